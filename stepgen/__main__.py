@@ -1,0 +1,5 @@
+import sys
+
+from stepgen.cli import main
+
+sys.exit(main())

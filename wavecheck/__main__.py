@@ -1,0 +1,5 @@
+import sys
+
+from wavecheck.cli import main
+
+sys.exit(main())

@@ -1,0 +1,123 @@
+"""The capture model every reader produces: named channels as exact edge arrays.
+
+A channel is its initial level plus a strictly increasing ``int64`` array of edge times in ticks;
+each edge toggles the level. There are no floats and no per-sample arrays here, so a capture of
+hundreds of millions of samples costs only its edges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.errors import UsageError
+from wavecheck.timebase import Timebase
+
+__all__ = ["Capture", "Channel", "EdgeArray"]
+
+EdgeArray = npt.NDArray[np.int64]
+
+
+@dataclass
+class Channel:
+    """One 1-bit signal of a capture.
+
+    Attributes:
+        name: the name as written in the file (``"STEP (Y axis)"``, a VCD reference name).
+        index: position in the file (``.sr`` probe number − 1, VCD declaration order), from 0.
+        initial: level (0 or 1) at :attr:`known_from`.
+        edges: tick of every level change, strictly increasing, each one toggling the level.
+        known_from: first tick at which the level is known (later than the capture start when a
+            VCD begins with ``x``).
+        xz_times: ticks at which the value became ``x`` or ``z`` after :attr:`known_from`
+            (empty for logic-analyzer captures); a channel with any cannot be checked.
+    """
+
+    name: str
+    index: int
+    initial: int
+    edges: EdgeArray
+    known_from: int = 0
+    xz_times: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    @property
+    def rising(self) -> int:
+        """Number of 0→1 edges."""
+        n = len(self.edges)
+        return n // 2 if self.initial == 1 else (n + 1) // 2
+
+    @property
+    def falling(self) -> int:
+        """Number of 1→0 edges."""
+        return len(self.edges) - self.rising
+
+    def level_after(self, i: int) -> int:
+        """Level after edge ``i`` (``-1`` means before the first edge)."""
+        return self.initial ^ ((i + 1) & 1)
+
+
+@dataclass
+class Capture:
+    """A whole capture: channels, exact time base, resolution and where it came from.
+
+    Attributes:
+        path: the file read.
+        format: ``"sr"``, ``"vcd"``, or ``"sigrok:<input format>"`` for files converted by sigrok-cli.
+        timebase: what one tick is.
+        resolution_ticks: the sample period T in ticks (1 for a ``.sr``; 0 for an exact simulator
+            VCD); a measured interval W is really in (W − T, W + T).
+        samplerate_hz: the sample rate if the file states one (``None`` for a plain VCD).
+        start: first tick of the captured window.
+        end: last tick of the captured window (``end - start`` is the duration).
+        channels: the 1-bit channels, in file order.
+        notes: things the reader skipped or assumed (vectors, reals, comments), one line each.
+    """
+
+    path: str
+    format: str
+    timebase: Timebase
+    resolution_ticks: int
+    samplerate_hz: Fraction | None
+    start: int
+    end: int
+    channels: list[Channel]
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def duration_s(self) -> Fraction:
+        """Length of the captured window in exact seconds."""
+        return self.timebase.seconds(self.end - self.start)
+
+    @property
+    def resolution_ns(self) -> Fraction:
+        """The sample period T in exact nanoseconds (0 for an exact VCD)."""
+        return self.timebase.ns(self.resolution_ticks)
+
+    def channel(self, ref: str | int) -> Channel:
+        """Find a channel by exact name, else by index (``"3"`` or ``3``).
+
+        Raises:
+            UsageError: no such channel; the message lists the channels there are.
+        """
+        if isinstance(ref, str):
+            for ch in self.channels:
+                if ch.name == ref:
+                    return ch
+            stripped = ref.strip()
+            for ch in self.channels:
+                if ch.name.strip() == stripped:
+                    return ch
+            if stripped.isdigit():
+                ref = int(stripped)
+        if isinstance(ref, int):
+            for ch in self.channels:
+                if ch.index == ref:
+                    return ch
+        available = ", ".join(f"{c.index}={c.name!r}" for c in self.channels) or "none"
+        raise UsageError(
+            f"{self.path}: no channel {ref!r} (channels: {available}; map by name or index, "
+            f"e.g. --map step={self.channels[0].name if self.channels else 'STEP'!r})"
+        )

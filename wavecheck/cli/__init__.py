@@ -1,0 +1,27 @@
+"""The ``wavecheck`` command: info, check, drives, compare, crosscheck."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from wavecheck.cli._main import run_cli
+
+__all__ = ["main"]
+
+COMMANDS = (
+    "wavecheck.cli.info",
+    "wavecheck.cli.check",
+    "wavecheck.cli.drives",
+    "wavecheck.cli.compare",
+    "wavecheck.cli.crosscheck",
+)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``wavecheck`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
+    return run_cli(
+        "wavecheck",
+        "Check STEP/DIR waveforms against stepper drive datasheet timing.",
+        COMMANDS,
+        argv,
+    )

@@ -1,0 +1,17 @@
+"""`wavecheck drives` (placeholder until implemented)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from wavecheck.errors import UsageError
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("drives", help="(not yet implemented)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    raise UsageError("wavecheck drives is not implemented yet")

@@ -1,0 +1,70 @@
+"""A drive's datasheet timing, as read from a rule file in ``rules/``.
+
+Every figure keeps its source and how sure it is. Time limits are exact nanoseconds
+(:class:`~fractions.Fraction`), the maximum step rate exact hertz.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Literal
+
+__all__ = ["TIME_RULES", "ActiveEdge", "Drive", "Figure", "Interface", "Status"]
+
+#: Time rules a drive file may give (ns), in the design's fixed vocabulary.
+TIME_RULES: tuple[str, ...] = (
+    "step_high",
+    "step_low",
+    "dir_setup",
+    "dir_hold",
+    "dir_delay",
+    "state_hold",
+    "enable_setup",
+)
+
+Status = Literal["datasheet", "secondary", "firmware-default", "preset", "uncertain"]
+Interface = Literal["step-dir", "up-down", "phases"]
+ActiveEdge = Literal["rising", "falling", "both"]
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One datasheet figure: an exact value, where it comes from, how sure it is."""
+
+    value: Fraction
+    """ns for time rules, Hz for ``max_rate``."""
+    source: str
+    status: Status
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Drive:
+    """A drive (or driver IC, or config-tool preset) and its STEP/DIR input timing."""
+
+    id: str
+    name: str
+    path: Path
+    kind: Literal["drive", "ic", "preset", "user"]
+    interface: Interface
+    active_edge: ActiveEdge
+    limits: Mapping[str, Figure]
+    """Time rules (keys from :data:`TIME_RULES`), values in ns."""
+    max_rate: Figure | None
+    """Maximum input step rate in Hz, if stated."""
+    sources: Mapping[str, str] = field(default_factory=dict)
+    """Citation key → full reference."""
+    notes: tuple[str, ...] = ()
+
+    def limit_ns(self, rule: str) -> Fraction | None:
+        """The minimum of ``rule`` in exact ns, or None when the drive states none."""
+        fig = self.limits.get(rule)
+        return fig.value if fig is not None else None
+
+    @property
+    def complete(self) -> bool:
+        """True when step high/low and DIR setup/hold are all given (enough to plan stepgen)."""
+        return all(r in self.limits for r in ("step_high", "step_low", "dir_setup", "dir_hold"))
