@@ -58,6 +58,15 @@ class Drive:
     sources: Mapping[str, str] = field(default_factory=dict)
     """Citation key → full reference."""
     notes: tuple[str, ...] = ()
+    edge_source: str = ""
+    """Citation key for :attr:`active_edge` ("" when the file gives none)."""
+    edge_status: Status | None = None
+    """How sure :attr:`active_edge` is (None when the file gives a bare string)."""
+    edge_note: str = ""
+    step_type: int | None = None
+    """LinuxCNC step type (0 step/dir, 1 up/down, 2–15 phase tables) when not implied by interface."""
+    opto: bool | None = None
+    """True for opto-isolated inputs (margins matter more), None when not known."""
 
     def limit_ns(self, rule: str) -> Fraction | None:
         """The minimum of ``rule`` in exact ns, or None when the drive states none."""

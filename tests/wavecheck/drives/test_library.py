@@ -1,0 +1,180 @@
+"""The rule library: every shipped file loads, key figures match drive-timing.md, bad files fail."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+from wavecheck.drives.library import list_drives, load_drive, rules_dir
+from wavecheck.drives.model import Drive
+from wavecheck.errors import RuleError
+
+RULE_FILES = sorted(rules_dir().glob("*.toml"))
+
+US = 1000  # ns
+
+
+def test_rules_dir_is_the_repo_rules_folder() -> None:
+    assert rules_dir().name == "rules"
+    assert (rules_dir() / "README.md").is_file()
+
+
+@pytest.mark.parametrize("path", RULE_FILES, ids=lambda p: p.stem)
+def test_every_rule_file_loads(path: Path) -> None:
+    drive = load_drive(path.stem)
+    assert drive.id == path.stem
+    assert drive.path == path
+    for fig in [*drive.limits.values(), *([drive.max_rate] if drive.max_rate else [])]:
+        assert fig.source in drive.sources
+    if drive.kind == "preset":
+        assert all(f.status == "preset" for f in drive.limits.values())
+
+
+def test_list_drives_covers_every_file() -> None:
+    assert [d.id for d in list_drives()] == [p.stem for p in RULE_FILES]
+
+
+# Values copied by hand from ../shared/reference/drive-timing.md (the independent source):
+# id, edge, step_high, step_low, dir_setup, dir_hold (ns; None = not given), max rate (Hz).
+REFERENCE: list[
+    tuple[str, str, float | None, float | None, float | None, float | None, int | None]
+] = [
+    ("gecko-g202", "falling", 4.5 * US, 0.5 * US, 1 * US, 20 * US, 200_000),
+    ("xylotex", "rising", 2 * US, 1 * US, 200, 200, None),
+    ("leadshine-dm542", "rising", 2.5 * US, 2.5 * US, 5 * US, None, 200_000),
+    ("a4988", "rising", 1 * US, 1 * US, 200, 200, 500_000),
+]
+
+
+@pytest.mark.parametrize(("drive_id", "edge", "high", "low", "setup", "hold", "rate"), REFERENCE)
+def test_key_figures_match_reference(
+    drive_id: str,
+    edge: str,
+    high: float | None,
+    low: float | None,
+    setup: float | None,
+    hold: float | None,
+    rate: int | None,
+) -> None:
+    d = load_drive(drive_id)
+    assert d.active_edge == edge
+    for rule, want in (
+        ("step_high", high),
+        ("step_low", low),
+        ("dir_setup", setup),
+        ("dir_hold", hold),
+    ):
+        got = d.limit_ns(rule)
+        assert (got is None and want is None) or got == Fraction(str(want)), (rule, got, want)
+    assert (d.max_rate.value if d.max_rate else None) == rate
+
+
+def test_g202_hold_note_says_from_the_step_edge() -> None:
+    d = load_drive("gecko-g202")
+    assert "after Step edge" in d.limits["dir_hold"].note
+    assert d.complete
+
+
+def test_load_by_path(tmp_path: Path) -> None:
+    src = rules_dir() / "xylotex.toml"
+    own = tmp_path / "xylotex.toml"
+    own.write_text(src.read_text())
+    d = load_drive(str(own))
+    assert isinstance(d, Drive) and d.path == own
+
+
+def test_env_var_adds_a_search_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    text = (rules_dir() / "xylotex.toml").read_text().replace('"xylotex"', '"my-drive"', 1)
+    (tmp_path / "my-drive.toml").write_text(text)
+    monkeypatch.setenv("WAVECHECK_RULES", str(tmp_path))
+    assert load_drive("my-drive").limit_ns("step_high") == 2000
+    assert "my-drive" in [d.id for d in list_drives()]
+
+
+def test_unknown_id_lists_close_matches() -> None:
+    with pytest.raises(RuleError) as exc:
+        load_drive("gecko-g20")
+    msg = str(exc.value)
+    assert "gecko-g202" in msg and "wavecheck drives" in msg and "\n" not in msg
+
+
+GOOD = """\
+id = "mine"
+name = "My drive"
+kind = "user"
+interface = "step-dir"
+active_edge = "rising"
+
+[limits.step_high]
+value = "2us"
+source = "M"
+status = "datasheet"
+
+[limits.max_rate]
+value = "100 kHz"
+source = "M"
+status = "secondary"
+
+[sources]
+M = "my manual"
+"""
+
+
+def test_good_user_file(tmp_path: Path) -> None:
+    path = tmp_path / "mine.toml"
+    path.write_text(GOOD)
+    d = load_drive(str(path))
+    assert d.kind == "user" and d.limit_ns("step_high") == 2000 and d.max_rate is not None
+    assert d.max_rate.value == 100_000 and d.edge_status is None and not d.complete
+
+
+BAD = [
+    # (replace this, with this, key expected in the message)
+    ('name = "My drive"\n', "", "name"),
+    ('kind = "user"', 'kind = "user"\nmaker = "x"', "maker"),
+    ('value = "2us"', 'value = "-2us"', "limits.step_high.value"),
+    ('value = "2us"', "value = 2", "limits.step_high.value"),
+    ('value = "2us"', 'value = "two us"', "limits.step_high.value"),
+    ('value = "2us"', 'value = "2 furlongs"', "limits.step_high.value"),
+    ('value = "2us"', 'value = "2 kHz"', "limits.step_high.value"),
+    ('value = "100 kHz"', 'value = "10us"', "limits.max_rate.value"),
+    ('status = "datasheet"', 'status = "datasheat"', "limits.step_high.status"),
+    ('interface = "step-dir"', 'interface = "pwm"', "interface"),
+    ('active_edge = "rising"', 'active_edge = "up"', "active_edge"),
+    ('id = "mine"', 'id = "yours"', "id"),
+    ("[limits.step_high]", "[limits.step_hi]", "limits.step_hi"),
+    (
+        'source = "M"\nstatus = "datasheet"',
+        'source = "Q"\nstatus = "datasheet"',
+        "limits.step_high.source",
+    ),
+    ('source = "M"\nstatus = "datasheet"', 'status = "datasheet"', "limits.step_high.source"),
+    ('status = "datasheet"', 'status = "datasheet"\nnot = "x"', "limits.step_high.not"),
+    ("[sources]", "[sourcez]", "sourcez"),
+    ('kind = "user"', 'kind = "robot"', "kind"),
+    ('value = "2us"', 'value = "2us', None),  # not TOML
+]
+
+
+@pytest.mark.parametrize(("old", "new", "key"), BAD)
+def test_malformed_file_names_file_and_key(
+    tmp_path: Path, old: str, new: str, key: str | None
+) -> None:
+    assert old in GOOD
+    path = tmp_path / "mine.toml"
+    path.write_text(GOOD.replace(old, new, 1))
+    with pytest.raises(RuleError) as exc:
+        load_drive(str(path))
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: ")
+    assert "\n" not in msg
+    if key is not None:
+        assert exc.value.key == key
+        assert f": {key}: " in msg
+
+
+def test_missing_file_is_a_rule_error(tmp_path: Path) -> None:
+    with pytest.raises(RuleError, match="no such rule file"):
+        load_drive(str(tmp_path / "nope.toml"))

@@ -1,0 +1,286 @@
+"""The drive rule library: ``rules/*.toml`` (and users' own files) read into :class:`Drive`.
+
+A rule file names one drive, its interface and active edge, and its limits; every figure carries
+a citation key and a status. ``rules/README.md`` documents the format. Values go through
+:mod:`wavecheck.units` (``"4.5us"``, ``"200 kHz"``); time limits become exact ns, the maximum
+rate exact Hz. Every malformed file raises :class:`~wavecheck.errors.RuleError` naming the file
+and the key.
+
+Search path for ids: the directories in ``$WAVECHECK_RULES`` (``os.pathsep``-separated, first
+wins), then the built-in library (:func:`rules_dir`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+import re
+import tomllib
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, get_args
+
+from wavecheck.drives.model import TIME_RULES, ActiveEdge, Drive, Figure, Interface, Status
+from wavecheck.errors import RuleError, UnitError
+from wavecheck.units import parse_quantity
+
+__all__ = [
+    "ENV_VAR",
+    "KINDS",
+    "LIMIT_KEYS",
+    "list_drives",
+    "load_drive",
+    "rules_dir",
+    "search_path",
+]
+
+#: Environment variable with extra rule directories (searched before the built-in library).
+ENV_VAR = "WAVECHECK_RULES"
+#: Keys allowed under ``[limits]``: the time rules (ns) and ``max_rate`` (Hz).
+LIMIT_KEYS: tuple[str, ...] = (*TIME_RULES, "max_rate")
+KINDS: tuple[str, ...] = ("drive", "ic", "preset", "user")
+STATUSES: tuple[str, ...] = get_args(Status)
+INTERFACES: tuple[str, ...] = get_args(Interface)
+EDGES: tuple[str, ...] = get_args(ActiveEdge)
+
+_ID = re.compile(r"^[a-z0-9]+(?:-[a-z0-9]+)*$")
+_TOP_REQUIRED = ("id", "name", "kind", "interface", "active_edge", "limits", "sources")
+_TOP_OPTIONAL = ("notes", "step_type", "opto")
+_FIGURE_REQUIRED = ("value", "source", "status")
+_FIGURE_OPTIONAL = ("note",)
+_EDGE_REQUIRED = ("value", "source", "status")
+
+
+def rules_dir() -> Path:
+    """The built-in rule library: the repository's ``rules/`` (editable install), else the
+    copy shipped inside the package (``wavecheck/_rules``)."""
+    package = Path(__file__).resolve().parent.parent
+    repo_rules = package.parent / "rules"
+    if repo_rules.is_dir():
+        return repo_rules
+    return package / "_rules"
+
+
+def search_path() -> list[Path]:
+    """Directories searched for ids: ``$WAVECHECK_RULES`` entries, then :func:`rules_dir`."""
+    extra = [Path(p) for p in os.environ.get(ENV_VAR, "").split(os.pathsep) if p]
+    return [*extra, rules_dir()]
+
+
+def _rule_files() -> dict[str, Path]:
+    """id → file over the search path (first directory wins)."""
+    found: dict[str, Path] = {}
+    for folder in search_path():
+        if folder.is_dir():
+            for path in sorted(folder.glob("*.toml")):
+                found.setdefault(path.stem, path)
+    return found
+
+
+def list_drives() -> list[Drive]:
+    """Every drive on the search path, sorted by id. A malformed file raises RuleError."""
+    return [_load_file(path) for _, path in sorted(_rule_files().items())]
+
+
+def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
+    """Load a drive by id (``"gecko-g202"``) or from a TOML file path of the same form.
+
+    Raises:
+        RuleError: the file is malformed (names file and key), or the id is unknown (lists close
+            matches).
+    """
+    text = os.fspath(id_or_path)
+    looks_like_path = text.endswith(".toml") or os.sep in text or "/" in text
+    if looks_like_path or (not _ID.match(text) and Path(text).is_file()):
+        path = Path(text)
+        if not path.is_file():
+            raise RuleError(
+                path, None, "no such rule file (give a drive id or a path to a .toml file)"
+            )
+        return _load_file(path)
+    files = _rule_files()
+    if text in files:
+        return _load_file(files[text])
+    close = difflib.get_close_matches(text.lower(), list(files), n=4, cutoff=0.5)
+    hint = f"did you mean {', '.join(close)}? " if close else ""
+    raise RuleError(text, None, f"unknown drive id ({hint}`wavecheck drives` lists them)")
+
+
+# ---------------------------------------------------------------------------------------------
+# parsing and validation
+
+
+def _load_file(path: Path) -> Drive:
+    try:
+        with path.open("rb") as fh:
+            data = tomllib.load(fh)
+    except tomllib.TOMLDecodeError as err:
+        raise RuleError(path, None, f"not valid TOML: {err}") from None
+    except OSError as err:
+        raise RuleError(path, None, f"cannot read: {err.strerror}") from None
+    return _parse(path, data)
+
+
+def _check_keys(
+    path: Path,
+    where: str,
+    table: dict[str, Any],
+    required: tuple[str, ...],
+    optional: tuple[str, ...],
+) -> None:
+    allowed = (*required, *optional)
+    for key in table:
+        if key not in allowed:
+            close = difflib.get_close_matches(key, allowed, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(allowed)}"
+            raise RuleError(path, f"{where}{key}", f"unknown key ({hint})")
+    for key in required:
+        if key not in table:
+            raise RuleError(path, f"{where}{key}", "missing (required)")
+
+
+def _string(path: Path, key: str, value: Any) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise RuleError(path, key, f"expected a non-empty string, got {value!r}")
+    return value
+
+
+def _choice(path: Path, key: str, value: Any, choices: tuple[str, ...]) -> str:
+    if value not in choices:
+        raise RuleError(path, key, f"{value!r} is not one of {', '.join(choices)}")
+    return str(value)
+
+
+def _source(path: Path, key: str, value: Any, sources: dict[str, str]) -> str:
+    cite = _string(path, key, value)
+    if cite not in sources:
+        raise RuleError(path, key, f"source {cite!r} is not in the [sources] table")
+    return cite
+
+
+def _figure(path: Path, rule: str, table: Any, sources: dict[str, str]) -> Figure:
+    where = f"limits.{rule}"
+    if not isinstance(table, dict):
+        raise RuleError(path, where, "expected a table with value, source, status")
+    _check_keys(path, where + ".", table, _FIGURE_REQUIRED, _FIGURE_OPTIONAL)
+    raw = table["value"]
+    if not isinstance(raw, str):
+        raise RuleError(
+            path,
+            f"{where}.value",
+            f"expected a quantity string with a unit such as '4.5us', got {raw!r}",
+        )
+    try:
+        value, dim = parse_quantity(raw)
+    except UnitError as err:
+        raise RuleError(path, f"{where}.value", str(err)) from None
+    if rule == "max_rate":
+        if dim != "frequency":
+            raise RuleError(
+                path,
+                f"{where}.value",
+                f"{raw!r} is a time; max_rate is a frequency such as '200 kHz'",
+            )
+        if value <= 0:
+            raise RuleError(path, f"{where}.value", f"{raw!r} must be positive")
+    else:
+        if dim != "time":
+            raise RuleError(
+                path, f"{where}.value", f"{raw!r} is a frequency; {rule} is a time such as '4.5us'"
+            )
+        if value < 0:
+            raise RuleError(
+                path, f"{where}.value", f"{raw!r} is negative (limits are minimum times >= 0)"
+            )
+        value = value * 10**9
+    status = _choice(path, f"{where}.status", table["status"], STATUSES)
+    note = table.get("note", "")
+    if not isinstance(note, str):
+        raise RuleError(path, f"{where}.note", f"expected a string, got {note!r}")
+    return Figure(
+        value=Fraction(value),
+        source=_source(path, f"{where}.source", table["source"], sources),
+        status=status,  # type: ignore[arg-type]
+        note=note,
+    )
+
+
+def _parse(path: Path, data: dict[str, Any]) -> Drive:
+    _check_keys(path, "", data, _TOP_REQUIRED, _TOP_OPTIONAL)
+    drive_id = _string(path, "id", data["id"])
+    if drive_id != path.stem:
+        raise RuleError(
+            path, "id", f"{drive_id!r} does not match the file name {path.stem!r} (rename one)"
+        )
+    if not _ID.match(drive_id):
+        raise RuleError(path, "id", f"{drive_id!r} must be lower case letters, digits and hyphens")
+
+    sources = data["sources"]
+    if not isinstance(sources, dict) or not sources:
+        raise RuleError(path, "sources", "expected a table of citation key = full reference")
+    for key, text in sources.items():
+        _string(path, f"sources.{key}", text)
+
+    kind = _choice(path, "kind", data["kind"], KINDS)
+    interface = _choice(path, "interface", data["interface"], INTERFACES)
+
+    edge_raw = data["active_edge"]
+    edge_source, edge_status, edge_note = "", None, ""
+    if isinstance(edge_raw, dict):
+        _check_keys(path, "active_edge.", edge_raw, _EDGE_REQUIRED, _FIGURE_OPTIONAL)
+        edge = _choice(path, "active_edge.value", edge_raw["value"], EDGES)
+        edge_source = _source(path, "active_edge.source", edge_raw["source"], sources)
+        edge_status = _choice(path, "active_edge.status", edge_raw["status"], STATUSES)
+        edge_note = edge_raw.get("note", "")
+        if not isinstance(edge_note, str):
+            raise RuleError(path, "active_edge.note", f"expected a string, got {edge_note!r}")
+    else:
+        edge = _choice(path, "active_edge", edge_raw, EDGES)
+
+    limits_raw = data["limits"]
+    if not isinstance(limits_raw, dict):
+        raise RuleError(path, "limits", "expected a table of [limits.RULE] tables")
+    limits: dict[str, Figure] = {}
+    max_rate: Figure | None = None
+    for rule, table in limits_raw.items():
+        if rule not in LIMIT_KEYS:
+            close = difflib.get_close_matches(rule, LIMIT_KEYS, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(LIMIT_KEYS)}"
+            raise RuleError(path, f"limits.{rule}", f"unknown rule ({hint})")
+        fig = _figure(path, rule, table, sources)
+        if rule == "max_rate":
+            max_rate = fig
+        else:
+            limits[rule] = fig
+
+    notes = data.get("notes", [])
+    if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
+        raise RuleError(path, "notes", "expected a list of strings")
+    step_type = data.get("step_type")
+    if step_type is not None and (
+        not isinstance(step_type, int) or isinstance(step_type, bool) or not 0 <= step_type <= 15
+    ):
+        raise RuleError(
+            path, "step_type", f"expected a LinuxCNC step type 0..15, got {step_type!r}"
+        )
+    opto = data.get("opto")
+    if opto is not None and not isinstance(opto, bool):
+        raise RuleError(path, "opto", f"expected true or false, got {opto!r}")
+
+    return Drive(
+        id=drive_id,
+        name=_string(path, "name", data["name"]),
+        path=path,
+        kind=kind,  # type: ignore[arg-type]
+        interface=interface,  # type: ignore[arg-type]
+        active_edge=edge,  # type: ignore[arg-type]
+        limits=limits,
+        max_rate=max_rate,
+        sources=dict(sources),
+        notes=tuple(notes),
+        edge_source=edge_source,
+        edge_status=edge_status,  # type: ignore[arg-type]
+        edge_note=edge_note,
+        step_type=step_type,
+        opto=opto,
+    )
