@@ -45,7 +45,95 @@ REFERENCE: list[
     ("xylotex", "rising", 2 * US, 1 * US, 200, 200, None),
     ("leadshine-dm542", "rising", 2.5 * US, 2.5 * US, 5 * US, None, 200_000),
     ("a4988", "rising", 1 * US, 1 * US, 200, 200, 500_000),
+    ("gecko-g203v", "rising", 1 * US, 2 * US, 200, 200, 333_000),
+    ("gecko-g540", "rising", 1000, 2000, 200, 200, None),  # preset figures only
+    ("stepperonline-dm542t", "rising", 2.5 * US, 2.5 * US, 5 * US, None, 200_000),
+    ("leadshine-dm556", "rising", 2.5 * US, None, 5 * US, None, 200_000),
+    ("leadshine-hbs86h", "rising", 2.5 * US, 2.5 * US, 6 * US, None, None),
+    ("tb6600", "rising", 2.2 * US, 2.2 * US, None, None, None),
+    ("tb6560", "rising", 30 * US, None, None, None, None),
+    ("drv8825", "rising", 1.9 * US, 1.9 * US, 650, 650, 250_000),
+    ("drv8834", "rising", 1.9 * US, 1.9 * US, 200, None, None),
+    ("drv8884", "rising", 970, 970, 200, 200, 500_000),
+    ("drv8886", "rising", 970, 970, 200, 200, 500_000),
+    ("drv8880", "rising", 1 * US, 1 * US, None, None, None),
+    ("tmc2209", "rising", 100, 100, 20, 20, None),
+    ("tmc2208", "rising", 100, 100, 20, 20, None),
+    ("tmc2130", "rising", 100, 100, 20, 20, None),
+    ("tmc2100", "rising", None, None, 20, 20, None),
+    ("tmc5160", "rising", 100, 100, 20, 20, 6_000_000),
+    ("teknic-clearpath", "rising", 715, 715, 25, 1 * US, 2_000_000),
+    ("novanta-everest", "falling", 5 * US, 5 * US, 1 * US, 20 * US, 100_000),
+    ("igus-dryve-d1", "rising", None, None, None, None, 25_000),
+    # LinuxCNC presets: steptime = t_active, stepspace = t_idle; falling edge swaps them.
+    ("linuxcnc-preset-gecko-202", "falling", 4500, 500, 1000, 20000, None),
+    ("linuxcnc-preset-gecko-203v", "rising", 1000, 2000, 200, 200, None),
+    ("linuxcnc-preset-xylotex-8s-3", "rising", 2000, 1000, 200, 200, None),
+    ("linuxcnc-preset-gecko-201", "rising", 500, 4000, 1000, 20000, None),
+    ("linuxcnc-preset-gecko-320", "rising", 3500, 500, 200, 200, None),
+    ("linuxcnc-preset-gecko-540", "rising", 1000, 2000, 200, 200, None),
+    ("linuxcnc-preset-l297", "rising", 500, 4000, 1000, 4000, None),
+    ("linuxcnc-preset-pmdx-150", "rising", 1000, 2000, 1000, 1000, None),
+    ("linuxcnc-preset-parker-compumotor-oem750", "rising", 1000, 1000, 200000, 1000, None),
+    ("linuxcnc-preset-jvl-smd41", "rising", 500, 500, 2500, 2500, None),
+    ("linuxcnc-preset-hobbycnc-pro-chopper", "rising", 2000, 2000, 2000, 2000, None),
+    ("linuxcnc-preset-keling-4030", "rising", 5000, 5000, 20000, 20000, None),
+    ("linuxcnc-preset-sherline", "rising", 22000, 22000, 100000, 100000, None),
+    ("linuxcnc-preset-tb6560", "rising", 5000, 5000, 20000, 20000, None),
+    ("linuxcnc-preset-stepcraft", "rising", 1000, 1000, 20000, 20000, None),
 ]
+
+REQUIRED_IDS = [
+    "gecko-g202", "gecko-g203v", "gecko-g540", "xylotex", "leadshine-dm542", "leadshine-dm556",
+    "tb6600", "tb6560", "a4988", "drv8825", "drv8834", "drv8884", "tmc2209", "tmc5160",
+    "teknic-clearpath", "linuxcnc-preset-gecko-202",
+]  # fmt: skip
+
+
+def test_library_has_the_required_drives() -> None:
+    ids = {p.stem for p in RULE_FILES}
+    assert set(REQUIRED_IDS) <= ids
+    assert len(ids) >= 20
+
+
+def test_reference_table_covers_every_file() -> None:
+    assert {row[0] for row in REFERENCE} == {p.stem for p in RULE_FILES}
+
+
+@pytest.mark.parametrize(
+    ("drive_id", "rule", "status"),
+    [
+        ("teknic-clearpath", "step_low", "uncertain"),
+        ("teknic-clearpath", "step_high", "datasheet"),
+        ("teknic-clearpath", "max_rate", "uncertain"),
+        ("tmc2209", "step_high", "uncertain"),
+        ("tmc5160", "step_high", "uncertain"),
+        ("tmc5160", "dir_setup", "datasheet"),
+        ("a4988", "max_rate", "uncertain"),
+        ("a4988", "step_high", "secondary"),
+        ("leadshine-dm556", "dir_setup", "uncertain"),
+        ("novanta-everest", "dir_setup", "uncertain"),
+        ("gecko-g540", "step_high", "preset"),
+        ("gecko-g202", "dir_hold", "datasheet"),
+    ],
+)
+def test_figure_status(drive_id: str, rule: str, status: str) -> None:
+    d = load_drive(drive_id)
+    fig = d.max_rate if rule == "max_rate" else d.limits[rule]
+    assert fig is not None and fig.status == status
+
+
+def test_uncertain_edges_are_marked() -> None:
+    assert load_drive("gecko-g203v").edge_status == "uncertain"
+    assert load_drive("gecko-g202").edge_status == "datasheet"
+    assert load_drive("tb6600").edge_status == "uncertain"
+
+
+def test_preset_notes_explain_the_mapping() -> None:
+    d = load_drive("linuxcnc-preset-gecko-202")
+    assert d.kind == "preset"
+    assert any("steptime is step_low" in n for n in d.notes)
+    assert "steptime" in d.limits["step_low"].note
 
 
 @pytest.mark.parametrize(("drive_id", "edge", "high", "low", "setup", "hold", "rate"), REFERENCE)
