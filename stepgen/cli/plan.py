@@ -1,17 +1,153 @@
-"""`stepgen plan` (placeholder until implemented)."""
+"""``stepgen plan``: the step timing calculator (LinuxCNC's StepTimingCalculator as a command).
+
+``stepgen plan --drive ID|FILE --latency J|FILE [--base-period P] [--invert-step]
+[--format text|json|ini|hal] [--channel N] [-o FILE]``
+
+Times: a number with a unit (``11us``, ``15500ns``); a bare number follows LinuxCNC's
+latency-test: below 1000 it is µs, otherwise ns (``11`` = 11 µs, ``11000`` = 11 µs). The reading
+is printed. ``--latency`` also takes a file: cyclictest summary or ``-h`` histogram output,
+``latency-histogram --nox`` output, or latency-test's one-number ``~/.latency`` (ns).
+
+Exit codes: 0 a plan was made, 2 unusable input (one line on stderr).
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
+from fractions import Fraction
+from pathlib import Path
 from typing import Any
 
-from wavecheck.errors import UsageError
+from stepgen.plan import plan, render_hal, render_ini, render_json, render_text
+from wavecheck.errors import UnitError, UsageError
+from wavecheck.output import atomic_write
+from wavecheck.units import parse_quantity
+
+__all__ = ["parse_latency_arg", "parse_time_arg", "register", "run"]
+
+_FORMATS = ("text", "json", "ini", "hal")
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("plan", help="(not yet implemented)")
+    """Add the ``plan`` subcommand to ``sub`` (an argparse subparsers object)."""
+    p = sub.add_parser(
+        "plan",
+        help="choose BASE_PERIOD and steplen/stepspace/dirsetup/dirhold for a drive and a latency",
+        description=(
+            "The step timing calculator: from a drive's datasheet figures and the worst latency J "
+            "it gives the minimum and the simple BASE_PERIOD, each stepgen parameter as "
+            "n = ceil((T + J) / P) periods, the max step rate and each requirement's margin. "
+            "A bare time below 1000 is us, otherwise ns (as LinuxCNC's latency-test reads it)."
+        ),
+    )
+    p.add_argument(
+        "--drive", required=True, metavar="ID|FILE", help="drive id from rules/ or a rule file"
+    )
+    p.add_argument(
+        "--latency",
+        required=True,
+        metavar="J|FILE",
+        help="worst latency (e.g. 11us), or a cyclictest / latency-histogram --nox / ~/.latency file",
+    )
+    p.add_argument(
+        "--base-period",
+        metavar="P",
+        help="BASE_PERIOD to plan for (default: the minimum rounded up to a whole us)",
+    )
+    p.add_argument(
+        "--invert-step",
+        action="store_true",
+        help="the STEP pin is inverted to the drive (default: not inverted, the seed's G202 reading)",
+    )
+    p.add_argument(
+        "--format", choices=_FORMATS, default="text", help="output format (default text)"
+    )
+    p.add_argument(
+        "--channel",
+        type=int,
+        default=0,
+        metavar="N",
+        help="stepgen channel for ini/hal (default 0)",
+    )
+    p.add_argument("-o", "--output", metavar="FILE", help="write the output here (atomically)")
     p.set_defaults(func=run)
 
 
+def parse_time_arg(text: str, option: str) -> tuple[Fraction, str]:
+    """Read a time option as exact ns, LinuxCNC latency-test style; returns ``(ns, reading)``.
+
+    A number with a unit is taken as given. A bare number below 1000 is µs, otherwise ns.
+
+    Raises:
+        UnitError: not a time.
+    """
+    try:
+        value, dim = parse_quantity(text, default_unit="ns")
+    except UnitError as err:
+        raise UnitError(f"{option} {text!r}: {err}") from None
+    if dim != "time":
+        raise UnitError(f"{option} {text!r} is a frequency; give a time such as '11us'")
+    ns = value * 10**9
+    stripped = text.strip()
+    bare = bool(stripped) and (stripped[-1].isdigit() or stripped[-1] == ".")
+    if bare:
+        if abs(ns) < 1000:
+            return (
+                ns * 1000,
+                f"{option} {text} (a bare number below 1000 is us, as latency-test reads it)",
+            )
+        return (
+            ns,
+            f"{option} {text} (a bare number of 1000 or more is ns, as latency-test reads it)",
+        )
+    return ns, f"{option} {text}"
+
+
+def parse_latency_arg(text: str) -> tuple[Fraction, str]:
+    """``--latency``: a time, or a file of a latency tool; returns ``(ns, where it came from)``."""
+    try:
+        return parse_time_arg(text, "--latency")
+    except UnitError:
+        path = Path(text).expanduser()
+        if not path.exists():
+            raise UsageError(
+                f"--latency {text!r} is neither a time such as '11us' nor an existing file "
+                "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file)"
+            ) from None
+    try:
+        from stepgen.latencyfiles import read_latency_file
+    except ImportError:  # pragma: no cover - until stepgen.latencyfiles lands
+        raise UsageError(
+            f"--latency {text}: reading latency files is not available yet (give a time, e.g. 11us)"
+        ) from None
+    worst_ns, description = read_latency_file(path)
+    return Fraction(worst_ns), f"{path}: {description}"
+
+
 def run(args: argparse.Namespace) -> int:
-    raise UsageError("stepgen plan is not implemented yet")
+    """Run ``stepgen plan``; returns 0 (errors raise a WavecheckError, exit 2)."""
+    from wavecheck.drives.library import load_drive
+
+    if args.channel < 0 or args.channel > 15:
+        raise UsageError(f"--channel {args.channel}: stepgen has channels 0..15")
+    latency, source = parse_latency_arg(args.latency)
+    period = None
+    if args.base_period is not None:
+        period, _ = parse_time_arg(args.base_period, "--base-period")
+    drive = load_drive(args.drive)
+    result = plan(drive, latency, period, step_inverted=args.invert_step, latency_source=source)
+    if args.format == "json":
+        out = render_json(result)
+    elif args.format == "ini":
+        out = render_ini(result, args.channel)
+    elif args.format == "hal":
+        out = render_hal(result, args.channel)
+    else:
+        out = render_text(result)
+    if args.output:
+        atomic_write(args.output, out)
+        print(f"stepgen plan: wrote {args.output} (latency {source})", file=sys.stderr)
+    else:
+        sys.stdout.write(out)
+    return 0
