@@ -1,17 +1,154 @@
-"""`wavecheck drives` (placeholder until implemented)."""
+"""``wavecheck drives [ID]``: list the rule library, or show one drive with every figure and source."""
 
 from __future__ import annotations
 
 import argparse
+import json
+from fractions import Fraction
 from typing import Any
 
-from wavecheck.errors import UsageError
+from wavecheck.drives.library import list_drives, load_drive
+from wavecheck.drives.model import TIME_RULES, Drive, Figure
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["drive_json", "register", "run"]
+
+_COLUMNS = ("step_high", "step_low", "dir_setup", "dir_hold")
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("drives", help="(not yet implemented)")
+    """Add the ``drives`` subcommand."""
+    p = sub.add_parser(
+        "drives",
+        help="list the drive rule files, or show one with its sources",
+        description="List the drive rule library (rules/ and $WAVECHECK_RULES), or show one "
+        "drive's figures with their status and full sources.",
+    )
+    p.add_argument("drive", nargs="?", metavar="ID", help="drive id or path to a .toml rule file")
+    p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    raise UsageError("wavecheck drives is not implemented yet")
+    """List or show drives; returns 0 (a bad id or file raises RuleError → exit 2)."""
+    if args.drive:
+        drive = load_drive(args.drive)
+        print(json.dumps(drive_json(drive), indent=2) if args.format == "json" else _show(drive))
+    else:
+        drives = list_drives()
+        if args.format == "json":
+            print(json.dumps({"drives": [drive_json(d) for d in drives]}, indent=2))
+        else:
+            print(_table(drives))
+    return 0
+
+
+def _number(value: Fraction) -> int | float:
+    return int(value) if value.denominator == 1 else float(value)
+
+
+def _figure_json(fig: Figure, unit: str, drive: Drive) -> dict[str, Any]:
+    return {
+        unit: _number(fig.value),
+        "status": fig.status,
+        "source": fig.source,
+        "source_text": drive.sources.get(fig.source, ""),
+        "note": fig.note,
+    }
+
+
+def drive_json(drive: Drive) -> dict[str, Any]:
+    """The drive as JSON-ready data: times in ns, rates in Hz, every figure with its source."""
+    return {
+        "id": drive.id,
+        "name": drive.name,
+        "kind": drive.kind,
+        "interface": drive.interface,
+        "active_edge": drive.active_edge,
+        "edge": {"status": drive.edge_status, "source": drive.edge_source, "note": drive.edge_note},
+        "step_type": drive.step_type,
+        "opto": drive.opto,
+        "path": str(drive.path),
+        "limits": {r: _figure_json(f, "value_ns", drive) for r, f in drive.limits.items()},
+        "max_rate": _figure_json(drive.max_rate, "value_hz", drive) if drive.max_rate else None,
+        "drive_rate_hz": _number(r) if (r := _drive_rate(drive)) is not None else None,
+        "complete": drive.complete,
+        "notes": list(drive.notes),
+        "sources": dict(drive.sources),
+    }
+
+
+def _drive_rate(drive: Drive) -> Fraction | None:
+    """The design's ``drive`` rate: min(datasheet max rate, 1 / (step_high + step_low)), in Hz."""
+    rates = [drive.max_rate.value] if drive.max_rate else []
+    high, low = drive.limit_ns("step_high"), drive.limit_ns("step_low")
+    if high is not None and low is not None and high + low > 0:
+        rates.append(Fraction(10**9) / (high + low))
+    return min(rates) if rates else None
+
+
+def _us(fig: Figure | None) -> str:
+    if fig is None:
+        return "-"
+    text = f"{float(fig.value / 1000):g}"
+    return text + ("?" if fig.status == "uncertain" else "")
+
+
+def _table(drives: list[Drive]) -> str:
+    head = ("id", "name", "kind", "edge", "high", "low", "setup", "hold", "max rate")
+    rows: list[tuple[str, ...]] = [head]
+    for d in drives:
+        rate = d.max_rate
+        rate_text = "-" if rate is None else format_frequency(rate.value)
+        if rate is not None and rate.status == "uncertain":
+            rate_text += "?"
+        edge = d.active_edge + ("?" if d.edge_status == "uncertain" else "")
+        name = d.name if len(d.name) <= 40 else d.name[:39] + "…"
+        rows.append(
+            (d.id, name, d.kind, edge, *(_us(d.limits.get(r)) for r in _COLUMNS), rate_text)
+        )
+    widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    lines.append(
+        f"{len(drives)} drives; times are minimums in µs at the drive input; "
+        "? = uncertain; '-' = not stated (not checked). `wavecheck drives ID` shows sources."
+    )
+    return "\n".join(lines)
+
+
+def _show(d: Drive) -> str:
+    out = [f"{d.id}: {d.name}", f"  kind       {d.kind}", f"  interface  {d.interface}"]
+    if d.step_type is not None:
+        out.append(f"  step type  {d.step_type}")
+    edge = f"  edge       {d.active_edge}"
+    if d.edge_status:
+        edge += f"  [{d.edge_status}, {d.edge_source}]"
+    if d.edge_note:
+        edge += f"  {d.edge_note}"
+    out.append(edge)
+    if d.opto is not None:
+        out.append(f"  opto       {'yes' if d.opto else 'no'}")
+    out.append(f"  file       {d.path}")
+    out.append("  figures (minimum times at the drive input; max_rate a maximum):")
+    figures: list[tuple[str, Figure, str]] = [
+        (r, d.limits[r], format_time(d.limits[r].value / 10**9))
+        for r in TIME_RULES
+        if r in d.limits
+    ]
+    if d.max_rate:
+        figures.append(("max_rate", d.max_rate, format_frequency(d.max_rate.value)))
+    for rule, fig, text in figures:
+        line = f"    {rule:<13}{text:<11}{fig.status:<17}[{fig.source}]"
+        out.append(line + (f"  {fig.note}" if fig.note else ""))
+    missing = [r for r in _COLUMNS if r not in d.limits] + ([] if d.max_rate else ["max_rate"])
+    if missing:
+        out.append(f"    not stated (not checked): {', '.join(missing)}")
+    rate = _drive_rate(d)
+    if rate is not None:
+        out.append(f"  drive step rate limit: {format_frequency(rate)}")
+    if d.notes:
+        out.append("  notes:")
+        out += [f"    - {n}" for n in d.notes]
+    out.append("  sources:")
+    out += [f"    [{k}] {v}" for k, v in d.sources.items()]
+    return "\n".join(out)
