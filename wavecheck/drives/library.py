@@ -52,13 +52,13 @@ _EDGE_REQUIRED = ("value", "source", "status")
 
 
 def rules_dir() -> Path:
-    """The built-in rule library: the repository's ``rules/`` (editable install), else the
-    copy shipped inside the package (``wavecheck/_rules``)."""
+    """The built-in rule library: ``wavecheck/_rules``, which in the repository is a symlink to
+    ``rules/`` (so this returns the repo's ``rules/``) and in a wheel holds the shipped copy."""
     package = Path(__file__).resolve().parent.parent
-    repo_rules = package.parent / "rules"
-    if repo_rules.is_dir():
-        return repo_rules
-    return package / "_rules"
+    shipped = package / "_rules"
+    if shipped.is_dir():
+        return shipped.resolve()
+    return package.parent / "rules"  # a checkout without symlinks
 
 
 def search_path() -> list[Path]:

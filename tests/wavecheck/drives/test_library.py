@@ -266,3 +266,9 @@ def test_malformed_file_names_file_and_key(
 def test_missing_file_is_a_rule_error(tmp_path: Path) -> None:
     with pytest.raises(RuleError, match="no such rule file"):
         load_drive(str(tmp_path / "nope.toml"))
+
+
+def test_wheel_ships_the_rules_through_the_package_symlink() -> None:
+    # pyproject's package-data takes wavecheck/_rules/*.toml; the symlink must reach rules/.
+    link = Path(__file__).resolve().parents[3] / "wavecheck" / "_rules"
+    assert link.is_symlink() and link.resolve() == rules_dir().resolve()
