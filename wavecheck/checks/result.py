@@ -1,0 +1,287 @@
+"""Verdicts: every measured interval of a rule judged against its limit, exactly.
+
+With T the resolution (exact ns; 0 for an exact simulator VCD), a measured interval W is really in
+(W − T, W + T), so each interval is
+
+- **pass** if W − T ≥ limit (tested first: a pulse exactly at its minimum passes when T = 0),
+- **fail** if W + T ≤ limit,
+- **indeterminate** otherwise (this sample rate cannot decide it).
+
+W is an integer number of ticks and the tick an exact rational, so both tests reduce to integer
+thresholds computed once per rule with exact :class:`~fractions.Fraction` arithmetic:
+pass ⟺ W ≥ ⌈(limit + T) / tick⌉, fail ⟺ W ≤ ⌊(limit − T) / tick⌋. No float is involved.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import EdgeArray
+from wavecheck.checks.primitives import Intervals
+from wavecheck.drives.model import Figure
+from wavecheck.timebase import Timebase
+
+__all__ = [
+    "FAIL",
+    "INDETERMINATE",
+    "PASS",
+    "RuleResult",
+    "Verdict",
+    "Violation",
+    "evaluate",
+    "sequence_result",
+]
+
+Verdict = Literal["pass", "fail", "indeterminate", "unchecked"]
+PASS, FAIL, INDETERMINATE = 0, 1, 2
+_I64_MAX = int(np.iinfo(np.int64).max)
+_I64_MIN = int(np.iinfo(np.int64).min)
+
+
+def _clamp(v: int) -> int:
+    return max(_I64_MIN, min(_I64_MAX, v))
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One failed interval (or one state-sequence error).
+
+    Attributes:
+        rule: the rule id.
+        start_tick: where the interval starts (its reference event).
+        end_tick: where it ends.
+        time_s: ``start_tick`` in exact seconds (from the capture's tick 0).
+        measured_ns: the measured length in exact ns (None for ``state_sequence``).
+        limit_ns: the rule's minimum in exact ns (None for ``state_sequence``).
+        margin_ns: measured − limit in exact ns (None for ``state_sequence``).
+        detail: extra text (``"state 1 → 8"`` for ``state_sequence``).
+    """
+
+    rule: str
+    start_tick: int
+    end_tick: int
+    time_s: Fraction
+    measured_ns: Fraction | None
+    limit_ns: Fraction | None
+    margin_ns: Fraction | None
+    detail: str = ""
+
+
+@dataclass
+class RuleResult:
+    """All intervals of one rule and their verdicts.
+
+    Attributes:
+        rule: the rule id (``step_high``, ``dir_hold``, …, ``state_sequence``).
+        limit_ns: the minimum in exact ns (None for ``state_sequence``).
+        figure: the drive's figure the limit comes from (source, status), if any.
+        intervals: every measured interval (start/end ticks), in time order.
+        outcome: ``PASS``/``FAIL``/``INDETERMINATE`` per interval (int8).
+        timebase: the capture's tick.
+        resolution_ns: T used for the verdicts, exact ns.
+        checked: how many intervals (or state changes) were examined.
+        details: per-interval text, only for ``state_sequence``.
+    """
+
+    rule: str
+    limit_ns: Fraction | None
+    figure: Figure | None
+    intervals: Intervals
+    outcome: npt.NDArray[np.int8]
+    timebase: Timebase
+    resolution_ns: Fraction
+    checked: int
+    details: list[str] = field(default_factory=list)
+
+    # -- counts and verdict -------------------------------------------------------------------
+    @property
+    def violations(self) -> int:
+        """Number of failed intervals."""
+        return int(np.count_nonzero(self.outcome == FAIL))
+
+    @property
+    def indeterminate(self) -> int:
+        """Number of intervals this resolution cannot decide."""
+        return int(np.count_nonzero(self.outcome == INDETERMINATE))
+
+    @property
+    def verdict(self) -> Verdict:
+        """fail if any interval fails, else indeterminate if any is, else pass; unchecked when
+        there was no interval of this kind (that is not a pass)."""
+        if self.checked == 0:
+            return "unchecked"
+        if self.violations:
+            return "fail"
+        if self.indeterminate:
+            return "indeterminate"
+        return "pass"
+
+    # -- measured values ---------------------------------------------------------------------
+    @property
+    def measured_ticks(self) -> EdgeArray:
+        """Every measured interval in ticks (int64)."""
+        return self.intervals.measured
+
+    @property
+    def measured_ns(self) -> npt.NDArray[np.float64]:
+        """Every measured interval in ns, as floats — for plots and histograms only."""
+        return self.timebase.ns_array(self.intervals.measured)
+
+    @property
+    def violation_ticks(self) -> EdgeArray:
+        """Start tick of every failed interval, in time order."""
+        return self.intervals.start[self.outcome == FAIL]
+
+    @property
+    def indeterminate_ticks(self) -> EdgeArray:
+        """Start tick of every indeterminate interval, in time order."""
+        return self.intervals.start[self.outcome == INDETERMINATE]
+
+    def _argmin(self) -> int | None:
+        if self.limit_ns is None or len(self.intervals) == 0:
+            return None
+        return int(np.argmin(self.intervals.measured))
+
+    @property
+    def min_measured_ns(self) -> Fraction | None:
+        """The shortest measured interval in exact ns (None when none was measured)."""
+        i = self._argmin()
+        if i is None:
+            return None
+        return self.timebase.ns(int(self.intervals.measured[i]))
+
+    @property
+    def max_measured_ns(self) -> Fraction | None:
+        """The longest measured interval in exact ns."""
+        if len(self.intervals) == 0 or self.limit_ns is None:
+            return None
+        return self.timebase.ns(int(self.intervals.measured.max()))
+
+    @property
+    def min_margin_ns(self) -> Fraction | None:
+        """min(measured − limit) over all intervals, exact ns (negative = the worst violation)."""
+        m = self.min_measured_ns
+        return None if m is None or self.limit_ns is None else m - self.limit_ns
+
+    @property
+    def min_margin_at_tick(self) -> int | None:
+        """Start tick of the interval with the smallest margin (the first such one)."""
+        i = self._argmin()
+        return None if i is None else int(self.intervals.start[i])
+
+    @property
+    def min_margin_at_s(self) -> Fraction | None:
+        """:attr:`min_margin_at_tick` in exact seconds."""
+        t = self.min_margin_at_tick
+        return None if t is None else self.timebase.seconds(t)
+
+    @property
+    def decide_samplerate_hz(self) -> Fraction | None:
+        """The sample rate at which the nearest-to-decided indeterminate interval would be decided,
+        if its true length were the measured one (|measured − limit| > 2·T′); None when nothing is
+        indeterminate or the closest one measured exactly the limit (no rate decides it)."""
+        if self.limit_ns is None or not self.indeterminate:
+            return None
+        w = self.intervals.measured[self.outcome == INDETERMINATE]
+        tick = self.timebase.tick_ns
+        gaps = []
+        lim_ticks = self.limit_ns / tick
+        below = w[w <= _clamp(math.ceil(lim_ticks) - 1)]
+        above = w[w >= _clamp(math.floor(lim_ticks) + 1)]
+        if len(below):
+            gaps.append(self.limit_ns - int(below.max()) * tick)
+        if len(above):
+            gaps.append(int(above.min()) * tick - self.limit_ns)
+        if not gaps or len(below) + len(above) < len(w):
+            return None
+        return Fraction(2 * 10**9) / min(gaps)
+
+    # -- violations -------------------------------------------------------------------------
+    def violation(self, i: int) -> Violation:
+        """The violation of interval ``i`` (which must have failed)."""
+        start = int(self.intervals.start[i])
+        end = int(self.intervals.end[i])
+        if self.limit_ns is None:
+            measured = margin = None
+        else:
+            measured = self.timebase.ns(end - start)
+            margin = measured - self.limit_ns
+        detail = self.details[i] if i < len(self.details) else ""
+        return Violation(
+            rule=self.rule,
+            start_tick=start,
+            end_tick=end,
+            time_s=self.timebase.seconds(start),
+            measured_ns=measured,
+            limit_ns=self.limit_ns,
+            margin_ns=margin,
+            detail=detail,
+        )
+
+    def worst_violations(self, n: int) -> list[Violation]:
+        """Up to ``n`` failed intervals, shortest (worst margin) first, ties in time order."""
+        idx = np.flatnonzero(self.outcome == FAIL)
+        if n <= 0 or len(idx) == 0:
+            return []
+        if self.limit_ns is not None:
+            m = self.intervals.measured[idx]
+            if len(idx) > n:
+                part = np.argpartition(m, n - 1)[:n]
+                idx, m = idx[part], m[part]
+            idx = idx[np.lexsort((idx, m))]
+        return [self.violation(int(i)) for i in idx[:n]]
+
+
+def evaluate(
+    rule: str,
+    intervals: Intervals,
+    limit_ns: Fraction,
+    timebase: Timebase,
+    resolution_ns: Fraction,
+    figure: Figure | None = None,
+) -> RuleResult:
+    """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact ns)."""
+    tick = timebase.tick_ns
+    pass_min = _clamp(math.ceil((limit_ns + resolution_ns) / tick))
+    fail_max = _clamp(math.floor((limit_ns - resolution_ns) / tick))
+    w = intervals.measured
+    outcome = np.full(len(w), INDETERMINATE, dtype=np.int8)
+    outcome[w <= fail_max] = FAIL
+    outcome[w >= pass_min] = PASS  # pass is tested first: it wins where both hold (T = 0)
+    return RuleResult(
+        rule=rule,
+        limit_ns=limit_ns,
+        figure=figure,
+        intervals=intervals,
+        outcome=outcome,
+        timebase=timebase,
+        resolution_ns=resolution_ns,
+        checked=len(intervals),
+    )
+
+
+def sequence_result(
+    ticks: EdgeArray,
+    details: list[str],
+    transitions: int,
+    timebase: Timebase,
+    resolution_ns: Fraction,
+) -> RuleResult:
+    """The ``state_sequence`` rule: every listed tick is a move to a non-neighbour state."""
+    return RuleResult(
+        rule="state_sequence",
+        limit_ns=None,
+        figure=None,
+        intervals=Intervals(ticks, ticks),
+        outcome=np.full(len(ticks), FAIL, dtype=np.int8),
+        timebase=timebase,
+        resolution_ns=resolution_ns,
+        checked=transitions,
+        details=details,
+    )

@@ -1,0 +1,134 @@
+"""Check one capture against one drive: map → decode → measure every rule → report.
+
+:func:`run_check` is the library entry point the CLI (and later the HTML/JUnit/plot outputs,
+several captures, INI/HAL configurations) build on; it does no I/O.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from fractions import Fraction
+
+from stepgen.steptypes import StepType, step_type
+from wavecheck.capture.model import Capture
+from wavecheck.checks.compile import run_rules
+from wavecheck.decode import ActiveEdge, decode
+from wavecheck.drives.model import Drive
+from wavecheck.errors import UsageError
+from wavecheck.interface import build_interface
+from wavecheck.rates import max_step_rates
+from wavecheck.report.model import Report
+from wavecheck.units import format_time, parse_time
+
+__all__ = ["auto_map", "resolve_resolution_ns", "run_check"]
+
+_AUTO_ROLES: dict[int, tuple[str, ...]] = {
+    0: ("step", "dir", "enable"),
+    1: ("up", "down", "enable"),
+}
+
+
+def _leaf(name: str) -> str:
+    """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
+    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
+
+
+def auto_map(capture: Capture, st: StepType) -> dict[str, str]:
+    """Map roles to channels named after them (``STEP``, ``dir``, ``stepgen.0.phase-A`` …).
+
+    A role is mapped only when exactly one channel's name (its last dotted part, any case) is the
+    role's name; roles the user maps explicitly take precedence over this.
+    """
+    roles = _AUTO_ROLES.get(st.number) or (*st.outputs, "enable")
+    mapping: dict[str, str] = {}
+    for role in roles:
+        hits = [c for c in capture.channels if _leaf(c.name) == role.lower()]
+        if len(hits) == 1:
+            mapping[role] = hits[0].name
+    return mapping
+
+
+def resolve_resolution_ns(capture: Capture, resolution: str | Fraction | None) -> Fraction:
+    """T in exact ns: the user's ``--resolution`` (a time such as ``"500ns"``, or exact seconds as
+    a Fraction) if given, else the capture's own (one sample period; 0 for a simulator VCD)."""
+    if resolution is None:
+        return capture.resolution_ns
+    seconds = parse_time(resolution) if isinstance(resolution, str) else Fraction(resolution)
+    if seconds < 0:
+        raise UsageError(f"--resolution must not be negative, got {format_time(seconds)}")
+    return seconds * 10**9
+
+
+def run_check(
+    capture: Capture,
+    drive: Drive,
+    mapping: Mapping[str, str] | None = None,
+    invert: Iterable[str] = (),
+    step_type_number: int = 0,
+    resolution: str | Fraction | None = None,
+    *,
+    forward_level: int = 0,
+    active_edge: ActiveEdge | None = None,
+    user_table: tuple[int, ...] | None = None,
+) -> Report:
+    """Check ``capture`` against ``drive``.
+
+    Args:
+        capture: the capture (edges in ticks).
+        drive: the drive's rules.
+        mapping: role → channel name or index; roles missing here are mapped by name when a
+            channel is called after the role (see :func:`auto_map`).
+        invert: roles to invert so that levels are the drive's input levels.
+        step_type_number: LinuxCNC step type 0–15.
+        resolution: T override (``"500ns"`` or exact seconds); default the capture's.
+        forward_level: DIR level meaning forward (default 0: DIR high = reverse, as LinuxCNC
+            and grbl drive it).
+        active_edge: override the drive's active edge.
+        user_table: state table for step type 15.
+
+    Raises:
+        WavecheckError: unusable input (unknown channel or role, bad type, bad resolution).
+    """
+    st = step_type(step_type_number, user_table)
+    full_map = auto_map(capture, st)
+    full_map.update(mapping or {})
+    iface = build_interface(capture, full_map, invert)
+    edge: ActiveEdge = active_edge or drive.active_edge
+    needed = st.outputs if st.number != 0 else ("step",)
+    for role in needed:
+        iface.require(role)
+    resolution_ns = resolve_resolution_ns(capture, resolution)
+    steps = decode(
+        iface, st.number, active_edge=edge, forward_level=forward_level, user_table=user_table
+    )
+    ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge)
+    rates = max_step_rates(iface, st.number, steps, drive, edge, capture.timebase)
+    notes = list(capture.notes)
+    if st.number == 0 and iface.get("dir") is None:
+        notes.append("no DIR channel mapped: step directions are unknown, DIR rules unchecked")
+    if len(steps.ambiguous):
+        first = format_time(capture.timebase.seconds(int(steps.ambiguous[0])))
+        notes.append(
+            f"{len(steps.ambiguous)} step(s) of ambiguous direction (DIR changed at the same "
+            f"sample as the active edge; first at {first}); counted as neither forward nor reverse"
+        )
+    if resolution is not None and capture.resolution_ns and resolution_ns < capture.resolution_ns:
+        notes.append(
+            f"--resolution {format_time(resolution_ns / 10**9)} is finer than the capture's sample "
+            f"period {format_time(capture.resolution_ns / 10**9)}: verdicts assume it"
+        )
+    return Report(
+        capture=capture,
+        drive=drive,
+        step_type=st,
+        interface=iface,
+        active_edge=edge,
+        forward_level=forward_level,
+        resolution_ns=resolution_ns,
+        steps=steps,
+        rules=ruleset.results,
+        not_stated=ruleset.not_stated,
+        not_applicable=ruleset.not_applicable,
+        rates=rates,
+        notes=notes,
+    )

@@ -1,0 +1,126 @@
+"""The JSON report: the design's keys, exact values printed as JSON numbers.
+
+Top-level keys: ``capture``, ``drive``, ``steps``, ``rules``, ``violations`` (capped, worst first),
+``violations_total`` (the uncapped count; added beside the design's keys so the cap is visible),
+``max_step_rate_hz``, ``verdict``. Times: ``*_ns`` in ns, ``*_s`` in s, rates in Hz. A value that
+does not exist (no interval measured, no limit) is ``null``.
+"""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+from typing import Any
+
+from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.report.model import Report
+
+__all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
+
+DEFAULT_VIOLATION_CAP = 1000
+
+
+def _num(v: Fraction | int | None) -> float | int | None:
+    if v is None:
+        return None
+    if isinstance(v, int) or v.denominator == 1:
+        return int(v)
+    return float(v)
+
+
+def _rule(r: RuleResult) -> dict[str, Any]:
+    fig = r.figure
+    return {
+        "id": r.rule,
+        "limit_ns": _num(r.limit_ns),
+        "checked": r.checked,
+        "violations": r.violations,
+        "indeterminate": r.indeterminate,
+        "min_margin_ns": _num(r.min_margin_ns),
+        "min_margin_at_s": _num(r.min_margin_at_s),
+        "min_measured_ns": _num(r.min_measured_ns),
+        "verdict": r.verdict,
+        "decide_samplerate_hz": _num(r.decide_samplerate_hz),
+        "limit_source": fig.source if fig else None,
+        "limit_status": fig.status if fig else None,
+    }
+
+
+def _violation(v: Violation) -> dict[str, Any]:
+    d: dict[str, Any] = {
+        "rule": v.rule,
+        "time_s": _num(v.time_s),
+        "measured_ns": _num(v.measured_ns),
+        "limit_ns": _num(v.limit_ns),
+        "margin_ns": _num(v.margin_ns),
+    }
+    if v.detail:
+        d["detail"] = v.detail
+    return d
+
+
+def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> dict[str, Any]:
+    """The report as plain JSON-ready data (see the module docstring for the keys)."""
+    cap = report.capture
+    mapped = {sig.channel: role for role, sig in report.interface.signals.items()}
+    steps = report.steps
+    rates = report.rates
+    return {
+        "capture": {
+            "path": cap.path,
+            "format": cap.format,
+            "resolution_ns": _num(report.resolution_ns),
+            "duration_s": _num(cap.duration_s),
+            "samplerate_hz": _num(cap.samplerate_hz),
+            "channels": [
+                {
+                    "index": c.index,
+                    "name": c.name,
+                    "edges": int(len(c.edges)),
+                    "role": mapped.get(c.name),
+                }
+                for c in cap.channels
+            ],
+            "mapping": report.mapping,
+            "inverted": list(report.inverted),
+            "notes": list(report.notes),
+        },
+        "drive": {
+            "id": report.drive.id,
+            "name": report.drive.name,
+            "source": str(report.drive.path),
+            "interface": report.drive.interface,
+            "active_edge": report.active_edge,
+            "rules_not_stated": list(report.not_stated),
+            "rules_not_applicable": list(report.not_applicable),
+        },
+        "steps": {
+            "step_type": report.step_type.number,
+            "step_type_name": report.step_type.name,
+            "forward_dir_level": report.forward_level if report.step_type.number == 0 else None,
+            "count": steps.count,
+            "forward": steps.forward,
+            "reverse": steps.reverse,
+            "unknown_direction": steps.unknown,
+            "ambiguous": int(len(steps.ambiguous)),
+            "final_position": steps.final_position,
+        },
+        "rules": [_rule(r) for r in report.rules],
+        "violations": [_violation(v) for v in report.violations(violation_cap)],
+        "violations_total": report.total_violations,
+        "max_step_rate_hz": {
+            "drive": _num(rates.drive),
+            "drive_limited_by": rates.drive_limited_by,
+            "observed": _num(rates.observed),
+            "observed_at_s": _num(rates.observed_at_s),
+            "headroom": _num(rates.headroom),
+            "longest_active_ns": _num(rates.longest_active_ns),
+            "idle_min_ns": _num(rates.idle_min_ns),
+        },
+        "verdict": report.verdict,
+    }
+
+
+def render_json(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> str:
+    """The JSON report as text (indented, ending in a newline)."""
+    return json.dumps(report_dict(report, violation_cap), indent=2, ensure_ascii=False) + "\n"

@@ -1,0 +1,119 @@
+"""The result of checking one step interface of one capture against one drive.
+
+A :class:`Report` keeps everything a renderer needs: the capture (channels and edges, for timing
+diagrams), the decoded steps, every rule's measured intervals and per-interval verdicts (for
+histograms and GTKWave markers), the violations (materialised lazily, worst first) and the
+maximum step rates. Times are exact (ticks, :class:`~fractions.Fraction` ns / s / Hz).
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+from stepgen.steptypes import StepType
+from wavecheck.capture.model import Capture
+from wavecheck.checks.result import RuleResult, Verdict, Violation
+from wavecheck.decode import ActiveEdge, StepEvents
+from wavecheck.drives.model import Drive
+from wavecheck.interface import StepInterface
+from wavecheck.rates import MaxStepRates
+
+__all__ = ["Report", "overall_verdict"]
+
+
+def overall_verdict(verdicts: list[Verdict]) -> Verdict:
+    """fail if any rule fails, else indeterminate if any is, else pass (``unchecked`` rules do not
+    make a pass a fail; a report whose every rule is unchecked is ``unchecked``)."""
+    if "fail" in verdicts:
+        return "fail"
+    if "indeterminate" in verdicts:
+        return "indeterminate"
+    if "pass" in verdicts:
+        return "pass"
+    return "unchecked"
+
+
+@dataclass
+class Report:
+    """One check of one capture's step interface against one drive.
+
+    Attributes:
+        capture: the capture read (path, format, timebase, channels with their edge arrays).
+        drive: the drive checked against.
+        step_type: the LinuxCNC step type decoded.
+        interface: the mapped signals (role → channel, initial level, edges, inversion).
+        active_edge: the edge the drive steps on.
+        forward_level: the DIR level taken as forward (type 0).
+        resolution_ns: T used for the verdicts, exact ns (0 = exact).
+        steps: the decoded steps.
+        rules: one result per evaluated rule, in report order.
+        not_stated: rules of this step type the drive gives no limit for (not evaluated).
+        not_applicable: rules the drive states that this step type has no use for.
+        rates: the maximum step rates.
+        notes: things the user should know (assumptions, ambiguous steps, reader notes).
+    """
+
+    capture: Capture
+    drive: Drive
+    step_type: StepType
+    interface: StepInterface
+    active_edge: ActiveEdge
+    forward_level: int
+    resolution_ns: Fraction
+    steps: StepEvents
+    rules: list[RuleResult]
+    not_stated: tuple[str, ...]
+    not_applicable: tuple[str, ...]
+    rates: MaxStepRates
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def verdict(self) -> Verdict:
+        """The overall verdict (see :func:`overall_verdict`)."""
+        return overall_verdict([r.verdict for r in self.rules])
+
+    @property
+    def exit_code(self) -> int:
+        """0 pass, 1 a rule failed, 3 only indeterminate results (or nothing could be checked)."""
+        return {"pass": 0, "fail": 1, "indeterminate": 3, "unchecked": 3}[self.verdict]
+
+    def rule(self, rule_id: str) -> RuleResult | None:
+        """The result of ``rule_id``, or None when it was not evaluated."""
+        for r in self.rules:
+            if r.rule == rule_id:
+                return r
+        return None
+
+    @property
+    def mapping(self) -> dict[str, str]:
+        """Role → channel name as mapped."""
+        return {role: sig.channel for role, sig in self.interface.signals.items()}
+
+    @property
+    def inverted(self) -> tuple[str, ...]:
+        """Roles that were inverted."""
+        return tuple(r for r, s in self.interface.signals.items() if s.inverted)
+
+    @property
+    def total_violations(self) -> int:
+        """Number of violations over all rules."""
+        return sum(r.violations for r in self.rules)
+
+    def violations(self, limit: int | None = None) -> list[Violation]:
+        """Violations over all rules, worst first.
+
+        ``state_sequence`` errors come first (a decode error is worse than any margin), then
+        timing violations by margin (most negative first), ties in time order. ``limit`` caps
+        the list (None: all of them — may be large).
+        """
+        n = self.total_violations if limit is None else min(limit, self.total_violations)
+        per_rule = [r.worst_violations(n) for r in self.rules if r.violations]
+
+        def key(v: Violation) -> tuple[int, Fraction, int]:
+            if v.margin_ns is None:
+                return (0, Fraction(0), v.start_tick)
+            return (1, v.margin_ns, v.start_tick)
+
+        return list(heapq.merge(*per_rule, key=key))[:n]

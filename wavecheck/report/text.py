@@ -1,0 +1,133 @@
+"""The text report: verdict, what was checked, a rule table, worst violations, max step rates."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from wavecheck.checks.result import RuleResult
+from wavecheck.report.model import Report
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["DEFAULT_TEXT_VIOLATIONS", "render_text"]
+
+DEFAULT_TEXT_VIOLATIONS = 20
+
+
+def _ns(v: Fraction | None, signed: bool = False) -> str:
+    if v is None:
+        return "-"
+    text = format_time(v / 10**9)
+    return ("+" + text) if signed and v > 0 else text
+
+
+def _hz(v: Fraction | None) -> str:
+    return "-" if v is None else format_frequency(v)
+
+
+def _at(r: RuleResult) -> str:
+    t = r.min_margin_at_s
+    return "-" if t is None else f"{float(t):.9f} s"
+
+
+def _table(rows: list[list[str]]) -> list[str]:
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    return [
+        "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in rows
+    ]
+
+
+def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -> str:
+    """The human report; ``max_violations`` worst violations are listed, the rest counted."""
+    cap = report.capture
+    drive = report.drive
+    out: list[str] = [f"verdict: {report.verdict.upper()}"]
+    res = "exact" if report.resolution_ns == 0 else f"T = {_ns(report.resolution_ns)}"
+    rate = f"{format_frequency(cap.samplerate_hz)}, " if cap.samplerate_hz else ""
+    out.append(
+        f"capture: {cap.path} ({cap.format}, {rate}{res}, {format_time(cap.duration_s)}, "
+        f"{len(cap.channels)} channels)"
+    )
+    out.append(
+        f"drive:   {drive.id} — {drive.name} (steps on the {report.active_edge} edge; {drive.path})"
+    )
+    mapping = ", ".join(f"{role}={ch!r}" for role, ch in report.mapping.items())
+    inv = f"; inverted: {', '.join(report.inverted)}" if report.inverted else ""
+    out.append(
+        f"map:     {mapping}{inv}; step type {report.step_type.number} ({report.step_type.name})"
+    )
+    s = report.steps
+    line = f"steps:   {s.count}"
+    if report.step_type.number == 0 and report.interface.get("dir") is None:
+        line += " (direction unknown: no DIR mapped)"
+    else:
+        pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
+        line += f" (forward {s.forward}, reverse {s.reverse}"
+        if s.unknown:
+            line += f", unknown {s.unknown}"
+        line += f"; final position {pos}"
+        if report.step_type.number == 0:
+            line += f"; DIR {'low' if report.forward_level == 0 else 'high'} = forward"
+        line += ")"
+    out.append(line)
+    out.append("")
+    rows = [
+        ["rule", "limit", "checked", "fail", "indet", "shortest", "min margin", "at", "verdict"]
+    ]
+    for r in report.rules:
+        rows.append(
+            [
+                r.rule,
+                _ns(r.limit_ns),
+                str(r.checked),
+                str(r.violations),
+                str(r.indeterminate),
+                _ns(r.min_measured_ns),
+                _ns(r.min_margin_ns, signed=True),
+                _at(r),
+                r.verdict.upper() if r.verdict == "fail" else r.verdict,
+            ]
+        )
+    out += _table(rows)
+    if report.not_stated:
+        out.append(f"not stated by the drive (not checked): {', '.join(report.not_stated)}")
+    if report.not_applicable:
+        out.append(
+            f"stated by the drive but not used by step type {report.step_type.number}: "
+            f"{', '.join(report.not_applicable)}"
+        )
+    for r in report.rules:
+        if r.indeterminate:
+            hz = r.decide_samplerate_hz
+            how = (
+                f"sampling faster than {format_frequency(hz)} would decide the closest one"
+                if hz is not None
+                else "the closest one measured exactly the limit; no sample rate decides it"
+            )
+            out.append(
+                f"{r.rule}: {r.indeterminate} interval(s) indeterminate at this resolution; {how}"
+            )
+    total = report.total_violations
+    if total:
+        shown = report.violations(max_violations)
+        out.append("")
+        out.append(f"violations: {total} (worst first)")
+        for v in shown:
+            if v.margin_ns is None:
+                out.append(f"  {v.rule:<14} at {float(v.time_s):.9f} s  {v.detail}")
+            else:
+                out.append(
+                    f"  {v.rule:<14} at {float(v.time_s):.9f} s  measured {_ns(v.measured_ns)}"
+                    f"  limit {_ns(v.limit_ns)}  margin {_ns(v.margin_ns, signed=True)}"
+                )
+        if total > len(shown):
+            out.append(f"  … and {total - len(shown)} more")
+    rates = report.rates
+    out.append("")
+    by = f" ({rates.drive_limited_by})" if rates.drive_limited_by else ""
+    out.append(
+        f"max step rate: drive {_hz(rates.drive)}{by}, observed {_hz(rates.observed)}, "
+        f"headroom {_hz(rates.headroom)}"
+    )
+    for note in report.notes:
+        out.append(f"note: {note}")
+    return "\n".join(out) + "\n"
