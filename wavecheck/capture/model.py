@@ -74,6 +74,8 @@ class Capture:
         end: last tick of the captured window (``end - start`` is the duration).
         channels: the 1-bit channels, in file order.
         notes: things the reader skipped or assumed (vectors, reals, comments), one line each.
+        skipped: signals present in the file that are not 1-bit channels, name → what they are
+            (``"an 8-bit vector"``, ``"a real"``), so mapping one gives a precise error.
     """
 
     path: str
@@ -85,6 +87,7 @@ class Capture:
     end: int
     channels: list[Channel]
     notes: list[str] = field(default_factory=list)
+    skipped: dict[str, str] = field(default_factory=dict)
 
     @property
     def duration_s(self) -> Fraction:
@@ -116,6 +119,12 @@ class Capture:
             for ch in self.channels:
                 if ch.index == ref:
                     return ch
+        if isinstance(ref, str) and (ref in self.skipped or ref.strip() in self.skipped):
+            what = self.skipped.get(ref) or self.skipped[ref.strip()]
+            raise UsageError(
+                f"{self.path}: channel {ref!r} is {what}, not a 1-bit signal "
+                "(map a 1-bit wire; split vectors into single bits when dumping)"
+            )
         available = ", ".join(f"{c.index}={c.name!r}" for c in self.channels) or "none"
         raise UsageError(
             f"{self.path}: no channel {ref!r} (channels: {available}; map by name or index, "

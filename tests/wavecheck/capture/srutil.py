@@ -1,0 +1,54 @@
+"""Build small .sr files for tests (an independent writer: zipfile + numpy)."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+
+def write_sr(
+    path: Path,
+    samples: npt.NDArray[np.uint8] | bytes,
+    *,
+    probes: dict[int, str] | None = None,
+    total: int = 8,
+    unitsize: int = 1,
+    samplerate: str | None = "1 MHz",
+    chunk: int = 1 << 20,
+    extra_meta: str = "",
+    members: dict[str, bytes] | None = None,
+    version: bytes = b"2",
+) -> Path:
+    """Write ``samples`` (raw bytes, ``unitsize`` per sample) as ``logic-1-N`` chunks of ``chunk`` bytes."""
+    raw = samples if isinstance(samples, bytes) else np.ascontiguousarray(samples).tobytes()
+    probes = probes if probes is not None else {i: f"D{i}" for i in range(total)}
+    meta = ["[global]", "sigrok version=0.5.2", "", "[device 1]", "capturefile=logic-1"]
+    meta.append(f"total probes={total}")
+    if samplerate is not None:
+        meta.append(f"samplerate={samplerate}")
+    meta += [f"probe{i + 1}={n}" for i, n in sorted(probes.items())]
+    if unitsize:
+        meta.append(f"unitsize={unitsize}")
+    text = "\n".join(meta) + "\n" + extra_meta
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("version", version, compress_type=zipfile.ZIP_STORED)
+        z.writestr("metadata", text, compress_type=zipfile.ZIP_DEFLATED)
+        if members is None:
+            for k, i in enumerate(range(0, len(raw), chunk)):
+                z.writestr(
+                    f"logic-1-{k + 1}", raw[i : i + chunk], compress_type=zipfile.ZIP_DEFLATED
+                )
+        else:
+            for name, data in members.items():
+                z.writestr(name, data, compress_type=zipfile.ZIP_DEFLATED)
+    return path
+
+
+def edges_by_unpacking(raw: bytes, unitsize: int, bit: int) -> tuple[int, list[int]]:
+    """Initial level and edge sample numbers of ``bit``, with unpackbits over all samples."""
+    u8 = np.frombuffer(raw, np.uint8).reshape(-1, unitsize)
+    bits = np.unpackbits(u8, axis=1, bitorder="little")[:, bit].astype(np.int8)
+    return int(bits[0]), (np.flatnonzero(np.diff(bits)) + 1).tolist()

@@ -1,0 +1,220 @@
+"""VCD reader: semantics, the shared corpus, fast path = simple path, and bad input."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.conftest import shared_capture, write_vcd
+from wavecheck.capture.model import Capture
+from wavecheck.capture.vcd import read_vcd, read_vcd_reference
+from wavecheck.errors import CaptureError, UsageError
+
+CORPUS = [
+    "sigrok-dumps/spi/spiflash_read16/chronovu_la8/chronovu_la8_spiflash_read16.vcd",
+    "sigrok-dumps/misc/vcd/real-analog.vcd",
+    "sigrok-dumps/misc/vcd/vectors-integers.vcd",
+]
+
+
+def assert_same(a: Capture, b: Capture) -> None:
+    assert (a.start, a.end, a.timebase, a.resolution_ticks) == (
+        b.start,
+        b.end,
+        b.timebase,
+        b.resolution_ticks,
+    )
+    assert [c.name for c in a.channels] == [c.name for c in b.channels]
+    for ca, cb in zip(a.channels, b.channels, strict=True):
+        assert (ca.initial, ca.known_from) == (cb.initial, cb.known_from), ca.name
+        np.testing.assert_array_equal(ca.edges, cb.edges, err_msg=ca.name)
+        np.testing.assert_array_equal(ca.xz_times, cb.xz_times, err_msg=ca.name)
+        assert ca.edges.dtype == np.int64
+        assert np.all(np.diff(ca.edges) > 0)
+
+
+def write(tmp_path: Path, text: str, name: str = "t.vcd") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+HEAD = '$timescale 1 ns $end\n$scope module top $end\n$var wire 1 ! a $end\n$var wire 1 " b $end\n$upscope $end\n$enddefinitions $end\n'
+
+
+@pytest.mark.parametrize("relpath", CORPUS)
+@pytest.mark.parametrize("chunk", [4 << 20, 97, 8, 3])
+def test_corpus_fast_equals_simple(relpath: str, chunk: int) -> None:
+    path = shared_capture(relpath)
+    assert_same(read_vcd(path, chunk_bytes=chunk), read_vcd_reference(path))
+
+
+def test_chronovu_channels_and_edges() -> None:
+    cap = read_vcd(shared_capture(CORPUS[0]))
+    assert [c.name for c in cap.channels] == [f"Channel_{i}" for i in range(8)]
+    assert cap.timebase.tick_ns == 10
+    assert cap.samplerate_hz is None and cap.resolution_ticks == 0
+    # count the toggles of Channel_3 (id "3") with a plain text scan, independent of both readers
+    level, edges = None, 0
+    for line in shared_capture(CORPUS[0]).read_text().split("$enddefinitions $end")[1].split():
+        if line.endswith("3") and line[0] in "01" and len(line) == 2:
+            if level is not None and line[0] != level:
+                edges += 1
+            level = line[0]
+    assert len(cap.channel("Channel_3").edges) == edges > 0
+
+
+def test_sigrok_comment_gives_samplerate_and_reals_are_skipped() -> None:
+    cap = read_vcd(shared_capture(CORPUS[1]))
+    assert cap.samplerate_hz == 200_000
+    assert cap.resolution_ticks == 5  # 5 us at a 1 us timescale
+    assert [c.name for c in cap.channels] == [f"D{i}" for i in range(8)]
+    assert cap.skipped["A0"] == "a real"
+    with pytest.raises(UsageError, match="'A0' is a real"):
+        cap.channel("A0")
+
+
+def test_vectors_skipped_and_findable() -> None:
+    cap = read_vcd(shared_capture(CORPUS[2]))
+    assert {c.name for c in cap.channels} == {"bit_i", "clk_i", "rst_i"}
+    assert any("skipped" in n for n in cap.notes)
+    with pytest.raises(UsageError, match="is a 6-bit vector"):
+        cap.channel("period_count")
+    with pytest.raises(UsageError, match="32-bit integer"):
+        cap.channel("tb_uwam_psf2.i[31:0]")
+
+
+@pytest.mark.parametrize(
+    ("body", "a_init", "a_edges", "b_edges"),
+    [
+        ('#0 0! 0"\n#5 1!\n#5 0!\n#7 1!\n#9\n', 0, [7], []),  # zero-width glitch: last wins
+        ('#0 0! 0"\n#5 1! 1!\n#6 1!\n#8 0!\n#9\n', 0, [5, 8], []),  # same-value changes
+        ('#0 0! 0"\n#3 1!\n#3 1"\n#3 0"\n#4\n', 0, [3], []),  # repeated timestamp lines
+        ('$dumpvars 1! 0" $end\n#2 0!\n#4 1"\n', 1, [2], [4]),  # values before the first #
+        ('#0 1! 0"\n$comment b 0! #1 $end\n#2 0!\n', 1, [2], []),  # body comment
+        ('#0 0! 0"\n#1 b1 !\n#2 b0 !\n', 0, [1, 2], []),  # 'b' value of a 1-bit wire
+        ('#0 0! 0"\n#1 1!\r\n#2 0!\r\n', 0, [1, 2], []),  # CRLF
+        ('#0 0! 0"\n#1 H!\n#2 L!\n', 0, [1, 2], []),  # 9-state strengths
+    ],
+)
+@pytest.mark.parametrize("chunk", [1 << 20, 5, 2])
+def test_semantics_table(
+    tmp_path: Path, body: str, a_init: int, a_edges: list[int], b_edges: list[int], chunk: int
+) -> None:
+    path = write(tmp_path, HEAD + body)
+    for cap in (read_vcd(path, chunk_bytes=chunk), read_vcd_reference(path)):
+        a, b = cap.channel("a"), cap.channel("b")
+        assert a.initial == a_init
+        assert a.edges.tolist() == a_edges
+        assert b.edges.tolist() == b_edges
+
+
+def test_xz_values_are_reported(tmp_path: Path) -> None:
+    path = write(tmp_path, HEAD + '#0 x! z"\n#4 1!\n#6 x!\n#7 z!\n#8 0!\n#9 0"\n#10\n')
+    for cap in (read_vcd(path, chunk_bytes=3), read_vcd_reference(path)):
+        a, b = cap.channel("a"), cap.channel("b")
+        assert (a.known_from, a.initial, a.edges.tolist(), a.xz_times.tolist()) == (4, 1, [8], [6])
+        assert (b.known_from, b.initial, b.edges.tolist(), b.xz_times.tolist()) == (9, 0, [], [])
+
+
+@pytest.mark.parametrize(
+    ("timescale", "tick"),
+    [
+        ("1 fs", Fraction(1, 10**15)),
+        ("10ps", Fraction(1, 10**11)),
+        ("100 s", Fraction(100)),
+        ("1 us", Fraction(1, 10**6)),
+        ("1\n ms", Fraction(1, 1000)),
+    ],
+)
+def test_timescales(tmp_path: Path, timescale: str, tick: Fraction) -> None:
+    path = write_vcd(tmp_path / "t.vcd", {"STEP": (0, [10, 20])}, timescale=timescale)
+    cap = read_vcd(path)
+    assert cap.timebase.tick_s == tick
+    assert cap.channel("STEP").edges.tolist() == [10, 20]
+
+
+def test_scopes_collide_use_full_names(tmp_path: Path) -> None:
+    text = (
+        "$timescale 1 ns $end\n$scope module top $end\n$scope module x $end\n$var wire 1 ! step $end\n"
+        '$upscope $end\n$scope module y $end\n$var wire 1 " step $end\n$var wire 1 # dir $end\n'
+        '$upscope $end\n$upscope $end\n$enddefinitions $end\n#0 0! 0" 0#\n#5 1"\n#6\n'
+    )
+    cap = read_vcd(write(tmp_path, text))
+    assert [c.name for c in cap.channels] == ["top.x.step", "top.y.step", "dir"]
+    assert cap.channel("top.y.step").edges.tolist() == [5]
+
+
+def test_multichar_ids(tmp_path: Path) -> None:
+    names = {f"s{i}": (i % 2, [10 + i, 200 + i]) for i in range(120)}  # ids run past one byte
+    ids = [chr(33 + (i % 94)) + ("" if i < 94 else chr(33 + i // 94)) for i in range(120)]
+    lines = ["$timescale 1 ns $end", "$scope module top $end"]
+    lines += [f"$var wire 1 {ids[i]} s{i} $end" for i in range(120)]
+    lines += ["$upscope $end", "$enddefinitions $end", "#0"]
+    lines += [f"{names[f's{i}'][0]}{ids[i]}" for i in range(120)]
+    for t in range(10, 330):
+        ev = [f"#{t}"] + [
+            f"{(i % 2) ^ 1 if t < 200 + i else i % 2}{ids[i]}"
+            for i in range(120)
+            if t in (10 + i, 200 + i)
+        ]
+        if len(ev) > 1:
+            lines += ev
+    lines.append("#400")
+    path = write(tmp_path, "\n".join(lines) + "\n")
+    for chunk in (1 << 20, 11):
+        cap = read_vcd(path, chunk_bytes=chunk)
+        for i in (0, 93, 94, 119):
+            ch = cap.channel(f"s{i}")
+            assert (ch.initial, ch.edges.tolist()) == (i % 2, [10 + i, 200 + i])
+        assert_same(cap, read_vcd_reference(path))
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("", "empty"),
+        ("hello world\n", "unexpected 'hello' in the header"),
+        (HEAD.replace("1 ns", "1 xs"), r"line 1: bad \$timescale"),
+        (HEAD.replace("1 ns", "ns"), "bad \\$timescale"),
+        (HEAD.replace("1 ns", "1000 s"), "outside"),
+        (HEAD[:70], "cut off in its header|without \\$end"),
+        (HEAD + '#0 0! 0"\n#100 1!\n#50 0!\n', r"line 9 .*time goes backwards: #50 after #100"),
+        (HEAD + '#0 0! 0"\n0?\n', "line 8 .*unknown id code"),
+        (HEAD + '#0 0! 0"\ngarbage line\n', "line 8 .*unexpected 'garbage'"),
+        (HEAD + '#0 0! 0"\nhello\n', "line 8 .*unknown id code in 'hello'"),
+        (HEAD + '#0 0! 0"\n#10 1', "without an id code"),
+        (HEAD + '#0 0! 0"\n#10 1!\n' + "\0" * 4096, "NUL"),
+        (HEAD + '#0 0! 0"\n#1x\n', "bad timestamp"),
+        (HEAD + '#0 0! 0"\n#-5\n', "bad timestamp"),
+        (HEAD, "no timestamps"),
+        (HEAD + '#0 0! 0"\n$comment never closed\n', "without \\$end"),
+        (HEAD + '#0 0! 0"\n$var wire 1 % c $end\n', "unexpected '\\$var'"),
+    ],
+)
+@pytest.mark.parametrize("chunk", [1 << 20, 4])
+def test_bad_input_is_one_line_capture_error(
+    tmp_path: Path, text: str, match: str, chunk: int
+) -> None:
+    path = write(tmp_path, text)
+    with pytest.raises(CaptureError, match=match) as info:
+        read_vcd(path, chunk_bytes=chunk)
+    assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(CaptureError, match="no such file"):
+        read_vcd(tmp_path / "nope.vcd")
+    with pytest.raises(CaptureError, match="folder"):
+        read_vcd(tmp_path)
+
+
+def test_user_resolution_and_samplerate(tmp_path: Path) -> None:
+    path = write_vcd(tmp_path / "t.vcd", {"STEP": (0, [10, 20])}, timescale="1 ns")
+    assert read_vcd(path, samplerate=Fraction(8_000_000)).resolution_ticks == 125
+    cap = read_vcd(path, samplerate=Fraction(3_000_000))
+    assert cap.resolution_ticks == 334 and any("rounded up" in n for n in cap.notes)
+    assert read_vcd(path, resolution_s=Fraction(1, 10**6)).resolution_ticks == 1000

@@ -1,0 +1,387 @@
+"""Native sigrok ``.sr`` (srzip) reader: streams the logic chunks and keeps only the edges.
+
+Layout (``../shared/reference/sigrok.md`` §5): a zip with ``version`` (1 or 2), ``metadata`` (an
+INI file: ``samplerate``, ``total probes``, ``probeN`` names, ``unitsize``, ``capturefile``) and
+the raw samples in ``logic-1`` or ``logic-1-1``, ``logic-1-2``, …, concatenated in numeric order.
+Each sample is ``unitsize`` bytes, little-endian, bit n = probe n+1.
+
+Memory is bounded by one read of ``chunk_bytes`` plus the edges: samples are never all in memory.
+Per read, each byte column is XORed with itself shifted by one sample (and with the last sample
+of the previous read), so edge finding is numpy work over the changed samples only. An edge seen
+at sample i (its value differs from sample i−1) has tick i; the tick is one sample period.
+"""
+
+from __future__ import annotations
+
+import configparser
+import os
+import re
+import zipfile
+import zlib
+from fractions import Fraction
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import Capture, Channel
+from wavecheck.errors import CaptureError, UnitError, UsageError
+from wavecheck.timebase import Timebase
+from wavecheck.units import format_frequency, parse_frequency
+
+__all__ = [
+    "DEFAULT_CHUNK_BYTES",
+    "MAX_MEMBER_BYTES",
+    "MAX_TOTAL_BYTES",
+    "SrMetadata",
+    "read_sr",
+    "read_sr_metadata",
+]
+
+DEFAULT_CHUNK_BYTES = 4 << 20
+MAX_MEMBER_BYTES = 1 << 30  # one chunk member inflated (sigrok writes 4–10 MiB)
+MAX_TOTAL_BYTES = 1 << 40  # the whole capture inflated (1 TiB: 1e12 samples at unitsize 1)
+_MAX_METADATA_BYTES = 1 << 20
+
+
+class SrMetadata:
+    """What a ``.sr`` file's ``metadata`` says, plus its ordered chunk members."""
+
+    def __init__(
+        self,
+        samplerate: Fraction | None,
+        samplerate_text: str | None,
+        total_probes: int,
+        unitsize: int,
+        probes: dict[int, str],
+        members: list[zipfile.ZipInfo],
+        total_analog: int,
+    ) -> None:
+        self.samplerate = samplerate
+        self.samplerate_text = samplerate_text
+        self.total_probes = total_probes
+        self.unitsize = unitsize
+        self.probes = probes  # probe index from 0 → name (enabled probes only)
+        self.members = members
+        self.total_analog = total_analog
+
+    @property
+    def nsamples(self) -> int:
+        return sum(m.file_size for m in self.members) // self.unitsize
+
+
+def _open_zip(path: str | os.PathLike[str]) -> zipfile.ZipFile:
+    try:
+        return zipfile.ZipFile(path)
+    except FileNotFoundError:
+        raise CaptureError(path, None, "no such file") from None
+    except IsADirectoryError:
+        raise CaptureError(path, None, "is a folder, not a capture file") from None
+    except zipfile.BadZipFile as err:
+        raise CaptureError(
+            path, None, f"not a sigrok .sr file: {err} (truncated or not a zip archive)"
+        ) from None
+    except OSError as err:
+        raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+
+
+def _int(path: str | os.PathLike[str], dev: configparser.SectionProxy, key: str) -> int | None:
+    if key not in dev:
+        return None
+    text = dev[key].strip()
+    if not re.fullmatch(r"\d{1,9}", text):
+        raise CaptureError(path, "metadata", f"{key}={text!r} is not a whole number")
+    return int(text)
+
+
+def read_sr_metadata(
+    path: str | os.PathLike[str],
+    zf: zipfile.ZipFile,
+    *,
+    max_member_bytes: int = MAX_MEMBER_BYTES,
+    max_total_bytes: int = MAX_TOTAL_BYTES,
+) -> SrMetadata:
+    """Parse and sanity-check ``version`` and ``metadata``; list the chunk members in order.
+
+    Raises:
+        CaptureError: naming the member or metadata key that is wrong.
+    """
+    names = set(zf.namelist())
+    for member in ("version", "metadata"):
+        if member not in names:
+            raise CaptureError(path, None, f"no {member!r} member: not a sigrok .sr file")
+    for member in ("version", "metadata"):
+        if zf.getinfo(member).file_size > _MAX_METADATA_BYTES:
+            raise CaptureError(path, f"member {member}", "is implausibly large (corrupt file?)")
+    try:
+        version = zf.read("version").strip()
+        raw_meta = zf.read("metadata")
+    except (zipfile.BadZipFile, zlib.error, EOFError) as err:
+        raise CaptureError(path, "metadata", f"cannot be unpacked: {err}") from None
+    if version not in (b"1", b"2"):
+        raise CaptureError(
+            path, "member version", f"unsupported .sr version {version[:10]!r} (known: 1, 2)"
+        )
+    cp = configparser.ConfigParser(interpolation=None, delimiters=("=",), strict=False)
+    cp.optionxform = str  # type: ignore[assignment,method-assign]
+    try:
+        cp.read_string(raw_meta.decode("utf-8"))
+    except (UnicodeDecodeError, configparser.Error) as err:
+        msg = str(err).splitlines()[0]
+        raise CaptureError(path, "metadata", f"cannot be parsed: {msg}") from None
+    if "device 1" not in cp:
+        raise CaptureError(path, "metadata", "has no [device 1] section")
+    dev = cp["device 1"]
+    total = _int(path, dev, "total probes")
+    unitsize = _int(path, dev, "unitsize")
+    if total is None or total < 1:
+        raise CaptureError(path, "metadata", "no logic channels ('total probes' missing or 0)")
+    if unitsize is None:
+        raise CaptureError(
+            path, "metadata", "no 'unitsize' (the file holds no logic data; sigrok ignores it too)"
+        )
+    if not 1 <= unitsize <= 64:
+        raise CaptureError(path, "metadata", f"unitsize={unitsize} is not 1 … 64 bytes per sample")
+    if total > 8 * unitsize:
+        raise CaptureError(
+            path,
+            "metadata",
+            f"total probes={total} does not fit in unitsize={unitsize} bytes ({8 * unitsize} bits)",
+        )
+    probes: dict[int, str] = {}
+    for key, value in dev.items():
+        match = re.fullmatch(r"probe(\d+)", key)
+        if match:
+            number = int(match.group(1))
+            if not 1 <= number <= total:
+                raise CaptureError(
+                    path, "metadata", f"{key}={value!r} is outside total probes={total}"
+                )
+            probes[number - 1] = value
+    rate_text = dev.get("samplerate")
+    rate: Fraction | None = None
+    if rate_text is not None:
+        try:
+            rate = parse_frequency(rate_text.strip(), default_unit="Hz")
+        except UnitError:
+            raise CaptureError(
+                path, "metadata", f"samplerate={rate_text!r} is not a frequency"
+            ) from None
+        if rate <= 0:
+            raise CaptureError(path, "metadata", f"samplerate={rate_text!r} must be positive")
+    base = dev.get("capturefile", "logic-1").strip()
+    if base in names:
+        members = [zf.getinfo(base)]
+    else:
+        numbered: dict[int, zipfile.ZipInfo] = {}
+        pattern = re.compile(re.escape(base) + r"-(\d+)")
+        for info in zf.infolist():
+            match = pattern.fullmatch(info.filename)
+            if match:
+                numbered[int(match.group(1))] = info
+        if not numbered:
+            raise CaptureError(path, None, f"no logic data (no member {base!r} or {base}-1)")
+        missing = sorted(set(range(1, max(numbered) + 1)) - set(numbered))
+        if missing:
+            raise CaptureError(
+                path,
+                f"member {base}-{missing[0]}",
+                f"is missing ({len(numbered)} chunks present, numbered up to {max(numbered)}); "
+                "the capture has a gap",
+            )
+        members = [numbered[k] for k in sorted(numbered)]
+    total_bytes = 0
+    for info in members:
+        if info.file_size % unitsize:
+            raise CaptureError(
+                path,
+                f"member {info.filename}",
+                f"is {info.file_size} bytes, not a whole number of {unitsize}-byte samples",
+            )
+        if info.file_size > max_member_bytes:
+            raise CaptureError(
+                path,
+                f"member {info.filename}",
+                f"would unpack to {info.file_size} bytes, more than the {max_member_bytes}-byte "
+                "limit for one chunk (a decompression bomb or corrupt file?)",
+            )
+        total_bytes += info.file_size
+    if total_bytes > max_total_bytes:
+        raise CaptureError(
+            path,
+            None,
+            f"would unpack to {total_bytes} bytes, more than the {max_total_bytes}-byte limit "
+            "(a decompression bomb or corrupt file?)",
+        )
+    if total_bytes == 0:
+        raise CaptureError(path, None, "holds no samples")
+    analog = _int(path, dev, "total analog") or 0
+    return SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
+
+
+class _EdgeFinder:
+    """Edges of the enabled bits over a stream of sample blocks."""
+
+    def __init__(self, unitsize: int, bits: list[int]) -> None:
+        self.unitsize = unitsize
+        self.bits = bits
+        # byte column → [(bit within byte, output slot)]
+        self.columns: dict[int, list[tuple[int, int]]] = {}
+        for slot, bit in enumerate(bits):
+            self.columns.setdefault(bit // 8, []).append((bit % 8, slot))
+        self.prev: dict[int, int] = {}
+        self.initial = [0] * len(bits)
+        self.parts: list[list[npt.NDArray[np.int64]]] = [[] for _ in bits]
+        self.nsamples = 0
+
+    def add(self, block: npt.NDArray[np.uint8]) -> None:
+        """Add whole samples (``len(block)`` a multiple of ``unitsize``)."""
+        n = len(block) // self.unitsize
+        if n == 0:
+            return
+        rows = block.reshape(n, self.unitsize)
+        base = self.nsamples
+        for col, slots in self.columns.items():
+            x = rows[:, col] if self.unitsize > 1 else block
+            if col not in self.prev:
+                first = int(x[0])
+                for bit, slot in slots:
+                    self.initial[slot] = (first >> bit) & 1
+            else:
+                d0 = int(x[0]) ^ self.prev[col]
+                if d0:
+                    for bit, slot in slots:
+                        if (d0 >> bit) & 1:
+                            self.parts[slot].append(np.array([base], dtype=np.int64))
+            self.prev[col] = int(x[-1])
+            if n > 1:
+                d = np.bitwise_xor(x[1:], x[:-1])
+                nz = np.flatnonzero(d)
+                if len(nz):
+                    dv = d[nz]
+                    pos = nz + (base + 1)
+                    if len(slots) == 1 and slots[0][0] == 0 and not (dv & 0xFE).any():
+                        self.parts[slots[0][1]].append(pos)
+                        continue
+                    for bit, slot in slots:
+                        sel = (dv & np.uint8(1 << bit)) != 0
+                        if sel.any():
+                            self.parts[slot].append(pos[sel])
+        self.nsamples += n
+
+    def edges(self, slot: int) -> npt.NDArray[np.int64]:
+        parts = self.parts[slot]
+        self.parts[slot] = []
+        if not parts:
+            return np.zeros(0, dtype=np.int64)
+        return np.concatenate(parts).astype(np.int64, copy=False)
+
+
+def read_sr(
+    path: str | os.PathLike[str],
+    *,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+    chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+    max_member_bytes: int = MAX_MEMBER_BYTES,
+    max_total_bytes: int = MAX_TOTAL_BYTES,
+) -> Capture:
+    """Read a sigrok ``.sr`` file chunk by chunk into edge arrays (tick = one sample).
+
+    Args:
+        path: the ``.sr`` file.
+        samplerate: sample rate in Hz; required when the metadata has none, and overrides it
+            (with a note) when it differs.
+        resolution_s: resolution in seconds, if coarser than one sample period.
+        chunk_bytes: bytes inflated and scanned at a time (tests use tiny values).
+        max_member_bytes / max_total_bytes: refuse files that would unpack to more.
+
+    Raises:
+        CaptureError: unreadable zip, bad metadata, missing/corrupt chunk (names the member).
+    """
+    if chunk_bytes < 1:
+        raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
+    with _open_zip(path) as zf:
+        meta = read_sr_metadata(
+            path, zf, max_member_bytes=max_member_bytes, max_total_bytes=max_total_bytes
+        )
+        notes: list[str] = []
+        rate = meta.samplerate
+        if samplerate is not None:
+            if samplerate <= 0:
+                raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
+            if rate is not None and rate != samplerate:
+                notes.append(
+                    f"sample rate {format_frequency(samplerate)} given by the user overrides "
+                    f"the file's {meta.samplerate_text}"
+                )
+            elif rate is None:
+                notes.append(
+                    f"the file states no sample rate; using {format_frequency(samplerate)} "
+                    "given by the user"
+                )
+            rate = samplerate
+        if rate is None:
+            raise CaptureError(
+                path,
+                "metadata",
+                "states no samplerate, so its time base is unknown (give it, e.g. --samplerate 12MHz)",
+            )
+        bits = sorted(meta.probes)
+        finder = _EdgeFinder(meta.unitsize, bits)
+        step = max(meta.unitsize, chunk_bytes - chunk_bytes % meta.unitsize)
+        for info in meta.members:
+            got = 0
+            try:
+                with zf.open(info) as fh:
+                    carry = b""
+                    while True:
+                        data = fh.read(step)
+                        if not data:
+                            break
+                        got += len(data)
+                        if carry:
+                            data, carry = carry + data, b""
+                        whole = len(data) - len(data) % meta.unitsize
+                        if whole < len(data):
+                            carry = data[whole:]
+                        finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+            except (zipfile.BadZipFile, zlib.error, EOFError, OSError) as err:
+                raise CaptureError(
+                    path,
+                    f"member {info.filename}",
+                    f"is corrupt after {got} bytes: {err} (the file is damaged)",
+                ) from None
+            if got != info.file_size:
+                raise CaptureError(
+                    path,
+                    f"member {info.filename}",
+                    f"gave {got} bytes, not the {info.file_size} it declares (the file is damaged)",
+                )
+        if meta.total_analog:
+            notes.append(f"skipped {meta.total_analog} analog channel(s)")
+        disabled = meta.total_probes - len(bits)
+        if disabled:
+            notes.append(f"{disabled} of {meta.total_probes} logic channels were disabled")
+        tb = Timebase.from_samplerate(rate)
+        res = 1
+        if resolution_s is not None:
+            ticks = resolution_s / tb.tick_s
+            res = max(1, -((-ticks.numerator) // ticks.denominator))
+            if res != 1:
+                notes.append(f"resolution set to {res} samples by the user")
+        channels = [
+            Channel(name=meta.probes[bit], index=bit, initial=finder.initial[slot],
+                    edges=finder.edges(slot))
+            for slot, bit in enumerate(bits)
+        ]  # fmt: skip
+    return Capture(
+        path=str(path),
+        format="sr",
+        timebase=tb,
+        resolution_ticks=res,
+        samplerate_hz=rate,
+        start=0,
+        end=finder.nsamples,
+        channels=channels,
+        notes=notes,
+    )

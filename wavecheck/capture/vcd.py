@@ -1,0 +1,900 @@
+"""VCD reader: 1-bit wires of any scope into exact edge arrays, streamed in chunks.
+
+Chosen by measurement (``../shared/reference/vcd-perf.md``, ``bench/vcd_read.py``): a vectorised
+numpy tokenizer over fixed-size chunks beats pywellen and vcdvcd and lets us own the error
+messages. The header is parsed in Python; the body is split into whitespace tokens with numpy,
+timestamps are decoded digit column by digit column, id codes go through a lookup table (or a
+packed-integer ``searchsorted`` for multi-character ids), and each chunk's changes are turned
+into edges at once. Changes at a chunk's last timestamp are held back until the next chunk, so a
+timestamp split over two chunks cannot create a fake edge. Memory: one chunk of text plus its
+token arrays, plus the edge arrays (the pieces and, at the end, their concatenation).
+
+Semantics (identical in :func:`read_vcd_reference`, the deliberately simple path):
+
+* times are the integer timestamps, ticks of ``$timescale``; changes before the first ``#`` are
+  at 0; a timestamp smaller than the previous one is an error;
+* several changes of one signal at one timestamp: the last one wins (no zero-width glitch);
+* a change to the current level is not an edge;
+* ``x``/``z`` (also ``u w -``) are unknown: the level before the first known value is not
+  invented (:attr:`Channel.known_from`), a later switch to unknown is listed in
+  :attr:`Channel.xz_times`, and edges compare known levels only; ``l``/``h`` read as 0/1;
+* vectors, integers and reals are skipped (listed in :attr:`Capture.skipped` and a note), except
+  a ``b`` change of a 1-bit signal, which is read as a scalar.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import Capture, Channel
+from wavecheck.errors import CaptureError, UnitError, UsageError
+from wavecheck.timebase import Timebase
+from wavecheck.units import parse_frequency
+
+__all__ = ["DEFAULT_CHUNK_BYTES", "VcdHeader", "parse_header", "read_vcd", "read_vcd_reference"]
+
+DEFAULT_CHUNK_BYTES = 4 << 20
+_MAX_HEADER_BYTES = 64 << 20
+_MAX_ID_LEN = 8
+_TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
+_SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
+_NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
+
+# Byte classes of the body tokenizer.
+_WS = np.zeros(256, dtype=bool)
+_WS[[9, 10, 11, 12, 13, 32]] = True
+_K_BAD, _K_TIME, _K_SCALAR, _K_VEC, _K_KEYWORD, _K_SKIP, _K_VECID = 0, 1, 2, 3, 4, 5, 6
+_KIND = np.zeros(256, dtype=np.int8)
+_KIND[ord("#")] = _K_TIME
+for _c in "01xXzZuUwWlLhH-":
+    _KIND[ord(_c)] = _K_SCALAR
+for _c in "bBrR":
+    _KIND[ord(_c)] = _K_VEC
+_KIND[ord("$")] = _K_KEYWORD
+# Value codes: 0, 1, 2 = unknown (x u w -), 3 = z.
+_VALUE = np.full(256, -1, dtype=np.int8)
+for _c, _v in {"0": 0, "1": 1, "l": 0, "L": 0, "h": 1, "H": 1, "z": 3, "Z": 3}.items():
+    _VALUE[ord(_c)] = _v
+for _c in "xXuUwW-":
+    _VALUE[ord(_c)] = 2
+_BODY_KEYWORDS = {b"$dumpvars", b"$dumpall", b"$dumpon", b"$dumpoff", b"$end"}
+_SCALAR_VALUES = {
+    "0": 0, "1": 1, "l": 0, "h": 1, "x": 2, "u": 2, "w": 2, "-": 2, "z": 3,
+}  # fmt: skip
+
+
+@dataclass
+class VarDecl:
+    """One ``$var`` of the header."""
+
+    type: str
+    size: int
+    id_code: str
+    reference: str  # with its bit select, e.g. "data[3]"
+    scope: tuple[str, ...]
+    line: int
+
+    @property
+    def full_name(self) -> str:
+        return ".".join((*self.scope, self.reference))
+
+
+@dataclass
+class VcdHeader:
+    """What the header declares; ``body_offset`` is the byte after ``$enddefinitions $end``."""
+
+    timescale: Timebase | None
+    timescale_text: str | None
+    vars: list[VarDecl]
+    comments: list[str]
+    body_offset: int
+    body_line: int
+
+
+def _line_of(data: bytes, offset: int) -> int:
+    return data.count(b"\n", 0, offset) + 1
+
+
+def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
+    """Parse the declarations at the start of ``data`` (which must contain the whole header).
+
+    Raises:
+        CaptureError: with the line number, for a bad timescale, ``$var`` or missing
+            ``$enddefinitions``.
+    """
+    tokens = [(m.group().decode("latin-1"), m.start(), m.end()) for m in re.finditer(rb"\S+", data)]
+    scope: list[str] = []
+    decls: list[VarDecl] = []
+    comments: list[str] = []
+    timescale: Timebase | None = None
+    timescale_text: str | None = None
+    i, n = 0, len(tokens)
+
+    def section(start: int) -> tuple[list[str], int]:
+        j = start + 1
+        while j < n and tokens[j][0] != "$end":
+            j += 1
+        if j >= n:
+            raise CaptureError(
+                path,
+                f"line {_line_of(data, tokens[start][1])}",
+                f"{tokens[start][0]} without $end (the header is cut off)",
+            )
+        return [t[0] for t in tokens[start + 1 : j]], j + 1
+
+    while i < n:
+        word, off, _ = tokens[i]
+        where = f"line {_line_of(data, off)}"
+        if word == "$enddefinitions":
+            _, i = section(i)
+            end = tokens[i - 1][2]
+            return VcdHeader(timescale, timescale_text, decls, comments, end, _line_of(data, end))
+        if word == "$timescale":
+            body, i = section(i)
+            text = "".join(body)
+            match = _TIMESCALE_RE.match(text)
+            if not match or int(match.group(1)) == 0:
+                raise CaptureError(
+                    path,
+                    where,
+                    f"bad $timescale {' '.join(body)!r} (write e.g. '$timescale 1 ns $end')",
+                )
+            tb = Timebase.from_timescale(int(match.group(1)), match.group(2))
+            if not Fraction(1, 10**15) <= tb.tick_s <= 100:
+                raise CaptureError(path, where, f"$timescale {text} is outside 1 fs … 100 s")
+            timescale, timescale_text = tb, f"{match.group(1)} {match.group(2)}"
+        elif word == "$scope":
+            body, i = section(i)
+            scope.append(body[-1] if body else "")
+        elif word == "$upscope":
+            _, i = section(i)
+            if scope:
+                scope.pop()
+        elif word == "$var":
+            body, i = section(i)
+            if len(body) < 4 or not body[1].isdigit() or int(body[1]) < 1:
+                raise CaptureError(
+                    path, where, f"bad $var {' '.join(body)!r} (expected '$var wire 1 ! name $end')"
+                )
+            id_code = body[2]
+            if len(id_code) > _MAX_ID_LEN:
+                raise CaptureError(
+                    path, where, f"id code {id_code!r} is longer than {_MAX_ID_LEN} characters"
+                )
+            decls.append(
+                VarDecl(
+                    body[0], int(body[1]), id_code, "".join(body[3:]), tuple(scope), int(where[5:])
+                )
+            )
+        elif word in ("$comment", "$date", "$version"):
+            body, i = section(i)
+            if word == "$comment":
+                comments.append(" ".join(body))
+        elif word.startswith("$"):
+            _, i = section(i)  # $attrbegin and friends: ignored
+        else:
+            raise CaptureError(
+                path, where, f"unexpected {word[:40]!r} in the header (is this a VCD file?)"
+            )
+    raise CaptureError(
+        path, "header", "no $enddefinitions (the file is cut off in its header, or not a VCD)"
+    )
+
+
+def _read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
+    """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far."""
+    data = b""
+    while True:
+        block = f.read(1 << 20)
+        data += block
+        pos = data.find(b"$enddefinitions")
+        if pos >= 0 and re.search(rb"\$end(\s|$)", data[pos + 15 :]) is not None:
+            break
+        if not block or len(data) > _MAX_HEADER_BYTES:
+            break
+    if not data.strip():
+        raise CaptureError(path, None, "the file is empty (no VCD header)")
+    header = parse_header(path, data)
+    return header, data[header.body_offset :]
+
+
+@dataclass
+class _Layout:
+    """The 1-bit channels and skipped signals of a header."""
+
+    names: list[str]
+    decls: list[VarDecl]  # first declaration of each channel
+    ids: list[str]
+    vector_ids: set[str]
+    skipped: dict[str, str]
+    notes: list[str]
+
+
+def _layout(header: VcdHeader) -> _Layout:
+    first: dict[str, VarDecl] = {}
+    aliases: dict[str, list[str]] = {}
+    for d in header.vars:
+        if d.id_code in first:
+            aliases.setdefault(d.id_code, []).append(d.full_name)
+        else:
+            first[d.id_code] = d
+    scalar = [d for d in first.values() if d.size == 1 and d.type not in _NON_SIGNAL_TYPES]
+    others = [d for d in first.values() if not (d.size == 1 and d.type not in _NON_SIGNAL_TYPES)]
+    ids_by_short: dict[str, set[str]] = {}
+    for d in header.vars:
+        ids_by_short.setdefault(d.reference, set()).add(d.id_code)
+    names: list[str] = []
+    used: set[str] = set()
+    for d in scalar:
+        name = d.reference if len(ids_by_short[d.reference]) == 1 else d.full_name
+        base, k = name, 2
+        while name in used:
+            name, k = f"{base}#{k}", k + 1
+        used.add(name)
+        names.append(name)
+    skipped: dict[str, str] = {}
+    notes: list[str] = []
+    for d in others:
+        if d.type in ("real", "realtime", "shortreal"):
+            what = "a real"
+        elif d.type in ("event", "string"):
+            what = f"an {d.type}" if d.type == "event" else "a string"
+        else:
+            what = f"a {d.size}-bit {'integer' if d.type == 'integer' else 'vector'}"
+        for d2 in header.vars:
+            if d2.id_code == d.id_code:
+                skipped.setdefault(d2.full_name, what)
+                if len(ids_by_short[d2.reference]) == 1 or d2.reference not in used:
+                    skipped.setdefault(d2.reference, what)
+                    bare = d2.reference.split("[", 1)[0]
+                    if bare and bare not in used:
+                        skipped.setdefault(bare, what)
+    if others:
+        listed = ", ".join(d.full_name for d in others[:10])
+        more = f" and {len(others) - 10} more" if len(others) > 10 else ""
+        notes.append(
+            f"skipped {len(others)} signal(s) that are not 1-bit wires "
+            f"(vectors, integers, reals): {listed}{more}"
+        )
+    n_alias = sum(len(v) for k, v in aliases.items() if k in {d.id_code for d in scalar})
+    if n_alias:
+        notes.append(f"{n_alias} declaration(s) alias a channel declared earlier (same id code)")
+    return _Layout(
+        names, scalar, [d.id_code for d in scalar], {d.id_code for d in others}, skipped, notes
+    )
+
+
+def _resolution(
+    path: str | os.PathLike[str],
+    tb: Timebase,
+    comments: list[str],
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    notes: list[str],
+) -> tuple[int, Fraction | None]:
+    """Resolution in ticks and sample rate: user values first, then sigrok's ``$comment``."""
+    rate = samplerate
+    if rate is None:
+        for text in comments:
+            match = _SAMPLERATE_RE.search(text)
+            if match:
+                try:
+                    rate = parse_frequency(match.group(1))
+                except UnitError:
+                    continue
+                notes.append(f"sample rate {match.group(1)} from the file's $comment")
+                break
+    period = resolution_s if resolution_s is not None else (1 / rate if rate else None)
+    if period is None:
+        return 0, None
+    if period < 0:
+        raise CaptureError(path, None, f"resolution {period} s must not be negative")
+    ticks = period / tb.tick_s
+    res = -((-ticks.numerator) // ticks.denominator)
+    if ticks.denominator != 1:
+        notes.append(
+            f"resolution {float(period * 10**9):g} ns is not a whole number of "
+            f"{float(tb.tick_ns):g} ns ticks; rounded up to {res} ticks"
+        )
+    return res, rate
+
+
+def _start_note(header: VcdHeader, notes: list[str]) -> Timebase:
+    if header.timescale is None:
+        notes.append("no $timescale; assumed 1 s per tick as the VCD standard says")
+        return Timebase(Fraction(1))
+    return header.timescale
+
+
+# ---------------------------------------------------------------------------------------------
+# Fast path
+
+
+class _EdgeBuilder:
+    """Turns batches of time-ordered (signal, time, value) changes into per-signal edges."""
+
+    def __init__(self, nsig: int) -> None:
+        self.nsig = nsig
+        self.last_raw = np.full(nsig, -1, dtype=np.int8)
+        self.last_known = np.full(nsig, -1, dtype=np.int8)
+        self.known_from = np.zeros(nsig, dtype=np.int64)
+        self.initial = np.zeros(nsig, dtype=np.int8)
+        self.edges: list[list[npt.NDArray[np.int64]]] = [[] for _ in range(nsig)]
+        self.xz: list[list[npt.NDArray[np.int64]]] = [[] for _ in range(nsig)]
+        self.count = 0
+
+    def add(
+        self,
+        sig: npt.NDArray[np.integer],
+        t: npt.NDArray[np.int64],
+        v: npt.NDArray[np.int8],
+    ) -> None:
+        """Add changes (in file order, times non-decreasing, all later than earlier batches)."""
+        if len(sig) == 0:
+            return
+        self.count += len(sig)
+        order = np.argsort(sig, kind="stable")
+        s, t, v = sig[order], t[order], v[order]
+        keep = np.ones(len(s), dtype=bool)
+        keep[:-1] = (s[1:] != s[:-1]) | (t[1:] != t[:-1])  # last change at a timestamp wins
+        if not keep.all():
+            s, t, v = s[keep], t[keep], v[keep]
+        n = len(s)
+        gfirst = np.ones(n, dtype=bool)
+        gfirst[1:] = s[1:] != s[:-1]
+        glast = np.ones(n, dtype=bool)
+        glast[:-1] = gfirst[1:]
+        # x/z transitions, counted only once the signal has had a known level
+        unknown = v >= 2
+        if unknown.any():
+            known = ~unknown
+            prevraw = np.empty(n, dtype=np.int8)
+            prevraw[1:] = v[:-1]
+            prevraw[gfirst] = self.last_raw[s[gfirst]]
+            kcum = np.cumsum(known)
+            excl: npt.NDArray[np.int64] = kcum - known
+            start_idx = np.maximum.accumulate(np.where(gfirst, np.arange(n), 0))
+            before: npt.NDArray[np.int64] = excl - excl[start_idx]
+            had_known = (before > 0) | (self.last_known[s] >= 0)
+            evt = unknown & had_known & (prevraw >= 0) & (prevraw < 2)
+            if evt.any():
+                self._split(self.xz, s[evt], t[evt])
+        self.last_raw[s[glast]] = v[glast]
+        k = np.flatnonzero(v < 2)
+        if len(k) == 0:
+            return
+        ks, kt, kv = s[k], t[k], v[k]
+        kfirst = np.ones(len(ks), dtype=bool)
+        kfirst[1:] = ks[1:] != ks[:-1]
+        klast = np.ones(len(ks), dtype=bool)
+        klast[:-1] = kfirst[1:]
+        prev = np.empty(len(kv), dtype=np.int8)
+        prev[1:] = kv[:-1]
+        prev[kfirst] = self.last_known[ks[kfirst]]
+        new = kfirst & (prev < 0)
+        if new.any():
+            self.initial[ks[new]] = kv[new]
+            self.known_from[ks[new]] = kt[new]
+        edge = (prev >= 0) & (kv != prev)
+        self._split(self.edges, ks[edge], kt[edge])
+        self.last_known[ks[klast]] = kv[klast]
+
+    def _split(
+        self,
+        into: list[list[npt.NDArray[np.int64]]],
+        s: npt.NDArray[np.integer],
+        t: npt.NDArray[np.int64],
+    ) -> None:
+        if len(s) == 0:
+            return
+        bounds = np.searchsorted(s, np.arange(self.nsig + 1))
+        for i in np.flatnonzero(np.diff(bounds)):
+            into[i].append(np.ascontiguousarray(t[bounds[i] : bounds[i + 1]], dtype=np.int64))
+
+    def channels(self, names: list[str], end: int, notes: list[str]) -> list[Channel]:
+        out: list[Channel] = []
+        never: list[str] = []
+        for i, name in enumerate(names):
+            edges = _concat(self.edges[i])
+            self.edges[i] = []
+            known = self.last_known[i] >= 0
+            if not known:
+                never.append(name)
+            out.append(
+                Channel(
+                    name=name,
+                    index=i,
+                    initial=int(self.initial[i]) if known else 0,
+                    edges=edges,
+                    known_from=int(self.known_from[i]) if known else end,
+                    xz_times=_concat(self.xz[i]),
+                )
+            )
+        if never:
+            notes.append(
+                f"{len(never)} channel(s) never have a known level: {', '.join(never[:10])}"
+            )
+        return out
+
+
+def _concat(parts: list[npt.NDArray[np.int64]]) -> npt.NDArray[np.int64]:
+    if not parts:
+        return np.zeros(0, dtype=np.int64)
+    if len(parts) == 1:
+        return parts[0]
+    return np.concatenate(parts)
+
+
+class _IdMap:
+    """Maps id-code tokens to channel numbers (−2 = a skipped vector/real, −1 = unknown)."""
+
+    def __init__(self, ids: list[str], vector_ids: set[str]) -> None:
+        allid = [(c, i) for i, c in enumerate(ids)] + [(c, -2) for c in vector_ids]
+        self.maxlen = max((len(c.encode("latin-1")) for c, _ in allid), default=1)
+        if self.maxlen == 1:
+            self.lut = np.full(256, -1, dtype=np.int32)
+            for c, i in allid:
+                self.lut[c.encode("latin-1")[0]] = i
+        else:
+            keys = np.array([self._pack(c.encode("latin-1")) for c, _ in allid], dtype=np.uint64)
+            vals = np.array([i for _, i in allid], dtype=np.int32)
+            order = np.argsort(keys)
+            self.keys, self.vals = keys[order], vals[order]
+
+    @staticmethod
+    def _pack(b: bytes) -> int:
+        return int.from_bytes(b, "little")
+
+    def lookup(
+        self, a: npt.NDArray[np.uint8], start: npt.NDArray[np.int64], length: npt.NDArray[np.int64]
+    ) -> npt.NDArray[np.int32]:
+        """Channel numbers of the ids at ``a[start : start + length]``."""
+        if self.maxlen == 1:
+            one = length == 1
+            out = np.full(len(start), -1, dtype=np.int32)
+            out[one] = self.lut[a[start[one]]]
+            return out
+        ok = (length >= 1) & (length <= self.maxlen)
+        packed = np.zeros(len(start), dtype=np.uint64)
+        for k in range(self.maxlen):
+            m = ok & (length > k)
+            packed[m] |= a[start[m] + k].astype(np.uint64) << np.uint64(8 * k)
+        pos = np.searchsorted(self.keys, packed)
+        pos[pos >= len(self.keys)] = 0
+        out = self.vals[pos].copy()
+        out[(self.keys[pos] != packed) | ~ok] = -1
+        return out
+
+
+class _Body:
+    """Streaming state of the fast body tokenizer."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        idmap: _IdMap,
+        builder: _EdgeBuilder,
+        line0: int,
+        offset0: int,
+    ) -> None:
+        self.path = path
+        self.idmap = idmap
+        self.builder = builder
+        self.line0 = line0  # line number of the first byte of the next buffer
+        self.offset0 = offset0  # file offset of the next buffer
+        self.time: int | None = None  # current timestamp
+        self.first_time: int | None = None
+        self.pre_time_changes = False
+        self.pend: (
+            tuple[npt.NDArray[np.int32], npt.NDArray[np.int64], npt.NDArray[np.int8]] | None
+        ) = None
+
+    def error(self, buf: bytes, off: int, msg: str) -> CaptureError:
+        line = self.line0 + buf.count(b"\n", 0, off)
+        return CaptureError(self.path, f"line {line} (byte {self.offset0 + off})", msg)
+
+    def feed(self, buf: bytes, final: bool) -> int:
+        """Process ``buf`` (which ends at whitespace unless ``final``); return bytes consumed."""
+        a = np.frombuffer(buf, dtype=np.uint8)
+        if len(a) == 0:
+            if final:
+                self._flush(final=True)
+            return 0
+        notws = ~_WS[a]
+        d = np.diff(notws.view(np.int8), prepend=np.int8(0), append=np.int8(0))
+        starts = np.flatnonzero(d == 1)
+        ends = np.flatnonzero(d == -1)
+        del d, notws
+        kind = _KIND[a[starts]]
+        consumed = len(buf)
+        # 1. $comment ... $end in the body is skipped whole (rare: a Python loop is fine)
+        kw = np.flatnonzero((kind == _K_KEYWORD) & (ends - starts == 8))
+        after = 0
+        for i in (int(x) for x in kw):
+            if i < after or buf[starts[i] : ends[i]] != b"$comment":
+                continue
+            close = i + 1
+            while close < len(kind) and buf[starts[close] : ends[close]] != b"$end":
+                close += 1
+            if close == len(kind):
+                if final:
+                    raise self.error(
+                        buf, int(starts[i]), "$comment without $end (the file is cut off)"
+                    )
+                consumed = int(starts[i])
+                kind, starts, ends = kind[:i], starts[:i], ends[:i]
+                break
+            kind[i : close + 1] = _K_SKIP
+            after = close + 1
+        # 2. vector/real values take the next token as their id: resolve runs of b/r by parity
+        isvec = kind == _K_VEC
+        vid: npt.NDArray[np.bool_] | None = None
+        if isvec.any():
+            idx = np.arange(len(kind))
+            run_start = isvec.copy()
+            run_start[1:] &= ~isvec[:-1]
+            first = np.maximum.accumulate(np.where(run_start, idx, 0))
+            vstart = isvec & ((idx - first) % 2 == 0)
+            if vstart[-1]:
+                last = len(kind) - 1
+                if final:
+                    raise self.error(
+                        buf,
+                        int(starts[last]),
+                        "vector value without an id code (the file is cut off)",
+                    )
+                consumed = min(consumed, int(starts[last]))
+                kind, starts, ends, vstart = kind[:last], starts[:last], ends[:last], vstart[:last]
+            vid = np.zeros(len(kind), dtype=bool)
+            vid[1:] = vstart[:-1]
+            kind[vid] = _K_VECID
+            kind[vstart] = _K_SKIP
+        # 3. the other keywords only mark sections of dumped values
+        for i in (int(x) for x in np.flatnonzero(kind == _K_KEYWORD)):
+            if buf[starts[i] : ends[i]] not in _BODY_KEYWORDS:
+                word = buf[starts[i] : min(ends[i], starts[i] + 30)].decode("latin-1")
+                raise self.error(buf, int(starts[i]), f"unexpected {word!r} in the value changes")
+        bad = np.flatnonzero(kind == _K_BAD)
+        if len(bad):
+            i = int(bad[0])
+            tok = buf[starts[i] : min(ends[i], starts[i] + 30)]
+            hint = " (NUL bytes: the file was cut off or padded)" if tok[:1] == b"\0" else ""
+            raise self.error(
+                buf,
+                int(starts[i]),
+                f"unexpected {tok.decode('latin-1')!r} in the value changes{hint}",
+            )
+        # timestamps
+        ts = np.flatnonzero(kind == _K_TIME)
+        tvals = self._timestamps(buf, a, starts[ts], ends[ts])
+        # scalar changes: value char + id
+        sc = np.flatnonzero(kind == _K_SCALAR)
+        sig = self.idmap.lookup(a, starts[sc] + 1, ends[sc] - starts[sc] - 1)
+        val = _VALUE[a[starts[sc]]]
+        if vid is not None and vid.any():
+            vi = np.flatnonzero(vid)
+            vsig = self.idmap.lookup(a, starts[vi], ends[vi] - starts[vi])
+            if (vsig == -1).any():
+                j = int(vi[np.flatnonzero(vsig == -1)[0]])
+                code = buf[starts[j] : min(ends[j], starts[j] + 30)].decode("latin-1")
+                raise self.error(buf, int(starts[j]), f"unknown id code {code!r}")
+            onebit = vsig >= 0
+            if onebit.any():  # "b1 !" on a 1-bit signal is a scalar change
+                vi, vs = vi[onebit], vsig[onebit]
+                vv = _VALUE[a[ends[vi - 1] - 1]]
+                wrong = ((a[starts[vi - 1]] | 0x20) == ord("r")) | (vv < 0)
+                if wrong.any():
+                    j = int(vi[np.flatnonzero(wrong)[0]]) - 1
+                    raise self.error(buf, int(starts[j]), "bad value for a 1-bit signal")
+                merged = np.concatenate([sc, vi])
+                order = np.argsort(merged, kind="stable")
+                sc = merged[order]
+                sig = np.concatenate([sig, vs])[order]
+                val = np.concatenate([val, vv])[order]
+        if len(sig) and (sig < 0).any():
+            j = int(sc[np.flatnonzero(sig < 0)[0]])
+            text = buf[starts[j] : min(ends[j], starts[j] + 30)].decode("latin-1")
+            if ends[j] - starts[j] == 1:
+                msg = f"value {text!r} without an id code (the file is cut off?)"
+            else:
+                msg = f"unknown id code in {text!r} (not declared by a $var, or a vector value without 'b')"
+            raise self.error(buf, int(starts[j]), msg)
+        # time of each change: the last timestamp before it
+        k = np.searchsorted(ts, sc) - 1
+        if len(tvals):
+            times = tvals[np.maximum(k, 0)]
+            if (k < 0).any():
+                times[k < 0] = self.time if self.time is not None else 0
+        else:
+            times = np.full(len(sc), self.time if self.time is not None else 0, dtype=np.int64)
+        if self.time is None and len(sc) and (k < 0).any():
+            self.pre_time_changes = True
+        if len(tvals):
+            if self.first_time is None:
+                self.first_time = int(tvals[0])
+            self.time = int(tvals[-1])
+        self._emit(sig.astype(np.int32, copy=False), times, val, final)
+        return consumed
+
+    def _timestamps(
+        self,
+        buf: bytes,
+        a: npt.NDArray[np.uint8],
+        s: npt.NDArray[np.int64],
+        e: npt.NDArray[np.int64],
+    ) -> npt.NDArray[np.int64]:
+        if len(s) == 0:
+            return np.zeros(0, dtype=np.int64)
+        ndig = e - s - 1
+        if (ndig < 1).any() or (ndig > 18).any():
+            j = int(np.flatnonzero((ndig < 1) | (ndig > 18))[0])
+            raise self.error(
+                buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
+            )
+        out = np.zeros(len(s), dtype=np.int64)
+        scale = np.int64(1)
+        for col in range(int(ndig.max())):
+            m = ndig > col
+            dig = a[e[m] - 1 - col].astype(np.int64) - 48
+            if ((dig < 0) | (dig > 9)).any():
+                j = int(np.flatnonzero(m)[np.flatnonzero((dig < 0) | (dig > 9))[0]])
+                raise self.error(
+                    buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
+                )
+            out[m] += dig * scale
+            scale *= 10
+        prev = np.empty(len(out), dtype=np.int64)
+        prev[1:] = out[:-1]
+        prev[0] = self.time if self.time is not None else -1
+        back = np.flatnonzero(out < prev)
+        if len(back):
+            j = int(back[0])
+            raise self.error(
+                buf,
+                int(s[j]),
+                f"time goes backwards: #{int(out[j])} after #{int(prev[j])} "
+                "(a cut-off or corrupted file?)",
+            )
+        return out
+
+    def _emit(
+        self,
+        sig: npt.NDArray[np.int32],
+        t: npt.NDArray[np.int64],
+        v: npt.NDArray[np.int8],
+        final: bool,
+    ) -> None:
+        if self.pend is not None:
+            ps, pt, pv = self.pend
+            sig, t, v = np.concatenate([ps, sig]), np.concatenate([pt, t]), np.concatenate([pv, v])
+            self.pend = None
+        if not final and len(t):
+            # hold back the changes at the last timestamp: the next chunk may add to it
+            cut = int(np.searchsorted(t, t[-1], side="left"))
+            self.pend = (sig[cut:], t[cut:], v[cut:])
+            sig, t, v = sig[:cut], t[:cut], v[:cut]
+        self.builder.add(sig, t, v)
+
+    def _flush(self, final: bool) -> None:
+        self._emit(np.zeros(0, np.int32), np.zeros(0, np.int64), np.zeros(0, np.int8), final)
+
+
+def _open(path: str | os.PathLike[str]) -> BinaryIO:
+    try:
+        return open(path, "rb")
+    except IsADirectoryError:
+        raise CaptureError(path, None, "is a folder, not a capture file") from None
+    except FileNotFoundError:
+        raise CaptureError(path, None, "no such file") from None
+    except OSError as err:
+        raise CaptureError(path, None, f"cannot open: {err.strerror}") from None
+
+
+def read_vcd(
+    path: str | os.PathLike[str],
+    *,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+    chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+) -> Capture:
+    """Read the 1-bit signals of a VCD file (fast, streaming path).
+
+    Args:
+        path: the VCD file.
+        samplerate: the rate the capture was sampled at, in Hz, if known (sets the resolution);
+            otherwise sigrok's ``$comment`` ("… at 8 MHz") is used, else the VCD is exact.
+        resolution_s: the resolution in seconds, overriding the sample rate's period.
+        chunk_bytes: bytes of text tokenized at a time (tests use tiny values).
+
+    Raises:
+        CaptureError: the file cannot be read as a VCD; the message gives the line.
+    """
+    if chunk_bytes < 1:
+        raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
+    with _open(path) as f:
+        header, rest = _read_header(path, f)
+        notes: list[str] = []
+        tb = _start_note(header, notes)
+        lay = _layout(header)
+        notes += lay.notes
+        builder = _EdgeBuilder(len(lay.ids))
+        body = _Body(
+            path, _IdMap(lay.ids, lay.vector_ids), builder, header.body_line, header.body_offset
+        )
+        buf = rest
+        eof = False
+        want = chunk_bytes
+        while True:
+            while not eof and len(buf) < want:
+                block = f.read(want - len(buf))
+                if not block:
+                    eof = True
+                buf += block
+            if eof and len(buf) <= want:
+                body.feed(buf, final=True)
+                break
+            cut = _last_ws(buf, want)
+            n = body.feed(buf[: cut + 1], final=False) if cut >= 0 else 0
+            body.line0 += buf.count(b"\n", 0, n)
+            body.offset0 += n
+            buf = buf[n:]
+            # nothing consumed: a token or $comment longer than a chunk, read more
+            want = chunk_bytes if n else max(2 * want, len(buf) + 1)
+    return _finish(
+        path,
+        header,
+        lay,
+        tb,
+        builder,
+        body.first_time,
+        body.time,
+        body.pre_time_changes,
+        notes,
+        samplerate,
+        resolution_s,
+    )
+
+
+def _last_ws(buf: bytes, limit: int) -> int:
+    """Index of the last whitespace byte in ``buf[:limit]`` (−1 if none)."""
+    return max(buf.rfind(c, 0, limit) for c in (b"\n", b" ", b"\t", b"\r", b"\f", b"\v"))
+
+
+def _finish(
+    path: str | os.PathLike[str],
+    header: VcdHeader,
+    lay: _Layout,
+    tb: Timebase,
+    builder: _EdgeBuilder,
+    first_time: int | None,
+    last_time: int | None,
+    pre_time: bool,
+    notes: list[str],
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+) -> Capture:
+    if last_time is None or first_time is None:
+        raise CaptureError(
+            path,
+            f"line {header.body_line}",
+            "no timestamps after the header (the file is cut off?)",
+        )
+    start = 0 if pre_time else first_time
+    end = last_time
+    if not lay.ids:
+        notes.append("no 1-bit signals in this file")
+    res, rate = _resolution(path, tb, header.comments, samplerate, resolution_s, notes)
+    return Capture(
+        path=str(path),
+        format="vcd",
+        timebase=tb,
+        resolution_ticks=res,
+        samplerate_hz=rate,
+        start=start,
+        end=end,
+        channels=builder.channels(lay.names, end, notes),
+        notes=notes,
+        skipped=lay.skipped,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Reference path
+
+
+def read_vcd_reference(
+    path: str | os.PathLike[str],
+    *,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+) -> Capture:
+    """Read a VCD the simple way: pyvcd's tokenizer and a plain loop per change.
+
+    Slow (about 0.2 M changes/s) and meant for tests: it must give the same capture as
+    :func:`read_vcd`. Errors are less precise.
+    """
+    from vcd.reader import TokenKind, tokenize
+
+    with _open(path) as f:
+        data = f.read()
+    if not data.strip():
+        raise CaptureError(path, None, "the file is empty (no VCD header)")
+    header = parse_header(path, data)
+    notes: list[str] = []
+    tb = _start_note(header, notes)
+    lay = _layout(header)
+    notes += lay.notes
+    index = {c: i for i, c in enumerate(lay.ids)}
+    changes: list[list[tuple[int, int]]] = [[] for _ in lay.ids]
+    time: int | None = None
+    first: int | None = None
+    pre = False
+    try:
+        for tok in tokenize(io.BytesIO(data)):
+            payload: Any = tok.data
+            if tok.kind is TokenKind.CHANGE_TIME:
+                t = int(payload)
+                if time is not None and t < time:
+                    raise CaptureError(path, f"line {tok.span.start.line}", "time goes backwards")
+                time = t
+                first = t if first is None else first
+            elif tok.kind in (TokenKind.CHANGE_SCALAR, TokenKind.CHANGE_VECTOR):
+                code, value = payload.id_code, payload.value
+                if code in lay.vector_ids:
+                    continue
+                if code not in index:
+                    raise CaptureError(
+                        path, f"line {tok.span.start.line}", f"unknown id code {code!r}"
+                    )
+                if tok.kind is TokenKind.CHANGE_VECTOR:
+                    value = str(value)[-1]
+                if time is None:
+                    pre = True
+                changes[index[code]].append((time or 0, _SCALAR_VALUES[str(value).lower()]))
+    except CaptureError:
+        raise
+    except Exception as err:  # pyvcd's parse errors
+        raise CaptureError(path, None, f"not a valid VCD: {err}") from None
+    builder = _EdgeBuilder(len(lay.ids))
+    for i, ch in enumerate(changes):
+        last_raw = -1
+        last_known = -1
+        edges: list[int] = []
+        xz: list[int] = []
+        # last change at a timestamp wins
+        dedup = [c for j, c in enumerate(ch) if j + 1 == len(ch) or ch[j + 1][0] != c[0]]
+        for t, v in dedup:
+            if v >= 2:
+                if last_known >= 0 and 0 <= last_raw < 2:
+                    xz.append(t)
+            elif last_known < 0:
+                builder.initial[i], builder.known_from[i] = v, t
+                last_known = v
+            elif v != last_known:
+                edges.append(t)
+                last_known = v
+            last_raw = v
+        builder.last_known[i] = last_known
+        builder.edges[i] = [np.array(edges, dtype=np.int64)]
+        builder.xz[i] = [np.array(xz, dtype=np.int64)]
+    return _finish(
+        path, header, lay, tb, builder, first, time, pre, notes, samplerate, resolution_s
+    )
+
+
+def sniff_vcd(head: bytes) -> bool:
+    """True if ``head`` (the first bytes of a file) looks like a VCD header."""
+    text = head.lstrip()
+    return text.startswith(b"$") and re.match(rb"\$[a-z]+", text) is not None
+
+
+_ = Path  # keep the import for type users
