@@ -1,0 +1,95 @@
+"""The fast engine gives exactly the reference model's edges, counts and final state."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from stepgen.fast import run_fast
+from stepgen.model import InvocationRun, StepgenConfig, run_reference
+
+
+def assert_same(a: InvocationRun, b: InvocationRun) -> None:
+    assert a.pins == b.pins
+    for pin in a.pins:
+        np.testing.assert_array_equal(a.toggles[pin], b.toggles[pin], err_msg=pin)
+    np.testing.assert_array_equal(a.counts_at, b.counts_at)
+    np.testing.assert_array_equal(a.counts_val, b.counts_val)
+    assert a.steps == b.steps
+    assert a.final == b.final
+
+
+@st.composite
+def scenarios(draw):  # type: ignore[no-untyped-def]
+    base = draw(st.sampled_from([10_000, 16_000, 25_000, 30_000, 50_000, 100_000]))
+    servo = draw(st.sampled_from([base, base * 4, 1_000_000, 990_000]))
+    stype = draw(st.sampled_from([0, 0, 1, 2, 3, 9, 14, 15]))
+    mode = draw(st.sampled_from(["position", "velocity"]))
+    scale = draw(st.sampled_from([1.0, 200.0, -320.0, 1000.0, 32000.0]))
+    tmax = 200_000
+    cfg = StepgenConfig(
+        step_type=stype,
+        user_step_type=(1, 3, 2, 6, 4) if stype == 15 else (),
+        base_period_ns=base,
+        servo_period_ns=servo,
+        mode=mode,
+        position_scale=scale,
+        maxvel=draw(st.sampled_from([0.0, 1e3, 1e4, 1e5])) / abs(scale),  # steps/s → units/s
+        maxaccel=draw(st.sampled_from([0.0, 1e4, 1e6, 1e8])) / abs(scale),
+        steplen=draw(st.one_of(st.integers(0, base * 2), st.integers(0, tmax))),
+        stepspace=draw(st.one_of(st.integers(0, base * 2), st.integers(0, tmax))),
+        dirsetup=draw(st.integers(0, tmax)),
+        dirhold=draw(st.integers(0, tmax)),
+        dirdelay=draw(st.integers(0, tmax)),
+        thread_order=draw(st.sampled_from(["update-first", "pulses-first"])),
+    )
+    n_servo = draw(st.integers(2, 30))
+    # command amplitude in steps (position) or steps/s (velocity), converted to position units
+    steps = draw(
+        st.sampled_from([3.0, 30.0, 300.0] if mode == "position" else [300.0, 3000.0, 30000.0])
+    )
+    amp = steps / abs(scale)
+    values = draw(st.lists(st.floats(-1, 1), min_size=1, max_size=8))
+    hold = draw(st.integers(1, 6))
+    cmds = np.repeat(np.array(values) * amp, hold)[:n_servo].tolist()
+    n_periods = n_servo * (cfg.servo_ns // base) + draw(st.integers(0, 7))
+    return cfg, cmds, n_periods
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(scenarios())
+def test_fast_equals_reference(scenario) -> None:  # type: ignore[no-untyped-def]
+    cfg, cmds, n = scenario
+    try:
+        cfg.validate()
+    except Exception:
+        return
+    assert_same(run_reference(cfg, cmds, n), run_fast(cfg, cmds, n))
+
+
+def test_fast_equals_reference_with_small_blocks() -> None:
+    """Pass 2's block boundaries carry the STEP timer, the phase state and the levels across."""
+    cfg = StepgenConfig(
+        step_type=0,
+        base_period_ns=25_000,
+        servo_period_ns=1_000_000,
+        mode="velocity",
+        position_scale=1000.0,
+        steplen=100_000,
+        stepspace=25_000,
+    )
+    cmds = list(np.sin(np.arange(40) / 3) * 6)
+    ref = run_reference(cfg, cmds, 40 * 40)
+    assert_same(ref, run_fast(cfg, cmds, 40 * 40, block_periods=7))
+    cfg2 = StepgenConfig(**{**cfg.__dict__, "step_type": 9})
+    assert_same(run_reference(cfg2, cmds, 1600), run_fast(cfg2, cmds, 1600, block_periods=40))
+
+
+def test_fast_uses_the_fast_path_in_steady_motion() -> None:
+    """Most servo periods of a steady move go through the closed form, not the exact loop."""
+    cfg = StepgenConfig(
+        base_period_ns=25_000, servo_period_ns=1_000_000, mode="velocity", position_scale=1000.0
+    )
+    run = run_fast(cfg, [5.0], 40 * 500)
+    assert run.exact_chunks <= 3 < run.fast_chunks
