@@ -20,7 +20,7 @@ from wavecheck.rates import max_step_rates
 from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
 
-__all__ = ["auto_map", "resolve_resolution_ns", "run_check"]
+__all__ = ["auto_map", "default_step_type", "resolve_resolution_ns", "run_check"]
 
 _AUTO_ROLES: dict[int, tuple[str, ...]] = {
     0: ("step", "dir", "enable"),
@@ -48,6 +48,20 @@ def auto_map(capture: Capture, st: StepType) -> dict[str, str]:
     return mapping
 
 
+def default_step_type(drive: Drive) -> int:
+    """The step type a drive implies: its ``step_type`` if given, 1 for up/down, else 0."""
+    declared = getattr(drive, "step_type", None)
+    if declared is not None:
+        return int(declared)
+    if drive.interface == "up-down":
+        return 1
+    if drive.interface == "phases":
+        raise UsageError(
+            f"drive {drive.id!r} takes phase signals: give the step type (--type 2..15)"
+        )
+    return 0
+
+
 def resolve_resolution_ns(capture: Capture, resolution: str | Fraction | None) -> Fraction:
     """T in exact ns: the user's ``--resolution`` (a time such as ``"500ns"``, or exact seconds as
     a Fraction) if given, else the capture's own (one sample period; 0 for a simulator VCD)."""
@@ -64,7 +78,7 @@ def run_check(
     drive: Drive,
     mapping: Mapping[str, str] | None = None,
     invert: Iterable[str] = (),
-    step_type_number: int = 0,
+    step_type_number: int | None = None,
     resolution: str | Fraction | None = None,
     *,
     forward_level: int = 0,
@@ -79,7 +93,8 @@ def run_check(
         mapping: role → channel name or index; roles missing here are mapped by name when a
             channel is called after the role (see :func:`auto_map`).
         invert: roles to invert so that levels are the drive's input levels.
-        step_type_number: LinuxCNC step type 0–15.
+        step_type_number: LinuxCNC step type 0–15; default the drive's (its ``step_type``, else
+            1 for an up/down drive, else 0).
         resolution: T override (``"500ns"`` or exact seconds); default the capture's.
         forward_level: DIR level meaning forward (default 0: DIR high = reverse, as LinuxCNC
             and grbl drive it).
@@ -89,7 +104,9 @@ def run_check(
     Raises:
         WavecheckError: unusable input (unknown channel or role, bad type, bad resolution).
     """
-    st = step_type(step_type_number, user_table)
+    st = step_type(
+        default_step_type(drive) if step_type_number is None else step_type_number, user_table
+    )
     full_map = auto_map(capture, st)
     full_map.update(mapping or {})
     iface = build_interface(capture, full_map, invert)

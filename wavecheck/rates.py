@@ -3,11 +3,17 @@
 - ``drive`` = min(datasheet max rate, 1 / (step_high + step_low limits)); either part may be
   missing, both missing gives None.
 - ``observed`` = 1 / the shortest interval between successive steps in the capture.
-- ``headroom`` = 1 / (longest observed active-level time + the drive's idle-level minimum),
-  capped by ``drive``: the highest rate at which pulses as long as this generator's would still
-  leave the drive its idle time. The active level is the one that starts at the active edge
-  (high for a rising-edge drive, low for a falling-edge drive; see drive-timing.md §0). Not
-  defined for phase types or a drive that steps on both edges.
+- ``headroom`` = 1 / (longest observed pulse + the drive's minimum for the other level), capped
+  by ``drive``: the highest rate at which pulses as long as this generator's would still leave
+  the drive its minimum time at the other level. The design says "longest observed active-level
+  time + the drive's idle-level minimum"; that is this formula when the generator's pulse starts
+  at the active edge (a rising-edge drive, or a falling-edge drive with STEP inverted). When it
+  ends at the active edge (the seed's G202 reading: falling-edge drive, STEP not inverted) the
+  active level is the *gap* between pulses, whose longest value is the longest pause in the
+  capture (seconds), and the literal formula would be meaningless. So the pulse level is taken
+  from the capture: the level whose longest complete stretch is the shorter one (pulses are
+  short and fixed, gaps grow as the rate falls); :attr:`MaxStepRates.pulse_level` says which.
+  Not defined for phase types or a drive that steps on both edges.
 """
 
 from __future__ import annotations
@@ -38,8 +44,9 @@ class MaxStepRates:
         observed: the capture's highest instantaneous rate.
         observed_at_s: start of the shortest step interval, exact seconds.
         headroom: the highest rate at which the observed pulse lengths would still pass.
-        longest_active_ns: the longest observed active-level time, exact ns.
-        idle_min_ns: the drive's idle-level minimum, exact ns.
+        longest_pulse_ns: the longest observed pulse (a stretch at :attr:`pulse_level`), exact ns.
+        idle_min_ns: the drive's minimum for the other level, exact ns.
+        pulse_level: the level of the generator's pulses (1 high, 0 low), from the capture.
     """
 
     drive: Fraction | None
@@ -47,8 +54,9 @@ class MaxStepRates:
     observed: Fraction | None
     observed_at_s: Fraction | None
     headroom: Fraction | None
-    longest_active_ns: Fraction | None
+    longest_pulse_ns: Fraction | None
     idle_min_ns: Fraction | None
+    pulse_level: int | None = None
 
 
 def drive_rate(drive: Drive) -> tuple[Fraction | None, str | None]:
@@ -82,20 +90,23 @@ def max_step_rates(
             observed = _GIGA / timebase.ns(int(gaps[i]))
             observed_at = timebase.seconds(int(steps.ticks[i]))
     headroom = longest = idle_min = None
+    pulse_level: int | None = None
     if type_number in (0, 1) and active_edge != "both":
-        active_level = 1 if active_edge == "rising" else 0
-        idle_min = drive.limit_ns("step_low" if active_level == 1 else "step_high")
         roles = ("step",) if type_number == 0 else ("up", "down")
-        parts = []
-        for role in roles:
-            sig = iface.get(role)
-            if sig is not None:
-                parts.append(widths(sig.initial, sig.edges, active_level))
-        active = Intervals.concat(parts)
-        if len(active):
-            longest = timebase.ns(int(active.measured.max()))
+        sigs = [s for s in (iface.get(r) for r in roles) if s is not None]
+        longest_at: dict[int, int] = {}
+        for level in (0, 1):
+            stretch = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
+            if len(stretch):
+                longest_at[level] = int(stretch.measured.max())
+        if longest_at:
+            pulse_level = min(longest_at, key=lambda lv: (longest_at[lv], lv != 1))
+            longest = timebase.ns(longest_at[pulse_level])
+            idle_min = drive.limit_ns("step_low" if pulse_level == 1 else "step_high")
             if idle_min is not None and longest + idle_min > 0:
                 headroom = _GIGA / (longest + idle_min)
                 if cap is not None:
                     headroom = min(headroom, cap)
-    return MaxStepRates(cap, limited_by, observed, observed_at, headroom, longest, idle_min)
+    return MaxStepRates(
+        cap, limited_by, observed, observed_at, headroom, longest, idle_min, pulse_level
+    )

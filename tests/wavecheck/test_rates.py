@@ -27,18 +27,29 @@ def test_observed_and_headroom_rising_edge() -> None:
     d = drive("rising", step_high=1 * US, step_low=2 * US, max_rate_hz=1_000_000)
     rates = run_check(capture({"S": (0, step)}), d, {"step": "S"}).rates
     assert rates.observed == Fraction(10**9, 8 * US) and rates.observed_at_s == Fraction(30, 10**6)
-    assert rates.longest_active_ns == 4 * US and rates.idle_min_ns == 2 * US
+    assert rates.longest_pulse_ns == 4 * US and rates.idle_min_ns == 2 * US
     assert rates.headroom == Fraction(10**9, 6 * US)
     assert rates.drive == Fraction(10**9, 3 * US)
 
 
-def test_headroom_falling_edge_uses_low_time_and_is_capped() -> None:
-    # G202: active level = low; longest low 1 µs, idle (high) minimum 4.5 µs → 1/5.5 µs = 181.8 kHz
-    step = pulses([10 * US, 20 * US, 26 * US], 5 * US)  # lows: 15-20 (5 µs), 25-26 (1 µs)
+def test_headroom_falling_edge_drive_not_inverted_uses_the_generator_pulse() -> None:
+    # G202 with stepgen's high pulses (STEP not inverted): the active (low) level is the gap,
+    # up to 200 µs here; the generator's pulse is the 5 µs high. Headroom 1/(5 + 0.5 µs).
+    step = pulses([10 * US, 110 * US, 310 * US], 5 * US)
     rates = run_check(capture({"S": (0, step)}), g202(), {"step": "S"}).rates
-    assert rates.longest_active_ns == 5 * US
-    assert rates.headroom == Fraction(10**9, 9500)
-    short = pulses([10 * US, 20 * US], 5 * US)
-    short[2] = short[1] + 100  # low 100 ns: 1/(0.1 + 4.5 µs) > 200 kHz → capped at drive
-    rates = run_check(capture({"S": (0, short)}), g202(), {"step": "S"}).rates
+    assert rates.pulse_level == 1 and rates.longest_pulse_ns == 5 * US
+    assert rates.idle_min_ns == 500 and rates.headroom == Fraction(10**9, 5500)
+
+
+def test_headroom_falling_edge_drive_inverted_reading() -> None:
+    # low pulses of 1 µs and 2 µs (the active level), long highs: 1/(2 + 4.5 µs)
+    edges = [10 * US, 11 * US, 100 * US, 102 * US, 300 * US]
+    rates = run_check(capture({"S": (1, edges)}), g202(), {"step": "S"}).rates
+    assert rates.pulse_level == 0 and rates.longest_pulse_ns == 2 * US
+    assert rates.headroom == Fraction(10**9, 6500)
+
+
+def test_headroom_is_capped_by_the_drive() -> None:
+    step = pulses([10 * US, 110 * US], 100)  # 1/(0.1 + 0.5 µs) = 1.67 MHz > 200 kHz
+    rates = run_check(capture({"S": (0, step)}), g202(), {"step": "S"}).rates
     assert rates.headroom == 200_000

@@ -114,8 +114,9 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             "observed": _num(rates.observed),
             "observed_at_s": _num(rates.observed_at_s),
             "headroom": _num(rates.headroom),
-            "longest_active_ns": _num(rates.longest_active_ns),
+            "longest_pulse_ns": _num(rates.longest_pulse_ns),
             "idle_min_ns": _num(rates.idle_min_ns),
+            "pulse_level": rates.pulse_level,
         },
         "verdict": report.verdict,
     }

@@ -101,7 +101,8 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
             how = (
                 f"sampling faster than {format_frequency(hz)} would decide the closest one"
                 if hz is not None
-                else "the closest one measured exactly the limit; no sample rate decides it"
+                else "the closest one measured exactly the limit, so this capture cannot say how "
+                "much faster a sample rate would decide it"
             )
             out.append(
                 f"{r.rule}: {r.indeterminate} interval(s) indeterminate at this resolution; {how}"

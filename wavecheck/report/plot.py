@@ -1,0 +1,366 @@
+"""PNG plots of a report: timing diagrams at the worst places and histograms of every rule.
+
+The figure has two parts:
+
+- up to :data:`MAX_PLACES` timing diagrams, one per place: the mapped signals (STEP/DIR, UP/DOWN
+  or the phases, at the drive's input, i.e. after any inversion) around a violation — the worst
+  violation of each failing rule first, then the next worst — or, when nothing fails, around the
+  smallest margin of each rule. The measured interval is drawn as an arrow and labelled, the
+  rule's limit as a shaded span from the same start, so "too short" is visible at a glance;
+- one histogram per rule of every measured interval, with the limit as a vertical line, so the
+  whole capture's distance from the datasheet shows.
+
+matplotlib is imported lazily with the Agg backend (no display needed). Times are drawn in µs
+(or ns/ms when that reads better) relative to the start of the drawn interval; each panel's
+title gives the absolute time in the capture.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.checks.result import FAIL, RuleResult
+from wavecheck.output import atomic_write
+from wavecheck.report.model import Report
+from wavecheck.units import format_time
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+__all__ = ["MAX_PLACES", "Place", "choose_places", "render_png", "write_plot"]
+
+#: Timing diagrams drawn at most.
+MAX_PLACES = 4
+_FAIL_COLOR = "#c0392b"
+_PASS_COLOR = "#27ae60"
+_INDET_COLOR = "#e67e22"
+_TRACE_COLOR = "#1f3b73"
+_ROLE_ORDER = (
+    "step",
+    "up",
+    "down",
+    "phase-A",
+    "phase-B",
+    "phase-C",
+    "phase-D",
+    "phase-E",
+    "dir",
+    "enable",
+)
+
+
+@dataclass(frozen=True)
+class Place:
+    """One interval to draw.
+
+    Attributes:
+        rule: the rule id.
+        start_tick: start of the interval (its reference event).
+        end_tick: its end.
+        measured_ns: its length, exact ns (None for ``state_sequence``).
+        limit_ns: the rule's limit, exact ns (None for ``state_sequence``).
+        failed: True for a violation, False for a smallest-margin place of a passing rule.
+        detail: extra text (``state_sequence``).
+    """
+
+    rule: str
+    start_tick: int
+    end_tick: int
+    measured_ns: Fraction | None
+    limit_ns: Fraction | None
+    failed: bool
+    detail: str = ""
+
+    @property
+    def margin_ns(self) -> Fraction | None:
+        """measured − limit, exact ns."""
+        if self.measured_ns is None or self.limit_ns is None:
+            return None
+        return self.measured_ns - self.limit_ns
+
+
+def _span(p: Place) -> int:
+    return max(p.end_tick - p.start_tick, 1)
+
+
+def _overlaps(a: Place, b: Place) -> bool:
+    pad = 2 * max(_span(a), _span(b))
+    return a.start_tick - pad <= b.end_tick and b.start_tick - pad <= a.end_tick
+
+
+def choose_places(report: Report, n: int = MAX_PLACES) -> list[Place]:
+    """The places to draw: worst violations (one per failing rule first), else smallest margins.
+
+    Places that would show the same stretch of the capture are drawn once.
+    """
+    places: list[Place] = []
+
+    def add(p: Place) -> None:
+        if len(places) < n and not any(_overlaps(p, q) for q in places):
+            places.append(p)
+
+    violations = report.violations(max(4 * n, 16))
+    if violations:
+        firsts: dict[str, Place] = {}
+        rest: list[Place] = []
+        for v in violations:
+            p = Place(v.rule, v.start_tick, v.end_tick, v.measured_ns, v.limit_ns, True, v.detail)
+            if v.rule in firsts:
+                rest.append(p)
+            else:
+                firsts[v.rule] = p
+        for p in [*firsts.values(), *rest]:
+            add(p)
+        return places
+    margins: list[tuple[Fraction, Place]] = []
+    for r in report.rules:
+        i = _argmin(r)
+        if i is None or r.limit_ns is None:
+            continue
+        start, end = int(r.intervals.start[i]), int(r.intervals.end[i])
+        measured = r.timebase.ns(end - start)
+        rel = (measured - r.limit_ns) / r.limit_ns if r.limit_ns else measured
+        margins.append((rel, Place(r.rule, start, end, measured, r.limit_ns, False)))
+    for _, p in sorted(margins, key=lambda m: m[0]):
+        add(p)
+    return places
+
+
+def _argmin(r: RuleResult) -> int | None:
+    if len(r.intervals) == 0:
+        return None
+    return int(np.argmin(r.intervals.measured))
+
+
+# -- units ----------------------------------------------------------------------------------------
+_UNITS: tuple[tuple[str, float], ...] = (("ns", 1.0), ("µs", 1e3), ("ms", 1e6), ("s", 1e9))
+
+
+def _unit_for(ns: float) -> tuple[str, float]:
+    """A display unit for lengths around ``ns`` nanoseconds: (name, ns per unit)."""
+    chosen = _UNITS[0]
+    for name, scale in _UNITS:
+        if abs(ns) >= scale:
+            chosen = (name, scale)
+    return chosen
+
+
+def _fmt_ns(v: Fraction | float | None) -> str:
+    if v is None:
+        return "-"
+    return format_time(Fraction(v) / 10**9)
+
+
+def _signed_ns(v: Fraction | None) -> str:
+    if v is None:
+        return "-"
+    return ("+" if v > 0 else "") + _fmt_ns(v)
+
+
+# -- drawing --------------------------------------------------------------------------------------
+def _level_at(initial: int, edges: npt.NDArray[np.int64], tick: int) -> int:
+    """Level of a signal just after ``tick`` (edges at ``tick`` included)."""
+    return initial ^ (int(np.searchsorted(edges, tick, side="right")) & 1)
+
+
+def _roles(report: Report) -> list[str]:
+    roles = list(report.interface.signals)
+    return sorted(roles, key=lambda r: _ROLE_ORDER.index(r) if r in _ROLE_ORDER else 99)
+
+
+def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
+    tb = report.capture.timebase
+    tick_ns = float(tb.tick_ns)
+    span_ticks = max(place.end_tick - place.start_tick, 1)
+    limit_ticks = float(place.limit_ns) / tick_ns if place.limit_ns else 0.0
+    width = max(span_ticks, limit_ticks, 1.0)
+    pad = 1.6 * width
+    lo = place.start_tick - pad
+    hi = max(place.end_tick, place.start_tick + limit_ticks) + pad
+    unit, scale = _unit_for((hi - lo) * tick_ns / 4)
+    t0 = place.start_tick
+
+    def x(ticks: npt.NDArray[np.float64] | float) -> Any:
+        return (np.asarray(ticks, dtype=np.float64) - t0) * tick_ns / scale
+
+    roles = _roles(report)
+    n = len(roles)
+    ypos = {role: (n - 1 - k) * 1.6 for k, role in enumerate(roles)}
+    for role in roles:
+        sig = report.interface.signals[role]
+        a = int(np.searchsorted(sig.edges, int(math.floor(lo)), side="right"))
+        b = int(np.searchsorted(sig.edges, int(math.ceil(hi)), side="right"))
+        ts = sig.edges[a:b].astype(np.float64)
+        level0 = sig.initial ^ (a & 1)
+        levels = np.array([level0] + [level0 ^ ((k + 1) & 1) for k in range(len(ts))], dtype=float)
+        xs = np.concatenate([[lo], ts, [hi]])
+        y = ypos[role]
+        ax.step(x(xs), np.append(levels, levels[-1]) + y, where="post", color=_TRACE_COLOR, lw=1.6)
+        label = role.upper() if not role.startswith("phase") else role
+        inv = " (inv)" if sig.inverted else ""
+        ax.text(x(lo), y + 0.5, f"{label}{inv} ", ha="right", va="center", fontsize=9, color="#333")
+    color = _FAIL_COLOR if place.failed else _PASS_COLOR
+    lane = (n - 1) * 1.6 + 1.55  # the annotation lane above every trace
+    limit_end = place.start_tick + limit_ticks
+    # the limit: a shaded span of the required minimum from the interval's start
+    if place.limit_ns is not None and place.limit_ns > 0:
+        ax.axvspan(x(place.start_tick), x(limit_end), color=color, alpha=0.10, lw=0)
+        ax.axvline(x(limit_end), color=color, lw=1, ls="--", alpha=0.8)
+        ax.text(
+            x(limit_end),
+            lane + 0.75,
+            f" limit ≥ {_fmt_ns(place.limit_ns)} ",
+            ha="left" if limit_end >= place.end_tick else "right",
+            va="center",
+            fontsize=8.5,
+            color=color,
+        )
+    # the measured interval
+    ax.annotate(
+        "",
+        xy=(x(place.end_tick), lane),
+        xytext=(x(place.start_tick), lane),
+        arrowprops={"arrowstyle": "<|-|>", "color": color, "lw": 1.4, "shrinkA": 0, "shrinkB": 0},
+    )
+    ax.axvline(x(place.start_tick), color=color, lw=0.8, ls=":")
+    ax.axvline(x(place.end_tick), color=color, lw=0.8, ls=":")
+    measured = (
+        f"{place.rule} {_fmt_ns(place.measured_ns)}"
+        if place.measured_ns is not None
+        else (place.detail or "state sequence error")
+    )
+    ax.text(
+        x(place.end_tick) if place.end_tick > place.start_tick else x(place.start_tick),
+        lane,
+        f"  {measured}",
+        ha="left",
+        va="center",
+        fontsize=9,
+        color=color,
+        fontweight="bold",
+        bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1},
+    )
+    t_s = tb.seconds(place.start_tick)
+    verdict = "FAIL" if place.failed else "smallest margin"
+    margin = "" if place.margin_ns is None else f", margin {_signed_ns(place.margin_ns)}"
+    ax.set_title(
+        f"{index}. {place.rule} — {verdict} at t = {float(t_s):.6f} s{margin}",
+        fontsize=10,
+        loc="left",
+        color=color if place.failed else "#222",
+    )
+    ax.set_xlim(x(lo), x(hi))
+    ax.set_ylim(-0.4, lane + 1.2)
+    ax.set_yticks([])
+    ax.set_xlabel(f"time from the interval's start ({unit})", fontsize=9)
+    for side in ("top", "right", "left"):
+        ax.spines[side].set_visible(False)
+    ax.tick_params(labelsize=8)
+
+
+def _draw_histogram(ax: Axes, r: RuleResult) -> None:
+    assert r.limit_ns is not None
+    values = r.measured_ns
+    limit = float(r.limit_ns)
+    ref = float(np.median(values)) if len(values) else limit
+    unit, scale = _unit_for(max(limit, ref) / 2 if max(limit, ref) > 0 else 1.0)
+    v = values / scale
+    lim = limit / scale
+    lo, hi = float(v.min()), float(v.max())
+    positive = lo > 0 and lim > 0
+    log_x = positive and hi / lo > 50
+    if log_x:
+        a, b = math.log10(min(lo, lim) * 0.8), math.log10(max(hi, lim) * 1.25)
+        bins: Any = np.logspace(a, b, 60)
+        ax.set_xscale("log")
+    else:
+        span = max(hi, lim) - min(lo, lim)
+        pad = span * 0.08 if span > 0 else max(abs(lim), 1.0) * 0.1
+        bins = np.linspace(min(lo, lim) - pad, max(hi, lim) + pad, 60)
+    fails = r.outcome == FAIL
+    ax.hist(v[~fails], bins=bins, color="#5b7db1", label="pass / indeterminate")
+    if fails.any():
+        ax.hist(v[fails], bins=bins, color=_FAIL_COLOR, label="fail")
+    ax.set_yscale("log")
+    ax.set_ylim(bottom=0.7)
+    ax.axvline(lim, color=_FAIL_COLOR, lw=1.6, ls="--")
+    ax.text(
+        lim,
+        1.0,
+        f" limit {_fmt_ns(r.limit_ns)}",
+        transform=ax.get_xaxis_transform(),
+        ha="left",
+        va="top",
+        fontsize=8,
+        color=_FAIL_COLOR,
+    )
+    status = {"fail": _FAIL_COLOR, "pass": _PASS_COLOR, "indeterminate": _INDET_COLOR}
+    ax.set_title(
+        f"{r.rule}: {r.checked:,} intervals, {r.violations:,} fail, min margin "
+        f"{_signed_ns(r.min_margin_ns)}",
+        fontsize=9,
+        loc="left",
+        color=status.get(r.verdict, "#222"),
+    )
+    ax.set_xlabel(f"measured ({unit}{', log scale' if log_x else ''})", fontsize=8.5)
+    ax.set_ylabel("count", fontsize=8.5)
+    ax.tick_params(labelsize=8)
+    for side in ("top", "right"):
+        ax.spines[side].set_visible(False)
+
+
+def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> bytes:
+    """The report's figure as PNG bytes (timing diagrams, then histograms)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    places = choose_places(report, max_places)
+    hist_rules = [r for r in report.rules if r.limit_ns is not None and len(r.intervals)]
+    n_roles = max(len(report.interface.signals), 1)
+    diag_h = 1.0 + 0.55 * n_roles
+    hist_cols = 2 if len(hist_rules) > 1 else 1
+    hist_rows = math.ceil(len(hist_rules) / hist_cols)
+    heights = [diag_h] * len(places) + [2.6] * hist_rows
+    if not heights:
+        heights = [1.0]
+    fig = Figure(figsize=(11, sum(heights) + 1.0), dpi=dpi, layout="constrained")
+    verdict = report.verdict.upper()
+    vcolor = {"FAIL": _FAIL_COLOR, "PASS": _PASS_COLOR}.get(verdict, _INDET_COLOR)
+    fig.suptitle(
+        f"{verdict} — {os.path.basename(report.capture.path)} vs {report.drive.id} "
+        f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)",
+        fontsize=12,
+        color=vcolor,
+        fontweight="bold",
+    )
+    grid = fig.add_gridspec(len(heights), hist_cols, height_ratios=heights)
+    for k, place in enumerate(places):
+        ax = fig.add_subplot(grid[k, :])
+        _draw_place(ax, report, place, k + 1)
+    for k, r in enumerate(hist_rules):
+        row, col = divmod(k, hist_cols)
+        span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col
+        ax = fig.add_subplot(grid[len(places) + row, span])
+        _draw_histogram(ax, r)
+    if not places and not hist_rules:
+        ax = fig.add_subplot(grid[0, :])
+        ax.axis("off")
+        ax.text(0.5, 0.5, "nothing measured", ha="center", va="center")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return buf.getvalue()
+
+
+def write_plot(report: Report, path: str | os.PathLike[str], max_places: int = MAX_PLACES) -> None:
+    """Render the report's figure and write it to ``path`` atomically."""
+    atomic_write(path, render_png(report, max_places))
