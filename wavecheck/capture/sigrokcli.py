@@ -58,9 +58,16 @@ def find_sigrok_cli() -> str | None:
 
 
 def run_sigrok(
-    args: list[str], *, path: str | os.PathLike[str], timeout: float = _TIMEOUT_S
+    args: list[str],
+    *,
+    path: str | os.PathLike[str],
+    timeout: float = _TIMEOUT_S,
+    harmless: tuple[str, ...] = (),
 ) -> subprocess.CompletedProcess[str]:
-    """Run ``sigrok-cli *args``; any failure (status, stderr pattern) is a CaptureError on ``path``."""
+    """Run ``sigrok-cli *args``; any failure (status, stderr pattern) is a CaptureError on ``path``.
+
+    Stderr lines containing one of ``harmless`` are not failures.
+    """
     exe = find_sigrok_cli()
     if exe is None:
         raise CaptureError(
@@ -81,7 +88,11 @@ def run_sigrok(
         raise CaptureError(path, "sigrok-cli", f"did not finish within {timeout:g} s") from None
     except OSError as err:
         raise CaptureError(path, "sigrok-cli", f"cannot be run: {err}") from None
-    lines = [ln.strip() for ln in proc.stderr.splitlines() if ln.strip()]
+    lines = [
+        ln.strip()
+        for ln in proc.stderr.splitlines()
+        if ln.strip() and not any(h in ln for h in harmless)
+    ]
     bad = [ln for ln in lines if any(p in ln for p in FAILURE_PATTERNS)]
     if proc.returncode != 0 or bad:
         detail = (bad or lines or [f"exit status {proc.returncode}"])[0]
@@ -102,7 +113,10 @@ class SigrokShow:
 def show(path: str | os.PathLike[str], input_format: str | None = None) -> SigrokShow:
     """Run ``--show`` on ``path`` (a cheap validity check) and parse its report."""
     args = ["-I", input_format] if input_format else []
-    out = run_sigrok([*args, "-i", str(path), "--show"], path=path).stdout
+    # a file without a sample rate makes sigrok-cli complain; --show still reports the rest
+    out = run_sigrok(
+        [*args, "-i", str(path), "--show"], path=path, harmless=("Cannot set 'samplerate' to 0",)
+    ).stdout
     rate = re.search(r"^Samplerate:\s*(\d+)", out, re.M)
     unit = re.search(r"^Logic unitsize:\s*(\d+)", out, re.M)
     count = re.search(r"^Logic sample count:\s*(\d+)", out, re.M)
@@ -169,7 +183,10 @@ def read_with_sigrok(
         spec = f"{input_format}:samplerate={int(samplerate)}"
     with tempfile.TemporaryDirectory(prefix="wavecheck-") as tmp:
         out = convert(path, Path(tmp) / "converted.sr", input_format=spec)
-        info = show(out)
+        try:
+            info = show(out)
+        except CaptureError as err:
+            raise CaptureError(path, err.where, err.msg) from None
         if not info.sample_count:
             raise CaptureError(
                 path,

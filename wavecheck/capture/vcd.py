@@ -170,10 +170,15 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
                 raise CaptureError(
                     path, where, f"id code {id_code!r} is longer than {_MAX_ID_LEN} characters"
                 )
+            ref = body[3:]
+            # "data [3]" → "data[3]"; sigrok's "STEP (Y axis)" keeps its spaces
+            name = (
+                " ".join(ref[:-1]) + ref[-1]
+                if len(ref) > 1 and ref[-1].startswith("[")
+                else " ".join(ref)
+            )
             decls.append(
-                VarDecl(
-                    body[0], int(body[1]), id_code, "".join(body[3:]), tuple(scope), int(where[5:])
-                )
+                VarDecl(body[0], int(body[1]), id_code, name, tuple(scope), int(where[5:]))
             )
         elif word in ("$comment", "$date", "$version"):
             body, i = section(i)

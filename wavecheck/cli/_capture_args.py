@@ -11,6 +11,7 @@ import os
 
 from wavecheck.capture.model import Capture
 from wavecheck.capture.open import open_capture
+from wavecheck.errors import UnitError
 from wavecheck.units import parse_frequency, parse_time
 
 __all__ = ["add_capture_arguments", "capture_from_args"]
@@ -48,9 +49,17 @@ def capture_from_args(args: argparse.Namespace, path: str | os.PathLike[str]) ->
     """
     rate = getattr(args, "samplerate", None)
     res = getattr(args, "resolution", None)
+    try:
+        samplerate = parse_frequency(rate, default_unit="Hz") if rate else None
+    except UnitError as err:
+        raise UnitError(f"--samplerate: {err}") from None
+    try:
+        resolution_s = parse_time(res) if res else None
+    except UnitError as err:
+        raise UnitError(f"--resolution: {err}") from None
     return open_capture(
         path,
-        samplerate=parse_frequency(rate, default_unit="Hz") if rate else None,
-        resolution_s=parse_time(res) if res else None,
+        samplerate=samplerate,
+        resolution_s=resolution_s,
         input_format=getattr(args, "input_format", None),
     )

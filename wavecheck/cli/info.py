@@ -1,17 +1,107 @@
-"""`wavecheck info` (placeholder until implemented)."""
+"""``wavecheck info CAPTURE``: format, sample rate / timescale, resolution, duration, channels.
+
+JSON keys (a contract): ``format``, ``samplerate_hz`` (null for a VCD without one),
+``resolution_ns``, ``duration_s``, ``channels`` [{name, index, initial, edges, rising, falling}];
+also ``path``, ``tick_ns``, ``notes``.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+from fractions import Fraction
 from typing import Any
 
-from wavecheck.errors import UsageError
+from wavecheck.capture.model import Capture
+from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["info_dict", "info_text", "register", "run"]
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("info", help="(not yet implemented)")
+    p = sub.add_parser(
+        "info",
+        help="show a capture's channels, sample rate, duration and edge counts",
+        description="Show a capture's format, sample rate or timescale, resolution, duration, "
+        "and per channel its name, initial level and number of edges.",
+    )
+    p.add_argument("capture", metavar="CAPTURE", help=".sr, VCD, or any sigrok-cli input format")
+    p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    add_capture_arguments(p)
     p.set_defaults(func=run)
 
 
+def _number(value: Fraction) -> int | float:
+    return int(value) if value.denominator == 1 else float(value)
+
+
+def info_dict(cap: Capture) -> dict[str, Any]:
+    """The JSON form of ``wavecheck info``."""
+    return {
+        "path": cap.path,
+        "format": cap.format,
+        "samplerate_hz": None if cap.samplerate_hz is None else _number(cap.samplerate_hz),
+        "tick_ns": _number(cap.timebase.tick_ns),
+        "resolution_ns": _number(cap.resolution_ns),
+        "duration_s": float(cap.duration_s),
+        "channels": [
+            {
+                "name": ch.name,
+                "index": ch.index,
+                "initial": ch.initial,
+                "edges": int(len(ch.edges)),
+                "rising": ch.rising,
+                "falling": ch.falling,
+            }
+            for ch in cap.channels
+        ],
+        "notes": list(cap.notes),
+    }
+
+
+def info_text(cap: Capture) -> str:
+    """The text form of ``wavecheck info``."""
+    rate = "none stated" if cap.samplerate_hz is None else format_frequency(cap.samplerate_hz)
+    res = "exact (0)" if cap.resolution_ticks == 0 else format_time(cap.resolution_ns / 10**9)
+    lines = [
+        f"capture     {cap.path}",
+        f"format      {cap.format}",
+        f"sample rate {rate}",
+        f"tick        {format_time(cap.timebase.tick_s)}"
+        + (" (timescale)" if cap.format == "vcd" else ""),
+        f"resolution  {res}",
+        f"duration    {format_time(cap.duration_s)} ({cap.end - cap.start} ticks)",
+        "",
+    ]
+    width = max([len("name")] + [len(ch.name) for ch in cap.channels])
+    lines.append(
+        f"{'index':>5}  {'name':<{width}}  initial  {'edges':>9}  {'rising':>9}  {'falling':>9}"
+    )
+    for ch in cap.channels:
+        extra = ""
+        if ch.known_from > cap.start:
+            extra += f"  known from {format_time(cap.timebase.seconds(ch.known_from))}"
+        if len(ch.xz_times):
+            extra += f"  x/z {len(ch.xz_times)} times"
+        lines.append(
+            f"{ch.index:>5}  {ch.name:<{width}}  {ch.initial:>7}  {len(ch.edges):>9}  "
+            f"{ch.rising:>9}  {ch.falling:>9}{extra}"
+        )
+    if not cap.channels:
+        lines.append("(no 1-bit channels)")
+    if cap.notes:
+        lines.append("")
+        lines += [f"note: {n}" for n in cap.notes]
+    return "\n".join(lines)
+
+
 def run(args: argparse.Namespace) -> int:
-    raise UsageError("wavecheck info is not implemented yet")
+    cap = capture_from_args(args, args.capture)
+    if args.format == "json":
+        json.dump(info_dict(cap), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(info_text(cap))
+    return 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import zipfile
 from pathlib import Path
 
@@ -52,3 +53,33 @@ def edges_by_unpacking(raw: bytes, unitsize: int, bit: int) -> tuple[int, list[i
     u8 = np.frombuffer(raw, np.uint8).reshape(-1, unitsize)
     bits = np.unpackbits(u8, axis=1, bitorder="little")[:, bit].astype(np.int8)
     return int(bits[0]), (np.flatnonzero(np.diff(bits)) + 1).tolist()
+
+
+@functools.lru_cache(maxsize=4)
+def count_edges_by_members(path: Path) -> tuple[list[int], list[int], int]:
+    """Initial level and edge count per bit of a unitsize-1 ``.sr``, member by member.
+
+    Independent of the reader: whole members read with ``ZipFile.read``, each bit shifted out
+    and compared with its neighbour, the last sample prepended to the next member.
+    Returns (initial per bit, edges per bit, samples).
+    """
+    with zipfile.ZipFile(path) as z:
+        names = sorted(
+            (n for n in z.namelist() if n.startswith("logic-1-")), key=lambda n: int(n[8:])
+        )
+        counts = [0] * 8
+        prev: np.ndarray | None = None
+        initial: list[int] = []
+        samples = 0
+        for n in names:
+            raw = np.frombuffer(z.read(n), np.uint8)
+            samples += len(raw)
+            if prev is None:
+                initial = [(int(raw[0]) >> b) & 1 for b in range(8)]
+            else:
+                raw = np.concatenate([prev, raw])
+            for b in range(8):
+                bits = (raw >> b) & 1
+                counts[b] += int(np.count_nonzero(bits[1:] != bits[:-1]))
+            prev = raw[-1:]
+    return initial, counts, samples

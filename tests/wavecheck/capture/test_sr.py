@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tests.wavecheck.capture.srutil import edges_by_unpacking, write_sr
+from tests.wavecheck.capture.srutil import count_edges_by_members, edges_by_unpacking, write_sr
 from wavecheck.capture.sr import read_sr
 from wavecheck.errors import CaptureError
 
@@ -20,23 +20,10 @@ def test_grbl_channels_and_edges_match_independent_unpacking(grbl_sr: Path) -> N
     cap = read_sr(grbl_sr)
     assert [c.name for c in cap.channels] == ["EN", "STEP (Y axis)", "TX", "RX"]
     assert cap.samplerate_hz == 2_000_000 and cap.resolution_ticks == 1
-    with zipfile.ZipFile(grbl_sr) as z:  # independent: member by member, unpackbits per chunk
-        names = sorted(
-            (n for n in z.namelist() if n.startswith("logic-1-")), key=lambda n: int(n[8:])
-        )
-        counts = np.zeros(8, dtype=np.int64)
-        last = None
-        for n in names:
-            bits = np.unpackbits(
-                np.frombuffer(z.read(n), np.uint8)[:, None], axis=1, bitorder="little"
-            )
-            if last is not None:
-                bits = np.vstack([last, bits])
-            counts += np.count_nonzero(np.diff(bits.astype(np.int8), axis=0), axis=0)
-            last = bits[-1:]
-            total = sum(z.getinfo(m).file_size for m in names)
-    assert cap.end == total
-    assert [len(c.edges) for c in cap.channels] == counts[:4].tolist()
+    initial, counts, samples = count_edges_by_members(grbl_sr)
+    assert cap.end == samples
+    assert [len(c.edges) for c in cap.channels] == counts[:4]
+    assert [c.initial for c in cap.channels] == initial[:4]
     assert all(np.all(np.diff(c.edges) > 0) for c in cap.channels)
 
 
