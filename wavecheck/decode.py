@@ -117,12 +117,23 @@ def level_before(
     sig: RoleSignal, ticks: EdgeArray
 ) -> tuple[npt.NDArray[np.int8], npt.NDArray[np.bool_]]:
     """The level of ``sig`` just before each tick, and whether it changes exactly at that tick."""
-    n = np.searchsorted(sig.edges, ticks, side="left")
+    edges = sig.edges
+    if len(edges) == 0:
+        return np.full(len(ticks), sig.initial, dtype=np.int8), np.zeros(len(ticks), dtype=np.bool_)
+    if len(ticks) > 8 * len(edges):
+        # Few signal edges, many ticks: place each edge among the ticks instead (O(n) cumsum).
+        after = np.searchsorted(ticks, edges, side="right")  # first tick strictly after the edge
+        n = np.cumsum(np.bincount(after, minlength=len(ticks) + 1)[: len(ticks)])
+        at = np.searchsorted(ticks, edges, side="left")
+        hit = at < len(ticks)
+        hit[hit] = ticks[at[hit]] == edges[hit]
+        same = np.zeros(len(ticks), dtype=np.bool_)
+        same[at[hit]] = True
+    else:
+        n = np.searchsorted(edges, ticks, side="left")
+        clipped = np.minimum(n, len(edges) - 1)
+        same = (n < len(edges)) & (edges[clipped] == ticks)
     level = (sig.initial ^ (n & 1)).astype(np.int8)
-    if len(sig.edges) == 0:
-        return level, np.zeros(len(ticks), dtype=np.bool_)
-    clipped = np.minimum(n, len(sig.edges) - 1)
-    same = (n < len(sig.edges)) & (sig.edges[clipped] == ticks)
     return level, same
 
 

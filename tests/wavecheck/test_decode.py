@@ -184,3 +184,22 @@ def test_dir_level_unknown_before_known_from() -> None:
     ev = decode(iface, 0)
     assert ev.direction.tolist() == [0, 1]
     assert np.array_equal(ev.ambiguous, [])
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    ticks=st.lists(st.integers(0, 300), unique=True, max_size=80),
+    edges=st.lists(st.integers(0, 300), unique=True, max_size=12),
+    initial=st.sampled_from([0, 1]),
+)
+def test_level_before_matches_brute_force_on_both_paths(ticks, edges, initial) -> None:
+    from wavecheck.decode import level_before
+    from wavecheck.interface import RoleSignal
+
+    t = np.asarray(sorted(ticks), dtype=np.int64)
+    e = np.asarray(sorted(edges), dtype=np.int64)
+    sig = RoleSignal("dir", "D", initial, e, 0, False)
+    level, same = level_before(sig, t)
+    want_level = [initial ^ (sum(1 for x in edges if x < ti) & 1) for ti in t.tolist()]
+    assert level.tolist() == want_level
+    assert same.tolist() == [ti in edges for ti in t.tolist()]

@@ -15,6 +15,7 @@ All inputs are increasing ``int64`` tick arrays; nothing loops per edge in Pytho
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -41,9 +42,9 @@ class Intervals:
     def __len__(self) -> int:
         return int(len(self.start))
 
-    @property
+    @cached_property
     def measured(self) -> EdgeArray:
-        """Lengths in ticks (``end - start``)."""
+        """Lengths in ticks (``end - start``), computed once."""
         return self.end - self.start
 
     @classmethod
