@@ -1,17 +1,239 @@
-"""`stepgen simulate` (placeholder until implemented)."""
+"""``stepgen simulate``: run the LinuxCNC stepgen model under a latency model, write VCD or .sr.
+
+Options are named after LinuxCNC's parameters; timing values are ns as bare numbers (as with
+halcmd) or carry a unit (``5us``). Exit 0 on success, 2 with a one-line message on bad settings
+(nothing is written).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
+from pathlib import Path
 from typing import Any
 
-from wavecheck.errors import UsageError
+from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
+from stepgen.model import StepgenConfig
+from stepgen.motion import Motion, parse_command_csv, parse_moves
+from stepgen.simulate import n_periods_for, simulate
+from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
+from wavecheck.errors import ConfigError, UnitError
+from wavecheck.units import time_ns
+
+__all__ = ["build_config", "build_motion", "register", "run"]
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("simulate", help="(not yet implemented)")
+    """Add the ``simulate`` subcommand."""
+    p = sub.add_parser(
+        "simulate",
+        help="simulate LinuxCNC's software stepgen with base-thread latency; write VCD or .sr",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    g = p.add_argument_group("stepgen (LinuxCNC names)")
+    g.add_argument("--type", type=int, default=0, help="step_type 0..15 (default 0 = step/dir)")
+    g.add_argument("--user-step-type", default="", help="type 15 table, e.g. 1,3,2,0")
+    g.add_argument(
+        "--base-period", default="25us", help="base thread period (bare number = ns; default 25us)"
+    )
+    g.add_argument(
+        "--servo-period",
+        default="1ms",
+        help="servo thread period, rounded by HAL to n·base (default 1ms)",
+    )
+    g.add_argument(
+        "--mode",
+        choices=("position", "velocity"),
+        default="position",
+        help="ctrl_type (default position)",
+    )
+    g.add_argument("--position-scale", type=float, default=1.0, help="steps per position unit")
+    g.add_argument(
+        "--maxvel", type=float, default=0.0, help="units/s (0 = only the step-rate limit)"
+    )
+    g.add_argument(
+        "--maxaccel", type=float, default=0.0, help="units/s² (0 = full speed in one servo period)"
+    )
+    for name in ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay"):
+        g.add_argument(
+            f"--{name}", default="1", help=f"{name} (ns, or with a unit; default 1 ns → 1 period)"
+        )
+    g.add_argument(
+        "--thread-order",
+        choices=("auto", "update-first", "pulses-first"),
+        default="auto",
+        help="which function runs first at a common tick; auto = update-first for a single thread "
+        "(servo = base, as tests/stepgen.0), pulses-first for two threads (the base thread usually "
+        "ticks first); update-first shows the start-up quirk",
+    )
+    m = p.add_argument_group("motion")
+    m.add_argument("--position", type=float, help="constant position-cmd (units)")
+    m.add_argument("--velocity", type=float, help="constant velocity-cmd (units/s)")
+    m.add_argument(
+        "--command", metavar="FILE.csv", help="time_s,value rows, each held until the next"
+    )
+    m.add_argument(
+        "--move", metavar="SPEC", help="trapezoid moves: 'X, X@V, pause 10ms, ...' from 0"
+    )
+    m.add_argument("--move-vel", type=float, help="peak velocity of --move (default --maxvel)")
+    m.add_argument("--move-accel", type=float, help="acceleration of --move (default --maxaccel)")
+    m.add_argument("--duration", help="simulated time (e.g. 2s, 500ms)")
+    m.add_argument("--periods", type=int, help="simulated base periods")
+    lat = p.add_argument_group("latency")
+    lat.add_argument(
+        "--latency",
+        default="none",
+        help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE",
+    )
+    lat.add_argument(
+        "--seed", type=int, default=0, help="seed of the random latency models (default 0)"
+    )
+    lat.add_argument(
+        "--active-edge",
+        choices=("rising", "falling"),
+        default="rising",
+        help="drive's active STEP edge (worst-case events)",
+    )
+    lat.add_argument(
+        "--catchup",
+        default=str(DEFAULT_CATCHUP_NS),
+        help="run time of an overdue invocation (default 1000 ns)",
+    )
+    o = p.add_argument_group("output")
+    o.add_argument("-o", "--output", required=True, help="OUT.vcd or OUT.sr")
+    o.add_argument(
+        "--max-samples", type=int, default=DEFAULT_MAX_SAMPLES, help=".sr size limit in samples"
+    )
+    o.add_argument(
+        "--engine",
+        choices=("fast", "reference"),
+        default="fast",
+        help="fast (default) or the plain per-period loop",
+    )
+    o.add_argument("-q", "--quiet", action="store_true", help="no summary")
     p.set_defaults(func=run)
 
 
+def _ns(text: str, option: str, allow_zero: bool = True) -> int:
+    try:
+        value = time_ns(str(text), default_unit="ns")
+    except UnitError as err:
+        raise ConfigError(f"{option} {text!r}: {err}") from None
+    if value.denominator != 1:
+        raise ConfigError(f"{option} {text!r} is not a whole number of ns")
+    if value < 0 or (value == 0 and not allow_zero):
+        raise ConfigError(f"{option} {text!r} must be {'>= 0' if allow_zero else '> 0'}")
+    return int(value)
+
+
+def build_config(args: argparse.Namespace) -> StepgenConfig:
+    """The :class:`StepgenConfig` from parsed options (raises ConfigError)."""
+    table: tuple[int, ...] = ()
+    if args.user_step_type:
+        try:
+            table = tuple(int(x, 0) for x in args.user_step_type.split(","))
+        except ValueError:
+            raise ConfigError(
+                f"--user-step-type {args.user_step_type!r} is not a list of integers (e.g. 1,3,2,0)"
+            ) from None
+    base = _ns(args.base_period, "--base-period", allow_zero=False)
+    servo = _ns(args.servo_period, "--servo-period", allow_zero=False)
+    order = args.thread_order
+    if order == "auto":
+        order = "update-first" if servo == base else "pulses-first"
+    cfg = StepgenConfig(
+        step_type=args.type,
+        user_step_type=table,
+        base_period_ns=base,
+        servo_period_ns=servo,
+        mode=args.mode,
+        position_scale=args.position_scale,
+        maxvel=args.maxvel,
+        maxaccel=args.maxaccel,
+        steplen=_ns(args.steplen, "--steplen"),
+        stepspace=_ns(args.stepspace, "--stepspace"),
+        dirsetup=_ns(args.dirsetup, "--dirsetup"),
+        dirhold=_ns(args.dirhold, "--dirhold"),
+        dirdelay=_ns(args.dirdelay, "--dirdelay"),
+        thread_order=order,
+    )
+    cfg.validate()
+    return cfg
+
+
+def build_motion(args: argparse.Namespace, cfg: StepgenConfig) -> Motion:
+    """The :class:`Motion` from ``--position/--velocity/--command/--move`` (exactly one)."""
+    given = [n for n in ("position", "velocity", "command", "move") if getattr(args, n) is not None]
+    if len(given) != 1:
+        raise ConfigError(
+            f"give exactly one of --position, --velocity, --command, --move (got {', '.join('--' + g for g in given) or 'none'})"
+        )
+    kind = given[0]
+    if kind == "position" or kind == "velocity":
+        if kind != cfg.mode:
+            raise ConfigError(f"--{kind} needs --mode {kind} (the stepgen is in {cfg.mode} mode)")
+        value = float(getattr(args, kind))
+        if not math.isfinite(value):
+            raise ConfigError(f"--{kind} {value} is not finite")
+        return Motion(kind, value)
+    if kind == "command":
+        times, values = parse_command_csv(args.command)
+        return Motion("csv", csv_times=times, csv_values=values)
+    vel = args.move_vel if args.move_vel is not None else cfg.maxvel
+    acc = args.move_accel if args.move_accel is not None else cfg.maxaccel
+    return Motion("moves", segments=parse_moves(args.move, vel, acc))
+
+
 def run(args: argparse.Namespace) -> int:
-    raise UsageError("stepgen simulate is not implemented yet")
+    """Run ``stepgen simulate``; returns the exit code."""
+    out = Path(args.output)
+    suffix = out.suffix.lower()
+    if suffix not in (".vcd", ".sr"):
+        raise ConfigError(f"-o {args.output!r}: write a .vcd or a .sr file")
+    cfg = build_config(args)
+    motion = build_motion(args, cfg)
+    latency = parse_latency(args.latency)
+    if args.periods is not None and args.duration is not None:
+        raise ConfigError("give --periods or --duration, not both")
+    if args.periods is not None:
+        n = args.periods
+    elif args.duration is not None:
+        n = n_periods_for(cfg, _ns(args.duration, "--duration", allow_zero=False))
+    elif motion.natural_duration_s is not None:
+        n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
+    else:
+        raise ConfigError("give --duration (e.g. 1s) or --periods N")
+    if n < 1:
+        raise ConfigError(f"--periods {n} must be >= 1")
+    trace = simulate(
+        cfg,
+        motion,
+        latency,
+        n_periods=n,
+        seed=args.seed,
+        active_edge=args.active_edge,
+        catchup_ns=_ns(args.catchup, "--catchup", allow_zero=False),
+        engine=args.engine,
+    )
+    import time
+
+    t0 = time.perf_counter()
+    if suffix == ".vcd":
+        changes = write_vcd(trace, out)
+        what = f"{changes} value changes, 1 ns timescale"
+    else:
+        rate, samples = write_sr(trace, out, max_samples=args.max_samples)
+        what = f"{samples} samples at {rate} Hz"
+    t_write = time.perf_counter() - t0
+    if not args.quiet:
+        sim_s = trace.n_periods * cfg.base_period_ns * 1e-9
+        print(
+            f"{out}: {trace.steps} steps, final counts {trace.final_counts}, {trace.n_periods} periods "
+            f"({sim_s:g} s) of type {cfg.step_type} at P = {cfg.base_period_ns} ns, servo {cfg.servo_ns} ns; "
+            f"latency {latency.text}; simulated in {trace.seconds:.3f} s, written in {t_write:.3f} s ({what})"
+        )
+        for note in trace.notes:
+            print(f"stepgen: note: {note}", file=sys.stderr)
+    return 0

@@ -1,0 +1,240 @@
+"""Base-thread latency: when each make-pulses invocation really runs.
+
+Invocation k is due at k·P and runs at ``t_k = max(k·P + l_k, t_{k−1} + G)``: l_k ≥ 0 is drawn
+from the model, and G (``catchup_ns``, default 1 µs) is how long an overdue invocation takes when
+the thread catches up after a latency longer than a period. So latency never reorders
+invocations, and times strictly increase. Every pin change made by invocation k appears at t_k.
+With l_k < P − G (every model except long spikes) the clamp never acts.
+
+Models (``--latency``; times take units, bare numbers are ns as in LinuxCNC):
+
+``none``                every invocation on time: all edges on the k·P grid.
+``uniform:J``           l_k uniform on the integers [0, J] ns (``--seed``).
+``normal:SIGMA,MAX``    l_k = min(round(|N(0, SIGMA)|), MAX) — a half-normal (``--seed``).
+``spike:J@EVERY``       l_k = J for the first invocation due at or after each multiple of EVERY
+                        (not at 0), else 0 — the seed's "every 64 s a 300 µs latency" is
+                        ``spike:300us@64s``.
+``histogram:FILE``      l_k drawn from cyclictest ``-h`` bins (b µs exactly), or a half-normal
+                        from latency-histogram ``--nox`` sdev/max (see :mod:`stepgen.latencyfiles`).
+``worst:J:RULE``        the assignment of l_k ∈ {0, J} that makes RULE's intervals shortest:
+                        invocations that make an *end* event of the rule run on time, every
+                        other one J late, so each interval is n·P − J (DESIGN "Worst case,
+                        precisely"). RULE is one of step_high, step_low, step_period, dir_setup,
+                        dir_hold (type 0), dir_delay (type 1), state_hold (types ≥ 2). For
+                        step_period and state_hold, whose intervals start and end with the same
+                        kind of event, those events alternate on time / late.
+
+The active STEP edge (rising by default; ``falling`` for a drive such as the Gecko G202 fed by a
+non-inverted pin) decides which edges are the dir_setup and step_period events. With the falling
+edge active, dir_hold runs from the end of the pulse to the DIR change: dirhold·P − J.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from stepgen.latencyfiles import read_histogram
+from stepgen.model import InvocationRun
+from wavecheck.errors import ConfigError, UnitError
+from wavecheck.units import time_ns
+
+__all__ = ["RULES", "LatencyModel", "describe", "invocation_times", "parse_latency"]
+
+ActiveEdge = Literal["rising", "falling"]
+RULES = ("step_high", "step_low", "step_period", "dir_setup", "dir_hold", "dir_delay", "state_hold")
+DEFAULT_CATCHUP_NS = 1000
+
+
+@dataclass(frozen=True)
+class LatencyModel:
+    """A parsed ``--latency`` model (see the module docstring). All times in integer ns."""
+
+    kind: str
+    text: str = "none"
+    j_ns: int = 0
+    sigma_ns: int = 0
+    every_ns: int = 0
+    rule: str = ""
+    path: str = ""
+
+    @property
+    def random(self) -> bool:
+        """True if the model draws from ``--seed``."""
+        return self.kind in ("uniform", "normal", "histogram")
+
+
+def _ns(text: str, what: str, model: str) -> int:
+    try:
+        value = time_ns(text.strip(), default_unit="ns")
+    except UnitError as err:
+        raise ConfigError(f"latency model {model!r}: {what} {text!r}: {err}") from None
+    if value < 0 or value.denominator != 1:
+        raise ConfigError(
+            f"latency model {model!r}: {what} {text!r} must be a whole number of ns >= 0"
+        )
+    return int(value)
+
+
+def parse_latency(text: str) -> LatencyModel:
+    """Parse a ``--latency`` string (``none``, ``uniform:11us``, ``worst:11us:step_high`` …).
+
+    Raises:
+        ConfigError: unknown model or bad value, one line with the value and a hint.
+    """
+    t = text.strip()
+    kind, _, rest = t.partition(":")
+    kind = kind.lower()
+    if kind == "none" and not rest:
+        return LatencyModel("none", t)
+    if kind == "uniform" and rest:
+        return LatencyModel("uniform", t, j_ns=_ns(rest, "J", t))
+    if kind == "normal" and rest:
+        parts = rest.split(",")
+        if len(parts) != 2:
+            raise ConfigError(f"latency model {t!r}: write normal:SIGMA,MAX (e.g. normal:2us,20us)")
+        return LatencyModel(
+            "normal", t, sigma_ns=_ns(parts[0], "SIGMA", t), j_ns=_ns(parts[1], "MAX", t)
+        )
+    if kind == "spike" and "@" in rest:
+        j, every = rest.split("@", 1)
+        every_ns = _ns(every, "EVERY", t)
+        if every_ns <= 0:
+            raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
+        return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)
+    if kind == "histogram" and rest:
+        if not Path(rest).expanduser().is_file():
+            raise ConfigError(
+                f"latency model {t!r}: file {rest!r} not found (cyclictest -h or latency-histogram --nox output)"
+            )
+        return LatencyModel("histogram", t, path=rest)
+    if kind == "worst" and rest.count(":") == 1:
+        j, rule = rest.split(":")
+        rule = rule.strip().lower().replace("-", "_")
+        if rule not in RULES:
+            raise ConfigError(
+                f"latency model {t!r}: unknown rule {rule!r} (rules: {', '.join(RULES)})"
+            )
+        return LatencyModel("worst", t, j_ns=_ns(j, "J", t), rule=rule)
+    raise ConfigError(
+        f"unknown latency model {text!r} (use none, uniform:J, normal:SIGMA,MAX, spike:J@EVERY, "
+        "histogram:FILE or worst:J:RULE, e.g. worst:11us:step_high)"
+    )
+
+
+def _offsets(
+    model: LatencyModel, run: InvocationRun, seed: int | None, active_edge: ActiveEdge
+) -> np.ndarray | None:
+    """l_k for every invocation (None for ``none``)."""
+    n = run.n_periods
+    base = run.config.base_period_ns
+    if model.kind == "none":
+        return None
+    if model.kind == "uniform":
+        return np.random.default_rng(seed).integers(0, model.j_ns + 1, n, dtype=np.int64)
+    if model.kind == "normal":
+        draw = np.abs(np.random.default_rng(seed).normal(0.0, float(model.sigma_ns), n))
+        return np.minimum(np.rint(draw), model.j_ns).astype(np.int64)
+    if model.kind == "spike":
+        out = np.zeros(n, dtype=np.int64)
+        m = np.arange(1, (n * base) // model.every_ns + 2, dtype=np.int64)
+        k = -(-(m * model.every_ns) // base)  # first invocation due at or after m·EVERY
+        out[k[k < n]] = model.j_ns
+        return out
+    if model.kind == "histogram":
+        hist = read_histogram(model.path)
+        rng = np.random.default_rng(seed)
+        if hist.half_normal is not None:
+            sigma, cap = hist.half_normal
+            return np.minimum(np.rint(np.abs(rng.normal(0.0, float(sigma), n))), cap).astype(
+                np.int64
+            )
+        return rng.choice(hist.values_ns, size=n, p=hist.weights).astype(np.int64)
+    if model.kind == "worst":
+        out = np.full(n, model.j_ns, dtype=np.int64)
+        on_time = _end_events(model.rule, run, active_edge)
+        out[on_time] = 0
+        return out
+    raise ConfigError(f"unknown latency model kind {model.kind!r}")
+
+
+def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.ndarray:
+    """Invocations that make the end events of ``rule``'s intervals (to run on time)."""
+    t = run.toggles
+    stype = run.config.step_type
+
+    def rising(pin: str) -> np.ndarray:
+        return t[pin][0::2]
+
+    def falling(pin: str) -> np.ndarray:
+        return t[pin][1::2]
+
+    def alternate(events: np.ndarray) -> np.ndarray:
+        return np.unique(events)[1::2]
+
+    if stype >= 2:
+        if rule != "state_hold":
+            raise ConfigError(f"rule {rule!r} does not apply to step type {stype} (use state_hold)")
+        return alternate(np.concatenate([t[p] for p in run.pins]))
+    lines = ("step",) if stype == 0 else ("up", "down")
+    rises = np.unique(np.concatenate([rising(p) for p in lines]))
+    falls = np.unique(np.concatenate([falling(p) for p in lines]))
+    active = rises if active_edge == "rising" else falls
+    if rule == "step_high":
+        return falls
+    if rule == "step_low":
+        return rises
+    if rule == "step_period":
+        return alternate(active)
+    if stype == 0 and rule == "dir_hold":
+        return t["dir"]
+    if stype == 0 and rule == "dir_setup":
+        changes = t["dir"]
+        pos = np.searchsorted(active, changes, side="left")  # first active edge at/after a change
+        pos = pos[pos < len(active)]
+        return np.unique(active[pos])
+    if stype == 1 and rule == "dir_delay":
+        up, down = rising("up"), rising("down")
+        lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
+        at = np.concatenate([up, down])
+        order = np.argsort(at, kind="stable")
+        at, lab = at[order], lab[order]
+        switch = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+        return at[switch]
+    raise ConfigError(f"rule {rule!r} does not apply to step type {stype}")
+
+
+def invocation_times(
+    model: LatencyModel,
+    run: InvocationRun,
+    seed: int | None = None,
+    active_edge: ActiveEdge = "rising",
+    catchup_ns: int = DEFAULT_CATCHUP_NS,
+) -> np.ndarray | None:
+    """t_k in ns for every invocation, or None when every invocation is on time (k·P).
+
+    Raises:
+        ConfigError: a rule that does not apply to the step type, a catch-up gap < 1 ns.
+    """
+    if catchup_ns < 1:
+        raise ConfigError(
+            f"catch-up gap {catchup_ns} ns must be >= 1 ns (keeps invocations in order)"
+        )
+    offs = _offsets(model, run, seed, active_edge)
+    if offs is None:
+        return None
+    base = run.config.base_period_ns
+    k = np.arange(run.n_periods, dtype=np.int64)
+    due = k * base + offs
+    # t_k = max(due_k, t_{k-1} + G)  ⇔  t_k − k·G = running max of (due_k − k·G)
+    return np.maximum.accumulate(due - k * catchup_ns) + k * catchup_ns
+
+
+def describe(model: LatencyModel, base_ns: int) -> str:
+    """A short human description (used in VCD comments and summaries)."""
+    if model.kind == "worst" and model.j_ns >= base_ns:
+        return f"{model.text} (J >= P: late invocations catch up, intervals are not n·P − J)"
+    return model.text

@@ -1,0 +1,173 @@
+"""Readers for latency measurements (reference §10): cyclictest, latency-histogram, ``~/.latency``.
+
+* :func:`read_latency_file` — the single worst figure (ns) from any of: LinuxCNC's one-number
+  ``~/.latency`` file (ns, written by ``latency-test``), a cyclictest summary (``T: … Max: N``,
+  µs unless ``-N`` was used), a cyclictest ``-h`` histogram (its ``# Max Latencies`` footer, else
+  the highest non-empty bin), or ``latency-histogram --nox`` output (base thread
+  max(|min|, max)).
+* :func:`read_histogram` — a distribution to draw latencies from (``histogram:FILE`` model):
+  cyclictest ``-h`` bins, or, for ``latency-histogram --nox`` (which prints no bins, only
+  min/max/sdev), a half-normal with that sdev capped at the worst value.
+
+Every problem is a :class:`~wavecheck.errors.ConfigError` naming the file and the line.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wavecheck.errors import ConfigError
+
+__all__ = ["LatencyHistogram", "read_histogram", "read_latency_file"]
+
+_NOX = re.compile(
+    r"^\s*(\d+)\s+s\s+(\S+)\s+min:\s*(-?[\d.]+)\s*us\s+max:\s*(-?[\d.]+)\s*us\s+sdev:\s*(-?[\d.]+)\s*us"
+)
+_CT_SUMMARY = re.compile(r"^\s*T:\s*(\d+).*?\bMax:\s*(-?\d+)")
+_HIST_ROW = re.compile(r"^(\d+)((?:\s+\d+)+)\s*$")
+
+
+@dataclass(frozen=True)
+class LatencyHistogram:
+    """A latency distribution: values in ns with weights, or a half-normal (sigma, cap)."""
+
+    values_ns: np.ndarray
+    weights: np.ndarray
+    description: str
+    half_normal: tuple[int, int] | None = None  # (sigma_ns, max_ns) for latency-histogram --nox
+
+
+def _read(path: str | Path) -> str:
+    try:
+        return Path(path).expanduser().read_text(encoding="utf-8", errors="replace")
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read latency file ({err.strerror})") from None
+
+
+def _us_to_ns(text: str) -> int:
+    return round(float(text) * 1000)
+
+
+def _nox(text: str) -> tuple[int, int, int] | None:
+    """(min_ns, max_ns, sdev_ns) of the base thread (or the only thread) in --nox output."""
+    rows: dict[str, list[tuple[int, int, int]]] = {}
+    for line in text.splitlines():
+        m = _NOX.match(line)
+        if m:
+            rows.setdefault(m.group(2), []).append(
+                (_us_to_ns(m.group(3)), _us_to_ns(m.group(4)), _us_to_ns(m.group(5)))
+            )
+    if not rows:
+        return None
+    lines = rows.get("base") or next(iter(rows.values()))
+    return min(r[0] for r in lines), max(r[1] for r in lines), lines[-1][2]
+
+
+def _cyclictest_hist(text: str, path: str | Path) -> tuple[np.ndarray, np.ndarray, int, int | None]:
+    """(bin values µs, counts summed over threads, overflows, max latency µs or None)."""
+    bins: list[int] = []
+    cols: list[list[int]] = []
+    overflows = 0
+    max_lat: int | None = None
+    for lineno, line in enumerate(text.splitlines(), 1):
+        m = _HIST_ROW.match(line)
+        if m:
+            bins.append(int(m.group(1)))
+            cols.append([int(x) for x in m.group(2).split()])
+            continue
+        if line.startswith("# Max Latencies:"):
+            nums = [int(x) for x in re.findall(r"\d+", line.split(":", 1)[1])]
+            max_lat = max(nums) if nums else None
+        elif line.startswith("# Histogram Overflows:"):
+            nums = [int(x) for x in re.findall(r"\d+", line.split(":", 1)[1])]
+            overflows = sum(nums)
+        elif line.strip() and not line.startswith("#") and bins:
+            raise ConfigError(
+                f"{path}: line {lineno}: not a cyclictest histogram row: {line.strip()!r}"
+            )
+    if not bins:
+        raise ConfigError(f"{path}: no histogram rows found (expected cyclictest -h output)")
+    width = min(len(c) for c in cols)
+    counts = np.array([c[:width] for c in cols], dtype=np.int64)
+    # with -H the last column is the sum over all threads: drop it rather than count twice
+    if width > 1 and np.array_equal(counts[:, -1], counts[:, :-1].sum(axis=1)):
+        counts = counts[:, :-1]
+    return np.array(bins, dtype=np.int64), counts.sum(axis=1), overflows, max_lat
+
+
+def read_latency_file(path: str | Path, cyclictest_unit: str = "us") -> tuple[int, str]:
+    """The worst latency in ``path`` in ns, and a one-line description of where it came from.
+
+    ``cyclictest_unit`` is the unit of a cyclictest summary's numbers ("ns" if it ran with
+    ``-N``); histograms are always in µs bins.
+
+    Raises:
+        ConfigError: unreadable file or no recognisable latency figure.
+    """
+    text = _read(path)
+    stripped = text.strip()
+    if re.fullmatch(r"\d+", stripped):
+        return int(stripped), f"{path}: LinuxCNC latency-test result (Max Jitter, ns)"
+    nox = _nox(text)
+    if nox is not None:
+        lo, hi, _ = nox
+        worst = max(abs(lo), hi)
+        return worst, f"{path}: latency-histogram --nox, base thread max(|min|, max)"
+    if "# Histogram" in text or any(_HIST_ROW.match(li) for li in text.splitlines()[:50]):
+        bins, counts, overflows, max_lat = _cyclictest_hist(text, path)
+        if max_lat is not None:
+            return max_lat * 1000, f"{path}: cyclictest -h '# Max Latencies' (µs)"
+        nonzero = np.flatnonzero(counts)
+        if overflows:
+            return (
+                int(bins[-1]) + 1
+            ) * 1000, f"{path}: cyclictest -h, overflows beyond the last bin (lower bound)"
+        if len(nonzero):
+            return (
+                int(bins[nonzero[-1]]) + 1
+            ) * 1000, f"{path}: cyclictest -h highest non-empty bin (upper edge)"
+        raise ConfigError(f"{path}: cyclictest histogram is empty")
+    maxes = [int(m.group(2)) for li in text.splitlines() if (m := _CT_SUMMARY.match(li))]
+    if maxes:
+        factor = {"us": 1000, "ns": 1}.get(cyclictest_unit)
+        if factor is None:
+            raise ConfigError(f"cyclictest unit {cyclictest_unit!r} is not 'us' or 'ns'")
+        return max(
+            maxes
+        ) * factor, f"{path}: cyclictest summary, worst 'Max:' over threads ({cyclictest_unit})"
+    raise ConfigError(
+        f"{path}: no latency figure found (expected ~/.latency, cyclictest output or latency-histogram --nox)"
+    )
+
+
+def read_histogram(path: str | Path) -> LatencyHistogram:
+    """A latency distribution from cyclictest ``-h`` output or ``latency-histogram --nox``.
+
+    cyclictest bins are whole µs (bin b holds latencies of b µs); a drawn value is b µs exactly.
+    Overflows (≥ the histogram size) are drawn as the ``# Max Latencies`` value.
+    """
+    text = _read(path)
+    nox = _nox(text)
+    if nox is not None:
+        lo, hi, sdev = nox
+        worst = max(abs(lo), hi)
+        return LatencyHistogram(
+            np.zeros(0, np.int64),
+            np.zeros(0),
+            f"half-normal sdev {sdev} ns capped at {worst} ns from {path} (latency-histogram --nox)",
+            half_normal=(sdev, worst),
+        )
+    bins, counts, overflows, max_lat = _cyclictest_hist(text, path)
+    values = bins * 1000
+    weights = counts.astype(float)
+    if overflows:
+        top = (max_lat if max_lat is not None else int(bins[-1]) + 1) * 1000
+        values = np.append(values, top)
+        weights = np.append(weights, float(overflows))
+    if weights.sum() <= 0:
+        raise ConfigError(f"{path}: cyclictest histogram is empty")
+    return LatencyHistogram(values, weights / weights.sum(), f"cyclictest histogram {path}")

@@ -1,0 +1,155 @@
+"""The Python API: run the stepgen model under a latency model and get edges in ns.
+
+>>> from stepgen.simulate import simulate
+>>> from stepgen.model import StepgenConfig
+>>> from stepgen.motion import Motion
+>>> cfg = StepgenConfig(base_period_ns=100_000, servo_period_ns=100_000, position_scale=32000,
+...                     maxvel=0.15, maxaccel=2)
+>>> trace = simulate(cfg, Motion("position", 0.04), n_periods=3500)
+>>> trace.steps, trace.final_counts
+(1280, 1280)
+
+``write_vcd(trace, path)`` / ``write_sr(trace, path)`` (:mod:`stepgen.vcdout`) write it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from stepgen.fast import run_fast
+from stepgen.latency import (
+    DEFAULT_CATCHUP_NS,
+    ActiveEdge,
+    LatencyModel,
+    invocation_times,
+    parse_latency,
+)
+from stepgen.model import InvocationRun, StepgenConfig, run_reference, update_schedule
+from stepgen.motion import Motion
+from wavecheck.errors import ConfigError
+
+__all__ = ["Trace", "n_periods_for", "simulate"]
+
+
+@dataclass
+class Trace:
+    """A simulated waveform: per pin, the times (ns) at which it toggles; all pins start at 0.
+
+    ``edges[pin]`` is sorted int64 ns; toggle j sets the pin to 1 if j is even, 0 if odd.
+    ``counts_t``/``counts_val``: the ``counts`` value (accum>>28 after each make-pulses) and
+    when it changed. ``end_ns`` is the end of the simulated span (n_periods·P, or later if a
+    latency pushed the last invocation past it).
+    """
+
+    config: StepgenConfig
+    latency: LatencyModel
+    seed: int | None
+    active_edge: ActiveEdge
+    n_periods: int
+    pins: tuple[str, ...]
+    edges: dict[str, np.ndarray]
+    counts_t: np.ndarray
+    counts_val: np.ndarray
+    steps: int
+    final_counts: int
+    end_ns: int
+    run: InvocationRun
+    seconds: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def base_period_ns(self) -> int:
+        """The base thread period P (ns)."""
+        return self.config.base_period_ns
+
+    @property
+    def servo_period_ns(self) -> int:
+        """The HAL-rounded servo period (ns)."""
+        return self.config.servo_ns
+
+    def levels_at(self, pin: str, t_ns: np.ndarray) -> np.ndarray:
+        """The pin's level just after each time in ``t_ns`` (0/1)."""
+        return (np.searchsorted(self.edges[pin], t_ns, side="right") & 1).astype(np.int8)
+
+
+def n_periods_for(config: StepgenConfig, duration_ns: int) -> int:
+    """Base periods needed to cover ``duration_ns`` (ceil)."""
+    return -(-int(duration_ns) // config.base_period_ns)
+
+
+def simulate(
+    config: StepgenConfig,
+    motion: Motion,
+    latency: LatencyModel | str = "none",
+    *,
+    n_periods: int,
+    seed: int | None = None,
+    active_edge: ActiveEdge = "rising",
+    catchup_ns: int = DEFAULT_CATCHUP_NS,
+    engine: str = "fast",
+) -> Trace:
+    """Simulate ``n_periods`` base periods; returns a :class:`Trace`.
+
+    Args:
+        config: the stepgen channel and threads.
+        motion: the command pin's values.
+        latency: a :class:`LatencyModel` or its string form (``"worst:11us:step_high"``).
+        n_periods: base-thread invocations to run (>= 1).
+        seed: for the random latency models.
+        active_edge: the drive's active STEP edge (worst-case dir_setup/step_period events).
+        catchup_ns: run time of an overdue invocation (see :mod:`stepgen.latency`).
+        engine: ``"fast"`` or ``"reference"`` (the plain per-period loop; same result, slower).
+
+    Raises:
+        ConfigError: bad settings, nothing simulated.
+    """
+    config.validate()
+    if n_periods < 1:
+        raise ConfigError(
+            f"run length {n_periods} periods must be >= 1 (give --periods or --duration)"
+        )
+    model = parse_latency(latency) if isinstance(latency, str) else latency
+    if active_edge not in ("rising", "falling"):
+        raise ConfigError(f"active edge {active_edge!r} is not rising or falling")
+    n_updates = len(update_schedule(config, n_periods))
+    cmds = motion.commands(max(n_updates, 1), config.servo_ns, config.mode)
+    t0 = time.perf_counter()
+    if engine == "fast":
+        run = run_fast(config, cmds, n_periods)
+    elif engine == "reference":
+        run = run_reference(config, cmds, n_periods)
+    else:
+        raise ConfigError(f"engine {engine!r} is not fast or reference")
+    times = invocation_times(model, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns)
+    base = config.base_period_ns
+
+    def at(idx: np.ndarray) -> np.ndarray:
+        return idx * base if times is None else times[idx]
+
+    edges = {pin: at(run.toggles[pin]) for pin in run.pins}
+    counts_t = at(run.counts_at)
+    last_invocation = n_periods - 1
+    last_t = last_invocation * base if times is None else int(times[-1])
+    end_ns = max(n_periods * base, last_t + 1)
+    seconds = time.perf_counter() - t0
+    trace = Trace(
+        config=config,
+        latency=model,
+        seed=seed,
+        active_edge=active_edge,
+        n_periods=n_periods,
+        pins=run.pins,
+        edges=edges,
+        counts_t=counts_t,
+        counts_val=run.counts_val,
+        steps=run.steps,
+        final_counts=int(run.final["counts"]),
+        end_ns=int(end_ns),
+        run=run,
+        seconds=seconds,
+        notes=list(run.warnings),
+    )
+    return trace
