@@ -1,0 +1,244 @@
+"""One self-contained HTML page for one or more reports.
+
+Everything is inline: CSS in a ``<style>`` element, the plots as base64 ``data:`` PNG images; the
+page makes no request of its own (no scripts, fonts, or links to anything outside). Per capture
+it shows the verdict, what was checked, the rule table, the worst violations, the maximum step
+rates, the notes and the plots (:mod:`wavecheck.report.plot`).
+
+Element ids for tools and tests: ``verdict`` (the overall verdict), per capture a ``section``
+with class ``capture`` and ``data-verdict``, tables with class ``rules``, ``violations``, ``rates``.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import os
+from collections.abc import Sequence
+from fractions import Fraction
+
+from wavecheck.output import atomic_write
+from wavecheck.report.model import Report, overall_verdict
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["render_html", "write_html"]
+
+_CSS = """
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:2rem auto;
+max-width:1200px;padding:0 1rem;color:#222;line-height:1.4}
+h1{font-size:1.5rem;margin-bottom:.2rem}h2{font-size:1.2rem;margin-top:2rem;
+border-bottom:1px solid #ddd;padding-bottom:.2rem}h3{font-size:1rem;margin:1.2rem 0 .4rem}
+.verdict{display:inline-block;padding:.15rem .6rem;border-radius:4px;color:#fff;font-weight:700}
+.v-pass{background:#27ae60}.v-fail{background:#c0392b}.v-indeterminate,.v-unchecked{background:#e67e22}
+table{border-collapse:collapse;margin:.4rem 0;font-size:.9rem}
+th,td{border:1px solid #ddd;padding:.25rem .55rem;text-align:left}
+th{background:#f4f4f4}td.num{text-align:right;font-variant-numeric:tabular-nums}
+tr.r-fail td{background:#fdecea}tr.r-indeterminate td{background:#fef5e7}
+dl{display:grid;grid-template-columns:max-content auto;gap:.1rem 1rem;margin:.4rem 0}
+dt{font-weight:600}dd{margin:0}.note{color:#555;font-size:.9rem}
+img{max-width:100%;border:1px solid #eee}
+.summary td:first-child{font-family:ui-monospace,monospace}
+"""
+
+
+def _e(text: object) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _ns(v: Fraction | None, signed: bool = False) -> str:
+    if v is None:
+        return "–"
+    text = format_time(v / 10**9)
+    return ("+" + text) if signed and v > 0 else text
+
+
+def _hz(v: Fraction | None) -> str:
+    return "–" if v is None else format_frequency(v)
+
+
+def _badge(verdict: str) -> str:
+    return f'<span class="verdict v-{_e(verdict)}">{_e(verdict.upper())}</span>'
+
+
+def _rules_table(report: Report) -> str:
+    head = (
+        "<tr><th>rule</th><th>limit</th><th>checked</th><th>fail</th><th>indet.</th>"
+        "<th>shortest</th><th>min margin</th><th>at (s)</th><th>verdict</th><th>source</th></tr>"
+    )
+    rows = []
+    for r in report.rules:
+        at = r.min_margin_at_s
+        src = r.figure.source if r.figure else ""
+        rows.append(
+            f'<tr class="r-{_e(r.verdict)}"><td>{_e(r.rule)}</td>'
+            f'<td class="num">{_ns(r.limit_ns)}</td><td class="num">{r.checked:,}</td>'
+            f'<td class="num">{r.violations:,}</td><td class="num">{r.indeterminate:,}</td>'
+            f'<td class="num">{_ns(r.min_measured_ns)}</td>'
+            f'<td class="num">{_ns(r.min_margin_ns, signed=True)}</td>'
+            f'<td class="num">{"–" if at is None else f"{float(at):.9f}"}</td>'
+            f"<td>{_badge(r.verdict)}</td><td class=\"note\">{_e(src)}</td></tr>"
+        )
+    return f'<table class="rules">{head}{"".join(rows)}</table>'
+
+
+def _violations_table(report: Report, limit: int) -> str:
+    total = report.total_violations
+    if not total:
+        return "<p>No violations.</p>"
+    head = (
+        "<tr><th>#</th><th>rule</th><th>at (s)</th><th>measured</th><th>limit</th>"
+        "<th>margin</th></tr>"
+    )
+    rows = []
+    for k, v in enumerate(report.violations(limit), 1):
+        if v.margin_ns is None:
+            cells = f'<td colspan="3">{_e(v.detail)}</td>'
+        else:
+            cells = (
+                f'<td class="num">{_ns(v.measured_ns)}</td><td class="num">{_ns(v.limit_ns)}</td>'
+                f'<td class="num">{_ns(v.margin_ns, signed=True)}</td>'
+            )
+        rows.append(
+            f'<tr><td class="num">{k}</td><td>{_e(v.rule)}</td>'
+            f'<td class="num">{float(v.time_s):.9f}</td>{cells}</tr>'
+        )
+    more = f"<p class=\"note\">… and {total - limit:,} more.</p>" if total > limit else ""
+    return f'<p>{total:,} violation(s), worst first.</p><table class="violations">{head}{"".join(rows)}</table>{more}'
+
+
+def _rates_table(report: Report, extra: dict[str, Fraction | None] | None) -> str:
+    rates = report.rates
+    rows = [
+        ("drive", rates.drive, f"datasheet ({rates.drive_limited_by})" if rates.drive_limited_by else "datasheet"),
+        ("observed", rates.observed, "highest instantaneous rate in the capture"),
+        ("headroom", rates.headroom, "highest rate at which this generator's pulses still pass"),
+    ]
+    for key, value in (extra or {}).items():
+        rows.append((key, value, "from the stepgen configuration"))
+    body = "".join(
+        f'<tr><td>{_e(k)}</td><td class="num">{_hz(v)}</td><td class="note">{_e(what)}</td></tr>'
+        for k, v, what in rows
+    )
+    return f'<table class="rates"><tr><th>max step rate</th><th>rate</th><th>meaning</th></tr>{body}</table>'
+
+
+def _section(
+    report: Report,
+    index: int,
+    png: bytes | None,
+    max_violations: int,
+    extra_rates: dict[str, Fraction | None] | None,
+) -> str:
+    cap = report.capture
+    res = "exact" if report.resolution_ns == 0 else _ns(report.resolution_ns)
+    mapping = ", ".join(f"{role} = {ch!r}" for role, ch in report.mapping.items())
+    if report.inverted:
+        mapping += f"; inverted: {', '.join(report.inverted)}"
+    s = report.steps
+    pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
+    parts = [
+        f'<section class="capture" id="capture-{index}" data-verdict="{_e(report.verdict)}">',
+        f"<h2>{_badge(report.verdict)} {_e(cap.path)}</h2>",
+        "<dl>",
+        f"<dt>drive</dt><dd>{_e(report.drive.id)} — {_e(report.drive.name)} "
+        f"(steps on the {_e(report.active_edge)} edge)</dd>",
+        f"<dt>capture</dt><dd>{_e(cap.format)}, {_e(format_time(cap.duration_s))}, "
+        f"resolution {_e(res)}, {len(cap.channels)} channels</dd>",
+        f"<dt>mapping</dt><dd>{_e(mapping)}; step type {report.step_type.number} "
+        f"({_e(report.step_type.name)})</dd>",
+        f"<dt>steps</dt><dd>{s.count:,} (forward {s.forward:,}, reverse {s.reverse:,}; "
+        f"final position {_e(pos)})</dd>",
+        "</dl>",
+        "<h3>Rules</h3>",
+        _rules_table(report),
+    ]
+    if report.not_stated:
+        parts.append(
+            f'<p class="note">Not stated by the drive (not checked): {_e(", ".join(report.not_stated))}</p>'
+        )
+    parts += ["<h3>Worst violations</h3>", _violations_table(report, max_violations)]
+    parts += ["<h3>Maximum step rates</h3>", _rates_table(report, extra_rates)]
+    if report.notes:
+        parts.append("<h3>Notes</h3><ul>")
+        parts += [f"<li>{_e(n)}</li>" for n in report.notes]
+        parts.append("</ul>")
+    if png is not None:
+        data = base64.b64encode(png).decode("ascii")
+        parts.append(
+            "<h3>Plots</h3>"
+            f'<img alt="timing diagrams and histograms of {_e(cap.path)}" '
+            f'src="data:image/png;base64,{data}">'
+        )
+    parts.append("</section>")
+    return "\n".join(parts)
+
+
+def render_html(
+    reports: Sequence[Report],
+    *,
+    plots: bool = True,
+    max_violations: int = 20,
+    errors: Sequence[str] = (),
+    extra_rates: dict[str, Fraction | None] | None = None,
+    title: str = "wavecheck report",
+) -> str:
+    """The page for ``reports`` (one section each).
+
+    Args:
+        reports: the checked captures.
+        plots: embed the PNG figure of each report (needs matplotlib).
+        max_violations: violations listed per capture (the total is always given).
+        errors: one-line errors of captures that could not be checked (shown, and they make the
+            overall verdict ``error``).
+        extra_rates: more max step rates in Hz (``config``, ``latency_safe``) for every report.
+        title: the page title.
+    """
+    verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
+    if errors:
+        verdict = "error"
+    pngs: list[bytes | None] = []
+    for r in reports:
+        if plots:
+            from wavecheck.report.plot import render_png
+
+            pngs.append(render_png(r))
+        else:
+            pngs.append(None)
+    summary_rows = "".join(
+        f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td><td>{_e(r.drive.id)}</td>'
+        f"<td>{_badge(r.verdict)}</td><td class=\"num\">{r.total_violations:,}</td>"
+        f'<td class="num">{r.steps.count:,}</td></tr>'
+        for k, r in enumerate(reports, 1)
+    )
+    error_rows = "".join(f"<li>{_e(e)}</li>" for e in errors)
+    body = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        f"<title>{_e(title)}: {_e(verdict.upper())}</title>",
+        f"<style>{_CSS}</style></head><body>",
+        f"<h1>{_e(title)}</h1>",
+        f'<p>Overall verdict: <span id="verdict" class="verdict v-{_e(verdict)}">'
+        f"{_e(verdict.upper())}</span></p>",
+    ]
+    if len(reports) > 1 or errors:
+        body.append(
+            '<table class="summary"><tr><th>capture</th><th>drive</th><th>verdict</th>'
+            f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
+        )
+    if errors:
+        body.append(f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>')
+    for k, (r, png) in enumerate(zip(reports, pngs, strict=True), 1):
+        body.append(_section(r, k, png, max_violations, extra_rates))
+    body.append(
+        '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
+        "limit (negative = violation).</p></body></html>"
+    )
+    return "\n".join(body) + "\n"
+
+
+def write_html(
+    reports: Sequence[Report], path: str | os.PathLike[str], **kwargs: object
+) -> None:
+    """Render :func:`render_html` and write it to ``path`` atomically."""
+    atomic_write(path, render_html(reports, **kwargs))  # type: ignore[arg-type]

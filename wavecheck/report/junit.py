@@ -1,0 +1,155 @@
+"""JUnit XML for CI systems: one ``testsuite`` per capture, one ``testcase`` per rule.
+
+The layout is the one Jenkins, GitLab, GitHub Actions reporters and Azure read (the Ant/Jenkins
+"junit-10" schema): ``<testsuites>`` → ``<testsuite name tests failures errors skipped time>``
+→ ``<testcase classname name time>`` with at most one ``<failure message type>``, ``<error>`` or
+``<skipped message>`` child.
+
+- ``classname`` is the capture (its path without the extension, so CI tools that split class
+  names at dots do not take ``.vcd`` for a class), ``name`` the rule id.
+- A failing rule is a ``<failure type="fail">`` whose message is the worst violation (measured,
+  limit, margin, time); the element's text lists the first few violations.
+- An unchecked rule (no interval of its kind in the capture) and a rule the drive states no limit
+  for are ``<skipped>``.
+- **Indeterminate is a failure** (``type="indeterminate"``): the capture cannot show that the
+  rule is met, and ``wavecheck check`` exits non-zero (3) for it; reporting it as skipped would
+  show a green dashboard for a red job. The message says which sample rate would decide it.
+- A capture that could not be read at all is one ``<testcase name="read">`` with an ``<error>``.
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import PurePath
+
+from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.output import atomic_write
+from wavecheck.report.model import Report
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["Unreadable", "classname", "render_junit", "write_junit"]
+
+_LISTED = 10
+
+
+@dataclass(frozen=True)
+class Unreadable:
+    """A capture that could not be checked (its path and the one-line error)."""
+
+    path: str
+    message: str
+
+
+def classname(path: str) -> str:
+    """The JUnit class name of a capture: its path without the file extension."""
+    p = PurePath(path)
+    return str(p.with_suffix("")) if p.suffix else str(p)
+
+
+def _ns(v: Fraction | None) -> str:
+    return "-" if v is None else format_time(v / 10**9)
+
+
+def _describe(v: Violation) -> str:
+    if v.margin_ns is None:
+        return f"{v.rule} at {float(v.time_s):.9f} s: {v.detail or 'state sequence error'}"
+    sign = "+" if v.margin_ns > 0 else ""
+    return (
+        f"{v.rule} at {float(v.time_s):.9f} s: measured {_ns(v.measured_ns)}, limit "
+        f"{_ns(v.limit_ns)} (margin {sign}{_ns(v.margin_ns)})"
+    )
+
+
+def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
+    case = ET.SubElement(
+        suite, "testcase", classname=classname(report.capture.path), name=r.rule, time="0"
+    )
+    if r.verdict == "fail":
+        worst = r.worst_violations(_LISTED)
+        el = ET.SubElement(
+            case,
+            "failure",
+            message=f"{r.violations} violation(s); worst: {_describe(worst[0])}",
+            type="fail",
+        )
+        lines = [_describe(v) for v in worst]
+        if r.violations > len(worst):
+            lines.append(f"... and {r.violations - len(worst)} more")
+        el.text = "\n".join(lines)
+        return "failure"
+    if r.verdict == "indeterminate":
+        hz = r.decide_samplerate_hz
+        how = f"; sampling faster than {format_frequency(hz)} would decide it" if hz else ""
+        ET.SubElement(
+            case,
+            "failure",
+            message=f"{r.indeterminate} interval(s) cannot be decided at a resolution of "
+            f"{_ns(r.resolution_ns)} (limit {_ns(r.limit_ns)}){how}",
+            type="indeterminate",
+        )
+        return "failure"
+    if r.verdict == "unchecked":
+        ET.SubElement(case, "skipped", message=f"no {r.rule} interval in the capture")
+        return "skipped"
+    return "pass"
+
+
+def _suite(root: ET.Element, report: Report) -> None:
+    suite = ET.SubElement(root, "testsuite", name=report.capture.path)
+    props = ET.SubElement(suite, "properties")
+    for key, value in (
+        ("drive", report.drive.id),
+        ("verdict", report.verdict),
+        ("steps", str(report.steps.count)),
+        ("step_type", str(report.step_type.number)),
+    ):
+        ET.SubElement(props, "property", name=key, value=value)
+    counts = {"failure": 0, "skipped": 0, "pass": 0}
+    for r in report.rules:
+        counts[_testcase(suite, report, r)] += 1
+    for rule in report.not_stated:
+        case = ET.SubElement(
+            suite, "testcase", classname=classname(report.capture.path), name=rule, time="0"
+        )
+        ET.SubElement(case, "skipped", message=f"drive {report.drive.id} states no {rule} limit")
+        counts["skipped"] += 1
+    suite.set("tests", str(sum(counts.values())))
+    suite.set("failures", str(counts["failure"]))
+    suite.set("errors", "0")
+    suite.set("skipped", str(counts["skipped"]))
+    suite.set("time", "0")
+
+
+def _error_suite(root: ET.Element, err: Unreadable) -> None:
+    suite = ET.SubElement(
+        root, "testsuite", name=err.path, tests="1", failures="0", errors="1", skipped="0", time="0"
+    )
+    case = ET.SubElement(suite, "testcase", classname=classname(err.path), name="read", time="0")
+    ET.SubElement(case, "error", message=err.message, type="unusable input")
+
+
+def render_junit(
+    reports: Sequence[Report], errors: Sequence[Unreadable] = (), name: str = "wavecheck"
+) -> str:
+    """The JUnit XML document for ``reports`` (and captures that could not be checked)."""
+    root = ET.Element("testsuites", name=name)
+    for report in reports:
+        _suite(root, report)
+    for err in errors:
+        _error_suite(root, err)
+    for key in ("tests", "failures", "errors", "skipped"):
+        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
+    root.set("time", "0")
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def write_junit(
+    reports: Sequence[Report], path: str | os.PathLike[str], errors: Sequence[Unreadable] = ()
+) -> None:
+    """Write :func:`render_junit` to ``path`` atomically."""
+    atomic_write(path, render_junit(reports, errors))
