@@ -47,6 +47,7 @@ _MAX_HEADER_BYTES = 64 << 20
 _MAX_ID_LEN = 8
 _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
 _SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
+_END_RE = re.compile(rb"\$end(\s|$)")
 _NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
 
 # Byte classes of the body tokenizer.
@@ -198,17 +199,21 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
 def _read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
     """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far."""
     data = b""
+    end = len(data)
     while True:
         block = f.read(1 << 20)
         data += block
         pos = data.find(b"$enddefinitions")
-        if pos >= 0 and re.search(rb"\$end(\s|$)", data[pos + 15 :]) is not None:
+        match = _END_RE.search(data, pos + 15) if pos >= 0 else None
+        if match is not None:
+            end = match.start() + 4
             break
+        end = len(data)
         if not block or len(data) > _MAX_HEADER_BYTES:
             break
     if not data.strip():
         raise CaptureError(path, None, "the file is empty (no VCD header)")
-    header = parse_header(path, data)
+    header = parse_header(path, data[:end])
     return header, data[header.body_offset :]
 
 
@@ -646,17 +651,21 @@ class _Body:
                 buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
             )
         out = np.zeros(len(s), dtype=np.int64)
-        scale = np.int64(1)
+        bad = np.zeros(len(s), dtype=bool)
+        last = e - 1
+        scale = 1
         for col in range(int(ndig.max())):
-            m = ndig > col
-            dig = a[e[m] - 1 - col].astype(np.int64) - 48
-            if ((dig < 0) | (dig > 9)).any():
-                j = int(np.flatnonzero(m)[np.flatnonzero((dig < 0) | (dig > 9))[0]])
-                raise self.error(
-                    buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
-                )
-            out[m] += dig * scale
+            # right-aligned digit columns; short numbers read the '#' (or before), masked out
+            dig = a[np.maximum(last - col, 0)].astype(np.int64) - 48
+            valid = ndig > col
+            bad |= valid & ((dig < 0) | (dig > 9))
+            out += np.where(valid, dig, 0) * scale
             scale *= 10
+        if bad.any():
+            j = int(np.flatnonzero(bad)[0])
+            raise self.error(
+                buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
+            )
         prev = np.empty(len(out), dtype=np.int64)
         prev[1:] = out[:-1]
         prev[0] = self.time if self.time is not None else -1

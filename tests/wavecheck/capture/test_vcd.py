@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.conftest import shared_capture, write_vcd
 from wavecheck.capture.model import Capture
@@ -218,3 +220,51 @@ def test_user_resolution_and_samplerate(tmp_path: Path) -> None:
     cap = read_vcd(path, samplerate=Fraction(3_000_000))
     assert cap.resolution_ticks == 334 and any("rounded up" in n for n in cap.notes)
     assert read_vcd(path, resolution_s=Fraction(1, 10**6)).resolution_ticks == 1000
+
+
+@st.composite
+def _waveforms(draw: st.DrawFn) -> tuple[dict[str, tuple[int, list[int]]], bool, int]:
+    n = draw(st.integers(1, 4))
+    sigs = {}
+    for i in range(n):
+        times = draw(st.lists(st.integers(1, 300), max_size=25, unique=True))
+        sigs[f"s{i}"] = (draw(st.integers(0, 1)), sorted(times))
+    return sigs, draw(st.booleans()), draw(st.integers(1, 40))
+
+
+def _write_layout(path: Path, sigs: dict[str, tuple[int, list[int]]], sigrok: bool) -> Path:
+    """Simulator layout (one change per line) or sigrok's (changes on the #t line), with a
+    redundant same-value change and a zero-width glitch thrown in at some timestamps."""
+    ids = {n: chr(33 + i) for i, n in enumerate(sigs)}
+    ev: dict[int, list[str]] = {0: [f"{init}{ids[n]}" for n, (init, _) in sigs.items()]}
+    for n, (init, edges) in sigs.items():
+        level = init
+        for k, t in enumerate(edges):
+            level ^= 1
+            extra = [f"{level ^ 1}{ids[n]}"] if k % 3 == 1 else []  # glitch: last value wins
+            ev.setdefault(t, []).extend([*extra, f"{level}{ids[n]}"])
+            if k % 4 == 2:
+                ev[t].append(f"{level}{ids[n]}")  # same value again: no edge
+    lines = ["$timescale 1 ns $end", "$scope module top $end"]
+    lines += [f"$var wire 1 {ids[n]} {n} $end" for n in sigs]
+    lines += ["$upscope $end", "$enddefinitions $end"]
+    for t in sorted(ev):
+        lines += [f"#{t} " + " ".join(ev[t])] if sigrok else [f"#{t}", *ev[t]]
+    lines.append("#400")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@settings(max_examples=50, deadline=None)
+@given(case=_waveforms())
+def test_random_waveforms_fast_equals_truth_and_simple(
+    tmp_path_factory: pytest.TempPathFactory,
+    case: tuple[dict[str, tuple[int, list[int]]], bool, int],
+) -> None:
+    sigs, sigrok, chunk = case
+    path = _write_layout(tmp_path_factory.mktemp("v") / "r.vcd", sigs, sigrok)
+    fast = read_vcd(path, chunk_bytes=chunk)
+    for name, (init, edges) in sigs.items():
+        ch = fast.channel(name)
+        assert (ch.initial, ch.edges.tolist()) == (init, edges)
+    assert_same(fast, read_vcd_reference(path))
