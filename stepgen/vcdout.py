@@ -15,6 +15,7 @@ logic signal and is left out. Runs longer than ``max_samples`` at that rate are 
 from __future__ import annotations
 
 import math
+import os
 import zipfile
 from pathlib import Path
 
@@ -85,6 +86,7 @@ def write_vcd(trace: Trace, path: str | Path) -> int:
         for ti, vi, xi in zip(t.tolist(), v.tolist(), x.tolist(), strict=True):
             change(variables[vi], ti, xi)
         writer.close(trace.end_ns)
+    os.chmod(path, 0o644)  # mkstemp's 0600 is not meant for a shipped trace
     return len(t)
 
 
@@ -160,4 +162,5 @@ def write_sr(
             z.writestr(
                 f"logic-1-{i + 1}", raw[off : off + SR_CHUNK], compress_type=zipfile.ZIP_DEFLATED
             )
+    os.chmod(path, 0o644)
     return 10**9 // g, int(n_samples)
