@@ -49,6 +49,9 @@ _TOP_OPTIONAL = ("notes", "step_type", "opto")
 _FIGURE_REQUIRED = ("value", "source", "status")
 _FIGURE_OPTIONAL = ("note",)
 _EDGE_REQUIRED = ("value", "source", "status")
+# Sanity bounds: beyond them a figure is a typo (and would overflow float formatting).
+_MAX_LIMIT_S = 1000
+_MAX_RATE_HZ = 10**12
 
 
 def rules_dir() -> Path:
@@ -116,6 +119,10 @@ def _load_file(path: Path) -> Drive:
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as err:
         raise RuleError(path, None, f"not valid TOML: {err}") from None
+    except UnicodeDecodeError as err:
+        raise RuleError(
+            path, None, f"not UTF-8 text (byte {err.start}): a rule file must be UTF-8 TOML"
+        ) from None
     except OSError as err:
         raise RuleError(path, None, f"cannot read: {err.strerror}") from None
     return _parse(path, data)
@@ -183,6 +190,10 @@ def _figure(path: Path, rule: str, table: Any, sources: dict[str, str]) -> Figur
             )
         if value <= 0:
             raise RuleError(path, f"{where}.value", f"{raw!r} must be positive")
+        if value > _MAX_RATE_HZ:
+            raise RuleError(
+                path, f"{where}.value", f"{raw!r} is implausibly high (at most 1 THz)"
+            )
     else:
         if dim != "time":
             raise RuleError(
@@ -191,6 +202,10 @@ def _figure(path: Path, rule: str, table: Any, sources: dict[str, str]) -> Figur
         if value < 0:
             raise RuleError(
                 path, f"{where}.value", f"{raw!r} is negative (limits are minimum times >= 0)"
+            )
+        if value > _MAX_LIMIT_S:
+            raise RuleError(
+                path, f"{where}.value", f"{raw!r} is implausibly long (at most 1000 s)"
             )
         value = value * 10**9
     status = _choice(path, f"{where}.status", table["status"], STATUSES)

@@ -1,0 +1,63 @@
+"""Run the CLIs in-process and hold them to the error contract of DESIGN.md (issue 8).
+
+Exit 2 for unusable input with exactly one line on stderr that names the file, never a
+traceback; any other exception escaping ``main`` fails the test (that is the traceback a user
+would see). With ``-o``, a failed run leaves no file behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from tests.reliability.corpus import Case, one_line_error
+
+#: Wall-clock bound for one in-process run on a small input ("no hang").
+MAX_SECONDS = 20.0
+
+
+def cli(prog: str, argv: Sequence[str]) -> tuple[int, str, str]:
+    """Run ``wavecheck`` or ``stepgen`` in-process: (exit code, stdout, stderr)."""
+    if prog == "wavecheck":
+        from wavecheck.cli import main
+    else:
+        from stepgen.cli import main
+    out, err = io.StringIO(), io.StringIO()
+    start = time.monotonic()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            rc = main(list(argv))
+        except SystemExit as exc:  # argparse
+            rc = int(exc.code) if isinstance(exc.code, int) else 2
+    took = time.monotonic() - start
+    assert took < MAX_SECONDS, f"{prog} {' '.join(argv)} took {took:.1f} s"
+    return rc, out.getvalue(), err.getvalue()
+
+
+def write_case(folder: Path, case: Case) -> Path:
+    path = folder / f"{case.name.replace('/', '_')}{case.suffix}"
+    path.write_bytes(case.data)
+    return path
+
+
+def assert_contract(
+    rc: int, err: str, path: str, expect: str, ok_codes: Sequence[int] = (0,)
+) -> None:
+    """``rc``/``err`` of one run obey the contract for a case expected to be ``expect``."""
+    if rc == 2:
+        problem = one_line_error(err, path)
+        assert problem is None, problem
+        assert expect != "ok", f"a valid input was refused: {err.strip()}"
+    else:
+        assert rc in ok_codes, f"exit {rc}, stderr {err[:300]!r}"
+        assert "Traceback" not in err
+        assert expect != "error", f"accepted a broken input (exit {rc})"
+
+
+def assert_no_output(folder: Path) -> None:
+    """No report and no temporary file was left in ``folder``."""
+    left = sorted(p.name for p in folder.iterdir())
+    assert left == [], f"files left behind after a failed run: {left}"
