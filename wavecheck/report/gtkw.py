@@ -1,0 +1,262 @@
+"""A GTKWave save file that opens the capture at its worst violations.
+
+``gtkwave FILE.gtkw`` then shows the mapped signals (named after their roles, inverted roles
+drawn inverted so levels are the drive's input levels) with the primary marker on the worst
+violation and the named markers ``A``…``Z`` on the next ones (GTKWave has one primary marker and
+26 named ones). With no violation, the markers go to each rule's smallest margin. A comment line
+per marker says which violation it is.
+
+The dump file: a VCD capture is opened as it is (signals by their hierarchical names). Any
+other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save file
+(``FILE.vcd`` for ``FILE.gtkw``) with pyvcd's writer: the mapped channels only, raw (not
+inverted), on the largest VCD timescale that holds every edge exactly.
+
+Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns), as GTKWave
+reads them.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import re
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+
+from wavecheck.output import atomic_path, atomic_write
+from wavecheck.progress import current as current_progress
+from wavecheck.report.model import Report
+from wavecheck.report.plot import choose_places
+from wavecheck.units import format_time
+
+__all__ = ["MAX_MARKERS", "render_gtkw", "vcd_timescale", "write_gtkw", "write_vcd_of"]
+
+#: Named markers A..Z plus the primary one.
+MAX_MARKERS = 27
+_UNITS = (("s", 0), ("ms", -3), ("us", -6), ("ns", -9), ("ps", -12))
+
+
+def vcd_timescale(tick_s: Fraction) -> tuple[int, str, Fraction]:
+    """A VCD timescale ``(magnitude, unit)`` for a capture tick, and timescale steps per tick.
+
+    The coarsest timescale (down to 1 ps) on which a tick is a whole number of steps; a tick that
+    is not a whole number of picoseconds (24 MHz: 41.666… ns) gets 1 ps and steps per tick that
+    are not whole — edges are then rounded to the nearest ps (the file is for viewing only).
+    """
+    for unit, exp in _UNITS:
+        for magnitude in (100, 10, 1):
+            steps = tick_s / (Fraction(magnitude) * Fraction(10) ** exp)
+            if steps.denominator == 1:
+                return magnitude, unit, steps
+    return 1, "ps", tick_s * 10**12
+
+
+def _round(ticks: int, steps_per_tick: Fraction) -> int:
+    """Timescale steps of a tick count (nearest, halves up)."""
+    num = ticks * steps_per_tick.numerator
+    return (2 * num + steps_per_tick.denominator) // (2 * steps_per_tick.denominator)
+
+
+def _vcd_header_names(path: str) -> tuple[dict[str, str], tuple[int, str] | None]:
+    """Reference name → hierarchical name of each 1-bit var of a VCD, and its timescale."""
+    from vcd.reader import TokenKind, tokenize
+
+    full: dict[str, list[str]] = {}
+    timescale: tuple[int, str] | None = None
+    scope: list[str] = []
+    with open(path, "rb") as f:
+        for tok in tokenize(f):
+            if tok.kind is TokenKind.SCOPE:
+                scope.append(tok.scope.ident)
+            elif tok.kind is TokenKind.UPSCOPE:
+                if scope:
+                    scope.pop()
+            elif tok.kind is TokenKind.TIMESCALE:
+                timescale = (int(tok.timescale.magnitude), str(tok.timescale.unit.value))
+            elif tok.kind is TokenKind.VAR:
+                ref = tok.var.reference
+                name = ".".join([*scope, ref])
+                full.setdefault(ref, []).append(name)
+                full.setdefault(name, []).append(name)
+            elif tok.kind is TokenKind.ENDDEFINITIONS:
+                break
+    return {k: v[0] for k, v in full.items() if len(v) == 1}, timescale
+
+
+def _trace_names(report: Report) -> dict[str, str]:
+    """Role → the name GTKWave knows the signal by, in the capture's own VCD."""
+    names, _ = _vcd_header_names(report.capture.path)
+    out: dict[str, str] = {}
+    for role, sig in report.interface.signals.items():
+        ch = sig.channel
+        base = re.sub(r"#\d+$", "", ch)
+        out[role] = names.get(ch) or names.get(base) or ch
+    return out
+
+
+def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str, Fraction]:
+    """Write the mapped channels of ``report``'s capture as a VCD (raw levels), atomically.
+
+    Variables are named after the roles (``step``, ``dir``, ``phase_A`` …) in scope
+    ``wavecheck``. Returns the timescale used and the ticks → timescale-steps factor.
+    """
+    from vcd import VCDWriter
+
+    cap = report.capture
+    magnitude, unit, factor = vcd_timescale(cap.timebase.tick_s)
+    roles = list(report.interface.signals)
+    times: list[np.ndarray] = []
+    which: list[np.ndarray] = []
+    for k, role in enumerate(roles):
+        edges = report.interface.signals[role].edges
+        times.append(edges)
+        which.append(np.full(len(edges), k, dtype=np.int32))
+    all_t = np.concatenate(times) if times else np.zeros(0, dtype=np.int64)
+    all_w = np.concatenate(which) if which else np.zeros(0, dtype=np.int32)
+    order = np.argsort(all_t, kind="stable")
+    all_t, all_w = all_t[order], all_w[order]
+    progress = current_progress()
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as f:
+        channels = ", ".join(
+            f"{role}={report.interface.signals[role].channel!r}" for role in roles
+        )
+        with VCDWriter(
+            f,
+            timescale=f"{magnitude} {unit}",
+            date="",
+            comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels",
+            version="wavecheck",
+        ) as writer:
+            levels = []
+            variables = []
+            for role in roles:
+                sig = report.interface.signals[role]
+                raw = sig.initial ^ int(sig.inverted)
+                levels.append(raw)
+                variables.append(
+                    writer.register_var(
+                        "wavecheck", role.replace("-", "_"), "wire", size=1, init=raw
+                    )
+                )
+            t0 = cap.start
+            n = len(all_t)
+            for i in range(n):
+                k = int(all_w[i])
+                levels[k] ^= 1
+                writer.change(variables[k], _round(int(all_t[i]) - t0, factor), levels[k])
+                if i % 65536 == 0:
+                    progress(i, n)
+            writer.close(_round(cap.end - t0, factor))
+    return magnitude, unit, factor
+
+
+def _zoom(window_units: float, pixels: int = 1000) -> float:
+    """GTKWave's zoom for ``window_units`` of the dump's time unit across about ``pixels``."""
+    if window_units <= 0:
+        return 0.0
+    return -math.log2(window_units / pixels)
+
+
+def render_gtkw(
+    report: Report,
+    dump_path: str | os.PathLike[str],
+    *,
+    names: dict[str, str],
+    unit_factor: Fraction | int,
+    origin_tick: int = 0,
+    save_path: str | os.PathLike[str] | None = None,
+) -> str:
+    """The save file's text.
+
+    Args:
+        report: the report (its violations become markers).
+        dump_path: the VCD GTKWave opens.
+        names: role → signal name in that VCD.
+        unit_factor: dump time units per capture tick.
+        origin_tick: the capture tick that is time 0 in the dump.
+        save_path: where the save file goes (recorded in it).
+    """
+    from vcd.gtkw import GTKWFlag, GTKWSave
+
+    places = choose_places(report, MAX_MARKERS)
+    buf = io.StringIO()
+    save = GTKWSave(buf)
+    save.comment(
+        f"wavecheck: {report.capture.path} vs {report.drive.id}: {report.verdict.upper()}, "
+        f"{report.total_violations} violation(s)"
+    )
+    save.dumpfile(os.fspath(dump_path))
+    if save_path is not None:
+        save.savefile(os.fspath(save_path))
+
+    factor = Fraction(unit_factor)
+
+    def at(tick: int) -> int:
+        return _round(tick - origin_tick, factor)
+
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    marks = [at(p.start_tick) for p in places]
+    for k, p in enumerate(places):
+        label = "primary marker" if k == 0 else f"marker {letters[k - 1].upper()}"
+        what = "FAIL" if p.failed else "smallest margin"
+        measured = (
+            f"measured {format_time(p.measured_ns / 10**9)}, limit {format_time(p.limit_ns / 10**9)}"
+            if p.measured_ns is not None and p.limit_ns is not None
+            else p.detail
+        )
+        save.comment(
+            f"{label}: {p.rule} {what} at {float(report.capture.timebase.seconds(p.start_tick)):.9f} s"
+            f" ({measured})"
+        )
+    if places:
+        first = places[0]
+        width = max(first.end_tick - first.start_tick, 1)
+        if first.limit_ns is not None:
+            width = max(width, int(first.limit_ns / report.capture.timebase.tick_ns))
+        window = round(8 * width * factor)
+        save.zoom_markers(
+            _zoom(window),
+            marks[0],
+            **{letters[k]: m for k, m in enumerate(marks[1:])},
+        )
+        save.timestart(max(0, marks[0] - window // 3))
+    else:
+        save.zoom_markers(0.0)
+    save.signals_width(220)
+    save.sst_expanded(True)
+    with save.group(f"{report.drive.id}: {report.verdict.upper()}"):
+        for role, sig in report.interface.signals.items():
+            flags = GTKWFlag.bin | (GTKWFlag.invert if sig.inverted else GTKWFlag.none)
+            label = role.upper() if not role.startswith("phase") else role
+            alias = label if sig.channel.lower() == role.lower() else f"{label} ({sig.channel})"
+            save.trace(names[role], alias=alias, datafmt="bin", extraflags=flags)
+    return buf.getvalue()
+
+
+def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
+    """Write the save file to ``path`` (and the VCD beside it for a non-VCD capture).
+
+    Returns the VCD written beside it, or None when the capture's own VCD is used.
+    """
+    path = Path(path)
+    cap = report.capture
+    if cap.format == "vcd":
+        names = _trace_names(report)
+        _, ts = _vcd_header_names(cap.path)
+        magnitude = ts[0] if ts else 1
+        text = render_gtkw(
+            report, cap.path, names=names, unit_factor=magnitude, save_path=path
+        )
+        atomic_write(path, text)
+        return None
+    vcd_path = path.with_suffix(".vcd")
+    _, _, factor = write_vcd_of(report, vcd_path)
+    names = {role: "wavecheck." + role.replace("-", "_") for role in report.interface.signals}
+    text = render_gtkw(
+        report, vcd_path, names=names, unit_factor=factor, origin_tick=cap.start, save_path=path
+    )
+    atomic_write(path, text)
+    return vcd_path
