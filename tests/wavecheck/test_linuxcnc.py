@@ -1,0 +1,131 @@
+"""LinuxCNC INI/HAL files: stepgen settings of a channel, config and latency-safe rates."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+from tests.wavecheck.waves import g202
+from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc import config_rates, read_config, read_ini
+
+INI = """\
+# a LinuxCNC configuration
+[EMCMOT]
+EMCMOT = motmod
+BASE_PERIOD = 16000
+SERVO_PERIOD = 1000000
+
+[JOINT_0]
+STEPLEN = 16000
+DIRHOLD = 32000
+"""
+
+HAL = """\
+loadrt [KINS]KINEMATICS
+loadrt stepgen step_type=0,0,2 ctrl_type=p,v,p
+addf stepgen.make-pulses base-thread
+setp stepgen.0.steplen [JOINT_0]STEPLEN   # one period
+setp stepgen.0.stepspace 0
+setp stepgen.0.dirsetup 16000
+setp stepgen.0.dirhold [JOINT_0]DIRHOLD
+setp stepgen.0.position-scale 200
+stepgen.1.steplen = 5000
+net xstep stepgen.0.step => parport.0.pin-02-out
+"""
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> tuple[Path, Path]:
+    ini = tmp_path / "machine.ini"
+    hal = tmp_path / "machine.hal"
+    ini.write_text(INI)
+    hal.write_text(HAL)
+    return ini, hal
+
+
+def test_read_channel_0(files: tuple[Path, Path]) -> None:
+    ini, hal = files
+    cfg = read_config(ini, hal, channel=0)
+    assert (cfg.base_period_ns, cfg.servo_period_ns) == (16000, 1_000_000)
+    assert (cfg.step_type, cfg.ctrl_type) == (0, "position")
+    assert cfg.params == {"steplen": 16000, "stepspace": 0, "dirsetup": 16000, "dirhold": 32000}
+    assert cfg.floats == {"position-scale": 200.0}
+    assert cfg.sources["dirhold"] == f"{hal}:7"
+    assert cfg.sources["BASE_PERIOD"] == f"{ini}:4"
+    assert cfg.periods() == {"steplen": 1, "stepspace": 0, "dirsetup": 1, "dirhold": 2}
+    kw = cfg.stepgen_kwargs()
+    assert kw["base_period_ns"] == 16000 and kw["dirhold"] == 32000 and kw["position_scale"] == 200
+
+
+def test_other_channels(files: tuple[Path, Path]) -> None:
+    ini, hal = files
+    one = read_config(ini, hal, channel=1)
+    assert (one.step_type, one.ctrl_type, one.params) == (0, "velocity", {"steplen": 5000})
+    assert read_config(ini, hal, channel=2).step_type == 2
+    with pytest.raises(ConfigError, match=r"channel 3 is not loaded \(use --channel 0..2\)"):
+        read_config(ini, hal, channel=3)
+
+
+def test_seed_rates_g202_16us_dirhold_2(tmp_path: Path) -> None:
+    # the seed: P = 16 µs, steplen = stepspace = 1, dirhold = 2 → 31,250 steps/s, safe at 11 µs
+    ini = tmp_path / "a.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 16000\n")
+    hal = tmp_path / "a.hal"
+    hal.write_text("setp stepgen.0.dirhold 32000\n")
+    rates = config_rates(read_config(ini, hal), g202(), 11_000)
+    assert rates.config == Fraction(31_250)
+    assert rates.latency_safe == Fraction(31_250)
+
+
+def test_seed_rates_g202_20us_dirhold_1_is_never_safe(tmp_path: Path) -> None:
+    ini = tmp_path / "a.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 20000\n")
+    rates = config_rates(read_config(ini), g202(), 11_000)
+    assert rates.config == Fraction(25_000)
+    assert rates.latency_safe is None
+    assert "dir_hold (dirhold·P − J) is 9000 ns < 20000 ns" in rates.notes[0]
+
+
+def test_stepspace_too_short_lowers_the_safe_rate(tmp_path: Path) -> None:
+    # P = 10 µs, J = 9.8 µs: stepspace 1 gives 200 ns < 500 ns, so 2 periods of space are needed
+    ini = tmp_path / "a.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 10000\n")
+    hal = tmp_path / "a.hal"
+    hal.write_text(
+        "setp stepgen.0.steplen 20000\nsetp stepgen.0.dirhold 40000\nsetp stepgen.0.dirsetup 20000\n"
+    )
+    rates = config_rates(read_config(ini, hal), g202(), 9_800)
+    assert rates.config == Fraction(10**9, 30_000)  # steplen 2 + stepspace 1
+    assert rates.latency_safe == Fraction(10**9, 40_000)  # steplen 2 + 2 periods of space
+
+
+@pytest.mark.parametrize(
+    ("ini", "hal", "needle"),
+    [
+        ("[EMCMOT]\nBASE_PERIOD = fast\n", "", r"a\.ini:2: \[EMCMOT\]BASE_PERIOD 'fast' is not a number"),
+        ("BASE_PERIOD = 1\n", "", r"line 1: 'BASE_PERIOD = 1' comes before any \[SECTION\]"),
+        ("[EMCMOT]\n", "setp stepgen.0.steplen -5\n", r"a\.hal:1: stepgen\.0\.steplen '-5' is not"),
+        ("[EMCMOT]\n", "setp stepgen.0.steplen [X]Y\n", r"\[X\]Y is not in"),
+    ],
+)
+def test_errors_name_file_and_line(tmp_path: Path, ini: str, hal: str, needle: str) -> None:
+    (tmp_path / "a.ini").write_text(ini)
+    (tmp_path / "a.hal").write_text(hal)
+    with pytest.raises(ConfigError, match=needle):
+        read_config(tmp_path / "a.ini", tmp_path / "a.hal")
+
+
+def test_no_base_period(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="no BASE_PERIOD"):
+        read_config(None, None).periods()
+
+
+def test_read_ini_keeps_duplicates(tmp_path: Path) -> None:
+    p = tmp_path / "m.ini"
+    p.write_text("[HAL]\nHALFILE = a.hal\nHALFILE = b.hal\n")
+    ini = read_ini(p)
+    assert ini.get("HAL", "HALFILE") == ("a.hal", 2)
+    assert len(ini.sections["HAL"]["HALFILE"]) == 2
