@@ -28,7 +28,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from stepgen.model import (
-    HALF_STEP,
     ONE_STEP,
     PICKOFF,
     Channel,
@@ -36,6 +35,8 @@ from stepgen.model import (
     InvocationRun,
     StepgenConfig,
     final_state,
+    follow_position,
+    follow_velocity,
     make_pulses_channel,
     update_schedule,
 )
@@ -193,47 +194,12 @@ def run_fast(
                     max_ac = maxaccel * abs_scale
                 if pos_mode:
                     pos_cmd = value * pos_scale
-                    vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
+                    new_vel = follow_position(
+                        pos_cmd, old_pos_cmd, accum, freq, max_freq, max_ac, dt, recip_dt
+                    )
                     old_pos_cmd = pos_cmd
-                    curr_pos = (accum - HALF_STEP) * (1.0 / (1 << PICKOFF))
-                    curr_vel = freq
-                    match_ac = max_ac if vel_cmd > curr_vel else -max_ac
-                    match_time = (vel_cmd - curr_vel) / match_ac
-                    avg_v = (vel_cmd + curr_vel) * 0.5
-                    est_out = curr_pos + avg_v * match_time
-                    est_cmd = pos_cmd + vel_cmd * (match_time - 1.5 * dt)
-                    est_err = est_out - est_cmd
-                    if match_time < dt:
-                        if abs(est_err) < 0.0001:
-                            new_vel = vel_cmd
-                        else:
-                            new_vel = vel_cmd - 0.5 * est_err * recip_dt
-                            if new_vel > curr_vel + max_ac * dt:
-                                new_vel = curr_vel + max_ac * dt
-                            elif new_vel < curr_vel - max_ac * dt:
-                                new_vel = curr_vel - max_ac * dt
-                    else:
-                        dp = -2.0 * match_ac * dt * match_time
-                        if abs(est_err + dp * 2.0) < abs(est_err):
-                            match_ac = -match_ac
-                        new_vel = curr_vel + match_ac * dt
-                    if new_vel > max_freq:
-                        new_vel = max_freq
-                    elif new_vel < -max_freq:
-                        new_vel = -max_freq
                 else:
-                    vel_cmd = value * pos_scale
-                    if vel_cmd > max_freq:
-                        vel_cmd = max_freq
-                    elif vel_cmd < -max_freq:
-                        vel_cmd = -max_freq
-                    dv = max_ac * dt
-                    if vel_cmd > freq + dv:
-                        new_vel = freq + dv
-                    elif vel_cmd < freq - dv:
-                        new_vel = freq - dv
-                    else:
-                        new_vel = vel_cmd
+                    new_vel = follow_velocity(value * pos_scale, freq, max_freq, max_ac, dt)
                 freq = new_vel
                 target = int(freq * freqscale)
                 deltalim = int(max_ac * accelscale)

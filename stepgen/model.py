@@ -426,34 +426,40 @@ def update_freq_channel(comp: Component, ch: Channel, newperiod: bool) -> None:
         else:
             max_ac = ch.maxaccel * abs(ch.pos_scale)
     if ch.pos_mode:
-        new_vel = position_follower(ch, max_freq, max_ac, dt, recip_dt)
+        pos_cmd = ch.pos_cmd * ch.pos_scale
+        new_vel = follow_position(
+            pos_cmd, ch.old_pos_cmd, ch.accum, ch.freq, max_freq, max_ac, dt, recip_dt
+        )
+        ch.old_pos_cmd = pos_cmd
     else:
-        vel_cmd = ch.vel_cmd * ch.pos_scale
-        if vel_cmd > max_freq:
-            vel_cmd = max_freq
-        elif vel_cmd < -max_freq:
-            vel_cmd = -max_freq
-        dv = max_ac * dt
-        if vel_cmd > ch.freq + dv:
-            new_vel = ch.freq + dv
-        elif vel_cmd < ch.freq - dv:
-            new_vel = ch.freq - dv
-        else:
-            new_vel = vel_cmd
+        new_vel = follow_velocity(ch.vel_cmd * ch.pos_scale, ch.freq, max_freq, max_ac, dt)
     ch.freq = new_vel
     ch.target_addval = _c_long(ch.freq * comp.freqscale)
     ch.deltalim = _c_long(max_ac * comp.accelscale)
 
 
-def position_follower(
-    ch: Channel, max_freq: float, max_ac: float, dt: float, recip_dt: float
+def follow_position(
+    pos_cmd: float,
+    old_pos_cmd: float,
+    accum: int,
+    curr_vel: float,
+    max_freq: float,
+    max_ac: float,
+    dt: float,
+    recip_dt: float,
 ) -> float:
-    """The pre-tuned trapezoidal position follower of §4.2; returns the new frequency (steps/s)."""
-    pos_cmd = ch.pos_cmd * ch.pos_scale
-    vel_cmd = (pos_cmd - ch.old_pos_cmd) * recip_dt
-    ch.old_pos_cmd = pos_cmd
-    curr_pos = (ch.accum - HALF_STEP) * (1.0 / (1 << PICKOFF))
-    curr_vel = ch.freq
+    """The pre-tuned trapezoidal position follower of §4.2; returns the new frequency (steps/s).
+
+    Args:
+        pos_cmd: this period's position command, in steps (``position-cmd · scale``).
+        old_pos_cmd: the previous one, in steps.
+        accum: the DDS accumulator (2^28 units per step, offset 2^27).
+        curr_vel: the previously commanded frequency, steps/s.
+        max_freq: the frequency limit, steps/s; max_ac: the acceleration limit, steps/s².
+        dt: the servo period in s; recip_dt: 1/dt (the C multiplies by it).
+    """
+    vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
+    curr_pos = (accum - HALF_STEP) * (1.0 / (1 << PICKOFF))
     match_ac = max_ac if vel_cmd > curr_vel else -max_ac
     match_time = (vel_cmd - curr_vel) / match_ac
     avg_v = (vel_cmd + curr_vel) * 0.5
@@ -480,6 +486,22 @@ def position_follower(
     elif new_vel < -max_freq:
         new_vel = -max_freq
     return new_vel
+
+
+def follow_velocity(
+    vel_cmd: float, curr_vel: float, max_freq: float, max_ac: float, dt: float
+) -> float:
+    """Velocity mode of §4.1: the command (steps/s) clamped to ±max_freq and ramped by max_ac·dt."""
+    if vel_cmd > max_freq:
+        vel_cmd = max_freq
+    elif vel_cmd < -max_freq:
+        vel_cmd = -max_freq
+    dv = max_ac * dt
+    if vel_cmd > curr_vel + dv:
+        return curr_vel + dv
+    if vel_cmd < curr_vel - dv:
+        return curr_vel - dv
+    return vel_cmd
 
 
 # ---------------------------------------------------------------------------------------------
