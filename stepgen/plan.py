@@ -541,8 +541,11 @@ def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tupl
         "(one invocation late by J, the next on time).",
         "Reversals follow LinuxCNC's hold logic (reference §2.3): DIR changes dirhold periods "
         "after the pulse ends, the next step comes dirsetup periods later. LinuxCNC does not "
-        "always obey dirsetup when a reversal is requested after the hold expired "
-        "(issue #2332, reference §2.4).",
+        "always obey dirsetup (reference §2.4, issue #2332): when a reversal is requested after "
+        "the hold expired, or the velocity passes through exactly 0 coming from negative (the "
+        "hold freezes addval at 0), DIR flips in the same period as the next pulse starts. No "
+        "parameter prevents it; when the active edge is the END of the pulse the drive still "
+        "gets steplen·P − J of setup.",
         "Values are set as whole multiples of P, so stepgen keeps them; if update-freq runs before "
         "make-pulses on the first cycle, LinuxCNC rounds them at 50 us first (reference §3): "
         "they only get longer (safe) but the max step rate drops.",
