@@ -16,25 +16,30 @@ from collections.abc import Callable
 from typing import Any
 
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._reports import (
+    add_report_arguments,
+    render_json_with_config,
+    render_junit_one,
+    render_text_with_config,
+    run_checks,
+)
 from wavecheck.drives.library import load_drive
 from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write
-from wavecheck.report.json import DEFAULT_VIOLATION_CAP, render_json
+from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.model import Report
-from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
+from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
 
 #: ``--format`` name → renderer(report, args) → text.
 RENDERERS: dict[str, Callable[[Report, argparse.Namespace], str]] = {
-    "text": lambda r, a: render_text(
-        r, DEFAULT_TEXT_VIOLATIONS if a.max_violations is None else a.max_violations
-    ),
-    "json": lambda r, a: render_json(
-        r, DEFAULT_VIOLATION_CAP if a.max_violations is None else a.max_violations
-    ),
+    # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
+    "text": render_text_with_config,
+    "json": render_json_with_config,
+    "junit": render_junit_one,
 }
 
 
@@ -47,7 +52,11 @@ def register(sub: Any) -> None:
         "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 2 unusable input.",
     )
     p.add_argument(
-        "capture", metavar="CAPTURE", help="the capture (.sr, .vcd, or a sigrok-cli format)"
+        "capture",
+        metavar="CAPTURE",
+        nargs="+",
+        help="the capture(s) (.sr, .vcd, or a sigrok-cli format); several files and glob "
+        "patterns ('runs/*.sr') give a summary line each and the worst exit code",
     )
     p.add_argument(
         "--drive", required=True, metavar="ID|FILE", help="drive id from rules/ or a TOML file"
@@ -98,6 +107,7 @@ def register(sub: Any) -> None:
         help=f"violations listed (text default {DEFAULT_TEXT_VIOLATIONS}, "
         f"JSON default {DEFAULT_VIOLATION_CAP}); the total is always given",
     )
+    add_report_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -146,6 +156,4 @@ def write_outputs(args: argparse.Namespace, report: Report) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
-    report = build_report(args, args.capture)
-    write_outputs(args, report)
-    return report.exit_code
+    return run_checks(args, build_report, write_outputs)

@@ -1,0 +1,339 @@
+"""``wavecheck check``'s report outputs and its several-captures mode.
+
+Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--html FILE.html``,
+``--gtkw FILE.gtkw``, ``-q/--quiet``, and the stepgen configuration ``--ini FILE``,
+``--hal FILE`` (repeatable), ``--channel N``, ``--latency J`` for the ``config`` and
+``latency_safe`` max step rates.
+
+Several captures (``wavecheck check a.sr b.vcd 'runs/*.sr'``): each is checked on its own; a
+capture that cannot be read is reported (one line on stderr) and the others go on. stdout gets
+each text report and then one summary line per capture; the exit code is the worst one
+(2 unusable > 1 fail > 3 indeterminate > 0 pass). JSON becomes ``{"reports": [...], "errors":
+[...], "verdict", "exit_code"}``; JUnit has one ``testsuite`` per capture; the HTML page a section
+per capture; ``--plot``/``--gtkw`` write one file per capture, named ``FILE-<capture stem>.png``.
+One capture keeps the single-report behaviour and output shapes exactly.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import sys
+from collections.abc import Callable
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from wavecheck.errors import UsageError, WavecheckError
+from wavecheck.linuxcnc import ConfigRates, LinuxCNCConfig, config_rates, read_config
+from wavecheck.output import atomic_write
+from wavecheck.progress import activate
+from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
+from wavecheck.report.model import Report, overall_verdict
+from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
+from wavecheck.units import format_frequency, format_time, parse_time
+
+__all__ = [
+    "add_report_arguments",
+    "expand_captures",
+    "extra_rates",
+    "render_json_with_config",
+    "render_junit_one",
+    "render_text_with_config",
+    "run_checks",
+    "summary_line",
+    "worst_exit_code",
+]
+
+_SEVERITY = {0: 0, 3: 1, 1: 2, 2: 3}
+
+
+def add_report_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
+    out = p.add_argument_group("reports")
+    out.add_argument("--plot", metavar="FILE.png", help="timing diagrams and histograms (PNG)")
+    out.add_argument("--html", metavar="FILE.html", help="one self-contained HTML page")
+    out.add_argument(
+        "--gtkw",
+        metavar="FILE.gtkw",
+        help="GTKWave save file with markers at the worst violations (a non-VCD capture is "
+        "written as FILE.vcd beside it)",
+    )
+    out.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bar (it is off anyway when "
+        "stderr is not a terminal)"
+    )
+    cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
+    cfg.add_argument("--ini", metavar="FILE", help="LinuxCNC INI file ([EMCMOT] BASE_PERIOD)")
+    cfg.add_argument(
+        "--hal",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="LinuxCNC HAL file (loadrt stepgen, setp stepgen.N.*); repeatable",
+    )
+    cfg.add_argument("--channel", type=int, default=0, metavar="N", help="stepgen channel (default 0)")
+    cfg.add_argument(
+        "--latency", metavar="J", help="worst base-thread latency (e.g. 11us) for latency_safe"
+    )
+
+
+def expand_captures(patterns: list[str]) -> list[str]:
+    """Capture paths from the command line: existing files as given, glob patterns expanded
+    (sorted); a pattern matching nothing is an error."""
+    out: list[str] = []
+    for pat in patterns:
+        if glob.has_magic(pat) and not os.path.exists(pat):
+            hits = sorted(glob.glob(pat, recursive=True))
+            if not hits:
+                raise UsageError(f"{pat}: no file matches this pattern")
+            out += hits
+        else:
+            out.append(pat)
+    return out
+
+
+def worst_exit_code(codes: list[int]) -> int:
+    """The worst of several exit codes: 2 > 1 > 3 > 0."""
+    return max(codes, key=lambda c: _SEVERITY.get(c, 3), default=0)
+
+
+# -- stepgen configuration rates -------------------------------------------------------------------
+def _linuxcnc(args: argparse.Namespace) -> LinuxCNCConfig | None:
+    if hasattr(args, "_linuxcnc_config"):
+        cached: LinuxCNCConfig | None = args._linuxcnc_config
+        return cached
+    cfg = None
+    if getattr(args, "ini", None) or getattr(args, "hal", None):
+        cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
+    elif getattr(args, "latency", None):
+        raise UsageError("--latency needs the stepgen configuration: give --ini (and --hal)")
+    args._linuxcnc_config = cfg
+    return cfg
+
+
+def _latency_ns(args: argparse.Namespace) -> Fraction | None:
+    text = getattr(args, "latency", None)
+    if not text:
+        return None
+    j = parse_time(text, default_unit="ns") * 10**9
+    if j < 0:
+        raise UsageError(f"--latency must not be negative, got {text}")
+    return j
+
+
+def extra_rates(report: Report, args: argparse.Namespace) -> ConfigRates | None:
+    """The ``config``/``latency_safe`` rates for ``report`` when ``--ini``/``--hal`` were given.
+
+    The STEP pin counts as inverted between stepgen and the drive when ``--invert step`` was
+    given (the capture then shows stepgen's output and the drive sees its inverse).
+    """
+    cfg = _linuxcnc(args)
+    if cfg is None:
+        return None
+    return config_rates(
+        cfg, report.drive, _latency_ns(args), step_inverted="step" in report.inverted
+    )
+
+
+def _rate_text(hz: Fraction | None) -> str:
+    return "-" if hz is None else format_frequency(hz)
+
+
+def render_text_with_config(report: Report, args: argparse.Namespace) -> str:
+    """The text report, plus the configuration's rates when one was given."""
+    cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
+    text = render_text(report, cap)
+    rates = extra_rates(report, args)
+    if rates is None:
+        return text
+    cfg = _linuxcnc(args)
+    assert cfg is not None
+    p = format_time(Fraction(cfg.require_base_period(), 10**9))
+    j = _latency_ns(args)
+    jt = "" if j is None else f" (J = {format_time(j / 10**9)})"
+    lines = [
+        f"max step rate (stepgen channel {cfg.channel}, BASE_PERIOD {p}): config "
+        f"{_rate_text(rates.config)}, latency_safe{jt} {_rate_text(rates.latency_safe)}"
+    ]
+    lines += [f"note: {n}" for n in rates.notes]
+    return text + "\n".join(lines) + "\n"
+
+
+def _num(v: Fraction | None) -> float | int | None:
+    if v is None:
+        return None
+    return int(v) if v.denominator == 1 else float(v)
+
+
+def _dict_with_config(report: Report, args: argparse.Namespace) -> dict[str, Any]:
+    cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
+    data = report_dict(report, cap)
+    rates = extra_rates(report, args)
+    if rates is not None:
+        data["max_step_rate_hz"]["config"] = _num(rates.config)
+        data["max_step_rate_hz"]["latency_safe"] = _num(rates.latency_safe)
+        data["max_step_rate_hz"]["config_notes"] = list(rates.notes)
+    return data
+
+
+def render_json_with_config(report: Report, args: argparse.Namespace) -> str:
+    """The JSON report, with ``config``/``latency_safe`` in ``max_step_rate_hz`` when known."""
+    return json.dumps(_dict_with_config(report, args), indent=2, ensure_ascii=False) + "\n"
+
+
+def render_junit_one(report: Report, args: argparse.Namespace) -> str:
+    """JUnit XML of one report."""
+    from wavecheck.report.junit import render_junit
+
+    return render_junit([report])
+
+
+# -- several captures --------------------------------------------------------------------------------
+def summary_line(report: Report) -> str:
+    """One line: verdict, capture, violations, steps and the worst rule."""
+    worst = ""
+    margins = [(r.min_margin_ns, r.rule) for r in report.rules if r.min_margin_ns is not None]
+    if margins:
+        m, rule = min(margins)
+        sign = "+" if m > 0 else ""
+        worst = f"; closest {rule} {sign}{format_time(m / 10**9)}"
+    return (
+        f"{report.verdict.upper():<13} {report.capture.path}: {report.total_violations} "
+        f"violation(s), {report.steps.count} steps{worst}"
+    )
+
+
+def _per_capture(path: str, capture: str, index: int, stems: dict[str, int]) -> str:
+    """``out.png`` → ``out-<capture stem>.png`` (a number added when stems repeat)."""
+    p = Path(path)
+    stem = Path(capture).stem
+    n = stems.get(stem, 0)
+    stems[stem] = n + 1
+    tag = stem if n == 0 else f"{stem}-{n + 1}"
+    return str(p.with_name(f"{p.stem}-{tag}{p.suffix}"))
+
+
+def _check_folders(args: argparse.Namespace) -> None:
+    for opt in ("output", "plot", "html", "gtkw"):
+        target = getattr(args, opt, None)
+        if target:
+            folder = Path(target).parent
+            if str(folder) and not folder.is_dir():
+                flag = "-o" if opt == "output" else f"--{opt}"
+                raise UsageError(f"{flag} {target}: folder {str(folder)!r} does not exist (create it first)")
+
+
+def _side_outputs(
+    args: argparse.Namespace, reports: list[Report], errors: list[tuple[str, str]]
+) -> None:
+    several = len(reports) + len(errors) > 1
+    stems: dict[str, int] = {}
+    gstems: dict[str, int] = {}
+    for k, r in enumerate(reports):
+        if args.plot:
+            from wavecheck.report.plot import write_plot
+
+            target = _per_capture(args.plot, r.capture.path, k, stems) if several else args.plot
+            write_plot(r, target)
+        if args.gtkw:
+            from wavecheck.report.gtkw import write_gtkw
+
+            target = _per_capture(args.gtkw, r.capture.path, k, gstems) if several else args.gtkw
+            write_gtkw(r, target)
+    if args.html:
+        from wavecheck.report.html import write_html
+
+        extra: dict[str, Fraction | None] | None = None
+        if reports:
+            rates = extra_rates(reports[0], args)
+            if rates is not None:
+                extra = {"config": rates.config, "latency_safe": rates.latency_safe}
+        write_html(
+            reports,
+            args.html,
+            errors=[f"{p}: {e}" if not e.startswith(p) else e for p, e in errors],
+            extra_rates=extra,
+            max_violations=DEFAULT_TEXT_VIOLATIONS
+            if args.max_violations is None
+            else args.max_violations,
+        )
+
+
+def run_checks(
+    args: argparse.Namespace,
+    build_report: Callable[[argparse.Namespace, str], Report],
+    write_outputs: Callable[[argparse.Namespace, Report], None],
+) -> int:
+    """Check every capture of ``args.capture`` and write every requested output.
+
+    One capture: ``write_outputs`` (the single-report behaviour) and the side outputs; an
+    unusable input raises (exit 2). Several: see the module docstring.
+    """
+    patterns = args.capture if isinstance(args.capture, list) else [args.capture]
+    paths = expand_captures(patterns)
+    _check_folders(args)
+    _linuxcnc(args)  # a bad INI/HAL file is reported before any capture is read
+    _latency_ns(args)
+    if len(paths) == 1:
+        with activate(f"reading {paths[0]}", quiet=args.quiet, unit="bytes"):
+            report = build_report(args, paths[0])
+        write_outputs(args, report)
+        _side_outputs(args, [report], [])
+        return report.exit_code
+    reports: list[Report] = []
+    errors: list[tuple[str, str]] = []
+    codes: list[int] = []
+    for path in paths:
+        try:
+            with activate(f"reading {path}", quiet=args.quiet, unit="bytes"):
+                reports.append(build_report(args, path))
+            codes.append(reports[-1].exit_code)
+        except WavecheckError as err:
+            print(f"wavecheck: error: {err}", file=sys.stderr)
+            errors.append((path, str(err)))
+            codes.append(err.exit_code)
+    code = worst_exit_code(codes)
+    _write_many(args, reports, errors, code)
+    _side_outputs(args, reports, errors)
+    return code
+
+
+def _write_many(
+    args: argparse.Namespace, reports: list[Report], errors: list[tuple[str, str]], code: int
+) -> None:
+    summary = [summary_line(r) for r in reports] + [
+        f"{'ERROR':<13} {e if e.startswith(p) else f'{p}: {e}'}" for p, e in errors
+    ]
+    if args.format == "json":
+        verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
+        if errors:
+            verdict = "error"
+        text = (
+            json.dumps(
+                {
+                    "reports": [_dict_with_config(r, args) for r in reports],
+                    "errors": [{"path": p, "error": e} for p, e in errors],
+                    "verdict": verdict,
+                    "exit_code": code,
+                },
+                indent=2,
+                ensure_ascii=False,
+            )
+            + "\n"
+        )
+    elif args.format == "junit":
+        from wavecheck.report.junit import Unreadable, render_junit
+
+        text = render_junit(reports, [Unreadable(p, e) for p, e in errors])
+    else:
+        parts = [f"== {r.capture.path} ==\n{render_text_with_config(r, args)}" for r in reports]
+        text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
+    if args.output:
+        atomic_write(args.output, text)
+        print("\n".join(summary))
+        print(f"report written to {args.output}")
+    else:
+        sys.stdout.write(text)
