@@ -19,6 +19,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from stepgen.latencyfiles import read_latency_file
 from stepgen.plan import plan, render_hal, render_ini, render_json, render_text
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.output import atomic_write
@@ -49,6 +50,11 @@ def register(sub: Any) -> None:
         required=True,
         metavar="J|FILE",
         help="worst latency (e.g. 11us), or a cyclictest / latency-histogram --nox / ~/.latency file",
+    )
+    p.add_argument(
+        "--cyclictest-nsecs",
+        action="store_true",
+        help="the --latency file is a cyclictest summary run with -N (numbers in ns, not us)",
     )
     p.add_argument(
         "--base-period",
@@ -104,8 +110,11 @@ def parse_time_arg(text: str, option: str) -> tuple[Fraction, str]:
     return ns, f"{option} {text}"
 
 
-def parse_latency_arg(text: str) -> tuple[Fraction, str]:
-    """``--latency``: a time, or a file of a latency tool; returns ``(ns, where it came from)``."""
+def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction, str]:
+    """``--latency``: a time, or a file of a latency tool; returns ``(ns, where it came from)``.
+
+    ``cyclictest_unit`` is the unit of a cyclictest summary's numbers (``"ns"`` if it ran with -N).
+    """
     try:
         return parse_time_arg(text, "--latency")
     except UnitError:
@@ -115,14 +124,8 @@ def parse_latency_arg(text: str) -> tuple[Fraction, str]:
                 f"--latency {text!r} is neither a time such as '11us' nor an existing file "
                 "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file)"
             ) from None
-    try:
-        from stepgen.latencyfiles import read_latency_file
-    except ImportError:  # pragma: no cover - until stepgen.latencyfiles lands
-        raise UsageError(
-            f"--latency {text}: reading latency files is not available yet (give a time, e.g. 11us)"
-        ) from None
-    worst_ns, description = read_latency_file(path)
-    return Fraction(worst_ns), f"{path}: {description}"
+    worst_ns, description = read_latency_file(path, cyclictest_unit=cyclictest_unit)
+    return Fraction(worst_ns), description
 
 
 def run(args: argparse.Namespace) -> int:
@@ -131,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.channel < 0 or args.channel > 15:
         raise UsageError(f"--channel {args.channel}: stepgen has channels 0..15")
-    latency, source = parse_latency_arg(args.latency)
+    latency, source = parse_latency_arg(args.latency, "ns" if args.cyclictest_nsecs else "us")
     period = None
     if args.base_period is not None:
         period, _ = parse_time_arg(args.base_period, "--base-period")

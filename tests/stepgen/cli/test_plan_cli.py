@@ -193,3 +193,82 @@ def test_incomplete_drive_file(tmp_path: Path, capsys: pytest.CaptureFixture[str
     code, out, err = run(capsys, "--drive", str(rule), "--latency", "11us")
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and "gives no dir_hold figure" in err
+
+
+# --------------------------------------------------------------------------- latency files
+
+NOX = """\
+    1 s   base min:  -3.100 us max:   6.400 us sdev:   0.500 us
+    1 s  servo min:  -9.000 us max:  30.000 us sdev:   2.000 us
+    2 s   base min: -11.300 us max:  10.200 us sdev:   0.900 us
+"""
+CYCLICTEST = """\
+policy: fifo: loadavg: 0.10 0.05 0.01 1/123 4567
+T: 0 ( 1234) P:80 I:1000 C:  10000 Min:      2 Act:    3 Avg:    3 Max:      15
+T: 1 ( 1235) P:80 I:1500 C:   6667 Min:      2 Act:    4 Avg:    3 Max:      12
+"""
+HISTOGRAM = """\
+# Histogram
+000000 000010\t000020
+000001 000100\t000090
+000013 000001\t000000
+# Total: 000000111 000000110
+# Min Latencies: 00000 00000
+# Avg Latencies: 00001 00001
+# Max Latencies: 00013 00001
+# Histogram Overflows: 00000 00000
+"""
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "extra", "ns", "phrase"),
+    [
+        # reference §10.1: latency-test writes the largest Max Jitter (ns) to ~/.latency
+        (".latency", "10636\n", [], 10636, "latency-test"),
+        # reference §10.2: --nox lines, base thread max(|min|, max) = 11.3 us
+        ("nox.txt", NOX, [], 11300, "latency-histogram --nox"),
+        # reference §10.4: cyclictest summary, worst Max: over threads, µs
+        ("ct.txt", CYCLICTEST, [], 15000, "cyclictest summary"),
+        # ... run with -N: the same numbers are ns
+        ("ct-n.txt", CYCLICTEST, ["--cyclictest-nsecs"], 15, "cyclictest summary"),
+        # reference §10.4: cyclictest -h footer '# Max Latencies'
+        ("hist.txt", HISTOGRAM, [], 13000, "Max Latencies"),
+    ],
+)
+def test_latency_files(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    name: str,
+    content: str,
+    extra: list[str],
+    ns: int,
+    phrase: str,
+) -> None:
+    path = tmp_path / name
+    path.write_text(content)
+    code, out, _ = run(
+        capsys, "--drive", "xylotex", "--latency", str(path), *extra, "--format", "json"
+    )
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["latency"]["ns"] == ns
+    assert str(path) in doc["latency"]["source"] and phrase in doc["latency"]["source"]
+    assert doc["min_base_period_ns"] == ns + 2000  # J + Xylotex's 2 us high time
+
+
+def test_latency_file_shown_in_text_and_hal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / ".latency"
+    path.write_text("11000\n")
+    _, text, _ = run(capsys, "--drive", "gecko-g202", "--latency", str(path))
+    assert f"latency J = 11 us ({path}: LinuxCNC latency-test" in text.splitlines()[0]
+    _, hal, _ = run(capsys, "--drive", "gecko-g202", "--latency", str(path), "--format", "hal")
+    assert str(path) in hal.splitlines()[0] and hal.splitlines()[0].startswith("#")
+
+
+def test_unreadable_latency_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "notes.txt"
+    path.write_text("nothing useful here\n")
+    code, out, err = run(capsys, "--drive", "xylotex", "--latency", str(path))
+    assert code == 2 and out == "" and err.count("\n") == 1 and str(path) in err
