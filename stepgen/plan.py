@@ -543,7 +543,7 @@ def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tupl
         "after the pulse ends, the next step comes dirsetup periods later. LinuxCNC does not "
         "always obey dirsetup (reference §2.4, issue #2332): when a reversal is requested after "
         "the hold expired, or the velocity passes through exactly 0 coming from negative (the "
-        "hold freezes addval at 0), DIR flips in the same period as the next pulse starts. No "
+        "hold freezes addval at 0), DIR can flip in the same period as the next pulse starts. No "
         "parameter prevents it; when the active edge is the END of the pulse the drive still "
         "gets steplen·P − J of setup.",
         "Values are set as whole multiples of P, so stepgen keeps them; if update-freq runs before "
@@ -675,8 +675,11 @@ def _us(ns: Fraction | int) -> str:
     return format_time(Fraction(ns) / 10**9)
 
 
-def render_text(p: Plan) -> str:
-    """The plan for people: figures, the parameters, rates, margins, assumptions, warnings."""
+def render_text(p: Plan, other: Plan | None = None) -> str:
+    """The plan for people: figures, the parameters, rates, margins, assumptions, warnings.
+
+    ``other``: the same plan under the other STEP-pin reading, summarised in one line.
+    """
     d = p.drive
     lines = [
         f"stepgen plan for {d.name} ({d.id}), latency J = {_us(p.latency_ns)} ({p.latency_source or 'given'})",
@@ -697,6 +700,19 @@ def render_text(p: Plan) -> str:
         "",
         f"max step rate {_rate(p.max_step_rate_hz):,} steps/s = 1 / ((steplen + stepspace)·P) "
         f"= 1 / ({p.step_periods} x {p.base_period_ns} ns)",
+    ]
+    pin = "inverted" if p.step_inverted else "not inverted"
+    lines.append(
+        f"(these figures assume the STEP pin {pin}: the drive's {d.active_edge} edge is the "
+        f"{p.active_at} of stepgen's pulse)"
+    )
+    if other is not None:
+        alt = ", ".join(f"{prm.name} {prm.periods}" for prm in other.params.values())
+        flag = "with --invert-step" if other.step_inverted else "without --invert-step"
+        lines.append(
+            f"(the other reading, {flag}: {alt} -> {_rate(other.max_step_rate_hz):,} steps/s)"
+        )
+    lines += [
         "",
         f"{'requirement':<13} {'interval':<42} {'formula':<36} {'worst':>8} {'limit':>8} "
         f"{'margin':>9} (ns)",

@@ -21,7 +21,7 @@ from typing import Any
 
 from stepgen.latencyfiles import read_latency_file
 from stepgen.plan import plan, render_hal, render_ini, render_json, render_text
-from wavecheck.errors import UnitError, UsageError
+from wavecheck.errors import UnitError, UsageError, WavecheckError
 from wavecheck.output import atomic_write
 from wavecheck.units import parse_quantity
 
@@ -147,7 +147,11 @@ def run(args: argparse.Namespace) -> int:
     elif args.format == "hal":
         out = render_hal(result, args.channel)
     else:
-        out = render_text(result)
+        try:
+            other = plan(drive, latency, result.base_period_ns, step_inverted=not args.invert_step)
+        except WavecheckError:  # pragma: no cover - same figures, same checks
+            other = None
+        out = render_text(result, other)
     if args.output:
         atomic_write(args.output, out)
         print(f"stepgen plan: wrote {args.output} (latency {source})", file=sys.stderr)

@@ -66,6 +66,11 @@ def test_text_states_mapping_and_latency_source(capsys: pytest.CaptureFixture[st
     assert "simple BASE_PERIOD      31000 ns" in out and "16,129 steps/s" in out
     assert "hold = dirhold·P − J" in out
     assert "dirhold          2     32000" in out
+    assert "assume the STEP pin not inverted: the drive's falling edge is the end" in out
+    assert (
+        "(the other reading, with --invert-step: steplen 1, stepspace 1, dirsetup 1, dirhold 1"
+        in out
+    )
 
 
 def test_invert_step_changes_the_reading(capsys: pytest.CaptureFixture[str]) -> None:
