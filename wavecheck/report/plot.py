@@ -266,31 +266,54 @@ def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
     ax.tick_params(labelsize=8)
 
 
+def _human_ns(v: float, _pos: object = None) -> str:
+    """Tick label for a time in ns: ``500 ns``, ``20 µs``, ``5 ms``."""
+    if v <= 0:
+        return "0"
+    name, scale = _unit_for(v)
+    return f"{v / scale:g} {name}"
+
+
+def _count_label(v: float, _pos: object = None) -> str:
+    return f"{v:,.0f}" if v >= 1 else ""
+
+
 def _draw_histogram(ax: Axes, r: RuleResult) -> None:
+    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+
     assert r.limit_ns is not None
     values = r.measured_ns
     limit = float(r.limit_ns)
-    ref = float(np.median(values)) if len(values) else limit
-    unit, scale = _unit_for(max(limit, ref) / 2 if max(limit, ref) > 0 else 1.0)
-    v = values / scale
-    lim = limit / scale
-    lo, hi = float(v.min()), float(v.max())
-    positive = lo > 0 and lim > 0
-    log_x = positive and hi / lo > 50
+    lo, hi = float(values.min()), float(values.max())
+    log_x = lo > 0 and limit > 0 and max(hi, limit) / min(lo, limit) > 50
     if log_x:
-        a, b = math.log10(min(lo, lim) * 0.8), math.log10(max(hi, lim) * 1.25)
+        # decades of durations (the space between pulses of a slow move): log axis in ns with
+        # human tick labels
+        unit, scale = "", 1.0
+        a, b = math.log10(min(lo, limit) * 0.8), math.log10(max(hi, limit) * 1.25)
         bins: Any = np.logspace(a, b, 60)
         ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(FuncFormatter(_human_ns))
+        ax.xaxis.set_minor_formatter(NullFormatter())
     else:
-        span = max(hi, lim) - min(lo, lim)
-        pad = span * 0.08 if span > 0 else max(abs(lim), 1.0) * 0.1
-        bins = np.linspace(min(lo, lim) - pad, max(hi, lim) + pad, 60)
+        unit, scale = _unit_for(max(limit, float(np.median(values))) / 2 or 1.0)
+        span = max(hi, limit) - min(lo, limit)
+        pad = span * 0.08 if span > 0 else max(abs(limit), 1.0) * 0.1
+        bins = (np.linspace(min(lo, limit) - pad, max(hi, limit) + pad, 60)) / scale
+    v = values / scale
+    lim = limit / scale
     fails = r.outcome == FAIL
     ax.hist(v[~fails], bins=bins, color="#5b7db1", label="pass / indeterminate")
     if fails.any():
         ax.hist(v[fails], bins=bins, color=_FAIL_COLOR, label="fail")
-    ax.set_yscale("log")
-    ax.set_ylim(bottom=0.7)
+    counts, _ = np.histogram(v, bins=bins)
+    if counts.max(initial=0) > 50:
+        ax.set_yscale("log")
+        ax.set_ylim(bottom=0.7)
+        ax.yaxis.set_major_formatter(FuncFormatter(_count_label))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+    else:
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.axvline(lim, color=_FAIL_COLOR, lw=1.6, ls="--")
     ax.text(
         lim,
@@ -304,13 +327,13 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
     )
     status = {"fail": _FAIL_COLOR, "pass": _PASS_COLOR, "indeterminate": _INDET_COLOR}
     ax.set_title(
-        f"{r.rule}: {r.checked:,} intervals, {r.violations:,} fail, min margin "
+        f"{r.rule}: {r.checked:,} interval(s), {r.violations:,} fail, min margin "
         f"{_signed_ns(r.min_margin_ns)}",
         fontsize=9,
         loc="left",
         color=status.get(r.verdict, "#222"),
     )
-    ax.set_xlabel(f"measured ({unit}{', log scale' if log_x else ''})", fontsize=8.5)
+    ax.set_xlabel("measured (log scale)" if log_x else f"measured ({unit})", fontsize=8.5)
     ax.set_ylabel("count", fontsize=8.5)
     ax.tick_params(labelsize=8)
     for side in ("top", "right"):
