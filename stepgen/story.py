@@ -47,6 +47,7 @@ __all__ = [
     "report",
     "reversal_motion",
     "seed_story",
+    "short_period_ns",
     "trace_capture",
     "worst_case",
     "zero_crossing_story",
@@ -57,15 +58,25 @@ RULES: tuple[str, ...] = ("step_high", "step_low", "step_period", "dir_setup", "
 US = 1000
 
 
+def servo_multiple(periods: Mapping[str, int]) -> int:
+    """Servo period in base periods for :func:`config_for`: 1, or steplen + stepspace + 1 (not a
+    multiple of the step spacing, so reversals still fall at every phase of the steps)."""
+    if periods["steplen"] <= 1:
+        return 1
+    return periods["steplen"] + periods["stepspace"] + 1
+
+
 def config_for(base_period_ns: int, periods: Mapping[str, int]) -> StepgenConfig:
     """A stepgen channel with ``periods`` (steplen … in whole periods) at ``base_period_ns``.
 
-    Velocity mode, servo period = base period (so a reversal is requested at any base period),
-    make-pulses first (no start-up rounding at 50 µs, reference §3), no user velocity/accel limit.
+    Velocity mode; servo period = base period (so a reversal can be requested at any base
+    period), or (steplen + stepspace + 1) base periods when steplen is longer than one period
+    (stepgen refuses a steplen longer than the servo period); make-pulses first (no start-up
+    rounding at 50 µs, reference §3); no user velocity/accel limit.
     """
     return StepgenConfig(
         base_period_ns=base_period_ns,
-        servo_period_ns=base_period_ns,
+        servo_period_ns=base_period_ns * servo_multiple(periods),
         mode="velocity",
         position_scale=1.0,
         steplen=periods["steplen"] * base_period_ns,
@@ -448,15 +459,35 @@ def plannable(drives: Iterable[Drive]) -> list[Drive]:
     ]
 
 
-def library_sweep(latencies_ns: Iterable[int] = (5 * US, 11 * US, 25 * US)) -> list[SweepRow]:
+def short_period_ns(drive: Drive, latency_ns: int) -> int:
+    """A BASE_PERIOD below the minimum: half of it, whole µs, but at least J + 1 µs — so the
+    pulse parameters need more than one period (exercises steplen/stepspace)."""
+    from stepgen.plan import min_base_period_ns
+
+    half = -(-min_base_period_ns(drive, latency_ns) // 2000) * 1000
+    return int(max(latency_ns + US, half))
+
+
+def library_sweep(
+    latencies_ns: Iterable[int] = (5 * US, 11 * US, 25 * US),
+    short_period_latency_ns: int | None = 5 * US,
+) -> list[SweepRow]:
     """Every plannable drive in ``rules/`` at every latency: plan → worst cases → check, and each
-    parameter above one period shortened by one period → worst cases → check."""
+    parameter above one period shortened by one period → worst cases → check.
+
+    With ``short_period_latency_ns`` each drive is also planned at :func:`short_period_ns`
+    (below the minimum BASE_PERIOD) for that latency.
+    """
     from wavecheck.drives.library import list_drives
 
     rows = []
     for drive in plannable(list_drives()):
-        for j in latencies_ns:
-            p = plan(drive, j)
+        cases: list[tuple[int, int | None]] = [(j, None) for j in latencies_ns]
+        if short_period_latency_ns is not None:
+            j = short_period_latency_ns
+            cases.append((j, short_period_ns(drive, j)))
+        for j, period in cases:
+            p = plan(drive, j, period)
             periods = _periods(p)
             row = SweepRow(drive, j, p, worst_case(drive, j, p.base_period_ns, periods))
             for name in PARAMS:
@@ -469,8 +500,9 @@ def library_sweep(latencies_ns: Iterable[int] = (5 * US, 11 * US, 25 * US)) -> l
     return rows
 
 
-def report(sweep: bool = True) -> tuple[str, bool]:
-    """The story as text, and whether every expectation held."""
+def report(sweep: bool = True, verbose: bool = False) -> tuple[str, bool]:
+    """The story as text, and whether every expectation held (``verbose``: every shortened
+    parameter of the sweep on its own line)."""
     lines = [
         "The seed's stepper-tuning story: plan -> stepgen simulate worst:J:RULE (every rule) -> wavecheck check",
         "",
@@ -490,31 +522,40 @@ def report(sweep: bool = True) -> tuple[str, bool]:
         rows = library_sweep()
         bad = [r for r in rows if not r.ok]
         ok &= not bad
-        lengthened = sum(len(r.shorter) for r in rows)
         runs = sum(r.outcome.runs + sum(o.runs for o in r.shorter.values()) for r in rows)
         drives = len({r.drive.id for r in rows})
+        below = sum(r.plan.base_period_ns < r.plan.min_base_period_ns for r in rows)
         lines.append(
-            f"Library sweep: {drives} plannable drives x J in 5, 11, 25 us = {len(rows)} plans, "
-            f"{runs} simulations"
+            f"Library sweep: {drives} plannable drives in rules/, J = 5, 11, 25 us at the planned "
+            f"P, and J = 5 us at a P below the minimum: {len(rows)} plans ({below} below the "
+            f"minimum), {runs} simulations"
         )
-        lines.append(
-            f"  planned configuration passes every worst case: {sum(r.outcome.verdict == 'pass' for r in rows)}/{len(rows)}"
-        )
-        fails = sum(o.verdict == "fail" for r in rows for o in r.shorter.values())
-        lines.append(
-            f"  parameters above one period: {lengthened}; one period shorter fails: {fails}/{lengthened}"
-        )
-        for r in rows:
-            for name, o in r.shorter.items():
-                lines.append(
-                    f"    {r.drive.id} J {_us(r.latency_ns)} P {_us(r.plan.base_period_ns)}: {name} "
-                    f"{r.plan.params[name].periods} -> {r.plan.params[name].periods - 1} fails "
-                    f"{','.join(o.failed) or 'NOTHING'}"
-                )
+        passed = sum(r.outcome.verdict == "pass" for r in rows)
+        lines.append(f"  planned configuration passes every worst case: {passed}/{len(rows)}")
+        for name in PARAMS:
+            cut = [(r, o) for r in rows for pname, o in r.shorter.items() if pname == name]
+            if not cut:
+                lines.append(f"  {name}: never above one period")
+                continue
+            own = sum(any(rule in r.plan.params[name].reason for rule in o.failed) for r, o in cut)
+            failed = sum(o.verdict == "fail" for _, o in cut)
+            lines.append(
+                f"  {name} above one period in {len(cut)} plans; one period shorter fails "
+                f"{failed}/{len(cut)} (the rule the plan names: {own})"
+            )
+        if verbose:
+            for r in rows:
+                for name, o in r.shorter.items():
+                    lines.append(
+                        f"    {r.drive.id} J {_us(r.latency_ns)} P {_us(r.plan.base_period_ns)}: "
+                        f"{name} {r.plan.params[name].periods} -> "
+                        f"{r.plan.params[name].periods - 1} fails {','.join(o.failed) or 'NOTHING'}"
+                    )
         for r in bad:
             lines.append(
-                f"  MISMATCH {r.drive.id} J {_us(r.latency_ns)}: plan {r.outcome.verdict} "
-                f"{','.join(r.outcome.failed)}; shorter { ({k: o.verdict for k, o in r.shorter.items()}) }"
+                f"  MISMATCH {r.drive.id} J {_us(r.latency_ns)} P {_us(r.plan.base_period_ns)}: "
+                f"plan {r.outcome.verdict} {','.join(r.outcome.failed)}; shorter "
+                f"{ ({k: o.verdict for k, o in r.shorter.items()}) }"
             )
     lines.append("")
     lines.append("all expectations hold" if ok else "SOME EXPECTATIONS FAILED")
@@ -522,9 +563,9 @@ def report(sweep: bool = True) -> tuple[str, bool]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Print the story; exit 0 when every expectation holds."""
+    """Print the story; exit 0 when every expectation holds (``--no-sweep``, ``--verbose``)."""
     args = sys.argv[1:] if argv is None else argv
-    text, ok = report(sweep="--no-sweep" not in args)
+    text, ok = report(sweep="--no-sweep" not in args, verbose="--verbose" in args)
     sys.stdout.write(text)
     return 0 if ok else 1
 

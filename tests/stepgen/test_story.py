@@ -178,6 +178,10 @@ def test_sweep_each_lengthened_parameter_is_needed(sweep: list[SweepRow]) -> Non
             )
             checked += 1
     assert checked >= 10  # G202 dirhold, preset dirsetup/dirhold ...
+    # every parameter is exercised (steplen/stepspace by the rows below the minimum period)
+    for name in ("steplen", "stepspace", "dirsetup", "dirhold"):
+        assert any(name in r.shorter for r in sweep), name
+    assert any(r.plan.base_period_ns < r.plan.min_base_period_ns for r in sweep)
 
 
 def test_report_all_expectations_hold() -> None:
