@@ -1,0 +1,70 @@
+"""The README's "three ways" examples, run exactly as written (blocks marked readme-test)."""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from wavecheck.cli import main
+
+REPO = Path(__file__).resolve().parent.parent
+GOLDEN = "captures/golden/g202-p20-worst-dirhold.vcd"
+
+pytest_plugins = ["pytester"]
+
+
+def _block(name: str) -> str:
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    m = re.search(rf"<!-- readme-test: {name} -->\n```\w+\n(.*?)```", text, re.S)
+    assert m, f"README has no block marked readme-test: {name}"
+    return m.group(1)
+
+
+@pytest.fixture
+def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A folder holding the golden traces the README names, as the current directory."""
+    src = REPO / "captures" / "golden"
+    if not (REPO / GOLDEN).exists():
+        pytest.fail(f"{GOLDEN} is missing (the README names it)")
+    shutil.copytree(src, tmp_path / "captures" / "golden")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_cli_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    commands = _block("cli").replace("\\\n", " ").strip().splitlines()
+    codes = []
+    for line in commands:
+        argv = shlex.split(line)
+        assert argv[0] == "wavecheck"
+        if "*" in line:  # what the shell would expand
+            argv = [a for arg in argv for a in (sorted(map(str, workdir.glob(arg))) or [arg])]
+            argv = [str(Path(a).relative_to(workdir)) if a.startswith(str(workdir)) else a for a in argv]
+        codes.append(main(argv[1:]))
+    out = capsys.readouterr().out
+    assert codes[0] == 1 and "dir_hold     20 us   1        1" in out
+    for name in ("g202.png", "g202.html", "g202.gtkw"):
+        assert (workdir / name).stat().st_size > 0
+    root = ET.parse(workdir / "junit.xml").getroot()
+    assert len(root.findall("testsuite")) == len(list((workdir / "captures/golden").glob("*.vcd")))
+
+
+def test_python_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    exec(compile(_block("python"), "README.md", "exec"), {})
+    assert capsys.readouterr().out == "fail 9000 20000\n"
+
+
+def test_pytest_blocks(pytester: pytest.Pytester) -> None:
+    shutil.copytree(REPO / "captures" / "golden", pytester.path / "captures" / "golden")
+    (pytester.path / "wavecheck.toml").write_text(_block("toml"))
+    pytester.makepyfile(test_readme_fixture=_block("fixture"))
+    result = pytester.runpytest("-v", "-p", "no:cacheprovider")
+    out = result.stdout.str()
+    assert "wavecheck.toml::g202-p20::dir_hold PASSED" in out
+    assert "test_g202_at_20us_breaks_dir_hold PASSED" in out
+    result.assert_outcomes(passed=7)  # verdict + 5 rules + the fixture test
