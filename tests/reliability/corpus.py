@@ -160,7 +160,6 @@ ZIP_HEADER_CASES = {
     "zip-flag-strong-encryption": {"flags": 0x40},
     "zip-version-needed-8.4": {"version": 84},
     "zip-method-unknown-99": {"method": 99},
-    "zip-method-lzma-bogus": {"method": 14},
 }
 
 
@@ -233,6 +232,10 @@ def sr_cases() -> Iterator[Case]:
     for label, kw in ZIP_HEADER_CASES.items():
         yield Case(label, patch_member_header(good, "logic-1-3", **kw), ".sr")
         yield Case(label + "-metadata", patch_member_header(good, "metadata", **kw), ".sr")
+    for member in ("logic-1-3", "metadata"):  # deflate data declared as LZMA
+        yield Case(
+            f"zip-method-lzma-bogus-{member}", patch_member_header(good, member, method=14), ".sr"
+        )
     # zip bombs: declared too large, and lying about its size
     yield Case(
         "declared-size-2GiB",
