@@ -232,12 +232,16 @@ def _side_outputs(
     several = len(reports) + len(errors) > 1
     stems: dict[str, int] = {}
     gstems: dict[str, int] = {}
+    pngs: list[bytes | None] = []
     for k, r in enumerate(reports):
+        png = None
         if args.plot:
-            from wavecheck.report.plot import write_plot
+            from wavecheck.report.plot import render_png
 
             target = _per_capture(args.plot, r.capture.path, k, stems) if several else args.plot
-            write_plot(r, target)
+            png = render_png(r)
+            atomic_write(target, png)
+        pngs.append(png)  # rendered once, embedded in the HTML page too
         if args.gtkw:
             from wavecheck.report.gtkw import write_gtkw
 
@@ -256,6 +260,7 @@ def _side_outputs(
             args.html,
             errors=[f"{p}: {e}" if not e.startswith(p) else e for p, e in errors],
             extra_rates=extra,
+            pngs=pngs,
             max_violations=DEFAULT_TEXT_VIOLATIONS
             if args.max_violations is None
             else args.max_violations,

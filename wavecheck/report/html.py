@@ -181,6 +181,7 @@ def render_html(
     errors: Sequence[str] = (),
     extra_rates: dict[str, Fraction | None] | None = None,
     title: str = "wavecheck report",
+    pngs: Sequence[bytes | None] | None = None,
 ) -> str:
     """The page for ``reports`` (one section each).
 
@@ -192,18 +193,19 @@ def render_html(
             overall verdict ``error``).
         extra_rates: more max step rates in Hz (``config``, ``latency_safe``) for every report.
         title: the page title.
+        pngs: figures already rendered (one per report; None entries are rendered here).
     """
     verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
     if errors:
         verdict = "error"
-    pngs: list[bytes | None] = []
-    for r in reports:
-        if plots:
+    given = list(pngs) if pngs is not None else [None] * len(reports)
+    figures: list[bytes | None] = []
+    for r, png in zip(reports, given, strict=True):
+        if plots and png is None:
             from wavecheck.report.plot import render_png
 
-            pngs.append(render_png(r))
-        else:
-            pngs.append(None)
+            png = render_png(r)
+        figures.append(png if plots else None)
     summary_rows = "".join(
         f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td><td>{_e(r.drive.id)}</td>'
         f"<td>{_badge(r.verdict)}</td><td class=\"num\">{r.total_violations:,}</td>"
@@ -228,7 +230,7 @@ def render_html(
         )
     if errors:
         body.append(f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>')
-    for k, (r, png) in enumerate(zip(reports, pngs, strict=True), 1):
+    for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
         body.append(_section(r, k, png, max_violations, extra_rates))
     body.append(
         '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
