@@ -19,6 +19,7 @@ from stepgen.motion import Motion, parse_command_csv, parse_moves
 from stepgen.simulate import n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
+from wavecheck.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from wavecheck.units import time_ns
 
 __all__ = ["build_config", "build_motion", "register", "run"]
@@ -113,6 +114,7 @@ def register(sub: Any) -> None:
         help="fast (default) or the plain per-period loop",
     )
     o.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    add_simulate_arguments(p)  # --ini/--hal/--channel fill the options left at their defaults
     p.set_defaults(func=run)
 
 
@@ -130,6 +132,7 @@ def _ns(text: str, option: str, allow_zero: bool = True) -> int:
 
 def build_config(args: argparse.Namespace) -> StepgenConfig:
     """The :class:`StepgenConfig` from parsed options (raises ConfigError)."""
+    apply_to_simulate_args(args)
     table: tuple[int, ...] = ()
     if args.user_step_type:
         try:
