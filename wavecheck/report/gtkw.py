@@ -253,10 +253,15 @@ def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
         atomic_write(path, text)
         return None
     vcd_path = path.with_suffix(".vcd")
-    _, _, factor = write_vcd_of(report, vcd_path)
+    magnitude, _, factor = write_vcd_of(report, vcd_path)
     names = {role: "wavecheck." + role.replace("-", "_") for role in report.interface.signals}
     text = render_gtkw(
-        report, vcd_path, names=names, unit_factor=factor, origin_tick=cap.start, save_path=path
+        report,
+        vcd_path,
+        names=names,
+        unit_factor=factor * magnitude,  # markers count in the unit, not in timescale steps
+        origin_tick=cap.start,
+        save_path=path,
     )
     atomic_write(path, text)
     return vcd_path

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from tests.conftest import write_vcd
 from tests.wavecheck.report.traces import stepgen_trace, write_stepgen_vcd
-from tests.wavecheck.waves import g202
+from tests.wavecheck.waves import capture, g202
 from wavecheck.capture.open import open_capture
 from wavecheck.engine import run_check
 from wavecheck.report.gtkw import vcd_timescale, write_gtkw
@@ -63,6 +63,24 @@ def test_non_vcd_capture_gets_a_vcd_beside_the_save_file(tmp_path: Path) -> None
         assert ch.initial == orig.initial
         assert list(ch.edges) == list(orig.edges)
     assert sorted(p.name for p in out.parent.iterdir()) == ["run.gtkw", "run.vcd"]
+
+
+def test_sr_like_capture_at_2mhz(tmp_path: Path) -> None:
+    # 500 ns ticks: the VCD beside is on a 100 ns timescale (5 steps a tick), markers in ns
+    trace = stepgen_trace()
+    cap = capture(
+        {k: (init, [t // 500 for t in edges]) for k, (init, edges) in trace.items()},
+        tick_ns=500,
+        resolution_ticks=1,
+    )
+    cap.format = "sr"
+    report = run_check(cap, g202())
+    out = tmp_path / "run.gtkw"
+    vcd = write_gtkw(report, out)
+    assert vcd is not None and "$timescale 100 ns $end" in vcd.read_text()
+    assert _markers(out.read_text()) == [500 * v.start_tick for v in report.violations()]
+    back = open_capture(vcd)
+    assert list(back.channel("step").edges) == [5 * t for t in cap.channel("STEP").edges]
 
 
 def test_vcd_timescale() -> None:
