@@ -58,7 +58,7 @@ __all__ = [
     "read_sr_metadata",
 ]
 
-DEFAULT_CHUNK_BYTES = 1 << 20  # inflated bytes scanned at a time: stays in cache (bench: 1–4 MiB best)
+DEFAULT_CHUNK_BYTES = 1 << 20  # bytes scanned at a time: stays in cache (bench/README.md)
 MAX_MEMBER_BYTES = 1 << 30  # one chunk member inflated (sigrok writes 4–10 MiB)
 MAX_TOTAL_BYTES = 1 << 40  # the whole capture inflated (1 TiB: 1e12 samples at unitsize 1)
 _MAX_METADATA_BYTES = 1 << 20
