@@ -4,7 +4,7 @@ PY    := .venv/bin/python
 VENV_STAMP := .venv/.installed
 DEMO  := captures/demo
 
-.PHONY: demo test setup system-deps lint typecheck bench golden golden-check story clean
+.PHONY: demo test setup system-deps lint typecheck bench golden golden-check story fuzz clean
 
 setup: $(VENV_STAMP) system-deps
 
@@ -47,6 +47,11 @@ lint:
 
 bench: setup
 	$(PY) bench/run.py
+
+# Longer fuzz run of every reader (the suite runs a bounded one); FUZZ_N mutants per reader.
+FUZZ_N ?= 20000
+fuzz: setup
+	$(PY) -m tests.reliability.fuzz -n $(FUZZ_N)
 
 golden: setup
 	$(PY) -m stepgen.golden --write

@@ -236,6 +236,9 @@ def sr_cases() -> Iterator[Case]:
         yield Case(
             f"zip-method-lzma-bogus-{member}", patch_member_header(good, member, method=14), ".sr"
         )
+    # bytes cut out of the middle: zipfile seeks to a negative offset (OSError EINVAL)
+    yield Case("bytes-removed-middle", good[:100] + good[400:], ".sr")
+    yield Case("bytes-removed-start", good[20:], ".sr")
     # zip bombs: declared too large, and lying about its size
     yield Case(
         "declared-size-2GiB",

@@ -1,0 +1,221 @@
+"""Longer fuzz runs of each reader, outside the test suite (issue 8).
+
+    .venv/bin/python -m tests.reliability.fuzz                     # all readers, 2000 mutants each
+    .venv/bin/python -m tests.reliability.fuzz --reader vcd -n 20000 --seed 7
+    .venv/bin/python -m tests.reliability.fuzz --reader sr --atheris -- -runs=100000   # coverage-guided
+
+Each reader gets its fixed corpus (``corpus.py``), the truncations of a valid file at every
+offset, and ``-n`` random mutants of valid files (byte flips, cuts, splices of other files,
+inserted tokens, repeated ranges). The contract: a result, or a :class:`WavecheckError` whose
+message is one line naming the file; any other exception is a failure, grouped by type and
+place and printed with a reproducer. ``make fuzz`` runs the default. Exit 1 if anything failed.
+
+``--atheris`` uses atheris (``pip install atheris``) when it is installed: libFuzzer-style
+coverage-guided mutation of the same targets; arguments after ``--`` go to libFuzzer.
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import sys
+import tempfile
+import time
+import traceback
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+from tests.reliability.corpus import (
+    base_sr_raw,
+    rule_cases,
+    rule_text,
+    sr_bytes,
+    sr_cases,
+    vcd_cases,
+    vcd_text,
+)
+from wavecheck.errors import WavecheckError
+
+_TOKENS = [b"#", b"#0", b"#-1", b"$end", b"$var wire 1 ! x $end", b"x!", b"1?", b"b1 !", b"\x00",
+           b"PK\x03\x04", b"[device 1]", b"unitsize=0", b"samplerate=0", b"\n", b"=", b"\xff" * 8]  # fmt: skip
+
+
+def _read_sr(path: Path) -> None:
+    from wavecheck.capture.sr import read_sr
+
+    read_sr(path, chunk_bytes=64)
+
+
+def _read_vcd(path: Path) -> None:
+    from wavecheck.capture.vcd import read_vcd
+
+    read_vcd(path, chunk_bytes=37)
+
+
+def _read_rules(path: Path) -> None:
+    from wavecheck.drives.library import load_drive
+
+    load_drive(path)
+
+
+def _read_sigrok(path: Path) -> None:
+    from fractions import Fraction
+
+    from wavecheck.capture.sigrokcli import read_with_sigrok
+
+    read_with_sigrok(path, "csv", samplerate=Fraction(10**6))
+
+
+READERS: dict[str, tuple[Callable[[Path], None], str, list[bytes]]] = {
+    "sr": (_read_sr, ".sr", [sr_bytes(base_sr_raw()), sr_bytes(base_sr_raw(300), chunk=7)]),
+    "vcd": (_read_vcd, ".vcd", [vcd_text().encode(), vcd_text(timescale="10 us").encode()]),
+    "rules": (_read_rules, ".toml", [rule_text().encode()]),
+    "sigrok": (
+        _read_sigrok,
+        ".csv",
+        [b"a,b,c\n" + b"".join(b"%d,%d,%d\n" % (i & 1, i >> 1 & 1, i >> 2 & 1) for i in range(40))],
+    ),
+}
+FIXED = {"sr": sr_cases, "vcd": vcd_cases, "rules": rule_cases}
+
+
+def mutate(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    b = bytearray(data)
+    for _ in range(rng.randint(1, 4)):
+        op = rng.randrange(6)
+        pos = rng.randrange(len(b) + 1) if b else 0
+        if op == 0 and b:
+            b[min(pos, len(b) - 1)] ^= rng.randint(1, 255)
+        elif op == 1:
+            del b[pos:]
+        elif op == 2:
+            b[pos:pos] = rng.choice(_TOKENS)
+        elif op == 3 and b:
+            end = min(len(b), pos + rng.randint(1, 64))
+            b[pos:pos] = b[pos:end] * rng.randint(1, 4)
+        elif op == 4:
+            other = rng.choice(others)
+            j = rng.randrange(len(other) + 1)
+            b[pos:] = other[j:]
+        elif op == 5 and b:
+            del b[pos : pos + rng.randint(1, 16)]
+    return bytes(b)
+
+
+class Tally:
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.cases = 0
+        self.errors = 0
+        self.results = 0
+        self.failures: Counter[str] = Counter()
+        self.examples: dict[str, bytes] = {}
+        self.slowest = 0.0
+
+    def run(self, reader: Callable[[Path], None], path: Path, data: bytes) -> None:
+        path.write_bytes(data)
+        self.cases += 1
+        start = time.monotonic()
+        try:
+            reader(path)
+            self.results += 1
+        except WavecheckError as err:
+            text = str(err)
+            self.errors += 1
+            if "\n" in text or str(path) not in text:
+                key = f"contract: message not one line naming the file: {text[:120]!r}"
+                self.failures[key] += 1
+                self.examples.setdefault(key, data)
+        except Exception as exc:  # noqa: BLE001 - every other exception is a finding
+            tb = traceback.extract_tb(exc.__traceback__)[-1]
+            key = f"{type(exc).__name__}: {str(exc)[:80]} at {Path(tb.filename).name}:{tb.lineno}"
+            self.failures[key] += 1
+            self.examples.setdefault(key, data)
+        self.slowest = max(self.slowest, time.monotonic() - start)
+
+    def report(self, out: Path) -> str:
+        lines = [
+            f"{self.name}: {self.cases} cases, {self.errors} refused (exit 2), {self.results} read, "
+            f"{sum(self.failures.values())} failures of {len(self.failures)} kinds, "
+            f"slowest {self.slowest:.2f} s"
+        ]
+        for i, (key, n) in enumerate(self.failures.most_common()):
+            repro = out / f"{self.name}-failure-{i}{READERS[self.name][1]}"
+            repro.write_bytes(self.examples[key])
+            lines.append(f"  {n:6d} × {key}  (reproducer: {repro})")
+        return "\n".join(lines)
+
+
+def run_random(name: str, n: int, seed: int, out: Path) -> Tally:
+    reader, suffix, seeds = READERS[name]
+    tally = Tally(name)
+    rng = random.Random(seed)
+    with tempfile.TemporaryDirectory(prefix=f"fuzz-{name}-") as tmp:
+        # a rule file's name must be its id
+        path = Path(tmp) / ("fuzz-drive.toml" if name == "rules" else f"input{suffix}")
+        if name in FIXED:
+            for case in FIXED[name]():
+                tally.run(reader, path, case.data)
+        if name != "sigrok":
+            for s in seeds:
+                for cut in range(len(s)):
+                    tally.run(reader, path, s[:cut])
+        others = [c.data for c in FIXED[name]()] if name in FIXED else seeds
+        for _ in range(n):
+            tally.run(reader, path, mutate(rng, rng.choice(seeds), others + seeds))
+    return tally
+
+
+def run_atheris(name: str, argv: list[str]) -> None:  # pragma: no cover - optional tool
+    import atheris  # type: ignore[import-not-found]
+
+    reader, suffix, _ = READERS[name]
+    tmp = Path(tempfile.mkdtemp(prefix=f"atheris-{name}-"))
+    path = tmp / ("fuzz-drive.toml" if name == "rules" else f"input{suffix}")
+
+    def one(data: bytes) -> None:
+        path.write_bytes(data)
+        try:
+            reader(path)
+        except WavecheckError as err:
+            if "\n" in str(err) or str(path) not in str(err):
+                raise AssertionError(f"bad message: {err}") from None
+
+    atheris.Setup([sys.argv[0], *argv], one)
+    atheris.Fuzz()
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--reader", choices=[*READERS, "all"], default="all")
+    p.add_argument("-n", type=int, default=2000, help="random mutants per reader")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "wavecheck-fuzz")
+    p.add_argument("--atheris", action="store_true", help="coverage-guided (needs atheris)")
+    p.add_argument("rest", nargs="*", help="after --: libFuzzer arguments (with --atheris)")
+    args = p.parse_args(argv)
+    if args.atheris:
+        if args.reader == "all":
+            p.error("--atheris needs one --reader")
+        run_atheris(args.reader, args.rest)
+        return 0
+    args.out.mkdir(parents=True, exist_ok=True)
+    names = list(READERS) if args.reader == "all" else [args.reader]
+    failed = 0
+    for name in names:
+        if name == "sigrok":
+            import shutil
+
+            if shutil.which("sigrok-cli") is None:
+                print("sigrok: skipped (sigrok-cli not installed)")
+                continue
+        n = args.n if name != "sigrok" else max(1, args.n // 20)  # one subprocess per case
+        tally = run_random(name, n, args.seed, args.out)
+        print(tally.report(args.out), flush=True)
+        failed += sum(tally.failures.values())
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
