@@ -170,9 +170,18 @@ def run_random(name: str, n: int, seed: int, out: Path) -> Tally:
 def run_atheris(name: str, argv: list[str]) -> None:  # pragma: no cover - optional tool
     import atheris  # type: ignore[import-not-found]
 
-    reader, suffix, _ = READERS[name]
+    import wavecheck.capture.sigrokcli
+    import wavecheck.capture.sr
+    import wavecheck.capture.vcd
+    import wavecheck.drives.library  # noqa: F401 - loaded before instrumenting
+
+    reader, suffix, seeds = READERS[name]
     tmp = Path(tempfile.mkdtemp(prefix=f"atheris-{name}-"))
     path = tmp / ("fuzz-drive.toml" if name == "rules" else f"input{suffix}")
+    corpus = tmp / "corpus"
+    corpus.mkdir()
+    for i, data in enumerate([*seeds, *(c.data for c in FIXED[name]())] if name in FIXED else seeds):
+        (corpus / f"seed{i}").write_bytes(data)
 
     def one(data: bytes) -> None:
         path.write_bytes(data)
@@ -182,7 +191,9 @@ def run_atheris(name: str, argv: list[str]) -> None:  # pragma: no cover - optio
             if "\n" in str(err) or str(path) not in str(err):
                 raise AssertionError(f"bad message: {err}") from None
 
-    atheris.Setup([sys.argv[0], *argv], one)
+    atheris.instrument_all()
+    print(f"atheris: seed corpus in {corpus}", flush=True)
+    atheris.Setup([sys.argv[0], *argv, str(corpus)], one)
     atheris.Fuzz()
 
 
