@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
+import numpy.typing as npt
 
 from wavecheck.checks.primitives import Intervals, widths
 from wavecheck.decode import ActiveEdge, StepEvents
@@ -32,6 +33,28 @@ from wavecheck.timebase import Timebase
 __all__ = ["MaxStepRates", "max_step_rates"]
 
 _GIGA = Fraction(10**9)
+_BLOCK = 1 << 20
+
+
+def _diff_extreme(
+    start: npt.NDArray[np.int64], end: npt.NDArray[np.int64], smallest: bool
+) -> tuple[int, int]:
+    """The smallest (or largest) ``end[i] - start[i]`` and its first index ``i`` (arrays not empty).
+
+    Block by block into one reused buffer: no full-length temporary (fresh memory is what costs
+    in a VM; bench/README.md).
+    """
+    buf = np.empty(min(len(start), _BLOCK), dtype=np.int64)
+    best_v, best_i = 0, -1
+    for i in range(0, len(start), _BLOCK):
+        j = min(len(start), i + _BLOCK)
+        d = buf[: j - i]
+        np.subtract(end[i:j], start[i:j], out=d)
+        k = int(np.argmin(d)) if smallest else int(np.argmax(d))
+        v = int(d[k])
+        if best_i < 0 or (v < best_v if smallest else v > best_v):
+            best_v, best_i = v, i + k
+    return best_v, best_i
 
 
 @dataclass(frozen=True)
@@ -84,10 +107,9 @@ def max_step_rates(
     cap, limited_by = drive_rate(drive)
     observed = observed_at = None
     if steps.count > 1:
-        gaps = np.diff(steps.ticks)
-        i = int(np.argmin(gaps))
-        if gaps[i] > 0:
-            observed = _GIGA / timebase.ns(int(gaps[i]))
+        gap, i = _diff_extreme(steps.ticks[:-1], steps.ticks[1:], smallest=True)
+        if gap > 0:
+            observed = _GIGA / timebase.ns(gap)
             observed_at = timebase.seconds(int(steps.ticks[i]))
     headroom = longest = idle_min = None
     pulse_level: int | None = None
@@ -98,7 +120,7 @@ def max_step_rates(
         for level in (0, 1):
             stretch = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
             if len(stretch):
-                longest_at[level] = int(stretch.measured.max())
+                longest_at[level] = _diff_extreme(stretch.start, stretch.end, smallest=False)[0]
         if longest_at:
             pulse_level = min(longest_at, key=lambda lv: (longest_at[lv], lv != 1))
             longest = timebase.ns(longest_at[pulse_level])
