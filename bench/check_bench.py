@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import time
 from fractions import Fraction
@@ -51,15 +52,17 @@ def main() -> None:
     walls: list[float] = []
     cpus: list[float] = []
     render_walls: list[float] = []
+    syss: list[float] = []
     report = None
     for _ in range(args.repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
+        t0, c0, s0 = time.perf_counter(), time.process_time(), os.times().system
         report = run_check(cap, drive, {"step": "STEP", "dir": "DIR"})
-        t1, c1 = time.perf_counter(), time.process_time()
+        t1, c1, s1 = time.perf_counter(), time.process_time(), os.times().system
         render_json(report, 100)
         t2 = time.perf_counter()
         walls.append(t1 - t0)
         cpus.append(c1 - c0)
+        syss.append(s1 - s0)
         render_walls.append(t2 - t1)
     assert report is not None
     wall, cpu = statistics.median(walls), statistics.median(cpus)
@@ -75,6 +78,7 @@ def main() -> None:
                 "cpu_s": cpu,
                 "walls": walls,
                 "cpus": cpus,
+                "sys": syss,
                 "render_json_s": statistics.median(render_walls),
                 "edges_per_s_cpu": nedges / cpu if cpu else None,
             }
