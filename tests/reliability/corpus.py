@@ -421,6 +421,9 @@ def vcd_cases() -> Iterator[Case]:
     )
     yield Case("wide-vector-value", wide.encode(), ".vcd", "either")
     yield Case("var-width-0", vcd_text(var_lines=["$var wire 0 # w0 $end"]).encode(), ".vcd")
+    # str.isdigit() is true for '¹' (byte 0xB9 read as latin-1), int() is not
+    sup = vcd_text(var_lines=["$var wire 1\xb9 # sup $end"]).encode("latin-1")
+    yield Case("var-width-superscript", sup, ".vcd")
     yield Case("var-width-junk", vcd_text(var_lines=["$var wire abc # wj $end"]).encode(), ".vcd")
     yield Case("var-short", vcd_text(var_lines=["$var wire 1 $end"]).encode(), ".vcd")
     yield Case(

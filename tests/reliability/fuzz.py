@@ -180,7 +180,9 @@ def run_atheris(name: str, argv: list[str]) -> None:  # pragma: no cover - optio
     path = tmp / ("fuzz-drive.toml" if name == "rules" else f"input{suffix}")
     corpus = tmp / "corpus"
     corpus.mkdir()
-    for i, data in enumerate([*seeds, *(c.data for c in FIXED[name]())] if name in FIXED else seeds):
+    for i, data in enumerate(
+        [*seeds, *(c.data for c in FIXED[name]())] if name in FIXED else seeds
+    ):
         (corpus / f"seed{i}").write_bytes(data)
 
     def one(data: bytes) -> None:
@@ -193,7 +195,10 @@ def run_atheris(name: str, argv: list[str]) -> None:  # pragma: no cover - optio
 
     atheris.instrument_all()
     print(f"atheris: seed corpus in {corpus}", flush=True)
-    atheris.Setup([sys.argv[0], *argv, str(corpus)], one)
+    crashes = Path(tempfile.gettempdir()) / "wavecheck-fuzz"
+    crashes.mkdir(exist_ok=True)
+    args = [*argv, f"-artifact_prefix={crashes}/{name}-"]
+    atheris.Setup([sys.argv[0], *args, str(corpus)], one)
     atheris.Fuzz()
 
 

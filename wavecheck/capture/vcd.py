@@ -162,7 +162,7 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
                 scope.pop()
         elif word == "$var":
             body, i = section(i)
-            if len(body) < 4 or not body[1].isdigit() or int(body[1]) < 1:
+            if len(body) < 4 or not re.fullmatch(r"[0-9]+", body[1]) or int(body[1]) < 1:
                 raise CaptureError(
                     path, where, f"bad $var {' '.join(body)!r} (expected '$var wire 1 ! name $end')"
                 )
