@@ -236,6 +236,9 @@ def sr_cases() -> Iterator[Case]:
         yield Case(
             f"zip-method-lzma-bogus-{member}", patch_member_header(good, member, method=14), ".sr"
         )
+    # a local header name that is not UTF-8 although its flag says so (UnicodeDecodeError)
+    yield Case("local-name-bad-utf8", bad_utf8_local_name(good, "logic-1-2"), ".sr")
+    yield Case("local-name-bad-utf8-metadata", bad_utf8_local_name(good, "metadata"), ".sr")
     # bytes cut out of the middle: zipfile seeks to a negative offset (OSError EINVAL)
     yield Case("bytes-removed-middle", good[:100] + good[400:], ".sr")
     yield Case("bytes-removed-start", good[20:], ".sr")
@@ -305,6 +308,21 @@ def bomb_lying_size(inflated: int = 64 << 20) -> bytes:
     (cd_off,) = struct.unpack_from("<I", fixed, eocd + 16)
     struct.pack_into("<I", fixed, eocd + 16, cd_off + delta)
     return bytes(fixed)
+
+
+def bad_utf8_local_name(data: bytes, member: str) -> bytes:
+    """Set the UTF-8 flag in ``member``'s local header and make its name bytes invalid UTF-8."""
+    out = bytearray(data)
+    name = member.encode()
+    pos = 0
+    while (pos := out.find(b"PK\x03\x04", pos)) >= 0:
+        (nlen,) = struct.unpack_from("<H", out, pos + 26)
+        if bytes(out[pos + 30 : pos + 30 + nlen]) == name:
+            (flags,) = struct.unpack_from("<H", out, pos + 6)
+            struct.pack_into("<H", out, pos + 6, flags | 0x800)
+            out[pos + 30] = 0xC8
+        pos += 4
+    return bytes(out)
 
 
 def truncation_offsets(size: int, count: int = 64) -> list[int]:
