@@ -237,7 +237,8 @@ def sr_cases() -> Iterator[Case]:
             f"zip-method-lzma-bogus-{member}", patch_member_header(good, member, method=14), ".sr"
         )
     # a local header name that is not UTF-8 although its flag says so (UnicodeDecodeError)
-    yield Case("local-name-bad-utf8", bad_utf8_local_name(good, "logic-1-2"), ".sr")
+    # (on a chunk the data is intact: readers that skip the local name may accept it)
+    yield Case("local-name-bad-utf8", bad_utf8_local_name(good, "logic-1-2"), ".sr", "either")
     yield Case("local-name-bad-utf8-metadata", bad_utf8_local_name(good, "metadata"), ".sr")
     # bytes cut out of the middle: zipfile seeks to a negative offset (OSError EINVAL)
     yield Case("bytes-removed-middle", good[:100] + good[400:], ".sr")
