@@ -38,7 +38,13 @@ from pathlib import Path
 import numpy as np
 
 from wavecheck.capture.model import Capture, EdgeArray
-from wavecheck.capture.sigrokcli import convert, find_sigrok_cli, run_sigrok, show
+from wavecheck.capture.sigrokcli import (
+    _SAMPLERATE_OPTION_FORMATS,
+    convert,
+    find_sigrok_cli,
+    run_sigrok,
+    show,
+)
 from wavecheck.decode import ActiveEdge, decode
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.interface import build_interface
@@ -173,6 +179,7 @@ def crosscheck(
     active_edge: ActiveEdge = "rising",
     forward_level: int = 0,
     downsample: int | None = None,
+    input_format: str | None = None,
     workdir: str | os.PathLike[str] | None = None,
 ) -> CrosscheckResult:
     """Run sigrok-cli's decoders on ``capture`` and compare with wavecheck's decode.
@@ -222,7 +229,17 @@ def crosscheck(
                 _write_vcd(capture, names, sr_names, vcd, scale, unit)
                 convert(vcd, sr, input_format=f"vcd:downsample={ds * scale}:skip=0")
             else:
-                fmt = capture.format.split(":", 1)[1]
+                # the same sigrok-cli input spec the capture was read with (options included)
+                fmt = input_format or capture.format.split(":", 1)[1]
+                name = fmt.split(":", 1)[0]
+                rate = capture.samplerate_hz
+                if (
+                    name in _SAMPLERATE_OPTION_FORMATS
+                    and "samplerate=" not in fmt
+                    and rate is not None
+                    and rate.denominator == 1
+                ):
+                    fmt = f"{fmt}:samplerate={int(rate)}"
                 convert(capture.path, sr, input_format=fmt)
                 sr_names = [_sigrok_name(n, capture.path) for n in names]
             info = show(sr)

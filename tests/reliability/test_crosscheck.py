@@ -114,3 +114,17 @@ def test_without_sigrok_cli(monkeypatch: pytest.MonkeyPatch, smoothie_sr: Path) 
     monkeypatch.setenv("PATH", "/nonexistent")
     rc, _, err = cli("wavecheck", ["crosscheck", str(smoothie_sr), "--map", "step=5"])
     assert rc == 2 and "sigrok-cli" in err and str(smoothie_sr) in err
+
+
+def test_sigrok_format_keeps_its_options(tmp_path: Path) -> None:
+    """A raw binary capture (3 channels, rate given on the command line) is converted again with
+    the same options: 5 rising edges on bit 0; DIR (bit 1) rises in the 4th step's own sample."""
+    samples = [0, 1, 0, 1, 0, 1, 0, 3, 2, 3, 2, 2]
+    path = tmp_path / "raw.bin"
+    path.write_bytes(bytes(samples))
+    rc, doc = _json([str(path), "--input-format", "binary:numchannels=3", "--samplerate", "1MHz",
+                     "--map", "step=0,dir=1"])  # fmt: skip
+    assert rc == 0, doc["disagreements"]
+    assert doc["sigrok_count"] == doc["wavecheck_steps"] == 5
+    assert doc["ambiguous"] == 1  # sigrok takes the new DIR level there
+    assert doc["final_sigrok_polarity"] == -3 + 2

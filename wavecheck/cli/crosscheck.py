@@ -100,6 +100,7 @@ def run(args: argparse.Namespace) -> int:
         active_edge=args.active_edge,
         forward_level=1 if args.dir_forward == "high" else 0,
         downsample=args.downsample,
+        input_format=args.input_format,
     )
     text = _json(result) if args.format == "json" else _text(result)
     if args.output:
