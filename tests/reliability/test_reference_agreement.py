@@ -114,6 +114,13 @@ def _compare(report, ref, w) -> None:  # type: ignore[no-untyped-def]
 )
 @given(w=waveforms())
 def test_engine_agrees_with_reference(tmp_path_factory: pytest.TempPathFactory, w: dict) -> None:
+    verdict = agree(w, tmp_path_factory.mktemp("agree"))
+    event(f"verdict {verdict}")
+
+
+def agree(w: dict, folder: Path) -> str:
+    """Check one waveform both ways; returns the reference verdict."""
+    folder.mkdir(parents=True, exist_ok=True)
     ref = reference_check(
         w["step"],
         w["dir"],
@@ -124,10 +131,7 @@ def test_engine_agrees_with_reference(tmp_path_factory: pytest.TempPathFactory, 
         active_edge=w["active_edge"],
         forward_level=w["forward_level"],
     )
-    event(f"verdict {ref.verdict}")
-    event(f"ambiguous steps: {bool(ref.ambiguous)}")
     drv = make_drive(active_edge=w["active_edge"], max_rate_hz=w["max_rate"], **w["limits"])
-    folder = tmp_path_factory.mktemp("agree")
     signals = {"STEP": w["step"], "DIR": w["dir"]}
     vcd_cap = read_vcd(_vcd(folder / "w.vcd", signals, w["end"]), chunk_bytes=w["vcd_chunk"])
     raw = samples_from_edges(w["end"] + 1, [w["step"], w["dir"]]).tobytes()
@@ -148,3 +152,30 @@ def test_engine_agrees_with_reference(tmp_path_factory: pytest.TempPathFactory, 
             active_edge=w["active_edge"],
         )
         _compare(report, ref, w)
+    return ref.verdict
+
+
+def test_the_comparison_has_teeth(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A DIR change in the same tick as an active edge must be a 0-length dir_setup interval;
+    an engine that looked only strictly after the change (an off-by-one) is caught."""
+    import numpy as np
+
+    import wavecheck.checks.compile as compiled
+    from wavecheck.checks.primitives import Intervals
+
+    w = {
+        "step": (0, [10, 12, 20, 22]), "dir": (0, [20]), "end": 30,
+        "limits": {"dir_setup": Fraction(100)}, "max_rate": None,
+        "resolution_ns": Fraction(0), "active_edge": "rising", "forward_level": 0,
+        "vcd_chunk": 16, "sr_member": 4, "sr_read": 3,
+    }  # fmt: skip
+    agree(w, tmp_path / "ok")
+
+    def strictly_after(data, ref):  # type: ignore[no-untyped-def]
+        k = np.searchsorted(ref, data, side="right")
+        ok = k < len(ref)
+        return Intervals(data[ok], ref[k[ok]])
+
+    monkeypatch.setattr(compiled, "setups", strictly_after)
+    with pytest.raises(AssertionError):
+        agree(w, tmp_path / "broken")
