@@ -40,6 +40,7 @@ from stepgen.model import (
     make_pulses_channel,
     update_schedule,
 )
+from wavecheck.progress import current
 
 __all__ = ["run_fast"]
 
@@ -162,8 +163,11 @@ def run_fast(
         ch.maxvel, ch.maxaccel = maxvel, maxaccel
         ch.rawcount = accum >> PICKOFF
 
+    report = current()
     for ci in range(len(bounds) - 1):
         k0, k1 = bounds[ci], bounds[ci + 1]
+        if not ci & 1023:
+            report(k0, n_periods)
         if k1 <= k0:
             continue
         if ci >= first_update_at:

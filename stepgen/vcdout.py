@@ -15,7 +15,6 @@ logic signal and is left out. Runs longer than ``max_samples`` at that rate are 
 from __future__ import annotations
 
 import math
-import os
 import zipfile
 from pathlib import Path
 
@@ -25,6 +24,9 @@ from vcd import VCDWriter
 from stepgen.simulate import Trace
 from wavecheck.errors import ConfigError
 from wavecheck.output import atomic_path
+from wavecheck.progress import current
+
+_REPORT_EVERY = 1 << 16  # value changes between two progress reports
 
 __all__ = ["DEFAULT_MAX_SAMPLES", "header_comment", "sr_sample_period_ns", "write_sr", "write_vcd"]
 
@@ -83,11 +85,15 @@ def write_vcd(trace: Trace, path: str | Path) -> int:
         ]
         variables.append(writer.register_var("stepgen", "counts", "integer", size=32, init=0))
         change = writer.change
-        for ti, vi, xi in zip(t.tolist(), v.tolist(), x.tolist(), strict=True):
-            change(variables[vi], ti, xi)
+        report = current()
+        n = len(t)
+        for a in range(0, n, _REPORT_EVERY):
+            b = min(a + _REPORT_EVERY, n)
+            for ti, vi, xi in zip(t[a:b].tolist(), v[a:b].tolist(), x[a:b].tolist(), strict=True):
+                change(variables[vi], ti, xi)
+            report(b, n)
         writer.close(trace.end_ns)
-    os.chmod(path, 0o644)  # mkstemp's 0600 is not meant for a shipped trace
-    return len(t)
+    return n
 
 
 def sr_sample_period_ns(trace: Trace) -> int:
@@ -162,5 +168,4 @@ def write_sr(
             z.writestr(
                 f"logic-1-{i + 1}", raw[off : off + SR_CHUNK], compress_type=zipfile.ZIP_DEFLATED
             )
-    os.chmod(path, 0o644)
     return 10**9 // g, int(n_samples)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,7 @@ from stepgen.simulate import n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc import add_simulate_arguments, apply_to_simulate_args
+from wavecheck.progress import activate
 from wavecheck.units import time_ns
 
 __all__ = ["build_config", "build_motion", "register", "run"]
@@ -210,25 +212,26 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("give --duration (e.g. 1s) or --periods N")
     if n < 1:
         raise ConfigError(f"--periods {n} must be >= 1")
-    trace = simulate(
-        cfg,
-        motion,
-        latency,
-        n_periods=n,
-        seed=args.seed,
-        active_edge=args.active_edge,
-        catchup_ns=_ns(args.catchup, "--catchup", allow_zero=False),
-        engine=args.engine,
-    )
-    import time
-
+    catchup_ns = _ns(args.catchup, "--catchup", allow_zero=False)
+    with activate("simulating", quiet=args.quiet, unit="periods"):
+        trace = simulate(
+            cfg,
+            motion,
+            latency,
+            n_periods=n,
+            seed=args.seed,
+            active_edge=args.active_edge,
+            catchup_ns=catchup_ns,
+            engine=args.engine,
+        )
     t0 = time.perf_counter()
-    if suffix == ".vcd":
-        changes = write_vcd(trace, out)
-        what = f"{changes} value changes, 1 ns timescale"
-    else:
-        rate, samples = write_sr(trace, out, max_samples=args.max_samples)
-        what = f"{samples} samples at {rate} Hz"
+    with activate(f"writing {out}", quiet=args.quiet, unit="changes"):
+        if suffix == ".vcd":
+            changes = write_vcd(trace, out)
+            what = f"{changes} value changes, 1 ns timescale"
+        else:
+            rate, samples = write_sr(trace, out, max_samples=args.max_samples)
+            what = f"{samples} samples at {rate} Hz"
     t_write = time.perf_counter() - t0
     if not args.quiet:
         sim_s = trace.n_periods * cfg.base_period_ns * 1e-9

@@ -118,3 +118,25 @@ def test_golden_files_are_reproduced(tmp_path: Path, sc) -> None:  # type: ignor
 
 def test_golden_set_is_small() -> None:
     assert sum(p.stat().st_size for p in GOLDEN.iterdir()) < 2_000_000
+
+
+def test_simulation_and_vcd_writing_report_progress(tmp_path: Path) -> None:
+    """A long run reports its progress through wavecheck.progress (the CLI draws the bar)."""
+    from stepgen.model import StepgenConfig
+    from stepgen.motion import Motion
+    from stepgen.simulate import simulate as run_sim
+    from stepgen.vcdout import write_vcd as write
+    from wavecheck.progress import _ACTIVE
+
+    seen: list[tuple[int, int | None]] = []
+    token = _ACTIVE.set(lambda done, total=None: seen.append((done, total)))
+    try:
+        cfg = StepgenConfig(mode="velocity", maxvel=1000.0, maxaccel=10_000.0)
+        trace = run_sim(cfg, Motion("velocity", value=500.0), n_periods=400_000)
+        sim_reports = len(seen)
+        write(trace, tmp_path / "t.vcd")
+    finally:
+        _ACTIVE.reset(token)
+    assert sim_reports >= 5  # 10,000 servo periods, a report every 1024
+    assert all(total == 400_000 for _, total in seen[:sim_reports])
+    assert seen[-1][0] == seen[-1][1]  # the writer ends at its total
