@@ -10,7 +10,6 @@ import pytest
 
 from tests.reliability.corpus import Case, one_line_error, sr_cases, vcd_cases
 from tests.reliability.fuzz import run_random
-from tests.reliability.test_malformed_sr import ZIP_FIELDS_BUG
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -18,7 +17,7 @@ REPO = Path(__file__).resolve().parents[2]
 @pytest.mark.parametrize(
     "reader",
     [
-        pytest.param("sr", marks=pytest.mark.xfail(strict=True, reason=ZIP_FIELDS_BUG)),
+        "sr",
         "vcd",
         "rules",
     ],

@@ -6,11 +6,10 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, reject, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.reliability.corpus import (
-    ZIP_HEADER_CASES,
     Case,
     base_sr_raw,
     samples_from_edges,
@@ -23,31 +22,9 @@ from wavecheck.capture.sr import read_sr
 from wavecheck.errors import CaptureError
 
 CASES = list(sr_cases())
-#: Known bug, left to the reader's owner (who is reworking chunk inflation right now).
-ZIP_FIELDS_BUG = (
-    "read_sr lets zipfile's NotImplementedError/RuntimeError escape (a traceback instead of exit 2) "
-    "for a member whose header sets the encryption flag (bit 0), patched-data (bit 5) or strong "
-    "encryption (bit 6) flag, a 'version needed' above 6.3, or an unknown compression method: it "
-    "catches only BadZipFile, zlib.error, EOFError and OSError (metadata and chunk reads alike); "
-    "and reading 'metadata' does not catch OSError either: bytes cut from the middle of the file "
-    "make zipfile seek to a negative offset (OSError EINVAL); and a local header whose UTF-8 "
-    "flag is set over a name that is not UTF-8 raises UnicodeDecodeError from ZipFile.open"
-)
-_XFAIL_CASES = {*ZIP_HEADER_CASES, "bytes-removed-middle", "local-name-bad-utf8-metadata"}
-_KNOWN_ZIPFILE_ERRORS = (
-    "encrypt", "flag bit", "zip file version", "compression method", "Invalid argument",
-    "codec can't decode",
-)  # fmt: skip
-
-
-def _param(case: Case) -> object:
-    if case.name in _XFAIL_CASES or case.name.removesuffix("-metadata") in ZIP_HEADER_CASES:
-        return pytest.param(
-            case, id=case.name, marks=pytest.mark.xfail(strict=True, reason=ZIP_FIELDS_BUG)
-        )
-    return pytest.param(case, id=case.name)
-
-
+#: Fixed in wavecheck/capture/sr.py (zipfile's NotImplementedError / RuntimeError / ValueError
+#: escaped: encryption and other flags, 'version needed', unknown methods, a non-UTF-8 name under
+#: the UTF-8 flag, and OSError from seeking to a negative offset when reading the metadata).
 GOOD = sr_bytes(base_sr_raw())
 FUZZ = settings(
     max_examples=150,
@@ -79,7 +56,7 @@ def _info_and_check(folder: Path, case: Case) -> None:
         p.unlink()
 
 
-@pytest.mark.parametrize("case", [_param(c) for c in CASES])
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_corpus(tmp_path: Path, case: Case) -> None:
     _info_and_check(tmp_path, case)
 
@@ -99,12 +76,7 @@ def test_fuzz_byte_flips(tmp_path: Path, flips: list[tuple[int, int]]) -> None:
     data = bytearray(GOOD)
     for pos, x in flips:
         data[pos] ^= x
-    try:
-        _info_and_check(tmp_path, Case("flipped", bytes(data), ".sr", "either"))
-    except (NotImplementedError, RuntimeError, OSError, UnicodeDecodeError) as err:
-        if any(k in str(err) for k in _KNOWN_ZIPFILE_ERRORS):
-            reject()  # ZIP_FIELDS_BUG, covered by the strict xfails of test_corpus
-        raise
+    _info_and_check(tmp_path, Case("flipped", bytes(data), ".sr", "either"))
 
 
 @FUZZ

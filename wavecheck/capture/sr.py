@@ -20,6 +20,7 @@ zlib-ng when it is installed (2–3× faster than the system zlib, CRC-32 includ
 from __future__ import annotations
 
 import configparser
+import lzma
 import os
 import re
 import struct
@@ -67,6 +68,13 @@ _READ_ERRORS: tuple[type[BaseException], ...] = (
     zipfile.BadZipFile, zlib.error, _zlib.error, EOFError, OSError
 )  # fmt: skip
 _BYTE_OFFSETS = np.arange(8, dtype=np.int64)
+# zipfile refuses some corrupt or exotic headers with these rather than BadZipFile: encryption
+# (RuntimeError), flag bits 5/6, "version needed", unknown methods (NotImplementedError), a
+# non-UTF-8 name under the UTF-8 flag (UnicodeDecodeError), bogus LZMA data (LZMAError)
+_ZIPFILE_REFUSALS: tuple[type[BaseException], ...] = (
+    NotImplementedError, RuntimeError, ValueError, lzma.LZMAError
+)  # fmt: skip
+_OPEN_ERRORS: tuple[type[BaseException], ...] = (zipfile.BadZipFile, *_ZIPFILE_REFUSALS)
 
 
 class SrMetadata:
@@ -102,7 +110,7 @@ def _open_zip(path: str | os.PathLike[str]) -> zipfile.ZipFile:
         raise CaptureError(path, None, "no such file") from None
     except IsADirectoryError:
         raise CaptureError(path, None, "is a folder, not a capture file") from None
-    except zipfile.BadZipFile as err:
+    except _OPEN_ERRORS as err:
         raise CaptureError(
             path, None, f"not a sigrok .sr file: {err} (truncated or not a zip archive)"
         ) from None
@@ -141,7 +149,7 @@ def read_sr_metadata(
     try:
         version = zf.read("version").strip()
         raw_meta = zf.read("metadata")
-    except (zipfile.BadZipFile, zlib.error, EOFError) as err:
+    except (*_READ_ERRORS, *_ZIPFILE_REFUSALS) as err:
         raise CaptureError(path, "metadata", f"cannot be unpacked: {err}") from None
     if version not in (b"1", b"2"):
         raise CaptureError(
@@ -338,9 +346,12 @@ def _member_blocks(
         zipfile.BadZipFile: a bad local header or CRC; zlib errors for a corrupt stream.
     """
     if info.flag_bits & 1 or info.compress_type not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
-        with zf.open(info) as fh:
-            while data := fh.read(step):
-                yield data
+        try:
+            with zf.open(info) as fh:
+                while data := fh.read(step):
+                    yield data
+        except _ZIPFILE_REFUSALS as err:
+            raise zipfile.BadZipFile(f"cannot be unpacked: {err}") from None
         return
     raw.seek(info.header_offset)
     head = raw.read(30)
