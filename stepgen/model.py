@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from decimal import Decimal
 from typing import Literal
 
 import numpy as np
@@ -87,6 +88,10 @@ def _c_long(x: float) -> int:
     return int(x)
 
 
+#: Longest thread period accepted (ns): LinuxCNC's threads run every few µs to a few ms.
+MAX_THREAD_PERIOD_NS = 10**9
+
+
 @dataclass(frozen=True)
 class StepgenConfig:
     """One stepgen channel and its threads, as set with ``loadrt``/``setp`` and ``addf``.
@@ -124,6 +129,12 @@ class StepgenConfig:
             raise ConfigError(
                 f"servo period {self.servo_period_ns} ns must be > 0 (e.g. --servo-period 1ms)"
             )
+        for what, value in (("base", self.base_period_ns), ("servo", self.servo_period_ns)):
+            if value > MAX_THREAD_PERIOD_NS:
+                raise ConfigError(
+                    f"{what} period {Decimal(value):.4g} ns is longer than 1 s; LinuxCNC threads run every "
+                    "few µs to ms (e.g. --base-period 25us --servo-period 1ms)"
+                )
         servo = hal_thread_period(self.base_period_ns, self.servo_period_ns)
         if self.mode not in ("position", "velocity"):
             raise ConfigError(f"mode {self.mode!r} is not position or velocity")

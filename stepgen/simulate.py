@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from decimal import Decimal
 
 import numpy as np
 
@@ -80,6 +81,10 @@ def n_periods_for(config: StepgenConfig, duration_ns: int) -> int:
     return -(-int(duration_ns) // config.base_period_ns)
 
 
+#: Most base periods one run simulates (per-period index/time arrays: 8 bytes each, a few of them).
+MAX_PERIODS = 50_000_000
+
+
 def simulate(
     config: StepgenConfig,
     motion: Motion,
@@ -110,6 +115,14 @@ def simulate(
     if n_periods < 1:
         raise ConfigError(
             f"run length {n_periods} periods must be >= 1 (give --periods or --duration)"
+        )
+    if n_periods > MAX_PERIODS:
+        span_s = Decimal(n_periods) * config.base_period_ns / 10**9
+        raise ConfigError(
+            f"run length {Decimal(n_periods):.3g} base periods ({span_s:.3g} s) is more than the "
+            f"{MAX_PERIODS:.0e} periods one run simulates (per-period arrays would not fit in "
+            f"memory; at P = {config.base_period_ns} ns that is "
+            f"{MAX_PERIODS * config.base_period_ns / 6e10:.3g} min: give a shorter --duration)"
         )
     model = parse_latency(latency) if isinstance(latency, str) else latency
     if active_edge not in ("rising", "falling"):

@@ -197,3 +197,15 @@ def test_bad_settings_are_config_errors() -> None:
         with pytest.raises(ConfigError) as err:
             StepgenConfig(**kw).validate()  # type: ignore[arg-type]
         assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"base_period_ns": 2 * 10**9}, r"base period 2\.000e\+9 ns is longer than 1 s"),
+        ({"servo_period_ns": 10**400}, r"servo period 1\.000e\+400 ns is longer than 1 s"),
+    ],
+)
+def test_thread_periods_longer_than_a_second_are_refused(kwargs: dict, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        StepgenConfig(**kwargs).validate()
