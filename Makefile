@@ -2,7 +2,6 @@
 SHELL := /bin/bash
 PY    := .venv/bin/python
 VENV_STAMP := .venv/.installed
-DEMO  := captures/demo
 
 .PHONY: demo test setup system-deps lint typecheck bench golden golden-check story fuzz clean
 
@@ -29,13 +28,34 @@ system-deps:
 	  fi; \
 	fi
 
+# The main job on bundled examples: LinuxCNC's stepgen (the faithful model in this repository)
+# driving a Gecko G202 with 11 us of base-thread latency, as in the seed's stepper-tuning
+# chapter. At BASE_PERIOD 20 us the DIR hold is 20 - 11 = 9 us < 20 us; `stepgen plan` picks
+# 16 us with dirhold = 2 periods, and the capture made with that plan passes.
+DEMO_BAD  := captures/golden/g202-p20-worst-dirhold.vcd
+DEMO_GOOD := captures/golden/g202-p16-dirhold2-worst.vcd
+GRBL      := ../shared/captures/sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr
+
 demo: setup
-	@echo "== wavecheck info: a real grbl capture (2 MHz, 48 s) =="
-	.venv/bin/wavecheck info ../shared/captures/sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr
+	@mkdir -p out
+	@echo "== 1. wavecheck info: a LinuxCNC stepgen trace, P = 20 us, 11 us worst-case latency =="
+	.venv/bin/wavecheck info $(DEMO_BAD)
 	@echo
-	@echo "== wavecheck check: the grbl capture against a Leadshine DM542 =="
-	-.venv/bin/wavecheck check ../shared/captures/sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr \
-	    --drive leadshine-dm542 --map 'step=STEP (Y axis)'
+	@echo "== 2. wavecheck check against the Gecko G202 datasheet (exit 1: a rule fails) =="
+	.venv/bin/wavecheck check $(DEMO_BAD) --drive gecko-g202 \
+	    --plot out/demo-g202-p20.png --html out/demo-g202-p20.html || test $$? -eq 1
+	@echo
+	@echo "== 3. stepgen plan: BASE_PERIOD and stepgen parameters for 11 us of latency =="
+	.venv/bin/stepgen plan --drive gecko-g202 --latency 11us --base-period 16us --format hal
+	@echo
+	@echo "== 4. the planned configuration under the same worst-case latency passes =="
+	.venv/bin/wavecheck check $(DEMO_GOOD) --drive gecko-g202
+	@if [ -f $(GRBL) ]; then \
+	  echo; echo "== 5. a real capture: Grbl on a 2 MHz FX2 analyzer, 48 s (sigrok-dumps) =="; \
+	  .venv/bin/wavecheck check $(GRBL) --drive leadshine-dm542 --map 'step=STEP (Y axis)'; \
+	fi
+	@echo
+	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
 test: setup
 	.venv/bin/ruff check wavecheck stepgen tests bench
