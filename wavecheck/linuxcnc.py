@@ -375,13 +375,8 @@ _SIMULATE_FIELDS = (
 )
 
 
-def add_simulate_arguments(parser: Any) -> None:
-    """Add ``--ini``, ``--hal`` and ``--channel`` to ``stepgen simulate``'s parser.
-
-    Settings read from the files fill every option left at its default; an option given with
-    another value on the command line wins.
-    """
-    group = parser.add_argument_group("LinuxCNC configuration files")
+def add_file_arguments(group: Any) -> None:
+    """Add ``--ini FILE``, ``--hal FILE`` (repeatable) and ``--channel N`` to an argparse group."""
     group.add_argument("--ini", metavar="FILE", help="INI file: [EMCMOT] BASE_PERIOD, SERVO_PERIOD")
     group.add_argument(
         "--hal",
@@ -390,7 +385,18 @@ def add_simulate_arguments(parser: Any) -> None:
         metavar="FILE",
         help="HAL file: loadrt stepgen step_type=/ctrl_type=, setp stepgen.N.* (repeatable)",
     )
-    group.add_argument("--channel", type=int, default=0, metavar="N", help="stepgen channel (0)")
+    group.add_argument(
+        "--channel", type=int, default=0, metavar="N", help="stepgen channel (default 0)"
+    )
+
+
+def add_simulate_arguments(parser: Any) -> None:
+    """Add ``--ini``, ``--hal`` and ``--channel`` to ``stepgen simulate``'s parser.
+
+    Settings read from the files fill every option left at its default; an option given with
+    another value on the command line wins.
+    """
+    add_file_arguments(parser.add_argument_group("LinuxCNC configuration files"))
     defaults = {
         a.dest: a.default for a in parser._actions if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
     }

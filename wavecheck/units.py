@@ -23,6 +23,8 @@ from wavecheck.errors import UnitError
 __all__ = [
     "Dimension",
     "format_frequency",
+    "format_ns",
+    "format_rate",
     "format_time",
     "parse_frequency",
     "parse_quantity",
@@ -145,3 +147,19 @@ def format_frequency(hz: Fraction | int | float, digits: int = 6) -> str:
         if abs(value) >= scale:
             return f"{value / scale:.{digits}g} {unit}"
     return f"{value:.{digits}g} Hz"
+
+
+def format_ns(ns: Fraction | None, *, signed: bool = False, missing: str = "-") -> str:
+    """Format exact nanoseconds for a report cell: ``Fraction(4500)`` → ``"4.5 us"``.
+
+    ``signed`` puts a ``+`` on positive values (margins); ``missing`` stands for None.
+    """
+    if ns is None:
+        return missing
+    text = format_time(Fraction(ns) / 10**9)
+    return "+" + text if signed and ns > 0 else text
+
+
+def format_rate(hz: Fraction | None, *, missing: str = "-") -> str:
+    """Format a rate in Hz for a report cell (``missing`` stands for None)."""
+    return missing if hz is None else format_frequency(hz)

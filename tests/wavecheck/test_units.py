@@ -61,3 +61,13 @@ def test_format() -> None:
     assert format_time(Fraction(9, 2_000_000)) == "4.5 us"
     assert format_time(Fraction(0)) == "0 s"
     assert format_frequency(31250) == "31.25 kHz"
+
+
+def test_report_cell_formats() -> None:
+    from wavecheck.units import format_ns, format_rate
+
+    assert format_ns(Fraction(4500)) == "4.5 us"
+    assert format_ns(Fraction(1000), signed=True) == "+1 us"
+    assert format_ns(Fraction(-833), signed=True) == "-833 ns"
+    assert format_ns(None) == "-" and format_ns(None, missing="–") == "–"
+    assert format_rate(Fraction(31250)) == "31.25 kHz" and format_rate(None) == "-"

@@ -27,7 +27,13 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.errors import UsageError, WavecheckError
-from wavecheck.linuxcnc import ConfigRates, LinuxCNCConfig, config_rates, read_config
+from wavecheck.linuxcnc import (
+    ConfigRates,
+    LinuxCNCConfig,
+    add_file_arguments,
+    config_rates,
+    read_config,
+)
 from wavecheck.output import atomic_write
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
@@ -66,15 +72,7 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "stderr is not a terminal)"
     )
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
-    cfg.add_argument("--ini", metavar="FILE", help="LinuxCNC INI file ([EMCMOT] BASE_PERIOD)")
-    cfg.add_argument(
-        "--hal",
-        action="append",
-        default=[],
-        metavar="FILE",
-        help="LinuxCNC HAL file (loadrt stepgen, setp stepgen.N.*); repeatable",
-    )
-    cfg.add_argument("--channel", type=int, default=0, metavar="N", help="stepgen channel (default 0)")
+    add_file_arguments(cfg)
     cfg.add_argument(
         "--latency", metavar="J", help="worst base-thread latency (e.g. 11us) for latency_safe"
     )

@@ -19,7 +19,7 @@ from fractions import Fraction
 
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report, overall_verdict
-from wavecheck.units import format_frequency, format_time
+from wavecheck.units import format_ns, format_rate, format_time
 
 __all__ = ["render_html", "write_html"]
 
@@ -46,14 +46,11 @@ def _e(text: object) -> str:
 
 
 def _ns(v: Fraction | None, signed: bool = False) -> str:
-    if v is None:
-        return "–"
-    text = format_time(v / 10**9)
-    return ("+" + text) if signed and v > 0 else text
+    return format_ns(v, signed=signed, missing="–")
 
 
 def _hz(v: Fraction | None) -> str:
-    return "–" if v is None else format_frequency(v)
+    return format_rate(v, missing="–")
 
 
 def _badge(verdict: str) -> str:

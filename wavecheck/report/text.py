@@ -6,7 +6,7 @@ from fractions import Fraction
 
 from wavecheck.checks.result import RuleResult
 from wavecheck.report.model import Report
-from wavecheck.units import format_frequency, format_time
+from wavecheck.units import format_frequency, format_ns, format_rate, format_time
 
 __all__ = ["DEFAULT_TEXT_VIOLATIONS", "render_text"]
 
@@ -14,14 +14,11 @@ DEFAULT_TEXT_VIOLATIONS = 20
 
 
 def _ns(v: Fraction | None, signed: bool = False) -> str:
-    if v is None:
-        return "-"
-    text = format_time(v / 10**9)
-    return ("+" + text) if signed and v > 0 else text
+    return format_ns(v, signed=signed)
 
 
 def _hz(v: Fraction | None) -> str:
-    return "-" if v is None else format_frequency(v)
+    return format_rate(v)
 
 
 def _at(r: RuleResult) -> str:
