@@ -39,7 +39,7 @@ from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.model import Report, overall_verdict
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
-from wavecheck.units import format_frequency, format_time, parse_time
+from wavecheck.units import format_frequency, format_time, parse_time, time_ns
 
 __all__ = [
     "add_report_arguments",
@@ -73,6 +73,12 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     )
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)
+    for name, what in _CONFIG_OPTIONS.items():
+        cfg.add_argument(
+            f"--{name.replace('_', '-')}",
+            metavar="T",
+            help=f"{what} (ns, or with a unit; overrides --ini/--hal)",
+        )
     cfg.add_argument(
         "--latency", metavar="J", help="worst base-thread latency (e.g. 11us) for latency_safe"
     )
@@ -93,6 +99,16 @@ def expand_captures(patterns: list[str]) -> list[str]:
     return out
 
 
+#: check's stepgen-configuration options (config and latency_safe rates), LinuxCNC's names.
+_CONFIG_OPTIONS = {
+    "base_period": "BASE_PERIOD",
+    "steplen": "stepgen steplen",
+    "stepspace": "stepgen stepspace",
+    "dirsetup": "stepgen dirsetup",
+    "dirhold": "stepgen dirhold",
+}
+
+
 def worst_exit_code(codes: list[int]) -> int:
     """The worst of several exit codes: 2 > 1 > 3 > 0."""
     return max(codes, key=lambda c: _SEVERITY.get(c, 3), default=0)
@@ -104,10 +120,25 @@ def _linuxcnc(args: argparse.Namespace) -> LinuxCNCConfig | None:
         cached: LinuxCNCConfig | None = args._linuxcnc_config
         return cached
     cfg = None
-    if getattr(args, "ini", None) or getattr(args, "hal", None):
+    given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
+    if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):
         cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
+        for name, text in given.items():
+            if text is None:
+                continue
+            option = f"--{name.replace('_', '-')}"
+            ns = time_ns(text, default_unit="ns")
+            if ns.denominator != 1 or ns < 0 or (name == "base_period" and ns == 0):
+                raise UsageError(f"{option} {text!r} must be a whole, positive number of ns")
+            if name == "base_period":
+                cfg.base_period_ns = int(ns)
+            else:
+                cfg.params[name] = int(ns)
+            cfg.sources[name] = option
     elif getattr(args, "latency", None):
-        raise UsageError("--latency needs the stepgen configuration: give --ini (and --hal)")
+        raise UsageError(
+            "--latency needs the stepgen configuration: give --ini/--hal or --base-period"
+        )
     args._linuxcnc_config = cfg
     return cfg
 
