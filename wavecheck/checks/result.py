@@ -232,8 +232,12 @@ class RuleResult:
         if self.limit_ns is not None:
             m = self.intervals.measured[idx]
             if len(idx) > n:
-                part = np.argpartition(m, n - 1)[:n]
-                idx, m = idx[part], m[part]
+                # the n shortest; among intervals tied with the n-th, the earliest ones
+                kth = np.partition(m, n - 1)[n - 1]
+                shorter = np.flatnonzero(m < kth)
+                tied = np.flatnonzero(m == kth)[: n - len(shorter)]
+                keep = np.concatenate([shorter, tied])
+                idx, m = idx[keep], m[keep]
             idx = idx[np.lexsort((idx, m))]
         return [self.violation(int(i)) for i in idx[:n]]
 

@@ -88,3 +88,16 @@ def test_verdicts_match_exact_rational_definition(w, limit, tick, res_ticks) -> 
 def test_zero_limit(res: int) -> None:
     r = _ev([0, 1], 0, res_ns=res)
     assert r.outcome.tolist() == ([PASS, PASS] if res == 0 else [INDETERMINATE, PASS])
+
+
+@given(
+    w=st.lists(st.integers(0, 6), min_size=1, max_size=60),
+    n=st.integers(1, 70),
+)
+def test_worst_n_is_a_prefix_of_the_full_order(w: list[int], n: int) -> None:
+    """Capping the list never changes which violations come first: worst margin, ties in time
+    order (many equal intervals, as a real capture at one sample rate has)."""
+    r = _ev(w, 7)
+    everything = [(v.measured_ns, v.start_tick) for v in r.worst_violations(len(w))]
+    assert everything == sorted(everything)
+    assert [(v.measured_ns, v.start_tick) for v in r.worst_violations(n)] == everything[:n]
