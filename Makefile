@@ -13,12 +13,14 @@ $(VENV_STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	@touch $@
 
-# Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks)
-# and chromium (the HTML report test). Installed when missing; never assumed.
+# Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks),
+# chromium (the HTML report test), gtkwave + xvfb (the save-file test). Installed when missing.
 system-deps:
 	@missing=""; \
 	command -v sigrok-cli >/dev/null || missing="$$missing sigrok-cli"; \
 	command -v chromium   >/dev/null || missing="$$missing chromium"; \
+	command -v gtkwave    >/dev/null || missing="$$missing gtkwave"; \
+	command -v xvfb-run   >/dev/null || missing="$$missing xvfb xauth"; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "installing from Debian:$$missing"; \
