@@ -8,8 +8,8 @@ the drive's input (after ``--invert``).
   which DIR level is forward (default 0, LinuxCNC's and grbl's convention: DIR = 1 when moving
   negative). A DIR change at the same tick as an active edge makes that step's direction
   ambiguous: its direction is 0 and it is listed in :attr:`StepEvents.ambiguous` (the checks
-  report it as both a ``dir_setup`` and a ``dir_hold`` interval of 0). Steps before DIR's level
-  is known, or with no DIR mapped, also have direction 0 ("unknown").
+  report it as both a ``dir_setup`` and a ``dir_hold`` interval of 0). Steps up to the tick where
+  DIR's level becomes known, or with no DIR mapped, also have direction 0 ("unknown").
 - Type 1 (up/down): one forward step per active UP edge, one reverse step per active DOWN edge.
   Active edges of UP and DOWN at the same tick are ambiguous.
 - Types 2–15 (state tables of :mod:`stepgen.steptypes`): the phase outputs form a state at every
@@ -17,6 +17,8 @@ the drive's input (after ``--invert``).
   previous one a reverse step. Any other move (a non-neighbour, or a state not in the table) is a
   ``state_sequence`` error, listed in :attr:`StepEvents.sequence_errors`, not a crash. Moving
   from a state not in the table back into it re-synchronises without a step or a second error.
+  While a phase is not known yet (``x`` at the start of a VCD), the state is not known: state
+  changes up to its ``known_from`` tick are not decoded.
 
 Everything is vectorised over the whole edge arrays (numpy ``searchsorted`` / ``diff``).
 """
@@ -150,7 +152,8 @@ def _decode_step_dir(iface: StepInterface, edge: ActiveEdge, forward_level: int)
         return StepEvents(ticks, direction, _positions(direction))
     level, same = level_before(dir_sig, ticks)
     direction = np.where(level == forward_level, 1, -1).astype(np.int8)
-    unknown = same | (ticks < dir_sig.known_from)
+    dir_unknown = iface.unknown_until(("dir",))
+    unknown = same if dir_unknown is None else same | (ticks <= dir_unknown)
     direction[unknown] = 0
     return StepEvents(ticks, direction, _positions(direction), ambiguous=ticks[same])
 
@@ -195,10 +198,14 @@ def phase_states(
 
 def _decode_table(iface: StepInterface, st: StepType) -> StepEvents:
     ticks, states, initial = phase_states(iface, st.outputs)
+    prev_states = np.concatenate([[initial], states[:-1]]).astype(np.int64)
+    unknown_until = iface.unknown_until(st.outputs)
+    if unknown_until is not None:  # the state is known only after every phase is
+        known = ticks > unknown_until
+        ticks, states, prev_states = ticks[known], states[known], prev_states[known]
     cycle = st.cycle
     lookup = np.full(32, -1, dtype=np.int64)
     lookup[np.asarray(st.states, dtype=np.int64)] = np.arange(cycle, dtype=np.int64)
-    prev_states = np.concatenate([[initial], states[:-1]]).astype(np.int64)
     a = lookup[prev_states]
     b = lookup[states]
     delta = np.mod(b - a, cycle)

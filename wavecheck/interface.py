@@ -85,6 +85,21 @@ class StepInterface:
         """The signal of ``role``, or None when it is not mapped."""
         return self.signals.get(role)
 
+    def unknown_until(self, roles: Iterable[str]) -> int | None:
+        """The latest :attr:`RoleSignal.known_from` among the mapped ``roles`` that is later than
+        the capture's start, or None when each was known from the start.
+
+        Up to and including that tick an edge of one of them may be hidden (the x → level change
+        itself may be one), so an interval or state change involving them must start after it.
+        """
+        start = self.capture.start
+        late = [
+            s.known_from
+            for s in (self.signals.get(r) for r in roles)
+            if s is not None and s.known_from > start
+        ]
+        return max(late) if late else None
+
     def require(self, role: str) -> RoleSignal:
         """The signal of ``role``; a clear error when it is not mapped."""
         sig = self.signals.get(role)

@@ -28,6 +28,9 @@ What each rule measures (levels at the drive's input, after inversion):
 - ``state_sequence``: each move to a state that is not a neighbour in the table.
 - ``enable_setup``: ENABLE becoming active (high after inversion; use ``--invert enable`` for an
   active-low input) → the first step while it stays active.
+
+An interval that starts while one of the signals it involves is not known yet (``x`` at the start
+of a VCD, up to its ``known_from``) is partial and not measured.
 """
 
 from __future__ import annotations
@@ -155,6 +158,25 @@ def _intervals(
     raise ValueError(f"no measurement for rule {rule!r}")
 
 
+def _known(intervals: Intervals, iface: StepInterface, st: StepType, rule: str) -> Intervals:
+    """Drop the intervals that start while a signal the rule involves is not known yet (``x`` at
+    the start of a VCD): an event of that signal may be hidden there, so they are partial."""
+    steps = ("step",) if st.number == 0 else ("up", "down") if st.number == 1 else st.outputs
+    roles: tuple[str, ...] = {
+        "step_period": steps,
+        "dir_setup": ("step", "dir"),
+        "dir_hold": ("step", "dir"),
+        "dir_delay": ("up", "down"),
+        "state_hold": st.outputs,
+        "enable_setup": (*steps, "enable"),
+    }.get(rule, ())  # step_high/low: one signal's own edges, all after its known_from
+    until = iface.unknown_until(roles)
+    if until is None or len(intervals) == 0:
+        return intervals
+    keep = intervals.start > until
+    return Intervals(intervals.start[keep], intervals.end[keep])
+
+
 @dataclass(frozen=True)
 class RuleSet:
     """What was evaluated and why the rest was not."""
@@ -203,7 +225,7 @@ def run_rules(
         results.append(
             evaluate(
                 rule,
-                _intervals(rule, iface, st, steps, active_edge),
+                _known(_intervals(rule, iface, st, steps, active_edge), iface, st, rule),
                 limit,
                 tb,
                 resolution_ns,

@@ -180,3 +180,66 @@ def test_auto_map_by_channel_name() -> None:
     cap = capture({"stepgen.0.step": (0, pulses([10, 100], 5)), "stepgen.0.dir": (0, [50])})
     report = run_check(cap, drive(step_high=1))
     assert report.mapping == {"step": "stepgen.0.step", "dir": "stepgen.0.dir"}
+
+
+# -- known_from: a channel that is x at the start of a VCD -----------------------------------------
+# DESIGN "Rules": every interval is measured *between* the two events of its definition; where one
+# channel's level is not known yet (x at the start of a VCD, Channel.known_from), an event of that
+# channel may be hidden, so an interval reaching back into that stretch is a partial interval and
+# is not measured ("Partial intervals at the capture's start and end are not measured", issue 3).
+
+
+def test_dir_hold_not_measured_from_an_active_edge_before_dir_is_known() -> None:
+    # STEP rises at 1 µs and 3.1 µs; DIR is x until 2.5 µs and changes at 3 µs. A DIR change could
+    # hide in 1..2.5 µs, so the 2 µs "hold" 1 µs → 3 µs is not a measured interval.
+    cap = capture({"S": (0, [1 * US, 2 * US, 3100, 5 * US]), "D": (0, [3 * US])}, end=6 * US)
+    cap.channels[1].known_from = 2500
+    report = run_check(cap, drive(dir_hold=200, dir_setup=200), {"step": "S", "dir": "D"})
+    hold, setup = report.rule("dir_hold"), report.rule("dir_setup")
+    assert hold is not None and setup is not None
+    assert (hold.checked, hold.verdict) == (0, "unchecked")
+    assert setup.measured_ticks.tolist() == [100]  # 3 µs → 3.1 µs: both levels known
+
+
+def test_dir_setup_not_measured_to_an_active_edge_after_step_becomes_known() -> None:
+    # DIR changes at 1 µs; STEP is x until 2.5 µs and rises at 3 µs: an active edge could hide in
+    # 1..2.5 µs, so 1 µs → 3 µs is not a measured setup.
+    cap = capture({"S": (0, [3 * US, 4 * US, 6 * US, 7 * US]), "D": (0, [1 * US, 5 * US])}, end=8 * US)
+    cap.channels[0].known_from = 2500
+    report = run_check(cap, drive(dir_hold=200, dir_setup=200), {"step": "S", "dir": "D"})
+    setup, hold = report.rule("dir_setup"), report.rule("dir_hold")
+    assert setup is not None and hold is not None
+    assert setup.measured_ticks.tolist() == [1 * US]  # 5 µs → 6 µs only
+    assert hold.measured_ticks.tolist() == [2 * US]  # 3 µs → 5 µs
+
+
+def test_up_down_period_and_dir_delay_not_measured_across_an_unknown_line() -> None:
+    # DOWN is x until 30 µs: a DOWN pulse could hide before, so UP 10 µs → DOWN 40 µs is not a
+    # step_period (nor a dir_delay); DOWN 40 µs → UP 50 µs is.
+    up = pulses([10 * US, 50 * US], 2 * US)
+    down = pulses([40 * US], 2 * US)
+    cap = capture({"UP": (0, up), "DOWN": (0, down)}, end=60 * US)
+    cap.channels[1].known_from = 30 * US
+    d = drive("rising", max_rate_hz=1000, interface="up-down", dir_delay=1 * US)
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    period, delay = report.rule("step_period"), report.rule("dir_delay")
+    assert period is not None and delay is not None
+    assert period.measured_ticks.tolist() == [10 * US]
+    assert delay.measured_ticks.tolist() == [8 * US]  # DOWN ends 42 µs → UP 50 µs
+
+
+def test_phase_state_hold_and_sequence_not_judged_before_every_phase_is_known() -> None:
+    # quadrature 1, 3, 2, 0 (A = bit 0). B is x until 150 µs (its level there: 1). Before that
+    # the combined state is not known: no state_hold interval, no state_sequence error, no step.
+    a_edges = [100 * US, 200 * US, 300 * US]  # A: 1 → 0 → 1 → 0
+    b_edges = [250 * US, 300 * US]  # B: 1 → 0 → 1
+    cap = capture({"phase-A": (1, a_edges), "phase-B": (1, b_edges)}, end=400 * US)
+    cap.channels[1].known_from = 150 * US
+    d = drive("rising", interface="phases", state_hold=10 * US)
+    report = run_check(cap, d, {}, step_type_number=2)
+    # known states: 2 (from 150) →(200) 3 →(250) 1 →(300) 2: 2→3 reverse, 3→1 reverse, 1→2 skips
+    hold = report.rule("state_hold")
+    assert hold is not None and hold.measured_ticks.tolist() == [50 * US, 50 * US]
+    seq = report.rule("state_sequence")
+    assert seq is not None and seq.violations == 1 and seq.checked == 3
+    assert report.steps.count == 2 and report.steps.final_position == -2
