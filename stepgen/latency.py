@@ -22,10 +22,11 @@ Models (``--latency``; times take units, bare numbers are ns as in LinuxCNC):
                         precisely"). RULE is one of step_high, step_low, step_period, dir_setup,
                         dir_hold (type 0), dir_delay (type 1), state_hold (types ≥ 2). For
                         step_period and state_hold, whose intervals start and end with the same
-                        kind of event, those events alternate on time / late.
+                        kind of event, those events alternate on time / late (for types ≥ 2
+                        step_period is state_hold's intervals: the state changes).
 
 The active STEP edge (rising by default; ``falling`` for a drive such as the Gecko G202 fed by a
-non-inverted pin) decides which edges are the dir_setup and step_period events. With the falling
+non-inverted pin) decides which edges are the dir_setup, step_period and dir_delay events. With the falling
 edge active, dir_hold runs from the end of the pulse to the DIR change: dirhold·P − J.
 """
 
@@ -176,8 +177,11 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
         return np.unique(events)[1::2]
 
     if stype >= 2:
-        if rule != "state_hold":
-            raise ConfigError(f"rule {rule!r} does not apply to step type {stype} (use state_hold)")
+        # a phase type's steps are its state changes: step_period measures the same intervals
+        if rule not in ("state_hold", "step_period"):
+            raise ConfigError(
+                f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
+            )
         return alternate(np.concatenate([t[p] for p in run.pins]))
     lines = ("step",) if stype == 0 else ("up", "down")
     rises = np.unique(np.concatenate([rising(p) for p in lines]))
@@ -197,7 +201,9 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
         pos = pos[pos < len(active)]
         return np.unique(active[pos])
     if stype == 1 and rule == "dir_delay":
-        up, down = rising("up"), rising("down")
+        # ends at the active edge of the first pulse on the other line
+        pick = rising if active_edge == "rising" else falling
+        up, down = pick("up"), pick("down")
         lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
         at = np.concatenate([up, down])
         order = np.argsort(at, kind="stable")

@@ -187,3 +187,50 @@ def test_histogram_model_draws_only_binned_values(tmp_path: Path) -> None:
     tr = _trace(f"histogram:{tmp_path / 'h.txt'}", seed=2)
     off = tr.edges["step"] - tr.run.toggles["step"] * P
     assert set(np.unique(off).tolist()) <= {0, 1000, 2000, 7000}
+
+
+def _updown_reversals() -> tuple[StepgenConfig, Motion]:
+    cfg = StepgenConfig(
+        step_type=1,
+        base_period_ns=P,
+        servo_period_ns=P,
+        mode="velocity",
+        position_scale=1.0,
+        dirdelay=2 * P,
+        thread_order="pulses-first",
+    )
+    t = np.arange(8) * 40 * P * 1e-9
+    v = np.where(np.arange(8) % 2 == 0, 25_000.0, -25_000.0)
+    return cfg, Motion("csv", csv_times=t, csv_values=v)
+
+
+@pytest.mark.parametrize("edge", ["rising", "falling"])
+def test_worst_dir_delay_ends_on_the_active_edge_of_the_first_pulse(edge: str) -> None:
+    """DESIGN 'Worst case, precisely' (both active edges) / reference §2.3 (types 1: the opposite
+    step comes >= L + D periods later): under worst:J:dir_delay the active edge of the first
+    pulse on the other line runs on time, every other edge J late."""
+    cfg, motion = _updown_reversals()
+    tr = simulate(cfg, motion, "worst:5us:dir_delay", n_periods=8 * 40 + 20, active_edge=edge)  # type: ignore[arg-type]
+    first = 0 if edge == "rising" else 1
+    ups, downs = tr.edges["up"][first::2], tr.edges["down"][first::2]
+    at = np.concatenate([ups, downs])
+    line = np.concatenate([np.zeros(len(ups)), np.ones(len(downs))])
+    order = np.argsort(at, kind="stable")
+    at, line = at[order], line[order]
+    switch = np.flatnonzero(line[1:] != line[:-1]) + 1
+    assert len(switch) >= 5
+    assert np.all(at[switch] % P == 0)  # on time
+    others = np.setdiff1d(np.concatenate([tr.edges["up"], tr.edges["down"]]), at[switch])
+    assert np.all(others % P == 5_000)  # J late
+
+
+def test_worst_step_period_applies_to_phase_types() -> None:
+    """Issue 4 lists step_period among the worst-case rules and the validator checks step_period
+    on phase types (successive state changes): worst:J:step_period alternates state changes."""
+    cfg = StepgenConfig(**{**VCFG.__dict__, "step_type": 2})
+    tr = simulate(cfg, VMOVE, "worst:11us:step_period", n_periods=4000)
+    changes = np.unique(np.concatenate([tr.edges[p] for p in tr.pins]))
+    assert np.all(changes[1::2] % P == 0) and np.all(changes[0::2] % P == 11_000)
+    held = np.diff(changes)[0::2]  # late start, on-time end: n·P − J
+    assert np.all(held % P == P - 11_000)
+    assert held.min() == 2 * P - 11_000  # 30 kHz at P = 16 µs: a state every ~2 periods
