@@ -347,7 +347,12 @@ def test_plan_properties(drive: Drive, j: int, inverted: bool, extra: int | None
     assert p.min_base_period_ns == min_base_period_ns(drive, j)
     assert p.simple_base_period_ns == simple_base_period_ns(drive, j) >= p.min_base_period_ns
     if period is None:
-        assert big_p % 1000 == 0 and 0 <= big_p - p.min_base_period_ns < 1000
+        # the minimum rounded up to a whole µs; P must also exceed J, which only matters when
+        # both step limits are 0 (minimum == J): then the next whole µs above J
+        assert big_p % 1000 == 0 and big_p > j
+        assert 0 <= big_p - p.min_base_period_ns < 1000 or (
+            p.min_base_period_ns == j and big_p - j <= 1000
+        )
     if big_p >= p.min_base_period_ns:
         assert p.params["steplen"].periods == 1
         assert p.max_step_rate_hz <= step_rate_hz(big_p, 2)
