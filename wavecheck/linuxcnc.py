@@ -297,7 +297,7 @@ class ConfigRates:
     """Max step rates from a stepgen configuration, exact Hz (None: not defined or none safe).
 
     Attributes:
-        config: stepgen's own clamp, 1 / ((steplen + stepspace)·P).
+        config: stepgen's own clamp, 1 / ((steplen + stepspace)·P) (steplen·P for types ≥ 2).
         latency_safe: the highest rate at which every interval meets the drive under ``J``.
         notes: why a rate is None, or what limits it.
     """
@@ -313,6 +313,7 @@ def config_rates(
     latency_ns: Fraction | int | None = None,
     *,
     step_inverted: bool = False,
+    step_type: int | None = None,
 ) -> ConfigRates:
     """The ``config`` and ``latency_safe`` rates of ``cfg`` for ``drive`` (see the module doc).
 
@@ -322,11 +323,20 @@ def config_rates(
         latency_ns: worst latency ``J`` in ns; without it ``latency_safe`` is None.
         step_inverted: the STEP pin is inverted between stepgen and the drive (moves the active
             edge to the start of stepgen's pulse; see :mod:`stepgen.plan`).
+        step_type: the step type checked (default ``cfg.step_type``, else 0). Types ≥ 2 have no
+            stepspace (config = 1 / (steplen·P)) and no latency_safe (the plan is step/dir's).
     """
     from stepgen import plan as planner
 
     p = cfg.require_base_period()
     n = cfg.periods()
+    kind = step_type if step_type is not None else cfg.step_type or 0
+    if kind >= 2:
+        return ConfigRates(
+            planner.step_rate_hz(p, n["steplen"]),
+            None,
+            (f"latency_safe is computed for step types 0 and 1, not step type {kind}",),
+        )
     config = planner.step_rate_hz(p, n["steplen"] + n["stepspace"])
     if latency_ns is None:
         return ConfigRates(config, None, ("latency_safe needs --latency J",))

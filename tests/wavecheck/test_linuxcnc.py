@@ -129,3 +129,17 @@ def test_read_ini_keeps_duplicates(tmp_path: Path) -> None:
     ini = read_ini(p)
     assert ini.get("HAL", "HALFILE") == ("a.hal", 2)
     assert len(ini.sections["HAL"]["HALFILE"]) == 2
+
+
+def test_config_rate_of_a_phase_type_has_no_stepspace(files: tuple[Path, Path]) -> None:
+    # DESIGN "Maximum achievable step rate": config is stepgen's own clamp. For step types ≥ 2
+    # stepgen has no stepspace (the reference: "For types ≥ 2 stepspace is 0 → 1e9 / steplen_ns";
+    # stepgen/model.py does the same), so channel 2 (type 2, default steplen 1 ns → one 16 µs
+    # period) steps at up to 62,500/s, not 31,250/s; latency_safe is not the step/dir plan's.
+    ini, hal = files
+    cfg = read_config(ini, hal, channel=2)
+    rates = config_rates(cfg, g202(), 11_000)
+    assert rates.config == Fraction(62_500)
+    assert rates.latency_safe is None and "step type" in rates.notes[0]
+    # the check's own --type wins over the HAL file (same channel decoded as step/dir)
+    assert config_rates(cfg, g202(), None, step_type=0).config == Fraction(31_250)

@@ -163,7 +163,11 @@ def extra_rates(report: Report, args: argparse.Namespace) -> ConfigRates | None:
     if cfg is None:
         return None
     return config_rates(
-        cfg, report.drive, _latency_ns(args), step_inverted="step" in report.inverted
+        cfg,
+        report.drive,
+        _latency_ns(args),
+        step_inverted="step" in report.inverted,
+        step_type=report.step_type.number,
     )
 
 
