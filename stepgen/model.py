@@ -135,7 +135,7 @@ class StepgenConfig:
                     f"{what} period {Decimal(value):.4g} ns is longer than 1 s; LinuxCNC threads run every "
                     "few µs to ms (e.g. --base-period 25us --servo-period 1ms)"
                 )
-        servo = hal_thread_period(self.base_period_ns, self.servo_period_ns)
+        hal_thread_period(self.base_period_ns, self.servo_period_ns)  # servo >= base
         if self.mode not in ("position", "velocity"):
             raise ConfigError(f"mode {self.mode!r} is not position or velocity")
         if self.thread_order not in ("update-first", "pulses-first"):
@@ -155,14 +155,6 @@ class StepgenConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 0 or value > U32_MAX:
                 raise ConfigError(f"--{name} {value!r} ns is not a u32 ns value (0..{U32_MAX})")
-        steplen = ulceil(max(self.steplen, 1), self.base_period_ns)
-        if max(self.steplen, 1) <= STARTUP_BASE_NS and self.quirk_applies:
-            steplen = ulceil(ulceil(max(self.steplen, 1), STARTUP_BASE_NS), self.base_period_ns)
-        if steplen > servo:
-            raise ConfigError(
-                f"--steplen {self.steplen} ns rounds to {steplen} ns, longer than the servo period "
-                f"{servo} ns (shorten steplen or lengthen the servo period)"
-            )
 
     @property
     def quirk_applies(self) -> bool:

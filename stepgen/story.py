@@ -71,7 +71,7 @@ def config_for(base_period_ns: int, periods: Mapping[str, int]) -> StepgenConfig
 
     Velocity mode; servo period = base period (so a reversal can be requested at any base
     period), or (steplen + stepspace + 1) base periods when steplen is longer than one period
-    (stepgen refuses a steplen longer than the servo period); make-pulses first (no start-up
+    (a servo period at least as long as a pulse, as in real set-ups); make-pulses first (no start-up
     rounding at 50 µs, reference §3); no user velocity/accel limit.
     """
     return StepgenConfig(

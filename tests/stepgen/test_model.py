@@ -14,6 +14,7 @@ from stepgen.model import (
     ulceil,
 )
 from tests.stepgen.helpers import counts_per_period, levels
+from tests.stepgen.test_fast import assert_same as assert_same_run
 from wavecheck.errors import ConfigError
 
 # §8: tests/stepgen.0 — one 100 µs thread, update-freq first, position mode
@@ -191,7 +192,6 @@ def test_bad_settings_are_config_errors() -> None:
         {"steplen": -1},
         {"maxvel": -1.0},
         {"step_type": 16},
-        {"steplen": 2_000_000, "servo_period_ns": 1_000_000},  # rounds past the servo period
     ]
     for kw in bad:
         with pytest.raises(ConfigError) as err:
@@ -209,3 +209,35 @@ def test_bad_settings_are_config_errors() -> None:
 def test_thread_periods_longer_than_a_second_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(ConfigError, match=message):
         StepgenConfig(**kwargs).validate()
+
+
+@pytest.mark.parametrize("order", ["update-first", "pulses-first"])
+def test_steplen_longer_than_the_servo_period_runs_as_in_linuxcnc(order: str) -> None:
+    """§3/§4: steplen is any u32 ns, rounded up to base periods; update-freq has no limit tied to
+    the servo period (only max_freq = 1e9/(steplen + stepspace) follows from it). So a steplen
+    longer than the servo period runs, with pulses of ceil(steplen/P) periods, in both engines.
+    With update-first the start-up quirk rounds at 50 µs first (100 000 → 100 000 → 120 000 at
+    P = 30 µs), also above 50 000 ns."""
+    cfg = StepgenConfig(
+        base_period_ns=30_000,
+        servo_period_ns=90_000,
+        mode="velocity",
+        steplen=100_000,
+        thread_order=order,  # type: ignore[arg-type]
+    )
+    cfg.validate()
+    ref = run_reference(cfg, [2000.0, -2000.0, 2000.0], 300)
+    assert_same_run(ref, run_fast(cfg, [2000.0, -2000.0, 2000.0], 300))
+    assert ref.final["steplen"] == 120_000  # both orders: ceil to 30 µs (from 100 000 or 50 µs·2)
+    step = levels(ref, "step")
+    rises = np.flatnonzero(np.diff(np.concatenate(([0], step))) == 1)
+    falls = np.flatnonzero(np.diff(np.concatenate(([0], step))) == -1)
+    assert len(rises) > 3
+    assert np.all(falls[: len(rises) - 1] - rises[: len(rises) - 1] == 4)  # 120 000 / 30 000
+
+
+def test_validate_steplen_quirk_is_not_limited_to_50us() -> None:
+    """§3 start-up quirk: the first rounding at P = 50 µs applies to every value, not only to
+    1..50 000 ns: at base 25 µs, 60 000 ns → 100 000 (then stays), not 75 000."""
+    cfg = StepgenConfig(base_period_ns=25_000, servo_period_ns=1_000_000, steplen=60_000)
+    assert run_reference(cfg, [0.0], 100).final["steplen"] == 100_000
