@@ -483,8 +483,14 @@ def read_sr(
         res = 1
         if resolution_s is not None:
             ticks = resolution_s / tb.tick_s
-            res = max(1, -((-ticks.numerator) // ticks.denominator))
-            if res != 1:
+            res = -((-ticks.numerator) // ticks.denominator)
+            if ticks < 1:
+                notes.append(
+                    f"resolution {float(resolution_s * 10**9):g} ns is finer than the sample "
+                    "period; using one sample"
+                )
+                res = 1
+            elif res != 1:
                 notes.append(f"resolution set to {res} samples by the user")
         channels = [
             Channel(name=meta.probes[bit], index=bit, initial=finder.initial[slot],

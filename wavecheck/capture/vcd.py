@@ -304,18 +304,37 @@ def _resolution(
                     continue
                 notes.append(f"sample rate {match.group(1)} from the file's $comment")
                 break
-    period = resolution_s if resolution_s is not None else (1 / rate if rate else None)
-    if period is None:
-        return 0, None
-    if period < 0:
-        raise CaptureError(path, None, f"resolution {period} s must not be negative")
-    ticks = period / tb.tick_s
+    sample_res: int | None = None
+    if rate:
+        # a sampled capture: an edge is known to one sample period T; when T is not a whole
+        # number of ticks the timestamps are rounded to the timescale (sigrok-cli writes
+        # round(i·T) for sample i, sigrok.md §7), which adds up to one tick to an interval
+        ticks = 1 / rate / tb.tick_s
+        sample_res = -((-ticks.numerator) // ticks.denominator)
+        if ticks.denominator != 1:
+            sample_res += 1
+            notes.append(
+                f"the sample period {float(ticks * tb.tick_ns):g} ns is not a whole number of "
+                f"{float(tb.tick_ns):g} ns ticks, so the timestamps are rounded; resolution "
+                f"{sample_res} ticks covers the period and the rounding"
+            )
+    if resolution_s is None:
+        return (0 if sample_res is None else sample_res), rate
+    if resolution_s < 0:
+        raise CaptureError(path, None, f"resolution {resolution_s} s must not be negative")
+    ticks = resolution_s / tb.tick_s
     res = -((-ticks.numerator) // ticks.denominator)
     if ticks.denominator != 1:
         notes.append(
-            f"resolution {float(period * 10**9):g} ns is not a whole number of "
+            f"resolution {float(resolution_s * 10**9):g} ns is not a whole number of "
             f"{float(tb.tick_ns):g} ns ticks; rounded up to {res} ticks"
         )
+    if sample_res is not None and res < sample_res:
+        notes.append(
+            f"resolution {float(resolution_s * 10**9):g} ns is finer than the sample period; "
+            f"using {sample_res} ticks"
+        )
+        res = sample_res
     return res, rate
 
 
