@@ -77,7 +77,8 @@ def open_capture(
             binary, csv) or to state a VCD's sampling; overrides the file's value with a note.
         resolution_s: the resolution (sample period) in seconds, overriding the derived one.
         input_format: ``"sr"``, ``"vcd"`` or a sigrok-cli input format (may carry options,
-            ``"binary:numchannels=4"``); default: detected from content and extension.
+            ``"binary:numchannels=4"``); default: detected from content and extension. A VCD
+            with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
@@ -90,11 +91,14 @@ def open_capture(
     name = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
     if input_format:
         detect_path_exists(path)
+    options = ":" in fmt
+    if name == "sr" and options:
+        raise UsageError(f"--input-format {fmt!r}: sr takes no options (give --input-format sr)")
     if name == "sr":
         from wavecheck.capture.sr import read_sr
 
         return read_sr(path, samplerate=samplerate, resolution_s=resolution_s)
-    if name == "vcd":
+    if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 
         return read_vcd(path, samplerate=samplerate, resolution_s=resolution_s)

@@ -10,6 +10,7 @@ import pytest
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
 from wavecheck.capture.open import detect_format, open_capture
+from wavecheck.capture.sigrokcli import find_sigrok_cli
 from wavecheck.errors import CaptureError, UsageError
 
 
@@ -55,3 +56,15 @@ def test_explicit_format_and_options(tmp_path: Path) -> None:
     assert cap.resolution_ticks == 10 and cap.samplerate_hz == 10**8
     with pytest.raises(UsageError, match="positive"):
         open_capture(vcd, samplerate=Fraction(0))
+
+
+def test_options_on_a_native_format_are_not_dropped(tmp_path: Path) -> None:
+    """--input-format 'vcd:downsample=2' names sigrok-cli input options: they must be used (the
+    VCD goes through sigrok-cli), not silently ignored by the native reader."""
+    vcd = write_vcd(tmp_path / "a.vcd", {"STEP": (0, [10, 20, 30])}, "1 us", end=40)
+    if find_sigrok_cli() is not None:
+        cap = open_capture(vcd, input_format="vcd:downsample=2:skip=0")
+        assert cap.format == "sigrok:vcd" and cap.samplerate_hz == 500_000
+        assert cap.channel("STEP").edges.tolist() == [5, 10, 15]
+    with pytest.raises(UsageError, match="sr.*no options"):
+        open_capture(write_sr(tmp_path / "a.sr", bytes([0, 1])), input_format="sr:foo=1")
