@@ -269,3 +269,52 @@ def test_random_waveforms_fast_equals_truth_and_simple(
         ch = fast.channel(name)
         assert (ch.initial, ch.edges.tolist()) == (init, edges)
     assert_same(fast, read_vcd_reference(path))
+
+
+_IDS = ["!", '"', "#", "b", "ab", "%%", "zz9", "$x", "#1", "bb"]
+
+
+@st.composite
+def _adversarial_vcd(draw: st.DrawFn) -> str:
+    """Layouts that stress the fast tokenizer: ids that look like timestamps, keywords or vector
+    markers, multi-character ids, $dumpvars/$dumpoff/$dumpon/$dumpall blocks and $comment in
+    the body, x/z, 'b' values of 1-bit wires, a vector, CRLF/tab/space separators, changes
+    before the first timestamp and a last line without a newline."""
+    ids = draw(st.lists(st.sampled_from(_IDS), min_size=1, max_size=4, unique=True))
+    vec = draw(st.sampled_from(["v", "bv", None]))
+    head = ["$timescale", draw(st.sampled_from(["1ns", "10 ps", "1\n fs", "100 s"])), "$end"]
+    head += ["$scope module top $end", *[f"$var wire 1 {c} s{i} $end" for i, c in enumerate(ids)]]
+    head += [f"$var wire 4 {vec} vv $end"] if vec else []
+    head += ["$upscope $end", "$enddefinitions $end"]
+    scalar = st.tuples(st.sampled_from("0101xzXZhl"), st.sampled_from(ids)).map("".join)
+    block = st.tuples(
+        st.sampled_from(["$dumpvars", "$dumpon", "$dumpoff", "$dumpall"]),
+        st.lists(scalar, max_size=4),
+    ).map(lambda kv: [kv[0], *kv[1], "$end"])
+    token = st.one_of(
+        st.integers(0, 3).map(lambda d: [("#", d)]),
+        scalar.map(lambda s: [s]),
+        st.tuples(st.sampled_from(["b0", "b1", "bx", "b01", "bz"]), st.sampled_from(ids)).map(list),
+        st.sampled_from(["hi", "#5 1!", "b1 !", ""]).map(lambda c: ["$comment", c, "$end"]),
+        block,
+        *([st.text("01xz", min_size=4, max_size=4).map(lambda b: ["b" + b, vec])] if vec else []),
+    )
+    t, body = 0, []
+    for group in draw(st.lists(token, max_size=30)):
+        for tok in group:
+            if isinstance(tok, tuple):
+                t += (0, 1, 5, 123456)[tok[1]]
+                tok = f"#{t}"
+            body.append(tok + draw(st.sampled_from([" ", "\n", "\r\n", "\t", "  "])))
+    body.append(f"#{t + 1}" + draw(st.sampled_from(["", "\n"])))
+    return "\n".join(head) + "\n" + "".join(body)
+
+
+@settings(max_examples=200, deadline=None)
+@given(text=_adversarial_vcd(), chunk=st.sampled_from([1, 2, 3, 5, 8, 64]))
+def test_adversarial_layouts_fast_equals_simple(
+    tmp_path_factory: pytest.TempPathFactory, text: str, chunk: int
+) -> None:
+    path = tmp_path_factory.mktemp("v") / "a.vcd"
+    path.write_bytes(text.encode())
+    assert_same(read_vcd(path, chunk_bytes=chunk), read_vcd_reference(path))
