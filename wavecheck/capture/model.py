@@ -76,6 +76,8 @@ class Capture:
         notes: things the reader skipped or assumed (vectors, reals, comments), one line each.
         skipped: signals present in the file that are not 1-bit channels, name → what they are
             (``"an 8-bit vector"``, ``"a real"``), so mapping one gives a precise error.
+        aliases: other names of a channel (a VCD id code declared more than once), name →
+            channel name, so mapping any of them finds it.
     """
 
     path: str
@@ -88,6 +90,7 @@ class Capture:
     channels: list[Channel]
     notes: list[str] = field(default_factory=list)
     skipped: dict[str, str] = field(default_factory=dict)
+    aliases: dict[str, str] = field(default_factory=dict)
 
     @property
     def duration_s(self) -> Fraction:
@@ -118,6 +121,11 @@ class Capture:
         if isinstance(ref, int):
             for ch in self.channels:
                 if ch.index == ref:
+                    return ch
+        if isinstance(ref, str):
+            target = self.aliases.get(ref) or self.aliases.get(ref.strip())
+            for ch in self.channels:
+                if target is not None and ch.name == target:
                     return ch
         if isinstance(ref, str) and (ref in self.skipped or ref.strip() in self.skipped):
             what = self.skipped.get(ref) or self.skipped[ref.strip()]

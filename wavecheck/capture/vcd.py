@@ -228,6 +228,7 @@ class _Layout:
     vector_ids: set[str]
     skipped: dict[str, str]
     notes: list[str]
+    aliases: dict[str, str]
 
 
 def _layout(header: VcdHeader) -> _Layout:
@@ -277,10 +278,25 @@ def _layout(header: VcdHeader) -> _Layout:
             f"(vectors, integers, reals): {listed}{more}"
         )
     n_alias = sum(len(v) for k, v in aliases.items() if k in {d.id_code for d in scalar})
+    alias_names: dict[str, str] = {}
+    by_id = {d.id_code: name for d, name in zip(scalar, names, strict=True)}
+    for d in header.vars:
+        target = by_id.get(d.id_code)
+        if target is None:
+            continue
+        for other in (d.full_name, d.reference):
+            if other not in used and (other != d.reference or len(ids_by_short[other]) == 1):
+                alias_names.setdefault(other, target)
     if n_alias:
         notes.append(f"{n_alias} declaration(s) alias a channel declared earlier (same id code)")
     return _Layout(
-        names, scalar, [d.id_code for d in scalar], {d.id_code for d in others}, skipped, notes
+        names,
+        scalar,
+        [d.id_code for d in scalar],
+        {d.id_code for d in others},
+        skipped,
+        notes,
+        alias_names,
     )
 
 
@@ -851,6 +867,7 @@ def _finish(
         channels=builder.channels(lay.names, end, notes),
         notes=notes,
         skipped=lay.skipped,
+        aliases=lay.aliases,
     )
 
 

@@ -318,3 +318,16 @@ def test_adversarial_layouts_fast_equals_simple(
     path = tmp_path_factory.mktemp("v") / "a.vcd"
     path.write_bytes(text.encode())
     assert_same(read_vcd(path, chunk_bytes=chunk), read_vcd_reference(path))
+
+
+def test_aliased_id_is_found_by_every_name(tmp_path: Path) -> None:
+    """Two declarations with one id code are one signal: mapping either name must find it."""
+    text = (
+        "$timescale 1 ns $end\n$scope module tb $end\n$var wire 1 ! step_out $end\n"
+        "$scope module dut $end\n$var wire 1 ! STEP $end\n$upscope $end\n$upscope $end\n"
+        "$enddefinitions $end\n#0 0!\n#5 1!\n#9\n"
+    )
+    cap = read_vcd(write(tmp_path, text))
+    assert [c.name for c in cap.channels] == ["step_out"]
+    for ref in ("step_out", "STEP", "tb.dut.STEP"):
+        assert cap.channel(ref).edges.tolist() == [5]
