@@ -61,3 +61,34 @@ def assert_no_output(folder: Path) -> None:
     """No report and no temporary file was left in ``folder``."""
     left = sorted(p.name for p in folder.iterdir())
     assert left == [], f"files left behind after a failed run: {left}"
+
+
+def info_then_check(folder: Path, case: Case, *, missing_channels_ok: bool = False) -> None:
+    """Run ``wavecheck info`` and ``wavecheck check -o report.json`` on ``case`` and hold both to
+    the error contract: a file ``info`` cannot read cannot be checked either; a refused check
+    leaves no report, an accepted one leaves a whole one.
+
+    ``missing_channels_ok``: a valid file without STEP/DIR channels may refuse the mapping.
+    """
+    path = write_case(folder, case)
+    rc, _, err = cli("wavecheck", ["info", str(path)])
+    assert_contract(rc, err, str(path), case.expect)
+    out_dir = folder / "out"
+    out_dir.mkdir(exist_ok=True)
+    rc2, _, err2 = cli(
+        "wavecheck",
+        ["check", str(path), "--drive", "gecko-g202", "--map", "step=STEP,dir=DIR",
+         "--format", "json", "-o", str(out_dir / "report.json")],
+    )  # fmt: skip
+    try:
+        if missing_channels_ok and case.expect == "ok" and rc2 == 2 and "no channel" in err2:
+            return
+        expect = "error" if rc == 2 else case.expect
+        assert_contract(rc2, err2, str(path), expect, ok_codes=(0, 1, 3))
+        if rc2 == 2:
+            assert_no_output(out_dir)
+        else:
+            assert (out_dir / "report.json").exists()
+    finally:
+        for p in out_dir.iterdir():
+            p.unlink()

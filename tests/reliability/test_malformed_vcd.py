@@ -9,7 +9,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.reliability.corpus import Case, truncation_offsets, vcd_cases, vcd_text
-from tests.reliability.helpers import assert_contract, assert_no_output, cli, write_case
+from tests.reliability.helpers import (
+    info_then_check,
+)
 from wavecheck.capture.vcd import read_vcd, read_vcd_reference
 from wavecheck.errors import CaptureError
 
@@ -24,24 +26,7 @@ FUZZ = settings(
 
 
 def _info_and_check(folder: Path, case: Case) -> None:
-    path = write_case(folder, case)
-    rc, _, err = cli("wavecheck", ["info", str(path)])
-    assert_contract(rc, err, str(path), case.expect)
-    out_dir = folder / "out"
-    out_dir.mkdir(exist_ok=True)
-    rc2, _, err2 = cli(
-        "wavecheck",
-        ["check", str(path), "--drive", "gecko-g202", "--map", "step=STEP,dir=DIR",
-         "--format", "json", "-o", str(out_dir / "report.json")],
-    )  # fmt: skip
-    expect = case.expect
-    if rc == 0 and expect == "either":
-        expect = "either"  # readable, but the check may still refuse (x/z on a mapped signal)
-    assert_contract(rc2, err2, str(path), expect if rc != 2 else "error", ok_codes=(0, 1, 3))
-    if rc2 == 2:
-        assert_no_output(out_dir)
-    for p in out_dir.iterdir():
-        p.unlink()
+    info_then_check(folder, case)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
