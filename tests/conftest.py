@@ -6,6 +6,12 @@ import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+# No per-example deadline: a loaded 2-core CI machine must not turn a slow example into a failure.
+# In CI (CI=true) the examples are derandomised, so the gate is repeatable; local runs explore.
+settings.register_profile("wavecheck", deadline=None, derandomize=os.environ.get("CI") == "true")
+settings.load_profile("wavecheck")
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED_CAPTURES = REPO.parent / "shared" / "captures"
