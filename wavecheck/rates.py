@@ -18,6 +18,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -27,7 +28,7 @@ import numpy.typing as npt
 from wavecheck.checks.primitives import Intervals, widths
 from wavecheck.decode import ActiveEdge, StepEvents
 from wavecheck.drives.model import Drive
-from wavecheck.interface import StepInterface
+from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.timebase import Timebase
 
 __all__ = ["MaxStepRates", "max_step_rates"]
@@ -55,6 +56,24 @@ def _diff_extreme(
         if best_i < 0 or (v < best_v if smallest else v > best_v):
             best_v, best_i = v, i + k
     return best_v, best_i
+
+
+def generator_pulses(signals: Sequence[RoleSignal]) -> tuple[int, int] | None:
+    """The level of the generator's pulses and the longest pulse in ticks, read from the capture.
+
+    Pulses are short and of fixed length while the gaps between them grow as the rate falls, so
+    the pulse level is the one whose longest stretch is shorter (high on a tie). None when the
+    signals never complete a stretch at either level.
+    """
+    longest_at: dict[int, int] = {}
+    for level in (0, 1):
+        stretch = Intervals.concat([widths(s.initial, s.edges, level) for s in signals])
+        if len(stretch):
+            longest_at[level] = _diff_extreme(stretch.start, stretch.end, smallest=False)[0]
+    if not longest_at:
+        return None
+    level = min(longest_at, key=lambda lv: (longest_at[lv], lv != 1))
+    return level, longest_at[level]
 
 
 @dataclass(frozen=True)
@@ -115,15 +134,10 @@ def max_step_rates(
     pulse_level: int | None = None
     if type_number in (0, 1) and active_edge != "both":
         roles = ("step",) if type_number == 0 else ("up", "down")
-        sigs = [s for s in (iface.get(r) for r in roles) if s is not None]
-        longest_at: dict[int, int] = {}
-        for level in (0, 1):
-            stretch = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
-            if len(stretch):
-                longest_at[level] = _diff_extreme(stretch.start, stretch.end, smallest=False)[0]
-        if longest_at:
-            pulse_level = min(longest_at, key=lambda lv: (longest_at[lv], lv != 1))
-            longest = timebase.ns(longest_at[pulse_level])
+        found = generator_pulses([s for s in (iface.get(r) for r in roles) if s is not None])
+        if found is not None:
+            pulse_level, longest_ticks = found
+            longest = timebase.ns(longest_ticks)
             idle_min = drive.limit_ns("step_low" if pulse_level == 1 else "step_high")
             if idle_min is not None and longest + idle_min > 0:
                 headroom = _GIGA / (longest + idle_min)

@@ -47,6 +47,7 @@ from wavecheck.checks.result import RuleResult, evaluate, sequence_result
 from wavecheck.decode import ActiveEdge, StepEvents, active_edges, phase_states
 from wavecheck.drives.model import Drive, Figure
 from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.rates import generator_pulses
 
 __all__ = ["RULES_BY_KIND", "RULE_ORDER", "RuleSet", "applicable_rules", "run_rules"]
 
@@ -106,8 +107,18 @@ def _pulse_ends(sig: RoleSignal, edge: ActiveEdge) -> tuple[EdgeArray, EdgeArray
 
 
 def _dir_delay(iface: StepInterface, edge: ActiveEdge) -> Intervals:
-    up_t, up_end = _pulse_ends(iface.require("up"), edge)
-    dn_t, dn_end = _pulse_ends(iface.require("down"), edge)
+    """End of the last pulse on one line → the active edge of the first pulse on the other.
+
+    A pulse ends at the edge after its active edge — unless the generator's pulses are at the
+    other level (high pulses into a falling-edge drive, the seed's G202 reading), where the
+    active edge itself ends the pulse.
+    """
+    up, down = iface.require("up"), iface.require("down")
+    up_t, up_end = _pulse_ends(up, edge)
+    dn_t, dn_end = _pulse_ends(down, edge)
+    found = generator_pulses([up, down])
+    if edge != "both" and found is not None and found[0] != (edge == "rising"):
+        up_end, dn_end = up_t, dn_t
     ticks = np.concatenate([up_t, dn_t])
     ends = np.concatenate([up_end, dn_end])
     line = np.concatenate([np.zeros(len(up_t), np.int8), np.ones(len(dn_t), np.int8)])

@@ -139,6 +139,33 @@ def test_up_down_dir_delay() -> None:
     assert low is not None and low.checked == 3  # 12-20 on UP, 22-43 on UP, 27-40 on DOWN
 
 
+@pytest.mark.parametrize(
+    ("inverted", "expected_us"),
+    [
+        # high pulses into a falling-edge drive: the active (falling) edge ENDS each pulse, so the
+        # delay runs from the last active edge on one line to the first on the other: 12→52, 52→92
+        (False, [40, 40]),
+        # the same lines inverted at the drive (low pulses): the falling edge starts each pulse,
+        # which ends at the next rising edge: UP's pulse 10-12 → DOWN's active edge at 50 µs
+        (True, [38, 38]),
+    ],
+)
+def test_up_down_dir_delay_falling_edge_drive(inverted: bool, expected_us: list[int]) -> None:
+    """DESIGN rule table: dir_delay = last pulse on one line → first pulse on the other. With high
+    pulses into a falling-edge drive, a pulse's end is its falling (active) edge — taking the
+    line's next rising edge (its next pulse, after the other line's) gave negative intervals."""
+    up = pulses([10 * US, 90 * US], 2 * US)
+    down = pulses([50 * US], 2 * US)
+    cap = capture({"UP": (0, up), "DOWN": (0, down)}, end=200 * US)
+    d = drive("falling", interface="up-down", dir_delay=5 * US)
+    invert = ("up", "down") if inverted else ()
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, invert, step_type_number=1)
+    r = report.rule("dir_delay")
+    assert r is not None
+    assert r.measured_ticks.tolist() == [v * US for v in expected_us]
+    assert r.verdict == "pass"
+
+
 def test_phase_types_state_hold_and_sequence() -> None:
     st = step_type(2)  # quadrature 1, 3, 2, 0
     # states entered at 100, 200, 250 (held 50), 350 (jump 0 → 3: non-neighbour? 0→3 is index 3→1)
