@@ -1,0 +1,315 @@
+"""VCD header: declarations, ``$timescale``, sigrok's ``$comment`` sample rate, and the layout of
+the 1-bit signals both VCD readers (:mod:`wavecheck.capture.vcd`, the fast one, and
+:mod:`wavecheck.capture.vcd_reference`, the simple one) read the body into.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import BinaryIO
+
+from wavecheck.errors import CaptureError, UnitError
+from wavecheck.timebase import Timebase
+from wavecheck.units import parse_frequency
+
+__all__ = ["VarDecl", "VcdHeader", "parse_header"]
+
+_MAX_HEADER_BYTES = 64 << 20
+_MAX_ID_LEN = 8
+_TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
+_SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
+_END_RE = re.compile(rb"\$end(\s|$)")
+_NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
+_SCALAR_VALUES = {
+    "0": 0, "1": 1, "l": 0, "h": 1, "x": 2, "u": 2, "w": 2, "-": 2, "z": 3,
+}  # fmt: skip
+
+
+@dataclass
+class VarDecl:
+    """One ``$var`` of the header."""
+
+    type: str
+    size: int
+    id_code: str
+    reference: str  # with its bit select, e.g. "data[3]"
+    scope: tuple[str, ...]
+    line: int
+
+    @property
+    def full_name(self) -> str:
+        return ".".join((*self.scope, self.reference))
+
+
+@dataclass
+class VcdHeader:
+    """What the header declares; ``body_offset`` is the byte after ``$enddefinitions $end``."""
+
+    timescale: Timebase | None
+    timescale_text: str | None
+    vars: list[VarDecl]
+    comments: list[str]
+    body_offset: int
+    body_line: int
+
+
+def _line_of(data: bytes, offset: int) -> int:
+    return data.count(b"\n", 0, offset) + 1
+
+
+def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
+    """Parse the declarations at the start of ``data`` (which must contain the whole header).
+
+    Raises:
+        CaptureError: with the line number, for a bad timescale, ``$var`` or missing
+            ``$enddefinitions``.
+    """
+    tokens = [(m.group().decode("latin-1"), m.start(), m.end()) for m in re.finditer(rb"\S+", data)]
+    scope: list[str] = []
+    decls: list[VarDecl] = []
+    comments: list[str] = []
+    timescale: Timebase | None = None
+    timescale_text: str | None = None
+    i, n = 0, len(tokens)
+
+    def section(start: int) -> tuple[list[str], int]:
+        j = start + 1
+        while j < n and tokens[j][0] != "$end":
+            j += 1
+        if j >= n:
+            raise CaptureError(
+                path,
+                f"line {_line_of(data, tokens[start][1])}",
+                f"{tokens[start][0]} without $end (the header is cut off)",
+            )
+        return [t[0] for t in tokens[start + 1 : j]], j + 1
+
+    while i < n:
+        word, off, _ = tokens[i]
+        where = f"line {_line_of(data, off)}"
+        if word == "$enddefinitions":
+            _, i = section(i)
+            end = tokens[i - 1][2]
+            return VcdHeader(timescale, timescale_text, decls, comments, end, _line_of(data, end))
+        if word == "$timescale":
+            body, i = section(i)
+            text = "".join(body)
+            match = _TIMESCALE_RE.match(text)
+            if not match or int(match.group(1)) == 0:
+                raise CaptureError(
+                    path,
+                    where,
+                    f"bad $timescale {' '.join(body)!r} (write e.g. '$timescale 1 ns $end')",
+                )
+            tb = Timebase.from_timescale(int(match.group(1)), match.group(2))
+            if not Fraction(1, 10**15) <= tb.tick_s <= 100:
+                raise CaptureError(path, where, f"$timescale {text} is outside 1 fs … 100 s")
+            timescale, timescale_text = tb, f"{match.group(1)} {match.group(2)}"
+        elif word == "$scope":
+            body, i = section(i)
+            scope.append(body[-1] if body else "")
+        elif word == "$upscope":
+            _, i = section(i)
+            if scope:
+                scope.pop()
+        elif word == "$var":
+            body, i = section(i)
+            if len(body) < 4 or not re.fullmatch(r"[0-9]+", body[1]) or int(body[1]) < 1:
+                raise CaptureError(
+                    path, where, f"bad $var {' '.join(body)!r} (expected '$var wire 1 ! name $end')"
+                )
+            id_code = body[2]
+            if len(id_code) > _MAX_ID_LEN:
+                raise CaptureError(
+                    path, where, f"id code {id_code!r} is longer than {_MAX_ID_LEN} characters"
+                )
+            ref = body[3:]
+            # "data [3]" → "data[3]"; sigrok's "STEP (Y axis)" keeps its spaces
+            name = (
+                " ".join(ref[:-1]) + ref[-1]
+                if len(ref) > 1 and ref[-1].startswith("[")
+                else " ".join(ref)
+            )
+            decls.append(
+                VarDecl(body[0], int(body[1]), id_code, name, tuple(scope), int(where[5:]))
+            )
+        elif word in ("$comment", "$date", "$version"):
+            body, i = section(i)
+            if word == "$comment":
+                comments.append(" ".join(body))
+        elif word.startswith("$"):
+            _, i = section(i)  # $attrbegin and friends: ignored
+        else:
+            raise CaptureError(
+                path, where, f"unexpected {word[:40]!r} in the header (is this a VCD file?)"
+            )
+    raise CaptureError(
+        path, "header", "no $enddefinitions (the file is cut off in its header, or not a VCD)"
+    )
+
+
+def _read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
+    """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far."""
+    data = b""
+    end = len(data)
+    while True:
+        block = f.read(1 << 20)
+        data += block
+        pos = data.find(b"$enddefinitions")
+        match = _END_RE.search(data, pos + 15) if pos >= 0 else None
+        if match is not None:
+            end = match.start() + 4
+            break
+        end = len(data)
+        if not block or len(data) > _MAX_HEADER_BYTES:
+            break
+    if not data.strip():
+        raise CaptureError(path, None, "the file is empty (no VCD header)")
+    header = parse_header(path, data[:end])
+    return header, data[header.body_offset :]
+
+
+@dataclass
+class _Layout:
+    """The 1-bit channels and skipped signals of a header."""
+
+    names: list[str]
+    decls: list[VarDecl]  # first declaration of each channel
+    ids: list[str]
+    vector_ids: set[str]
+    skipped: dict[str, str]
+    notes: list[str]
+    aliases: dict[str, str]
+
+
+def _layout(header: VcdHeader) -> _Layout:
+    first: dict[str, VarDecl] = {}
+    aliases: dict[str, list[str]] = {}
+    for d in header.vars:
+        if d.id_code in first:
+            aliases.setdefault(d.id_code, []).append(d.full_name)
+        else:
+            first[d.id_code] = d
+    scalar = [d for d in first.values() if d.size == 1 and d.type not in _NON_SIGNAL_TYPES]
+    others = [d for d in first.values() if not (d.size == 1 and d.type not in _NON_SIGNAL_TYPES)]
+    ids_by_short: dict[str, set[str]] = {}
+    for d in header.vars:
+        ids_by_short.setdefault(d.reference, set()).add(d.id_code)
+    names: list[str] = []
+    used: set[str] = set()
+    for d in scalar:
+        name = d.reference if len(ids_by_short[d.reference]) == 1 else d.full_name
+        base, k = name, 2
+        while name in used:
+            name, k = f"{base}#{k}", k + 1
+        used.add(name)
+        names.append(name)
+    skipped: dict[str, str] = {}
+    notes: list[str] = []
+    for d in others:
+        if d.type in ("real", "realtime", "shortreal"):
+            what = "a real"
+        elif d.type in ("event", "string"):
+            what = f"an {d.type}" if d.type == "event" else "a string"
+        else:
+            what = f"a {d.size}-bit {'integer' if d.type == 'integer' else 'vector'}"
+        for d2 in header.vars:
+            if d2.id_code == d.id_code:
+                skipped.setdefault(d2.full_name, what)
+                if len(ids_by_short[d2.reference]) == 1 or d2.reference not in used:
+                    skipped.setdefault(d2.reference, what)
+                    bare = d2.reference.split("[", 1)[0]
+                    if bare and bare not in used:
+                        skipped.setdefault(bare, what)
+    if others:
+        listed = ", ".join(d.full_name for d in others[:10])
+        more = f" and {len(others) - 10} more" if len(others) > 10 else ""
+        notes.append(
+            f"skipped {len(others)} signal(s) that are not 1-bit wires "
+            f"(vectors, integers, reals): {listed}{more}"
+        )
+    n_alias = sum(len(v) for k, v in aliases.items() if k in {d.id_code for d in scalar})
+    alias_names: dict[str, str] = {}
+    by_id = {d.id_code: name for d, name in zip(scalar, names, strict=True)}
+    for d in header.vars:
+        target = by_id.get(d.id_code)
+        if target is None:
+            continue
+        for other in (d.full_name, d.reference):
+            if other not in used and (other != d.reference or len(ids_by_short[other]) == 1):
+                alias_names.setdefault(other, target)
+    if n_alias:
+        notes.append(f"{n_alias} declaration(s) alias a channel declared earlier (same id code)")
+    return _Layout(
+        names,
+        scalar,
+        [d.id_code for d in scalar],
+        {d.id_code for d in others},
+        skipped,
+        notes,
+        alias_names,
+    )
+
+
+def _resolution(
+    path: str | os.PathLike[str],
+    tb: Timebase,
+    comments: list[str],
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    notes: list[str],
+) -> tuple[int, Fraction | None]:
+    """Resolution in ticks and sample rate: user values first, then sigrok's ``$comment``."""
+    rate = samplerate
+    if rate is None:
+        for text in comments:
+            match = _SAMPLERATE_RE.search(text)
+            if match:
+                try:
+                    rate = parse_frequency(match.group(1))
+                except UnitError:
+                    continue
+                notes.append(f"sample rate {match.group(1)} from the file's $comment")
+                break
+    sample_res: int | None = None
+    if rate:
+        # a sampled capture: an edge is known to one sample period T; when T is not a whole
+        # number of ticks the timestamps are rounded to the timescale (sigrok-cli writes
+        # round(i·T) for sample i, sigrok.md §7), which adds up to one tick to an interval
+        ticks = 1 / rate / tb.tick_s
+        sample_res = -((-ticks.numerator) // ticks.denominator)
+        if ticks.denominator != 1:
+            sample_res += 1
+            notes.append(
+                f"the sample period {float(ticks * tb.tick_ns):g} ns is not a whole number of "
+                f"{float(tb.tick_ns):g} ns ticks, so the timestamps are rounded; resolution "
+                f"{sample_res} ticks covers the period and the rounding"
+            )
+    if resolution_s is None:
+        return (0 if sample_res is None else sample_res), rate
+    if resolution_s < 0:
+        raise CaptureError(path, None, f"resolution {resolution_s} s must not be negative")
+    ticks = resolution_s / tb.tick_s
+    res = -((-ticks.numerator) // ticks.denominator)
+    if ticks.denominator != 1:
+        notes.append(
+            f"resolution {float(resolution_s * 10**9):g} ns is not a whole number of "
+            f"{float(tb.tick_ns):g} ns ticks; rounded up to {res} ticks"
+        )
+    if sample_res is not None and res < sample_res:
+        notes.append(
+            f"resolution {float(resolution_s * 10**9):g} ns is finer than the sample period; "
+            f"using {sample_res} ticks"
+        )
+        res = sample_res
+    return res, rate
+
+
+def _start_note(header: VcdHeader, notes: list[str]) -> Timebase:
+    if header.timescale is None:
+        notes.append("no $timescale; assumed 1 s per tick as the VCD standard says")
+        return Timebase(Fraction(1))
+    return header.timescale
