@@ -15,6 +15,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from tests.conftest import write_vcd
 from tests.reliability.corpus import samples_from_edges, sr_bytes, sr_metadata
 from tests.reliability.refcheck import min_margin, reference_check
 from tests.wavecheck.waves import drive as make_drive
@@ -26,23 +27,7 @@ TICK_NS = Fraction(100)  # VCD "$timescale 100 ns", .sr at 10 MHz
 
 
 def _vcd(path: Path, signals: dict[str, tuple[int, list[int]]], end: int) -> Path:
-    ids = {name: chr(33 + i) for i, name in enumerate(signals)}
-    lines = ["$timescale 100 ns $end", "$scope module top $end"]
-    lines += [f"$var wire 1 {ids[n]} {n} $end" for n in signals]
-    lines += ["$upscope $end", "$enddefinitions $end", "#0", "$dumpvars"]
-    lines += [f"{init}{ids[n]}" for n, (init, _) in signals.items()] + ["$end"]
-    events: dict[int, list[str]] = {}
-    for n, (init, edges) in signals.items():
-        level = init
-        for t in edges:
-            level ^= 1
-            events.setdefault(t, []).append(f"{level}{ids[n]}")
-    for t in sorted(events):
-        lines.append(f"#{t}")
-        lines += events[t]
-    lines.append(f"#{end}")
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return write_vcd(path, signals, timescale="100 ns", end=end)
 
 
 @st.composite
