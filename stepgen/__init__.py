@@ -1,5 +1,9 @@
-"""stepgen: a faithful model of LinuxCNC's software step generator, and its timing calculator."""
+"""stepgen: a faithful model of LinuxCNC's software step generator, and its timing calculator.
 
-# wavecheck's package imports stepgen.steptypes (the shared step tables); importing wavecheck
-# first makes the order the same whichever package a program imports first.
-import wavecheck as _wavecheck  # noqa: F401
+It builds on :mod:`wavecheck` (errors, units, step-type tables, the n·P − J arithmetic); wavecheck
+never imports stepgen.
+"""
+
+from wavecheck import __version__
+
+__all__ = ["__version__"]

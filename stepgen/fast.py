@@ -138,7 +138,7 @@ def run_fast(
     u = 0
     pos_mode = ch.pos_mode
     cycle = max(kind.cycle, 1)
-    phased = kind.number >= 2
+    phased = kind.kind == "phases"
     append = desc.append
     steady = False
 

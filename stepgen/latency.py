@@ -34,19 +34,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 
 from stepgen.latencyfiles import read_histogram
 from stepgen.model import InvocationRun
+from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
+from wavecheck.linuxcnc.steptypes import kind_of
+from wavecheck.rules import RULES as TABLE
 from wavecheck.units import time_ns
 
 __all__ = ["RULES", "LatencyModel", "describe", "invocation_times", "parse_latency"]
 
-ActiveEdge = Literal["rising", "falling"]
-RULES = ("step_high", "step_low", "step_period", "dir_setup", "dir_hold", "dir_delay", "state_hold")
+#: The rules ``worst:J:RULE`` can target: every interval rule whose intervals stepgen's own
+#: invocations end (not state_sequence, which has none, nor enable_setup: stepgen has no ENABLE).
+RULES: tuple[str, ...] = tuple(
+    r.id for r in TABLE if r.check != "sequence" and "enable" not in (r.ref, r.data)
+)
 DEFAULT_CATCHUP_NS = 1000
 
 
@@ -166,6 +171,9 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
     """Invocations that make the end events of ``rule``'s intervals (to run on time)."""
     t = run.toggles
     stype = run.config.step_type
+    kind = kind_of(stype)
+    if active_edge == "both":
+        raise ConfigError("the worst-case latency model needs one active edge (rising or falling)")
 
     def rising(pin: str) -> np.ndarray:
         return t[pin][0::2]
@@ -176,14 +184,14 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
     def alternate(events: np.ndarray) -> np.ndarray:
         return np.unique(events)[1::2]
 
-    if stype >= 2:
+    if kind == "phases":
         # a phase type's steps are its state changes: step_period measures the same intervals
         if rule not in ("state_hold", "step_period"):
             raise ConfigError(
                 f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
             )
         return alternate(np.concatenate([t[p] for p in run.pins]))
-    lines = ("step",) if stype == 0 else ("up", "down")
+    lines = ("step",) if kind == "step-dir" else ("up", "down")
     rises = np.unique(np.concatenate([rising(p) for p in lines]))
     falls = np.unique(np.concatenate([falling(p) for p in lines]))
     active = rises if active_edge == "rising" else falls
@@ -193,14 +201,14 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
         return rises
     if rule == "step_period":
         return alternate(active)
-    if stype == 0 and rule == "dir_hold":
+    if kind == "step-dir" and rule == "dir_hold":
         return t["dir"]
-    if stype == 0 and rule == "dir_setup":
+    if kind == "step-dir" and rule == "dir_setup":
         changes = t["dir"]
         pos = np.searchsorted(active, changes, side="left")  # first active edge at/after a change
         pos = pos[pos < len(active)]
         return np.unique(active[pos])
-    if stype == 1 and rule == "dir_delay":
+    if kind == "up-down" and rule == "dir_delay":
         # ends at the active edge of the first pulse on the other line
         pick = rising if active_edge == "rising" else falling
         up, down = pick("up"), pick("down")

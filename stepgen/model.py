@@ -25,8 +25,8 @@ from typing import Literal
 
 import numpy as np
 
-from stepgen.steptypes import StepType, step_type
 from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.steptypes import StepType, step_type
 
 __all__ = [
     "HALF_STEP",
@@ -162,7 +162,7 @@ class StepgenConfig:
         return self.thread_order == "update-first"
 
     def kind(self) -> StepType:
-        """The :class:`~stepgen.steptypes.StepType` (raises ConfigError for a bad type)."""
+        """The :class:`~wavecheck.linuxcnc.steptypes.StepType` (raises ConfigError for a bad type)."""
         return step_type(self.step_type, self.user_step_type or None)
 
     @property
@@ -207,8 +207,8 @@ class Channel:
         self.step_len = config.steplen
         # storage sharing (§1): types >= 1 keep dirdelay in dir_hold_dly, dir_setup is internal 0;
         # stepspace exists for types 0/1 only.
-        self.step_space = config.stepspace if kind.number < 2 else 0
-        if kind.number == 0:
+        self.step_space = config.stepspace if kind.kind != "phases" else 0
+        if kind.kind == "step-dir":
             self.dir_hold_dly = config.dirhold
             self.dir_setup = config.dirsetup
         else:

@@ -5,66 +5,47 @@ From a drive's datasheet figures and the PC's worst latency ``J`` this chooses `
 states the maximum step rate and the margin every requirement keeps. See §9 of
 ``shared/reference/stepgen-linuxcnc.md`` and the seeds' "Stepper Tuning" chapter.
 
-The principle (seed, [TWK]): every interval stepgen makes ``n`` base periods long is only
-guaranteed ``n·P − J`` long in real time (one invocation late by ``J``, the next on time). A
-requirement ``T`` therefore needs ``n = ceil((T + J) / P)`` periods.
-
-Mapping datasheet figures onto stepgen (all of this is stated in :attr:`Plan.assumptions`):
-
-* stepgen's pulse (``steplen`` periods) is the drive's *high* time when the STEP pin is not
-  inverted, its *low* time when it is; ``stepspace`` is the other level.
-* The drive's active edge is the start of stepgen's pulse for a rising-edge drive on a
-  non-inverted pin, or a falling-edge drive on an inverted pin (then ``steplen`` is ``t_active``);
-  otherwise it is the *end* of the pulse (the seed's own G202 reading: falling edge, pin not
-  inverted).
-* The datasheet's DIR hold counts from the active edge; LinuxCNC's ``dirhold`` counts from the end
-  of the pulse. So the worst hold is ``dirhold·P − J`` when the active edge ends the pulse and
-  ``(steplen + dirhold)·P − J`` when it starts it. Likewise DIR setup (DIR change → next active
-  edge) is ``dirsetup·P − J`` or ``(dirsetup + steplen)·P − J``.
-* Across a reversal the idle level lasts only ``dirhold + dirsetup`` periods and the step period
-  ``steplen + dirhold + dirsetup`` periods (reference §2.3), so those are requirements too.
+The interval arithmetic (``n = ceil((T + J) / P)``, which datasheet figure each parameter serves,
+where the active edge lies on stepgen's pulse) is :mod:`wavecheck.linuxcnc.timing`; this module
+chooses the parameters, states its assumptions and warnings. Outputs: :mod:`stepgen.plan_render`.
 
 Everything is exact: times are :class:`~fractions.Fraction` ns, the base period an integer ns.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Literal
 
 from wavecheck.drives.model import Drive
 from wavecheck.errors import ConfigError
-from wavecheck.units import format_time
+from wavecheck.linuxcnc.timing import (
+    PARAMS,
+    PLAN_RULES,
+    ActiveAt,
+    Requirement,
+    active_at,
+    evaluate,
+    period_limit_ns,
+    periods_needed,
+    require_figures,
+    step_rate_hz,
+)
+from wavecheck.units import exact_ns, format_time
 
 __all__ = [
     "PARAMS",
     "PLAN_RULES",
-    "ActiveAt",
     "Param",
     "Plan",
-    "Requirement",
     "latency_guidance",
-    "evaluate",
     "min_base_period_ns",
-    "periods_needed",
     "plan",
-    "plan_to_dict",
-    "render_hal",
-    "render_ini",
-    "render_json",
-    "render_text",
     "simple_base_period_ns",
-    "step_rate_hz",
 ]
 
-#: stepgen's timing parameters for step type 0, in the order LinuxCNC lists them.
-PARAMS: tuple[str, ...] = ("steplen", "stepspace", "dirsetup", "dirhold")
-#: The drive figures a plan needs.
-PLAN_RULES: tuple[str, ...] = ("step_high", "step_low", "dir_setup", "dir_hold")
 #: The seed's advice: start at 25 µs and go down only while the PC stays responsive.
 SHORT_PERIOD_NS = 25_000
 #: StepConf never proposes a BASE_PERIOD above 100 µs (reference §9, [SC]).
@@ -74,28 +55,6 @@ MAX_LATENCY_NS = 1_000_000
 #: stepgen's timing parameters are u32 ns.
 U32_MAX = 2**32 - 1
 
-ActiveAt = Literal["start", "end"]
-"""Where the drive's active edge lies on stepgen's pulse: its start or its end."""
-
-
-def periods_needed(
-    requirement_ns: Fraction | int, latency_ns: Fraction | int, period_ns: int
-) -> int:
-    """Whole base periods ``n`` such that ``n·P − J ≥ T``: ``ceil((T + J) / P)`` (≥ 0).
-
-    Args:
-        requirement_ns: the drive's minimum ``T`` in ns.
-        latency_ns: worst latency ``J`` in ns.
-        period_ns: base period ``P`` in ns (> 0).
-    """
-    need = Fraction(requirement_ns) + Fraction(latency_ns)
-    return max(0, math.ceil(need / period_ns))
-
-
-def step_rate_hz(period_ns: int | Fraction, periods: int) -> Fraction:
-    """Exact step rate in Hz when one step takes ``periods`` base periods of ``period_ns``."""
-    return Fraction(10**9) / (Fraction(period_ns) * periods)
-
 
 def min_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
     """The seed's minimum BASE_PERIOD: ``J`` + the longer of the step high/low requirements (ns).
@@ -103,7 +62,7 @@ def min_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
     With it, steplen = stepspace = 1 period meets both pulse levels; DIR setup/hold are met by
     lengthening ``dirsetup``/``dirhold``.
     """
-    _require(drive, ("step_high", "step_low"))
+    require_figures(drive, ("step_high", "step_low"))
     return Fraction(latency_ns) + max(_limit(drive, "step_high"), _limit(drive, "step_low"))
 
 
@@ -112,7 +71,7 @@ def simple_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
 
     With it every parameter can stay at one period (LinuxCNC's default).
     """
-    _require(drive, PLAN_RULES)
+    require_figures(drive)
     return Fraction(latency_ns) + max(_limit(drive, r) for r in PLAN_RULES)
 
 
@@ -128,35 +87,6 @@ class Param:
     """The value to set, ns (``periods · P``; stepgen keeps it as is)."""
     reason: str
     """Why it has this many periods (the binding requirement, or LinuxCNC's one-period minimum)."""
-
-
-@dataclass(frozen=True)
-class Requirement:
-    """One interval the drive needs, and what the plan guarantees for it under latency ``J``."""
-
-    rule: str
-    """Rule id (``step_high``, ``step_low``, ``dir_setup``, ``dir_hold``, ``step_period``)."""
-    what: str
-    """Which interval, in words (e.g. "DIR hold, active edge = end of pulse → DIR change")."""
-    limit_ns: Fraction
-    """The drive's minimum ``T``, ns."""
-    params: tuple[str, ...]
-    """The stepgen parameters whose periods add up to this interval."""
-    periods: int
-    """The interval in base periods (sum of ``params``)."""
-    worst_ns: Fraction
-    """Shortest real interval under latency ``J``: ``periods·P − J``, ns."""
-
-    @property
-    def margin_ns(self) -> Fraction:
-        """``periods·P − J − T`` in ns (≥ 0 for every requirement of a plan)."""
-        return self.worst_ns - self.limit_ns
-
-    @property
-    def formula(self) -> str:
-        """E.g. ``"(steplen + dirhold)·P − J"``."""
-        names = " + ".join(self.params)
-        return f"({names})·P − J" if len(self.params) > 1 else f"{names}·P − J"
 
 
 @dataclass(frozen=True)
@@ -296,7 +226,7 @@ def plan(
             period out of range.
     """
     j = _check_latency(latency_ns)
-    _require(drive, PLAN_RULES)
+    require_figures(drive)
     if drive.interface != "step-dir":
         raise ConfigError(
             f"drive {drive.id} has a {drive.interface} interface; stepgen plan handles "
@@ -320,8 +250,8 @@ def plan(
     pulse_level = "low" if step_inverted else "high"
     active_rule = "step_low" if step_inverted else "step_high"
     idle_rule = "step_high" if step_inverted else "step_low"
-    starts = (drive.active_edge == "rising") != step_inverted
-    active_at: ActiveAt = "start" if starts else "end"
+    at = active_at(drive, step_inverted)
+    starts = at == "start"
 
     def need(rule: str) -> int:
         return periods_needed(_limit(drive, rule), j, period)
@@ -341,7 +271,7 @@ def plan(
         f"{active_rule} (the drive's {pulse_level} time = stepgen's pulse)",
     )
     space_need = need(idle_rule)
-    period_rule_ns = _period_limit(drive)
+    period_rule_ns = period_limit_ns(drive)
     period_need = periods_needed(period_rule_ns, j, period) if period_rule_ns is not None else 0
     if period_need - steplen > space_need:
         stepspace = choose(
@@ -394,10 +324,10 @@ def plan(
             )
         params[name] = Param(name, periods[name], ns, reasons[name])
 
-    requirements = _requirements(drive, j, period, periods, step_inverted, active_at)
+    requirements = evaluate(drive, j, period, periods, step_inverted=step_inverted)
     assert all(r.margin_ns >= 0 for r in requirements), requirements  # the plan's own invariant
 
-    assumptions = _assumptions(drive, step_inverted, active_at)
+    assumptions = _assumptions(drive, step_inverted, at)
     warnings: list[str] = []
     guidance, bad = latency_guidance(j)
     if bad:
@@ -414,14 +344,14 @@ def plan(
         )
     if period < min_p:
         warnings.append(
-            f"BASE_PERIOD is below the minimum {_ns(min_p)} ns for one-period pulses: steplen or "
+            f"BASE_PERIOD is below the minimum {exact_ns(min_p)} ns for one-period pulses: steplen or "
             "stepspace takes more than one period, lowering the max step rate"
         )
     for rule in PLAN_RULES:
         fig = drive.limits[rule]
         if fig.status not in ("datasheet",):
             warnings.append(
-                f"{rule} {_ns(fig.value)} ns is a {fig.status} figure, not a datasheet value"
+                f"{rule} {exact_ns(fig.value)} ns is a {fig.status} figure, not a datasheet value"
             )
 
     return Plan(
@@ -429,7 +359,7 @@ def plan(
         latency_ns=j,
         latency_source=latency_source,
         step_inverted=step_inverted,
-        active_at=active_at,
+        active_at=at,
         min_base_period_ns=min_p,
         simple_base_period_ns=simple_p,
         base_period_ns=period,
@@ -440,77 +370,6 @@ def plan(
         warnings=tuple(warnings),
         guidance=guidance,
     )
-
-
-def evaluate(
-    drive: Drive,
-    latency_ns: Fraction | int,
-    base_period_ns: int,
-    periods: Mapping[str, int],
-    *,
-    step_inverted: bool = False,
-) -> tuple[Requirement, ...]:
-    """The worst-case intervals of any stepgen setting (not only a plan's) against ``drive``.
-
-    Args:
-        periods: steplen, stepspace, dirsetup, dirhold in whole base periods.
-    Returns:
-        One :class:`Requirement` per interval; a negative ``margin_ns`` is a violation.
-    """
-    _require(drive, PLAN_RULES)
-    starts = (drive.active_edge == "rising") != step_inverted
-    return _requirements(
-        drive,
-        Fraction(latency_ns),
-        base_period_ns,
-        dict(periods),
-        step_inverted,
-        "start" if starts else "end",
-    )
-
-
-def _requirements(
-    drive: Drive,
-    j: Fraction,
-    period: int,
-    periods: Mapping[str, int],
-    step_inverted: bool,
-    active_at: ActiveAt,
-) -> tuple[Requirement, ...]:
-    active_rule = "step_low" if step_inverted else "step_high"
-    idle_rule = "step_high" if step_inverted else "step_low"
-    edge = "start" if active_at == "start" else "end"
-    rows: list[tuple[str, str, tuple[str, ...]]] = [
-        (active_rule, "stepgen's pulse", ("steplen",)),
-        (idle_rule, "between pulses, same direction", ("stepspace",)),
-        (idle_rule, "between pulses across a reversal", ("dirhold", "dirsetup")),
-    ]
-    if active_at == "start":
-        rows += [
-            ("dir_setup", "DIR change → active edge (start of pulse)", ("dirsetup",)),
-            ("dir_hold", "active edge (start of pulse) → DIR change", ("steplen", "dirhold")),
-        ]
-    else:
-        rows += [
-            ("dir_setup", "DIR change → active edge (end of pulse)", ("dirsetup", "steplen")),
-            ("dir_hold", "active edge (end of pulse) → DIR change", ("dirhold",)),
-        ]
-    if _period_limit(drive) is not None:
-        rows += [
-            (
-                "step_period",
-                f"active edge → active edge ({edge} of pulse)",
-                ("steplen", "stepspace"),
-            ),
-            ("step_period", "active edges across a reversal", ("steplen", "dirhold", "dirsetup")),
-        ]
-    out = []
-    for rule, what, names in rows:
-        limit = _period_limit(drive) if rule == "step_period" else _limit(drive, rule)
-        assert limit is not None
-        n = sum(periods[name] for name in names)
-        out.append(Requirement(rule, what, limit, names, n, n * period - j))
-    return tuple(out)
 
 
 def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tuple[str, ...]:
@@ -557,7 +416,7 @@ def _check_latency(latency_ns: Fraction | int) -> Fraction:
     j = Fraction(latency_ns)
     if j <= 0:
         raise ConfigError(
-            f"latency {_ns(j)} ns must be positive (run latency-test or cyclictest and give its "
+            f"latency {exact_ns(j)} ns must be positive (run latency-test or cyclictest and give its "
             "worst figure, e.g. --latency 11us)"
         )
     if j > MAX_LATENCY_NS:
@@ -578,183 +437,13 @@ def _check_period(base_period_ns: int | Fraction, j: Fraction) -> int:
         raise ConfigError(f"base period {p} ns must be positive (e.g. --base-period 25us)")
     if p <= j:
         raise ConfigError(
-            f"base period {_ns(p)} ns is not longer than the latency {_ns(j)} ns: every "
+            f"base period {exact_ns(p)} ns is not longer than the latency {exact_ns(j)} ns: every "
             "one-period interval could vanish (choose a period above J + the longer step time)"
         )
     return int(p)
-
-
-def _require(drive: Drive, rules: tuple[str, ...]) -> None:
-    missing = [r for r in rules if drive.limit_ns(r) is None]
-    if missing:
-        raise ConfigError(
-            f"drive {drive.id} ({drive.path}) gives no {', '.join(missing)} figure; stepgen plan "
-            f"needs {', '.join(PLAN_RULES)} (add the datasheet figure to the rule file)"
-        )
 
 
 def _limit(drive: Drive, rule: str) -> Fraction:
     value = drive.limit_ns(rule)
     assert value is not None
     return value
-
-
-def _period_limit(drive: Drive) -> Fraction | None:
-    """The drive's shortest step period 1/fmax in ns, if it states a max rate."""
-    if drive.max_rate is None or drive.max_rate.value <= 0:
-        return None
-    return Fraction(10**9) / drive.max_rate.value
-
-
-# ---------------------------------------------------------------------------------- rendering
-
-
-def _ns(value: Fraction | int) -> str:
-    """Exact ns for people: ``11000``, ``15500``, ``10636.4``."""
-    v = Fraction(value)
-    if v.denominator == 1:
-        return str(v.numerator)
-    return f"{float(v):.6g}"
-
-
-def _num(value: Fraction | int) -> int | float:
-    """A JSON number: exact integer when integral, else a float."""
-    v = Fraction(value)
-    return v.numerator if v.denominator == 1 else float(v)
-
-
-def _rate(hz: Fraction) -> int:
-    """A step rate rounded down to a whole step/s (the seed's 16,129 and 38,461)."""
-    return math.floor(hz)
-
-
-def plan_to_dict(p: Plan) -> dict[str, Any]:
-    """The JSON document of a plan (keys are a public contract, see ``stepgen plan --help``)."""
-    return {
-        "drive": {"id": p.drive.id, "name": p.drive.name, "active_edge": p.drive.active_edge},
-        "latency": {"ns": _num(p.latency_ns), "source": p.latency_source},
-        "step_inverted": p.step_inverted,
-        "active_edge_at": p.active_at,
-        "min_base_period_ns": math.ceil(p.min_base_period_ns),
-        "min_base_period_step_rate_hz": _rate(p.min_base_period_rate_hz),
-        "simple_base_period_ns": math.ceil(p.simple_base_period_ns),
-        "simple_base_period_step_rate_hz": _rate(p.simple_base_period_rate_hz),
-        "base_period_ns": p.base_period_ns,
-        "base_period_given": p.base_period_given,
-        "params": {
-            name: {"ns": prm.ns, "periods": prm.periods, "reason": prm.reason}
-            for name, prm in p.params.items()
-        },
-        "max_step_rate_hz": _rate(p.max_step_rate_hz),
-        "margins_ns": {rule: _num(m) for rule, m in p.margins_ns.items()},
-        "requirements": [
-            {
-                "rule": r.rule,
-                "what": r.what,
-                "limit_ns": _num(r.limit_ns),
-                "formula": r.formula,
-                "periods": r.periods,
-                "worst_ns": _num(r.worst_ns),
-                "margin_ns": _num(r.margin_ns),
-            }
-            for r in p.requirements
-        ],
-        "shortest_output_ns": _num(p.shortest_output_ns),
-        "assumptions": list(p.assumptions),
-        "guidance": p.guidance,
-        "warnings": list(p.warnings),
-    }
-
-
-def render_json(p: Plan) -> str:
-    """The plan as indented JSON (with a trailing newline)."""
-    return json.dumps(plan_to_dict(p), indent=2, ensure_ascii=False) + "\n"
-
-
-def _us(ns: Fraction | int) -> str:
-    return format_time(Fraction(ns) / 10**9)
-
-
-def render_text(p: Plan, other: Plan | None = None) -> str:
-    """The plan for people: figures, the parameters, rates, margins, assumptions, warnings.
-
-    ``other``: the same plan under the other STEP-pin reading, summarised in one line.
-    """
-    d = p.drive
-    lines = [
-        f"stepgen plan for {d.name} ({d.id}), latency J = {_us(p.latency_ns)} ({p.latency_source or 'given'})",
-        f"  {p.guidance}",
-        "",
-        f"minimum BASE_PERIOD  {_ns(p.min_base_period_ns):>8} ns  = J + longer of step high/low "
-        f"-> max {_rate(p.min_base_period_rate_hz):,} steps/s",
-        f"simple BASE_PERIOD   {_ns(p.simple_base_period_ns):>8} ns  = J + longest requirement "
-        f"-> max {_rate(p.simple_base_period_rate_hz):,} steps/s",
-        f"chosen BASE_PERIOD   {p.base_period_ns:>8} ns  "
-        + ("(given)" if p.base_period_given else "(the minimum rounded up to a whole us)"),
-        "",
-        "parameter  periods        ns  why",
-    ]
-    for prm in p.params.values():
-        lines.append(f"{prm.name:<10} {prm.periods:>7} {prm.ns:>9}  {prm.reason}")
-    lines += [
-        "",
-        f"max step rate {_rate(p.max_step_rate_hz):,} steps/s = 1 / ((steplen + stepspace)·P) "
-        f"= 1 / ({p.step_periods} x {p.base_period_ns} ns)",
-    ]
-    pin = "inverted" if p.step_inverted else "not inverted"
-    lines.append(
-        f"(these figures assume the STEP pin {pin}: the drive's {d.active_edge} edge is the "
-        f"{p.active_at} of stepgen's pulse)"
-    )
-    if other is not None:
-        alt = ", ".join(f"{prm.name} {prm.periods}" for prm in other.params.values())
-        flag = "with --invert-step" if other.step_inverted else "without --invert-step"
-        lines.append(
-            f"(the other reading, {flag}: {alt} -> {_rate(other.max_step_rate_hz):,} steps/s)"
-        )
-    lines += [
-        "",
-        f"{'requirement':<13} {'interval':<42} {'formula':<36} {'worst':>8} {'limit':>8} "
-        f"{'margin':>9} (ns)",
-    ]
-    for r in p.requirements:
-        lines.append(
-            f"{r.rule:<13} {r.what:<42} {r.formula:<36} {_ns(r.worst_ns):>8} {_ns(r.limit_ns):>8} "
-            f"{_ns(r.margin_ns):>9}"
-        )
-    lines += ["", "assumptions:"] + [f"  - {a}" for a in p.assumptions]
-    if p.warnings:
-        lines += ["", "warnings:"] + [f"  ! {w}" for w in p.warnings]
-    return "\n".join(lines) + "\n"
-
-
-def _header(p: Plan, comment: str) -> list[str]:
-    pin = "INVERTED" if p.step_inverted else "not inverted"
-    return [
-        f"{comment} stepgen plan: {p.drive.name} ({p.drive.id}), latency {_us(p.latency_ns)}"
-        f" ({p.latency_source or 'given'})",
-        f"{comment} assumes the STEP pin {pin}: the drive's {p.drive.active_edge} (active) edge is "
-        f"the {p.active_at} of stepgen's pulse",
-        f"{comment} max step rate {_rate(p.max_step_rate_hz)} steps/s; shortest output time "
-        f"{_ns(p.shortest_output_ns)} ns under worst latency",
-    ]
-
-
-def render_ini(p: Plan, channel: int = 0) -> str:
-    """An INI snippet: ``[EMCMOT] BASE_PERIOD`` and StepConf-style ``[JOINT_N]`` timing keys."""
-    lines = _header(p, "#")
-    lines += ["[EMCMOT]", f"BASE_PERIOD = {p.base_period_ns}", "", f"[JOINT_{channel}]"]
-    for name in PARAMS:
-        lines.append(f"{name.upper()} = {p.params[name].ns}")
-    return "\n".join(lines) + "\n"
-
-
-def render_hal(p: Plan, channel: int = 0) -> str:
-    """A HAL snippet: the ``setp stepgen.N.*`` lines (BASE_PERIOD is stated in a comment)."""
-    lines = _header(p, "#")
-    lines.append(f"# BASE_PERIOD = {p.base_period_ns} ns ([EMCMOT] in the INI file)")
-    if p.step_inverted:
-        lines.append("# invert the STEP output pin, e.g. setp parport.0.pin-02-out-invert 1")
-    for name in PARAMS:
-        lines.append(f"setp stepgen.{channel}.{name} {p.params[name].ns}")
-    return "\n".join(lines) + "\n"

@@ -27,12 +27,14 @@ from fractions import Fraction
 
 import numpy as np
 
+from stepgen.latency import RULES as WORST_RULES
 from stepgen.model import StepgenConfig
 from stepgen.motion import Motion
 from stepgen.plan import PARAMS, Plan, plan
 from stepgen.simulate import Trace, simulate
 from wavecheck.capture.model import Capture, Channel
 from wavecheck.drives.model import Drive
+from wavecheck.rules import applicable
 from wavecheck.timebase import Timebase
 
 __all__ = [
@@ -54,7 +56,7 @@ __all__ = [
 ]
 
 #: The step/dir rules, each simulated under its own worst case.
-RULES: tuple[str, ...] = ("step_high", "step_low", "step_period", "dir_setup", "dir_hold")
+RULES: tuple[str, ...] = tuple(r.id for r in applicable("step-dir") if r.id in WORST_RULES)
 US = 1000
 
 

@@ -11,8 +11,7 @@ from collections.abc import Iterable, Mapping
 from fractions import Fraction
 
 from wavecheck.capture.model import Capture
-from wavecheck.decode import ActiveEdge
-from wavecheck.drives.model import Drive
+from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.engine import run_check
 from wavecheck.report.model import Report
 from wavecheck.units import parse_frequency, parse_time

@@ -45,7 +45,8 @@ from wavecheck.capture.sigrokcli import (
     run_sigrok,
     show,
 )
-from wavecheck.decode import ActiveEdge, decode
+from wavecheck.decode import decode
+from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.interface import build_interface
 

@@ -12,7 +12,7 @@ the drive's input (after ``--invert``).
   DIR's level becomes known, or with no DIR mapped, also have direction 0 ("unknown").
 - Type 1 (up/down): one forward step per active UP edge, one reverse step per active DOWN edge.
   Active edges of UP and DOWN at the same tick are ambiguous.
-- Types 2–15 (state tables of :mod:`stepgen.steptypes`): the phase outputs form a state at every
+- Types 2–15 (state tables of :mod:`wavecheck.linuxcnc.steptypes`): the phase outputs form a state at every
   tick where any phase changes; a move to the next state in the table is a forward step, to the
   previous one a reverse step. Any other move (a non-neighbour, or a state not in the table) is a
   ``state_sequence`` error, listed in :attr:`StepEvents.sequence_errors`, not a crash. Moving
@@ -26,18 +26,17 @@ Everything is vectorised over the whole edge arrays (numpy ``searchsorted`` / ``
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
 
-from stepgen.steptypes import StepType, step_type
 from wavecheck.capture.model import EdgeArray
+from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import UsageError
 from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.linuxcnc.steptypes import StepType, step_type
 
 __all__ = [
-    "ActiveEdge",
     "StepEvents",
     "active_edges",
     "decode",
@@ -45,7 +44,6 @@ __all__ = [
     "phase_states",
 ]
 
-ActiveEdge = Literal["rising", "falling", "both"]
 _EMPTY = np.zeros(0, dtype=np.int64)
 
 
@@ -256,8 +254,8 @@ def decode(
     if forward_level not in (0, 1):
         raise UsageError(f"DIR forward level must be 0 or 1, got {forward_level!r}")
     st = step_type(type_number, user_table)
-    if st.number == 0:
+    if st.kind == "step-dir":
         return _decode_step_dir(iface, active_edge, forward_level)
-    if st.number == 1:
+    if st.kind == "up-down":
         return _decode_up_down(iface, active_edge)
     return _decode_table(iface, st)

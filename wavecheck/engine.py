@@ -9,24 +9,18 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from fractions import Fraction
 
-from stepgen.steptypes import StepType, step_type
 from wavecheck.capture.model import Capture
 from wavecheck.checks.compile import run_rules
-from wavecheck.decode import ActiveEdge, decode
-from wavecheck.drives.model import Drive
+from wavecheck.checks.rates import max_step_rates
+from wavecheck.decode import decode
+from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.errors import UsageError
 from wavecheck.interface import build_interface
-from wavecheck.rates import max_step_rates
+from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
 
 __all__ = ["auto_map", "default_step_type", "resolve_resolution_ns", "run_check"]
-
-_AUTO_ROLES: dict[int, tuple[str, ...]] = {
-    0: ("step", "dir", "enable"),
-    1: ("up", "down", "enable"),
-}
-
 
 def _leaf(name: str) -> str:
     """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
@@ -39,7 +33,7 @@ def auto_map(capture: Capture, st: StepType) -> dict[str, str]:
     A role is mapped only when exactly one channel's name (its last dotted part, any case) is the
     role's name; roles the user maps explicitly take precedence over this.
     """
-    roles = _AUTO_ROLES.get(st.number) or (*st.outputs, "enable")
+    roles = (*st.outputs, "enable")
     mapping: dict[str, str] = {}
     for role in roles:
         hits = [c for c in capture.channels if _leaf(c.name) == role.lower()]
@@ -111,17 +105,16 @@ def run_check(
     full_map.update(mapping or {})
     iface = build_interface(capture, full_map, invert)
     edge: ActiveEdge = active_edge or drive.active_edge
-    needed = st.outputs if st.number != 0 else ("step",)
-    for role in needed:
+    for role in st.pulse_roles:
         iface.require(role)
     resolution_ns = resolve_resolution_ns(capture, resolution)
     steps = decode(
         iface, st.number, active_edge=edge, forward_level=forward_level, user_table=user_table
     )
     ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge)
-    rates = max_step_rates(iface, st.number, steps, drive, edge, capture.timebase)
+    rates = max_step_rates(iface, st, steps, drive, edge, capture.timebase)
     notes = list(capture.notes)
-    if st.number == 0 and iface.get("dir") is None:
+    if st.kind == "step-dir" and iface.get("dir") is None:
         notes.append("no DIR channel mapped: step directions are unknown, DIR rules unchecked")
     if len(steps.ambiguous):
         first = format_time(capture.timebase.seconds(int(steps.ambiguous[0])))

@@ -337,25 +337,14 @@ class CaptureCollector(pytest.Collector):
 
 def _rules_of(spec: CaptureSpec) -> list[str]:
     """The rules a check of ``spec`` will evaluate, known without reading the capture."""
-    from stepgen.steptypes import step_type
-    from wavecheck.checks.compile import RULE_ORDER, applicable_rules
+    from wavecheck.checks.compile import planned_rules
     from wavecheck.drives.library import load_drive
     from wavecheck.engine import default_step_type
+    from wavecheck.linuxcnc.steptypes import step_type
 
     drive = load_drive(spec.drive)
     st = step_type(default_step_type(drive) if spec.type is None else spec.type)
-    out = []
-    for rule in RULE_ORDER:
-        if rule not in applicable_rules(st):
-            continue
-        stated = (
-            rule == "state_sequence"
-            or (rule == "step_period" and drive.max_rate is not None and drive.max_rate.value > 0)
-            or (rule != "step_period" and rule in drive.limits)
-        )
-        if stated:
-            out.append(rule)
-    return out
+    return [r.id for r in planned_rules(drive, st)[0]]
 
 
 class RuleItem(pytest.Item):

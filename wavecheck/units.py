@@ -22,10 +22,12 @@ from wavecheck.errors import UnitError
 
 __all__ = [
     "Dimension",
+    "exact_ns",
     "format_frequency",
     "format_ns",
     "format_rate",
     "format_time",
+    "json_number",
     "parse_frequency",
     "parse_quantity",
     "parse_time",
@@ -163,3 +165,18 @@ def format_ns(ns: Fraction | None, *, signed: bool = False, missing: str = "-") 
 def format_rate(hz: Fraction | None, *, missing: str = "-") -> str:
     """Format a rate in Hz for a report cell (``missing`` stands for None)."""
     return missing if hz is None else format_frequency(hz)
+
+
+def exact_ns(ns: Fraction | int) -> str:
+    """Exact ns for tables of ns: ``11000``, ``15500``; a non-integer value to 6 digits
+    (``10636.4``)."""
+    v = Fraction(ns)
+    return str(v.numerator) if v.denominator == 1 else f"{float(v):.6g}"
+
+
+def json_number(value: Fraction | int | float | None) -> int | float | None:
+    """A JSON number: an exact integer when the value is whole, else a float; None stays None."""
+    if value is None:
+        return None
+    v = Fraction(value)
+    return v.numerator if v.denominator == 1 else float(v)

@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from stepgen.latencyfiles import read_latency_file
-from stepgen.plan import plan, render_hal, render_ini, render_json, render_text
+from stepgen.plan import plan
+from stepgen.plan_render import render_hal, render_ini, render_json, render_text
 from wavecheck.errors import UnitError, UsageError, WavecheckError
 from wavecheck.output import atomic_write
 from wavecheck.units import parse_quantity

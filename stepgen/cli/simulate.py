@@ -14,13 +14,13 @@ import time
 from pathlib import Path
 from typing import Any
 
+from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.model import StepgenConfig
 from stepgen.motion import Motion, parse_command_csv, parse_moves
 from stepgen.simulate import n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from wavecheck.progress import activate
 from wavecheck.units import time_ns
 

@@ -9,19 +9,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stepgen.plan import (
-    PARAMS,
-    evaluate,
-    latency_guidance,
-    min_base_period_ns,
-    periods_needed,
-    plan,
-    plan_to_dict,
-    simple_base_period_ns,
-    step_rate_hz,
-)
+from stepgen.plan import PARAMS, latency_guidance, min_base_period_ns, plan, simple_base_period_ns
+from stepgen.plan_render import plan_to_dict
 from wavecheck.drives.model import Drive, Figure
 from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
 
 US = 1000
 

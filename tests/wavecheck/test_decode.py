@@ -7,11 +7,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stepgen.steptypes import STATE_TABLES, step_type
 from tests.wavecheck.waves import capture, pulses
 from wavecheck.decode import active_edges, decode
 from wavecheck.errors import ConfigError, UsageError
 from wavecheck.interface import build_interface
+from wavecheck.linuxcnc.steptypes import STATE_TABLES, step_type
 
 
 def _iface(signals, mapping, invert=()):

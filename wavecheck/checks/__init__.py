@@ -1,6 +1,6 @@
 """Timing checks: generic measurements, exact verdicts, and the drive's rules compiled from them."""
 
-from wavecheck.checks.compile import RULE_ORDER, RuleSet, applicable_rules, run_rules
+from wavecheck.checks.compile import RuleSet, applicable_rules, run_rules
 from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
 from wavecheck.checks.result import (
     FAIL,
@@ -17,7 +17,6 @@ __all__ = [
     "FAIL",
     "INDETERMINATE",
     "PASS",
-    "RULE_ORDER",
     "Intervals",
     "RuleResult",
     "RuleSet",

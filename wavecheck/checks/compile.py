@@ -1,36 +1,23 @@
-"""Compile a drive's figures into the design's rule ids and measure them over a step interface.
+"""Compile a drive's figures and the rule table (:mod:`wavecheck.rules`) into measured, judged rules.
 
-Which rules apply depends on the step type:
+A rule of the table is evaluated when it applies to the step type's kind and the drive states its
+figure (``step_period`` from the drive's maximum step rate: limit = 1/max_rate). A rule the drive
+states whose signals are not mapped (e.g. no DIR channel captured) has no interval: its verdict
+is ``unchecked``.
 
-====================  =================================================================
-type 0 (step/dir)     step_high, step_low, step_period, dir_setup, dir_hold, enable_setup
-type 1 (up/down)      step_high, step_low, step_period, dir_delay, enable_setup
-types 2–15 (phases)   state_hold, step_period, state_sequence, enable_setup
-====================  =================================================================
+This module turns the table's events (``pulse``, ``active``, ``step``, ``dir``, ``line``,
+``state``, ``enable``) and checks (``width``, ``period``, ``setup``, ``hold``, ``switch``,
+``sequence``) into intervals. Two details of the events:
 
-A rule is evaluated when the drive states a limit for it (``step_period`` from the drive's
-maximum step rate: limit = 1/max_rate). A rule the drive states but whose signals are not
-mapped (e.g. no DIR channel captured) has no interval and its verdict is ``unchecked``.
-
-What each rule measures (levels at the drive's input, after inversion):
-
-- ``step_high`` / ``step_low``: every complete high / low time of STEP (or of UP and DOWN).
-- ``step_period``: successive steps (active edges; state changes for phase types).
-- ``dir_setup``: each DIR change → the first active STEP edge at or after it.
-- ``dir_hold``: the last active STEP edge at or before each DIR change → that change (datasheet
-  meaning, from the active edge — not LinuxCNC's ``dirhold``, which counts from the pulse end).
-  A DIR change at the same tick as an active edge is a 0 interval of both ``dir_setup`` and
-  ``dir_hold``.
-- ``dir_delay`` (up/down): where the pulses switch line, from the end of the last pulse on one
+- ``dir_delay`` (``switch``): where the pulses switch line, from the end of the last pulse on one
   line (the edge that ends it) to the active edge of the first pulse on the other; overlapping
   pulses measure negative.
-- ``state_hold``: every complete time a phase state is held (between successive state changes).
-- ``state_sequence``: each move to a state that is not a neighbour in the table.
 - ``enable_setup``: ENABLE becoming active (high after inversion; use ``--invert enable`` for an
   active-low input) → the first step while it stays active.
 
-An interval that starts while one of the signals it involves is not known yet (``x`` at the start
-of a VCD, up to its ``known_from``) is partial and not measured.
+A DIR change at the same tick as an active edge is a 0 interval of both ``dir_setup`` and
+``dir_hold``. An interval that starts while one of the signals it involves is not known yet
+(``x`` at the start of a VCD, up to its ``known_from``) is partial and not measured.
 """
 
 from __future__ import annotations
@@ -40,55 +27,48 @@ from fractions import Fraction
 
 import numpy as np
 
-from stepgen.steptypes import StepType
 from wavecheck.capture.model import EdgeArray
 from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
+from wavecheck.checks.rates import generator_pulses
 from wavecheck.checks.result import RuleResult, evaluate, sequence_result
-from wavecheck.decode import ActiveEdge, StepEvents, active_edges, phase_states
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.decode import StepEvents, active_edges, phase_states
+from wavecheck.drives.model import ActiveEdge, Drive, Figure
 from wavecheck.interface import RoleSignal, StepInterface
-from wavecheck.rates import generator_pulses
+from wavecheck.linuxcnc.steptypes import StepType
+from wavecheck.rules import RULE_IDS, Rule, applicable
 
-__all__ = ["RULES_BY_KIND", "RULE_ORDER", "RuleSet", "applicable_rules", "run_rules"]
-
-#: Rule ids in report order.
-RULE_ORDER: tuple[str, ...] = (
-    "step_high",
-    "step_low",
-    "step_period",
-    "dir_setup",
-    "dir_hold",
-    "dir_delay",
-    "state_hold",
-    "state_sequence",
-    "enable_setup",
-)
-RULES_BY_KIND: dict[str, tuple[str, ...]] = {
-    "step-dir": ("step_high", "step_low", "step_period", "dir_setup", "dir_hold", "enable_setup"),
-    "up-down": ("step_high", "step_low", "step_period", "dir_delay", "enable_setup"),
-    "phases": ("step_period", "state_hold", "state_sequence", "enable_setup"),
-}
-
-
-def _kind(st: StepType) -> str:
-    return "step-dir" if st.number == 0 else "up-down" if st.number == 1 else "phases"
+__all__ = ["RuleSet", "applicable_rules", "planned_rules", "run_rules"]
 
 
 def applicable_rules(st: StepType) -> tuple[str, ...]:
-    """The rule ids that apply to step type ``st``."""
-    return RULES_BY_KIND[_kind(st)]
+    """The rule ids that apply to step type ``st``, in report order."""
+    return tuple(r.id for r in applicable(st.kind))
 
 
-def _figure(drive: Drive, rule: str) -> tuple[Fraction, Figure] | None:
-    if rule == "step_period":
+def _figure(drive: Drive, r: Rule) -> tuple[Fraction, Figure] | None:
+    if r.figure == "max_rate":
         fig = drive.max_rate
         if fig is None or fig.value <= 0:
             return None
         return Fraction(10**9) / fig.value, fig
-    if rule == "state_sequence":
+    if r.figure == "none":
         return None
-    f = drive.limits.get(rule)
+    f = drive.limits.get(r.id)
     return None if f is None else (f.value, f)
+
+
+def planned_rules(drive: Drive, st: StepType) -> tuple[tuple[Rule, ...], tuple[str, ...]]:
+    """The rules a check of step type ``st`` against ``drive`` evaluates, in report order (those
+    that apply and whose figure the drive states, and ``state_sequence``, which needs none), and
+    the ids of the rules that apply but have no figure."""
+    run: list[Rule] = []
+    missing: list[str] = []
+    for r in applicable(st.kind):
+        if r.figure == "none" or _figure(drive, r) is not None:
+            run.append(r)
+        else:
+            missing.append(r.id)
+    return tuple(run), tuple(missing)
 
 
 def _pulse_ends(sig: RoleSignal, edge: ActiveEdge) -> tuple[EdgeArray, EdgeArray]:
@@ -142,46 +122,51 @@ def _enable_setup(enable: RoleSignal, steps: EdgeArray) -> Intervals:
     return Intervals(rises[ok], first[ok])
 
 
-def _intervals(
-    rule: str, iface: StepInterface, st: StepType, steps: StepEvents, edge: ActiveEdge
-) -> Intervals:
-    if rule in ("step_high", "step_low"):
-        level = 1 if rule == "step_high" else 0
-        roles = ("step",) if st.number == 0 else ("up", "down")
-        parts = [widths(s.initial, s.edges, level) for s in (iface.require(r) for r in roles)]
-        return Intervals.concat(parts)
-    if rule == "step_period":
-        return periods(steps.ticks)
-    if rule in ("dir_setup", "dir_hold"):
+def _events(
+    name: str, iface: StepInterface, st: StepType, steps: StepEvents, edge: ActiveEdge
+) -> EdgeArray | None:
+    """The ticks of one of the table's events; None when its role is not mapped."""
+    if name == "step":
+        return steps.ticks
+    if name == "active":
+        return active_edges(iface.require("step"), edge)
+    if name == "dir":
         d = iface.get("dir")
-        if d is None:
-            return Intervals.empty()
-        act = active_edges(iface.require("step"), edge)
-        return setups(d.edges, act) if rule == "dir_setup" else holds(act, d.edges)
-    if rule == "dir_delay":
+        return None if d is None else d.edges
+    if name == "state":
+        return phase_states(iface, st.outputs)[0]
+    raise ValueError(f"no event {name!r} in the rule table's vocabulary")
+
+
+def _intervals(
+    r: Rule, iface: StepInterface, st: StepType, steps: StepEvents, edge: ActiveEdge
+) -> Intervals:
+    if r.check == "width":
+        assert r.level is not None
+        sigs = (iface.require(role) for role in st.pulse_roles)
+        return Intervals.concat([widths(s.initial, s.edges, r.level) for s in sigs])
+    if r.check == "switch":
         return _dir_delay(iface, edge)
-    if rule == "state_hold":
-        ticks, _, _ = phase_states(iface, st.outputs)
-        return periods(ticks)
-    if rule == "enable_setup":
+    if r.ref == "enable":
         en = iface.get("enable")
         return Intervals.empty() if en is None else _enable_setup(en, steps.ticks)
-    raise ValueError(f"no measurement for rule {rule!r}")
+    ref = _events(r.ref, iface, st, steps, edge)
+    if r.check == "period":
+        return Intervals.empty() if ref is None else periods(ref)
+    data = _events(r.data, iface, st, steps, edge)
+    if ref is None or data is None:
+        return Intervals.empty()
+    if r.check == "setup":
+        return setups(ref, data)
+    if r.check == "hold":
+        return holds(ref, data)
+    raise ValueError(f"rule {r.id!r}: no measurement for check {r.check!r}")
 
 
-def _known(intervals: Intervals, iface: StepInterface, st: StepType, rule: str) -> Intervals:
+def _known(intervals: Intervals, iface: StepInterface, st: StepType, r: Rule) -> Intervals:
     """Drop the intervals that start while a signal the rule involves is not known yet (``x`` at
     the start of a VCD): an event of that signal may be hidden there, so they are partial."""
-    steps = ("step",) if st.number == 0 else ("up", "down") if st.number == 1 else st.outputs
-    roles: tuple[str, ...] = {
-        "step_period": steps,
-        "dir_setup": ("step", "dir"),
-        "dir_hold": ("step", "dir"),
-        "dir_delay": ("up", "down"),
-        "state_hold": st.outputs,
-        "enable_setup": (*steps, "enable"),
-    }.get(rule, ())  # step_high/low: one signal's own edges, all after its known_from
-    until = iface.unknown_until(roles)
+    until = iface.unknown_until(r.roles_for(st))
     if until is None or len(intervals) == 0:
         return intervals
     keep = intervals.start > until
@@ -207,15 +192,12 @@ def run_rules(
     resolution_ns: Fraction,
     active_edge: ActiveEdge,
 ) -> RuleSet:
-    """Measure and judge every applicable rule the drive states, in :data:`RULE_ORDER`."""
+    """Measure and judge every applicable rule the drive states, in the table's order."""
     tb = iface.capture.timebase
-    applicable = applicable_rules(st)
+    run, not_stated = planned_rules(drive, st)
     results: list[RuleResult] = []
-    not_stated: list[str] = []
-    for rule in RULE_ORDER:
-        if rule not in applicable:
-            continue
-        if rule == "state_sequence":
+    for r in run:
+        if r.check == "sequence":
             details = [
                 f"state {a} → {b}"
                 for a, b in zip(
@@ -228,15 +210,13 @@ def run_rules(
                 )
             )
             continue
-        fig = _figure(drive, rule)
-        if fig is None:
-            not_stated.append(rule)
-            continue
+        fig = _figure(drive, r)
+        assert fig is not None
         limit, figure = fig
         results.append(
             evaluate(
-                rule,
-                _known(_intervals(rule, iface, st, steps, active_edge), iface, st, rule),
+                r.id,
+                _known(_intervals(r, iface, st, steps, active_edge), iface, st, r),
                 limit,
                 tb,
                 resolution_ns,
@@ -244,5 +224,6 @@ def run_rules(
             )
         )
     stated = set(drive.limits) | ({"step_period"} if drive.max_rate is not None else set())
-    not_applicable = tuple(r for r in RULE_ORDER if r in stated and r not in applicable)
-    return RuleSet(results, tuple(not_stated), not_applicable)
+    used = applicable_rules(st)
+    not_applicable = tuple(r for r in RULE_IDS if r in stated and r not in used)
+    return RuleSet(results, not_stated, not_applicable)

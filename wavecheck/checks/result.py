@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -26,6 +25,7 @@ from wavecheck.capture.model import EdgeArray
 from wavecheck.checks.primitives import Intervals
 from wavecheck.drives.model import Figure
 from wavecheck.timebase import Timebase
+from wavecheck.verdict import Verdict
 
 __all__ = [
     "FAIL",
@@ -38,7 +38,6 @@ __all__ = [
     "sequence_result",
 ]
 
-Verdict = Literal["pass", "fail", "indeterminate", "unchecked"]
 PASS, FAIL, INDETERMINATE = 0, 1, 2
 _I64_MAX = int(np.iinfo(np.int64).max)
 _I64_MIN = int(np.iinfo(np.int64).min)

@@ -11,13 +11,10 @@ import sys
 from collections.abc import Sequence
 
 from wavecheck.errors import WavecheckError
+from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
 __all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "run_cli"]
 
-EXIT_PASS = 0
-EXIT_FAIL = 1
-EXIT_USAGE = 2
-EXIT_INDETERMINATE = 3
 
 
 class _Parser(argparse.ArgumentParser):

@@ -26,20 +26,16 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError, WavecheckError
-from wavecheck.linuxcnc import (
-    ConfigRates,
-    LinuxCNCConfig,
-    add_file_arguments,
-    config_rates,
-    read_config,
-)
+from wavecheck.linuxcnc.config import ConfigRates, LinuxCNCConfig, config_rates, read_config
 from wavecheck.output import atomic_write
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
-from wavecheck.report.model import Report, overall_verdict
+from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
 from wavecheck.units import format_frequency, format_time, parse_time, time_ns
+from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
     "add_report_arguments",
@@ -50,11 +46,7 @@ __all__ = [
     "render_text_with_config",
     "run_checks",
     "summary_line",
-    "worst_exit_code",
 ]
-
-_SEVERITY = {0: 0, 3: 1, 1: 2, 2: 3}
-
 
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
@@ -107,11 +99,6 @@ _CONFIG_OPTIONS = {
     "dirsetup": "stepgen dirsetup",
     "dirhold": "stepgen dirhold",
 }
-
-
-def worst_exit_code(codes: list[int]) -> int:
-    """The worst of several exit codes: 2 > 1 > 3 > 0."""
-    return max(codes, key=lambda c: _SEVERITY.get(c, 3), default=0)
 
 
 # -- stepgen configuration rates -------------------------------------------------------------------

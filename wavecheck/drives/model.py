@@ -12,18 +12,9 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Literal
 
-__all__ = ["TIME_RULES", "ActiveEdge", "Drive", "Figure", "Interface", "Status"]
+from wavecheck.rules import TIME_RULES
 
-#: Time rules a drive file may give (ns), in the design's fixed vocabulary.
-TIME_RULES: tuple[str, ...] = (
-    "step_high",
-    "step_low",
-    "dir_setup",
-    "dir_hold",
-    "dir_delay",
-    "state_hold",
-    "enable_setup",
-)
+__all__ = ["TIME_RULES", "ActiveEdge", "Drive", "Figure", "Interface", "Status"]
 
 Status = Literal["datasheet", "secondary", "firmware-default", "preset", "uncertain"]
 Interface = Literal["step-dir", "up-down", "phases"]

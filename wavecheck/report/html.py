@@ -18,8 +18,9 @@ from collections.abc import Sequence
 from fractions import Fraction
 
 from wavecheck.output import atomic_write
-from wavecheck.report.model import Report, overall_verdict
+from wavecheck.report.model import Report
 from wavecheck.units import format_ns, format_rate, format_time
+from wavecheck.verdict import overall_verdict
 
 __all__ = ["render_html", "write_html"]
 

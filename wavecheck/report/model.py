@@ -12,27 +12,16 @@ import heapq
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from stepgen.steptypes import StepType
 from wavecheck.capture.model import Capture
-from wavecheck.checks.result import RuleResult, Verdict, Violation
-from wavecheck.decode import ActiveEdge, StepEvents
-from wavecheck.drives.model import Drive
+from wavecheck.checks.rates import MaxStepRates
+from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.decode import StepEvents
+from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.interface import StepInterface
-from wavecheck.rates import MaxStepRates
+from wavecheck.linuxcnc.steptypes import StepType
+from wavecheck.verdict import Verdict, exit_code, overall_verdict
 
 __all__ = ["Report", "overall_verdict"]
-
-
-def overall_verdict(verdicts: list[Verdict]) -> Verdict:
-    """fail if any rule fails, else indeterminate if any is, else pass (``unchecked`` rules do not
-    make a pass a fail; a report whose every rule is unchecked is ``unchecked``)."""
-    if "fail" in verdicts:
-        return "fail"
-    if "indeterminate" in verdicts:
-        return "indeterminate"
-    if "pass" in verdicts:
-        return "pass"
-    return "unchecked"
 
 
 @dataclass
@@ -77,7 +66,7 @@ class Report:
     @property
     def exit_code(self) -> int:
         """0 pass, 1 a rule failed, 3 only indeterminate results (or nothing could be checked)."""
-        return {"pass": 0, "fail": 1, "indeterminate": 3, "unchecked": 3}[self.verdict]
+        return exit_code(self.verdict)
 
     def rule(self, rule_id: str) -> RuleResult | None:
         """The result of ``rule_id``, or None when it was not evaluated."""

@@ -54,7 +54,7 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
     )
     s = report.steps
     line = f"steps:   {s.count}"
-    if report.step_type.number == 0 and report.interface.get("dir") is None:
+    if report.step_type.kind == "step-dir" and report.interface.get("dir") is None:
         line += " (direction unknown: no DIR mapped)"
     else:
         pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
@@ -62,7 +62,7 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
         if s.unknown:
             line += f", unknown {s.unknown}"
         line += f"; final position {pos}"
-        if report.step_type.number == 0:
+        if report.step_type.kind == "step-dir":
             line += f"; DIR {'low' if report.forward_level == 0 else 'high'} = forward"
         line += ")"
     out.append(line)

@@ -6,9 +6,9 @@ from fractions import Fraction
 
 import pytest
 
-from stepgen.steptypes import step_type
 from tests.wavecheck.waves import capture, drive, g202, pulses
 from wavecheck.engine import run_check
+from wavecheck.linuxcnc.steptypes import step_type
 
 US = 1000  # ticks per µs at the default 1 ns tick
 

@@ -19,7 +19,7 @@ Rates (Hz, exact):
   intervals that do not depend on the rate (the pulse, DIR setup/hold, the gaps across a
   reversal) must meet it as set, else no rate is safe (None); the space between pulses and the
   step period grow as the rate falls, so the rate is 1 / (N·P) with N the fewest periods per
-  step that give both. Requirements and ``n = ceil((T + J)/P)`` come from :mod:`stepgen.plan`.
+  step that give both. Requirements and ``n = ceil((T + J)/P)`` come from :mod:`wavecheck.linuxcnc.timing`.
 """
 
 from __future__ import annotations
@@ -31,7 +31,10 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from wavecheck.drives.model import Drive
 from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.steptypes import kind_of
+from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
 
 __all__ = [
     "TIMING_PARAMS",
@@ -152,7 +155,8 @@ class LinuxCNCConfig:
         return self.base_period_ns
 
     def stepgen_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments for :class:`stepgen.model.StepgenConfig` (only what was set)."""
+        """The settings that were set, keyed by the model's field names (``base_period_ns``, ``mode``,
+        ``steplen`` …)."""
         kw: dict[str, Any] = {}
         if self.step_type is not None:
             kw["step_type"] = self.step_type
@@ -309,7 +313,7 @@ class ConfigRates:
 
 def config_rates(
     cfg: LinuxCNCConfig,
-    drive: Any,
+    drive: Drive,
     latency_ns: Fraction | int | None = None,
     *,
     step_inverted: bool = False,
@@ -322,30 +326,27 @@ def config_rates(
         drive: a :class:`~wavecheck.drives.model.Drive`.
         latency_ns: worst latency ``J`` in ns; without it ``latency_safe`` is None.
         step_inverted: the STEP pin is inverted between stepgen and the drive (moves the active
-            edge to the start of stepgen's pulse; see :mod:`stepgen.plan`).
+            edge to the start of stepgen's pulse; see :mod:`wavecheck.linuxcnc.timing`).
         step_type: the step type checked (default ``cfg.step_type``, else 0). Types ≥ 2 have no
             stepspace (config = 1 / (steplen·P)) and no latency_safe (the plan is step/dir's).
     """
-    from stepgen import plan as planner
-
     p = cfg.require_base_period()
     n = cfg.periods()
-    kind = step_type if step_type is not None else cfg.step_type or 0
-    if kind >= 2:
+    number = step_type if step_type is not None else cfg.step_type or 0
+    if kind_of(number) == "phases":
         return ConfigRates(
-            planner.step_rate_hz(p, n["steplen"]),
+            step_rate_hz(p, n["steplen"]),
             None,
-            (f"latency_safe is computed for step types 0 and 1, not step type {kind}",),
+            (f"latency_safe is computed for step types 0 and 1, not step type {number}",),
         )
-    config = planner.step_rate_hz(p, n["steplen"] + n["stepspace"])
+    config = step_rate_hz(p, n["steplen"] + n["stepspace"])
     if latency_ns is None:
         return ConfigRates(config, None, ("latency_safe needs --latency J",))
     try:
-        reqs = planner.evaluate(drive, latency_ns, p, n, step_inverted=step_inverted)
+        reqs = evaluate(drive, latency_ns, p, n, step_inverted=step_inverted)
     except ConfigError as err:
         return ConfigRates(config, None, (f"latency_safe not computed: {err}",))
-    rate_dependent = {("stepspace",), ("steplen", "stepspace")}
-    fixed_fail = [r for r in reqs if r.params not in rate_dependent and r.margin_ns < 0]
+    fixed_fail = [r for r in reqs if not r.rate_dependent and r.margin_ns < 0]
     if fixed_fail:
         worst = min(fixed_fail, key=lambda r: r.margin_ns)
         return ConfigRates(
@@ -359,83 +360,12 @@ def config_rates(
     per_step = n["steplen"] + n["stepspace"]
     for r in reqs:
         if r.params == ("stepspace",):
-            per_step = max(per_step, n["steplen"] + planner.periods_needed(r.limit_ns, latency_ns, p))
+            per_step = max(per_step, n["steplen"] + periods_needed(r.limit_ns, latency_ns, p))
         elif r.params == ("steplen", "stepspace"):
-            per_step = max(per_step, planner.periods_needed(r.limit_ns, latency_ns, p))
-    safe = planner.step_rate_hz(p, per_step)
+            per_step = max(per_step, periods_needed(r.limit_ns, latency_ns, p))
+    safe = step_rate_hz(p, per_step)
     note = (
         f"latency_safe: {per_step} base periods per step (config: "
         f"{n['steplen'] + n['stepspace']}) at J = {float(latency_ns):g} ns"
     )
     return ConfigRates(config, min(safe, config), (note,))
-
-
-# -- stepgen simulate ------------------------------------------------------------------------------
-#: simulate option dest → how a LinuxCNCConfig fills it.
-_SIMULATE_FIELDS = (
-    "base_period",
-    "servo_period",
-    "type",
-    "user_step_type",
-    "mode",
-    "position_scale",
-    "maxvel",
-    "maxaccel",
-    *TIMING_PARAMS,
-)
-
-
-def add_file_arguments(group: Any) -> None:
-    """Add ``--ini FILE``, ``--hal FILE`` (repeatable) and ``--channel N`` to an argparse group."""
-    group.add_argument("--ini", metavar="FILE", help="INI file: [EMCMOT] BASE_PERIOD, SERVO_PERIOD")
-    group.add_argument(
-        "--hal",
-        action="append",
-        default=[],
-        metavar="FILE",
-        help="HAL file: loadrt stepgen step_type=/ctrl_type=, setp stepgen.N.* (repeatable)",
-    )
-    group.add_argument(
-        "--channel", type=int, default=0, metavar="N", help="stepgen channel (default 0)"
-    )
-
-
-def add_simulate_arguments(parser: Any) -> None:
-    """Add ``--ini``, ``--hal`` and ``--channel`` to ``stepgen simulate``'s parser.
-
-    Settings read from the files fill every option left at its default; an option given with
-    another value on the command line wins.
-    """
-    add_file_arguments(parser.add_argument_group("LinuxCNC configuration files"))
-    defaults = {
-        a.dest: a.default for a in parser._actions if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
-    }
-    parser.set_defaults(_linuxcnc_defaults=defaults)
-
-
-def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
-    """Fill ``stepgen simulate``'s options from ``--ini``/``--hal`` (see
-    :func:`add_simulate_arguments`); returns the configuration read, or None without files."""
-    if not getattr(args, "ini", None) and not getattr(args, "hal", None):
-        return None
-    cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
-    defaults: dict[str, Any] = getattr(args, "_linuxcnc_defaults", {})
-    values: dict[str, Any] = {
-        "base_period": None if cfg.base_period_ns is None else str(cfg.base_period_ns),
-        "servo_period": None if cfg.servo_period_ns is None else str(cfg.servo_period_ns),
-        "type": cfg.step_type,
-        "user_step_type": ",".join(str(v) for v in cfg.user_step_type) or None,
-        "mode": cfg.ctrl_type,
-        "position_scale": cfg.floats.get("position-scale"),
-        "maxvel": cfg.floats.get("maxvel"),
-        "maxaccel": cfg.floats.get("maxaccel"),
-    }
-    for name in TIMING_PARAMS:
-        values[name] = str(cfg.params[name]) if name in cfg.params else None
-    for dest, value in values.items():
-        if value is None or not hasattr(args, dest):
-            continue
-        if dest in defaults and getattr(args, dest) != defaults[dest]:
-            continue  # given on the command line: it wins
-        setattr(args, dest, value)
-    return cfg

@@ -5,8 +5,8 @@ from __future__ import annotations
 from fractions import Fraction
 
 from tests.wavecheck.waves import capture, drive, g202, pulses
+from wavecheck.checks.rates import drive_rate
 from wavecheck.engine import run_check
-from wavecheck.rates import drive_rate
 
 US = 1000
 

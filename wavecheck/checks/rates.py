@@ -26,9 +26,10 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.checks.primitives import Intervals, widths
-from wavecheck.decode import ActiveEdge, StepEvents
-from wavecheck.drives.model import Drive
+from wavecheck.decode import StepEvents
+from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.timebase import Timebase
 
 __all__ = ["MaxStepRates", "max_step_rates"]
@@ -116,7 +117,7 @@ def drive_rate(drive: Drive) -> tuple[Fraction | None, str | None]:
 
 def max_step_rates(
     iface: StepInterface,
-    type_number: int,
+    st: StepType,
     steps: StepEvents,
     drive: Drive,
     active_edge: ActiveEdge,
@@ -132,9 +133,8 @@ def max_step_rates(
             observed_at = timebase.seconds(int(steps.ticks[i]))
     headroom = longest = idle_min = None
     pulse_level: int | None = None
-    if type_number in (0, 1) and active_edge != "both":
-        roles = ("step",) if type_number == 0 else ("up", "down")
-        found = generator_pulses([s for s in (iface.get(r) for r in roles) if s is not None])
+    if st.kind != "phases" and active_edge != "both":
+        found = generator_pulses([s for s in (iface.get(r) for r in st.pulse_roles) if s is not None])
         if found is not None:
             pulse_level, longest_ticks = found
             longest = timebase.ns(longest_ticks)

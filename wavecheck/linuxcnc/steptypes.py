@@ -1,19 +1,22 @@
 """LinuxCNC's step types: 0 step/dir, 1 up/down, 2–14 state tables, 15 user-defined.
 
-The tables are LinuxCNC ``stepgen.c``'s, as listed in §6 of the stepgen reference
-(``shared/reference/stepgen-linuxcnc.md``). Phase A is bit 0 of each state value; forward motion
-walks the states upward, reverse downward, wrapping. The validator's decoder and the stepgen
-model both use this one table.
+The tables are LinuxCNC ``stepgen.c``'s (the ``step_type`` list of LinuxCNC's stepgen manual page).
+Phase A is bit 0 of each state value; forward motion walks the states upward, reverse downward,
+wrapping. The validator's decoder and the stepgen model both use this one table.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 from wavecheck.errors import ConfigError
 
-__all__ = ["PHASE_NAMES", "STATE_TABLES", "StepType", "step_type"]
+__all__ = ["PHASE_NAMES", "STATE_TABLES", "StepKind", "StepType", "kind_of", "step_type"]
+
+StepKind = Literal["step-dir", "up-down", "phases"]
+"""What a step type puts on the wire: STEP + DIR, UP + DOWN pulses, or phase states."""
 
 PHASE_NAMES: tuple[str, ...] = ("phase-A", "phase-B", "phase-C", "phase-D", "phase-E")
 
@@ -47,14 +50,24 @@ class StepType:
     states: tuple[int, ...] = ()
 
     @property
-    def is_table(self) -> bool:
-        """True for the state-table types (2–15)."""
-        return self.number >= 2
+    def kind(self) -> StepKind:
+        """``step-dir`` (type 0), ``up-down`` (type 1) or ``phases`` (2–15)."""
+        return kind_of(self.number)
+
+    @property
+    def pulse_roles(self) -> tuple[str, ...]:
+        """The roles whose edges are steps: ``step``, ``up``/``down``, or the phase outputs."""
+        return ("step",) if self.kind == "step-dir" else self.outputs
 
     @property
     def cycle(self) -> int:
         """Number of states in the cycle (0 for types 0 and 1)."""
         return len(self.states)
+
+
+def kind_of(number: int) -> StepKind:
+    """The kind of step type ``number`` (no table needed, so type 15 without one works)."""
+    return "step-dir" if number == 0 else "up-down" if number == 1 else "phases"
 
 
 def step_type(number: int, user_table: Sequence[int] | None = None) -> StepType:

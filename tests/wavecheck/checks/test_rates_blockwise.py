@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wavecheck import rates
+from wavecheck.checks import rates
 
 
 @pytest.mark.parametrize("block", [1, 2, 3, 7, 1 << 20])

@@ -9,7 +9,7 @@ import pytest
 
 from tests.wavecheck.waves import g202
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc import config_rates, read_config, read_ini
+from wavecheck.linuxcnc.config import config_rates, read_config, read_ini
 
 INI = """\
 # a LinuxCNC configuration

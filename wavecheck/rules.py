@@ -1,0 +1,128 @@
+"""The rule table: every rule id, declared once, as data.
+
+Each rule is a generic timing check in the spirit of Verilog's ``$width``, ``$period``,
+``$setup`` and ``$hold``: a *reference* event starts each interval and a *data* event ends it,
+and the interval must be at least the drive's figure. The checks compiler
+(:mod:`wavecheck.checks.compile`), the reports, the drive library (which keys a rule file may
+give) and ``wavecheck drives`` all read this table; adding a rule is one entry here plus its
+measurement, if it needs a new kind, and its tests.
+
+Events (levels at the drive's input, after ``--invert``):
+
+==============  ====================================================================
+``pulse``       the edges of the pulse lines (STEP, or UP and DOWN)
+``active``      the active edges of STEP (the drive's ``active_edge``)
+``step``        the decoded steps (active edges; state changes for phase types)
+``dir``         every DIR change
+``line``        a step on the other up/down line than the step before it
+``state``       every change of the combined phase state
+``enable``      ENABLE becoming active
+==============  ====================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from wavecheck.linuxcnc.steptypes import StepKind, StepType
+
+__all__ = [
+    "RULES",
+    "RULE_IDS",
+    "TIME_RULES",
+    "Check",
+    "Figure",
+    "Rule",
+    "applicable",
+    "rule",
+]
+
+Check = Literal["width", "period", "setup", "hold", "switch", "sequence"]
+"""How intervals are built: ``width`` every complete stretch at ``level`` of the pulse lines;
+``period`` successive ``ref`` events; ``setup`` each ``ref`` event → the first ``data`` event at
+or after it; ``hold`` the last ``ref`` event at or before each ``data`` event → that event;
+``switch`` the end of the last pulse on one up/down line → the first active edge on the other;
+``sequence`` moves to a state that is not a neighbour in the table (no interval, no limit)."""
+
+Figure = Literal["time", "max_rate", "none"]
+"""Where a rule's limit comes from: the drive file's time figure of the same id (ns), the
+drive's maximum step rate (limit = 1 / max_rate), or nowhere (``state_sequence``)."""
+
+_ALL: tuple[StepKind, ...] = ("step-dir", "up-down", "phases")
+
+
+@dataclass(frozen=True)
+class Rule:
+    """One rule: what it measures, where its limit comes from, which step types it applies to."""
+
+    id: str
+    """The rule id of reports and JSON."""
+    what: str
+    """What is measured, in words (for reports and ``wavecheck drives``)."""
+    check: Check
+    figure: Figure
+    kinds: tuple[StepKind, ...]
+    """The step-type kinds the rule applies to."""
+    ref: str = ""
+    """The event that starts each interval (see the module doc)."""
+    data: str = ""
+    """The event that ends each interval."""
+    level: int | None = None
+    """For ``width``: the level measured (1 high, 0 low)."""
+    roles: tuple[str, ...] = ()
+    """Roles whose ``x`` stretch at the start of a capture makes an interval partial (not
+    measured); ``"pulse"`` stands for the step type's pulse roles, ``"phases"`` for its phase
+    outputs. Empty for rules that measure one signal's own edges."""
+
+    def roles_for(self, st: StepType) -> tuple[str, ...]:
+        """:attr:`roles` with ``"pulse"``/``"phases"`` expanded for step type ``st``."""
+        out: list[str] = []
+        for role in self.roles:
+            if role == "pulse":
+                out += st.pulse_roles
+            elif role == "phases":
+                out += st.outputs
+            else:
+                out.append(role)
+        return tuple(dict.fromkeys(out))
+
+
+RULES: tuple[Rule, ...] = (
+    Rule("step_high", "every high time of STEP (or of UP and DOWN)", "width", "time",
+         ("step-dir", "up-down"), ref="pulse", data="pulse", level=1),
+    Rule("step_low", "every low time of STEP (or of UP and DOWN) between two pulses", "width",
+         "time", ("step-dir", "up-down"), ref="pulse", data="pulse", level=0),
+    Rule("step_period", "successive steps (1 / the maximum step rate)", "period", "max_rate",
+         _ALL, ref="step", data="step", roles=("pulse",)),
+    Rule("dir_setup", "DIR change → the next active STEP edge", "setup", "time", ("step-dir",),
+         ref="dir", data="active", roles=("step", "dir")),
+    Rule("dir_hold", "active STEP edge → the next DIR change (from the active edge, not "
+         "LinuxCNC's dirhold, which counts from the end of the pulse)", "hold", "time",
+         ("step-dir",), ref="active", data="dir", roles=("step", "dir")),
+    Rule("dir_delay", "up/down: end of the last pulse on one line → the first pulse on the other",
+         "switch", "time", ("up-down",), ref="line", data="line", roles=("up", "down")),
+    Rule("state_hold", "phase types: the time each output state is held", "period", "time",
+         ("phases",), ref="state", data="state", roles=("phases",)),
+    Rule("state_sequence", "phase types: moves to a state that is not a neighbour in the table",
+         "sequence", "none", ("phases",)),
+    Rule("enable_setup", "ENABLE active → the first step while it stays active", "setup", "time",
+         _ALL, ref="enable", data="step", roles=("pulse", "enable")),
+)
+
+#: Rule ids in report order.
+RULE_IDS: tuple[str, ...] = tuple(r.id for r in RULES)
+#: The rules a drive file gives as a time figure (ns), in report order.
+TIME_RULES: tuple[str, ...] = tuple(r.id for r in RULES if r.figure == "time")
+
+_BY_ID = {r.id: r for r in RULES}
+
+
+def rule(rule_id: str) -> Rule:
+    """The rule ``rule_id`` (KeyError for an unknown id)."""
+    return _BY_ID[rule_id]
+
+
+def applicable(kind: StepKind) -> tuple[Rule, ...]:
+    """The rules that apply to step types of ``kind``, in report order."""
+    return tuple(r for r in RULES if kind in r.kinds)
