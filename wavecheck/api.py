@@ -7,7 +7,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from fractions import Fraction
 
 from wavecheck.capture.model import Capture
@@ -32,6 +32,10 @@ def check(
     forward_level: int = 0,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
+    ini: str | os.PathLike[str] | None = None,
+    hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
+    channel: int = 0,
+    latency: str | Fraction | None = None,
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
 
@@ -48,6 +52,11 @@ def check(
         forward_level: DIR level that means forward (0 or 1).
         active_edge: override the drive's active edge.
         user_table: the state table of step type 15.
+        ini: a LinuxCNC INI file (BASE_PERIOD) for the ``config`` and ``latency_safe`` rates.
+        hal: LinuxCNC HAL file(s) with the stepgen settings.
+        channel: the stepgen channel of the HAL files.
+        latency: the worst base-thread latency ``J`` (``"11us"`` or exact seconds) for
+            ``latency_safe``.
 
     Raises:
         WavecheckError: unreadable capture or rule file, unknown channel, bad option.
@@ -61,6 +70,15 @@ def check(
         from wavecheck.drives.library import load_drive
 
         drive = load_drive(drive)
+    stepgen = None
+    if ini is not None or hal is not None:
+        from wavecheck.linuxcnc.config import read_config
+
+        hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
+        stepgen = read_config(ini, hals, channel)
+    j = None
+    if latency is not None:
+        j = (parse_time(latency) if isinstance(latency, str) else Fraction(latency)) * 10**9
     res: str | Fraction | None = resolution
     if isinstance(resolution, str):
         res = parse_time(resolution)
@@ -74,4 +92,6 @@ def check(
         forward_level=forward_level,
         active_edge=active_edge,
         user_table=user_table,
+        stepgen=stepgen,
+        latency_ns=j,
     )

@@ -7,6 +7,7 @@ several captures, INI/HAL configurations) build on; it does no I/O.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import replace
 from fractions import Fraction
 
 from wavecheck.capture.model import Capture
@@ -16,6 +17,7 @@ from wavecheck.decode import decode
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.errors import UsageError
 from wavecheck.interface import build_interface
+from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
@@ -78,6 +80,8 @@ def run_check(
     forward_level: int = 0,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
+    stepgen: LinuxCNCConfig | None = None,
+    latency_ns: Fraction | None = None,
 ) -> Report:
     """Check ``capture`` against ``drive``.
 
@@ -94,6 +98,10 @@ def run_check(
             and grbl drive it).
         active_edge: override the drive's active edge.
         user_table: state table for step type 15.
+        stepgen: a LinuxCNC stepgen configuration (INI/HAL, options) for the ``config`` and
+            ``latency_safe`` step rates; the STEP pin counts as inverted between stepgen and the
+            drive when ``invert`` holds ``step``.
+        latency_ns: the worst base-thread latency ``J`` for ``latency_safe`` (ns).
 
     Raises:
         WavecheckError: unusable input (unknown channel or role, bad type, bad resolution).
@@ -113,6 +121,15 @@ def run_check(
     )
     ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge)
     rates = max_step_rates(iface, st, steps, drive, edge, capture.timebase)
+    if stepgen is not None:
+        configured = config_rates(
+            stepgen,
+            drive,
+            latency_ns,
+            step_inverted=iface.signals["step"].inverted if "step" in iface.signals else False,
+            step_type=st.number,
+        )
+        rates = replace(rates, configured=configured)
     notes = list(capture.notes)
     if st.kind == "step-dir" and iface.get("dir") is None:
         notes.append("no DIR channel mapped: step directions are unknown, DIR rules unchecked")

@@ -19,6 +19,8 @@ The file (paths relative to it)::
     invert = ["step"]
     type = 0                           # LinuxCNC step type (default: the drive's)
     resolution = "500ns"               # optional; also samplerate, input_format, dir_forward
+    ini = "machine.ini"                # optional LinuxCNC files for the config and latency_safe
+    hal = ["machine.hal"]              #   step rates (channel = N), with latency = "11us"
     expect = "pass"                    # pass | fail | indeterminate (default pass)
     expect_rules = { dir_hold = "fail" }
 
@@ -75,6 +77,10 @@ _KEYS = {
     "dir_forward",
     "expect",
     "expect_rules",
+    "ini",
+    "hal",
+    "channel",
+    "latency",
 }
 
 
@@ -102,6 +108,10 @@ class CaptureSpec:
     dir_forward: str = "low"
     expect: str = "pass"
     expect_rules: dict[str, str] = field(default_factory=dict)
+    ini: Path | None = None
+    hal: tuple[Path, ...] = ()
+    channel: int = 0
+    latency: str | None = None
 
     def expected(self, rule: str) -> tuple[str, ...]:
         """The verdicts a rule item accepts."""
@@ -149,6 +159,9 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
     if drive.endswith(".toml") and drive_path.exists():
         drive = str(drive_path)
     path = Path(entry["path"])
+    hal = entry.get("hal", [])
+    hal = [hal] if isinstance(hal, str) else hal
+    ini = entry.get("ini")
     return CaptureSpec(
         name=str(entry.get("name") or path.stem),
         path=path if path.is_absolute() else folder / path,
@@ -162,6 +175,10 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
         dir_forward=str(entry.get("dir_forward", "low")),
         expect=expect,
         expect_rules={str(k): str(v) for k, v in rules.items()},
+        ini=None if ini is None else folder / str(ini),
+        hal=tuple(folder / str(h) for h in hal),
+        channel=int(entry.get("channel", 0)),
+        latency=None if entry.get("latency") is None else str(entry["latency"]),
     )
 
 
@@ -208,6 +225,10 @@ def _run(spec: CaptureSpec) -> Report:
         samplerate=spec.samplerate,
         input_format=spec.input_format,
         forward_level=1 if spec.dir_forward == "high" else 0,
+        ini=spec.ini,
+        hal=spec.hal or None,
+        channel=spec.channel,
+        latency=spec.latency,
     )
 
 
@@ -264,8 +285,11 @@ def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str
 
 
 def _describe_report(report: Report, max_violations: int) -> str:
+    from wavecheck.report.text import rate_lines
+
     lines = [f"verdict {report.verdict.upper()} ({report.total_violations} violation(s))"]
     lines += [describe_rule(report, r, max_violations) for r in report.rules if r.verdict != "pass"]
+    lines += rate_lines(report)
     return "\n".join(lines)
 
 
@@ -360,6 +384,8 @@ class RuleItem(pytest.Item):
 
     def runtest(self) -> None:
         report = _report(self.config_path, self.spec)
+        if self.rule is None:
+            self.user_properties += _rate_properties(report)
         max_v = int(self.config.getoption("wavecheck_max_violations"))
         try:
             self._judge(report, max_v)
@@ -405,6 +431,11 @@ class RuleItem(pytest.Item):
 
     def reportinfo(self) -> tuple[Path, int | None, str]:
         return self.path, None, f"{self.spec.name}::{self.name}"
+
+
+def _rate_properties(report: Report) -> list[tuple[str, object]]:
+    named = report.rates.named().items()
+    return [(f"max_step_rate_hz.{k}", float(v)) for k, v in named if v is not None]
 
 
 # -- fixture ------------------------------------------------------------------------------------

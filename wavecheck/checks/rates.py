@@ -29,6 +29,7 @@ from wavecheck.checks.primitives import Intervals, widths
 from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.timebase import Timebase
 
@@ -90,6 +91,8 @@ class MaxStepRates:
         longest_pulse_ns: the longest observed pulse (a stretch at :attr:`pulse_level`), exact ns.
         idle_min_ns: the drive's minimum for the other level, exact ns.
         pulse_level: the level of the generator's pulses (1 high, 0 low), from the capture.
+        configured: the ``config`` and ``latency_safe`` rates of a stepgen configuration, with
+            the settings they assume (None when no configuration was given).
     """
 
     drive: Fraction | None
@@ -100,6 +103,28 @@ class MaxStepRates:
     longest_pulse_ns: Fraction | None
     idle_min_ns: Fraction | None
     pulse_level: int | None = None
+    configured: ConfigRates | None = None
+
+    def named(self) -> dict[str, Fraction | None]:
+        """The five rates by their report names: drive, observed, headroom, config,
+        latency_safe (Hz; None where not defined)."""
+        return {
+            "drive": self.drive,
+            "observed": self.observed,
+            "headroom": self.headroom,
+            "config": self.config,
+            "latency_safe": self.latency_safe,
+        }
+
+    @property
+    def config(self) -> Fraction | None:
+        """stepgen's own clamp for the configuration given, Hz (None without one)."""
+        return None if self.configured is None else self.configured.config
+
+    @property
+    def latency_safe(self) -> Fraction | None:
+        """The highest rate that meets the drive under the configuration's worst latency, Hz."""
+        return None if self.configured is None else self.configured.latency_safe
 
 
 def drive_rate(drive: Drive) -> tuple[Fraction | None, str | None]:

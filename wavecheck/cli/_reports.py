@@ -28,23 +28,24 @@ from typing import Any
 
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError, WavecheckError
-from wavecheck.linuxcnc.config import ConfigRates, LinuxCNCConfig, config_rates, read_config
+from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
-from wavecheck.units import format_frequency, format_time, parse_time, time_ns
+from wavecheck.units import format_time, parse_time, time_ns
 from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
     "add_report_arguments",
     "expand_captures",
-    "extra_rates",
-    "render_json_with_config",
-    "render_junit_one",
-    "render_text_with_config",
+    "latency_ns",
+    "render_json_report",
+    "render_junit_report",
+    "render_text_report",
     "run_checks",
+    "stepgen_config",
     "summary_line",
 ]
 
@@ -102,7 +103,9 @@ _CONFIG_OPTIONS = {
 
 
 # -- stepgen configuration rates -------------------------------------------------------------------
-def _linuxcnc(args: argparse.Namespace) -> LinuxCNCConfig | None:
+def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
+    """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given);
+    read once and kept on ``args``."""
     if hasattr(args, "_linuxcnc_config"):
         cached: LinuxCNCConfig | None = args._linuxcnc_config
         return cached
@@ -130,7 +133,8 @@ def _linuxcnc(args: argparse.Namespace) -> LinuxCNCConfig | None:
     return cfg
 
 
-def _latency_ns(args: argparse.Namespace) -> Fraction | None:
+def latency_ns(args: argparse.Namespace) -> Fraction | None:
+    """``--latency`` in exact ns (None when not given)."""
     text = getattr(args, "latency", None)
     if not text:
         return None
@@ -140,71 +144,23 @@ def _latency_ns(args: argparse.Namespace) -> Fraction | None:
     return j
 
 
-def extra_rates(report: Report, args: argparse.Namespace) -> ConfigRates | None:
-    """The ``config``/``latency_safe`` rates for ``report`` when ``--ini``/``--hal`` were given.
-
-    The STEP pin counts as inverted between stepgen and the drive when ``--invert step`` was
-    given (the capture then shows stepgen's output and the drive sees its inverse).
-    """
-    cfg = _linuxcnc(args)
-    if cfg is None:
-        return None
-    return config_rates(
-        cfg,
-        report.drive,
-        _latency_ns(args),
-        step_inverted="step" in report.inverted,
-        step_type=report.step_type.number,
-    )
-
-
-def _rate_text(hz: Fraction | None) -> str:
-    return "-" if hz is None else format_frequency(hz)
-
-
-def render_text_with_config(report: Report, args: argparse.Namespace) -> str:
-    """The text report, plus the configuration's rates when one was given."""
+def render_text_report(report: Report, args: argparse.Namespace) -> str:
+    """The text report (``--max-violations`` listed)."""
     cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
-    text = render_text(report, cap)
-    rates = extra_rates(report, args)
-    if rates is None:
-        return text
-    cfg = _linuxcnc(args)
-    assert cfg is not None
-    p = format_time(Fraction(cfg.require_base_period(), 10**9))
-    j = _latency_ns(args)
-    jt = "" if j is None else f" (J = {format_time(j / 10**9)})"
-    lines = [
-        f"max step rate (stepgen channel {cfg.channel}, BASE_PERIOD {p}): config "
-        f"{_rate_text(rates.config)}, latency_safe{jt} {_rate_text(rates.latency_safe)}"
-    ]
-    lines += [f"note: {n}" for n in rates.notes]
-    return text + "\n".join(lines) + "\n"
+    return render_text(report, cap)
 
 
-def _num(v: Fraction | None) -> float | int | None:
-    if v is None:
-        return None
-    return int(v) if v.denominator == 1 else float(v)
-
-
-def _dict_with_config(report: Report, args: argparse.Namespace) -> dict[str, Any]:
+def _dict(report: Report, args: argparse.Namespace) -> dict[str, Any]:
     cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
-    data = report_dict(report, cap)
-    rates = extra_rates(report, args)
-    if rates is not None:
-        data["max_step_rate_hz"]["config"] = _num(rates.config)
-        data["max_step_rate_hz"]["latency_safe"] = _num(rates.latency_safe)
-        data["max_step_rate_hz"]["config_notes"] = list(rates.notes)
-    return data
+    return report_dict(report, cap)
 
 
-def render_json_with_config(report: Report, args: argparse.Namespace) -> str:
-    """The JSON report, with ``config``/``latency_safe`` in ``max_step_rate_hz`` when known."""
-    return json.dumps(_dict_with_config(report, args), indent=2, ensure_ascii=False) + "\n"
+def render_json_report(report: Report, args: argparse.Namespace) -> str:
+    """The JSON report (``--max-violations`` listed)."""
+    return json.dumps(_dict(report, args), indent=2, ensure_ascii=False) + "\n"
 
 
-def render_junit_one(report: Report, args: argparse.Namespace) -> str:
+def render_junit_report(report: Report, args: argparse.Namespace) -> str:
     """JUnit XML of one report."""
     from wavecheck.report.junit import render_junit
 
@@ -270,16 +226,10 @@ def _side_outputs(
     if args.html:
         from wavecheck.report.html import write_html
 
-        extra: dict[str, Fraction | None] | None = None
-        if reports:
-            rates = extra_rates(reports[0], args)
-            if rates is not None:
-                extra = {"config": rates.config, "latency_safe": rates.latency_safe}
         write_html(
             reports,
             args.html,
             errors=[f"{p}: {e}" if not e.startswith(p) else e for p, e in errors],
-            extra_rates=extra,
             pngs=pngs,
             max_violations=DEFAULT_TEXT_VIOLATIONS
             if args.max_violations is None
@@ -300,8 +250,8 @@ def run_checks(
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]
     paths = expand_captures(patterns)
     _check_folders(args)
-    _linuxcnc(args)  # a bad INI/HAL file is reported before any capture is read
-    _latency_ns(args)
+    stepgen_config(args)  # a bad INI/HAL file is reported before any capture is read
+    latency_ns(args)
     if len(paths) == 1:
         with activate(f"reading {paths[0]}", quiet=args.quiet, unit="bytes"):
             report = build_report(args, paths[0])
@@ -339,7 +289,7 @@ def _write_many(
         text = (
             json.dumps(
                 {
-                    "reports": [_dict_with_config(r, args) for r in reports],
+                    "reports": [_dict(r, args) for r in reports],
                     "errors": [{"path": p, "error": e} for p, e in errors],
                     "verdict": verdict,
                     "exit_code": code,
@@ -354,7 +304,7 @@ def _write_many(
 
         text = render_junit(reports, [Unreadable(p, e) for p, e in errors])
     else:
-        parts = [f"== {r.capture.path} ==\n{render_text_with_config(r, args)}" for r in reports]
+        parts = [f"== {r.capture.path} ==\n{render_text_report(r, args)}" for r in reports]
         text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
     if args.output:
         atomic_write(args.output, text)

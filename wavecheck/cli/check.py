@@ -18,10 +18,12 @@ from typing import Any
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.cli._reports import (
     add_report_arguments,
-    render_json_with_config,
-    render_junit_one,
-    render_text_with_config,
+    latency_ns,
+    render_json_report,
+    render_junit_report,
+    render_text_report,
     run_checks,
+    stepgen_config,
 )
 from wavecheck.drives.library import load_drive
 from wavecheck.engine import run_check
@@ -37,9 +39,9 @@ __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
 #: ``--format`` name → renderer(report, args) → text.
 RENDERERS: dict[str, Callable[[Report, argparse.Namespace], str]] = {
     # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
-    "text": render_text_with_config,
-    "json": render_json_with_config,
-    "junit": render_junit_one,
+    "text": render_text_report,
+    "json": render_json_report,
+    "junit": render_junit_report,
 }
 
 
@@ -138,6 +140,8 @@ def build_report(args: argparse.Namespace, path: str) -> Report:
         forward_level=1 if args.dir_forward == "high" else 0,
         active_edge=args.active_edge,
         user_table=_user_table(args.user_step_type),
+        stepgen=stepgen_config(args),
+        latency_ns=latency_ns(args),
     )
 
 

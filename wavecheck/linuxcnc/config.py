@@ -304,11 +304,17 @@ class ConfigRates:
         config: stepgen's own clamp, 1 / ((steplen + stepspace)·P) (steplen·P for types ≥ 2).
         latency_safe: the highest rate at which every interval meets the drive under ``J``.
         notes: why a rate is None, or what limits it.
+        channel: the stepgen channel the rates are of.
+        base_period_ns: the BASE_PERIOD they assume.
+        latency_ns: the worst latency ``J`` they assume (None: not given).
     """
 
     config: Fraction | None
     latency_safe: Fraction | None
     notes: tuple[str, ...] = ()
+    channel: int = 0
+    base_period_ns: int = 0
+    latency_ns: Fraction | None = None
 
 
 def config_rates(
@@ -331,25 +337,30 @@ def config_rates(
             stepspace (config = 1 / (steplen·P)) and no latency_safe (the plan is step/dir's).
     """
     p = cfg.require_base_period()
+    j = None if latency_ns is None else Fraction(latency_ns)
+
+    def _rates(config: Fraction | None, safe: Fraction | None, notes: tuple[str, ...]) -> ConfigRates:
+        return ConfigRates(config, safe, notes, cfg.channel, p, j)
+
     n = cfg.periods()
     number = step_type if step_type is not None else cfg.step_type or 0
     if kind_of(number) == "phases":
-        return ConfigRates(
+        return _rates(
             step_rate_hz(p, n["steplen"]),
             None,
             (f"latency_safe is computed for step types 0 and 1, not step type {number}",),
         )
     config = step_rate_hz(p, n["steplen"] + n["stepspace"])
     if latency_ns is None:
-        return ConfigRates(config, None, ("latency_safe needs --latency J",))
+        return _rates(config, None, ("latency_safe needs --latency J",))
     try:
         reqs = evaluate(drive, latency_ns, p, n, step_inverted=step_inverted)
     except ConfigError as err:
-        return ConfigRates(config, None, (f"latency_safe not computed: {err}",))
+        return _rates(config, None, (f"latency_safe not computed: {err}",))
     fixed_fail = [r for r in reqs if not r.rate_dependent and r.margin_ns < 0]
     if fixed_fail:
         worst = min(fixed_fail, key=lambda r: r.margin_ns)
-        return ConfigRates(
+        return _rates(
             config,
             None,
             (
@@ -368,4 +379,4 @@ def config_rates(
         f"latency_safe: {per_step} base periods per step (config: "
         f"{n['steplen'] + n['stepspace']}) at J = {float(latency_ns):g} ns"
     )
-    return ConfigRates(config, min(safe, config), (note,))
+    return _rates(config, min(safe, config), (note,))

@@ -104,15 +104,20 @@ def _violations_table(report: Report, limit: int) -> str:
     return f'<p>{total:,} violation(s), worst first.</p><table class="violations">{head}{"".join(rows)}</table>{more}'
 
 
-def _rates_table(report: Report, extra: dict[str, Fraction | None] | None) -> str:
+def _rates_table(report: Report) -> str:
     rates = report.rates
     rows = [
         ("drive", rates.drive, f"datasheet ({rates.drive_limited_by})" if rates.drive_limited_by else "datasheet"),
         ("observed", rates.observed, "highest instantaneous rate in the capture"),
         ("headroom", rates.headroom, "highest rate at which this generator's pulses still pass"),
     ]
-    for key, value in (extra or {}).items():
-        rows.append((key, value, "from the stepgen configuration"))
+    cfg = rates.configured
+    if cfg is not None:
+        assumed = f"stepgen channel {cfg.channel}, BASE_PERIOD {_ns(Fraction(cfg.base_period_ns))}"
+        if cfg.latency_ns is not None:
+            assumed += f", J = {_ns(cfg.latency_ns)}"
+        rows.append(("config", cfg.config, f"stepgen's own clamp ({assumed})"))
+        rows.append(("latency_safe", cfg.latency_safe, f"meets the drive under worst latency ({assumed})"))
     body = "".join(
         f'<tr><td>{_e(k)}</td><td class="num">{_hz(v)}</td><td class="note">{_e(what)}</td></tr>'
         for k, v, what in rows
@@ -125,7 +130,6 @@ def _section(
     index: int,
     png: bytes | None,
     max_violations: int,
-    extra_rates: dict[str, Fraction | None] | None,
 ) -> str:
     cap = report.capture
     res = "exact" if report.resolution_ns == 0 else _ns(report.resolution_ns)
@@ -155,7 +159,7 @@ def _section(
             f'<p class="note">Not stated by the drive (not checked): {_e(", ".join(report.not_stated))}</p>'
         )
     parts += ["<h3>Worst violations</h3>", _violations_table(report, max_violations)]
-    parts += ["<h3>Maximum step rates</h3>", _rates_table(report, extra_rates)]
+    parts += ["<h3>Maximum step rates</h3>", _rates_table(report)]
     if report.notes:
         parts.append("<h3>Notes</h3><ul>")
         parts += [f"<li>{_e(n)}</li>" for n in report.notes]
@@ -177,7 +181,6 @@ def render_html(
     plots: bool = True,
     max_violations: int = 20,
     errors: Sequence[str] = (),
-    extra_rates: dict[str, Fraction | None] | None = None,
     title: str = "wavecheck report",
     pngs: Sequence[bytes | None] | None = None,
 ) -> str:
@@ -189,7 +192,6 @@ def render_html(
         max_violations: violations listed per capture (the total is always given).
         errors: one-line errors of captures that could not be checked (shown, and they make the
             overall verdict ``error``).
-        extra_rates: more max step rates in Hz (``config``, ``latency_safe``) for every report.
         title: the page title.
         pngs: figures already rendered (one per report; None entries are rendered here).
     """
@@ -229,7 +231,7 @@ def render_html(
     if errors:
         body.append(f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>')
     for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
-        body.append(_section(r, k, png, max_violations, extra_rates))
+        body.append(_section(r, k, png, max_violations))
     body.append(
         '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
         "limit (negative = violation).</p></body></html>"

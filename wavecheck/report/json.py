@@ -9,38 +9,31 @@ does not exist (no interval measured, no limit) is ``null``.
 from __future__ import annotations
 
 import json
-from fractions import Fraction
 from typing import Any
 
 from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.model import Report
+from wavecheck.units import json_number
 
 __all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
 
 DEFAULT_VIOLATION_CAP = 1000
 
 
-def _num(v: Fraction | int | None) -> float | int | None:
-    if v is None:
-        return None
-    if isinstance(v, int) or v.denominator == 1:
-        return int(v)
-    return float(v)
-
-
 def _rule(r: RuleResult) -> dict[str, Any]:
     fig = r.figure
     return {
         "id": r.rule,
-        "limit_ns": _num(r.limit_ns),
+        "limit_ns": json_number(r.limit_ns),
         "checked": r.checked,
         "violations": r.violations,
         "indeterminate": r.indeterminate,
-        "min_margin_ns": _num(r.min_margin_ns),
-        "min_margin_at_s": _num(r.min_margin_at_s),
-        "min_measured_ns": _num(r.min_measured_ns),
+        "min_margin_ns": json_number(r.min_margin_ns),
+        "min_margin_at_s": json_number(r.min_margin_at_s),
+        "min_measured_ns": json_number(r.min_measured_ns),
         "verdict": r.verdict,
-        "decide_samplerate_hz": _num(r.decide_samplerate_hz),
+        "decide_samplerate_hz": json_number(r.decide_samplerate_hz),
         "limit_source": fig.source if fig else None,
         "limit_status": fig.status if fig else None,
     }
@@ -49,10 +42,10 @@ def _rule(r: RuleResult) -> dict[str, Any]:
 def _violation(v: Violation) -> dict[str, Any]:
     d: dict[str, Any] = {
         "rule": v.rule,
-        "time_s": _num(v.time_s),
-        "measured_ns": _num(v.measured_ns),
-        "limit_ns": _num(v.limit_ns),
-        "margin_ns": _num(v.margin_ns),
+        "time_s": json_number(v.time_s),
+        "measured_ns": json_number(v.measured_ns),
+        "limit_ns": json_number(v.limit_ns),
+        "margin_ns": json_number(v.margin_ns),
     }
     if v.detail:
         d["detail"] = v.detail
@@ -69,9 +62,9 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
         "capture": {
             "path": cap.path,
             "format": cap.format,
-            "resolution_ns": _num(report.resolution_ns),
-            "duration_s": _num(cap.duration_s),
-            "samplerate_hz": _num(cap.samplerate_hz),
+            "resolution_ns": json_number(report.resolution_ns),
+            "duration_s": json_number(cap.duration_s),
+            "samplerate_hz": json_number(cap.samplerate_hz),
             "channels": [
                 {
                     "index": c.index,
@@ -109,16 +102,28 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
         "violations": [_violation(v) for v in report.violations(violation_cap)],
         "violations_total": report.total_violations,
         "max_step_rate_hz": {
-            "drive": _num(rates.drive),
+            "drive": json_number(rates.drive),
             "drive_limited_by": rates.drive_limited_by,
-            "observed": _num(rates.observed),
-            "observed_at_s": _num(rates.observed_at_s),
-            "headroom": _num(rates.headroom),
-            "longest_pulse_ns": _num(rates.longest_pulse_ns),
-            "idle_min_ns": _num(rates.idle_min_ns),
+            "observed": json_number(rates.observed),
+            "observed_at_s": json_number(rates.observed_at_s),
+            "headroom": json_number(rates.headroom),
+            "longest_pulse_ns": json_number(rates.longest_pulse_ns),
+            "idle_min_ns": json_number(rates.idle_min_ns),
             "pulse_level": rates.pulse_level,
+            **_configured(rates.configured),
         },
         "verdict": report.verdict,
+    }
+
+
+def _configured(cfg: ConfigRates | None) -> dict[str, Any]:
+    """``config``, ``latency_safe`` and ``config_notes`` when a stepgen configuration was given."""
+    if cfg is None:
+        return {}
+    return {
+        "config": json_number(cfg.config),
+        "latency_safe": json_number(cfg.latency_safe),
+        "config_notes": list(cfg.notes),
     }
 
 

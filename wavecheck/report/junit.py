@@ -98,6 +98,12 @@ def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
     return "pass"
 
 
+def _rate_properties(report: Report) -> list[tuple[str, str]]:
+    """``max_step_rate_hz.<name>`` for every max step rate the report has (exact Hz, 6 digits)."""
+    named = report.rates.named().items()
+    return [(f"max_step_rate_hz.{k}", f"{float(v):.6g}") for k, v in named if v is not None]
+
+
 def _suite(root: ET.Element, report: Report) -> None:
     suite = ET.SubElement(root, "testsuite", name=report.capture.path)
     props = ET.SubElement(suite, "properties")
@@ -106,6 +112,7 @@ def _suite(root: ET.Element, report: Report) -> None:
         ("verdict", report.verdict),
         ("steps", str(report.steps.count)),
         ("step_type", str(report.step_type.number)),
+        *_rate_properties(report),
     ):
         ET.SubElement(props, "property", name=key, value=value)
     counts = {"failure": 0, "skipped": 0, "pass": 0}

@@ -8,7 +8,7 @@ from wavecheck.checks.result import RuleResult
 from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
 
-__all__ = ["DEFAULT_TEXT_VIOLATIONS", "render_text"]
+__all__ = ["DEFAULT_TEXT_VIOLATIONS", "rate_lines", "render_text"]
 
 DEFAULT_TEXT_VIOLATIONS = 20
 
@@ -19,6 +19,27 @@ def _ns(v: Fraction | None, signed: bool = False) -> str:
 
 def _hz(v: Fraction | None) -> str:
     return format_rate(v)
+
+
+def rate_lines(report: Report) -> list[str]:
+    """The max step rates: drive, observed and headroom, then (with a stepgen configuration)
+    config and latency_safe with the settings they assume and their notes."""
+    rates = report.rates
+    by = f" ({rates.drive_limited_by})" if rates.drive_limited_by else ""
+    out = [
+        f"max step rate: drive {_hz(rates.drive)}{by}, observed {_hz(rates.observed)}, "
+        f"headroom {_hz(rates.headroom)}"
+    ]
+    cfg = rates.configured
+    if cfg is not None:
+        j = "" if cfg.latency_ns is None else f" (J = {format_time(cfg.latency_ns / 10**9)})"
+        out.append(
+            f"max step rate (stepgen channel {cfg.channel}, BASE_PERIOD "
+            f"{format_time(Fraction(cfg.base_period_ns, 10**9))}): config {_hz(cfg.config)}, "
+            f"latency_safe{j} {_hz(cfg.latency_safe)}"
+        )
+        out += [f"note: {n}" for n in cfg.notes]
+    return out
 
 
 def _at(r: RuleResult) -> str:
@@ -119,13 +140,8 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
                 )
         if total > len(shown):
             out.append(f"  … and {total - len(shown)} more")
-    rates = report.rates
-    out.append("")
-    by = f" ({rates.drive_limited_by})" if rates.drive_limited_by else ""
-    out.append(
-        f"max step rate: drive {_hz(rates.drive)}{by}, observed {_hz(rates.observed)}, "
-        f"headroom {_hz(rates.headroom)}"
-    )
-    for note in report.notes:
-        out.append(f"note: {note}")
+    rates, *configured = rate_lines(report)
+    out += ["", rates]
+    out += [f"note: {note}" for note in report.notes]
+    out += configured
     return "\n".join(out) + "\n"
