@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import filecmp
+import re
 import subprocess
 import sys
 import tempfile
@@ -108,6 +109,11 @@ SCENARIOS: tuple[Scenario, ...] = (
         why="user step table (3-phase half step) in velocity mode",
     ),
 )
+
+
+def command_files() -> list[str]:
+    """The files the scenarios read from the golden folder (``{golden}/NAME``)."""
+    return sorted({m for sc in SCENARIOS for m in re.findall(r"\{golden\}/(\S+)", sc.args)})
 
 
 def _parse(args: str, golden: Path) -> argparse.Namespace:
@@ -247,6 +253,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = ap.parse_args(argv)
     golden: Path = args.golden_dir.resolve()
+    missing = [f for f in command_files() if not (golden / f).is_file()]
+    if missing:
+        print(f"golden: {golden} lacks the command files {', '.join(missing)}", file=sys.stderr)
+        return 2
     if args.write:
         write(golden)
         problems = []
