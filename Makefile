@@ -60,14 +60,15 @@ demo: setup
 	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
 test: setup
-	.venv/bin/ruff check wavecheck stepgen tests bench
+	.venv/bin/ruff check wavecheck stepgen tools tests bench
 	.venv/bin/mypy
 	.venv/bin/pytest -n 2 -q
 
 lint:
-	.venv/bin/ruff check wavecheck stepgen tests bench
+	.venv/bin/ruff check wavecheck stepgen tools tests bench
 
 bench: setup
+	$(PY) -m pip install -q -e '.[bench]'
 	$(PY) bench/run.py
 
 # Longer fuzz run of every reader (the suite runs a bounded one); FUZZ_N mutants per reader.
@@ -75,14 +76,15 @@ FUZZ_N ?= 20000
 fuzz: setup
 	$(PY) -m tests.reliability.fuzz -n $(FUZZ_N)
 
+# Development tools: tools/ is not installed; they run from the checkout (python -m tools.NAME).
 golden: setup
-	$(PY) -m stepgen.golden --write
+	$(PY) -m tools.golden --write
 
 golden-check: setup
-	$(PY) -m stepgen.golden --check
+	$(PY) -m tools.golden --check
 
 story: setup
-	$(PY) -m stepgen.story
+	$(PY) -m tools.story
 
 clean:
 	rm -rf .venv build *.egg-info .pytest_cache .mypy_cache .ruff_cache

@@ -53,7 +53,6 @@ U32_MAX = 0xFFFF_FFFF
 _NEVER = (
     U32_MAX  # "old_*" sentinel (~0 in the C) so every timing param is rounded on the first call
 )
-_INT64_MIN = -(1 << 63)
 
 ThreadOrder = Literal["update-first", "pulses-first"]
 Mode = Literal["position", "velocity"]

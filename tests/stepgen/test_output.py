@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from stepgen.cli import main
-from stepgen.golden import GOLDEN, SCENARIOS, generate
+from tools.golden import GOLDEN, SCENARIOS, generate
 
 S0 = [
     "simulate",

@@ -24,164 +24,21 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Literal
-
-import numpy as np
+from typing import Any
 
 from wavecheck.capture.open import open_capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.compare import Comparison, compare
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write
-from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
+from wavecheck.verdict import exit_code
 
-__all__ = ["Comparison", "compare_reports", "register", "render_compare_json", "render_compare_text", "run"]
+__all__ = ["register", "render_compare_json", "render_compare_text", "run"]
 
-Align = Literal["first-step", "none"]
-_RANK = {"pass": 0, "unchecked": 0, "indeterminate": 1, "fail": 2}
-
-
-@dataclass(frozen=True)
-class RuleDiff:
-    """One rule in both reports (None where a report did not evaluate it)."""
-
-    rule: str
-    golden_verdict: str | None
-    capture_verdict: str | None
-    golden_violations: int | None
-    capture_violations: int | None
-    golden_margin_ns: Fraction | None
-    capture_margin_ns: Fraction | None
-
-    @property
-    def delta_margin_ns(self) -> Fraction | None:
-        """capture − golden smallest margin, exact ns."""
-        if self.golden_margin_ns is None or self.capture_margin_ns is None:
-            return None
-        return self.capture_margin_ns - self.golden_margin_ns
-
-    @property
-    def change(self) -> str:
-        """``"same"``, ``"worse"`` or ``"better"`` (by verdict)."""
-        g = _RANK.get(self.golden_verdict or "unchecked", 0)
-        c = _RANK.get(self.capture_verdict or "unchecked", 0)
-        return "same" if g == c else ("worse" if c > g else "better")
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """The result of comparing a capture with a golden trace.
-
-    Attributes:
-        capture / golden: the two reports.
-        align: how times were aligned.
-        tolerance_ns: the allowed per-step time difference, exact ns.
-        compared: steps compared (the shorter count).
-        max_abs_diff_ns: the largest |Δt| over compared steps, exact ns (None: nothing compared).
-        max_at_step: index of that step.
-        beyond_tolerance: steps whose |Δt| exceeds the tolerance.
-        mean_diff_ns: mean Δt (capture − golden), ns (float).
-        direction_mismatches: steps whose known directions differ.
-        rules: per-rule differences.
-    """
-
-    capture: Report
-    golden: Report
-    align: Align
-    tolerance_ns: Fraction
-    compared: int
-    max_abs_diff_ns: Fraction | None
-    max_at_step: int | None
-    beyond_tolerance: int
-    mean_diff_ns: float | None
-    direction_mismatches: int
-    rules: list[RuleDiff]
-
-    @property
-    def same_count(self) -> bool:
-        """Both have the same number of steps."""
-        return self.capture.steps.count == self.golden.steps.count
-
-    @property
-    def same_position(self) -> bool:
-        """Both end at the same position (unknown positions never match)."""
-        c, g = self.capture.steps.final_position, self.golden.steps.final_position
-        return c is not None and c == g
-
-    @property
-    def verdict(self) -> str:
-        """pass / fail / indeterminate (see the module docstring)."""
-        if (
-            not self.same_count
-            or not self.same_position
-            or self.beyond_tolerance
-            or self.direction_mismatches
-            or any(d.change == "worse" and d.capture_verdict == "fail" for d in self.rules)
-        ):
-            return "fail"
-        if any(d.change == "worse" for d in self.rules):
-            return "indeterminate"
-        return "pass"
-
-    @property
-    def exit_code(self) -> int:
-        """0 pass, 1 fail, 3 indeterminate."""
-        return {"pass": 0, "fail": 1, "indeterminate": 3}[self.verdict]
-
-
-def _times_ns(report: Report, align: Align) -> np.ndarray:
-    ticks = report.steps.ticks
-    origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
-    return (ticks - origin).astype(np.float64) * float(report.capture.timebase.tick_ns)
-
-
-def _exact_ns(report: Report, i: int, align: Align) -> Fraction:
-    ticks = report.steps.ticks
-    origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
-    return report.capture.timebase.ns(int(ticks[i]) - origin)
-
-
-def compare_reports(
-    capture: Report, golden: Report, tolerance_ns: Fraction, align: Align = "first-step"
-) -> Comparison:
-    """Compare two checked reports (see the module docstring)."""
-    n = min(capture.steps.count, golden.steps.count)
-    max_diff = max_at = mean = None
-    beyond = 0
-    if n:
-        d = _times_ns(capture, align)[:n] - _times_ns(golden, align)[:n]
-        i = int(np.argmax(np.abs(d)))
-        max_at = i
-        max_diff = abs(_exact_ns(capture, i, align) - _exact_ns(golden, i, align))
-        beyond = int(np.count_nonzero(np.abs(d) > float(tolerance_ns) + 1e-3))
-        mean = float(d.mean())
-    dc, dg = capture.steps.direction[:n], golden.steps.direction[:n]
-    mismatches = int(np.count_nonzero((dc != 0) & (dg != 0) & (dc != dg)))
-    ids = [r.rule for r in golden.rules] + [
-        r.rule for r in capture.rules if golden.rule(r.rule) is None
-    ]
-    diffs = []
-    for rule in ids:
-        g, c = golden.rule(rule), capture.rule(rule)
-        diffs.append(
-            RuleDiff(
-                rule,
-                g.verdict if g else None,
-                c.verdict if c else None,
-                g.violations if g else None,
-                c.violations if c else None,
-                g.min_margin_ns if g else None,
-                c.min_margin_ns if c else None,
-            )
-        )
-    return Comparison(
-        capture, golden, align, tolerance_ns, n, max_diff, max_at, beyond, mean, mismatches, diffs
-    )
 
 
 def _ns(v: Fraction | None, signed: bool = False) -> str:
@@ -316,7 +173,9 @@ def register(sub: Any) -> None:
         metavar="ROLE=CH",
         help="golden mapping (default: by name, e.g. stepgen's step/dir)",
     )
-    p.add_argument("--invert", action="append", default=[], metavar="ROLE", help="capture role to invert")
+    p.add_argument(
+        "--invert", action="append", default=[], metavar="ROLE", help="capture role to invert"
+    )
     p.add_argument(
         "--golden-invert", action="append", default=[], metavar="ROLE", help="golden role to invert"
     )
@@ -345,28 +204,23 @@ def run(args: argparse.Namespace) -> int:
     if tol < 0:
         raise UsageError(f"--tolerance must not be negative, got {args.tolerance}")
     drive = load_drive(args.drive)
-    fwd = 1 if args.dir_forward == "high" else 0
-    cap = run_check(
+    result = compare(
         capture_from_args(args, args.capture),
-        drive,
-        parse_map(args.map),
-        args.invert,
-        args.type,
-        forward_level=fwd,
-    )
-    gold = run_check(
         open_capture(args.golden),
         drive,
-        parse_map(args.golden_map),
-        args.golden_invert,
-        args.type,
-        forward_level=fwd,
+        tol,
+        args.align,
+        capture_map=parse_map(args.map),
+        capture_invert=args.invert,
+        golden_map=parse_map(args.golden_map),
+        golden_invert=args.golden_invert,
+        step_type=args.type,
+        forward_level=1 if args.dir_forward == "high" else 0,
     )
-    result = compare_reports(cap, gold, tol, args.align)
     text = render_compare_json(result) if args.format == "json" else render_compare_text(result)
     if args.output:
         atomic_write(args.output, text)
         print(f"{result.verdict}: compared with {args.golden}; written to {args.output}")
     else:
         sys.stdout.write(text)
-    return result.exit_code
+    return exit_code(result.verdict)

@@ -19,7 +19,6 @@ The layout is the one Jenkins, GitLab, GitHub Actions reporters and Azure read (
 
 from __future__ import annotations
 
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,11 +26,10 @@ from fractions import Fraction
 from pathlib import PurePath
 
 from wavecheck.checks.result import RuleResult, Violation
-from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_time
 
-__all__ = ["Unreadable", "classname", "render_junit", "write_junit"]
+__all__ = ["Unreadable", "classname", "render_junit"]
 
 _LISTED = 10
 
@@ -153,10 +151,3 @@ def render_junit(
     root.set("time", "0")
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
-def write_junit(
-    reports: Sequence[Report], path: str | os.PathLike[str], errors: Sequence[Unreadable] = ()
-) -> None:
-    """Write :func:`render_junit` to ``path`` atomically."""
-    atomic_write(path, render_junit(reports, errors))

@@ -166,11 +166,6 @@ def _signed_ns(v: Fraction | None) -> str:
 
 
 # -- drawing --------------------------------------------------------------------------------------
-def _level_at(initial: int, edges: npt.NDArray[np.int64], tick: int) -> int:
-    """Level of a signal just after ``tick`` (edges at ``tick`` included)."""
-    return initial ^ (int(np.searchsorted(edges, tick, side="right")) & 1)
-
-
 def _roles(report: Report) -> list[str]:
     roles = list(report.interface.signals)
     return sorted(roles, key=lambda r: _ROLE_ORDER.index(r) if r in _ROLE_ORDER else 99)

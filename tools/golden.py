@@ -1,17 +1,22 @@
-"""Golden VCDs made by ``stepgen simulate``: ``python -m stepgen.golden --write|--check``.
+"""Golden VCDs made by ``stepgen simulate``: ``python -m tools.golden --write|--check``.
 
-Each scenario in :data:`SCENARIOS` is a ``stepgen simulate`` command line. ``--write``
-regenerates ``captures/golden/NAME.vcd`` and ``NAME.toml`` (what the file must show: steps,
-final counts, edges per pin, and the expected ``wavecheck check`` verdict against a named
-drive, with the reason). ``--check`` regenerates into a temporary folder and fails if any file
-differs byte for byte; then, if ``wavecheck check`` is available, runs it on each golden VCD that
-names a drive and fails if its verdict differs from the expected one.
+A development tool run from a source checkout (``make golden``, ``make golden-check``), not part
+of the installed package. Each scenario in :data:`SCENARIOS` is a ``stepgen simulate`` command
+line. ``--write`` regenerates ``NAME.vcd`` and ``NAME.toml`` in the golden folder (what the file
+must show: steps, final counts, edges per pin, and the expected ``wavecheck check`` verdict
+against a named drive, with the reason). ``--check`` regenerates into a temporary folder and
+fails if any file differs byte for byte; then, if ``wavecheck check`` is available, runs it on
+each golden VCD that names a drive and fails if its verdict differs from the expected one.
+
+The golden folder is ``--golden-dir`` (default :data:`GOLDEN`, ``captures/golden`` of the
+checkout this file is in); the scenarios' command files (``reversal-p20.csv`` …) are read from it.
 """
 
 from __future__ import annotations
 
 import argparse
 import filecmp
+import re
 import subprocess
 import sys
 import tempfile
@@ -20,12 +25,15 @@ from pathlib import Path
 
 from stepgen.cli.simulate import build_config, build_motion, register
 from stepgen.latency import parse_latency
-from stepgen.simulate import n_periods_for, simulate
+from stepgen.simulate import Trace, n_periods_for, simulate
 from stepgen.vcdout import write_vcd
 from wavecheck.units import time_ns
+from wavecheck.verdict import verdict_of_exit
 
-GOLDEN = Path(__file__).resolve().parent.parent / "captures" / "golden"
-EXIT_VERDICT = {0: "pass", 1: "fail", 3: "indeterminate"}
+#: The source checkout this tool belongs to (tools/ is one level below it).
+ROOT = Path(__file__).resolve().parent.parent
+#: The golden folder unless ``--golden-dir`` names another.
+GOLDEN = ROOT / "captures" / "golden"
 
 
 @dataclass(frozen=True)
@@ -103,6 +111,11 @@ SCENARIOS: tuple[Scenario, ...] = (
 )
 
 
+def command_files() -> list[str]:
+    """The files the scenarios read from the golden folder (``{golden}/NAME``)."""
+    return sorted({m for sc in SCENARIOS for m in re.findall(r"\{golden\}/(\S+)", sc.args)})
+
+
 def _parse(args: str, golden: Path) -> argparse.Namespace:
     import shlex
 
@@ -114,34 +127,35 @@ def _parse(args: str, golden: Path) -> argparse.Namespace:
     )
 
 
-def generate(sc: Scenario, folder: Path, golden: Path = GOLDEN) -> None:
-    """Write ``NAME.vcd`` and ``NAME.toml`` for one scenario into ``folder``."""
-    ns = _parse(sc.args, golden)
-    cfg = build_config(ns)
-    motion = build_motion(ns, cfg)
-    if ns.periods is not None:
-        n = ns.periods
-    elif ns.duration is not None:
-        n = n_periods_for(cfg, int(time_ns(ns.duration, default_unit="ns")))
+def _trace(args: argparse.Namespace) -> Trace:
+    """Simulate what the parsed ``stepgen simulate`` command line asks for."""
+    cfg = build_config(args)
+    motion = build_motion(args, cfg)
+    if args.periods is not None:
+        n = args.periods
+    elif args.duration is not None:
+        n = n_periods_for(cfg, int(time_ns(args.duration, default_unit="ns")))
     else:
         dur = motion.natural_duration_s
         assert dur is not None
         n = n_periods_for(cfg, round(dur * 1e9))
-    trace = simulate(
+    return simulate(
         cfg,
         motion,
-        parse_latency(ns.latency),
+        parse_latency(args.latency),
         n_periods=n,
-        seed=ns.seed,
-        active_edge=ns.active_edge,
-        catchup_ns=int(time_ns(ns.catchup, default_unit="ns")),
+        seed=args.seed,
+        active_edge=args.active_edge,
+        catchup_ns=int(time_ns(args.catchup, default_unit="ns")),
     )
-    write_vcd(trace, folder / f"{sc.name}.vcd")
+
+
+def _expectations(sc: Scenario, trace: Trace) -> str:
+    """``NAME.toml``: the command, why, what the trace shows and the expected verdict."""
+    command = f"stepgen simulate {sc.args.format(golden='captures/golden')} -o {sc.name}.vcd"
     lines = [
-        "# golden stepgen trace; regenerate with: make golden (python -m stepgen.golden --write)",
-        f'command = "stepgen simulate {sc.args.format(golden="captures/golden")} -o {sc.name}.vcd"'.replace(
-            "'", "'"
-        ),
+        "# golden stepgen trace; regenerate with: make golden (python -m tools.golden --write)",
+        f'command = "{command}"',
         f'why = "{sc.why}"',
         "",
         "[expect]",
@@ -153,7 +167,15 @@ def generate(sc: Scenario, folder: Path, golden: Path = GOLDEN) -> None:
     lines += [f'edges."{pin}" = {len(trace.edges[pin])}' for pin in trace.pins]
     if sc.drive:
         lines += ["", "[wavecheck]", f'drive = "{sc.drive}"', f'verdict = "{sc.verdict or "pass"}"']
-    (folder / f"{sc.name}.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return "\n".join(lines) + "\n"
+
+
+def generate(sc: Scenario, folder: Path, golden: Path = GOLDEN) -> None:
+    """Write ``NAME.vcd`` and ``NAME.toml`` for one scenario into ``folder``; the scenario's
+    command files are read from ``golden``."""
+    trace = _trace(_parse(sc.args, golden))
+    write_vcd(trace, folder / f"{sc.name}.vcd")
+    (folder / f"{sc.name}.toml").write_text(_expectations(sc, trace), encoding="utf-8")
 
 
 def wavecheck_verdict(vcd: Path, drive: str) -> str | None:
@@ -166,41 +188,42 @@ def wavecheck_verdict(vcd: Path, drive: str) -> str | None:
     )
     if proc.returncode == 2 and "invalid choice" in proc.stderr:
         return None
-    return EXIT_VERDICT.get(
-        proc.returncode, f"error (exit {proc.returncode}: {proc.stderr.strip()[:200]})"
-    )
+    verdict = verdict_of_exit(proc.returncode)
+    return verdict or f"error (exit {proc.returncode}: {proc.stderr.strip()[:200]})"
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``--write`` regenerates captures/golden; ``--check`` compares and runs wavecheck."""
-    ap = argparse.ArgumentParser(prog="python -m stepgen.golden", description=__doc__)
-    g = ap.add_mutually_exclusive_group(required=True)
-    g.add_argument("--write", action="store_true")
-    g.add_argument("--check", action="store_true")
-    args = ap.parse_args(argv)
-    problems: list[str] = []
-    if args.write:
-        GOLDEN.mkdir(parents=True, exist_ok=True)
+def write(golden: Path) -> None:
+    """Regenerate every scenario into ``golden``."""
+    golden.mkdir(parents=True, exist_ok=True)
+    for sc in SCENARIOS:
+        generate(sc, golden, golden)
+        print(f"wrote {golden / sc.name}.vcd")
+
+
+def differences(golden: Path) -> list[str]:
+    """Regenerate every scenario into a temporary folder; the golden files that differ."""
+    problems = []
+    with tempfile.TemporaryDirectory() as tmp:
         for sc in SCENARIOS:
-            generate(sc, GOLDEN)
-            print(f"wrote {GOLDEN / sc.name}.vcd")
-    else:
-        with tempfile.TemporaryDirectory() as tmp:
-            for sc in SCENARIOS:
-                generate(sc, Path(tmp))
-                for ext in ("vcd", "toml"):
-                    ref = GOLDEN / f"{sc.name}.{ext}"
-                    if not ref.exists() or not filecmp.cmp(
-                        ref, Path(tmp) / f"{sc.name}.{ext}", shallow=False
-                    ):
-                        problems.append(
-                            f"{ref}: differs from a fresh run (run make golden and review the diff)"
-                        )
+            generate(sc, Path(tmp), golden)
+            for ext in ("vcd", "toml"):
+                ref = golden / f"{sc.name}.{ext}"
+                fresh = Path(tmp) / f"{sc.name}.{ext}"
+                if not ref.exists() or not filecmp.cmp(ref, fresh, shallow=False):
+                    problems.append(
+                        f"{ref}: differs from a fresh run (run make golden and review the diff)"
+                    )
+    return problems
+
+
+def verdict_problems(golden: Path) -> list[str]:
+    """Run ``wavecheck check`` on every golden VCD that names a drive; the unexpected verdicts."""
+    problems = []
     for sc in SCENARIOS:
         if not sc.drive:
             continue
         expected = sc.verdict or "pass"
-        got = wavecheck_verdict(GOLDEN / f"{sc.name}.vcd", sc.drive)
+        got = wavecheck_verdict(golden / f"{sc.name}.vcd", sc.drive)
         if got is None:
             print(
                 f"{sc.name}: wavecheck check not available; expected verdict {expected} not verified"
@@ -211,6 +234,34 @@ def main(argv: list[str] | None = None) -> int:
             )
         else:
             print(f"{sc.name}: wavecheck check --drive {sc.drive}: {got} as expected")
+    return problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``--write`` regenerates the golden folder; ``--check`` compares and runs wavecheck."""
+    ap = argparse.ArgumentParser(prog="python -m tools.golden", description=__doc__)
+    g = ap.add_mutually_exclusive_group(required=True)
+    g.add_argument("--write", action="store_true")
+    g.add_argument("--check", action="store_true")
+    ap.add_argument(
+        "--golden-dir",
+        type=Path,
+        default=GOLDEN,
+        metavar="DIR",
+        help=f"the golden traces (default {GOLDEN})",
+    )
+    args = ap.parse_args(argv)
+    golden: Path = args.golden_dir.resolve()
+    missing = [f for f in command_files() if not (golden / f).is_file()]
+    if missing:
+        print(f"golden: {golden} lacks the command files {', '.join(missing)}", file=sys.stderr)
+        return 2
+    if args.write:
+        write(golden)
+        problems = []
+    else:
+        problems = differences(golden)
+    problems += verdict_problems(golden)
     for p in problems:
         print(f"golden: {p}", file=sys.stderr)
     return 1 if problems else 0

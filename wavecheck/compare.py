@@ -1,0 +1,236 @@
+"""A capture compared with a golden trace (e.g. made by stepgen): the model and the algorithm of
+``wavecheck compare`` (:mod:`wavecheck.cli.compare` parses the options and renders the result).
+
+Both files are checked against the same drive; then compared are
+
+- the step count, the final position and every step's direction;
+- every step's time: step *i* of the capture against step *i* of the golden, after aligning both
+  on their first step (``--align first-step``, the default: a logic analyzer starts at an
+  arbitrary moment) or on their own time 0 (``--align none``); a step further than
+  ``--tolerance`` (default 2 µs) from its golden time is a difference;
+- the two rule tables: each rule's verdict, violations and smallest margin, and the change.
+
+Verdict: **fail** when the steps differ (count, final position, a direction, a time beyond the
+tolerance) or a rule is worse than in the golden (fails where the golden does not); else
+**indeterminate** when a rule is indeterminate where the golden passes; else **pass**. A golden
+that itself fails a rule (a golden of a bad configuration) is matched by a capture failing it
+too.
+
+Time differences are computed in float64 ns (±0.001 ns at 10⁶ s); the largest is recomputed
+exactly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Literal
+
+import numpy as np
+
+from wavecheck.capture.model import Capture
+from wavecheck.drives.model import Drive
+from wavecheck.engine import run_check
+from wavecheck.report.model import Report
+
+__all__ = ["Align", "Comparison", "RuleDiff", "compare", "compare_reports"]
+
+Align = Literal["first-step", "none"]
+_RANK = {"pass": 0, "unchecked": 0, "indeterminate": 1, "fail": 2}
+
+
+@dataclass(frozen=True)
+class RuleDiff:
+    """One rule in both reports (None where a report did not evaluate it)."""
+
+    rule: str
+    golden_verdict: str | None
+    capture_verdict: str | None
+    golden_violations: int | None
+    capture_violations: int | None
+    golden_margin_ns: Fraction | None
+    capture_margin_ns: Fraction | None
+
+    @property
+    def delta_margin_ns(self) -> Fraction | None:
+        """capture − golden smallest margin, exact ns."""
+        if self.golden_margin_ns is None or self.capture_margin_ns is None:
+            return None
+        return self.capture_margin_ns - self.golden_margin_ns
+
+    @property
+    def change(self) -> str:
+        """``"same"``, ``"worse"`` or ``"better"`` (by verdict)."""
+        g = _RANK.get(self.golden_verdict or "unchecked", 0)
+        c = _RANK.get(self.capture_verdict or "unchecked", 0)
+        return "same" if g == c else ("worse" if c > g else "better")
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The result of comparing a capture with a golden trace.
+
+    Attributes:
+        capture / golden: the two reports.
+        align: how times were aligned.
+        tolerance_ns: the allowed per-step time difference, exact ns.
+        compared: steps compared (the shorter count).
+        max_abs_diff_ns: the largest |Δt| over compared steps, exact ns (None: nothing compared).
+        max_at_step: index of that step.
+        beyond_tolerance: steps whose |Δt| exceeds the tolerance.
+        mean_diff_ns: mean Δt (capture − golden), ns (float).
+        direction_mismatches: steps whose known directions differ.
+        rules: per-rule differences.
+    """
+
+    capture: Report
+    golden: Report
+    align: Align
+    tolerance_ns: Fraction
+    compared: int
+    max_abs_diff_ns: Fraction | None
+    max_at_step: int | None
+    beyond_tolerance: int
+    mean_diff_ns: float | None
+    direction_mismatches: int
+    rules: list[RuleDiff]
+
+    @property
+    def same_count(self) -> bool:
+        """Both have the same number of steps."""
+        return self.capture.steps.count == self.golden.steps.count
+
+    @property
+    def same_position(self) -> bool:
+        """Both end at the same position (unknown positions never match)."""
+        c, g = self.capture.steps.final_position, self.golden.steps.final_position
+        return c is not None and c == g
+
+    @property
+    def verdict(self) -> str:
+        """pass / fail / indeterminate (see the module docstring)."""
+        if (
+            not self.same_count
+            or not self.same_position
+            or self.beyond_tolerance
+            or self.direction_mismatches
+            or any(d.change == "worse" and d.capture_verdict == "fail" for d in self.rules)
+        ):
+            return "fail"
+        if any(d.change == "worse" for d in self.rules):
+            return "indeterminate"
+        return "pass"
+
+
+def _times_ns(report: Report, align: Align) -> np.ndarray:
+    ticks = report.steps.ticks
+    origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
+    return (ticks - origin).astype(np.float64) * float(report.capture.timebase.tick_ns)
+
+
+def _exact_ns(report: Report, i: int, align: Align) -> Fraction:
+    ticks = report.steps.ticks
+    origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
+    return report.capture.timebase.ns(int(ticks[i]) - origin)
+
+
+@dataclass(frozen=True)
+class _StepTimes:
+    compared: int
+    max_abs_diff_ns: Fraction | None
+    max_at_step: int | None
+    beyond_tolerance: int
+    mean_diff_ns: float | None
+
+
+def _step_times(
+    capture: Report, golden: Report, tolerance_ns: Fraction, align: Align
+) -> _StepTimes:
+    """Step *i* of ``capture`` against step *i* of ``golden`` over the shorter count."""
+    n = min(capture.steps.count, golden.steps.count)
+    if not n:
+        return _StepTimes(0, None, None, 0, None)
+    d = _times_ns(capture, align)[:n] - _times_ns(golden, align)[:n]
+    i = int(np.argmax(np.abs(d)))
+    return _StepTimes(
+        compared=n,
+        max_abs_diff_ns=abs(_exact_ns(capture, i, align) - _exact_ns(golden, i, align)),
+        max_at_step=i,
+        beyond_tolerance=int(np.count_nonzero(np.abs(d) > float(tolerance_ns) + 1e-3)),
+        mean_diff_ns=float(d.mean()),
+    )
+
+
+def _direction_mismatches(capture: Report, golden: Report, n: int) -> int:
+    """Steps among the first ``n`` whose directions are both known and differ."""
+    dc, dg = capture.steps.direction[:n], golden.steps.direction[:n]
+    return int(np.count_nonzero((dc != 0) & (dg != 0) & (dc != dg)))
+
+
+def _rule_diffs(capture: Report, golden: Report) -> list[RuleDiff]:
+    """Every rule of either report, the golden's order first."""
+    ids = [r.rule for r in golden.rules] + [
+        r.rule for r in capture.rules if golden.rule(r.rule) is None
+    ]
+    diffs = []
+    for rule in ids:
+        g, c = golden.rule(rule), capture.rule(rule)
+        diffs.append(
+            RuleDiff(
+                rule,
+                g.verdict if g else None,
+                c.verdict if c else None,
+                g.violations if g else None,
+                c.violations if c else None,
+                g.min_margin_ns if g else None,
+                c.min_margin_ns if c else None,
+            )
+        )
+    return diffs
+
+
+def compare_reports(
+    capture: Report, golden: Report, tolerance_ns: Fraction, align: Align = "first-step"
+) -> Comparison:
+    """Compare two checked reports (see the module docstring)."""
+    t = _step_times(capture, golden, tolerance_ns, align)
+    return Comparison(
+        capture=capture,
+        golden=golden,
+        align=align,
+        tolerance_ns=tolerance_ns,
+        compared=t.compared,
+        max_abs_diff_ns=t.max_abs_diff_ns,
+        max_at_step=t.max_at_step,
+        beyond_tolerance=t.beyond_tolerance,
+        mean_diff_ns=t.mean_diff_ns,
+        direction_mismatches=_direction_mismatches(capture, golden, t.compared),
+        rules=_rule_diffs(capture, golden),
+    )
+
+
+def compare(
+    capture: Capture,
+    golden: Capture,
+    drive: Drive,
+    tolerance_ns: Fraction,
+    align: Align = "first-step",
+    *,
+    capture_map: Mapping[str, str] | None = None,
+    capture_invert: Iterable[str] = (),
+    golden_map: Mapping[str, str] | None = None,
+    golden_invert: Iterable[str] = (),
+    step_type: int | None = None,
+    forward_level: int = 0,
+) -> Comparison:
+    """Check ``capture`` and ``golden`` against the same ``drive`` (each with its own role mapping
+    and inverted roles; the same step type and forward DIR level) and compare the two reports."""
+    checked = [
+        run_check(cap, drive, mapping, invert, step_type, forward_level=forward_level)
+        for cap, mapping, invert in (
+            (capture, capture_map, capture_invert),
+            (golden, golden_map, golden_invert),
+        )
+    ]
+    return compare_reports(checked[0], checked[1], tolerance_ns, align)
