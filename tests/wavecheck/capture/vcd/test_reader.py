@@ -12,8 +12,7 @@ from hypothesis import strategies as st
 
 from tests.conftest import shared_capture, write_vcd
 from wavecheck.capture.model import Capture
-from wavecheck.capture.vcd import read_vcd
-from wavecheck.capture.vcd_reference import read_vcd_reference
+from wavecheck.capture.vcd import read_vcd, read_vcd_reference
 from wavecheck.errors import CaptureError, UsageError
 
 CORPUS = [
