@@ -2,9 +2,9 @@
 
 * :func:`gen_sr` — a long sigrok ``.sr`` of STEP/DIR for 3 axes plus ENABLE, at realistic rates
   (trapezoid moves up to ~20 kHz, 5 µs pulses, DIR changing between moves), written chunk by
-  chunk: samples are built per 4 MiB member with ``np.repeat`` over the runs between edges,
-  deflated at level 9 like libsigrok's srzip ("Defl:X"), by a small thread pool, into a zip
-  written by hand (local headers, data, central directory).
+  chunk: samples are built per 4 MiB member with ``np.repeat`` over the runs between edges and
+  written as they come by wavecheck's .sr writer (:mod:`wavecheck.capture.srzip`), deflated at
+  level 9 like libsigrok's srzip.
 * :func:`gen_vcd` — a 10 M-change, 6-signal VCD like ``../shared/reference/vcd-perf.md``'s
   (3 axes ``step``/``dir``, 1 ns timescale, X 25.0 / Y 24.3 / Z 25.7 kHz with ±500 ns jitter,
   2 µs pulses, DIR reversing every ~4000 steps 5 µs before a rising edge), in the simulator
@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import struct
 import time
-import zlib
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
+
+from wavecheck.capture.srzip import sr_metadata, write_sr
 
 DATA = Path(__file__).resolve().parent / "data"
 SR_MEMBER_BYTES = 4 << 20  # libsigrok's CHUNK_SIZE for VCD input; FX2 captures use 10 MiB
@@ -82,25 +81,6 @@ def _axis_steps(
 # .sr
 
 
-def _zip_local(name: bytes, crc: int, csize: int, usize: int, level_flag: int) -> bytes:
-    return (
-        struct.pack(
-            "<IHHHHHIIIHH", 0x04034B50, 20, level_flag, 8, 0, 0x21, crc, csize, usize, len(name), 0
-        )
-        + name
-    )
-
-
-def _zip_central(
-    name: bytes, crc: int, csize: int, usize: int, offset: int, method: int, level_flag: int
-) -> bytes:
-    return struct.pack(
-        "<IHHHHHHIIIHHHHHII",
-        0x02014B50, 20, 20, level_flag, method, 0, 0x21, crc, csize, usize,
-        len(name), 0, 0, 0, 0, 0, offset,
-    ) + name  # fmt: skip
-
-
 def gen_sr(
     path: Path,
     *,
@@ -108,7 +88,6 @@ def gen_sr(
     samplerate: int = 20_000_000,
     seed: int = 7,
     level: int = 9,
-    threads: int = 2,
 ) -> dict[str, object]:
     """Write a STEP/DIR ``.sr`` of ``nsamples`` samples (unitsize 1); return its truth."""
     rng = np.random.default_rng(seed)
@@ -161,66 +140,13 @@ def gen_sr(
         vals = np.concatenate([[s0], state[i0:i1]]).astype(np.uint8)
         return np.repeat(vals, np.diff(bounds)).tobytes()
 
-    def deflate(k: int) -> tuple[bytes, int, int]:
-        a = k * SR_MEMBER_BYTES
-        raw = block(a, min(nsamples, a + SR_MEMBER_BYTES))
-        c = zlib.compressobj(level, zlib.DEFLATED, -15)
-        return c.compress(raw) + c.flush(), zlib.crc32(raw), len(raw)
-
-    meta = "\n".join(
-        [
-            "[global]",
-            "sigrok version=0.5.2",
-            "",
-            "[device 1]",
-            "capturefile=logic-1",
-            "total probes=8",
-            f"samplerate={samplerate // 1_000_000} MHz",
-            "total analog=0",
-            *(f"probe{i + 1}={n}" for i, n in enumerate(names)),
-            "unitsize=1",
-            "",
-        ]
-    ).encode()
     nmembers = -(-nsamples // SR_MEMBER_BYTES)
-    tmp = path.with_suffix(".tmp")
-    central: list[bytes] = []
-    flag = 2 if level >= 8 else 0  # "maximum compression" bit, as libzip sets it
-    with open(tmp, "wb") as f, ThreadPoolExecutor(threads) as pool:
-
-        def put(name: str, data: bytes, crc: int, usize: int, method: int) -> None:
-            off = f.tell()
-            bname = name.encode()
-            f.write(_zip_local(bname, crc, len(data), usize, flag if method else 0))
-            if not method:  # stored: fix the method field written above
-                f.seek(off + 8)
-                f.write(struct.pack("<H", 0))
-                f.seek(0, 2)
-            f.write(data)
-            central.append(
-                _zip_central(bname, crc, len(data), usize, off, method, flag if method else 0)
-            )
-
-        put("version", b"2", zlib.crc32(b"2"), 1, 0)
-        put("metadata", meta, zlib.crc32(meta), len(meta), 0)
-        window = threads * 2
-        futs = [pool.submit(deflate, k) for k in range(min(window, nmembers))]
-        for k in range(nmembers):
-            data, crc, usize = futs[k].result()
-            futs[k] = None  # type: ignore[call-overload]
-            if k + window < nmembers:
-                futs.append(pool.submit(deflate, k + window))
-            put(f"logic-1-{k + 1}", data, crc, usize, 8)
-        cd_off = f.tell()
-        for c in central:
-            f.write(c)
-        cd_size = f.tell() - cd_off
-        f.write(
-            struct.pack(
-                "<IHHHHIIH", 0x06054B50, 0, 0, len(central), len(central), cd_size, cd_off, 0
-            )
-        )
-    tmp.replace(path)
+    members = (
+        block(k * SR_MEMBER_BYTES, min(nsamples, (k + 1) * SR_MEMBER_BYTES))
+        for k in range(nmembers)
+    )
+    meta = sr_metadata(names, samplerate=samplerate, unitsize=1)
+    write_sr(path, members, metadata=meta, compresslevel=level)
     truth["members"] = nmembers
     path.with_suffix(".truth.json").write_text(json.dumps(truth, indent=1) + "\n")
     return truth

@@ -15,23 +15,20 @@ logic signal and is left out. Runs longer than ``max_samples`` at that rate are 
 from __future__ import annotations
 
 import math
-import zipfile
 from pathlib import Path
 
 import numpy as np
-from vcd import VCDWriter
 
 from stepgen.simulate import Trace
+from wavecheck.capture.srzip import SR_CHUNK_BYTES, rate_text, write_sr_edges
+from wavecheck.capture.vcd.writer import VcdVector, VcdWire
+from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
-from wavecheck.output import atomic_path
-from wavecheck.progress import current
-
-_REPORT_EVERY = 1 << 16  # value changes between two progress reports
 
 __all__ = ["DEFAULT_MAX_SAMPLES", "header_comment", "sr_sample_period_ns", "write_sr", "write_vcd"]
 
 DEFAULT_MAX_SAMPLES = 200_000_000
-SR_CHUNK = 4 * 1024 * 1024
+SR_CHUNK = SR_CHUNK_BYTES
 
 
 def header_comment(trace: Trace) -> str:
@@ -56,44 +53,17 @@ def header_comment(trace: Trace) -> str:
     return "; ".join(parts)
 
 
-def _events(trace: Trace) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """All value changes sorted by time: (time_ns, var index, value); counts is the last var."""
-    ts, vs, vals = [], [], []
-    for i, pin in enumerate(trace.pins):
-        e = trace.edges[pin]
-        ts.append(e)
-        vs.append(np.full(len(e), i, dtype=np.int64))
-        vals.append((np.arange(len(e)) + 1) & 1)
-    n = len(trace.pins)
-    ts.append(trace.counts_t)
-    vs.append(np.full(len(trace.counts_t), n, dtype=np.int64))
-    vals.append(trace.counts_val)
-    t = np.concatenate(ts).astype(np.int64)
-    v = np.concatenate(vs)
-    x = np.concatenate(vals).astype(np.int64)
-    order = np.lexsort((v, t))
-    return t[order], v[order], x[order]
-
-
 def write_vcd(trace: Trace, path: str | Path) -> int:
     """Write ``trace`` as a VCD at ``path`` (atomically); returns the number of value changes."""
-    t, v, x = _events(trace)
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="ascii", newline="\n") as fh:
-        writer = VCDWriter(fh, timescale="1 ns", date="", comment=header_comment(trace))
-        variables = [
-            writer.register_var("stepgen", pin, "wire", size=1, init=0) for pin in trace.pins
-        ]
-        variables.append(writer.register_var("stepgen", "counts", "integer", size=32, init=0))
-        change = writer.change
-        report = current()
-        n = len(t)
-        for a in range(0, n, _REPORT_EVERY):
-            b = min(a + _REPORT_EVERY, n)
-            for ti, vi, xi in zip(t[a:b].tolist(), v[a:b].tolist(), x[a:b].tolist(), strict=True):
-                change(variables[vi], ti, xi)
-            report(b, n)
-        writer.close(trace.end_ns)
-    return n
+    return write_vcd_file(
+        path,
+        [VcdWire(pin, 0, trace.edges[pin]) for pin in trace.pins],
+        vectors=[VcdVector("counts", trace.counts_t, trace.counts_val, size=32)],
+        timescale="1 ns",
+        end=trace.end_ns,
+        scope="stepgen",
+        comment=header_comment(trace),
+    )
 
 
 def sr_sample_period_ns(trace: Trace) -> int:
@@ -104,13 +74,6 @@ def sr_sample_period_ns(trace: Trace) -> int:
         if len(e):
             g = math.gcd(g, int(np.gcd.reduce(e)))
     return max(g, 1)
-
-
-def _rate_text(hz: int) -> str:
-    for div, unit in ((10**9, "GHz"), (10**6, "MHz"), (10**3, "kHz")):
-        if hz % div == 0:
-            return f"{hz // div} {unit}"
-    return f"{hz} Hz"
 
 
 def write_sr(
@@ -125,47 +88,19 @@ def write_sr(
     n_samples = trace.end_ns // g
     if n_samples > max_samples:
         raise ConfigError(
-            f"{path}: a .sr of this run needs {n_samples} samples at {_rate_text(10**9 // g)} "
+            f"{path}: a .sr of this run needs {n_samples} samples at {rate_text(10**9 // g)} "
             f"(edges on a {g} ns grid), more than {max_samples} (write a .vcd instead, or shorten the run)"
         )
-    n_pins = len(trace.pins)
-    unitsize = max(1, (n_pins + 7) // 8)
-    # merged changes: sample index → new byte value
-    t, v, _ = _events(trace)
-    logic = v < n_pins
-    t, v = t[logic] // g, v[logic]
-    bits = np.zeros(len(t), dtype=np.int64)
-    if len(t):
-        bits = np.bitwise_xor.accumulate(np.left_shift(1, v))
-    # keep the last change per sample index
-    keep = np.ones(len(t), dtype=bool)
-    if len(t):
-        keep[:-1] = t[1:] != t[:-1]
-    t, bits = t[keep], bits[keep]
-    starts = np.concatenate(([0], t))
-    values = np.concatenate(([0], bits))
-    lengths = np.diff(np.concatenate((starts, [n_samples])))
-    good = lengths > 0
-    samples = np.repeat(
-        values[good].astype(f"<u{unitsize}" if unitsize in (1, 2, 4, 8) else "<u8"), lengths[good]
+    # an edge at the very end (sample n_samples) lies after the last sample
+    edges = [trace.edges[pin] // g for pin in trace.pins]
+    edges = [e[e < n_samples] for e in edges]
+    write_sr_edges(
+        path,
+        list(trace.pins),
+        edges,
+        [0] * len(trace.pins),
+        int(n_samples),
+        samplerate=10**9 // g,
+        chunk_bytes=SR_CHUNK,
     )
-    raw = samples.tobytes()
-    meta = [
-        "[global]",
-        "sigrok version=0.5.2",
-        "",
-        "[device 1]",
-        "capturefile=logic-1",
-        f"total probes={n_pins}",
-    ]
-    meta += [f"samplerate={_rate_text(10**9 // g)}", "total analog=0"]
-    meta += [f"probe{i + 1}={pin}" for i, pin in enumerate(trace.pins)]
-    meta.append(f"unitsize={unitsize}")
-    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w") as z:
-        z.writestr(zipfile.ZipInfo("version"), "2", compress_type=zipfile.ZIP_STORED)
-        z.writestr("metadata", "\n".join(meta) + "\n", compress_type=zipfile.ZIP_DEFLATED)
-        for i, off in enumerate(range(0, max(len(raw), 1), SR_CHUNK)):
-            z.writestr(
-                f"logic-1-{i + 1}", raw[off : off + SR_CHUNK], compress_type=zipfile.ZIP_DEFLATED
-            )
     return 10**9 // g, int(n_samples)

@@ -5,8 +5,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import settings
+
+from wavecheck.capture.vcd.writer import VcdWire
+from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 
 # No per-example deadline: a loaded 2-core CI machine must not turn a slow example into a failure.
 # In CI (CI=true) the examples are derandomised, so the gate is repeatable; local runs explore.
@@ -53,25 +57,14 @@ def write_vcd(
     """Write a small simulator-style VCD: ``signals`` maps name → (initial level, edge times).
 
     Each edge toggles the level. ``end`` adds a final timestamp (default: last edge + 1).
+    Written by the project's one VCD writer (:func:`wavecheck.capture.vcd.writer.write_vcd`).
     """
-    ids = {name: chr(33 + i) for i, name in enumerate(signals)}
-    lines = [f"$timescale {timescale} $end", "$scope module top $end"]
-    lines += [f"$var wire 1 {ids[n]} {n} $end" for n in signals]
-    lines += ["$upscope $end", "$enddefinitions $end", "#0", "$dumpvars"]
-    lines += [f"{init}{ids[n]}" for n, (init, _) in signals.items()]
-    lines.append("$end")
-    events: dict[int, list[str]] = {}
-    for n, (init, edges) in signals.items():
-        level = init
-        for t in edges:
-            level ^= 1
-            events.setdefault(t, []).append(f"{level}{ids[n]}")
-    last = 0
-    for t in sorted(events):
-        if t != 0:
-            lines.append(f"#{t}")
-        lines += events[t]
-        last = t
-    lines.append(f"#{end if end is not None else last + 1}")
-    path.write_text("\n".join(lines) + "\n")
+    wires = [
+        VcdWire(name, init, np.asarray(edges, dtype=np.int64))
+        for name, (init, edges) in signals.items()
+    ]
+    last = max((max(edges) for _, edges in signals.values() if edges), default=0)
+    write_vcd_file(
+        path, wires, timescale=timescale, end=end if end is not None else last + 1, scope="top"
+    )
     return path

@@ -2,8 +2,9 @@
 
 Every generator returns :class:`Case` objects (a name, the file's bytes, a suffix and what a
 correct reader must do with it). The builders are independent of wavecheck's readers: ``.sr``
-files are written with :mod:`zipfile`, VCDs as text. The same functions feed the in-suite tests
-(``test_malformed_*.py``) and the longer fuzz run (``fuzz.py``).
+files are written with wavecheck's .sr writer (or :mod:`zipfile` where they break the layout),
+VCDs as text. The same functions feed the in-suite tests (``test_malformed_*.py``) and the
+longer fuzz run (``fuzz.py``).
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
+
+from wavecheck.capture.srzip import write_sr
 
 Expect = Literal["error", "ok", "either"]
 
@@ -82,9 +85,24 @@ def sr_bytes(
     drop: Sequence[str] = (),
     compress: int = zipfile.ZIP_DEFLATED,
 ) -> bytes:
-    """A ``.sr`` zip: ``version``, ``metadata`` and ``raw`` cut into ``logic-1-N`` chunks."""
+    """A ``.sr`` zip: ``version``, ``metadata`` and ``raw`` cut into ``logic-1-N`` chunks.
+
+    Written by the project's .sr writer (:func:`wavecheck.capture.srzip.write_sr`), except the
+    layouts it does not make — ``drop`` (a member left out), ``members`` (members named as
+    given), ``version=None`` (no version member) — which are written here with :mod:`zipfile`.
+    """
     meta = sr_metadata() if metadata is None else metadata
     buf = io.BytesIO()
+    if members is None and not drop and version is not None:
+        write_sr(
+            buf,
+            raw,
+            metadata=meta,
+            chunk_bytes=max(1, chunk),
+            compression=compress,
+            version=version,
+        )
+        return buf.getvalue()
     with zipfile.ZipFile(buf, "w") as z:
         if version is not None and "version" not in drop:
             z.writestr("version", version, compress_type=zipfile.ZIP_STORED)

@@ -12,8 +12,7 @@ from tests.reliability.corpus import Case, truncation_offsets, vcd_cases, vcd_te
 from tests.reliability.helpers import (
     info_then_check,
 )
-from wavecheck.capture.vcd import read_vcd
-from wavecheck.capture.vcd_reference import read_vcd_reference
+from wavecheck.capture.vcd import read_vcd, read_vcd_reference
 from wavecheck.errors import CaptureError
 
 CASES = list(vcd_cases())

@@ -13,9 +13,8 @@ from pathlib import Path
 from wavecheck.capture.model import Capture
 from wavecheck.errors import CaptureError, UsageError
 
-__all__ = ["NATIVE_FORMATS", "detect_format", "open_capture"]
+__all__ = ["detect_format", "open_capture"]
 
-NATIVE_FORMATS = ("sr", "vcd")
 _ALIASES = {"srzip": "sr", "sigrok": "sr"}
 _BY_EXTENSION = {
     ".sr": "sr",

@@ -21,6 +21,7 @@ from wavecheck.capture.model import Capture
 from wavecheck.errors import CaptureError
 
 __all__ = [
+    "SAMPLERATE_OPTION_FORMATS",
     "SigrokShow",
     "convert",
     "find_sigrok_cli",
@@ -49,7 +50,8 @@ FAILURE_PATTERNS = (
     "superfluous",
 )
 _TIMEOUT_S = 3600.0
-_SAMPLERATE_OPTION_FORMATS = ("binary", "csv", "trace32_ad", "raw_analog")
+#: sigrok-cli input formats that take a ``samplerate`` option (the others carry their own rate).
+SAMPLERATE_OPTION_FORMATS = ("binary", "csv", "trace32_ad", "raw_analog")
 
 
 def find_sigrok_cli() -> str | None:
@@ -173,7 +175,7 @@ def read_with_sigrok(
     spec = input_format
     if (
         samplerate is not None
-        and name in _SAMPLERATE_OPTION_FORMATS
+        and name in SAMPLERATE_OPTION_FORMATS
         and "samplerate=" not in input_format
     ):
         if samplerate.denominator != 1:

@@ -8,8 +8,8 @@ per marker says which violation it is.
 
 The dump file: a VCD capture is opened as it is (signals by their hierarchical names). Any
 other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save file
-(``FILE.vcd`` for ``FILE.gtkw``) with pyvcd's writer: the mapped channels only, raw (not
-inverted), on the largest VCD timescale that holds every edge exactly.
+(``FILE.vcd`` for ``FILE.gtkw``) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
+channels only, raw (not inverted), on the largest VCD timescale that holds every edge exactly.
 
 Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns), as GTKWave
 reads them.
@@ -25,9 +25,10 @@ from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
-from wavecheck.output import atomic_path, atomic_write
-from wavecheck.progress import current as current_progress
+from wavecheck.capture.vcd.writer import VcdWire, write_vcd
+from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
 from wavecheck.report.plot import choose_places
 from wavecheck.units import format_time
@@ -97,59 +98,40 @@ def _trace_names(report: Report) -> dict[str, str]:
     return out
 
 
+def _round_all(ticks: npt.NDArray[np.int64], steps_per_tick: Fraction) -> npt.NDArray[np.int64]:
+    """:func:`_round` of every element (exact: Python integers when int64 could overflow)."""
+    num, den = steps_per_tick.numerator, steps_per_tick.denominator
+    big = int(np.abs(ticks).max(initial=0)) * num * 2 + den >= 2**62
+    t = ticks.astype(object) if big else ticks.astype(np.int64)
+    return np.asarray((2 * t * num + den) // (2 * den), dtype=np.int64)
+
+
 def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str, Fraction]:
     """Write the mapped channels of ``report``'s capture as a VCD (raw levels), atomically.
 
     Variables are named after the roles (``step``, ``dir``, ``phase_A`` …) in scope
     ``wavecheck``. Returns the timescale used and the ticks → timescale-steps factor.
     """
-    from vcd import VCDWriter
-
     cap = report.capture
     magnitude, unit, factor = vcd_timescale(cap.timebase.tick_s)
-    roles = list(report.interface.signals)
-    times: list[np.ndarray] = []
-    which: list[np.ndarray] = []
-    for k, role in enumerate(roles):
-        edges = report.interface.signals[role].edges
-        times.append(edges)
-        which.append(np.full(len(edges), k, dtype=np.int32))
-    all_t = np.concatenate(times) if times else np.zeros(0, dtype=np.int64)
-    all_w = np.concatenate(which) if which else np.zeros(0, dtype=np.int32)
-    order = np.argsort(all_t, kind="stable")
-    all_t, all_w = all_t[order], all_w[order]
-    progress = current_progress()
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as f:
-        channels = ", ".join(
-            f"{role}={report.interface.signals[role].channel!r}" for role in roles
-        )
-        with VCDWriter(
-            f,
-            timescale=f"{magnitude} {unit}",
-            date="",
-            comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels",
-            version="wavecheck",
-        ) as writer:
-            levels = []
-            variables = []
-            for role in roles:
-                sig = report.interface.signals[role]
-                raw = sig.initial ^ int(sig.inverted)
-                levels.append(raw)
-                variables.append(
-                    writer.register_var(
-                        "wavecheck", role.replace("-", "_"), "wire", size=1, init=raw
-                    )
-                )
-            t0 = cap.start
-            n = len(all_t)
-            for i in range(n):
-                k = int(all_w[i])
-                levels[k] ^= 1
-                writer.change(variables[k], _round(int(all_t[i]) - t0, factor), levels[k])
-                if i % 65536 == 0:
-                    progress(i, n)
-            writer.close(_round(cap.end - t0, factor))
+    signals = report.interface.signals
+    channels = ", ".join(f"{role}={sig.channel!r}" for role, sig in signals.items())
+    write_vcd(
+        path,
+        [
+            VcdWire(
+                role.replace("-", "_"),
+                sig.initial ^ int(sig.inverted),
+                _round_all(np.asarray(sig.edges, dtype=np.int64) - cap.start, factor),
+            )
+            for role, sig in signals.items()
+        ],
+        timescale=f"{magnitude} {unit}",
+        end=_round(cap.end - cap.start, factor),
+        scope="wavecheck",
+        comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels",
+        version="wavecheck",
+    )
     return magnitude, unit, factor
 
 
@@ -247,9 +229,7 @@ def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
         names = _trace_names(report)
         _, ts = _vcd_header_names(cap.path)
         magnitude = ts[0] if ts else 1
-        text = render_gtkw(
-            report, cap.path, names=names, unit_factor=magnitude, save_path=path
-        )
+        text = render_gtkw(report, cap.path, names=names, unit_factor=magnitude, save_path=path)
         atomic_write(path, text)
         return None
     vcd_path = path.with_suffix(".vcd")

@@ -1,4 +1,5 @@
-"""Build small .sr files for tests (an independent writer: zipfile + numpy)."""
+"""Build small .sr files for tests (the project's one .sr writer, :mod:`wavecheck.capture.srzip`)
+and count their edges independently of the reader (zipfile + numpy)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
+
+from wavecheck.capture.srzip import sr_metadata
+from wavecheck.capture.srzip import write_sr as write_srzip
 
 
 def write_sr(
@@ -22,29 +26,35 @@ def write_sr(
     extra_meta: str = "",
     members: dict[str, bytes] | None = None,
     version: bytes = b"2",
+    compression: int = zipfile.ZIP_DEFLATED,
 ) -> Path:
-    """Write ``samples`` (raw bytes, ``unitsize`` per sample) as ``logic-1-N`` chunks of ``chunk`` bytes."""
-    raw = samples if isinstance(samples, bytes) else np.ascontiguousarray(samples).tobytes()
-    probes = probes if probes is not None else {i: f"D{i}" for i in range(total)}
-    meta = ["[global]", "sigrok version=0.5.2", "", "[device 1]", "capturefile=logic-1"]
-    meta.append(f"total probes={total}")
-    if samplerate is not None:
-        meta.append(f"samplerate={samplerate}")
-    meta += [f"probe{i + 1}={n}" for i, n in sorted(probes.items())]
-    if unitsize:
-        meta.append(f"unitsize={unitsize}")
-    text = "\n".join(meta) + "\n" + extra_meta
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("version", version, compress_type=zipfile.ZIP_STORED)
-        z.writestr("metadata", text, compress_type=zipfile.ZIP_DEFLATED)
-        if members is None:
-            for k, i in enumerate(range(0, len(raw), chunk)):
-                z.writestr(
-                    f"logic-1-{k + 1}", raw[i : i + chunk], compress_type=zipfile.ZIP_DEFLATED
-                )
-        else:
-            for name, data in members.items():
-                z.writestr(name, data, compress_type=zipfile.ZIP_DEFLATED)
+    """Write ``samples`` (raw bytes, ``unitsize`` per sample) as ``logic-1-N`` chunks of ``chunk`` bytes.
+
+    ``members`` replaces the ``logic-1-N`` members by these (names as given), for layouts the
+    writer does not make (a single ``logic-1``, gaps, odd names); ``unitsize=0`` writes none.
+    """
+    meta = sr_metadata(
+        probes if probes is not None else {i: f"D{i}" for i in range(total)},
+        samplerate=samplerate,
+        unitsize=unitsize,
+        total_probes=total,
+        total_analog=None,
+        extra=extra_meta,
+    )
+    if members is None:
+        write_srzip(
+            path,
+            samples,
+            metadata=meta,
+            chunk_bytes=chunk,
+            version=version,
+            compression=compression,
+        )
+        return path
+    write_srzip(path, [], metadata=meta, version=version)
+    with zipfile.ZipFile(path, "a") as z:
+        for name, data in members.items():
+            z.writestr(name, data, compress_type=compression)
     return path
 
 

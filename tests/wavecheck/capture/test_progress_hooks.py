@@ -25,6 +25,7 @@ def test_vcd_reader_reports_bytes_up_to_the_file_size(
 ) -> None:
     edges = list(range(10, 20_000, 10))
     path = write_vcd(tmp_path / "a.vcd", {"step": (0, edges), "dir": (0, [5, 9_995])})
+    reports.clear()  # the writer's own progress (value changes) is not under test
     read_vcd(path, chunk_bytes=1024)
     size = path.stat().st_size
     assert len(reports) > 10

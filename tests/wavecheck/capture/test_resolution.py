@@ -13,8 +13,7 @@ from tests.wavecheck.capture.srutil import write_sr
 from wavecheck.capture.model import Capture
 from wavecheck.capture.sigrokcli import convert, find_sigrok_cli
 from wavecheck.capture.sr import read_sr
-from wavecheck.capture.vcd import read_vcd
-from wavecheck.capture.vcd_reference import read_vcd_reference
+from wavecheck.capture.vcd import read_vcd, read_vcd_reference
 
 SAMPLES = [1, 2, 4, 5, 7, 10, 11, 13, 20, 23, 30, 31, 37, 40]  # edge sample numbers
 

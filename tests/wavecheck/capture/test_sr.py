@@ -151,15 +151,14 @@ def test_bad_metadata(tmp_path: Path, kwargs: dict[str, object], match: str) -> 
 
 
 def test_crc_error_names_member(tmp_path: Path) -> None:
-    path = tmp_path / "a.sr"
     raw = bytes(range(256)) * 4
-    with zipfile.ZipFile(path, "w") as z:
-        z.writestr("version", "2")
-        z.writestr(
-            "metadata", "[device 1]\ntotal probes=8\nsamplerate=1 MHz\nprobe1=A\nunitsize=1\n"
-        )
-        z.writestr("logic-1-1", raw)
-        z.writestr("logic-1-2", raw)
+    path = write_sr(
+        tmp_path / "a.sr",
+        raw + raw,
+        probes={0: "A"},
+        chunk=len(raw),
+        compression=zipfile.ZIP_STORED,
+    )
     with pytest.raises(CaptureError, match="member logic-1-2: is corrupt.*CRC"):
         read_sr(_corrupt_crc(path))
 

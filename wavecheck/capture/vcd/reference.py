@@ -1,7 +1,8 @@
 """The deliberately simple VCD reader: pyvcd's tokenizer and a plain loop per change.
 
-Slow and meant for tests: the fast reader (:func:`wavecheck.capture.vcd.read_vcd`) must give the
-same capture on every file. It shares only the header parsing and the final assembly with it.
+Slow and meant for tests: the fast reader (:func:`wavecheck.capture.vcd.reader.read_vcd`) must
+give the same capture on every file. It shares only :mod:`wavecheck.capture.vcd.header` with it
+(the header parsing and the final assembly), none of the fast reader's body code.
 """
 
 from __future__ import annotations
@@ -14,8 +15,15 @@ from typing import Any
 import numpy as np
 
 from wavecheck.capture.model import Capture
-from wavecheck.capture.vcd import _EdgeBuilder, _finish, _open
-from wavecheck.capture.vcd_header import _SCALAR_VALUES, _layout, _start_note, parse_header
+from wavecheck.capture.vcd.header import (
+    SCALAR_VALUES,
+    SignalEdges,
+    build_capture,
+    header_timebase,
+    layout_of,
+    open_vcd,
+    parse_header,
+)
 from wavecheck.errors import CaptureError
 
 __all__ = ["read_vcd_reference"]
@@ -34,14 +42,14 @@ def read_vcd_reference(
     """
     from vcd.reader import TokenKind, tokenize
 
-    with _open(path) as f:
+    with open_vcd(path) as f:
         data = f.read()
     if not data.strip():
         raise CaptureError(path, None, "the file is empty (no VCD header)")
     header = parse_header(path, data)
     notes: list[str] = []
-    tb = _start_note(header, notes)
-    lay = _layout(header)
+    tb = header_timebase(header, notes)
+    lay = layout_of(header)
     notes += lay.notes
     index = {c: i for i, c in enumerate(lay.ids)}
     changes: list[list[tuple[int, int]]] = [[] for _ in lay.ids]
@@ -69,15 +77,16 @@ def read_vcd_reference(
                     value = str(value)[-1]
                 if time is None:
                     pre = True
-                changes[index[code]].append((time or 0, _SCALAR_VALUES[str(value).lower()]))
+                changes[index[code]].append((time or 0, SCALAR_VALUES[str(value).lower()]))
     except CaptureError:
         raise
     except Exception as err:  # pyvcd's parse errors
         raise CaptureError(path, None, f"not a valid VCD: {err}") from None
-    builder = _EdgeBuilder(len(lay.ids))
-    for i, ch in enumerate(changes):
+    signals: list[SignalEdges] = []
+    for ch in changes:
         last_raw = -1
         last_known = -1
+        initial, known_from = 0, None
         edges: list[int] = []
         xz: list[int] = []
         # last change at a timestamp wins
@@ -87,15 +96,17 @@ def read_vcd_reference(
                 if last_known >= 0 and 0 <= last_raw < 2:
                     xz.append(t)
             elif last_known < 0:
-                builder.initial[i], builder.known_from[i] = v, t
+                initial, known_from = v, t
                 last_known = v
             elif v != last_known:
                 edges.append(t)
                 last_known = v
             last_raw = v
-        builder.last_known[i] = last_known
-        builder.edges[i] = [np.array(edges, dtype=np.int64)]
-        builder.xz[i] = [np.array(xz, dtype=np.int64)]
-    return _finish(
-        path, header, lay, tb, builder, first, time, pre, notes, samplerate, resolution_s
+        signals.append(
+            SignalEdges(
+                initial, known_from, np.array(edges, dtype=np.int64), np.array(xz, dtype=np.int64)
+            )
+        )
+    return build_capture(
+        path, header, lay, tb, signals, first, time, pre, notes, samplerate, resolution_s
     )

@@ -9,7 +9,7 @@ into edges at once. Changes at a chunk's last timestamp are held back until the 
 timestamp split over two chunks cannot create a fake edge. Memory: one chunk of text plus its
 token arrays, plus the edge arrays (the pieces and, at the end, their concatenation).
 
-Semantics (identical in :func:`wavecheck.capture.vcd_reference.read_vcd_reference`, the
+Semantics (identical in :func:`wavecheck.capture.vcd.reference.read_vcd_reference`, the
 deliberately simple path):
 
 * times are the integer timestamps, ticks of ``$timescale``; changes before the first ``#`` are
@@ -26,28 +26,25 @@ deliberately simple path):
 from __future__ import annotations
 
 import os
-import re
 from fractions import Fraction
 from typing import BinaryIO
 
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel
-from wavecheck.capture.vcd_header import (
-    VcdHeader,
-    _Layout,
-    _layout,
-    _read_header,
-    _resolution,
-    _start_note,
-    parse_header,
+from wavecheck.capture.model import Capture
+from wavecheck.capture.vcd.header import (
+    SignalEdges,
+    build_capture,
+    header_timebase,
+    layout_of,
+    open_vcd,
+    read_header,
 )
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
-from wavecheck.timebase import Timebase
 
-__all__ = ["DEFAULT_CHUNK_BYTES", "VcdHeader", "parse_header", "read_vcd", "sniff_vcd"]
+__all__ = ["DEFAULT_CHUNK_BYTES", "read_vcd"]
 
 DEFAULT_CHUNK_BYTES = 1 << 20  # 1 MiB: as fast as 4 MiB here, ~50 MB less working memory
 
@@ -158,28 +155,20 @@ class _EdgeBuilder:
             # channel is joined, doubling the peak memory of :meth:`channels`
             into[i].append(t[bounds[i] : bounds[i + 1]].astype(np.int64, copy=True))
 
-    def channels(self, names: list[str], end: int, notes: list[str]) -> list[Channel]:
-        out: list[Channel] = []
-        never: list[str] = []
-        for i, name in enumerate(names):
+    def signals(self) -> list[SignalEdges]:
+        """Each signal's edges, joined (the pieces are released as they are joined)."""
+        out: list[SignalEdges] = []
+        for i in range(self.nsig):
             edges = _concat(self.edges[i])
             self.edges[i] = []
             known = self.last_known[i] >= 0
-            if not known:
-                never.append(name)
             out.append(
-                Channel(
-                    name=name,
-                    index=i,
+                SignalEdges(
                     initial=int(self.initial[i]) if known else 0,
+                    known_from=int(self.known_from[i]) if known else None,
                     edges=edges,
-                    known_from=int(self.known_from[i]) if known else end,
                     xz_times=_concat(self.xz[i]),
                 )
-            )
-        if never:
-            notes.append(
-                f"{len(never)} channel(s) never have a known level: {', '.join(never[:10])}"
             )
         return out
 
@@ -450,17 +439,6 @@ class _Body:
         self._emit(np.zeros(0, np.int32), np.zeros(0, np.int64), np.zeros(0, np.int8), final)
 
 
-def _open(path: str | os.PathLike[str]) -> BinaryIO:
-    try:
-        return open(path, "rb")
-    except IsADirectoryError:
-        raise CaptureError(path, None, "is a folder, not a capture file") from None
-    except FileNotFoundError:
-        raise CaptureError(path, None, "no such file") from None
-    except OSError as err:
-        raise CaptureError(path, None, f"cannot open: {err.strerror}") from None
-
-
 def read_vcd(
     path: str | os.PathLike[str],
     *,
@@ -482,11 +460,11 @@ def read_vcd(
     """
     if chunk_bytes < 1:
         raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
-    with _open(path) as f:
-        header, rest = _read_header(path, f)
+    with open_vcd(path) as f:
+        header, rest = read_header(path, f)
         notes: list[str] = []
-        tb = _start_note(header, notes)
-        lay = _layout(header)
+        tb = header_timebase(header, notes)
+        lay = layout_of(header)
         notes += lay.notes
         builder = _EdgeBuilder(len(lay.ids))
         body = _Body(
@@ -514,12 +492,12 @@ def read_vcd(
             buf = buf[n:]
             # nothing consumed: a token or $comment longer than a chunk, read more
             want = chunk_bytes if n else max(2 * want, len(buf) + 1)
-    return _finish(
+    return build_capture(
         path,
         header,
         lay,
         tb,
-        builder,
+        builder.signals(),
         body.first_time,
         body.time,
         body.pre_time_changes,
@@ -540,49 +518,3 @@ def _file_size(f: BinaryIO) -> int | None:
 def _last_ws(buf: bytes, limit: int) -> int:
     """Index of the last whitespace byte in ``buf[:limit]`` (−1 if none)."""
     return max(buf.rfind(c, 0, limit) for c in (b"\n", b" ", b"\t", b"\r", b"\f", b"\v"))
-
-
-def _finish(
-    path: str | os.PathLike[str],
-    header: VcdHeader,
-    lay: _Layout,
-    tb: Timebase,
-    builder: _EdgeBuilder,
-    first_time: int | None,
-    last_time: int | None,
-    pre_time: bool,
-    notes: list[str],
-    samplerate: Fraction | None,
-    resolution_s: Fraction | None,
-) -> Capture:
-    if last_time is None or first_time is None:
-        raise CaptureError(
-            path,
-            f"line {header.body_line}",
-            "no timestamps after the header (the file is cut off?)",
-        )
-    start = 0 if pre_time else first_time
-    end = last_time
-    if not lay.ids:
-        notes.append("no 1-bit signals in this file")
-    res, rate = _resolution(path, tb, header.comments, samplerate, resolution_s, notes)
-    return Capture(
-        path=str(path),
-        format="vcd",
-        timebase=tb,
-        resolution_ticks=res,
-        samplerate_hz=rate,
-        start=start,
-        end=end,
-        channels=builder.channels(lay.names, end, notes),
-        notes=notes,
-        skipped=lay.skipped,
-        aliases=lay.aliases,
-    )
-
-
-def sniff_vcd(head: bytes) -> bool:
-    """True if ``head`` (the first bytes of a file) looks like a VCD header."""
-    text = head.lstrip()
-    return text.startswith(b"$") and re.match(rb"\$[a-z]+", text) is not None
-

@@ -1,6 +1,9 @@
-"""VCD header: declarations, ``$timescale``, sigrok's ``$comment`` sample rate, and the layout of
-the 1-bit signals both VCD readers (:mod:`wavecheck.capture.vcd`, the fast one, and
-:mod:`wavecheck.capture.vcd_reference`, the simple one) read the body into.
+"""VCD header and what both VCD readers share: declarations, ``$timescale``, sigrok's
+``$comment`` sample rate, the layout of the 1-bit signals the body is read into, and the final
+assembly of a :class:`~wavecheck.capture.model.Capture` from each signal's edges.
+
+The readers are :mod:`wavecheck.capture.vcd.reader` (the fast one) and
+:mod:`wavecheck.capture.vcd.reference` (the simple one the tests compare it with).
 """
 
 from __future__ import annotations
@@ -11,11 +14,28 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import BinaryIO
 
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import Capture, Channel
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
 from wavecheck.units import parse_frequency
 
-__all__ = ["VarDecl", "VcdHeader", "parse_header"]
+__all__ = [
+    "SCALAR_VALUES",
+    "Layout",
+    "SignalEdges",
+    "VarDecl",
+    "VcdHeader",
+    "build_capture",
+    "header_timebase",
+    "layout_of",
+    "open_vcd",
+    "parse_header",
+    "read_header",
+    "resolution_of",
+]
 
 _MAX_HEADER_BYTES = 64 << 20
 _MAX_ID_LEN = 8
@@ -23,7 +43,8 @@ _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
 _SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
 _END_RE = re.compile(rb"\$end(\s|$)")
 _NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
-_SCALAR_VALUES = {
+#: Scalar value character → 0, 1, 2 (unknown: x u w -) or 3 (z).
+SCALAR_VALUES = {
     "0": 0, "1": 1, "l": 0, "h": 1, "x": 2, "u": 2, "w": 2, "-": 2, "z": 3,
 }  # fmt: skip
 
@@ -151,7 +172,23 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
     )
 
 
-def _read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
+def open_vcd(path: str | os.PathLike[str]) -> BinaryIO:
+    """Open ``path`` for reading in binary mode.
+
+    Raises:
+        CaptureError: missing file, a folder, or not readable.
+    """
+    try:
+        return open(path, "rb")
+    except IsADirectoryError:
+        raise CaptureError(path, None, "is a folder, not a capture file") from None
+    except FileNotFoundError:
+        raise CaptureError(path, None, "no such file") from None
+    except OSError as err:
+        raise CaptureError(path, None, f"cannot open: {err.strerror}") from None
+
+
+def read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
     """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far."""
     data = b""
     end = len(data)
@@ -173,7 +210,7 @@ def _read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, 
 
 
 @dataclass
-class _Layout:
+class Layout:
     """The 1-bit channels and skipped signals of a header."""
 
     names: list[str]
@@ -185,7 +222,8 @@ class _Layout:
     aliases: dict[str, str]
 
 
-def _layout(header: VcdHeader) -> _Layout:
+def layout_of(header: VcdHeader) -> Layout:
+    """The channels a reader makes of ``header``: unique names, aliases, skipped non-wires."""
     first: dict[str, VarDecl] = {}
     aliases: dict[str, list[str]] = {}
     for d in header.vars:
@@ -243,7 +281,7 @@ def _layout(header: VcdHeader) -> _Layout:
                 alias_names.setdefault(other, target)
     if n_alias:
         notes.append(f"{n_alias} declaration(s) alias a channel declared earlier (same id code)")
-    return _Layout(
+    return Layout(
         names,
         scalar,
         [d.id_code for d in scalar],
@@ -254,7 +292,7 @@ def _layout(header: VcdHeader) -> _Layout:
     )
 
 
-def _resolution(
+def resolution_of(
     path: str | os.PathLike[str],
     tb: Timebase,
     comments: list[str],
@@ -308,8 +346,80 @@ def _resolution(
     return res, rate
 
 
-def _start_note(header: VcdHeader, notes: list[str]) -> Timebase:
+def header_timebase(header: VcdHeader, notes: list[str]) -> Timebase:
+    """The header's ``$timescale``, or 1 s (with a note) when it has none."""
     if header.timescale is None:
         notes.append("no $timescale; assumed 1 s per tick as the VCD standard says")
         return Timebase(Fraction(1))
     return header.timescale
+
+
+@dataclass
+class SignalEdges:
+    """What a reader found for one 1-bit channel; times in ticks of the timescale."""
+
+    initial: int  # first known level (0 when never known)
+    known_from: int | None  # tick of the first known value; None: never known
+    edges: npt.NDArray[np.int64]  # ticks where the known level changes
+    xz_times: npt.NDArray[np.int64]  # ticks where a known level turns x/z
+
+
+def build_capture(
+    path: str | os.PathLike[str],
+    header: VcdHeader,
+    layout: Layout,
+    tb: Timebase,
+    signals: list[SignalEdges],
+    first_time: int | None,
+    last_time: int | None,
+    pre_time: bool,
+    notes: list[str],
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+) -> Capture:
+    """Assemble the capture: ``signals`` in ``layout.ids`` order, ``first_time``/``last_time``
+    the first and last ``#`` timestamps, ``pre_time`` whether changes came before the first.
+
+    Raises:
+        CaptureError: no timestamp after the header; a bad resolution.
+    """
+    if last_time is None or first_time is None:
+        raise CaptureError(
+            path,
+            f"line {header.body_line}",
+            "no timestamps after the header (the file is cut off?)",
+        )
+    start = 0 if pre_time else first_time
+    end = last_time
+    if not layout.ids:
+        notes.append("no 1-bit signals in this file")
+    res, rate = resolution_of(path, tb, header.comments, samplerate, resolution_s, notes)
+    channels = [
+        Channel(
+            name=name,
+            index=i,
+            initial=sig.initial if sig.known_from is not None else 0,
+            edges=sig.edges,
+            known_from=sig.known_from if sig.known_from is not None else end,
+            xz_times=sig.xz_times,
+        )
+        for i, (name, sig) in enumerate(zip(layout.names, signals, strict=True))
+    ]
+    never = [
+        name for name, sig in zip(layout.names, signals, strict=True) if sig.known_from is None
+    ]
+    if never:
+        notes.append(f"{len(never)} channel(s) never have a known level: {', '.join(never[:10])}")
+    return Capture(
+        path=str(path),
+        format="vcd",
+        timebase=tb,
+        resolution_ticks=res,
+        samplerate_hz=rate,
+        start=start,
+        end=end,
+        channels=channels,
+        notes=notes,
+        skipped=layout.skipped,
+        aliases=layout.aliases,
+    )
