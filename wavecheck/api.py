@@ -30,6 +30,7 @@ def check(
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
     forward_level: int = 0,
+    pulse_level: int = 1,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
     ini: str | os.PathLike[str] | None = None,
@@ -50,6 +51,7 @@ def check(
         samplerate: sample rate for a file without one (``"12MHz"`` or exact Hz).
         input_format: force a reader (``"sr"``, ``"vcd"``, a sigrok-cli format).
         forward_level: DIR level that means forward (0 or 1).
+        pulse_level: level of the generator's step pulses at its output (1 high, 0 low).
         active_edge: override the drive's active edge.
         user_table: the state table of step type 15.
         ini: a LinuxCNC INI file (BASE_PERIOD) for the ``config`` and ``latency_safe`` rates.
@@ -90,6 +92,7 @@ def check(
         step_type,
         res,
         forward_level=forward_level,
+        pulse_level=pulse_level,
         active_edge=active_edge,
         user_table=user_table,
         stepgen=stepgen,

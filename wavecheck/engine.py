@@ -13,6 +13,7 @@ from fractions import Fraction
 from wavecheck.capture.model import Capture
 from wavecheck.checks.compile import run_rules
 from wavecheck.checks.rates import max_step_rates
+from wavecheck.checks.rates import pulse_level as generator_pulse_level
 from wavecheck.decode import decode
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.errors import UsageError
@@ -82,6 +83,7 @@ def run_check(
     user_table: tuple[int, ...] | None = None,
     stepgen: LinuxCNCConfig | None = None,
     latency_ns: Fraction | None = None,
+    pulse_level: int = 1,
 ) -> Report:
     """Check ``capture`` against ``drive``.
 
@@ -102,6 +104,9 @@ def run_check(
             ``latency_safe`` step rates; the STEP pin counts as inverted between stepgen and the
             drive when ``invert`` holds ``step``.
         latency_ns: the worst base-thread latency ``J`` for ``latency_safe`` (ns).
+        pulse_level: the level of the generator's step pulses at its output (1 high, as LinuxCNC,
+            grbl, Marlin, Klipper and Smoothieware make them by default; 0 low); with ``invert``
+            the drive sees the other level.
 
     Raises:
         WavecheckError: unusable input (unknown channel or role, bad type, bad resolution).
@@ -119,8 +124,21 @@ def run_check(
     steps = decode(
         iface, st.number, active_edge=edge, forward_level=forward_level, user_table=user_table
     )
-    ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge)
-    rates = max_step_rates(iface, st, steps, drive, edge, capture.timebase)
+    if pulse_level not in (0, 1):
+        raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {pulse_level!r}")
+    level = generator_pulse_level(iface, st, pulse_level)
+    ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge, level)
+    own = next((r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None)
+    rates = max_step_rates(
+        iface,
+        st,
+        steps,
+        drive,
+        edge,
+        capture.timebase,
+        level=level,
+        pulse_verdict=None if own is None else own.verdict,
+    )
     if stepgen is not None:
         configured = config_rates(
             stepgen,

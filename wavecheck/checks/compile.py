@@ -29,7 +29,6 @@ import numpy as np
 
 from wavecheck.capture.model import EdgeArray
 from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
-from wavecheck.checks.rates import generator_pulses
 from wavecheck.checks.result import RuleResult, evaluate, sequence_result
 from wavecheck.decode import StepEvents, active_edges, phase_states
 from wavecheck.drives.model import ActiveEdge, Drive, Figure
@@ -86,18 +85,17 @@ def _pulse_ends(sig: RoleSignal, edge: ActiveEdge) -> tuple[EdgeArray, EdgeArray
     return act, ends
 
 
-def _dir_delay(iface: StepInterface, edge: ActiveEdge) -> Intervals:
+def _dir_delay(iface: StepInterface, edge: ActiveEdge, level: int) -> Intervals:
     """End of the last pulse on one line → the active edge of the first pulse on the other.
 
-    A pulse ends at the edge after its active edge — unless the generator's pulses are at the
-    other level (high pulses into a falling-edge drive, the seed's G202 reading), where the
-    active edge itself ends the pulse.
+    A pulse ends at the edge after its active edge — unless the generator's pulses (at ``level``)
+    end at the active edge (high pulses into a falling-edge drive, as in LinuxCNC's stepper-tuning
+    chapter's Gecko G202 example), where the active edge itself ends the pulse.
     """
     up, down = iface.require("up"), iface.require("down")
     up_t, up_end = _pulse_ends(up, edge)
     dn_t, dn_end = _pulse_ends(down, edge)
-    found = generator_pulses([up, down])
-    if edge != "both" and found is not None and found[0] != (edge == "rising"):
+    if edge != "both" and level != (edge == "rising"):
         up_end, dn_end = up_t, dn_t
     ticks = np.concatenate([up_t, dn_t])
     ends = np.concatenate([up_end, dn_end])
@@ -139,14 +137,14 @@ def _events(
 
 
 def _intervals(
-    r: Rule, iface: StepInterface, st: StepType, steps: StepEvents, edge: ActiveEdge
+    r: Rule, iface: StepInterface, st: StepType, steps: StepEvents, edge: ActiveEdge, level: int
 ) -> Intervals:
     if r.check == "width":
         assert r.level is not None
         sigs = (iface.require(role) for role in st.pulse_roles)
         return Intervals.concat([widths(s.initial, s.edges, r.level) for s in sigs])
     if r.check == "switch":
-        return _dir_delay(iface, edge)
+        return _dir_delay(iface, edge, level)
     if r.ref == "enable":
         en = iface.get("enable")
         return Intervals.empty() if en is None else _enable_setup(en, steps.ticks)
@@ -191,8 +189,12 @@ def run_rules(
     drive: Drive,
     resolution_ns: Fraction,
     active_edge: ActiveEdge,
+    pulse_level: int = 1,
 ) -> RuleSet:
-    """Measure and judge every applicable rule the drive states, in the table's order."""
+    """Measure and judge every applicable rule the drive states, in the table's order.
+
+    ``pulse_level`` is the level of the generator's pulses at the drive's input
+    (:func:`wavecheck.checks.rates.pulse_level`)."""
     tb = iface.capture.timebase
     run, not_stated = planned_rules(drive, st)
     results: list[RuleResult] = []
@@ -216,7 +218,7 @@ def run_rules(
         results.append(
             evaluate(
                 r.id,
-                _known(_intervals(r, iface, st, steps, active_edge), iface, st, r),
+                _known(_intervals(r, iface, st, steps, active_edge, pulse_level), iface, st, r),
                 limit,
                 tb,
                 resolution_ns,

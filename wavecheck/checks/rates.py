@@ -3,23 +3,25 @@
 - ``drive`` = min(datasheet max rate, 1 / (step_high + step_low limits)); either part may be
   missing, both missing gives None.
 - ``observed`` = 1 / the shortest interval between successive steps in the capture.
-- ``headroom`` = 1 / (longest observed pulse + the drive's minimum for the other level), capped
-  by ``drive``: the highest rate at which pulses as long as this generator's would still leave
-  the drive its minimum time at the other level. The design says "longest observed active-level
-  time + the drive's idle-level minimum"; that is this formula when the generator's pulse starts
-  at the active edge (a rising-edge drive, or a falling-edge drive with STEP inverted). When it
-  ends at the active edge (the seed's G202 reading: falling-edge drive, STEP not inverted) the
-  active level is the *gap* between pulses, whose longest value is the longest pause in the
-  capture (seconds), and the literal formula would be meaningless. So the pulse level is taken
-  from the capture: the level whose longest complete stretch is the shorter one (pulses are
-  short and fixed, gaps grow as the rate falls); :attr:`MaxStepRates.pulse_level` says which.
-  Not defined for phase types or a drive that steps on both edges.
+- ``headroom``: the highest rate at which this generator's pulses would still pass. A step
+  generator makes pulses of a fixed length and shortens the gaps between them as the rate rises,
+  so at the rate f the gap is 1/f − pulse and must stay at least the drive's minimum for the gap's
+  level: headroom = 1 / (typical pulse + that minimum), capped by the drive's own figures (the
+  binding one is named in :attr:`MaxStepRates.headroom_limited_by`). The typical pulse is the
+  median of the complete pulses (one pulse stretched by latency does not decide it); the longest is
+  reported beside it. No headroom (None, with the reason in :attr:`MaxStepRates.headroom_note`)
+  when the pulses fail their own minimum (no rate helps), the drive states no minimum for the gap's
+  level, the drive steps on both edges, or the step type has phases.
+
+The pulse level is not read from the capture's duty cycle: a step generator's pulses are high at
+its output (LinuxCNC's stepgen, grbl, Marlin, Klipper and Smoothieware by default), so at the
+drive's input they are high, or low when the STEP (UP/DOWN) role is inverted (``--invert step``).
+``pulse_level`` overrides that for a generator whose output pulses are low.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
@@ -28,7 +30,7 @@ import numpy.typing as npt
 from wavecheck.checks.primitives import Intervals, widths
 from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.interface import StepInterface
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.timebase import Timebase
@@ -60,22 +62,11 @@ def _diff_extreme(
     return best_v, best_i
 
 
-def generator_pulses(signals: Sequence[RoleSignal]) -> tuple[int, int] | None:
-    """The level of the generator's pulses and the longest pulse in ticks, read from the capture.
-
-    Pulses are short and of fixed length while the gaps between them grow as the rate falls, so
-    the pulse level is the one whose longest stretch is shorter (high on a tie). None when the
-    signals never complete a stretch at either level.
-    """
-    longest_at: dict[int, int] = {}
-    for level in (0, 1):
-        stretch = Intervals.concat([widths(s.initial, s.edges, level) for s in signals])
-        if len(stretch):
-            longest_at[level] = _diff_extreme(stretch.start, stretch.end, smallest=False)[0]
-    if not longest_at:
-        return None
-    level = min(longest_at, key=lambda lv: (longest_at[lv], lv != 1))
-    return level, longest_at[level]
+def pulse_level(iface: StepInterface, st: StepType, generator_level: int = 1) -> int:
+    """The level of the generator's pulses at the drive's input: ``generator_level`` (1: pulses
+    high at the generator's output), flipped when the pulse roles are inverted."""
+    inverted = any(s.inverted for s in (iface.get(r) for r in st.pulse_roles) if s is not None)
+    return generator_level ^ int(inverted)
 
 
 @dataclass(frozen=True)
@@ -87,10 +78,14 @@ class MaxStepRates:
         drive_limited_by: ``"max_rate"``, ``"pulse"`` (step_high + step_low) or None.
         observed: the capture's highest instantaneous rate.
         observed_at_s: start of the shortest step interval, exact seconds.
-        headroom: the highest rate at which the observed pulse lengths would still pass.
+        headroom: the highest rate at which the observed pulses would still pass (module doc).
         longest_pulse_ns: the longest observed pulse (a stretch at :attr:`pulse_level`), exact ns.
         idle_min_ns: the drive's minimum for the other level, exact ns.
-        pulse_level: the level of the generator's pulses (1 high, 0 low), from the capture.
+        pulse_level: the level of the generator's pulses at the drive's input (1 high, 0 low).
+        typical_pulse_ns: the median pulse (the lower middle one), exact ns.
+        headroom_limited_by: ``"gap"`` (typical pulse + the gap's minimum), ``"max_rate"`` or
+            ``"pulse"`` (the drive's own step_high + step_low).
+        headroom_note: why there is no headroom, or None.
         configured: the ``config`` and ``latency_safe`` rates of a stepgen configuration, with
             the settings they assume (None when no configuration was given).
     """
@@ -103,6 +98,9 @@ class MaxStepRates:
     longest_pulse_ns: Fraction | None
     idle_min_ns: Fraction | None
     pulse_level: int | None = None
+    typical_pulse_ns: Fraction | None = None
+    headroom_limited_by: str | None = None
+    headroom_note: str | None = None
     configured: ConfigRates | None = None
 
     def named(self) -> dict[str, Fraction | None]:
@@ -140,6 +138,13 @@ def drive_rate(drive: Drive) -> tuple[Fraction | None, str | None]:
     return min(candidates, key=lambda c: c[0])
 
 
+def _median(start: npt.NDArray[np.int64], end: npt.NDArray[np.int64]) -> int:
+    """The lower median of ``end - start`` (arrays not empty)."""
+    d = end - start
+    k = (len(d) - 1) // 2
+    return int(np.partition(d, k)[k])
+
+
 def max_step_rates(
     iface: StepInterface,
     st: StepType,
@@ -147,8 +152,17 @@ def max_step_rates(
     drive: Drive,
     active_edge: ActiveEdge,
     timebase: Timebase,
+    *,
+    level: int,
+    pulse_verdict: str | None = None,
 ) -> MaxStepRates:
-    """Compute ``drive``, ``observed`` and ``headroom`` for a decoded capture."""
+    """Compute ``drive``, ``observed`` and ``headroom`` for a decoded capture.
+
+    Args:
+        level: the generator's pulse level at the drive's input (:func:`pulse_level`).
+        pulse_verdict: the verdict of the pulse level's own rule (step_high for high pulses);
+            a fail means no rate would pass.
+    """
     cap, limited_by = drive_rate(drive)
     observed = observed_at = None
     if steps.count > 1:
@@ -156,18 +170,26 @@ def max_step_rates(
         if gap > 0:
             observed = _GIGA / timebase.ns(gap)
             observed_at = timebase.seconds(int(steps.ticks[i]))
-    headroom = longest = idle_min = None
-    pulse_level: int | None = None
-    if st.kind != "phases" and active_edge != "both":
-        found = generator_pulses([s for s in (iface.get(r) for r in st.pulse_roles) if s is not None])
-        if found is not None:
-            pulse_level, longest_ticks = found
-            longest = timebase.ns(longest_ticks)
-            idle_min = drive.limit_ns("step_low" if pulse_level == 1 else "step_high")
-            if idle_min is not None and longest + idle_min > 0:
-                headroom = _GIGA / (longest + idle_min)
-                if cap is not None:
-                    headroom = min(headroom, cap)
-    return MaxStepRates(
-        cap, limited_by, observed, observed_at, headroom, longest, idle_min, pulse_level
-    )
+    out = MaxStepRates(cap, limited_by, observed, observed_at, None, None, None, level)
+    if st.kind == "phases" or active_edge == "both":
+        why = "phase outputs" if st.kind == "phases" else "a drive that steps on both edges"
+        return replace(out, pulse_level=None, headroom_note=f"not defined for {why}")
+    sigs = [s for s in (iface.get(r) for r in st.pulse_roles) if s is not None]
+    pulses = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
+    if not len(pulses):
+        return replace(out, headroom_note="no complete pulse in the capture")
+    longest = timebase.ns(_diff_extreme(pulses.start, pulses.end, smallest=False)[0])
+    typical = timebase.ns(_median(pulses.start, pulses.end))
+    own, other = ("step_high", "step_low") if level == 1 else ("step_low", "step_high")
+    idle_min = drive.limit_ns(other)
+    out = replace(out, longest_pulse_ns=longest, typical_pulse_ns=typical, idle_min_ns=idle_min)
+    if pulse_verdict == "fail":
+        return replace(out, headroom_note=f"the pulses fail {own} at any rate")
+    if idle_min is None:
+        return replace(out, headroom_note=f"the drive states no {other} minimum for the gaps")
+    if typical + idle_min <= 0:
+        return replace(out, headroom_note="zero-length pulses and gaps")
+    headroom, by = _GIGA / (typical + idle_min), "gap"
+    if cap is not None and cap < headroom:
+        headroom, by = cap, limited_by or "drive"
+    return replace(out, headroom=headroom, headroom_limited_by=by)

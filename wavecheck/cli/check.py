@@ -94,6 +94,14 @@ def register(sub: Any) -> None:
         "negative moves)",
     )
     p.add_argument(
+        "--pulse-level",
+        choices=("high", "low"),
+        default="high",
+        help="level of the generator's step pulses at its output (default high, as LinuxCNC, "
+        "grbl, Marlin, Klipper and Smoothieware make them; --invert step says the drive sees "
+        "the other level)",
+    )
+    p.add_argument(
         "--active-edge",
         choices=("rising", "falling", "both"),
         help="override the drive's active STEP edge",
@@ -141,6 +149,7 @@ def build_report(args: argparse.Namespace, path: str) -> Report:
         active_edge=args.active_edge,
         user_table=_user_table(args.user_step_type),
         stepgen=stepgen_config(args),
+        pulse_level=1 if args.pulse_level == "high" else 0,
         latency_ns=latency_ns(args),
     )
 

@@ -109,7 +109,14 @@ def _rates_table(report: Report) -> str:
     rows = [
         ("drive", rates.drive, f"datasheet ({rates.drive_limited_by})" if rates.drive_limited_by else "datasheet"),
         ("observed", rates.observed, "highest instantaneous rate in the capture"),
-        ("headroom", rates.headroom, "highest rate at which this generator's pulses still pass"),
+        (
+            "headroom",
+            rates.headroom,
+            "highest rate at which this generator's pulses (typical length "
+            f"{_ns(rates.typical_pulse_ns)}) still leave the gaps their minimum"
+            + (f"; limited by {rates.headroom_limited_by}" if rates.headroom_limited_by else "")
+            + (f"; none: {rates.headroom_note}" if rates.headroom_note else ""),
+        ),
     ]
     cfg = rates.configured
     if cfg is not None:

@@ -26,9 +26,13 @@ def rate_lines(report: Report) -> list[str]:
     config and latency_safe with the settings they assume and their notes."""
     rates = report.rates
     by = f" ({rates.drive_limited_by})" if rates.drive_limited_by else ""
+    if rates.headroom is not None:
+        headroom = f"{_hz(rates.headroom)} ({rates.headroom_limited_by})"
+    else:
+        headroom = f"- ({rates.headroom_note})" if rates.headroom_note else "-"
     out = [
         f"max step rate: drive {_hz(rates.drive)}{by}, observed {_hz(rates.observed)}, "
-        f"headroom {_hz(rates.headroom)}"
+        f"headroom {headroom}"
     ]
     cfg = rates.configured
     if cfg is not None:

@@ -166,6 +166,19 @@ def test_up_down_dir_delay_falling_edge_drive(inverted: bool, expected_us: list[
     assert r.verdict == "pass"
 
 
+def test_up_down_dir_delay_pulses_longer_than_gaps() -> None:
+    """Issue 12: with 2.5 µs pulses and 0.5 µs gaps, duty-cycle statistics took the gaps for the
+    pulses and measured the switch from the START of the last UP pulse (2.5 µs, PASS). The pulse
+    level comes from the interface (high pulses, not inverted): the switch is 0.5 µs, a fail."""
+    up = pulses([0, 3 * US, 6 * US], 2500)  # last UP pulse 6.0-8.5 µs
+    down = pulses([9 * US, 12 * US], 2500)  # first DOWN pulse at 9.0 µs: 0.5 µs after UP ends
+    cap = capture({"UP": (0, up), "DOWN": (0, down)}, end=20 * US)
+    d = drive("rising", interface="up-down", dir_delay=2 * US, step_high=1 * US, step_low=100)
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    r = report.rule("dir_delay")
+    assert r is not None and r.measured_ticks.tolist() == [500] and r.verdict == "fail"
+
+
 def test_phase_types_state_hold_and_sequence() -> None:
     st = step_type(2)  # quadrature 1, 3, 2, 0
     # states entered at 100, 200, 250 (held 50), 350 (jump 0 → 3: non-neighbour? 0→3 is index 3→1)
