@@ -122,6 +122,19 @@ def _suite(root: ET.Element, report: Report) -> None:
         )
         ET.SubElement(case, "skipped", message=f"drive {report.drive.id} states no {rule} limit")
         counts["skipped"] += 1
+    if report.verdict == "unchecked":
+        # Nothing could be checked: the command exits 3, so the suite must not read as green.
+        case = ET.SubElement(
+            suite, "testcase", classname=classname(report.capture.path), name="verdict", time="0"
+        )
+        ET.SubElement(
+            case,
+            "failure",
+            message="nothing was checked: no rule found an interval of its kind in the capture "
+            "(check the mapping and that the capture holds steps)",
+            type="unchecked",
+        )
+        counts["failure"] += 1
     suite.set("tests", str(sum(counts.values())))
     suite.set("failures", str(counts["failure"]))
     suite.set("errors", "0")

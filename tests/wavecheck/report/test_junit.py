@@ -94,3 +94,26 @@ def test_indeterminate_is_a_failure_and_unchecked_is_skipped() -> None:
 def test_classname_drops_the_extension() -> None:
     assert classname("captures/golden/g202-j11.vcd") == "captures/golden/g202-j11"
     assert classname("run") == "run"
+
+
+@pytest.mark.parametrize("steps", [[], [0, 20]])
+def test_all_unchecked_is_a_failure_as_the_exit_code_says(steps: list[int]) -> None:
+    """Issue 12: a capture where every rule is unchecked exits 3, but its JUnit said
+    failures="0" (a green dashboard for a red job)."""
+    cap = capture({"S": (0, steps), "D": (0, [])}, end=100)
+    d = drive("rising", dir_hold=1000, dir_setup=1000)
+    report = run_check(cap, d, {"step": "S", "dir": "D"})
+    assert report.verdict == "unchecked" and report.exit_code == 3
+    xml = render_junit([report])
+    _validate(xml)
+    root = ET.fromstring(xml)
+    _check_counts(root)
+    assert int(root.get("failures", "0")) == 1
+    fail = root.find(".//testcase[@name='verdict']/failure")
+    assert fail is not None and fail.get("type") == "unchecked"
+
+
+def test_junit_failures_match_the_exit_code(failing_report: Report, passing_report: Report) -> None:
+    for report in (failing_report, passing_report):
+        root = ET.fromstring(render_junit([report]))
+        assert (int(root.get("failures", "0")) > 0) == (report.exit_code != 0)
