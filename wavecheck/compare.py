@@ -14,7 +14,9 @@ Verdict: **fail** when the steps differ (count, final position, a direction, a t
 tolerance) or a rule is worse than in the golden (fails where the golden does not); else
 **indeterminate** when a rule is indeterminate where the golden passes; else **pass**. A golden
 that itself fails a rule (a golden of a bad configuration) is matched by a capture failing it
-too.
+too. :meth:`Comparison.failures` names each line that failed. Without DIR on either side (grbl
+captures often have none) the final positions are unknown on both and are not compared: count,
+times and rules still are; unknown on one side only is a difference.
 
 Time differences are computed in float64 ns (±0.001 ns at 10⁶ s); the largest is recomputed
 exactly.
@@ -32,6 +34,7 @@ import numpy as np
 from wavecheck.capture.model import Capture
 from wavecheck.drives.model import Drive
 from wavecheck.engine import run_check
+from wavecheck.errors import UsageError
 from wavecheck.report.model import Report
 
 __all__ = ["Align", "Comparison", "RuleDiff", "compare", "compare_reports"]
@@ -102,25 +105,49 @@ class Comparison:
         return self.capture.steps.count == self.golden.steps.count
 
     @property
-    def same_position(self) -> bool:
-        """Both end at the same position (unknown positions never match)."""
+    def position(self) -> Literal["same", "different", "unknown"]:
+        """The final positions: ``unknown`` when neither is known (no DIR on either side)."""
         c, g = self.capture.steps.final_position, self.golden.steps.final_position
-        return c is not None and c == g
+        if c is None and g is None:
+            return "unknown"
+        return "same" if c == g else "different"
+
+    @property
+    def same_position(self) -> bool:
+        """Both end at the same position, or neither position is known."""
+        return self.position != "different"
+
+    def failures(self) -> list[str]:
+        """Each line of the comparison that makes it fail, in words (empty: no failure)."""
+        cs, gs = self.capture.steps, self.golden.steps
+        out = []
+        if not self.same_count:
+            out.append(f"step count {cs.count} vs {gs.count}")
+        if not self.same_position:
+            out.append(f"final position {_pos(cs.final_position)} vs {_pos(gs.final_position)}")
+        if self.direction_mismatches:
+            out.append(f"{self.direction_mismatches} step direction(s) differ")
+        if self.beyond_tolerance:
+            out.append(f"{self.beyond_tolerance} step time(s) beyond the tolerance")
+        out += [
+            f"{d.rule} fails where the golden {d.golden_verdict or 'does not evaluate it'}"
+            for d in self.rules
+            if d.change == "worse" and d.capture_verdict == "fail"
+        ]
+        return out
 
     @property
     def verdict(self) -> str:
         """pass / fail / indeterminate (see the module docstring)."""
-        if (
-            not self.same_count
-            or not self.same_position
-            or self.beyond_tolerance
-            or self.direction_mismatches
-            or any(d.change == "worse" and d.capture_verdict == "fail" for d in self.rules)
-        ):
+        if self.failures():
             return "fail"
         if any(d.change == "worse" for d in self.rules):
             return "indeterminate"
         return "pass"
+
+
+def _pos(v: int | None) -> str:
+    return "unknown" if v is None else f"{v:+d}"
 
 
 def _times_ns(report: Report, align: Align) -> np.ndarray:
@@ -226,11 +253,13 @@ def compare(
 ) -> Comparison:
     """Check ``capture`` and ``golden`` against the same ``drive`` (each with its own role mapping
     and inverted roles; the same step type and forward DIR level) and compare the two reports."""
-    checked = [
-        run_check(cap, drive, mapping, invert, step_type, forward_level=forward_level)
-        for cap, mapping, invert in (
-            (capture, capture_map, capture_invert),
-            (golden, golden_map, golden_invert),
+    checked = run_check(
+        capture, drive, capture_map, capture_invert, step_type, forward_level=forward_level
+    )
+    try:
+        reference = run_check(
+            golden, drive, golden_map, golden_invert, step_type, forward_level=forward_level
         )
-    ]
-    return compare_reports(checked[0], checked[1], tolerance_ns, align)
+    except UsageError as err:
+        raise UsageError(f"golden {err} (the golden's channels are mapped with --golden-map)") from None
+    return compare_reports(checked, reference, tolerance_ns, align)

@@ -56,14 +56,15 @@ def render_compare_text(c: Comparison) -> str:
     """The human comparison."""
     cs, gs = c.capture.steps, c.golden.steps
     out = [
-        f"verdict: {c.verdict.upper()}",
+        f"verdict: {c.verdict.upper()}"
+        + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
         f"capture: {c.capture.capture.path} ({cs.count} steps, final position {_pos(cs.final_position)})",
         f"golden:  {c.golden.capture.path} ({gs.count} steps, final position {_pos(gs.final_position)})",
         f"drive:   {c.capture.drive.id}",
         "",
         f"step count:     {cs.count} vs {gs.count} ({'same' if c.same_count else 'DIFFERENT'})",
         f"final position: {_pos(cs.final_position)} vs {_pos(gs.final_position)} "
-        f"({'same' if c.same_position else 'DIFFERENT'})",
+        f"({ {'same': 'same', 'different': 'DIFFERENT', 'unknown': 'no DIR on either: not compared'}[c.position]})",
         f"directions:     {c.direction_mismatches} mismatch(es) in {c.compared} step(s)",
     ]
     align = "the first step" if c.align == "first-step" else "time 0 of each file"
@@ -148,6 +149,7 @@ def render_compare_json(c: Comparison) -> str:
             }
             for d in c.rules
         ],
+        "failures": c.failures(),
         "verdict": c.verdict,
     }
     return json.dumps(data, indent=2, ensure_ascii=False) + "\n"

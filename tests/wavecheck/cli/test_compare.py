@@ -100,3 +100,31 @@ def test_bad_tolerance_is_exit_2(golden: Path, capsys) -> None:
     code = main(["compare", str(golden), str(golden), "--drive", "gecko-g202", "--tolerance", "2 parsecs"])
     _, err = capsys.readouterr()
     assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+def test_identical_captures_without_dir_pass(golden: Path, tmp_path: Path, capsys) -> None:
+    """Issue 12: with no DIR channel both final positions are unknown; compare said 'unknown vs
+    unknown (DIFFERENT)' and failed, so no grbl capture could ever pass."""
+    cap = open_capture(golden)
+    step = cap.channel("step")
+    only_step = write_vcd(tmp_path / "s.vcd", {"STEP": (step.initial, [int(t) for t in step.edges])})
+    code, data = _compare(capsys, str(only_step), str(only_step))
+    assert code == 0 and data["verdict"] == "pass" and data["failures"] == []
+    assert main(["compare", str(only_step), str(only_step), "--drive", "gecko-g202"]) == 0
+    assert "no DIR on either: not compared" in capsys.readouterr().out
+
+
+def test_a_fail_says_which_line_failed(golden: Path, tmp_path: Path, capsys) -> None:
+    cap = _as_capture(golden, tmp_path / "c.vcd", shift=0, drop_last=True)
+    code, data = _compare(capsys, str(cap), str(golden))
+    assert code == 1 and "step count 39 vs 40" in data["failures"]
+    assert main(["compare", str(cap), str(golden), "--drive", "gecko-g202"]) == 1
+    assert capsys.readouterr().out.splitlines()[0].startswith("verdict: FAIL (step count 39 vs 40")
+
+
+def test_golden_mapping_error_hints_golden_map(golden: Path, tmp_path: Path, capsys) -> None:
+    cap = _as_capture(golden, tmp_path / "c.vcd", shift=0)
+    code = main(["compare", str(cap), str(golden), "--drive", "gecko-g202",
+                 "--golden-map", "step=NOPE"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--golden-map" in err and len(err.strip().splitlines()) == 1
