@@ -75,6 +75,28 @@ def test_falling_edge(tmp_path: Path) -> None:
     assert rc == 0 and doc["sigrok_count"] == 4
 
 
+@pytest.mark.parametrize("timescale,factor", [("1 fs", 10**6), ("1 ps", 10**3)])
+def test_fine_timescales_keep_the_downsample_in_range(
+    tmp_path: Path, timescale: str, factor: int
+) -> None:
+    """Issue 12: a 1 fs VCD (GHDL's default) handed sigrok-cli a downsample factor above 2^31,
+    which it wraps: a false DISAGREE (and above 2^31 a run that never ended)."""
+    from tests.conftest import write_vcd
+    from wavecheck.capture.open import open_capture
+
+    golden = open_capture(GOLDEN / "g202-p20-worst-dirhold.vcd")  # 1 ns ticks
+    signals = {
+        n: (golden.channel(n).initial, [int(t) * factor for t in golden.channel(n).edges])
+        for n in ("step", "dir")
+    }
+    path = write_vcd(tmp_path / "fine.vcd", signals, timescale=timescale, end=golden.end * factor)
+    rc, doc = _json([str(path), "--map", "step=step,dir=dir"])
+    assert rc == 0, doc["disagreements"]
+    if factor == 10**6:  # in capture ticks above 2^31; the factor sigrok-cli got is smaller
+        assert doc["downsample"] > 2**31
+    assert doc["sigrok_count"] == doc["wavecheck_steps"] > 0
+
+
 def test_too_coarse_downsample_disagrees() -> None:
     """Forcing a downsample that merges pulses (sigrok.md §7) must show up as a disagreement."""
     path = GOLDEN / "stepgen0.vcd"

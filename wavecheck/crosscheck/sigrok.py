@@ -97,23 +97,38 @@ def _unit_for(tick_s: Fraction) -> tuple[str, int]:
     raise UsageError(f"tick {tick_s} s is not a whole number of femtoseconds")
 
 
+#: sigrok-cli keeps the VCD input's ``downsample`` in a signed 32-bit int (it wraps above).
+MAX_SIGROK_DOWNSAMPLE = 2**31 - 1
+
+
 def _write_mapped_vcd(
-    capture: Capture, names: list[str], out_names: list[str], path: Path, scale: int, unit: str
-) -> None:
-    """The channels ``names`` only (called ``out_names``), times × ``scale`` in ``1 <unit>``,
-    ending with a timestamp after the last edge (sigrok drops the values at the last one)."""
+    capture: Capture, names: list[str], out_names: list[str], path: Path, ds: int
+) -> int:
+    """The channels ``names`` only (called ``out_names``), already downsampled: each edge at
+    sample ``tick // ds`` (distinct edge times stay distinct, as ``ds`` is at most their shortest
+    gap), ending one sample after the last edge (sigrok drops the values at the last one).
+
+    The timescale is the sample period ``ds`` ticks where a VCD timescale can state it; the
+    returned factor (the ``downsample`` sigrok-cli is given, always below 2^31) is what the
+    sample numbers are scaled by in the file. A 1 fs VCD (GHDL's default) once needed a factor
+    above 2^31 here, which sigrok-cli wraps.
+    """
     chans = [capture.channel(n) for n in names]
-    last = max([capture.end, *(int(c.edges[-1]) for c in chans if len(c.edges))]) + 1
+    last = max([capture.end, *(int(c.edges[-1]) for c in chans if len(c.edges))]) // ds + 1
+    unit, factor = _unit_for(capture.timebase.tick_s * ds)
+    if factor > MAX_SIGROK_DOWNSAMPLE:
+        unit, factor = "s", 1  # the sample period cannot be stated: sample numbers stay exact
     write_vcd(
         path,
         [
-            VcdWire(o, c.initial, np.asarray(c.edges, dtype=np.int64) * scale)
+            VcdWire(o, c.initial, (np.asarray(c.edges, dtype=np.int64) // ds) * factor)
             for o, c in zip(out_names, chans, strict=True)
         ],
         timescale=f"1 {unit}",
-        end=last * scale,
+        end=last * factor,
         scope="crosscheck",
     )
+    return factor
 
 
 def prepare_input(
@@ -147,11 +162,10 @@ def prepare_input(
                 f"{capture.path}: converting for sigrok-cli would make "
                 f"{capture.end // ds} samples (downsample {ds}); give --downsample N"
             )
-        unit, scale = _unit_for(capture.timebase.tick_s)
         sr_names = ["step", "dir"][: len(names)]
         vcd = tmp / "mapped.vcd"
-        _write_mapped_vcd(capture, names, sr_names, vcd, scale, unit)
-        convert(vcd, sr, input_format=f"vcd:downsample={ds * scale}:skip=0")
+        factor = _write_mapped_vcd(capture, names, sr_names, vcd, ds)
+        convert(vcd, sr, input_format=f"vcd:downsample={factor}:skip=0")
     else:
         # the same sigrok-cli input spec the capture was read with (options included)
         fmt = input_format or capture.format.split(":", 1)[1]
