@@ -47,11 +47,12 @@ def test_cli_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
             argv = [str(Path(a).relative_to(workdir)) if a.startswith(str(workdir)) else a for a in argv]
         codes.append(main(argv[1:]))
     out = capsys.readouterr().out
-    assert codes[0] == 1 and "dir_hold     20 us   1        1" in out
+    assert codes == [1, 1] and "dir_hold     20 us   1        1" in out  # both: a rule failed
     for name in ("g202.png", "g202.html", "g202.gtkw"):
         assert (workdir / name).stat().st_size > 0
     root = ET.parse(workdir / "junit.xml").getroot()
-    assert len(root.findall("testsuite")) == len(list((workdir / "captures/golden").glob("*.vcd")))
+    assert len(root.findall("testsuite")) == len(list((workdir / "captures/golden").glob("g202-*.vcd")))
+    assert root.get("errors") == "0"
 
 
 def test_python_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:

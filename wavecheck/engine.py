@@ -45,6 +45,20 @@ def auto_map(capture: Capture, st: StepType) -> dict[str, str]:
     return mapping
 
 
+def _suggest_type(capture: Capture, st: StepType) -> None:
+    """Raise a UsageError that suggests ``--type`` when a step/dir or up/down check meets a
+    capture whose channels are named like phase outputs (``phase-A``, ``stepgen.0.phase-B``)."""
+    if st.kind == "phases":
+        return
+    phases = sorted(c.name for c in capture.channels if _leaf(c.name).startswith("phase-"))
+    if phases:
+        raise UsageError(
+            f"{capture.path}: no {st.pulse_roles[0]!r} channel, but {', '.join(map(repr, phases))} "
+            "look like phase outputs: give the step type (--type 2 for quadrature, 3-14 for the "
+            "other phase tables, 15 with --user-step-type)"
+        )
+
+
 def default_step_type(drive: Drive) -> int:
     """The step type a drive implies: its ``step_type`` if given, 1 for up/down, else 0."""
     declared = getattr(drive, "step_type", None)
@@ -119,6 +133,8 @@ def run_check(
     iface = build_interface(capture, full_map, invert)
     edge: ActiveEdge = active_edge or drive.active_edge
     for role in st.pulse_roles:
+        if iface.get(role) is None:
+            _suggest_type(capture, st)
         iface.require(role)
     resolution_ns = resolve_resolution_ns(capture, resolution)
     steps = decode(

@@ -134,3 +134,17 @@ def test_counts_match_sigrok_counter(smoothie_sr: Path) -> None:
         assert out.stderr.strip() == ""
         count = int(out.stdout.strip().splitlines()[-1].split(":")[-1])
         assert count == check(smoothie_sr, "a4988", map={"step": ch}).steps.count == 739
+
+
+def test_phase_channels_suggest_the_step_type() -> None:
+    """Issue 12: the README's JUnit example met the shipped quadrature trace and the hint said
+    'add --map' where --type 2 is the fix."""
+    import pytest
+
+    import wavecheck
+    from wavecheck.errors import UsageError
+
+    golden = Path(__file__).resolve().parents[2] / "captures" / "golden" / "stepgen1-quadrature.vcd"
+    with pytest.raises(UsageError, match=r"--type 2 for quadrature"):
+        wavecheck.check(golden, "gecko-g202")
+    assert wavecheck.check(golden, "gecko-g202", step_type=2).steps.count > 0
