@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
@@ -61,35 +62,22 @@ def _round(ticks: int, steps_per_tick: Fraction) -> int:
     return (2 * num + steps_per_tick.denominator) // (2 * steps_per_tick.denominator)
 
 
-def _vcd_header_names(path: str) -> tuple[dict[str, str], tuple[int, str] | None]:
-    """Reference name → hierarchical name of each 1-bit var of a VCD, and its timescale."""
-    from vcd.reader import TokenKind, tokenize
-
+def _vcd_header_names(path: str) -> tuple[dict[str, str], int]:
+    """Name → hierarchical name of each var of a VCD (by its reference or its full name, when
+    that is unique), and the magnitude of its timescale (``10`` for ``10 ns``; 1 when none)."""
+    with open_vcd(path) as f:
+        header, _ = read_header(path, f)
     full: dict[str, list[str]] = {}
-    timescale: tuple[int, str] | None = None
-    scope: list[str] = []
-    with open(path, "rb") as f:
-        for tok in tokenize(f):
-            if tok.kind is TokenKind.SCOPE:
-                scope.append(tok.scope.ident)
-            elif tok.kind is TokenKind.UPSCOPE:
-                if scope:
-                    scope.pop()
-            elif tok.kind is TokenKind.TIMESCALE:
-                timescale = (int(tok.timescale.magnitude), str(tok.timescale.unit.value))
-            elif tok.kind is TokenKind.VAR:
-                ref = tok.var.reference
-                name = ".".join([*scope, ref])
-                full.setdefault(ref, []).append(name)
-                full.setdefault(name, []).append(name)
-            elif tok.kind is TokenKind.ENDDEFINITIONS:
-                break
-    return {k: v[0] for k, v in full.items() if len(v) == 1}, timescale
+    for var in header.vars:
+        name = var.full_name
+        full.setdefault(var.reference, []).append(name)
+        full.setdefault(name, []).append(name)
+    magnitude = int(header.timescale_text.split()[0]) if header.timescale_text else 1
+    return {k: v[0] for k, v in full.items() if len(v) == 1}, magnitude
 
 
-def _trace_names(report: Report) -> dict[str, str]:
+def _trace_names(names: dict[str, str], report: Report) -> dict[str, str]:
     """Role → the name GTKWave knows the signal by, in the capture's own VCD."""
-    names, _ = _vcd_header_names(report.capture.path)
     out: dict[str, str] = {}
     for role, sig in report.interface.signals.items():
         ch = sig.channel
@@ -226,9 +214,8 @@ def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
     path = Path(path)
     cap = report.capture
     if cap.format == "vcd":
-        names = _trace_names(report)
-        _, ts = _vcd_header_names(cap.path)
-        magnitude = ts[0] if ts else 1
+        all_names, magnitude = _vcd_header_names(cap.path)
+        names = _trace_names(all_names, report)
         text = render_gtkw(report, cap.path, names=names, unit_factor=magnitude, save_path=path)
         atomic_write(path, text)
         return None

@@ -11,6 +11,7 @@ from tests.wavecheck.report.traces import stepgen_trace, write_stepgen_vcd
 from tests.wavecheck.waves import capture, g202
 from wavecheck.capture.open import open_capture
 from wavecheck.engine import run_check
+from wavecheck.report import gtkw
 from wavecheck.report.gtkw import vcd_timescale, write_gtkw
 
 
@@ -87,3 +88,17 @@ def test_vcd_timescale() -> None:
     assert vcd_timescale(Fraction(1, 2_000_000)) == (100, "ns", 5)  # 2 MHz: 500 ns
     assert vcd_timescale(Fraction(1, 10**9)) == (1, "ns", 1)
     assert vcd_timescale(Fraction(1, 24_000_000)) == (1, "ps", Fraction(125_000, 3))  # rounded
+
+
+def test_header_names_come_from_the_shared_vcd_header(tmp_path: Path) -> None:
+    vcd = tmp_path / "two.vcd"
+    vcd.write_text(
+        "$timescale 100 ps $end\n$scope module top $end\n$scope module x $end\n"
+        "$var wire 1 ! step $end\n$upscope $end\n$scope module y $end\n"
+        '$var wire 1 " step $end\n$var wire 1 # dir $end\n$upscope $end\n$upscope $end\n'
+        '$enddefinitions $end\n#0\n0!\n0"\n0#\n#10\n'
+    )
+    names, magnitude = gtkw._vcd_header_names(str(vcd))
+    assert magnitude == 100
+    assert names["dir"] == "top.y.dir" and names["top.x.step"] == "top.x.step"
+    assert "step" not in names  # two leaves named step: only their full names
