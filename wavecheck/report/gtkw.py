@@ -11,8 +11,18 @@ other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save 
 (``FILE.vcd`` for ``FILE.gtkw``) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
 channels only, raw (not inverted), on the largest VCD timescale that holds every edge exactly.
 
-Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns), as GTKWave
-reads them.
+Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns, ``1 fs``
+in fs), as GTKWave reads them. Markers go to distinct times: a place whose time is already marked
+is skipped and the next one taken.
+
+The view (measured through the Tcl interface of Debian's GTKWave 3.3): GTKWave draws
+``2 ** -zoom`` time units per 200 pixels of its wave area, starting at ``[timestart]`` (rounded
+down to a power of ten below one pixel), and opens at time 0 instead when the window would run
+past the dump's last time. The save file sets the window ``[size]``, the signal pane width and a
+collapsed signal search tree, so the wave area is :data:`WAVE_PIXELS` wide; the zoom and start put
+the worst violation's interval (both edges) in the middle third of that window, the primary marker
+on its first edge. A narrower wave area (another theme, a window manager that shrinks the window)
+cuts the right side first.
 """
 
 from __future__ import annotations
@@ -21,22 +31,40 @@ import io
 import math
 import os
 import re
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
+from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
-from wavecheck.report.plot import choose_places
+from wavecheck.report.plot import Place, choose_places
 from wavecheck.units import format_time
 
-__all__ = ["MAX_MARKERS", "render_gtkw", "vcd_timescale", "write_gtkw", "write_vcd_of"]
+__all__ = [
+    "MAX_MARKERS",
+    "WAVE_PIXELS",
+    "WINDOW_SIZE",
+    "View",
+    "render_gtkw",
+    "vcd_timescale",
+    "view_of",
+    "write_gtkw",
+    "write_vcd_of",
+]
 
 #: Named markers A..Z plus the primary one.
 MAX_MARKERS = 27
+#: The window the save file asks for (pixels) and the width of its signal pane.
+WINDOW_SIZE = (1200, 600)
+SIGNALS_WIDTH = 220
+#: Width of the wave area GTKWave 3.3 (Debian) draws in that window with the search tree collapsed.
+WAVE_PIXELS = 916
+_PIXELS_PER_FRAME = 200  # GTKWave shows 2 ** -zoom time units per 200 pixels
 _UNITS = (("s", 0), ("ms", -3), ("us", -6), ("ns", -9), ("ps", -12))
 
 
@@ -61,35 +89,22 @@ def _round(ticks: int, steps_per_tick: Fraction) -> int:
     return (2 * num + steps_per_tick.denominator) // (2 * steps_per_tick.denominator)
 
 
-def _vcd_header_names(path: str) -> tuple[dict[str, str], tuple[int, str] | None]:
-    """Reference name → hierarchical name of each 1-bit var of a VCD, and its timescale."""
-    from vcd.reader import TokenKind, tokenize
-
+def _vcd_header_names(path: str) -> tuple[dict[str, str], int]:
+    """Name → hierarchical name of each var of a VCD (by its reference or its full name, when
+    that is unique), and the magnitude of its timescale (``10`` for ``10 ns``; 1 when none)."""
+    with open_vcd(path) as f:
+        header, _ = read_header(path, f)
     full: dict[str, list[str]] = {}
-    timescale: tuple[int, str] | None = None
-    scope: list[str] = []
-    with open(path, "rb") as f:
-        for tok in tokenize(f):
-            if tok.kind is TokenKind.SCOPE:
-                scope.append(tok.scope.ident)
-            elif tok.kind is TokenKind.UPSCOPE:
-                if scope:
-                    scope.pop()
-            elif tok.kind is TokenKind.TIMESCALE:
-                timescale = (int(tok.timescale.magnitude), str(tok.timescale.unit.value))
-            elif tok.kind is TokenKind.VAR:
-                ref = tok.var.reference
-                name = ".".join([*scope, ref])
-                full.setdefault(ref, []).append(name)
-                full.setdefault(name, []).append(name)
-            elif tok.kind is TokenKind.ENDDEFINITIONS:
-                break
-    return {k: v[0] for k, v in full.items() if len(v) == 1}, timescale
+    for var in header.vars:
+        name = var.full_name
+        full.setdefault(var.reference, []).append(name)
+        full.setdefault(name, []).append(name)
+    magnitude = int(header.timescale_text.split()[0]) if header.timescale_text else 1
+    return {k: v[0] for k, v in full.items() if len(v) == 1}, magnitude
 
 
-def _trace_names(report: Report) -> dict[str, str]:
+def _trace_names(names: dict[str, str], report: Report) -> dict[str, str]:
     """Role → the name GTKWave knows the signal by, in the capture's own VCD."""
-    names, _ = _vcd_header_names(report.capture.path)
     out: dict[str, str] = {}
     for role, sig in report.interface.signals.items():
         ch = sig.channel
@@ -135,11 +150,54 @@ def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str
     return magnitude, unit, factor
 
 
-def _zoom(window_units: float, pixels: int = 1000) -> float:
-    """GTKWave's zoom for ``window_units`` of the dump's time unit across about ``pixels``."""
-    if window_units <= 0:
-        return 0.0
-    return -math.log2(window_units / pixels)
+def _zoom(window_units: Fraction, pixels: int = WAVE_PIXELS) -> float:
+    """GTKWave's zoom that shows ``window_units`` (> 0) of the dump's time unit across ``pixels``."""
+    return -math.log2(window_units * _PIXELS_PER_FRAME / pixels)
+
+
+@dataclass(frozen=True)
+class View:
+    """What GTKWave opens at: ``start`` (``[timestart]``) and ``window`` (the time across
+    :data:`WAVE_PIXELS`), both in the dump's time unit, and the save file's ``zoom``."""
+
+    start: int
+    window: Fraction
+
+    @property
+    def zoom(self) -> float:
+        return _zoom(self.window)
+
+
+def view_of(first: int, last: int, t_min: int, t_max: int) -> View:
+    """The view of the interval ``[first, last]`` in a dump spanning ``[t_min, t_max]`` (dump units).
+
+    The interval fills the middle third of the window (its length again as context each side;
+    a zero-length interval counts as 1 unit). GTKWave opens at time 0 when ``start + window``
+    exceeds ``t_max``, so near the dump's end the window must stay inside it even for the widest
+    wave area the window can hold (``WINDOW_SIZE[0]`` pixels): the window is then narrowed while
+    some context after ``last`` remains, and at the very end fits the planned wave area exactly.
+    """
+    length = max(last - first, 1)
+    start = max(first - length, t_min)
+    window = Fraction(3 * length)
+    widest = Fraction(WINDOW_SIZE[0], WAVE_PIXELS)
+    if start + widest * window > t_max:
+        narrowed = (t_max - start) / widest
+        window = (
+            narrowed if start + narrowed >= last + Fraction(length, 4) else Fraction(t_max - start)
+        )
+    return View(start, max(window, Fraction(1)))
+
+
+def _distinct(places: list[Place], times: list[int], n: int) -> list[tuple[Place, int]]:
+    """The first ``n`` places whose marker times differ (a repeated time takes the next place)."""
+    out: list[tuple[Place, int]] = []
+    seen: set[int] = set()
+    for p, t in zip(places, times, strict=True):
+        if t not in seen and len(out) < n:
+            seen.add(t)
+            out.append((p, t))
+    return out
 
 
 def render_gtkw(
@@ -163,7 +221,6 @@ def render_gtkw(
     """
     from vcd.gtkw import GTKWFlag, GTKWSave
 
-    places = choose_places(report, MAX_MARKERS)
     buf = io.StringIO()
     save = GTKWSave(buf)
     save.comment(
@@ -179,8 +236,11 @@ def render_gtkw(
     def at(tick: int) -> int:
         return _round(tick - origin_tick, factor)
 
+    candidates = choose_places(report, 4 * MAX_MARKERS)
+    chosen = _distinct(candidates, [at(p.start_tick) for p in candidates], MAX_MARKERS)
+    places = [p for p, _ in chosen]
+    marks = [t for _, t in chosen]
     letters = "abcdefghijklmnopqrstuvwxyz"
-    marks = [at(p.start_tick) for p in places]
     for k, p in enumerate(places):
         label = "primary marker" if k == 0 else f"marker {letters[k - 1].upper()}"
         what = "FAIL" if p.failed else "smallest margin"
@@ -193,22 +253,20 @@ def render_gtkw(
             f"{label}: {p.rule} {what} at {float(report.capture.timebase.seconds(p.start_tick)):.9f} s"
             f" ({measured})"
         )
+    save.size(*WINDOW_SIZE)
+    cap = report.capture
     if places:
-        first = places[0]
-        width = max(first.end_tick - first.start_tick, 1)
-        if first.limit_ns is not None:
-            width = max(width, int(first.limit_ns / report.capture.timebase.tick_ns))
-        window = round(8 * width * factor)
-        save.zoom_markers(
-            _zoom(window),
-            marks[0],
-            **{letters[k]: m for k, m in enumerate(marks[1:])},
-        )
-        save.timestart(max(0, marks[0] - window // 3))
+        first, last = marks[0], at(places[0].end_tick)
+        if last == first:  # a state change: show it with its neighbouring edges
+            first, last = (at(t) for t in _neighbours(report, places[0].start_tick))
+        view = view_of(min(first, marks[0]), max(last, marks[0]), at(cap.start), at(cap.end))
+        save.zoom_markers(view.zoom, marks[0], **{letters[k]: m for k, m in enumerate(marks[1:])})
+        save.timestart(view.start)
     else:
-        save.zoom_markers(0.0)
-    save.signals_width(220)
-    save.sst_expanded(True)
+        save.zoom_markers(_zoom(Fraction(max(at(cap.end) - at(cap.start), 1))))
+        save.timestart(at(cap.start))
+    save.signals_width(SIGNALS_WIDTH)
+    save.sst_expanded(False)
     with save.group(f"{report.drive.id}: {report.verdict.upper()}"):
         for role, sig in report.interface.signals.items():
             flags = GTKWFlag.bin | (GTKWFlag.invert if sig.inverted else GTKWFlag.none)
@@ -216,6 +274,19 @@ def render_gtkw(
             alias = label if sig.channel.lower() == role.lower() else f"{label} ({sig.channel})"
             save.trace(names[role], alias=alias, datafmt="bin", extraflags=flags)
     return buf.getvalue()
+
+
+def _neighbours(report: Report, tick: int) -> tuple[int, int]:
+    """The mapped signals' last edge before ``tick`` and first edge after it (``tick`` itself
+    where there is none)."""
+    edges = np.concatenate(
+        [np.asarray(sig.edges, dtype=np.int64) for sig in report.interface.signals.values()]
+    )
+    before, after = edges[edges < tick], edges[edges > tick]
+    return (
+        int(before.max()) if len(before) else tick,
+        int(after.min()) if len(after) else tick,
+    )
 
 
 def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
@@ -226,9 +297,8 @@ def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
     path = Path(path)
     cap = report.capture
     if cap.format == "vcd":
-        names = _trace_names(report)
-        _, ts = _vcd_header_names(cap.path)
-        magnitude = ts[0] if ts else 1
+        all_names, magnitude = _vcd_header_names(cap.path)
+        names = _trace_names(all_names, report)
         text = render_gtkw(report, cap.path, names=names, unit_factor=magnitude, save_path=path)
         atomic_write(path, text)
         return None

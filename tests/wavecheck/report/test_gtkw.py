@@ -6,12 +6,16 @@ import re
 from fractions import Fraction
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import write_vcd
 from tests.wavecheck.report.traces import stepgen_trace, write_stepgen_vcd
 from tests.wavecheck.waves import capture, g202
 from wavecheck.capture.open import open_capture
 from wavecheck.engine import run_check
-from wavecheck.report.gtkw import vcd_timescale, write_gtkw
+from wavecheck.report import gtkw
+from wavecheck.report.gtkw import WAVE_PIXELS, WINDOW_SIZE, vcd_timescale, view_of, write_gtkw
+from wavecheck.report.plot import Place
 
 
 def _markers(text: str) -> list[int]:
@@ -87,3 +91,83 @@ def test_vcd_timescale() -> None:
     assert vcd_timescale(Fraction(1, 2_000_000)) == (100, "ns", 5)  # 2 MHz: 500 ns
     assert vcd_timescale(Fraction(1, 10**9)) == (1, "ns", 1)
     assert vcd_timescale(Fraction(1, 24_000_000)) == (1, "ps", Fraction(125_000, 3))  # rounded
+
+
+def _view(text: str) -> tuple[int, float]:
+    """``[timestart]`` and the time GTKWave shows across the planned wave area (dump units)."""
+    zoom = float(next(ln for ln in text.splitlines() if ln.startswith("*")).split()[0][1:])
+    start = int(next(ln for ln in text.splitlines() if ln.startswith("[timestart]")).split()[1])
+    return start, WAVE_PIXELS * 2**-zoom / 200
+
+
+def test_markers_go_to_distinct_times(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # places that share a time (repeated identical violations) get one marker; the next
+    # distinct place takes the next letter
+    vcd = write_stepgen_vcd(tmp_path / "run.vcd")
+    report = run_check(open_capture(vcd), g202())
+    v = report.violations()
+    place = [Place(x.rule, x.start_tick, x.end_tick, x.measured_ns, x.limit_ns, True) for x in v]
+    repeated = [place[0], place[0], place[1], place[0], place[1], place[2]]
+    monkeypatch.setattr(gtkw, "choose_places", lambda report, n: repeated)
+    out = tmp_path / "run.gtkw"
+    write_gtkw(report, out)
+    text = out.read_text()
+    assert _markers(text) == [v[0].start_tick, v[1].start_tick, v[2].start_tick]
+    assert text.count("dir_hold FAIL") == 3
+
+
+def test_save_file_sets_the_window_and_shows_the_worst_interval(tmp_path: Path) -> None:
+    vcd = write_stepgen_vcd(tmp_path / "run.vcd")
+    report = run_check(open_capture(vcd), g202())
+    out = tmp_path / "run.gtkw"
+    write_gtkw(report, out)
+    text = out.read_text()
+    assert "[size] 1200 600" in text and "[sst_expanded] 0" in text
+    worst = report.violations(1)[0]
+    start, window = _view(text)
+    # the interval (9 us) is the middle third of the window
+    assert start == worst.start_tick - 9_000
+    assert window == pytest.approx(27_000, rel=1e-5)
+
+
+def test_view_stays_inside_the_dump() -> None:
+    widest = Fraction(WINDOW_SIZE[0], WAVE_PIXELS)
+    middle = view_of(1_000, 1_900, 0, 10_000)
+    assert (middle.start, middle.window) == (100, 2_700)
+    assert view_of(50, 950, 0, 10_000).start == 0  # no time before the dump's first
+    near = view_of(1_000, 1_900, 0, 3_000)  # the widest window still ends inside the dump
+    assert near.start == 100 and near.start + widest * near.window <= 3_000
+    assert near.start + near.window >= 1_900 + 900 // 4
+    at_end = view_of(1_000, 1_900, 0, 1_900)  # ends on the dump's last time: an exact fit
+    assert (at_end.start, at_end.window) == (100, 1_800)
+    assert view_of(5, 5, 0, 10).window == 3  # a zero-length interval counts as 1 unit
+
+
+def test_a_state_change_is_shown_with_its_neighbouring_edges(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    vcd = write_stepgen_vcd(tmp_path / "run.vcd")
+    report = run_check(open_capture(vcd), g202())
+    step = list(report.interface.signals["step"].edges)
+    tick = step[10]
+    place = Place("state_sequence", tick, tick, None, None, True, "state 1 → 3")
+    monkeypatch.setattr(gtkw, "choose_places", lambda report, n: [place])
+    out = tmp_path / "run.gtkw"
+    write_gtkw(report, out)
+    start, window = _view(out.read_text())
+    assert _markers(out.read_text()) == [tick]
+    assert start < step[9] and step[11] < start + window
+
+
+def test_header_names_come_from_the_shared_vcd_header(tmp_path: Path) -> None:
+    vcd = tmp_path / "two.vcd"
+    vcd.write_text(
+        "$timescale 100 ps $end\n$scope module top $end\n$scope module x $end\n"
+        "$var wire 1 ! step $end\n$upscope $end\n$scope module y $end\n"
+        '$var wire 1 " step $end\n$var wire 1 # dir $end\n$upscope $end\n$upscope $end\n'
+        '$enddefinitions $end\n#0\n0!\n0"\n0#\n#10\n'
+    )
+    names, magnitude = gtkw._vcd_header_names(str(vcd))
+    assert magnitude == 100
+    assert names["dir"] == "top.y.dir" and names["top.x.step"] == "top.x.step"
+    assert "step" not in names  # two leaves named step: only their full names
