@@ -90,7 +90,7 @@ def _dir_delay(iface: StepInterface, edge: ActiveEdge) -> Intervals:
     """End of the last pulse on one line → the active edge of the first pulse on the other.
 
     A pulse ends at the edge after its active edge — unless the generator's pulses are at the
-    other level (high pulses into a falling-edge drive, the seed's G202 reading), where the
+    other level (high pulses into a falling-edge drive, Stepper Tuning's G202), where the
     active edge itself ends the pulse.
     """
     up, down = iface.require("up"), iface.require("down")

@@ -8,7 +8,7 @@
   the drive its minimum time at the other level. The design says "longest observed active-level
   time + the drive's idle-level minimum"; that is this formula when the generator's pulse starts
   at the active edge (a rising-edge drive, or a falling-edge drive with STEP inverted). When it
-  ends at the active edge (the seed's G202 reading: falling-edge drive, STEP not inverted) the
+  ends at the active edge (Stepper Tuning's G202: falling-edge drive, STEP not inverted) the
   active level is the *gap* between pulses, whose longest value is the longest pause in the
   capture (seconds), and the literal formula would be meaningless. So the pulse level is taken
   from the capture: the level whose longest complete stretch is the shorter one (pulses are
