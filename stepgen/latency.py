@@ -12,7 +12,7 @@ Models (``--latency``; times take units, bare numbers are ns as in LinuxCNC):
 ``uniform:J``           l_k uniform on the integers [0, J] ns (``--seed``).
 ``normal:SIGMA,MAX``    l_k = min(round(|N(0, SIGMA)|), MAX) — a half-normal (``--seed``).
 ``spike:J@EVERY``       l_k = J for the first invocation due at or after each multiple of EVERY
-                        (not at 0), else 0 — the seed's "every 64 s a 300 µs latency" is
+                        (not at 0), else 0 — Stepper Tuning's "every 64 s a 300 µs latency" is
                         ``spike:300us@64s``.
 ``histogram:FILE``      l_k drawn from cyclictest ``-h`` bins (b µs exactly), or a half-normal
                         from latency-histogram ``--nox`` sdev/max (see :mod:`stepgen.latencyfiles`).

@@ -1,4 +1,4 @@
-"""Readers for latency measurements (reference §10): cyclictest, latency-histogram, ``~/.latency``.
+"""Readers for latency measurements: cyclictest, latency-histogram, ``~/.latency``.
 
 * :func:`read_latency_file` — the single worst figure (ns) from any of: LinuxCNC's one-number
   ``~/.latency`` file (ns, written by ``latency-test``), a cyclictest summary (``T: … Max: N``,

@@ -3,7 +3,8 @@
 From a drive's datasheet figures and the PC's worst latency ``J`` this chooses ``BASE_PERIOD``
 (``P``) and the four step/dir parameters of LinuxCNC's software stepgen (step type 0), and
 states the maximum step rate and the margin every requirement keeps. See §9 of
-``shared/reference/stepgen-linuxcnc.md`` and the seeds' "Stepper Tuning" chapter.
+``shared/reference/stepgen-linuxcnc.md`` and the "Stepper Tuning" chapter of LinuxCNC's
+Integrator's manual (``docs/src/motion/tweaking-steppers.adoc``).
 
 The interval arithmetic (``n = ceil((T + J) / P)``, which datasheet figure each parameter serves,
 where the active edge lies on stepgen's pulse) is :mod:`wavecheck.linuxcnc.timing`; this module
@@ -46,18 +47,18 @@ __all__ = [
     "simple_base_period_ns",
 ]
 
-#: The seed's advice: start at 25 µs and go down only while the PC stays responsive.
+#: LinuxCNC's Stepper Tuning advice: start at 25 µs and go down only while the PC stays responsive.
 SHORT_PERIOD_NS = 25_000
 #: StepConf never proposes a BASE_PERIOD above 100 µs (reference §9, [SC]).
 LONG_PERIOD_NS = 100_000
-#: Above this latency LinuxCNC is unusable on the PC at all (seed); no plan is made.
+#: Above this latency LinuxCNC is unusable on the PC at all (Stepper Tuning); no plan is made.
 MAX_LATENCY_NS = 1_000_000
 #: stepgen's timing parameters are u32 ns.
 U32_MAX = 2**32 - 1
 
 
 def min_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
-    """The seed's minimum BASE_PERIOD: ``J`` + the longer of the step high/low requirements (ns).
+    """Stepper Tuning's minimum BASE_PERIOD: ``J`` + the longer step high/low requirement (ns).
 
     With it, steplen = stepspace = 1 period meets both pulse levels; DIR setup/hold are met by
     lengthening ``dirsetup``/``dirhold``.
@@ -67,7 +68,7 @@ def min_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
 
 
 def simple_base_period_ns(drive: Drive, latency_ns: Fraction | int) -> Fraction:
-    """The seed's simple BASE_PERIOD: ``J`` + the longest of the four requirements (ns).
+    """Stepper Tuning's simple BASE_PERIOD: ``J`` + the longest of the four requirements (ns).
 
     With it every parameter can stay at one period (LinuxCNC's default).
     """
@@ -115,7 +116,7 @@ class Plan:
     assumptions: tuple[str, ...]
     warnings: tuple[str, ...]
     guidance: str
-    """The seeds' verdict on the latency figure."""
+    """LinuxCNC's Stepper Tuning verdict on the latency figure."""
 
     @property
     def step_periods(self) -> int:
@@ -164,36 +165,42 @@ class Plan:
 
 
 def latency_guidance(latency_ns: Fraction | int) -> tuple[str, bool]:
-    """The seeds' verdict on a worst latency (ns): ``(text, is_warning)``.
+    """LinuxCNC's Stepper Tuning verdict on a worst latency (ns): ``(text, is_warning)``.
 
-    Thresholds from the "Stepper Tuning" seed: below about 15–20 µs very nice results; 30–50 µs
-    good results but a disappointing max step rate; 100 µs or more not a candidate for software
-    stepping; over 1 ms not a candidate for LinuxCNC at all. The newer latency-test doc says
-    50–500 µs needs a hardware step generator (reference §9).
+    Thresholds from LinuxCNC's "Stepper Tuning" chapter: below about 15–20 µs very nice results;
+    30–50 µs good results but a disappointing max step rate; 100 µs or more not a candidate for
+    software stepping; over 1 ms not a candidate for LinuxCNC at all. The newer latency-test doc
+    says 50–500 µs needs a hardware step generator.
     """
     j = Fraction(latency_ns)
     us = format_time(j / 10**9)
     if j <= 20_000:
-        return (f"latency {us}: good for software stepping (seed: below about 15-20 us)", False)
+        return (
+            f"latency {us}: good for software stepping (LinuxCNC Stepper Tuning: below about "
+            "15-20 us)",
+            False,
+        )
     if j < 30_000:
         return (
-            f"latency {us}: between the seed's 'very nice' (15-20 us) and 'usable' (30-50 us) "
+            f"latency {us}: between Stepper Tuning's 'very nice' (15-20 us) and 'good' (30-50 us) "
             "ranges; the max step rate will be lower",
             False,
         )
     if j <= 50_000:
         return (
-            f"latency {us}: usable but the max step rate may disappoint (seed: 30-50 us)",
+            f"latency {us}: usable but the max step rate may disappoint (LinuxCNC Stepper "
+            "Tuning: 30-50 us)",
             True,
         )
     if j < 100_000:
         return (
-            f"latency {us}: worse than the seed's 30-50 us 'usable' range; LinuxCNC's newer "
+            f"latency {us}: worse than Stepper Tuning's 30-50 us 'good' range; LinuxCNC's newer "
             "latency doc says 50-500 us needs a hardware step generator",
             True,
         )
     return (
-        f"latency {us}: not a candidate for software stepping (seed: 100 us or more); "
+        f"latency {us}: not a candidate for software stepping (LinuxCNC Stepper Tuning: 100 us "
+        "or more); "
         "use a hardware step generator",
         True,
     )
@@ -217,7 +224,7 @@ def plan(
         base_period_ns: the BASE_PERIOD ``P`` (whole ns, > J); default: the minimum
             (:func:`min_base_period_ns`) rounded up to a whole µs.
         step_inverted: True when the STEP pin is inverted between stepgen and the drive. The
-            default False is LinuxCNC's default pin polarity and the seed's G202 reading (a
+            default False is LinuxCNC's default pin polarity and Stepper Tuning's G202 reading (a
             falling-edge drive then steps at the end of stepgen's pulse).
         latency_source: where the latency figure came from, for the report.
 
@@ -335,7 +342,8 @@ def plan(
     if period < SHORT_PERIOD_NS:
         warnings.append(
             f"BASE_PERIOD {format_time(Fraction(period, 10**9))} is below 25 us: start at 25 us or "
-            "more, run LinuxCNC, and go down only while the PC stays responsive (seed)"
+            "more, run LinuxCNC, and go down only while the PC stays responsive (LinuxCNC "
+            "Stepper Tuning)"
         )
     if period > LONG_PERIOD_NS:
         warnings.append(
@@ -381,7 +389,11 @@ def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tupl
         f"({'step_low' if step_inverted else 'step_high'}), stepspace its {other} time.",
         f"{drive.name} steps on the {drive.active_edge} edge = the {active_at.upper()} of stepgen's "
         f"pulse, so steplen is the drive's {'t_active' if active_at == 'start' else 't_idle'}"
-        + (" (the seed's own G202 reading)." if active_at == "end" and not step_inverted else "."),
+        + (
+            " (the G202 example of LinuxCNC's Stepper Tuning chapter)."
+            if active_at == "end" and not step_inverted
+            else "."
+        ),
     ]
     if active_at == "end":
         out.append(
@@ -398,15 +410,17 @@ def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tupl
     out += [
         "Every interval stepgen makes n periods long is at least n·P − J in real time "
         "(one invocation late by J, the next on time).",
-        "Reversals follow LinuxCNC's hold logic (reference §2.3): DIR changes dirhold periods "
+        "Reversals follow LinuxCNC's hold logic (stepgen.c, make_pulses): DIR changes dirhold "
+        "periods "
         "after the pulse ends, the next step comes dirsetup periods later. LinuxCNC does not "
-        "always obey dirsetup (reference §2.4, issue #2332): when a reversal is requested after "
+        "always obey dirsetup (LinuxCNC issue #2332): when a reversal is requested after "
         "the hold expired, or the velocity passes through exactly 0 coming from negative (the "
         "hold freezes addval at 0), DIR can flip in the same period as the next pulse starts. No "
         "parameter prevents it; when the active edge is the END of the pulse the drive still "
         "gets steplen·P − J of setup.",
         "Values are set as whole multiples of P, so stepgen keeps them; if update-freq runs before "
-        "make-pulses on the first cycle, LinuxCNC rounds them at 50 us first (reference §3): "
+        "make-pulses on the first cycle, LinuxCNC rounds them at 50 us first (stepgen.c, "
+        "update_freq): "
         "they only get longer (safe) but the max step rate drops.",
     ]
     return tuple(out)
@@ -422,7 +436,8 @@ def _check_latency(latency_ns: Fraction | int) -> Fraction:
     if j > MAX_LATENCY_NS:
         raise ConfigError(
             f"latency {format_time(j / 10**9)} is over 1 ms: not a candidate for LinuxCNC at all "
-            "(seed), so no stepgen plan (check the unit: a bare number of 1000 or more is ns)"
+            "(LinuxCNC Stepper Tuning), so no stepgen plan (check the unit: a bare number of 1000 "
+            "or more is ns)"
         )
     return j
 

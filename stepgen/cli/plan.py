@@ -65,7 +65,8 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--invert-step",
         action="store_true",
-        help="the STEP pin is inverted to the drive (default: not inverted, the seed's G202 reading)",
+        help="the STEP pin is inverted to the drive (default: not inverted, as in the G202 "
+        "example of LinuxCNC's Stepper Tuning chapter)",
     )
     p.add_argument(
         "--format", choices=_FORMATS, default="text", help="output format (default text)"

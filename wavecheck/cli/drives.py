@@ -8,7 +8,7 @@ from fractions import Fraction
 from typing import Any
 
 from wavecheck.drives.library import list_drives, load_drive
-from wavecheck.drives.model import TIME_RULES, Drive, Figure
+from wavecheck.drives.model import MARK_LEGEND, TIME_RULES, Drive, Figure
 from wavecheck.units import format_frequency, format_time
 
 __all__ = ["drive_json", "register", "run"]
@@ -90,8 +90,7 @@ def _drive_rate(drive: Drive) -> Fraction | None:
 def _us(fig: Figure | None) -> str:
     if fig is None:
         return "-"
-    text = f"{float(fig.value / 1000):g}"
-    return text + ("?" if fig.status == "uncertain" else "")
+    return f"{float(fig.value / 1000):g}{fig.mark}"
 
 
 def _table(drives: list[Drive]) -> str:
@@ -99,10 +98,8 @@ def _table(drives: list[Drive]) -> str:
     rows: list[tuple[str, ...]] = [head]
     for d in drives:
         rate = d.max_rate
-        rate_text = "-" if rate is None else format_frequency(rate.value)
-        if rate is not None and rate.status == "uncertain":
-            rate_text += "?"
-        edge = d.active_edge + ("?" if d.edge_status == "uncertain" else "")
+        rate_text = "-" if rate is None else format_frequency(rate.value) + rate.mark
+        edge = d.active_edge + d.edge_mark
         name = d.name if len(d.name) <= 40 else d.name[:39] + "…"
         rows.append(
             (d.id, name, d.kind, edge, *(_us(d.limits.get(r)) for r in _COLUMNS), rate_text)
@@ -111,7 +108,7 @@ def _table(drives: list[Drive]) -> str:
     lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
     lines.append(
         f"{len(drives)} drives; times are minimums in µs at the drive input; "
-        "? = uncertain; '-' = not stated (not checked). `wavecheck drives ID` shows sources."
+        f"{MARK_LEGEND}; '-' = not stated (not checked). `wavecheck drives ID` shows sources."
     )
     return "\n".join(lines)
 
@@ -120,7 +117,7 @@ def _show(d: Drive) -> str:
     out = [f"{d.id}: {d.name}", f"  kind       {d.kind}", f"  interface  {d.interface}"]
     if d.step_type is not None:
         out.append(f"  step type  {d.step_type}")
-    edge = f"  edge       {d.active_edge}"
+    edge = f"  edge       {d.active_edge}{d.edge_mark}"
     if d.edge_status:
         edge += f"  [{d.edge_status}, {d.edge_source}]"
     if d.edge_note:
@@ -138,7 +135,7 @@ def _show(d: Drive) -> str:
     if d.max_rate:
         figures.append(("max_rate", d.max_rate, format_frequency(d.max_rate.value)))
     for rule, fig, text in figures:
-        line = f"    {rule:<13}{text:<11}{fig.status:<17}[{fig.source}]"
+        line = f"    {rule:<13}{text + fig.mark:<11}{fig.status:<17}[{fig.source}]"
         out.append(line + (f"  {fig.note}" if fig.note else ""))
     missing = [r for r in _COLUMNS if r not in d.limits] + ([] if d.max_rate else ["max_rate"])
     if missing:

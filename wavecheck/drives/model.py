@@ -14,11 +14,32 @@ from typing import Literal
 
 from wavecheck.rules import TIME_RULES
 
-__all__ = ["TIME_RULES", "ActiveEdge", "Drive", "Figure", "Interface", "Status"]
+__all__ = [
+    "MARK_LEGEND",
+    "STATUS_MARKS",
+    "TIME_RULES",
+    "ActiveEdge",
+    "Drive",
+    "Figure",
+    "Interface",
+    "Status",
+    "status_mark",
+]
 
 Status = Literal["datasheet", "secondary", "firmware-default", "preset", "uncertain"]
 Interface = Literal["step-dir", "up-down", "phases"]
 ActiveEdge = Literal["rising", "falling", "both"]
+
+#: The mark a figure of this status carries wherever it is shown (``100 ns?``): the drive list,
+#: ``wavecheck drives ID`` and every check report. Statuses not listed carry none.
+STATUS_MARKS: Mapping[str, str] = {"uncertain": "?", "firmware-default": "*"}
+#: What the marks mean, for a legend under a table that shows them.
+MARK_LEGEND = "? = uncertain figure, * = firmware default (not a figure of the drive's own)"
+
+
+def status_mark(status: str | None) -> str:
+    """The mark of ``status`` (``"?"``, ``"*"`` or ``""``; ``""`` for None)."""
+    return STATUS_MARKS.get(status, "") if status else ""
 
 
 @dataclass(frozen=True)
@@ -30,6 +51,11 @@ class Figure:
     source: str
     status: Status
     note: str = ""
+
+    @property
+    def mark(self) -> str:
+        """``"?"`` for an uncertain figure, ``"*"`` for a firmware default, else ``""``."""
+        return status_mark(self.status)
 
 
 @dataclass(frozen=True)
@@ -63,6 +89,11 @@ class Drive:
         """The minimum of ``rule`` in exact ns, or None when the drive states none."""
         fig = self.limits.get(rule)
         return fig.value if fig is not None else None
+
+    @property
+    def edge_mark(self) -> str:
+        """The mark of :attr:`active_edge`'s status (``"?"`` when uncertain)."""
+        return status_mark(self.edge_status)
 
     @property
     def complete(self) -> bool:

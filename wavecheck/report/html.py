@@ -6,7 +6,11 @@ it shows the verdict, what was checked, the rule table, the worst violations, th
 rates, the notes and the plots (:mod:`wavecheck.report.plot`).
 
 Element ids for tools and tests: ``verdict`` (the overall verdict), per capture a ``section``
-with class ``capture`` and ``data-verdict``, tables with class ``rules``, ``violations``, ``rates``.
+with class ``capture`` and ``data-verdict``, tables with class ``rules``, ``violations``, ``rates``,
+and a ``dl`` with class ``sources`` (``id="sources-N"``; each key's ``dt`` has ``id="src-N-KEY"``)
+listing the full references the rule table's "source" column cites. A limit whose figure is
+uncertain or a firmware default carries its mark (``100 ns?``); identical violations are one row
+with their count (:mod:`wavecheck.report.groups`); the check's assumptions are among the notes.
 """
 
 from __future__ import annotations
@@ -17,7 +21,10 @@ import os
 from collections.abc import Sequence
 from fractions import Fraction
 
+from wavecheck.drives.model import MARK_LEGEND
 from wavecheck.output import atomic_write
+from wavecheck.report.assumptions import assumptions
+from wavecheck.report.groups import group_violations
 from wavecheck.report.model import Report
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import overall_verdict
@@ -58,7 +65,20 @@ def _badge(verdict: str) -> str:
     return f'<span class="verdict v-{_e(verdict)}">{_e(verdict.upper())}</span>'
 
 
-def _rules_table(report: Report) -> str:
+def _src_id(index: int, key: str) -> str:
+    return f"src-{index}-{key}"
+
+
+def _source_cell(report: Report, index: int, key: str, status: str) -> str:
+    if not key:
+        return ""
+    text = _e(key)
+    if key in report.drive.sources:
+        text = f'<a href="#{_e(_src_id(index, key))}">{text}</a>'
+    return text if status == "datasheet" else f"{text} ({_e(status)})"
+
+
+def _rules_table(report: Report, index: int) -> str:
     head = (
         "<tr><th>rule</th><th>limit</th><th>checked</th><th>fail</th><th>indet.</th>"
         "<th>shortest</th><th>min margin</th><th>at (s)</th><th>verdict</th><th>source</th></tr>"
@@ -66,17 +86,22 @@ def _rules_table(report: Report) -> str:
     rows = []
     for r in report.rules:
         at = r.min_margin_at_s
-        src = r.figure.source if r.figure else ""
+        fig = r.figure
+        src = _source_cell(report, index, fig.source, fig.status) if fig else ""
+        mark = fig.mark if fig else ""
         rows.append(
             f'<tr class="r-{_e(r.verdict)}"><td>{_e(r.rule)}</td>'
-            f'<td class="num">{_ns(r.limit_ns)}</td><td class="num">{r.checked:,}</td>'
+            f'<td class="num">{_ns(r.limit_ns)}{_e(mark)}</td><td class="num">{r.checked:,}</td>'
             f'<td class="num">{r.violations:,}</td><td class="num">{r.indeterminate:,}</td>'
             f'<td class="num">{_ns(r.min_measured_ns)}</td>'
             f'<td class="num">{_ns(r.min_margin_ns, signed=True)}</td>'
             f'<td class="num">{"–" if at is None else f"{float(at):.9f}"}</td>'
-            f"<td>{_badge(r.verdict)}</td><td class=\"note\">{_e(src)}</td></tr>"
+            f"<td>{_badge(r.verdict)}</td><td class=\"note\">{src}</td></tr>"
         )
-    return f'<table class="rules">{head}{"".join(rows)}</table>'
+    legend = ""
+    if any(r.figure is not None and r.figure.mark for r in report.rules):
+        legend = f'<p class="note">{_e(MARK_LEGEND)}.</p>'
+    return f'<table class="rules">{head}{"".join(rows)}</table>{legend}'
 
 
 def _violations_table(report: Report, limit: int) -> str:
@@ -84,24 +109,52 @@ def _violations_table(report: Report, limit: int) -> str:
     if not total:
         return "<p>No violations.</p>"
     head = (
-        "<tr><th>#</th><th>rule</th><th>at (s)</th><th>measured</th><th>limit</th>"
-        "<th>margin</th></tr>"
+        "<tr><th>#</th><th>rule</th><th>count</th><th>at (s)</th><th>last at (s)</th>"
+        "<th>measured</th><th>limit</th><th>margin</th></tr>"
     )
+    shown = report.violations(limit)
+    groups = group_violations(shown)
+    marks = {r.rule: r.figure.mark for r in report.rules if r.figure is not None}
     rows = []
-    for k, v in enumerate(report.violations(limit), 1):
+    for k, g in enumerate(groups, 1):
+        v = g.first
         if v.margin_ns is None:
             cells = f'<td colspan="3">{_e(v.detail)}</td>'
         else:
             cells = (
-                f'<td class="num">{_ns(v.measured_ns)}</td><td class="num">{_ns(v.limit_ns)}</td>'
+                f'<td class="num">{_ns(v.measured_ns)}</td>'
+                f'<td class="num">{_ns(v.limit_ns)}{_e(marks.get(v.rule, ""))}</td>'
                 f'<td class="num">{_ns(v.margin_ns, signed=True)}</td>'
             )
+        last = "–" if g.count == 1 else f"{float(g.last.time_s):.9f}"
         rows.append(
-            f'<tr><td class="num">{k}</td><td>{_e(v.rule)}</td>'
-            f'<td class="num">{float(v.time_s):.9f}</td>{cells}</tr>'
+            f'<tr><td class="num">{k}</td><td>{_e(v.rule)}</td><td class="num">{g.count:,}</td>'
+            f'<td class="num">{float(v.time_s):.9f}</td><td class="num">{last}</td>{cells}</tr>'
         )
-    more = f"<p class=\"note\">… and {total - limit:,} more.</p>" if total > limit else ""
-    return f'<p>{total:,} violation(s), worst first.</p><table class="violations">{head}{"".join(rows)}</table>{more}'
+    more = f"<p class=\"note\">… and {total - len(shown):,} more.</p>" if total > len(shown) else ""
+    grouped = (
+        f" The {len(shown):,} worst are shown as {len(groups):,} "
+        f"group{'' if len(groups) == 1 else 's'} of identical violations (count, first and last "
+        "time)."
+        if len(groups) < len(shown)
+        else ""
+    )
+    return (
+        f"<p>{total:,} violation(s), worst first.{grouped}</p>"
+        f'<table class="violations">{head}{"".join(rows)}</table>{more}'
+    )
+
+
+def _sources(report: Report, index: int) -> str:
+    """The drive's full references, keyed as the rule table's "source" column cites them."""
+    items = "".join(
+        f'<dt id="{_e(_src_id(index, key))}">{_e(key)}</dt><dd>{_e(text)}</dd>'
+        for key, text in report.drive.sources.items()
+    )
+    return (
+        f'<dl class="sources" id="sources-{index}">{items}</dl>'
+        f'<p class="note">Rule file: {_e(report.drive.path)}</p>'
+    )
 
 
 def _rates_table(report: Report) -> str:
@@ -145,12 +198,13 @@ def _section(
         mapping += f"; inverted: {', '.join(report.inverted)}"
     s = report.steps
     pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
+    edge_mark = report.drive.edge_mark if report.active_edge == report.drive.active_edge else ""
     parts = [
         f'<section class="capture" id="capture-{index}" data-verdict="{_e(report.verdict)}">',
         f"<h2>{_badge(report.verdict)} {_e(cap.path)}</h2>",
         "<dl>",
         f"<dt>drive</dt><dd>{_e(report.drive.id)} — {_e(report.drive.name)} "
-        f"(steps on the {_e(report.active_edge)} edge)</dd>",
+        f"(steps on the {_e(report.active_edge)}{_e(edge_mark)} edge)</dd>",
         f"<dt>capture</dt><dd>{_e(cap.format)}, {_e(format_time(cap.duration_s))}, "
         f"resolution {_e(res)}, {len(cap.channels)} channels</dd>",
         f"<dt>mapping</dt><dd>{_e(mapping)}; step type {report.step_type.number} "
@@ -159,7 +213,7 @@ def _section(
         f"final position {_e(pos)})</dd>",
         "</dl>",
         "<h3>Rules</h3>",
-        _rules_table(report),
+        _rules_table(report, index),
     ]
     if report.not_stated:
         parts.append(
@@ -167,10 +221,13 @@ def _section(
         )
     parts += ["<h3>Worst violations</h3>", _violations_table(report, max_violations)]
     parts += ["<h3>Maximum step rates</h3>", _rates_table(report)]
-    if report.notes:
+    notes = [*report.notes, *assumptions(report)]
+    if notes:
         parts.append("<h3>Notes</h3><ul>")
-        parts += [f"<li>{_e(n)}</li>" for n in report.notes]
+        parts += [f"<li>{_e(n)}</li>" for n in notes]
         parts.append("</ul>")
+    if report.drive.sources:
+        parts += ["<h3>Sources</h3>", _sources(report, index)]
     if png is not None:
         data = base64.b64encode(png).decode("ascii")
         parts.append(

@@ -4,6 +4,12 @@ Top-level keys: ``capture``, ``drive``, ``steps``, ``rules``, ``violations`` (ca
 ``violations_total`` (the uncapped count; added beside the design's keys so the cap is visible),
 ``max_step_rate_hz``, ``verdict``. Times: ``*_ns`` in ns, ``*_s`` in s, rates in Hz. A value that
 does not exist (no interval measured, no limit) is ``null``.
+
+How sure each limit is: ``rules[].limit_status`` (datasheet, secondary, firmware-default, preset,
+uncertain) and ``limit_source`` (a key of ``drive.sources``, the full references);
+``drive.active_edge_status`` likewise for the edge. ``capture.assumptions`` states what the check
+assumed (ENABLE level, DIR level meaning forward, inversions, uncertain limits). Every violation
+up to the cap is listed one by one (the text and HTML reports group identical ones).
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from typing import Any
 
 from wavecheck.checks.result import RuleResult, Violation
 from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.report.assumptions import assumptions
 from wavecheck.report.model import Report
 from wavecheck.units import json_number
 
@@ -77,6 +84,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             "mapping": report.mapping,
             "inverted": list(report.inverted),
             "notes": list(report.notes),
+            "assumptions": assumptions(report),
         },
         "drive": {
             "id": report.drive.id,
@@ -84,6 +92,10 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             "source": str(report.drive.path),
             "interface": report.drive.interface,
             "active_edge": report.active_edge,
+            "active_edge_status": (
+                report.drive.edge_status if report.active_edge == report.drive.active_edge else None
+            ),
+            "sources": dict(report.drive.sources),
             "rules_not_stated": list(report.not_stated),
             "rules_not_applicable": list(report.not_applicable),
         },

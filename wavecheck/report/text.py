@@ -1,10 +1,18 @@
-"""The text report: verdict, what was checked, a rule table, worst violations, max step rates."""
+"""The text report: verdict, what was checked, a rule table, worst violations, max step rates.
+
+A limit whose figure is uncertain or a firmware default carries its mark (``100 ns?``, see
+:data:`~wavecheck.drives.model.STATUS_MARKS`); identical violations are grouped on one line
+(:mod:`wavecheck.report.groups`); the assumptions the check made close the report as notes.
+"""
 
 from __future__ import annotations
 
 from fractions import Fraction
 
 from wavecheck.checks.result import RuleResult
+from wavecheck.drives.model import MARK_LEGEND
+from wavecheck.report.assumptions import assumptions
+from wavecheck.report.groups import ViolationGroup, group_violations
 from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
 
@@ -51,6 +59,48 @@ def _at(r: RuleResult) -> str:
     return "-" if t is None else f"{float(t):.9f} s"
 
 
+def _mark(r: RuleResult) -> str:
+    return r.figure.mark if r.figure is not None else ""
+
+
+def _violation_lines(report: Report, max_violations: int) -> list[str]:
+    """The worst ``max_violations`` violations, identical ones grouped on one line."""
+    total = report.total_violations
+    shown = report.violations(max_violations)
+    groups = group_violations(shown)
+    marks = {r.rule: _mark(r) for r in report.rules}
+    head = f"violations: {total} (worst first"
+    if len(groups) < len(shown):
+        head += (
+            f"; the {len(shown)} worst shown as {len(groups)} "
+            f"group{'' if len(groups) == 1 else 's'} of identical violations"
+        )
+    out = ["", head + ")"]
+    out += [_group_line(g, marks.get(g.rule, "")) for g in groups]
+    if total > len(shown):
+        out.append(f"  … and {total - len(shown)} more")
+    return out
+
+
+def _group_line(g: ViolationGroup, mark: str) -> str:
+    v = g.first
+    if g.count == 1:
+        at = f"at {float(v.time_s):.9f} s"
+        what = f"{v.rule:<14} {at}"
+    else:
+        what = f"{g.count} × {v.rule}"
+    if v.margin_ns is None:
+        line = f"  {what}  {v.detail}"
+    else:
+        line = (
+            f"  {what}  measured {_ns(v.measured_ns)}  limit {_ns(v.limit_ns)}{mark}"
+            f"  margin {_ns(v.margin_ns, signed=True)}"
+        )
+    if g.count > 1:
+        line += f"  first at {float(v.time_s):.9f} s, last at {float(g.last.time_s):.9f} s"
+    return line
+
+
 def _table(rows: list[list[str]]) -> list[str]:
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     return [
@@ -70,7 +120,8 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
         f"{len(cap.channels)} channels)"
     )
     out.append(
-        f"drive:   {drive.id} — {drive.name} (steps on the {report.active_edge} edge; {drive.path})"
+        f"drive:   {drive.id} — {drive.name} (steps on the {report.active_edge}"
+        f"{drive.edge_mark if report.active_edge == drive.active_edge else ''} edge; {drive.path})"
     )
     mapping = ", ".join(f"{role}={ch!r}" for role, ch in report.mapping.items())
     inv = f"; inverted: {', '.join(report.inverted)}" if report.inverted else ""
@@ -99,7 +150,7 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
         rows.append(
             [
                 r.rule,
-                _ns(r.limit_ns),
+                _ns(r.limit_ns) + _mark(r),
                 str(r.checked),
                 str(r.violations),
                 str(r.indeterminate),
@@ -110,6 +161,8 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
             ]
         )
     out += _table(rows)
+    if any(_mark(r) for r in report.rules):
+        out.append(f"{MARK_LEGEND}; `wavecheck drives {drive.id}` shows every figure's source")
     if report.not_stated:
         out.append(f"not stated by the drive (not checked): {', '.join(report.not_stated)}")
     if report.not_applicable:
@@ -129,23 +182,11 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
             out.append(
                 f"{r.rule}: {r.indeterminate} interval(s) indeterminate at this resolution; {how}"
             )
-    total = report.total_violations
-    if total:
-        shown = report.violations(max_violations)
-        out.append("")
-        out.append(f"violations: {total} (worst first)")
-        for v in shown:
-            if v.margin_ns is None:
-                out.append(f"  {v.rule:<14} at {float(v.time_s):.9f} s  {v.detail}")
-            else:
-                out.append(
-                    f"  {v.rule:<14} at {float(v.time_s):.9f} s  measured {_ns(v.measured_ns)}"
-                    f"  limit {_ns(v.limit_ns)}  margin {_ns(v.margin_ns, signed=True)}"
-                )
-        if total > len(shown):
-            out.append(f"  … and {total - len(shown)} more")
+    if report.total_violations:
+        out += _violation_lines(report, max_violations)
     rates, *configured = rate_lines(report)
     out += ["", rates]
     out += [f"note: {note}" for note in report.notes]
+    out += [f"note: {a}" for a in assumptions(report)]
     out += configured
     return "\n".join(out) + "\n"
