@@ -253,12 +253,51 @@ def plan(
         period = max(math.ceil(min_p / 1000), math.floor(j / 1000) + 1) * 1000
     else:
         period = _check_period(base_period_ns, j)
+    at = active_at(drive, step_inverted)
+    periods, reasons = _choose_periods(drive, j, period, step_inverted)
+    params: dict[str, Param] = {}
+    for name in PARAMS:
+        ns = periods[name] * period
+        if ns > U32_MAX:
+            raise ConfigError(
+                f"{name} would be {ns} ns, more than stepgen's u32 parameter holds "
+                "(choose a longer base period)"
+            )
+        params[name] = Param(name, periods[name], ns, reasons[name])
+    requirements = evaluate(drive, j, period, periods, step_inverted=step_inverted)
+    assert all(r.margin_ns >= 0 for r in requirements), requirements  # the plan's own invariant
 
+    assumptions = _assumptions(drive, step_inverted, at)
+    guidance, bad = latency_guidance(j)
+    warnings = _warnings(drive, period, min_p, guidance if bad else None)
+
+    return Plan(
+        drive=drive,
+        latency_ns=j,
+        latency_source=latency_source,
+        step_inverted=step_inverted,
+        active_at=at,
+        min_base_period_ns=min_p,
+        simple_base_period_ns=simple_p,
+        base_period_ns=period,
+        base_period_given=given,
+        params=params,
+        requirements=requirements,
+        assumptions=assumptions,
+        warnings=tuple(warnings),
+        guidance=guidance,
+    )
+
+
+def _choose_periods(
+    drive: Drive, j: Fraction, period: int, step_inverted: bool
+) -> tuple[dict[str, int], dict[str, str]]:
+    """steplen, stepspace, dirsetup, dirhold in whole periods of ``period`` under latency ``j``,
+    and why each has that many."""
     pulse_level = "low" if step_inverted else "high"
     active_rule = "step_low" if step_inverted else "step_high"
     idle_rule = "step_high" if step_inverted else "step_low"
-    at = active_at(drive, step_inverted)
-    starts = at == "start"
+    starts = active_at(drive, step_inverted) == "start"
 
     def need(rule: str) -> int:
         return periods_needed(_limit(drive, rule), j, period)
@@ -321,24 +360,14 @@ def plan(
         )
 
     periods = {"steplen": steplen, "stepspace": stepspace, "dirsetup": dirsetup, "dirhold": dirhold}
-    params: dict[str, Param] = {}
-    for name in PARAMS:
-        ns = periods[name] * period
-        if ns > U32_MAX:
-            raise ConfigError(
-                f"{name} would be {ns} ns, more than stepgen's u32 parameter holds "
-                "(choose a longer base period)"
-            )
-        params[name] = Param(name, periods[name], ns, reasons[name])
+    return periods, reasons
 
-    requirements = evaluate(drive, j, period, periods, step_inverted=step_inverted)
-    assert all(r.margin_ns >= 0 for r in requirements), requirements  # the plan's own invariant
 
-    assumptions = _assumptions(drive, step_inverted, at)
-    warnings: list[str] = []
-    guidance, bad = latency_guidance(j)
-    if bad:
-        warnings.append(guidance)
+def _warnings(
+    drive: Drive, period: int, min_p: Fraction, latency_warning: str | None
+) -> list[str]:
+    """What the user should know about a plan at base period ``period`` (ns)."""
+    warnings: list[str] = [] if latency_warning is None else [latency_warning]
     if period < SHORT_PERIOD_NS:
         warnings.append(
             f"BASE_PERIOD {format_time(Fraction(period, 10**9))} is below 25 us: start at 25 us or "
@@ -361,23 +390,7 @@ def plan(
             warnings.append(
                 f"{rule} {exact_ns(fig.value)} ns is a {fig.status} figure, not a datasheet value"
             )
-
-    return Plan(
-        drive=drive,
-        latency_ns=j,
-        latency_source=latency_source,
-        step_inverted=step_inverted,
-        active_at=at,
-        min_base_period_ns=min_p,
-        simple_base_period_ns=simple_p,
-        base_period_ns=period,
-        base_period_given=given,
-        params=params,
-        requirements=requirements,
-        assumptions=assumptions,
-        warnings=tuple(warnings),
-        guidance=guidance,
-    )
+    return warnings
 
 
 def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tuple[str, ...]:
