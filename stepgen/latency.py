@@ -40,11 +40,10 @@ edge active, dir_hold runs from the end of the pulse to the DIR change: dirholdÂ
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from stepgen.latencyfiles import read_histogram
+from stepgen.latencyfiles import check_latency_path, read_histogram
 from stepgen.model import InvocationRun
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
@@ -127,10 +126,10 @@ def parse_latency(text: str) -> LatencyModel:
             raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
         return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)
     if kind == "histogram" and rest:
-        if not Path(rest).expanduser().is_file():
-            raise ConfigError(
-                f"latency model {t!r}: file {rest!r} not found (cyclictest -h or latency-histogram --nox output)"
-            )
+        try:
+            check_latency_path(rest)
+        except ConfigError as err:
+            raise ConfigError(f"latency model {t!r}: {err}") from None
         return LatencyModel("histogram", t, path=rest)
     if kind == "worst" and rest.count(":") == 1:
         j, rule = rest.split(":")
