@@ -228,6 +228,8 @@ class Motion:
 
 #: Reversals :func:`worst_motion` requests by default (two each way).
 WORST_REVERSALS = 4
+#: Most reversals designed for a long run (``n_updates``); full speed is held after them.
+WORST_MAX_REVERSALS = 64
 #: Steps made at the full rate before slowing down for each reversal.
 WORST_FULL_RATE_STEPS = 4
 #: Servo updates :func:`worst_motion` stands still first: the first update-freq may use the
@@ -345,8 +347,9 @@ def worst_motion(
 
     Args:
         config: the channel and threads (its ``mode`` is taken as velocity).
-        n_updates: design this many servo updates (default: until ``reversals`` reversals
-            and a last full-speed run are done).
+        n_updates: the run's servo updates: reversals go on until then, at most
+            ``WORST_MAX_REVERSALS`` (full speed is held after the last). Default: ``reversals``
+            reversals and a last full-speed run.
         reversals: reversals to request when ``n_updates`` is None.
     Returns:
         a ``Motion(kind="worst")`` whose ``notes`` say what it made.
@@ -408,8 +411,8 @@ def worst_motion(
             servo(0.0)  # standing still while update-freq leaves its start-up constants (§3)
         while True:
             full_rate(sign)
-            if n_updates is None and done + late >= reversals:
-                break
+            if done + late >= (reversals if n_updates is None else WORST_MAX_REVERSALS):
+                break  # then full speed is held to the end of the run
             if reverse(sign):
                 done += 1
             else:

@@ -29,7 +29,7 @@ from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.model import StepgenConfig, update_schedule
 from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
-from stepgen.simulate import n_periods_for, simulate
+from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.progress import activate
@@ -265,7 +265,9 @@ def run(args: argparse.Namespace) -> int:
         n = n_periods_for(cfg, _ns(args.duration, "--duration", allow_zero=False))
     if n is not None and n < 1:
         raise ConfigError(f"--periods {n} must be >= 1")
-    updates = None if n is None else len(update_schedule(cfg, n))
+    updates = None  # the worst-case motion is designed for the run's servo updates
+    if worst and n is not None and n <= MAX_PERIODS:  # (simulate refuses longer runs)
+        updates = len(update_schedule(cfg, n))
     motion = build_motion(args, cfg, n_updates=updates)
     if n is None:
         if motion.natural_duration_s is None:
