@@ -1,10 +1,17 @@
 """Base-thread latency: when each make-pulses invocation really runs.
 
 Invocation k is due at k·P and runs at ``t_k = max(k·P + l_k, t_{k−1} + G)``: l_k ≥ 0 is drawn
-from the model, and G (``catchup_ns``, default 1 µs) is how long an overdue invocation takes when
-the thread catches up after a latency longer than a period. So latency never reorders
-invocations, and times strictly increase. Every pin change made by invocation k appears at t_k.
-With l_k < P − G (every model except long spikes) the clamp never acts.
+from the model, and G (``catchup_ns``, default 1 µs) is how long an invocation takes to run: the
+next one cannot start before it ends (so after a latency longer than a period the thread catches
+up G apart). So latency never reorders invocations, and times strictly increase. Every pin change
+made by invocation k appears at t_k. With l_k ≤ P − G the clamp never acts.
+
+For ``worst:J:RULE`` with P − G < J < P the clamp would act: an invocation J late ends after the
+next, on-time one is due, which then starts late too, and an interval that ends right after a
+late invocation is (n − 1)·P + G long instead of n·P − J. :func:`catchup_for` therefore takes
+G = P − J when the run time was left at its default (a shorter run time only makes intervals
+shorter: still the worst case), and notes it; a run time given explicitly is kept, with a
+warning saying which length the intervals get instead (see :func:`catchup_for`).
 
 Models (``--latency``; times take units, bare numbers are ns as in LinuxCNC):
 
@@ -33,11 +40,10 @@ edge active, dir_hold runs from the end of the pulse to the DIR change: dirhold�
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from stepgen.latencyfiles import read_histogram
+from stepgen.latencyfiles import check_latency_path, read_histogram
 from stepgen.model import InvocationRun
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
@@ -45,7 +51,15 @@ from wavecheck.linuxcnc.steptypes import kind_of
 from wavecheck.rules import RULES as TABLE
 from wavecheck.units import time_ns
 
-__all__ = ["RULES", "LatencyModel", "describe", "invocation_times", "parse_latency"]
+__all__ = [
+    "DEFAULT_CATCHUP_NS",
+    "RULES",
+    "LatencyModel",
+    "catchup_for",
+    "describe",
+    "invocation_times",
+    "parse_latency",
+]
 
 #: The rules ``worst:J:RULE`` can target: every interval rule whose intervals stepgen's own
 #: invocations end (not state_sequence, which has none, nor enable_setup: stepgen has no ENABLE).
@@ -112,10 +126,10 @@ def parse_latency(text: str) -> LatencyModel:
             raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
         return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)
     if kind == "histogram" and rest:
-        if not Path(rest).expanduser().is_file():
-            raise ConfigError(
-                f"latency model {t!r}: file {rest!r} not found (cyclictest -h or latency-histogram --nox output)"
-            )
+        try:
+            check_latency_path(rest)
+        except ConfigError as err:
+            raise ConfigError(f"latency model {t!r}: {err}") from None
         return LatencyModel("histogram", t, path=rest)
     if kind == "worst" and rest.count(":") == 1:
         j, rule = rest.split(":")
@@ -221,22 +235,61 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
     raise ConfigError(f"rule {rule!r} does not apply to step type {stype}")
 
 
+def catchup_for(
+    model: LatencyModel, base_ns: int, catchup_ns: int | None = None
+) -> tuple[int, str | None]:
+    """The run time G (ns) to use under ``model`` at base period ``base_ns``, and a note or None.
+
+    ``catchup_ns`` None means "the default": ``DEFAULT_CATCHUP_NS``, lowered to P − J for
+    ``worst:J:RULE`` when J > P − G so that the bound n·P − J is reached (see the module doc).
+    An explicit G is kept; the note then warns when it prevents the bound.
+
+    Raises:
+        ConfigError: a run time < 1 ns (invocations must stay in order).
+    """
+    if catchup_ns is not None and catchup_ns < 1:
+        raise ConfigError(
+            f"catch-up gap {catchup_ns} ns must be >= 1 ns (keeps invocations in order)"
+        )
+    g = DEFAULT_CATCHUP_NS if catchup_ns is None else catchup_ns
+    if model.kind != "worst":
+        return g, None
+    j, p = model.j_ns, base_ns
+    if j >= p:
+        return g, (
+            f"{model.text}: J = {j} ns >= P = {p} ns: a late invocation runs after the next one "
+            f"was due, the thread catches up {g} ns apart, and intervals are not n·P − J"
+        )
+    if g <= p - j:
+        return g, None
+    if catchup_ns is None:
+        return p - j, (
+            f"{model.text}: an invocation is taken to run in P − J = {p - j} ns (not "
+            f"{DEFAULT_CATCHUP_NS} ns) so that one J late ends when the next is due and every "
+            "interval reaches n·P − J"
+        )
+    return g, (
+        f"warning: {model.text} with --catchup {g} ns > P − J = {p - j} ns: an invocation J late "
+        f"delays the next, on-time one by {g - (p - j)} ns, so intervals ending right after a late "
+        f"invocation are (n − 1)·P + {g} ns, not n·P − J (give --catchup {p - j} or less)"
+    )
+
+
 def invocation_times(
     model: LatencyModel,
     run: InvocationRun,
     seed: int | None = None,
     active_edge: ActiveEdge = "rising",
-    catchup_ns: int = DEFAULT_CATCHUP_NS,
+    catchup_ns: int | None = None,
 ) -> np.ndarray | None:
     """t_k in ns for every invocation, or None when every invocation is on time (k·P).
+
+    ``catchup_ns`` is the run time G; None takes :func:`catchup_for`'s default.
 
     Raises:
         ConfigError: a rule that does not apply to the step type, a catch-up gap < 1 ns.
     """
-    if catchup_ns < 1:
-        raise ConfigError(
-            f"catch-up gap {catchup_ns} ns must be >= 1 ns (keeps invocations in order)"
-        )
+    catchup_ns, _ = catchup_for(model, run.config.base_period_ns, catchup_ns)
     offs = _offsets(model, run, seed, active_edge)
     if offs is None:
         return None

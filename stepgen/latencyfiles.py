@@ -10,11 +10,22 @@
   min/max/sdev), a half-normal with that sdev capped at the worst value.
 
 Every problem is a :class:`~wavecheck.errors.ConfigError` naming the file and the line.
+
+Files are read with a bound (:func:`read_text`): at most :data:`MAX_LATENCY_FILE_BYTES` (64 MiB)
+and only from something that ends. No real output comes near the cap: a cyclictest ``-h``
+histogram is one line of about 7 bytes per thread per 1-µs bin, so even 10,000 bins (10 ms, ten
+times the latency at which LinuxCNC is unusable) for 128 threads is about 9 MB; a cyclictest
+summary and ``~/.latency`` are a few lines; ``latency-histogram --nox`` writes one ~60-byte line
+per thread per update, so 64 MiB is over a million updates. Character and block devices
+(``/dev/zero``, ``/dev/urandom``) never end and are refused before any byte is read; a regular
+file over the cap is refused from its size; a pipe is read up to the cap.
 """
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,7 +33,18 @@ import numpy as np
 
 from wavecheck.errors import ConfigError
 
-__all__ = ["LatencyHistogram", "read_histogram", "read_latency_file"]
+__all__ = [
+    "MAX_LATENCY_FILE_BYTES",
+    "LatencyHistogram",
+    "check_latency_path",
+    "read_histogram",
+    "read_latency_file",
+    "read_text",
+]
+
+#: The most bytes a latency file may hold (see the module docstring for why 64 MiB).
+MAX_LATENCY_FILE_BYTES = 64 << 20
+_CAP_TEXT = "64 MiB"
 
 _NOX = re.compile(
     r"^\s*(\d+)\s+s\s+(\S+)\s+min:\s*(-?[\d.]+)\s*us\s+max:\s*(-?[\d.]+)\s*us\s+sdev:\s*(-?[\d.]+)\s*us"
@@ -41,11 +63,75 @@ class LatencyHistogram:
     half_normal: tuple[int, int] | None = None  # (sigma_ns, max_ns) for latency-histogram --nox
 
 
-def _read(path: str | Path) -> str:
+def _kind(mode: int) -> str | None:
+    """What a non-regular file is, in words (None for a regular file)."""
+    for test, words in (
+        (stat.S_ISREG, None),
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a pipe"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return words
+    return "not a regular file"
+
+
+def _refuse_mode(path: str | Path, mode: int) -> None:
+    kind = _kind(mode)
+    if kind in ("a directory", "a character device", "a block device"):
+        what = "is a directory" if kind == "a directory" else f"is {kind}, which never ends"
+        raise ConfigError(
+            f"{path}: {what}; give a latency file (cyclictest or latency-histogram --nox output "
+            "saved to a file, or ~/.latency)"
+        )
+
+
+def check_latency_path(path: str | Path) -> None:
+    """Refuse a latency path that does not exist or cannot be read to its end (one line).
+
+    Raises:
+        ConfigError: missing, a directory, a character or block device.
+    """
     try:
-        return Path(path).expanduser().read_text(encoding="utf-8", errors="replace")
+        st = os.stat(Path(path).expanduser())
+    except OSError as err:
+        if isinstance(err, FileNotFoundError):
+            raise ConfigError(
+                f"{path}: not found (cyclictest -h or latency-histogram --nox output)"
+            ) from None
+        raise ConfigError(f"{path}: cannot read latency file ({err.strerror})") from None
+    _refuse_mode(path, st.st_mode)
+
+
+def read_text(path: str | Path) -> str:
+    """A latency file's text, read with a bound (see the module docstring).
+
+    Raises:
+        ConfigError: missing or unreadable, a device that never ends, a directory, or more than
+            ``MAX_LATENCY_FILE_BYTES`` — one line naming the file.
+    """
+    too_big = (
+        f"{path}: more than {_CAP_TEXT}, far beyond any cyclictest, latency-histogram or "
+        "~/.latency output; give the tool's output (e.g. cyclictest -q -h 400 > FILE)"
+    )
+    check_latency_path(path)  # a device is refused before it is opened
+    try:
+        with open(Path(path).expanduser(), "rb") as fh:
+            st = os.fstat(fh.fileno())
+            _refuse_mode(path, st.st_mode)
+            if stat.S_ISREG(st.st_mode) and st.st_size > MAX_LATENCY_FILE_BYTES:
+                raise ConfigError(too_big)
+            data = fh.read(MAX_LATENCY_FILE_BYTES + 1)
     except OSError as err:
         raise ConfigError(f"{path}: cannot read latency file ({err.strerror})") from None
+    if len(data) > MAX_LATENCY_FILE_BYTES:
+        raise ConfigError(too_big)
+    return data.decode("utf-8", errors="replace")
+
+
+_read = read_text
 
 
 def _us_to_ns(text: str) -> int:

@@ -13,23 +13,35 @@ Update u happens at t = u·S (S = the HAL-rounded servo period) and sees the com
 
   e.g. ``--move "0.04, pause 10ms, 0"`` is a move forward and back: a reversal. In position mode
   the pin gets the sampled position profile; in velocity mode its exact velocity.
+* ``--motion worst`` (the default with ``--latency worst:J:RULE`` and no other motion):
+  :func:`worst_motion`, velocity commands that make every interval make-pulses can produce
+  with the channel's parameters at its fewest base periods — runs at the full step rate (the
+  pulse, the gap and the step period at steplen, stepspace and steplen + stepspace periods) and
+  reversals requested at the earliest moment after a pulse, so DIR changes dirhold periods after
+  the pulse ends and the next step comes dirsetup periods after that (reference §2.3: the DIR
+  hold, DIR setup, the gap dirhold + dirsetup and the step period steplen + dirhold + dirsetup
+  across a reversal). It is designed by running the reference model itself, closed loop.
 
-The default run length with ``--move`` is the profile's length plus 50 ms to settle.
+The default run length with ``--move`` is the profile's length plus 50 ms to settle; with
+``--motion worst`` the designed commands' length.
 """
 
 from __future__ import annotations
 
+import copy
 import csv
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from stepgen.model import PICKOFF, Component, StepgenConfig, make_pulses_channel
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.units import parse_time
 
-__all__ = ["Motion", "Segment", "parse_command_csv", "parse_moves"]
+__all__ = ["Motion", "Segment", "parse_command_csv", "parse_moves", "worst_motion"]
 
 SETTLE_S = 0.05
 
@@ -157,19 +169,28 @@ def parse_command_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 class Motion:
     """What the command pin does; :meth:`commands` samples it at the servo updates."""
 
-    kind: str = "position"  # position | velocity | csv | moves
+    kind: str = "position"  # position | velocity | csv | moves | worst
     value: float = 0.0
     csv_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     csv_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
     segments: list[Segment] = field(default_factory=list)
+    updates: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """``worst``: the velocity-cmd of each servo update (units/s); the last is held."""
+    servo_ns: int = 0
+    """``worst``: the servo period the commands were designed for (ns)."""
+    notes: list[str] = field(default_factory=list)
+    """What the motion made (``worst``), for the summary."""
 
     @property
     def natural_duration_s(self) -> float | None:
-        """The profile's own length plus settling (moves), the last CSV row (csv), else None."""
+        """The profile's own length plus settling (moves), the last CSV row (csv), the designed
+        updates (worst), else None."""
         if self.kind == "moves":
             return sum(s.duration for s in self.segments) + SETTLE_S
         if self.kind == "csv":
             return float(self.csv_times[-1]) + SETTLE_S
+        if self.kind == "worst":
+            return len(self.updates) * self.servo_ns * 1e-9
         return None
 
     def commands(self, n_updates: int, servo_ns: int, mode: str) -> np.ndarray:
@@ -177,6 +198,14 @@ class Motion:
         t = np.arange(n_updates, dtype=float) * (servo_ns * 1e-9)
         if self.kind in ("position", "velocity"):
             return np.full(n_updates, self.value)
+        if self.kind == "worst":
+            if mode != "velocity" or servo_ns != self.servo_ns:
+                raise ConfigError(
+                    "the worst-case motion was designed for velocity mode at a servo period of "
+                    f"{self.servo_ns} ns (run with that configuration)"
+                )
+            idx = np.minimum(np.arange(n_updates), len(self.updates) - 1)
+            return self.updates[idx]
         if self.kind == "csv":
             idx = np.searchsorted(self.csv_times, t, side="right") - 1
             return np.where(idx >= 0, self.csv_values[np.maximum(idx, 0)], 0.0)
@@ -192,3 +221,217 @@ class Motion:
         if mode == "position":
             out[t >= start] = last
         return out
+
+
+# ----------------------------------------------------------------------------------------------
+# The worst-case motion
+
+#: Reversals :func:`worst_motion` requests by default (two each way).
+WORST_REVERSALS = 4
+#: Most reversals designed for a long run (``n_updates``); full speed is held after them.
+WORST_MAX_REVERSALS = 64
+#: Steps made at the full rate before slowing down for each reversal.
+WORST_FULL_RATE_STEPS = 4
+#: Servo updates :func:`worst_motion` stands still first: the first update-freq may use the
+#: start-up constants (P = 50 µs, reference §3), which are no interval of the configuration.
+WORST_SETTLE_UPDATES = 2
+#: Base periods :func:`worst_motion` waits, per phase, for the state it needs before giving up.
+WORST_WAIT_PERIODS = 2_000_000
+
+
+class _Enough(Exception):
+    """The requested number of servo updates has been designed."""
+
+
+class _Run:
+    """The reference model driven one servo period at a time (the designer's view of it)."""
+
+    def __init__(self, config: StepgenConfig) -> None:
+        self.comp = Component([config])
+        self.ch = self.comp.channels[0]
+        self.base = config.base_period_ns
+        self.servo = config.servo_ns
+        self.n = config.servo_multiple
+        self.k = 0  #: the next make-pulses invocation
+        self.last_step = -1
+        self.last_dir = 0
+        if config.thread_order == "pulses-first":
+            self.pulse()  # invocation 0 runs before the first update-freq
+
+    def pulse(self) -> bool:
+        """One make-pulses invocation; True if it stepped."""
+        self.comp.periodns = self.base
+        stepped = make_pulses_channel(self.ch, self.base)
+        if stepped:
+            self.last_step = self.k
+            self.last_dir = 1 if self.ch.addval > 0 else -1
+        self.k += 1
+        return stepped
+
+    def update(self, cmd: float) -> None:
+        """update-freq with velocity-cmd ``cmd``."""
+        self.ch.vel_cmd = cmd
+        self.comp.update_freq(self.servo)
+
+    def periods(self) -> tuple[int, int, int, int]:
+        """steplen, stepspace, dirhold (dirdelay), dirsetup as rounded by update-freq, in periods."""
+        ch = self.ch
+        return (
+            ch.step_len // self.base,
+            ch.step_space // self.base,
+            ch.dir_hold_dly // self.base,
+            ch.dir_setup // self.base,
+        )
+
+    def earliest_reversal(self, cmd: float, sign: int) -> bool:
+        """Would requesting ``cmd`` now reverse at the earliest moment after the last step?
+
+        That is (reference §2.3): the direction changes L+H periods after that step and the
+        next step, in the new direction, comes S periods later. Run on a copy.
+        """
+        if self.last_step < 0 or self.last_dir != sign or self.ch.timer2 == 0:
+            return False
+        steplen, _, hold, setup = self.periods()
+        want_dir = self.last_step + steplen + hold
+        want_step = want_dir + setup
+        trial = copy.deepcopy(self)
+        dir_at: int | None = None
+        while trial.k <= want_step:
+            trial.update(cmd)
+            for _ in range(trial.n):
+                k = trial.k
+                stepped = trial.pulse()
+                if dir_at is None and trial.ch.curr_dir == -sign:
+                    dir_at = k
+                if stepped:
+                    return dir_at == want_dir and k == want_step and trial.last_dir == -sign
+        return False
+
+
+    def aim(self, cmd_for: Callable[[int], float], flip: float, sign: int) -> float | None:
+        """A slow command for this servo period that puts a step in its last L+H periods, so
+        that reversing at the next update is the earliest reversal (checked on copies); None if
+        no addval below deltalim does."""
+        ch = self.ch
+        if ch.addval * sign <= 0 or ch.deltalim <= 1 or abs(ch.addval) >= ch.deltalim:
+            return None
+        steplen, _, hold, _ = self.periods()
+        boundary = ((ch.accum >> PICKOFF) + (1 if sign > 0 else 0)) << PICKOFF
+        rest = boundary - ch.accum if sign > 0 else ch.accum - boundary + 1
+        for j in range(min(steplen + hold, self.n)):
+            x = -(-rest // (self.n - j))  # the step falls in period n − j after the update
+            if not 1 <= x < ch.deltalim:
+                continue
+            trial = copy.deepcopy(self)
+            trial.update(cmd_for(sign * x))
+            for _ in range(trial.n):
+                trial.pulse()
+            if trial.earliest_reversal(flip, sign):
+                return cmd_for(sign * x)
+        return None
+
+
+def worst_motion(
+    config: StepgenConfig, *, n_updates: int | None = None, reversals: int = WORST_REVERSALS
+) -> Motion:
+    """Velocity commands that make every interval make-pulses can produce at its fewest periods.
+
+    After ``WORST_SETTLE_UPDATES`` servo periods standing still, repeatedly: full speed (the
+    velocity command above any rate, clamped by update-freq to
+    stepgen's maximum) until ``WORST_FULL_RATE_STEPS`` steps were made at the steady full rate;
+    then a slow speed from which one base period of ramp reverses ``addval``; then, at the
+    first servo update where the reference model (run on a copy) shows that reversing now makes
+    the direction change dirhold periods after the last pulse ends and the next step dirsetup
+    periods after that, full speed the other way. The channel runs in velocity mode (make-pulses,
+    which makes every interval, does not depend on ctrl_type).
+
+    Args:
+        config: the channel and threads (its ``mode`` is taken as velocity).
+        n_updates: the run's servo updates: reversals go on until then, at most
+            ``WORST_MAX_REVERSALS`` (full speed is held after the last). Default: ``reversals``
+            reversals and a last full-speed run.
+        reversals: reversals to request when ``n_updates`` is None.
+    Returns:
+        a ``Motion(kind="worst")`` whose ``notes`` say what it made.
+    """
+    cfg = replace(config, mode="velocity")
+    cfg.validate()
+    run = _Run(cfg)
+    big = 2e9 / cfg.position_scale  # steps/s above any rate stepgen allows (1 step per ns)
+    cmds: list[float] = []
+    misses: list[str] = []
+
+    def servo(cmd: float) -> None:
+        if n_updates is not None and len(cmds) >= n_updates:
+            raise _Enough
+        cmds.append(cmd)
+        run.update(cmd)
+        for _ in range(run.n):
+            run.pulse()
+
+    def full_rate(sign: int) -> None:
+        steady = 0
+        start = run.k
+        while True:
+            before = run.ch.target_addval
+            servo(sign * big)
+            ch = run.ch
+            steplen, space, _, _ = run.periods()
+            if ch.addval == ch.target_addval == before:
+                steady += run.n
+                if steady >= WORST_FULL_RATE_STEPS * (steplen + space):
+                    return
+            if run.k - start > WORST_WAIT_PERIODS:
+                misses.append(f"full speed not steady after {WORST_WAIT_PERIODS} periods")
+                return
+
+    def cmd_for(addval: int) -> float:
+        """The velocity-cmd whose target addval is ``addval`` (trunc of freq·freqscale)."""
+        return math.copysign(abs(addval) + 0.5, addval) / run.comp.freqscale / cfg.position_scale
+
+    def reverse(sign: int) -> bool:
+        # slow enough that one period of ramp (deltalim) reverses addval
+        d, full = run.ch.deltalim, abs(run.ch.target_addval)
+        slow = cmd_for(sign * (max(1, min(full, d - 1)) if d > 0 else 1))
+        flip = -sign * big
+        start = run.k
+        while run.k - start <= WORST_WAIT_PERIODS:
+            if run.earliest_reversal(flip, sign):
+                servo(flip)
+                return True
+            aimed = run.aim(cmd_for, flip, sign)
+            servo(slow if aimed is None else aimed)
+        servo(flip)
+        return False
+
+    done = late = 0
+    sign = 1
+    try:
+        for _ in range(WORST_SETTLE_UPDATES):
+            servo(0.0)  # standing still while update-freq leaves its start-up constants (§3)
+        while True:
+            full_rate(sign)
+            if done + late >= (reversals if n_updates is None else WORST_MAX_REVERSALS):
+                break  # then full speed is held to the end of the run
+            if reverse(sign):
+                done += 1
+            else:
+                late += 1
+            sign = -sign
+    except _Enough:
+        pass
+    steplen, space, hold, setup = run.periods()
+    notes = [
+        f"worst-case motion (velocity-cmd, {len(cmds)} servo updates): runs of "
+        f">= {WORST_FULL_RATE_STEPS} steps at the full rate ({steplen + space} periods per step at "
+        f"most) and {done} reversal(s) requested at the earliest moment after a pulse (direction "
+        f"{hold} periods after the pulse ends, the next step {setup} periods later)"
+    ]
+    if late:
+        notes.append(
+            f"worst-case motion: {late} reversal(s) could not be requested at the earliest moment "
+            f"within {WORST_WAIT_PERIODS} base periods (maxaccel too low for a one-period reversal?): "
+            "the intervals across them are longer than their minimum"
+        )
+    notes += [f"worst-case motion: {m}" for m in misses]
+    return Motion(kind="worst", updates=np.array(cmds, dtype=float), servo_ns=cfg.servo_ns, notes=notes)

@@ -22,9 +22,9 @@ import numpy as np
 
 from stepgen.fast import run_fast
 from stepgen.latency import (
-    DEFAULT_CATCHUP_NS,
     ActiveEdge,
     LatencyModel,
+    catchup_for,
     invocation_times,
     parse_latency,
 )
@@ -93,7 +93,7 @@ def simulate(
     n_periods: int,
     seed: int | None = None,
     active_edge: ActiveEdge = "rising",
-    catchup_ns: int = DEFAULT_CATCHUP_NS,
+    catchup_ns: int | None = None,
     engine: str = "fast",
 ) -> Trace:
     """Simulate ``n_periods`` base periods; returns a :class:`Trace`.
@@ -105,7 +105,8 @@ def simulate(
         n_periods: base-thread invocations to run (>= 1).
         seed: for the random latency models.
         active_edge: the drive's active STEP edge (worst-case dir_setup/step_period events).
-        catchup_ns: run time of an overdue invocation (see :mod:`stepgen.latency`).
+        catchup_ns: run time G of an invocation (see :mod:`stepgen.latency`); None: 1 µs,
+            or P − J under ``worst:J:RULE`` when that is shorter (:func:`~stepgen.latency.catchup_for`).
         engine: ``"fast"`` or ``"reference"`` (the plain per-period loop; same result, slower).
 
     Raises:
@@ -136,6 +137,7 @@ def simulate(
         run = run_reference(config, cmds, n_periods)
     else:
         raise ConfigError(f"engine {engine!r} is not fast or reference")
+    catchup_ns, catchup_note = catchup_for(model, config.base_period_ns, catchup_ns)
     times = invocation_times(model, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns)
     base = config.base_period_ns
 
@@ -165,4 +167,7 @@ def simulate(
         seconds=seconds,
         notes=list(run.warnings),
     )
+    trace.notes += motion.notes
+    if catchup_note is not None:
+        trace.notes.append(catchup_note)
     return trace

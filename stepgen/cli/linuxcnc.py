@@ -19,8 +19,11 @@ _SIMULATE_FIELDS = (
     "position_scale",
     "maxvel",
     "maxaccel",
+    "thread_order",
     *TIMING_PARAMS,
 )
+#: simulate's motion options: a command the files set fills one only when none is given.
+_MOTIONS = ("position", "velocity", "command", "move", "motion")
 
 
 def add_simulate_arguments(parser: Any) -> None:
@@ -38,7 +41,14 @@ def add_simulate_arguments(parser: Any) -> None:
 
 def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
     """Fill ``stepgen simulate``'s options from ``--ini``/``--hal`` (see
-    :func:`add_simulate_arguments`); returns the configuration read, or None without files."""
+    :func:`add_simulate_arguments`); returns the configuration read, or None without files.
+
+    Besides the settings: the threads' periods (base/servo period), the ``addf`` order in one
+    thread (``--thread-order``), ``setp stepgen.N.enable``, and a ``setp …position-cmd`` /
+    ``velocity-cmd`` (a constant command, used when no motion option is given). What the files
+    say that the run does not honour goes to ``args._linuxcnc_ignored``, one line each.
+    """
+    args._linuxcnc_ignored = []
     if not getattr(args, "ini", None) and not getattr(args, "hal", None):
         return None
     cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
@@ -53,6 +63,7 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
         "maxvel": cfg.floats.get("maxvel"),
         "maxaccel": cfg.floats.get("maxaccel"),
     }
+    values["thread_order"] = cfg.thread_order
     for name in TIMING_PARAMS:
         values[name] = str(cfg.params[name]) if name in cfg.params else None
     for dest, value in values.items():
@@ -61,4 +72,24 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
         if dest in defaults and getattr(args, dest) != defaults[dest]:
             continue  # given on the command line: it wins
         setattr(args, dest, value)
+    if cfg.enable is not None:
+        args.enable = cfg.enable
+    ignored = list(cfg.ignored)
+    if cfg.command is not None:
+        kind, value = cfg.command
+        where = cfg.sources["command"]
+        given = [k for k in _MOTIONS if getattr(args, k, None) is not None]
+        if given:
+            ignored.append(
+                f"ignored: setp stepgen.{cfg.channel}.{kind}-cmd {value:g} ({where}): --{given[0]} "
+                "drives the command"
+            )
+        elif kind != args.mode:
+            ignored.append(
+                f"ignored: setp stepgen.{cfg.channel}.{kind}-cmd {value:g} ({where}): the channel "
+                f"is in {args.mode} mode (no {kind}-cmd pin)"
+            )
+        else:
+            setattr(args, kind, value)
+    args._linuxcnc_ignored = ignored
     return cfg

@@ -3,6 +3,16 @@
 Options are named after LinuxCNC's parameters; timing values are ns as bare numbers (as with
 halcmd) or carry a unit (``5us``). Exit 0 on success, 2 with a one-line message on bad settings
 (nothing is written).
+
+What a worst-case run proves: with --latency worst:J:RULE and the worst-case motion (--motion
+worst, the default when no other motion is given), every interval of RULE that make-pulses can
+make with these parameters (the pulse, the gap and the step period at the full step rate, and the
+DIR hold, DIR setup, gap and step period across a reversal requested at the earliest moment after
+a pulse) occurs at least once at its worst-case length n·P − J, with n its fewest base periods;
+so if `wavecheck check` passes RULE on the output, every such interval meets the drive under any
+latency up to J (J < P). Not covered: the corner cases of a reversal requested after the DIR hold
+has run out (LinuxCNC issue #2332: DIR setup shorter than dirsetup, even 0), which no latency
+causes; simulate them with --move or --command.
 """
 
 from __future__ import annotations
@@ -11,14 +21,15 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
-from stepgen.model import StepgenConfig
-from stepgen.motion import Motion, parse_command_csv, parse_moves
-from stepgen.simulate import n_periods_for, simulate
+from stepgen.model import StepgenConfig, update_schedule
+from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
+from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.progress import activate
@@ -80,6 +91,13 @@ def register(sub: Any) -> None:
     m.add_argument(
         "--move", metavar="SPEC", help="trapezoid moves: 'X, X@V, pause 10ms, ...' from 0"
     )
+    m.add_argument(
+        "--motion",
+        choices=("worst",),
+        help="worst: full-rate runs and reversals at the earliest moment after a pulse, so every "
+        "interval make-pulses can make occurs at its fewest periods (velocity mode; the default "
+        "with --latency worst:J:RULE and no other motion)",
+    )
     m.add_argument("--move-vel", type=float, help="peak velocity of --move (default --maxvel)")
     m.add_argument("--move-accel", type=float, help="acceleration of --move (default --maxaccel)")
     m.add_argument("--duration", help="simulated time (e.g. 2s, 500ms)")
@@ -88,7 +106,8 @@ def register(sub: Any) -> None:
     lat.add_argument(
         "--latency",
         default="none",
-        help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE",
+        help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE "
+        "(every interval of RULE the motion makes is n·P − J long; see above for what a pass proves)",
     )
     lat.add_argument(
         "--seed", type=int, default=0, help="seed of the random latency models (default 0)"
@@ -101,8 +120,9 @@ def register(sub: Any) -> None:
     )
     lat.add_argument(
         "--catchup",
-        default=str(DEFAULT_CATCHUP_NS),
-        help="run time of an overdue invocation (default 1000 ns)",
+        default=_CATCHUP_DEFAULT,
+        help="run time of an invocation: the next cannot start before it ends (default 1000 ns; "
+        "P − J under worst:J:RULE when that is shorter, so the bound n·P − J is reached)",
     )
     o = p.add_argument_group("output")
     o.add_argument("-o", "--output", required=True, help="OUT.vcd or OUT.sr")
@@ -118,6 +138,15 @@ def register(sub: Any) -> None:
     o.add_argument("-q", "--quiet", action="store_true", help="no summary")
     add_simulate_arguments(p)  # --ini/--hal/--channel fill the options left at their defaults
     p.set_defaults(func=run)
+
+
+class _DefaultText(str):
+    """An option's default left untouched (tells "not given" from the same value typed)."""
+
+    __slots__ = ()
+
+
+_CATCHUP_DEFAULT = _DefaultText(DEFAULT_CATCHUP_NS)
 
 
 def _ns(text: str, option: str, allow_zero: bool = True) -> int:
@@ -163,19 +192,37 @@ def build_config(args: argparse.Namespace) -> StepgenConfig:
         dirhold=_ns(args.dirhold, "--dirhold"),
         dirdelay=_ns(args.dirdelay, "--dirdelay"),
         thread_order=order,
+        enable=getattr(args, "enable", True),
     )
     cfg.validate()
     return cfg
 
 
-def build_motion(args: argparse.Namespace, cfg: StepgenConfig) -> Motion:
-    """The :class:`Motion` from ``--position/--velocity/--command/--move`` (exactly one)."""
-    given = [n for n in ("position", "velocity", "command", "move") if getattr(args, n) is not None]
+MOTIONS = ("position", "velocity", "command", "move", "motion")
+
+
+def build_motion(
+    args: argparse.Namespace, cfg: StepgenConfig, n_updates: int | None = None
+) -> Motion:
+    """The :class:`Motion` from ``--position/--velocity/--command/--move/--motion`` (exactly
+    one; ``--motion worst`` when none is given under ``--latency worst:J:RULE``).
+    ``n_updates``: servo updates the worst-case motion is designed for (None: its own length)."""
+    given = [n for n in MOTIONS if getattr(args, n, None) is not None]
+    if not given and parse_latency(args.latency).kind == "worst":
+        given = ["motion"]
+        args.motion = "worst"
     if len(given) != 1:
         raise ConfigError(
-            f"give exactly one of --position, --velocity, --command, --move (got {', '.join('--' + g for g in given) or 'none'})"
+            f"give exactly one of --position, --velocity, --command, --move, --motion worst (got {', '.join('--' + g for g in given) or 'none'})"
         )
     kind = given[0]
+    if kind == "motion":
+        if cfg.mode != "velocity":
+            raise ConfigError(
+                "the worst-case motion drives velocity-cmd: run with --mode velocity "
+                "(make-pulses, which makes every interval, is the same in both modes)"
+            )
+        return worst_motion(cfg, n_updates=n_updates)
     if kind == "position" or kind == "velocity":
         if kind != cfg.mode:
             raise ConfigError(f"--{kind} needs --mode {kind} (the stepgen is in {cfg.mode} mode)")
@@ -198,20 +245,35 @@ def run(args: argparse.Namespace) -> int:
     if suffix not in (".vcd", ".sr"):
         raise ConfigError(f"-o {args.output!r}: write a .vcd or a .sr file")
     cfg = build_config(args)
-    motion = build_motion(args, cfg)
+    warnings: list[str] = list(getattr(args, "_linuxcnc_ignored", []))
     latency = parse_latency(args.latency)
+    worst = args.motion == "worst" or (
+        latency.kind == "worst" and all(getattr(args, k) is None for k in MOTIONS)
+    )
+    if worst and cfg.mode != "velocity":
+        cfg = replace(cfg, mode="velocity")
+        warnings.append(
+            "the worst-case motion drives velocity-cmd: the channel runs in velocity mode "
+            "(make-pulses, which makes every interval, is the same in both modes)"
+        )
     if args.periods is not None and args.duration is not None:
         raise ConfigError("give --periods or --duration, not both")
+    n: int | None = None
     if args.periods is not None:
         n = args.periods
     elif args.duration is not None:
         n = n_periods_for(cfg, _ns(args.duration, "--duration", allow_zero=False))
-    elif motion.natural_duration_s is not None:
-        n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
-    else:
-        raise ConfigError("give --duration (e.g. 1s) or --periods N")
-    if n < 1:
+    if n is not None and n < 1:
         raise ConfigError(f"--periods {n} must be >= 1")
+    updates = None  # the worst-case motion is designed for the run's servo updates
+    if worst and n is not None and n <= MAX_PERIODS:  # (simulate refuses longer runs)
+        updates = len(update_schedule(cfg, n))
+    motion = build_motion(args, cfg, n_updates=updates)
+    if n is None:
+        if motion.natural_duration_s is None:
+            raise ConfigError("give --duration (e.g. 1s) or --periods N")
+        n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
+    catchup_given = not isinstance(args.catchup, _DefaultText)
     catchup_ns = _ns(args.catchup, "--catchup", allow_zero=False)
     with activate("simulating", quiet=args.quiet, unit="periods"):
         trace = simulate(
@@ -221,9 +283,11 @@ def run(args: argparse.Namespace) -> int:
             n_periods=n,
             seed=args.seed,
             active_edge=args.active_edge,
-            catchup_ns=catchup_ns,
+            catchup_ns=catchup_ns if catchup_given else None,
             engine=args.engine,
         )
+    for line in warnings + [t for t in trace.notes if t.startswith("warning:")]:
+        print(f"stepgen: {line}", file=sys.stderr)
     t0 = time.perf_counter()
     with activate(f"writing {out}", quiet=args.quiet, unit="changes"):
         if suffix == ".vcd":
@@ -241,5 +305,6 @@ def run(args: argparse.Namespace) -> int:
             f"latency {latency.text}; simulated in {trace.seconds:.3f} s, written in {t_write:.3f} s ({what})"
         )
         for note in trace.notes:
-            print(f"stepgen: note: {note}", file=sys.stderr)
+            if not note.startswith("warning:"):
+                print(f"stepgen: note: {note}", file=sys.stderr)
     return 0

@@ -5,6 +5,19 @@
 - HAL (``--hal FILE``, repeatable): ``loadrt stepgen step_type=0,0,1 ctrl_type=p,p,v
   user_step_type=…`` and ``setp stepgen.N.steplen 5000`` (also ``stepgen.N.steplen = 5000``);
   values may be ``[SECTION]KEY`` references into the INI. stepgen's timing parameters are ns.
+- The threads a HAL file makes and what runs in them: ``loadrt threads name1=fast period1=100000
+  …`` (up to three threads) and ``loadrt motmod base_period_nsec=… servo_period_nsec=…`` (the
+  ``base-thread`` and ``servo-thread``) give thread periods; ``addf FUNCT THREAD [POSITION]``
+  places functions. The period of the thread ``stepgen.make-pulses`` is added to is the base
+  period and that of ``stepgen.update-freq``'s thread the servo period (they win over the INI's
+  BASE_PERIOD/SERVO_PERIOD, which only reach stepgen through motmod); with both in one thread
+  their ``addf`` order is :attr:`LinuxCNCConfig.thread_order` (reference §3, §8).
+- ``setp stepgen.N.position-cmd X`` / ``velocity-cmd V`` (a constant command) and
+  ``setp stepgen.N.enable 0|1``.
+
+What a file says that a model of one stepgen channel cannot honour (a ``net`` driving the
+command or ``enable`` pin, an unknown ``stepgen.N.*`` name) is listed in
+:attr:`LinuxCNCConfig.ignored`, one line each naming the file and line.
 
 One parser serves ``wavecheck check`` (the ``config`` and ``latency_safe`` max step rates) and
 ``stepgen simulate`` (:meth:`LinuxCNCConfig.stepgen_kwargs`). Every value remembers the file
@@ -24,8 +37,10 @@ Rates (Hz, exact):
 
 from __future__ import annotations
 
+import math
 import os
 import re
+import shlex
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -118,6 +133,15 @@ class LinuxCNCConfig:
         params: ``setp stepgen.N.<param>`` timing values in ns (steplen, stepspace, …).
         floats: ``position-scale``, ``maxvel``, ``maxaccel`` when set.
         sources: setting → ``"file:line"``.
+        threads: HAL thread name → period (ns), from ``loadrt threads`` / ``loadrt motmod``.
+        functions: HAL thread name → its functions in run order (``addf``).
+        thread_order: ``"update-first"`` or ``"pulses-first"`` when ``stepgen.update-freq``
+            and ``stepgen.make-pulses`` run in one thread (their ``addf`` order), else None.
+        command: ``("position", X)`` or ``("velocity", V)`` from ``setp stepgen.N.position-cmd``
+            / ``velocity-cmd``, None if not set.
+        enable: ``setp stepgen.N.enable`` (None: not set).
+        enable_connected: a ``net`` drives ``stepgen.N.enable``.
+        ignored: what the files say that the model does not honour, one line each.
     """
 
     channel: int = 0
@@ -129,6 +153,14 @@ class LinuxCNCConfig:
     params: dict[str, int] = field(default_factory=dict)
     floats: dict[str, float] = field(default_factory=dict)
     sources: dict[str, str] = field(default_factory=dict)
+    threads: dict[str, int] = field(default_factory=dict)
+    functions: dict[str, list[str]] = field(default_factory=dict)
+    thread_order: str | None = None
+    command: tuple[str, float] | None = None
+    enable: bool | None = None
+    enable_connected: bool = False
+    stepgen_loaded: bool = False
+    ignored: list[str] = field(default_factory=list)
 
     def periods(self) -> dict[str, int]:
         """steplen, stepspace, dirsetup, dirhold in whole base periods, rounded up as stepgen
@@ -173,6 +205,10 @@ class LinuxCNCConfig:
                 kw[name] = self.params[name]
         for name, value in self.floats.items():
             kw[name.replace("-", "_")] = value
+        if self.thread_order is not None:
+            kw["thread_order"] = self.thread_order
+        if self.enable is not None:
+            kw["enable"] = self.enable
         return kw
 
 
@@ -208,6 +244,151 @@ def _list_entry(text: str, channel: int, where: str, what: str) -> str:
     return items[channel]
 
 
+#: stepgen's HAL functions (reference §1).
+PULSES, UPDATE = "stepgen.make-pulses", "stepgen.update-freq"
+#: ``loadrt threads`` makes up to three threads (``nameN=``, ``periodN=``).
+_THREADS_MAX = 3
+
+
+def _hal_words(line: str) -> list[str]:
+    """A HAL command's words (``"quoted words"`` kept together)."""
+    try:
+        return shlex.split(line, posix=True)
+    except ValueError:
+        return line.split()
+
+
+def _loadrt_args(words: list[str], ini: IniFile | None, where: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for arg in words:
+        if "=" in arg:
+            key, value = arg.split("=", 1)
+            out[key] = _resolve(value, ini, where)
+    return out
+
+
+def _thread_period(value: str, where: str, what: str) -> int:
+    ns = _int_ns(value, where, what)
+    if ns == 0:
+        raise ConfigError(f"{where}: {what} must be > 0 ns")
+    return ns
+
+
+def _parse_loadrt_stepgen(args: dict[str, str], cfg: LinuxCNCConfig, where: str) -> None:
+    cfg.stepgen_loaded = True
+    for key, value in args.items():
+        if key == "step_type":
+            entry = _list_entry(value, cfg.channel, where, key)
+            try:
+                cfg.step_type = int(entry)
+            except ValueError:
+                raise ConfigError(f"{where}: step_type entry {entry!r} is not a number") from None
+            cfg.sources["step_type"] = where
+        elif key == "ctrl_type":
+            entry = _list_entry(value, cfg.channel, where, key).lower()
+            if entry not in ("p", "v"):
+                raise ConfigError(f"{where}: ctrl_type entry {entry!r} is not p or v")
+            cfg.ctrl_type = "position" if entry == "p" else "velocity"
+            cfg.sources["ctrl_type"] = where
+        elif key == "user_step_type":
+            try:
+                cfg.user_step_type = tuple(int(v, 0) for v in value.split(",") if v)
+            except ValueError:
+                raise ConfigError(f"{where}: user_step_type={value} is not a list of numbers") from None
+            cfg.sources["user_step_type"] = where
+
+
+def _parse_loadrt_threads(args: dict[str, str], cfg: LinuxCNCConfig, where: str) -> None:
+    for i in range(1, _THREADS_MAX + 1):
+        name = args.get(f"name{i}")
+        period = args.get(f"period{i}")
+        if period is None:
+            if name is not None:
+                cfg.ignored.append(f"ignored: thread {name} ({where}) has no period{i}= (its period is not known)")
+            continue
+        name = name or f"thread{i}"
+        cfg.threads[name] = _thread_period(period, where, f"period{i}")
+        cfg.sources[f"thread {name}"] = where
+
+
+def _parse_loadrt_motmod(args: dict[str, str], cfg: LinuxCNCConfig, where: str) -> None:
+    # motmod makes the base thread only when base_period_nsec > 0
+    for key, name in (("base_period_nsec", "base-thread"), ("servo_period_nsec", "servo-thread")):
+        value = args.get(key)
+        if value is None:
+            continue
+        ns = _int_ns(value, where, key)
+        if ns > 0:
+            cfg.threads[name] = ns
+            cfg.sources[f"thread {name}"] = where
+
+
+def _parse_addf(words: list[str], cfg: LinuxCNCConfig, where: str) -> None:
+    """``addf FUNCT THREAD [POSITION]``: POSITION 1 = first, -1 = last (the default)."""
+    if len(words) < 3:
+        return
+    funct, thread = words[1], words[2]
+    order = cfg.functions.setdefault(thread, [])
+    position = -1
+    if len(words) > 3:
+        try:
+            position = int(words[3])
+        except ValueError:
+            raise ConfigError(f"{where}: addf position {words[3]!r} is not a number") from None
+    if position > 0:
+        order.insert(min(position - 1, len(order)), funct)
+    else:
+        order.insert(max(len(order) + 1 + position, 0), funct)
+    if funct in (PULSES, UPDATE):
+        cfg.sources[funct] = where
+
+
+def _parse_net(words: list[str], cfg: LinuxCNCConfig, where: str, prefix: str) -> None:
+    """``net SIGNAL PIN…``: a net that drives the channel's command or enable pin."""
+    for pin in words[2:]:
+        if not pin.startswith(prefix):
+            continue
+        name = pin[len(prefix) :]
+        line = " ".join(words)
+        if name in ("position-cmd", "velocity-cmd"):
+            cfg.ignored.append(
+                f"ignored: {line} ({where}) (the model drives {name} itself: --position, "
+                "--velocity, --move, --command or --motion)"
+            )
+        elif name == "enable":
+            cfg.enable_connected = True
+            cfg.ignored.append(f"ignored: {line} ({where}) (the model keeps enable on)")
+
+
+def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: str) -> None:
+    param = name[len(prefix) :]
+    if param in TIMING_PARAMS:
+        cfg.params[param] = _int_ns(value, where, name)
+        cfg.sources[param] = where
+    elif param in _FLOAT_PARAMS:
+        try:
+            cfg.floats[param] = float(value)
+        except ValueError:
+            raise ConfigError(f"{where}: {name} {value!r} is not a number") from None
+        cfg.sources[param] = where
+    elif param in ("position-cmd", "velocity-cmd"):
+        try:
+            number = float(value)
+        except ValueError:
+            raise ConfigError(f"{where}: {name} {value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise ConfigError(f"{where}: {name} {value!r} is not finite")
+        cfg.command = (param[: -len("-cmd")], number)
+        cfg.sources["command"] = where
+    elif param == "enable":
+        if value.strip().lower() not in ("0", "1", "true", "false"):
+            raise ConfigError(f"{where}: {name} {value!r} is not 0 or 1")
+        cfg.enable = value.strip().lower() in ("1", "true")
+        cfg.sources["enable"] = where
+    else:
+        cfg.ignored.append(f"ignored: setp {name} {value} ({where}) (not a stepgen setting the model has)")
+
+
 def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
     text = _read(path)
     lines = text.replace("\\\n", " ").splitlines()
@@ -217,32 +398,23 @@ def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile |
         if not line:
             continue
         where = f"{path}:{no}"
-        words = line.split()
-        if words[0] == "loadrt" and len(words) > 1 and words[1] == "stepgen":
-            for arg in words[2:]:
-                if "=" not in arg:
-                    continue
-                key, value = arg.split("=", 1)
-                value = _resolve(value, ini, where)
-                if key == "step_type":
-                    entry = _list_entry(value, cfg.channel, where, key)
-                    try:
-                        cfg.step_type = int(entry)
-                    except ValueError:
-                        raise ConfigError(f"{where}: step_type entry {entry!r} is not a number") from None
-                    cfg.sources["step_type"] = where
-                elif key == "ctrl_type":
-                    entry = _list_entry(value, cfg.channel, where, key).lower()
-                    if entry not in ("p", "v"):
-                        raise ConfigError(f"{where}: ctrl_type entry {entry!r} is not p or v")
-                    cfg.ctrl_type = "position" if entry == "p" else "velocity"
-                    cfg.sources["ctrl_type"] = where
-                elif key == "user_step_type":
-                    try:
-                        cfg.user_step_type = tuple(int(v, 0) for v in value.split(",") if v)
-                    except ValueError:
-                        raise ConfigError(f"{where}: user_step_type={value} is not a list of numbers") from None
-                    cfg.sources["user_step_type"] = where
+        words = _hal_words(line)
+        if not words:
+            continue
+        if words[0] == "loadrt" and len(words) > 1:
+            args = _loadrt_args(words[2:], ini, where)
+            if words[1] == "stepgen":
+                _parse_loadrt_stepgen(args, cfg, where)
+            elif words[1] == "threads":
+                _parse_loadrt_threads(args, cfg, where)
+            elif words[1] == "motmod":
+                _parse_loadrt_motmod(args, cfg, where)
+            continue
+        if words[0] == "addf":
+            _parse_addf(words, cfg, where)
+            continue
+        if words[0] == "net":
+            _parse_net(words, cfg, where, prefix)
             continue
         if words[0] == "setp" and len(words) >= 3:
             name, value = words[1], words[2]
@@ -250,19 +422,50 @@ def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile |
             name, value = words[0], words[2]
         else:
             continue
-        if not name.startswith(prefix):
+        if name.startswith(prefix):
+            _parse_setp(name, _resolve(value, ini, where), cfg, where, prefix)
+
+
+def _thread_of(cfg: LinuxCNCConfig, funct: str) -> str | None:
+    for thread, functs in cfg.functions.items():
+        if funct in functs:
+            return thread
+    return None
+
+
+def _apply_threads(cfg: LinuxCNCConfig) -> None:
+    """Base/servo period and thread order from the threads stepgen's functions were added to."""
+    pulses, update = _thread_of(cfg, PULSES), _thread_of(cfg, UPDATE)
+    for thread, key, attr, funct in (
+        (pulses, "BASE_PERIOD", "base_period_ns", PULSES),
+        (update, "SERVO_PERIOD", "servo_period_ns", UPDATE),
+    ):
+        if thread is None or thread not in cfg.threads:
             continue
-        param = name[len(prefix) :]
-        value = _resolve(value, ini, where)
-        if param in TIMING_PARAMS:
-            cfg.params[param] = _int_ns(value, where, name)
-            cfg.sources[param] = where
-        elif param in _FLOAT_PARAMS:
-            try:
-                cfg.floats[param] = float(value)
-            except ValueError:
-                raise ConfigError(f"{where}: {name} {value!r} is not a number") from None
-            cfg.sources[param] = where
+        ns, where = cfg.threads[thread], cfg.sources[f"thread {thread}"]
+        old = getattr(cfg, attr)
+        if old is not None and old != ns and cfg.sources.get(key) != where:
+            cfg.ignored.append(
+                f"ignored: [EMCMOT]{key} {old} ns ({cfg.sources.get(key)}): {funct} runs in "
+                f"thread {thread}, period {ns} ns ({where})"
+            )
+        setattr(cfg, attr, ns)
+        cfg.sources[key] = where
+    if pulses is not None and pulses == update:
+        order = cfg.functions[pulses]
+        first = order.index(UPDATE) < order.index(PULSES)
+        cfg.thread_order = "update-first" if first else "pulses-first"
+    if (pulses is None) != (update is None):
+        missing, present = (UPDATE, PULSES) if update is None else (PULSES, UPDATE)
+        cfg.ignored.append(
+            f"ignored: {present} is added to a thread ({cfg.sources[present]}) but {missing} is not: "
+            f"LinuxCNC would make no steps; the model runs both"
+        )
+    if cfg.stepgen_loaded and cfg.enable is None and not cfg.enable_connected:
+        cfg.ignored.append(
+            f"ignored: stepgen.{cfg.channel}.enable is never set or connected (LinuxCNC would make "
+            "no steps); the model keeps it on"
+        )
 
 
 def read_config(
@@ -293,6 +496,7 @@ def read_config(
     hals = [] if hal is None else ([hal] if isinstance(hal, (str, os.PathLike)) else list(hal))
     for h in hals:
         _parse_hal(h, cfg, ini_file)
+    _apply_threads(cfg)
     return cfg
 
 

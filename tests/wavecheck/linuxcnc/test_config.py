@@ -143,3 +143,69 @@ def test_config_rate_of_a_phase_type_has_no_stepspace(files: tuple[Path, Path]) 
     assert rates.latency_safe is None and "step type" in rates.notes[0]
     # the check's own --type wins over the HAL file (same channel decoded as step/dir)
     assert config_rates(cfg, g202(), None, step_type=0).config == Fraction(31_250)
+
+
+def test_threads_and_addf_give_the_periods_and_order(tmp_path: Path) -> None:
+    """Reference §1/§3/§8: make-pulses' thread period is the base period, update-freq's the servo
+    period; in one thread the addf order decides which runs first. The HAL wins over an INI
+    BASE_PERIOD that no motmod line uses, and says so."""
+    ini = tmp_path / "a.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 25000\n")
+    hal = tmp_path / "a.hal"
+    hal.write_text(
+        "loadrt threads name1=fast period1=100000\n"
+        "loadrt stepgen step_type=0\n"
+        "addf stepgen.make-pulses fast\n"
+        "addf stepgen.update-freq fast 1\n"  # position 1: runs first
+        "setp stepgen.0.position-cmd .04\n"
+        "setp stepgen.0.enable 1\n"
+    )
+    cfg = read_config(ini, hal)
+    assert (cfg.base_period_ns, cfg.servo_period_ns) == (100_000, 100_000)
+    assert cfg.sources["BASE_PERIOD"] == f"{hal}:1"
+    assert cfg.functions["fast"] == ["stepgen.update-freq", "stepgen.make-pulses"]
+    assert cfg.thread_order == "update-first"
+    assert cfg.command == ("position", 0.04) and cfg.enable is True
+    assert cfg.stepgen_kwargs()["thread_order"] == "update-first"
+    assert cfg.ignored == [
+        f"ignored: [EMCMOT]BASE_PERIOD 25000 ns ({ini}:2): stepgen.make-pulses runs in thread "
+        f"fast, period 100000 ns ({hal}:1)"
+    ]
+
+
+def test_motmod_threads_come_from_the_ini(tmp_path: Path) -> None:
+    """A stock configuration: motmod's base-thread and servo-thread periods are INI references."""
+    ini = tmp_path / "a.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 20000\nSERVO_PERIOD = 1000000\n")
+    hal = tmp_path / "a.hal"
+    hal.write_text(
+        "loadrt motmod base_period_nsec=[EMCMOT]BASE_PERIOD servo_period_nsec=[EMCMOT]SERVO_PERIOD\n"
+        "loadrt stepgen step_type=0\n"
+        "addf stepgen.make-pulses base-thread\n"
+        "addf stepgen.update-freq servo-thread\n"
+        "net xen joint.0.amp-enable-out => stepgen.0.enable\n"
+    )
+    cfg = read_config(ini, hal)
+    assert (cfg.base_period_ns, cfg.servo_period_ns, cfg.thread_order) == (20_000, 1_000_000, None)
+    assert cfg.ignored == [
+        f"ignored: net xen joint.0.amp-enable-out => stepgen.0.enable ({hal}:5) (the model keeps "
+        "enable on)"
+    ]
+
+
+def test_only_one_stepgen_function_added_is_named(tmp_path: Path) -> None:
+    hal = tmp_path / "a.hal"
+    hal.write_text(
+        "loadrt threads name1=fast period1=50000\nloadrt stepgen step_type=0\n"
+        "addf stepgen.make-pulses fast\nsetp stepgen.0.enable 1\n"
+    )
+    cfg = read_config(None, hal)
+    assert cfg.base_period_ns == 50_000 and cfg.servo_period_ns is None
+    assert len(cfg.ignored) == 1 and "stepgen.update-freq is not" in cfg.ignored[0]
+
+
+def test_bad_thread_period_names_the_line(tmp_path: Path) -> None:
+    hal = tmp_path / "a.hal"
+    hal.write_text("\nloadrt threads name1=fast period1=soon\n")
+    with pytest.raises(ConfigError, match=rf"{hal}:2: period1 'soon'"):
+        read_config(None, hal)
