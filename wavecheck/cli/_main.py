@@ -1,4 +1,5 @@
-"""Shared command-line plumbing: subcommand dispatch and the one-line error contract.
+"""Shared command-line plumbing: subcommand dispatch, ``--version`` and the one-line error
+contract.
 
 Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 2 unusable input or usage.
 """
@@ -10,6 +11,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
+from wavecheck import __version__
 from wavecheck.errors import WavecheckError
 from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
@@ -31,6 +33,7 @@ def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[
     to a ``run(args) -> int``.
     """
     parser = _Parser(prog=prog, description=description)
+    parser.add_argument("--version", action="version", version=f"{prog} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name in modules:
