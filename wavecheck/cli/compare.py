@@ -36,7 +36,7 @@ from wavecheck.drives.library import load_drive
 from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
 
@@ -335,7 +335,9 @@ def register(sub: Any) -> None:
     )
     add_capture_arguments(p)
     p.add_argument("--format", choices=("text", "json"), default="text")
-    p.add_argument("-o", "--output", metavar="FILE", help="write the comparison to FILE")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the comparison to FILE"
+    )
     p.set_defaults(func=run)
 
 
