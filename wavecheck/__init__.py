@@ -26,4 +26,7 @@ __all__ = [
     "check",
     "run_check",
 ]
+
+#: The package version, written only here: pyproject.toml reads it at build time
+#: ([tool.setuptools.dynamic]), so the installed distribution always carries this value.
 __version__ = "0.1.0"

@@ -1,48 +1,288 @@
-"""Write outputs whole or not at all: a temporary file beside the target, renamed on success."""
+"""Write every output of both tools through one mechanism that never destroys anything.
+
+Where a path leads decides how it is written:
+
+- a new file, or an existing regular file: a temporary file beside it, renamed over it on
+  success (whole or not at all; an existing file keeps its mode);
+- a symlink: followed to its target, which is then written as above (the link stays a link);
+- a device, FIFO or socket, or a process's file descriptor (``/dev/stdout``, ``/dev/fd/N``,
+  ``/proc/self/fd/N``): opened and written in place, nothing renamed, no temporary file;
+- a directory, a folder that is missing or cannot be written, ``-``, or an input of the same run
+  (see :func:`protect_inputs`): refused with a :class:`~wavecheck.errors.UsageError` (exit 2).
+
+The command line declares each output option with ``type=``:func:`output_file` and checks them
+all with :func:`check_outputs` before any work is done.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import stat
+import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
+from typing import NamedTuple
 
 from wavecheck.errors import UsageError
 
-__all__ = ["atomic_path", "atomic_write"]
+__all__ = [
+    "OutputTarget",
+    "atomic_path",
+    "atomic_write",
+    "check_outputs",
+    "output_file",
+    "protect_inputs",
+    "resolve_output",
+]
+
+#: the inputs of the running command: (what it is, path, st_dev, st_ino) of each regular file.
+_protected: list[tuple[str, str, int, int]] = []
+
+
+class _Refused(Exception):
+    """Why a path cannot be written (the caller adds the option and the path)."""
+
+
+class OutputTarget(NamedTuple):
+    """Where and how an output path is written (:func:`resolve_output`)."""
+
+    path: Path  #: where the bytes go (symlinks followed)
+    in_place: bool  #: opened and written; no temporary file, no rename
+    fd: int | None  #: the descriptor of this process the path names (``/dev/stdout`` → 1)
+
+
+def output_file(text: str) -> str:
+    """argparse ``type=`` of every output option: marks it for :func:`check_outputs`.
+
+    The value is returned unchanged; the checks need every option (inputs too), so they run
+    after parsing.
+    """
+    return text
+
+
+def _fd_link(link: Path) -> int | None:
+    """The descriptor number when ``link`` is one of this process's ``/proc/self/fd`` entries,
+    -1 for another ``/proc`` link, None for an ordinary symlink."""
+    folder = os.path.realpath(link.parent)
+    if folder == os.path.realpath("/proc/self/fd") and link.name.isdigit():
+        return int(link.name)
+    return -1 if folder.startswith("/proc/") else None
+
+
+def _follow(text: str) -> tuple[Path, int | None]:
+    """Follow ``text``'s symlinks to the path they end at; stop at a ``/proc`` (fd) link."""
+    p = Path(text)
+    for _ in range(40):
+        try:
+            st = os.lstat(p)
+        except FileNotFoundError:
+            return p, None
+        except NotADirectoryError:
+            raise _Refused(f"{str(p.parent)!r} is not a folder") from None
+        except OSError as err:  # a folder on the way cannot be searched, a loop …
+            raise _Refused(err.strerror or str(err)) from None
+        if not stat.S_ISLNK(st.st_mode):
+            return p, None
+        fd = _fd_link(p)
+        if fd is not None:
+            return p, fd
+        p = Path(os.path.realpath(p.parent)) / os.readlink(p)
+    raise _Refused("too many levels of symbolic links")
+
+
+def _refuse_input(st: os.stat_result) -> None:
+    for what, path, dev, ino in _protected:
+        if (st.st_dev, st.st_ino) == (dev, ino):
+            raise _Refused(f"is the {what} file {path}, an input of this run (refusing to overwrite it)")
+
+
+def _target(target: str | os.PathLike[str]) -> OutputTarget:
+    """Where and how ``target`` is written; raises :class:`_Refused`."""
+    text = os.fspath(target)
+    if text == "":
+        raise _Refused("give a file name")
+    if text == "-":
+        raise _Refused("'-' is not standard output here (give a file name, or /dev/stdout)")
+    if text.endswith(os.sep) or os.path.basename(text) in (".", ".."):
+        raise _Refused("names a folder (give a file name)")
+    path, fd = _follow(text)
+    if fd is not None:
+        return OutputTarget(path, True, fd if fd >= 0 else None)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return OutputTarget(path, False, None)
+    except NotADirectoryError:
+        raise _Refused(f"{str(path.parent)!r} is not a folder") from None
+    except OSError as err:
+        raise _Refused(err.strerror or str(err)) from None
+    if stat.S_ISDIR(st.st_mode):
+        raise _Refused("is a directory (give a file name)")
+    if stat.S_ISREG(st.st_mode):
+        _refuse_input(st)
+        return OutputTarget(path, False, None)
+    return OutputTarget(path, True, None)  # device, FIFO, socket
+
+
+def resolve_output(target: str | os.PathLike[str]) -> OutputTarget:
+    """Where and how :func:`atomic_write` would write ``target``, without writing.
+
+    Raises:
+        UsageError: the target is refused (a directory, ``-``, an input of the run).
+    """
+    try:
+        return _target(target)
+    except _Refused as why:
+        raise UsageError(f"{os.fspath(target)}: {why}") from None
+
+
+def _check_folder(folder: Path, probe: bool) -> None:
+    """Refuse a folder that is missing, is not a folder, or (``probe``) cannot take a new file.
+
+    The probe creates and removes a temporary file: permission bits say nothing to root, and a
+    read-only mount or ``/proc`` refuses even root.
+    """
+    if not folder.exists():
+        raise _Refused(f"folder {str(folder)!r} does not exist (create it first)")
+    if not folder.is_dir():
+        raise _Refused(f"{str(folder)!r} is not a folder")
+    if probe:
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".wavecheck-probe.", dir=folder)
+        except OSError as err:
+            raise _Refused(f"folder {str(folder)!r} is not writable ({err.strerror})") from None
+        os.close(fd)
+        os.unlink(tmp)
+
+
+def check_outputs(
+    outputs: Mapping[str, str | os.PathLike[str] | None],
+    inputs: Mapping[str, Iterable[str | os.PathLike[str]]] | None = None,
+) -> None:
+    """Check every output option before any work: ``outputs`` maps option → path (None: not
+    given), ``inputs`` maps a description (``"CAPTURE"``, ``"--hal"``) → the run's input files.
+
+    Raises:
+        UsageError: one line naming the option and the path (a directory, a missing or
+            unwritable folder, an input of the run, two options naming one file).
+    """
+    with protect_inputs(inputs or {}):
+        seen: dict[str, str] = {}
+        for option, value in outputs.items():
+            if value is None:
+                continue
+            text = os.fspath(value)
+            try:
+                t = _target(text)
+                if not t.in_place:
+                    _check_folder(t.path.parent, probe=True)
+                    key = os.path.realpath(t.path)
+                    if key in seen:
+                        raise _Refused(f"is also given to {seen[key]} (give each output its own file)")
+                    seen[key] = option
+            except _Refused as why:
+                raise UsageError(f"{option} {text}: {why}") from None
+
+
+@contextlib.contextmanager
+def protect_inputs(inputs: Mapping[str, Iterable[str | os.PathLike[str]]]) -> Iterator[None]:
+    """While active, any write to one of ``inputs`` (the same file by any name: a symlink, a
+    hard link, another spelling) is refused. ``inputs`` maps a description → paths; paths that
+    do not exist or are not regular files are ignored."""
+    added: list[tuple[str, str, int, int]] = []
+    for what, paths in inputs.items():
+        for p in paths:
+            try:
+                st = os.stat(p)
+            except (OSError, ValueError):
+                continue
+            if stat.S_ISREG(st.st_mode):
+                added.append((what, os.fspath(p), st.st_dev, st.st_ino))
+    _protected.extend(added)
+    try:
+        yield
+    finally:
+        for item in added:
+            _protected.remove(item)
 
 
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path in ``target``'s folder; rename it onto ``target`` on success.
+    """Yield the path to write ``target``'s content to (see the module docstring).
 
-    On any exception the temporary file is removed, so a failure never leaves half an output.
+    For a regular or new file it is a temporary file in the target's folder, renamed onto the
+    target on success and removed on any exception, so a failure never leaves half an output.
+    For a device, FIFO or descriptor it is the target itself, written in place (a descriptor
+    is reopened; :func:`atomic_write` writes through the descriptor instead, at its offset).
+
+    Raises:
+        UsageError: the target is refused (a directory, an input, a missing folder …).
     """
-    target = Path(target)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise UsageError(f"{target}: folder {str(folder)!r} does not exist (create it first)")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    text = os.fspath(target)
+    try:
+        t = _target(text)
+        if not t.in_place:
+            _check_folder(t.path.parent, probe=False)
+    except _Refused as why:
+        raise UsageError(f"{text}: {why}") from None
+    if t.in_place:
+        yield t.path
+        return
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{t.path.name}.", suffix=".tmp", dir=t.path.parent)
+    except OSError as err:
+        raise UsageError(
+            f"{text}: folder {str(t.path.parent)!r} is not writable ({err.strerror})"
+        ) from None
     os.close(fd)
-    # mkstemp creates 0600; give the output the mode a plain open() would (0666 less umask)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
+    try:
+        mode = stat.S_IMODE(os.stat(t.path).st_mode)  # replacing a file keeps its mode
+    except FileNotFoundError:
+        umask = os.umask(0)  # a new file gets what a plain open() gives: 0666 less the umask
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    os.chmod(tmp, mode)
     tmp_path = Path(tmp)
     try:
         yield tmp_path
-        os.replace(tmp_path, target)
+        os.replace(tmp_path, t.path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
         raise
 
 
+def _write_fd(fd: int, data: bytes) -> None:
+    """Write to one of this process's descriptors at its own offset (``>>`` stays appending)."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view) :]
+
+
 def atomic_write(target: str | os.PathLike[str], data: str | bytes) -> None:
-    """Write ``data`` to ``target`` atomically (text as UTF-8)."""
-    with atomic_path(target) as tmp:
-        if isinstance(data, str):
-            tmp.write_text(data, encoding="utf-8")
-        else:
-            tmp.write_bytes(data)
+    """Write ``data`` (text as UTF-8) to ``target`` whole, or in place (see the module docstring).
+
+    Raises:
+        UsageError: the target is refused, or it cannot be written.
+    """
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    text = os.fspath(target)
+    fd = None
+    with contextlib.suppress(_Refused):
+        fd = _target(text).fd
+    try:
+        if fd is not None:
+            _write_fd(fd, payload)
+            return
+        with atomic_path(target) as path, open(path, "wb") as f:
+            f.write(payload)
+    except OSError as err:
+        if err.errno == errno.EPIPE:
+            raise
+        raise UsageError(f"{text}: cannot write ({err.strerror or err})") from None

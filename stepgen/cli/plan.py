@@ -23,7 +23,7 @@ from stepgen.latencyfiles import read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
 from wavecheck.errors import UnitError, UsageError, WavecheckError
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 from wavecheck.units import parse_quantity
 
 __all__ = ["parse_latency_arg", "parse_time_arg", "register", "run"]
@@ -78,7 +78,9 @@ def register(sub: Any) -> None:
         metavar="N",
         help="stepgen channel for ini/hal (default 0)",
     )
-    p.add_argument("-o", "--output", metavar="FILE", help="write the output here (atomically)")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the output here"
+    )
     p.set_defaults(func=run)
 
 

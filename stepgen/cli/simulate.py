@@ -32,6 +32,7 @@ from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
 from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
+from wavecheck.output import output_file
 from wavecheck.progress import activate
 from wavecheck.units import time_ns
 
@@ -125,7 +126,9 @@ def register(sub: Any) -> None:
         "P − J under worst:J:RULE when that is shorter, so the bound n·P − J is reached)",
     )
     o = p.add_argument_group("output")
-    o.add_argument("-o", "--output", required=True, help="OUT.vcd or OUT.sr")
+    o.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", required=True, type=output_file, help="OUT.vcd or OUT.sr"
+    )
     o.add_argument(
         "--max-samples", type=int, default=DEFAULT_MAX_SAMPLES, help=".sr size limit in samples"
     )

@@ -1,20 +1,28 @@
-"""Shared command-line plumbing: subcommand dispatch and the one-line error contract.
+"""Shared command-line plumbing: subcommand dispatch, ``--version``, the output checks and the
+one-line error contract.
 
 Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 2 unusable input or usage.
+
+Every output option is declared with ``type=``:func:`wavecheck.output.output_file`; before a
+command runs, each one is checked (:func:`wavecheck.output.check_outputs`) against the command's
+inputs (every file named by another option), and those inputs stay protected while it runs.
 """
 
 from __future__ import annotations
 
 import argparse
+import glob
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
+from wavecheck import __version__
 from wavecheck.errors import WavecheckError
+from wavecheck.output import check_outputs, output_file, protect_inputs
 from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
 __all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "run_cli"]
-
 
 
 class _Parser(argparse.ArgumentParser):
@@ -31,13 +39,18 @@ def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[
     to a ``run(args) -> int``.
     """
     parser = _Parser(prog=prog, description=description)
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    parser.add_argument("--version", action="version", version=f"{prog} {__version__}")
+    # dest: not "command", which stepgen simulate's --command option also sets
+    sub = parser.add_subparsers(dest="_subcommand", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name in modules:
         importlib.import_module(name).register(sub)
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args))
+        outputs, inputs = _files(sub.choices[args._subcommand], args)
+        check_outputs(outputs, inputs)  # before any work
+        with protect_inputs(inputs):
+            return int(args.func(args))
     except WavecheckError as err:
         print(f"{prog}: error: {err}", file=sys.stderr)
         return err.exit_code
@@ -46,3 +59,34 @@ def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[
         return 130
     except BrokenPipeError:
         return 0
+
+
+def _files(
+    parser: argparse.ArgumentParser, args: argparse.Namespace
+) -> tuple[dict[str, str | None], dict[str, list[str]]]:
+    """The command's output options (option → path) and the files its other options name.
+
+    An input is any existing file named by a free-text option or argument (``FILE``,
+    ``ID|FILE``, ``kind:FILE``, a glob pattern); options with choices, numbers and flags are not.
+    """
+    outputs: dict[str, str | None] = {}
+    inputs: dict[str, list[str]] = {}
+    for action in parser._actions:  # noqa: SLF001 - argparse has no public list
+        if action.nargs == 0 or action.choices is not None or action.dest == argparse.SUPPRESS:
+            continue
+        name = action.option_strings[0] if action.option_strings else action.dest
+        value = getattr(args, action.dest, None)
+        if action.type is output_file:
+            outputs[name] = value
+            continue
+        if action.type not in (None, str):
+            continue
+        for text in value if isinstance(value, list) else [value]:
+            if not isinstance(text, str) or not text:
+                continue
+            paths = [text, text.partition(":")[2]]
+            if glob.has_magic(text):
+                paths += glob.glob(text, recursive=True)
+            found = [p for p in paths if p and os.path.isfile(os.path.expanduser(p))]
+            inputs.setdefault(name, []).extend(os.path.expanduser(p) for p in found)
+    return outputs, inputs

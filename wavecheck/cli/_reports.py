@@ -29,7 +29,7 @@ from typing import Any
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.model import Report
@@ -51,11 +51,16 @@ __all__ = [
 
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
-    out = p.add_argument_group("reports")
-    out.add_argument("--plot", metavar="FILE.png", help="timing diagrams and histograms (PNG)")
-    out.add_argument("--html", metavar="FILE.html", help="one self-contained HTML page")
+    out = p.add_argument_group("reports")  # output_file: checked before any work (wavecheck.output)
+    out.add_argument(
+        "--plot", type=output_file, metavar="FILE.png", help="timing diagrams and histograms (PNG)"
+    )
+    out.add_argument(
+        "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
+    )
     out.add_argument(
         "--gtkw",
+        type=output_file,
         metavar="FILE.gtkw",
         help="GTKWave save file with markers at the worst violations (a non-VCD capture is "
         "written as FILE.vcd beside it)",
@@ -192,16 +197,6 @@ def _per_capture(path: str, capture: str, index: int, stems: dict[str, int]) -> 
     return str(p.with_name(f"{p.stem}-{tag}{p.suffix}"))
 
 
-def _check_folders(args: argparse.Namespace) -> None:
-    for opt in ("output", "plot", "html", "gtkw"):
-        target = getattr(args, opt, None)
-        if target:
-            folder = Path(target).parent
-            if str(folder) and not folder.is_dir():
-                flag = "-o" if opt == "output" else f"--{opt}"
-                raise UsageError(f"{flag} {target}: folder {str(folder)!r} does not exist (create it first)")
-
-
 def _side_outputs(
     args: argparse.Namespace, reports: list[Report], errors: list[tuple[str, str]]
 ) -> None:
@@ -249,7 +244,6 @@ def run_checks(
     """
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]
     paths = expand_captures(patterns)
-    _check_folders(args)
     stepgen_config(args)  # a bad INI/HAL file is reported before any capture is read
     latency_ns(args)
     if len(paths) == 1:

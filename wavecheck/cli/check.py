@@ -29,7 +29,7 @@ from wavecheck.drives.library import load_drive
 from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
@@ -108,7 +108,9 @@ def register(sub: Any) -> None:
     )
     add_capture_arguments(p)
     p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
-    p.add_argument("-o", "--output", metavar="FILE", help="write the report to FILE (atomically)")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
+    )
     p.add_argument(
         "--max-violations",
         type=int,

@@ -33,7 +33,7 @@ from wavecheck.compare import Comparison, compare
 from wavecheck.drives.library import load_drive
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 from wavecheck.units import format_time, parse_time
 from wavecheck.verdict import exit_code
 
@@ -196,7 +196,9 @@ def register(sub: Any) -> None:
     )
     add_capture_arguments(p)
     p.add_argument("--format", choices=("text", "json"), default="text")
-    p.add_argument("-o", "--output", metavar="FILE", help="write the comparison to FILE")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the comparison to FILE"
+    )
     p.set_defaults(func=run)
 
 

@@ -15,7 +15,7 @@ from wavecheck.cli._main import EXIT_FAIL, EXIT_PASS
 from wavecheck.crosscheck import CrosscheckResult, crosscheck
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, output_file
 
 __all__ = ["register", "run"]
 
@@ -51,7 +51,9 @@ def register(sub: Any) -> None:
         help="VCD only: ticks per sigrok sample (default: the shortest gap between STEP/DIR edges)",
     )  # fmt: skip
     p.add_argument("--format", choices=("text", "json"), default="text")
-    p.add_argument("-o", "--output", metavar="FILE", help="write the result to FILE (atomically)")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the result to FILE"
+    )
     add_capture_arguments(p)
     p.set_defaults(func=run)
 
