@@ -249,11 +249,9 @@ def _report(config_path: Path, spec: CaptureSpec) -> Report:
 
 
 def _ns(v: Any) -> str:
-    from wavecheck.units import format_time
+    from wavecheck.units import format_ns
 
-    if v is None:
-        return "-"
-    return ("+" if v > 0 else "") + format_time(v / 10**9)
+    return format_ns(v, signed=True)
 
 
 def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str:

@@ -34,18 +34,11 @@ from wavecheck.drives.library import load_drive
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write, output_file
-from wavecheck.units import format_time, parse_time
+from wavecheck.units import format_ns, format_time, json_number, parse_time
 from wavecheck.verdict import exit_code
 
 __all__ = ["register", "render_compare_json", "render_compare_text", "run"]
 
-
-
-def _ns(v: Fraction | None, signed: bool = False) -> str:
-    if v is None:
-        return "-"
-    text = format_time(v / 10**9)
-    return ("+" + text) if signed and v > 0 else text
 
 
 def _pos(v: int | None) -> str:
@@ -71,10 +64,10 @@ def render_compare_text(c: Comparison) -> str:
     if c.max_abs_diff_ns is not None and c.max_at_step is not None:
         t = c.golden.capture.timebase.seconds(int(c.golden.steps.ticks[c.max_at_step]))
         out.append(
-            f"step times:     aligned on {align}; max |Δt| {_ns(c.max_abs_diff_ns)} at step "
+            f"step times:     aligned on {align}; max |Δt| {format_ns(c.max_abs_diff_ns)} at step "
             f"{c.max_at_step} (golden t = {float(t):.9f} s); mean Δt "
             f"{format_time(Fraction(c.mean_diff_ns or 0.0) / 10**9)}; {c.beyond_tolerance} step(s) "
-            f"beyond ±{_ns(c.tolerance_ns)}"
+            f"beyond ±{format_ns(c.tolerance_ns)}"
         )
     else:
         out.append("step times:     no step to compare")
@@ -86,9 +79,9 @@ def render_compare_text(c: Comparison) -> str:
                 d.rule,
                 f"{d.golden_verdict or '-'} ({d.golden_violations if d.golden_violations is not None else '-'})",
                 f"{d.capture_verdict or '-'} ({d.capture_violations if d.capture_violations is not None else '-'})",
-                _ns(d.golden_margin_ns, True),
-                _ns(d.capture_margin_ns, True),
-                _ns(d.delta_margin_ns, True),
+                format_ns(d.golden_margin_ns, signed=True),
+                format_ns(d.capture_margin_ns, signed=True),
+                format_ns(d.delta_margin_ns, signed=True),
                 d.change.upper() if d.change == "worse" else d.change,
             ]
         )
@@ -96,14 +89,6 @@ def render_compare_text(c: Comparison) -> str:
     out += ["  ".join(x.ljust(w) for x, w in zip(r, widths, strict=True)).rstrip() for r in rows]
     out.append("(verdict (violations) per rule; margin = shortest measured − limit)")
     return "\n".join(out) + "\n"
-
-
-def _num(v: Fraction | int | float | None) -> float | int | None:
-    if v is None:
-        return None
-    if isinstance(v, Fraction):
-        return int(v) if v.denominator == 1 else float(v)
-    return v
 
 
 def render_compare_json(c: Comparison) -> str:
@@ -124,9 +109,9 @@ def render_compare_json(c: Comparison) -> str:
         },
         "timing": {
             "align": c.align,
-            "tolerance_ns": _num(c.tolerance_ns),
+            "tolerance_ns": json_number(c.tolerance_ns),
             "compared": c.compared,
-            "max_abs_diff_ns": _num(c.max_abs_diff_ns),
+            "max_abs_diff_ns": json_number(c.max_abs_diff_ns),
             "max_at_step": c.max_at_step,
             "mean_diff_ns": c.mean_diff_ns,
             "beyond_tolerance": c.beyond_tolerance,
@@ -137,14 +122,14 @@ def render_compare_json(c: Comparison) -> str:
                 "golden": {
                     "verdict": d.golden_verdict,
                     "violations": d.golden_violations,
-                    "min_margin_ns": _num(d.golden_margin_ns),
+                    "min_margin_ns": json_number(d.golden_margin_ns),
                 },
                 "capture": {
                     "verdict": d.capture_verdict,
                     "violations": d.capture_violations,
-                    "min_margin_ns": _num(d.capture_margin_ns),
+                    "min_margin_ns": json_number(d.capture_margin_ns),
                 },
-                "delta_margin_ns": _num(d.delta_margin_ns),
+                "delta_margin_ns": json_number(d.delta_margin_ns),
                 "change": d.change,
             }
             for d in c.rules

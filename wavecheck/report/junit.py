@@ -22,12 +22,11 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 from pathlib import PurePath
 
 from wavecheck.checks.result import RuleResult, Violation
 from wavecheck.report.model import Report
-from wavecheck.units import format_frequency, format_time
+from wavecheck.units import format_frequency, format_ns
 
 __all__ = ["Unreadable", "classname", "render_junit"]
 
@@ -48,17 +47,13 @@ def classname(path: str) -> str:
     return str(p.with_suffix("")) if p.suffix else str(p)
 
 
-def _ns(v: Fraction | None) -> str:
-    return "-" if v is None else format_time(v / 10**9)
-
-
 def _describe(v: Violation) -> str:
     if v.margin_ns is None:
         return f"{v.rule} at {float(v.time_s):.9f} s: {v.detail or 'state sequence error'}"
     sign = "+" if v.margin_ns > 0 else ""
     return (
-        f"{v.rule} at {float(v.time_s):.9f} s: measured {_ns(v.measured_ns)}, limit "
-        f"{_ns(v.limit_ns)} (margin {sign}{_ns(v.margin_ns)})"
+        f"{v.rule} at {float(v.time_s):.9f} s: measured {format_ns(v.measured_ns)}, limit "
+        f"{format_ns(v.limit_ns)} (margin {sign}{format_ns(v.margin_ns)})"
     )
 
 
@@ -86,7 +81,7 @@ def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
             case,
             "failure",
             message=f"{r.indeterminate} interval(s) cannot be decided at a resolution of "
-            f"{_ns(r.resolution_ns)} (limit {_ns(r.limit_ns)}){how}",
+            f"{format_ns(r.resolution_ns)} (limit {format_ns(r.limit_ns)}){how}",
             type="indeterminate",
         )
         return "failure"
