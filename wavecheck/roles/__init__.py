@@ -18,8 +18,9 @@ lines, channels left unassigned with why, and the conflicts the waveforms cannot
   ambiguous unless exactly one is named DIR.
 - **UP/DOWN**: two pulse lines without a DIR that never pulse together and take turns: at each
   switch the period is no shorter than the periods beside it (a line pulsing within the other's
-  run is another axis). If unchanging channels exist that could be DIRs of two step axes moving one
-  after the other, that is a conflict (unless the names say up/down or step).
+  run is another axis), with the same pulse level and width (one step generator drives both).
+  If two or more unchanging channels could be the DIRs of two step axes moving one after the
+  other, that is a conflict (unless the names say up/down or step).
 - **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables
   (:mod:`wavecheck.roles.phases`).
 - **ENABLE**: a leftover changing line at one level of which no axis ever moves, while some

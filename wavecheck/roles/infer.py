@@ -28,7 +28,9 @@ from wavecheck.roles.phases import PhaseGroup, find_phase_groups
 __all__ = ["propose"]
 
 _REVERSAL_GAP = 1.25  # a reversal's period is this much longer than the periods beside it
-_SWITCH_GAP = 0.9  # up/down: the period across a switch is at least this times its neighbours'
+_NEARER = 20  # a tied DIR goes to the STEP this many times nearer to each of its changes
+_SWITCH_GAP = 0.9
+_SAME_WIDTH = 1.2  # up/down: median pulse widths of the two lines within this factor  # up/down: the period across a switch is at least this times its neighbours'
 _AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
 
 I64 = npt.NDArray[np.int64]
@@ -54,6 +56,7 @@ class DirFit:
     at_reversal: int  # toggles whose period is longer than the periods beside it
     outside: int  # toggles before the first or after the last pulse
     per_level: tuple[int, int]  # pulses of s while d is low, high
+    near: npt.NDArray[np.float64]  # per change: ticks to the nearest pulse of s (setup or hold)
 
     @property
     def score(self) -> int:
@@ -104,7 +107,9 @@ def _dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     after = np.where(inner + 1 < p.count, st[np.minimum(inner + 1, p.count - 1)] - st[inner], 0)
     beside = np.maximum(before, after).astype(np.float64)
     at_rev = int(np.count_nonzero(period >= _REVERSAL_GAP * beside))
-    return DirFit(d, s, n, at_rev, outside, (lo, hi))
+    hold = np.where(a > 0, t - p.ends[np.maximum(a - 1, 0)], np.inf)
+    setup = np.where(a < p.count, st[np.minimum(a, p.count - 1)] - t, np.inf)
+    return DirFit(d, s, n, at_rev, outside, (lo, hi), np.minimum(hold, setup))
 
 
 def _pulses_inside(d: Channel, dp: Pulses, s_starts: I64) -> int:
@@ -126,10 +131,13 @@ class UpDownFit:
         )
 
 
-def _up_down(p: Pulses, q: Pulses) -> UpDownFit | None:
+def _up_down(p: Pulses, q: Pulses, resolution: int) -> UpDownFit | None:
     """The fit of two pulse trains as an up/down pair, or None when they run at the same time."""
-    if p.count == 0 or q.count == 0:
+    if p.count == 0 or q.count == 0 or p.level != q.level:
         return None
+    wp, wq = float(np.median(p.widths)), float(np.median(q.widths))
+    if max(wp, wq) > _SAME_WIDTH * min(wp, wq) + 2 * resolution:
+        return None  # one step generator drives both lines: same pulse level and width
     s = np.concatenate([p.starts, q.starts])
     e = np.concatenate([p.ends, q.ends])
     lab = np.concatenate([np.zeros(p.count, np.int8), np.ones(q.count, np.int8)])
@@ -149,7 +157,7 @@ def _up_down(p: Pulses, q: Pulses) -> UpDownFit | None:
     return UpDownFit(len(sw))
 
 
-@dataclass
+@dataclass(eq=False)
 class _Axis:
     kind: str
     step_type: int
@@ -171,6 +179,9 @@ class _Inference:
         self.unassigned: list[Unassigned] = []
         self.conflicts: list[Conflict] = []
         self.why: dict[int, str] = {}  # reason for channels left out
+        self.dir_notes: dict[int, str] = {}  # DIR index -> how elimination decided
+        self.turns: dict[int, set[int]] = {}  # pulse line -> lines it takes turns with
+        self.unsure_steps: set[int] = set()  # pulse lines named in a DIR conflict
 
     def _refs(self) -> dict[int, str]:
         refs: dict[int, str] = {}
@@ -213,6 +224,7 @@ class _Inference:
         ]
         pulse = [c for c in movers if self.looks[c.index].is_step_like]
         pulse = self._demote(pulse)
+        self.turns = self._takes_turns(pulse)
         in_pulse = {c.index for c in pulse}
         dirs = self._dirs(pulse, [c for c in movers if c.index not in in_pulse])
         self._pulse_axes(pulse, dirs)
@@ -254,8 +266,12 @@ class _Inference:
         return keep
 
     def _dirs(self, pulse: list[Channel], others: list[Channel]) -> dict[int, DirFit]:
-        """DIR fits, STEP channel index → fit; conflicts recorded."""
-        chosen: dict[int, list[DirFit]] = {}
+        """DIR fits, STEP channel index → fit; conflicts recorded.
+
+        A STEP has one DIR: a line that fits a single STEP line not yet given a DIR takes it,
+        and that STEP drops out of the other lines' candidates; repeated until nothing changes.
+        """
+        cands: dict[int, list[DirFit]] = {}
         for d in others:
             fits = []
             for s in pulse:
@@ -264,18 +280,61 @@ class _Inference:
                 f = _dir_fit(d, s, sp)
                 if f is not None:
                     fits.append(f)
-            if not fits:
+            if fits:
+                cands[d.index] = fits
+        claimed: dict[int, DirFit] = {}  # STEP index -> fit, by elimination
+        while True:
+            owners = {f.d.index for f in claimed.values()}
+            picks: dict[int, list[DirFit]] = {}
+            for di, fits in cands.items():
+                live = [f for f in fits if f.s.index not in claimed]
+                if di not in owners and len(live) == 1:
+                    picks.setdefault(live[0].s.index, []).append(live[0])
+            if not picks:  # nothing forced: let evidence pick, then eliminate again
+                for di, fits in cands.items():
+                    live = [f for f in fits if f.s.index not in claimed]
+                    best = self._pick_dir(fits[0].d, live) if di not in owners and live else None
+                    if best is not None:
+                        picks.setdefault(best.s.index, []).append(best)
+            new = {si: fs[0] for si, fs in picks.items() if len(fs) == 1}
+            if not new:
+                break
+            claimed.update(new)
+        owners = {f.d.index for f in claimed.values()}
+        def other(g: DirFit) -> str:
+            has = claimed.get(g.s.index)
+            if has is not None:
+                return f"{self.name_of(g.s)} has DIR {self.name_of(has.d)}"
+            return f"{self.name_of(g.s)} fits it less well"
+
+        self.dir_notes = {
+            f.d.index: " (it also fits other STEP lines: "
+            + "; ".join(other(g) for g in cands[f.d.index] if g.s.index != f.s.index)
+            + ")"
+            for f in claimed.values()
+            if len(cands[f.d.index]) > 1
+        }
+        chosen: dict[int, list[DirFit]] = {si: [f] for si, f in claimed.items()}
+        for di, fits in cands.items():
+            if di in owners:
                 continue
-            best = self._pick_dir(d, fits)
+            d = fits[0].d
+            live = [f for f in fits if f.s.index not in claimed]
+            if not live:
+                self.why[di] = "fits as DIR only of STEP lines that have another DIR"
+                self.taken.add(di)
+                continue
+            best = self._pick_dir(d, live)
             if best is None:
                 self.conflicts.append(
                     Conflict(
                         f"{self.name_of(d)} fits as the DIR of several STEP lines",
-                        tuple(f"DIR of {self.name_of(f.s)}: {f.evidence()}" for f in fits),
+                        tuple(f"DIR of {self.name_of(f.s)}: {f.evidence()}" for f in live),
                     )
                 )
                 self.why[d.index] = "ambiguous DIR (see below)"
                 self.taken.add(d.index)
+                self.unsure_steps |= {f.s.index for f in live}
                 continue
             chosen.setdefault(best.s.index, []).append(best)
         out: dict[int, DirFit] = {}
@@ -300,12 +359,31 @@ class _Inference:
                     tuple(f"DIR {self.name_of(f.d)}: {f.evidence()}" for f in fits),
                 )
             )
+            self.unsure_steps.add(s.index)
             for f in fits:
                 self.why[f.d.index] = "ambiguous DIR (see below)"
                 self.taken.add(f.d.index)
         return out
 
+    def _takes_turns(self, pulse: list[Channel]) -> dict[int, set[int]]:
+        """Pulse line → the lines it takes turns with (up/down candidates, before any DIR)."""
+        out: dict[int, set[int]] = {c.index: set() for c in pulse}
+        for i, p in enumerate(pulse):
+            for q in pulse[i + 1 :]:
+                pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
+                assert pp is not None and qp is not None
+                if _up_down(pp, qp, self.cap.resolution_ticks) is not None:
+                    out[p.index].add(q.index)
+                    out[q.index].add(p.index)
+        return out
+
     def _pick_dir(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
+        best = self._pick_dir_by_evidence(d, fits)
+        if best is not None and len(fits) > 1 and self.turns.get(best.s.index):
+            return None  # an up/down line has no DIR: do not let a tie-break give it one
+        return best
+
+    def _pick_dir_by_evidence(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
         if len(fits) == 1:
             return fits[0]
         axis = self.hints[d.index].axis
@@ -314,13 +392,41 @@ class _Inference:
             if len(same) == 1:
                 return same[0]
         fits = sorted(fits, key=lambda f: -f.score)
-        top, second = fits[0], fits[1]
-        if top.score == top.toggles and second.score < top.score:
-            return top
+        top = [f for f in fits if f.score == fits[0].score]
+        if fits[0].score < fits[0].toggles:
+            return None
+        if len(top) == 1:
+            return top[0]
+        # tied: a DIR changes within setup/hold of its own STEP's pulses; take the STEP that is
+        # far nearer (_NEARER) at every change than every other tied one
+        for f in top:
+            if all(bool(np.all(_NEARER * f.near <= g.near)) for g in top if g is not f):
+                return f
         return None
 
     def _pulse_axes(self, pulse: list[Channel], dirs: dict[int, DirFit]) -> None:
-        free = [s for s in pulse if s.index not in dirs]
+        # a line named in a DIR conflict may be a STEP (with that DIR) or an up/down line; so
+        # may every line it takes turns with, and theirs: leave them all to the user
+        unsure = set(self.unsure_steps)
+        todo = list(unsure)
+        while todo:
+            for j in self.turns.get(todo.pop(), ()):
+                if j not in unsure and j not in dirs:
+                    unsure.add(j)
+                    todo.append(j)
+        unsure = {i for i in unsure if i not in dirs and self.turns.get(i)}
+        if unsure:
+            lines = [c for c in pulse if c.index in unsure]
+            self.conflicts.append(
+                Conflict(
+                    "pulse lines that may be STEPs of the ambiguous DIRs or up/down lines",
+                    tuple(f"{self.name_of(c)}: {self.looks[c.index].evidence}" for c in lines),
+                )
+            )
+            for c in lines:
+                self.why[c.index] = "a STEP or an up/down line (see below)"
+                self.taken.add(c.index)
+        free = [s for s in pulse if s.index not in dirs and s.index not in unsure]
         pairs = self._up_down_pairs(free)
         paired = {c.index for pr in pairs for c in pr[:2]}
         for up, down, ud in pairs:
@@ -341,14 +447,15 @@ class _Inference:
             motion = np.sort(np.concatenate([upl.pulses.starts, downl.pulses.starts]))
             self.axes.append(_Axis("up-down", 1, roles, [up, down], motion, notes))
         for s in pulse:
-            if s.index in paired:
+            if s.index in paired or s.index in self.taken:
                 continue
             look = self.looks[s.index]
             assert look.pulses is not None
             roles = [self.choice("step", s, look.evidence, active=look.pulses.level)]
             fit = dirs.get(s.index)
             if fit is not None:
-                roles.append(self.choice("dir", fit.d, fit.evidence()))
+                note = self.dir_notes.get(fit.d.index, "")
+                roles.append(self.choice("dir", fit.d, fit.evidence() + note))
             self.axes.append(_Axis("step-dir", 0, roles, [s], look.pulses.starts, []))
 
     def _up_down_pairs(self, free: list[Channel]) -> list[tuple[Channel, Channel, UpDownFit]]:
@@ -360,7 +467,7 @@ class _Inference:
                     continue  # named STEP: an axis of its own
                 pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
                 assert pp is not None and qp is not None
-                fit = _up_down(pp, qp)
+                fit = _up_down(pp, qp, self.cap.resolution_ticks)
                 if fit is not None:
                     partners[p.index].append((q, fit))
                     partners[q.index].append((p, fit))
@@ -396,7 +503,10 @@ class _Inference:
                     self.taken.add(c.index)
                 continue
             done |= {p.index, q.index}
-            if spare and not named:
+            if len(spare) >= 2 and not named:  # two DIRs that never changed?
+                for c in (p, q):
+                    self.why[c.index] = "up/down or a step axis of its own (see below)"
+                    self.taken.add(c.index)
                 self.conflicts.append(
                     Conflict(
                         f"{self.name_of(p)} and {self.name_of(q)} take turns and neither has a "
@@ -438,7 +548,8 @@ class _Inference:
                 missing.remove(a)
         by_index = {c.index: c for c in free}
         nexts = [by_index.get(a.channels[0].index + 1) for a in missing]
-        if missing and all(c is not None and self.hints[c.index].neutral for c in nexts):
+        unsure = any("DIR" in c.question for c in self.conflicts)  # a changing DIR is unplaced
+        if missing and not unsure and all(c is not None and self.hints[c.index].neutral for c in nexts):
             for a, nxt in zip(missing, nexts, strict=True):
                 assert nxt is not None
                 step = a.channels[0]
