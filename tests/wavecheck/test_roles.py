@@ -4,6 +4,7 @@ reported ambiguous, never mapped wrongly."""
 
 from __future__ import annotations
 
+import shlex
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -291,8 +292,12 @@ def _motion(
     return moves
 
 
-def _machine(rng: np.random.Generator, n_axes: int, with_enable: bool) -> Machine:
+def _machine(
+    rng: np.random.Generator, n_axes: int, with_enable: bool, unused: int = 0
+) -> Machine:
     m = Machine()
+    for _ in range(unused):  # probes on nothing
+        m.add(int(rng.integers(0, 2)), [])
     for k in range(n_axes):
         t0 = int(rng.integers(0, 2000)) * US + 10_000 * US
         updown = rng.random() >= 0.7
@@ -400,17 +405,26 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
     seed=st.integers(0, 2**32 - 1),
     n_axes=st.integers(2, 5),
     with_enable=st.booleans(),
+    unused=st.integers(0, 2),
     style=st.sampled_from(["D", "ch", "num"]),
 )
 def test_generated_machines_are_mapped_right_or_refused(
-    seed: int, n_axes: int, with_enable: bool, style: str
+    seed: int, n_axes: int, with_enable: bool, unused: int, style: str
 ) -> None:
     rng = np.random.default_rng(seed)
-    m = _machine(rng, n_axes, with_enable)
+    m = _machine(rng, n_axes, with_enable, unused)
     cap, where = _generated_capture(m, rng, style)
     p = propose(cap)
     verdict = _judge(m, where, p, cap)
     assert not verdict.startswith("wrong"), f"{verdict}\n{p.text()}"
+    if verdict == "right":  # the --map text names the same channels
+        for value in shlex.split(p.map_args())[1::2]:
+            assert ("." in value) == (len(p.axes) > 1)
+            name = value.split(".", 1)[0] if len(p.axes) > 1 else None
+            roles = parse_map([value.replace(f"{name}.", "")] if name else [value])
+            axis = p.axis(name) if name else p.axes[0]
+            assert roles == axis.mapping
+            build_interface(cap, roles)
 
 
 def test_generated_machines_are_mostly_decided() -> None:
@@ -426,20 +440,3 @@ def test_generated_machines_are_mostly_decided() -> None:
     # STEP lines as well, and up/down lines that take turns with more than one other line
     assert verdicts.count("right") >= 0.6 * len(verdicts), verdicts
 
-
-def _stats() -> None:  # pragma: no cover - a developer's look: python -m tests.wavecheck.test_roles
-    rng = np.random.default_rng(1)
-    out: dict[str, int] = {}
-    for i in range(400):
-        m = _machine(rng, 2 + i % 4, bool(i % 2))
-        cap, where = _generated_capture(m, rng, "D")
-        p = propose(cap)
-        v = _judge(m, where, p, cap)
-        out[v] = out.get(v, 0) + 1
-        if v.startswith("wrong"):
-            print(v, p.text(), sep="\n")
-    print(out)
-
-
-if __name__ == "__main__":
-    _stats()

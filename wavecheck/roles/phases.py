@@ -115,14 +115,14 @@ def _luts(number: int, m: int) -> tuple[tuple[tuple[int, ...], ...], npt.NDArray
 
 
 def _fit(
-    chans: Sequence[Channel], number: int, seq: npt.NDArray[np.int64]
+    chans: Sequence[Channel], number: int, seq: npt.NDArray[np.int64], min_cycles: int = 2
 ) -> tuple[tuple[int, ...], int] | None:
     """(order, reversals) of the preferred channel order in which the group states ``seq``
     (initial state first) walk table ``number``, or None. ``order[k]`` is the phase bit that
-    ``chans[k]`` drives."""
+    ``chans[k]`` drives; fewer than ``min_cycles`` cycles of changes are no evidence."""
     cycle = len(STATE_TABLES[number][1])
     changes = len(seq) - 1
-    if changes < 2 * cycle:
+    if changes < min_cycles * cycle:
         return None
     orders, luts = _luts(number, len(chans))
     head = luts[:, seq[:_PREFIX]]
@@ -170,6 +170,18 @@ def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
                 continue
             counts = [len(c.edges) for c in group]
             if max(counts) > 2 * min(counts) + 4:
+                continue
+            # a look at the first _PREFIX changes first: most groups fail there, cheaply
+            cut = min(int(c.edges[min(len(c.edges), _PREFIX) - 1]) for c in group)
+            head = [
+                Channel(c.name, c.index, c.initial, c.edges[: np.searchsorted(c.edges, cut, "right")])
+                for c in group
+            ]
+            h_times, h_states, h_initial = _states(head)
+            h_seq = np.r_[h_initial, h_states]
+            if not _steady(h_times) or not any(
+                _fit(head, number, h_seq, 0) is not None for number in by_size[m]
+            ):
                 continue
             times, states, initial = _states(group)
             seq = np.r_[initial, states]
