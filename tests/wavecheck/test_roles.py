@@ -1,0 +1,442 @@
+"""Channel roles found by their waveforms (wavecheck.roles): the real captures, every golden trace,
+hand-made cases for each rule, and generated multi-axis machines that must be mapped right or
+reported ambiguous, never mapped wrongly."""
+
+from __future__ import annotations
+
+import shlex
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.open import open_capture
+from wavecheck.interface import build_interface, parse_map
+from wavecheck.roles import Proposal, propose
+from wavecheck.roles.names import name_hint
+
+from .waves import capture, pulses
+
+GOLDEN = Path(__file__).resolve().parents[2] / "captures" / "golden"
+US = 1000  # ticks (ns) per µs
+
+
+def _roles(p: Proposal) -> dict[str, dict[str, str]]:
+    return {a.name: {r.role: r.channel for r in a.roles} for a in p.axes}
+
+
+# ---------------------------------------------------------------- real captures
+
+
+def test_grbl_step_is_step_en_is_enable_serial_lines_are_not_roles(grbl_sr: Path) -> None:
+    p = propose(open_capture(grbl_sr))
+    assert p.unambiguous, p.text()
+    assert _roles(p) == {"y": {"step": "STEP (Y axis)", "enable": "EN"}}
+    y = p.axis("y")
+    assert y.kind == "step-dir" and y.step_type == 0
+    assert y.role("step").evidence.startswith("pulse train: 10,508 high pulses of 9.5 us–13.5 us")
+    en = y.role("enable")
+    assert en.active_level == 1 and y.inverted == ()
+    assert "all 10,508 steps" in en.evidence and "none while it is low" in en.evidence
+    why = {u.channel: u.why for u in p.unassigned}
+    assert set(why) == {"TX", "RX"}
+    for line in ("TX", "RX"):
+        assert why[line].startswith("serial line:") and "idle high" in why[line]
+        assert "115," in why[line] or "117," in why[line]  # about 115,200 baud
+    assert p.map_args() == "--map 'step=STEP (Y axis),enable=EN'"
+    # the text a user pastes parses back into the same mapping and resolves on the capture
+    assert parse_map(["step=STEP (Y axis),enable=EN"]) == y.mapping
+
+
+def test_smoothieware_two_axes_3_4_and_5_6(smoothie_sr: Path) -> None:
+    cap = open_capture(smoothie_sr)
+    p = propose(cap)
+    assert p.unambiguous, p.text()
+    # test_engine_real.py: Y = step 3 / dir 4, X = step 5 / dir 6
+    assert _roles(p) == {"a": {"step": "3", "dir": "4"}, "b": {"step": "5", "dir": "6"}}
+    for a in p.axes:
+        assert a.role("step").basis == "waveform"
+        assert a.role("dir").basis == "layout"  # DIR never changes: only the wiring says so
+        assert "739 high pulses" in a.role("step").evidence
+    assert p.map_args() == "--map a.step=3,a.dir=4 --map b.step=5,b.dir=6"
+    why = {u.index: u.why for u in p.unassigned}
+    assert set(why) == {0, 1, 2, 7}
+    assert why[0].startswith("serial line")  # the ARM ITM trace
+    for a in p.axes:
+        build_interface(cap, a.mapping)  # every reference resolves
+
+
+# ---------------------------------------------------------------- golden traces
+
+
+@pytest.mark.parametrize(
+    ("trace", "kind", "step_type", "mapping"),
+    [
+        ("a4988-spike", "step-dir", 0, {"step": "step", "dir": "dir"}),
+        ("g202-p16-dirhold2-worst", "step-dir", 0, {"step": "step", "dir": "dir"}),
+        ("g202-p20-worst-dirhold", "step-dir", 0, {"step": "step", "dir": "dir"}),
+        ("stepgen0", "step-dir", 0, {"step": "step", "dir": "dir"}),
+        ("xylotex-dirsetup-zero", "step-dir", 0, {"step": "step", "dir": "dir"}),
+        ("updown-uniform", "up-down", 1, {"up": "up", "down": "down"}),
+        ("stepgen1-quadrature", "phases", 2, {"phase-A": "phase-A", "phase-B": "phase-B"}),
+        # type 15 with the user table 1,3,2,6,4,5: LinuxCNC's type 4 table
+        ("user-type15-velocity", "phases", 4,
+         {"phase-A": "phase-A", "phase-B": "phase-B", "phase-C": "phase-C"}),
+    ],
+)
+def test_golden_traces(trace: str, kind: str, step_type: int, mapping: dict[str, str]) -> None:
+    p = propose(open_capture(GOLDEN / f"{trace}.vcd"))
+    assert p.unambiguous, p.text()
+    assert len(p.axes) == 1 and not p.unassigned
+    axis = p.axes[0]
+    assert (axis.kind, axis.step_type, axis.mapping) == (kind, step_type, mapping)
+
+
+def test_golden_dir_decided_by_waveform_when_it_changes() -> None:
+    for trace in ("g202-p20-worst-dirhold", "xylotex-dirsetup-zero"):
+        d = propose(open_capture(GOLDEN / f"{trace}.vcd")).axes[0].role("dir")
+        assert d is not None and d.basis == "waveform"
+        assert d.evidence.startswith("toggles 2 times, only between pulses of 'step'")
+
+
+def _renamed(cap: Capture, names: list[str]) -> Capture:
+    chans = [
+        Channel(name=n, index=c.index, initial=c.initial, edges=c.edges)
+        for n, c in zip(names, cap.channels, strict=True)
+    ]
+    return Capture(cap.path, cap.format, cap.timebase, cap.resolution_ticks, cap.samplerate_hz,
+                   cap.start, cap.end, chans)
+
+
+@pytest.mark.parametrize(
+    "trace", ["g202-p20-worst-dirhold", "xylotex-dirsetup-zero", "updown-uniform",
+              "stepgen1-quadrature", "user-type15-velocity"],
+)
+def test_golden_traces_with_neutral_names(trace: str) -> None:
+    cap = open_capture(GOLDEN / f"{trace}.vcd")
+    named = propose(cap).axes[0]
+    neutral = propose(_renamed(cap, [f"D{c.index}" for c in cap.channels]))
+    assert neutral.unambiguous, neutral.text()
+    axis = neutral.axes[0]
+    assert (axis.kind, axis.step_type) == (named.kind, named.step_type)
+    by_index = {r.role: r.index for r in named.roles}
+    got = {r.role: r.index for r in axis.roles}
+    if axis.kind == "step-dir":
+        assert got == by_index
+    else:  # which line is UP / phase-A is not in the waveform
+        assert set(got.values()) == set(by_index.values())
+
+
+# ---------------------------------------------------------------- rules, one by one
+
+
+def test_names_give_roles_and_axes() -> None:
+    cases = {
+        "X_STEP": ({"step"}, "x"),
+        "STEP (Y axis)": ({"step"}, "y"),
+        "xstep": ({"step"}, "x"),
+        "dirz": ({"dir"}, "z"),
+        "stepgen.2.step": ({"step"}, "2"),
+        "PUL+": ({"step"}, None),
+        "EN": ({"enable"}, None),
+        "phase-A": ({"phase-A"}, None),
+        "D3": (set(), None),
+        "A0": (set(), None),
+        "ch3": (set(), None),
+    }
+    for name, (roles, axis) in cases.items():
+        h = name_hint(name)
+        assert (set(h.roles), h.axis) == (roles, axis), name
+
+
+def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
+    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
+    # toggles at 502 µs: inside the pulse at 500..505 µs
+    p = propose(capture({"s": (0, step), "d": (0, [502 * US, 1203 * US])}))
+    assert _roles(p) == {"a": {"step": "s"}}
+    assert [u.channel for u in p.unassigned] == ["d"]
+
+
+def test_waveform_beats_the_name() -> None:
+    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
+    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    s = p.axes[0].role("step")
+    assert s is not None and s.channel == "DIR" and "the waveform decides" in s.evidence
+
+
+def _reversing_axis(t0: int, reversals: list[int], period: int = 100 * US) -> tuple[list[int], list[int]]:
+    """Starts of pulses and DIR toggles of an axis that reverses after the given pulse counts:
+    each reversal slows down (3 periods), pauses, and DIR changes 10 µs before the next pulse."""
+    starts: list[int] = []
+    toggles: list[int] = []
+    t = t0
+    for n in reversals:
+        for k in range(n):
+            slow = 3 if k in (0, n - 1) else 1
+            t += period * slow
+            starts.append(t)
+        t += 5 * period
+        toggles.append(t + 3 * period - 10 * US)
+    return starts, toggles[:-1]
+
+
+def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
+    xs, xd = _reversing_axis(0, [10, 12, 9])
+    ys, yd = _reversing_axis(37 * US, [7, 8, 15])
+    cap = capture({
+        "0": (0, pulses(xs, 5 * US)), "1": (0, pulses(ys, 4 * US)),
+        "2": (0, yd), "3": (0, xd),
+    })
+    p = propose(cap)
+    assert p.unambiguous, p.text()
+    assert _roles(p) == {"a": {"step": "0", "dir": "3"}, "b": {"step": "1", "dir": "2"}}
+    assert "2 of 2 at reversals of its rate" in p.axis("a").role("dir").evidence
+
+
+def test_up_down_pair_refused_when_unchanging_lines_could_be_dirs() -> None:
+    up = pulses([100 * US * k for k in range(1, 11)], 5 * US)
+    down = pulses([3000 * US + 100 * US * k for k in range(1, 11)], 5 * US)
+    clean = propose(capture({"p": (0, up), "q": (0, down)}))
+    assert clean.unambiguous and clean.axes[0].kind == "up-down"
+    assert clean.map_args() == "--map up=p,down=q" and clean.type_args() == "--type 1"
+    one = propose(capture({"p": (0, up), "q": (0, down), "r": (0, [])}))
+    assert one.unambiguous and one.axes[0].kind == "up-down"  # one DIR cannot serve two axes
+    spare = propose(capture({"p": (0, up), "q": (0, down), "r": (0, []), "s": (1, [])}))
+    assert not spare.unambiguous and not spare.axes
+    assert "take turns" in spare.ambiguous[0].question
+    named = propose(capture({"X_STEP": (0, up), "Y_STEP": (0, down), "r": (0, []), "s": (0, [])}))
+    assert [a.kind for a in named.axes] == ["step-dir", "step-dir"]
+
+
+def test_shared_enable_and_active_low() -> None:
+    xs, xd = _reversing_axis(1000 * US, [10, 12])
+    ys, yd = _reversing_axis(1037 * US, [7, 8])
+    last = max(xs[-1], ys[-1]) + 500 * US
+    cap = capture({"x": (0, pulses(xs, 5 * US)), "xd": (0, xd), "y": (0, pulses(ys, 5 * US)),
+                   "yd": (1, yd), "en": (1, [500 * US, last])})
+    p = propose(cap)
+    assert p.unambiguous, p.text()
+    assert [s.channel for s in p.shared] == ["en"] and p.shared[0].axes == ("a", "b")
+    for a in p.axes:
+        assert a.role("enable").active_level == 0 and a.inverted == ("enable",)
+
+
+def test_map_args_quote_and_fall_back_to_indices() -> None:
+    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
+    assert propose(capture({"S,1": (0, step)})).map_args() == "--map step=0"
+    named = propose(capture({"STEP (Y axis)": (0, step), "Y DIR": (0, [])}))
+    assert named.map_args() == "--map 'step=STEP (Y axis),dir=Y DIR'"
+    assert named.axis("y").role("dir").basis == "name"
+
+
+def test_long_capture_is_bounded_in_time() -> None:
+    rng = np.random.default_rng(3)
+    n = 1_000_000
+    starts = np.cumsum(rng.integers(20, 60, n)) * 1000
+    step = np.empty(2 * n, np.int64)
+    step[0::2], step[1::2] = starts, starts + 5000
+    rev = starts[np.arange(5000, n, 50_000)] - 3000
+    cap = capture({"s": (0, step.tolist()), "d": (0, rev.tolist()), "u": (1, [])})
+    t = time.perf_counter()
+    p = propose(cap)
+    assert time.perf_counter() - t < 10
+    assert _roles(p) == {"a": {"step": "s", "dir": "d"}}
+
+
+# ---------------------------------------------------------------- generated machines
+
+
+@dataclass
+class Truth:
+    kind: str
+    roles: dict[str, int]  # role -> generated line number
+    dir_changes: bool = True
+
+
+@dataclass
+class Machine:
+    lines: list[tuple[int, list[int]]] = field(default_factory=list)  # (initial, edges)
+    axes: list[Truth] = field(default_factory=list)
+    enable: int | None = None
+
+    def add(self, initial: int, edges: list[int]) -> int:
+        self.lines.append((initial, edges))
+        return len(self.lines) - 1
+
+
+def _motion(
+    rng: np.random.Generator, t0: int, reverse: bool = False
+) -> list[tuple[int, list[int]]]:
+    """Moves of one axis: (direction, pulse start ticks); each move speeds up and slows down,
+    consecutive moves are apart by a pause longer than their slowest periods."""
+    moves = []
+    t = t0
+    direction = int(rng.choice([-1, 1]))
+    fast = int(rng.integers(40, 400)) * US
+    for i in range(int(rng.integers(2 if reverse else 1, 6))):
+        n = int(rng.integers(3, 40))
+        ramp = np.minimum(np.minimum(np.arange(n) + 1, n - np.arange(n)), 4)
+        periods = (fast * 4 / ramp * rng.uniform(0.95, 1.05, n)).astype(np.int64)
+        starts = t + np.cumsum(periods)
+        moves.append((direction, starts.tolist()))
+        t = int(starts[-1]) + int(periods[-1] * rng.uniform(1.6, 4))
+        if rng.random() < 0.3:
+            t += int(rng.integers(1, 30)) * fast  # an idle stretch
+        if rng.random() < 0.6 or (reverse and i == 0):
+            direction = -direction
+    return moves
+
+
+def _machine(
+    rng: np.random.Generator, n_axes: int, with_enable: bool, unused: int = 0
+) -> Machine:
+    m = Machine()
+    for _ in range(unused):  # probes on nothing
+        m.add(int(rng.integers(0, 2)), [])
+    for k in range(n_axes):
+        t0 = int(rng.integers(0, 2000)) * US + 10_000 * US
+        updown = rng.random() >= 0.7
+        # an up/down axis that never reverses pulses on one line only: to any observer a step
+        # axis without its DIR, so each generated up/down axis reverses at least once
+        moves = _motion(rng, t0, reverse=updown)
+        width = int(rng.integers(2, 20)) * US
+        level = int(rng.integers(0, 2))  # pulse level; idle at the other
+        if not updown:
+            starts = [s for _, ss in moves for s in ss]
+            step = pulses(starts, width)
+            d0 = int(rng.integers(0, 2))
+            toggles = []
+            for (d1, s1), (d2, s2) in zip(moves, moves[1:], strict=False):
+                if d1 != d2:
+                    gap_start, gap_end = s1[-1] + width, s2[0]
+                    room = gap_end - gap_start
+                    lead = int(min(room // 3, int(rng.integers(1, 50)) * US))
+                    toggles.append(gap_start + lead if rng.random() < 0.5 else gap_end - lead)
+            s = m.add(level ^ 1, step)
+            d = m.add(d0, toggles)
+            m.axes.append(Truth("step-dir", {"step": s, "dir": d}, bool(toggles)))
+        else:
+            up = [s for d, ss in moves if d > 0 for s in ss]
+            down = [s for d, ss in moves if d < 0 for s in ss]
+            u = m.add(level ^ 1, pulses(up, width))
+            dn = m.add(level ^ 1, pulses(down, width))
+            m.axes.append(Truth("up-down", {"up": u, "down": dn}))
+        del k
+    if with_enable:
+        edges = [e for _, ee in m.lines for e in ee]
+        first, last = min(edges), max(edges)
+        m.enable = m.add(int(rng.integers(0, 2)), [first - 5000 * US, last + 5000 * US])
+    return m
+
+
+def _generated_capture(m: Machine, rng: np.random.Generator, style: str) -> tuple[Capture, list[int]]:
+    """The machine's lines in a shuffled order with neutral names; returns the capture and, per
+    generated line, its channel index."""
+    order = rng.permutation(len(m.lines))
+    where = [0] * len(m.lines)
+    signals: dict[str, tuple[int, list[int]]] = {}
+    for pos, line in enumerate(order):
+        where[int(line)] = pos
+        name = {"D": f"D{pos}", "ch": f"ch{pos}", "num": str(pos)}[style]
+        initial, edges = m.lines[int(line)]
+        signals[name] = (initial, edges)
+    last = max(e for _, ee in m.lines for e in ee)
+    return capture(signals, end=last + 1000 * US), where
+
+
+def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
+    """``"right"``, ``"ambiguous"`` or ``"wrong: …"``: every role proposed must be the machine's,
+    and when nothing is ambiguous every axis must be there."""
+    constant_check = {c.index: c for c in cap.channels}
+    truth_by_channel: dict[int, tuple[int, str]] = {}
+    for k, t in enumerate(m.axes):
+        for role, line in t.roles.items():
+            truth_by_channel[where[line]] = (k, role)
+    found: set[int] = set()
+    for a in p.axes:
+        pulse = [r for r in a.roles if r.role in ("step", "up", "down")]
+        if not pulse or pulse[0].index not in truth_by_channel:
+            return f"wrong: axis {a.name} {a.mapping}"
+        k, _ = truth_by_channel[pulse[0].index]
+        t = m.axes[k]
+        if a.kind != t.kind:
+            return f"wrong: axis {a.name} is {a.kind}, truly {t.kind}"
+        found.add(k)
+        for r in a.roles:
+            if r.role == "enable":
+                if m.enable is None or r.index != where[m.enable]:
+                    return f"wrong: enable {r.channel}"
+                continue
+            if r.basis == "layout":
+                # a guess from the wiring, flagged as such: allowed only for an axis whose DIR
+                # never changed, on a channel that never changes (no edge of it is checked; only
+                # the sign of the position rests on it)
+                if r.role != "dir" or t.dir_changes or len(constant_check[r.index].edges):
+                    return f"wrong: layout guess {a.name}.{r.role}={r.channel}"
+                continue
+            truly = truth_by_channel.get(r.index)
+            if a.kind == "up-down":
+                ok = truly is not None and truly[0] == k and truly[1] in ("up", "down")
+            else:
+                ok = truly == (k, r.role)
+            if not ok:
+                return f"wrong: {a.name}.{r.role}={r.channel} is truly {truly}"
+    if p.ambiguous:
+        return "ambiguous"
+    if found != set(range(len(m.axes))):
+        return f"wrong: axes missing {sorted(set(range(len(m.axes))) - found)}"
+    for a in p.axes:
+        pulse = next(r for r in a.roles if r.role in ("step", "up", "down"))
+        t = m.axes[truth_by_channel[pulse.index][0]]
+        if t.kind == "step-dir" and t.dir_changes and a.role("dir") is None:
+            return f"wrong: axis {a.name} lost its DIR"
+        if m.enable is not None and a.role("enable") is None:
+            return f"wrong: axis {a.name} lost its ENABLE"
+    return "right"
+
+
+@settings(max_examples=300)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n_axes=st.integers(2, 5),
+    with_enable=st.booleans(),
+    unused=st.integers(0, 2),
+    style=st.sampled_from(["D", "ch", "num"]),
+)
+def test_generated_machines_are_mapped_right_or_refused(
+    seed: int, n_axes: int, with_enable: bool, unused: int, style: str
+) -> None:
+    rng = np.random.default_rng(seed)
+    m = _machine(rng, n_axes, with_enable, unused)
+    cap, where = _generated_capture(m, rng, style)
+    p = propose(cap)
+    verdict = _judge(m, where, p, cap)
+    assert not verdict.startswith("wrong"), f"{verdict}\n{p.text()}"
+    if verdict == "right":  # the --map text names the same channels
+        for value in shlex.split(p.map_args())[1::2]:
+            assert ("." in value) == (len(p.axes) > 1)
+            name = value.split(".", 1)[0] if len(p.axes) > 1 else None
+            roles = parse_map([value.replace(f"{name}.", "")] if name else [value])
+            axis = p.axis(name) if name else p.axes[0]
+            assert roles == axis.mapping
+            build_interface(cap, roles)
+
+
+def test_generated_machines_are_mostly_decided() -> None:
+    """The property above is also met by refusing everything; most machines must be mapped."""
+    rng = np.random.default_rng(20240613)
+    verdicts = []
+    for i in range(120):
+        m = _machine(rng, 2 + i % 4, bool(i % 2))
+        cap, where = _generated_capture(m, rng, "D")
+        verdicts.append(_judge(m, where, propose(cap), cap))
+    assert not [v for v in verdicts if v.startswith("wrong")]
+    # about 70% (step/dir-only machines 95%); the rest are single-toggle DIRs that fit two
+    # STEP lines as well, and up/down lines that take turns with more than one other line
+    assert verdicts.count("right") >= 0.6 * len(verdicts), verdicts
+

@@ -1,0 +1,65 @@
+"""Channels found by their waveforms: which channel is whose STEP, DIR, UP/DOWN, phase or ENABLE.
+
+:func:`propose` looks at every channel of a capture and returns a :class:`Proposal`: the axes
+(each a kind, a LinuxCNC step type and a role → channel mapping with the evidence in words), shared
+lines, channels left unassigned with why, and the conflicts the waveforms cannot settle. The rules:
+
+- **STEP**: a pulse train: many pulses at one level with nearly constant width, no longer than
+  the gaps, which may vary (:mod:`wavecheck.roles.features`).
+- **serial lines** (UART TX/RX, an SWO trace) are never STEP: their intervals are whole multiples of
+  one bit time with runs of several bits at both levels, and they idle at one level
+  (:mod:`wavecheck.roles.features`).
+- **DIR** of a STEP line: changes only between its pulses (never inside one; at the tick a pulse
+  starts is allowed: DIR setup 0), with at least one pulse after each change before the next, and
+  pulses at both of its levels. A STEP has one DIR, so a line that fits a single STEP line not yet
+  given a DIR takes it, and that STEP drops out of the other lines' candidates. Among several it
+  fits, the one whose rate reverses at every change (the period across the change is 1.25× the
+  periods beside it: slow-down, gap, speed-up; or the change is before the first / after the last
+  pulse) when no other does as well; else a name with the same axis; else the STEP that is 20×
+  nearer at every change (DIR setup/hold is short); a tie-break never gives a DIR to a line that
+  takes turns with another (it may be an up/down line). Otherwise it is ambiguous, and so is every
+  pulse line it fits and every line those take turns with. Two DIRs for one STEP are ambiguous
+  unless exactly one is named DIR.
+- **UP/DOWN**: two pulse lines without a DIR that never pulse together and take turns: at each
+  switch the period is no shorter than the periods beside it (a line pulsing within the other's
+  run is another axis), with the same pulse level and width (one step generator drives both).
+  If two or more unchanging channels could be the DIRs of two step axes moving one after the
+  other, that is a conflict (unless the names say up/down or step).
+- **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables
+  (:mod:`wavecheck.roles.phases`).
+- **ENABLE**: a leftover changing line at one level of which no axis ever moves, while some
+  axes move at the other (it changes before the first and after the last pulse, or around
+  bursts); serving several axes it is a shared line.
+- a **DIR that never changes** has no waveform evidence: a channel named like the axis's DIR is
+  taken by name; else, when every STEP without a DIR is followed by an unchanging, neutrally named
+  channel, each such channel is taken as that STEP's DIR by layout (the Smoothieware capture:
+  3/4 and 5/6), flagged ``basis="layout"``.
+- **names** (:mod:`wavecheck.roles.names`) name the axes and break ties; the waveform decides,
+  and the evidence says when a name disagreed.
+
+Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x``,
+``stepgen.2.step`` → ``2``), else ``a``, ``b`` … in channel order (skipping letters the names
+took). The ``--map`` text is :meth:`Proposal.map_args`.
+"""
+
+from wavecheck.roles.infer import propose
+from wavecheck.roles.model import (
+    AxisProposal,
+    Basis,
+    Conflict,
+    Proposal,
+    RoleChoice,
+    SharedLine,
+    Unassigned,
+)
+
+__all__ = [
+    "AxisProposal",
+    "Basis",
+    "Conflict",
+    "Proposal",
+    "RoleChoice",
+    "SharedLine",
+    "Unassigned",
+    "propose",
+]

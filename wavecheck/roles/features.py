@@ -1,0 +1,197 @@
+"""What one channel's edges look like on their own: unchanging, a serial line, or a pulse train.
+
+Everything here is vectorised over a channel's edge array (a few ``numpy`` passes, no Python loop
+per edge), so a channel of ten million edges costs a few hundred milliseconds.
+
+A **pulse train** (a STEP candidate): at least two complete pulses at one level whose widths are
+nearly constant (the 10th..90th percentile within a factor 1.6, plus two samples of resolution),
+and no longer than the typical time spent at the other level. Its gaps may vary (acceleration,
+pauses); the pulse width does not.
+
+A **serial line** (UART TX/RX, an ARM SWO/ITM trace): every interval shorter than a frame is a whole
+multiple of one bit time *b* (the shortest interval), and *both* levels show several of those
+multiples (a byte's bits give runs of 1·b, 2·b, 3·b … of either level), while a STEP line's pulse
+level shows one width only. A UART idles at one level (high) between frames, so only that level
+has long intervals, and runs of the other level stay within a frame (≤ 9·b). The grbl capture's TX
+and RX have intervals of 17–104 samples at 2 MHz, all within ±1 sample of multiples of 17.36
+(115,200 baud), with 1..6 bit runs at both levels: serial, never STEP.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import Capture, Channel, EdgeArray
+from wavecheck.units import format_frequency, format_time
+
+__all__ = ["ChannelLook", "Pulses", "look_at", "pulses_of"]
+
+_WIDTH_SPREAD = 1.6  # p90/p10 of a pulse train's pulse widths stays below this
+_SERIAL_FRAME_BITS = 10.5  # intervals up to this many bit times belong to a frame
+_SERIAL_ON_GRID = 0.9  # share of in-frame intervals within a quarter bit of a whole multiple
+
+
+@dataclass(frozen=True)
+class Pulses:
+    """The complete pulses of a channel at its pulse level, in ticks.
+
+    ``starts[i]`` and ``ends[i]`` bound pulse *i*; a pulse cut by the capture's start or end is
+    left out (its width is unknown).
+    """
+
+    level: int
+    starts: EdgeArray
+    ends: EdgeArray
+
+    @property
+    def count(self) -> int:
+        """Number of complete pulses."""
+        return len(self.starts)
+
+    @property
+    def widths(self) -> EdgeArray:
+        """Width of each pulse in ticks."""
+        return self.ends - self.starts
+
+
+def pulses_of(ch: Channel, level: int) -> Pulses:
+    """The complete pulses of ``ch`` at ``level`` (an edge into ``level`` and the next edge)."""
+    e = ch.edges
+    # level after edge i is initial ^ ((i + 1) & 1); edges into `level` are those indices
+    first = 0 if (ch.initial ^ 1) == level else 1
+    starts = e[first::2]
+    ends = e[first + 1 :: 2]
+    return Pulses(level, starts[: len(ends)], ends)
+
+
+@dataclass(frozen=True)
+class ChannelLook:
+    """What a channel looks like on its own.
+
+    Attributes:
+        channel: the channel.
+        kind: ``"constant"`` (no edge), ``"serial"``, ``"pulses"`` (a pulse train: a STEP
+            candidate), ``"other"``.
+        pulses: for ``"pulses"``, its pulses at the pulse level; else the pulses at the level
+            that is shorter on median (used to test whether it is a DIR with long "pulses").
+        evidence: what was seen, in words.
+    """
+
+    channel: Channel
+    kind: str
+    pulses: Pulses | None
+    evidence: str
+
+    @property
+    def is_step_like(self) -> bool:
+        """True for a pulse train (a STEP, UP or DOWN candidate)."""
+        return self.kind == "pulses"
+
+
+def _level_intervals(ch: Channel) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Intervals between consecutive edges, split by the level they are at: (low, high)."""
+    d = np.diff(ch.edges)
+    after_first = ch.initial ^ 1  # level after edge 0; alternates from there
+    lv0 = d[0::2] if after_first == 0 else d[1::2]
+    lv1 = d[1::2] if after_first == 0 else d[0::2]
+    return lv0, lv1
+
+
+def _serial(ch: Channel, cap: Capture) -> str | None:
+    """Evidence that ``ch`` is a serial line, or None."""
+    if len(ch.edges) < 20:
+        return None
+    lows, highs = _level_intervals(ch)
+    allv = np.concatenate([lows, highs])
+    shortest = int(allv.min())
+    near = allv[allv <= shortest + shortest // 2 + 1]
+    b = float(np.median(near))
+    if b <= 0:
+        return None
+    per_level: list[npt.NDArray[np.float64]] = []
+    on_grid = 0
+    in_frame = 0
+    for v in (lows, highs):
+        short = v[v <= _SERIAL_FRAME_BITS * b].astype(np.float64) / b
+        per_level.append(short)
+        on_grid += int(np.count_nonzero(np.abs(short - np.rint(short)) <= 0.25))
+        in_frame += len(short)
+    if in_frame < 20 or on_grid < _SERIAL_ON_GRID * in_frame:
+        return None
+    for short in per_level:
+        if len(short) == 0:
+            return None
+        multiples = np.bincount(np.rint(short).astype(np.int64))
+        if np.count_nonzero(multiples >= max(2, 0.05 * len(short))) < 2:
+            return None  # one width only at this level: a pulse train, not bytes
+    frame = allv[allv <= _SERIAL_FRAME_BITS * b].astype(np.float64)
+    b = float(frame.sum() / np.rint(frame / b).sum())  # least-squares bit time
+    bit = cap.timebase.seconds(1) * Fraction(b).limit_denominator(1000)
+    long_low = int(np.count_nonzero(lows > _SERIAL_FRAME_BITS * b))
+    long_high = int(np.count_nonzero(highs > _SERIAL_FRAME_BITS * b))
+    idle = (
+        "idle high"
+        if long_high > 4 * long_low
+        else "idle low"
+        if long_low > 4 * long_high
+        else "no idle level"
+    )
+    return (
+        f"serial line: {on_grid:,} of {in_frame:,} in-frame intervals are whole multiples of "
+        f"{format_time(bit)} (about {float(1 / bit):,.0f} baud), runs of several bit times "
+        f"at both levels, {idle}: not a step signal"
+    )
+
+
+def _span(cap: Capture, lo: int, hi: int) -> str:
+    a, b = format_time(cap.timebase.seconds(lo)), format_time(cap.timebase.seconds(hi))
+    return a if lo == hi else f"{a}–{b}"
+
+
+def look_at(ch: Channel, cap: Capture) -> ChannelLook:
+    """Classify one channel from its own edges (see the module docstring for the rules)."""
+    n = len(ch.edges)
+    if n == 0:
+        lvl = "high" if ch.initial else "low"
+        return ChannelLook(ch, "constant", None, f"never changes ({lvl} throughout)")
+    serial = _serial(ch, cap)
+    if serial is not None:
+        return ChannelLook(ch, "serial", None, serial)
+    lows, highs = _level_intervals(ch)
+    if len(lows) == 0 or len(highs) == 0:
+        return ChannelLook(ch, "other", None, f"changes {n} time{'s' if n != 1 else ''}")
+    med0, med1 = float(np.median(lows)), float(np.median(highs))
+    if med0 != med1:
+        level = 0 if med0 < med1 else 1
+    else:
+        level = ch.initial ^ 1
+    p = pulses_of(ch, level)
+    gaps = lows if level == 1 else highs
+    res = 2 * max(cap.resolution_ticks, 0)
+    if p.count >= 2:
+        w = p.widths
+        p10, p90 = np.percentile(w, [10, 90])
+        steady = p90 <= _WIDTH_SPREAD * p10 + res
+        short = float(np.median(w)) <= float(np.median(gaps)) if len(gaps) else True
+        if steady and short:
+            periods = np.diff(p.starts)
+            rate = ""
+            if len(periods):
+                fastest = int(periods.min())
+                rate = f", rate up to {format_frequency(1 / cap.timebase.seconds(fastest), 3)}"
+            gap_text = f", gaps {_span(cap, int(gaps.min()), int(gaps.max()))}" if len(gaps) else ""
+            return ChannelLook(
+                ch,
+                "pulses",
+                p,
+                f"pulse train: {p.count:,} {'high' if level else 'low'} pulses of "
+                f"{_span(cap, int(w.min()), int(w.max()))}{gap_text}{rate}",
+            )
+    why = f"changes {n:,} time{'s' if n != 1 else ''}"
+    if p.count >= 2:
+        why += ", not a pulse train (its pulse widths vary, or are longer than its gaps)"
+    return ChannelLook(ch, "other", p, why)

@@ -1,0 +1,673 @@
+"""Propose channel roles from the waveforms: the relations between channels, and the proposal.
+
+See :mod:`wavecheck.roles` for the rules. Each relation below is a few ``numpy`` passes over edge
+arrays (``searchsorted``, ``bincount``); nothing loops over edges in Python.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.model import Capture, Channel
+from wavecheck.roles.features import ChannelLook, Pulses, look_at
+from wavecheck.roles.model import (
+    AxisProposal,
+    Basis,
+    Conflict,
+    Proposal,
+    RoleChoice,
+    SharedLine,
+    Unassigned,
+)
+from wavecheck.roles.names import NameHint, name_hint
+from wavecheck.roles.phases import PhaseGroup, find_phase_groups
+
+__all__ = ["propose"]
+
+_REVERSAL_GAP = 1.25  # a reversal's period is this much longer than the periods beside it
+_NEARER = 20  # a tied DIR goes to the STEP this many times nearer to each of its changes
+_SWITCH_GAP = 0.9
+_SAME_WIDTH = 1.2  # up/down: median pulse widths of the two lines within this factor  # up/down: the period across a switch is at least this times its neighbours'
+_AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+
+I64 = npt.NDArray[np.int64]
+
+
+def _level_at(ch: Channel, times: I64) -> I64:
+    """Level of ``ch`` just after each of ``times`` (an edge at that very tick counts)."""
+    n = np.searchsorted(ch.edges, times, side="right")
+    return (ch.initial ^ (n & 1)).astype(np.int64)
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n:,} {word}{'' if n == 1 else 's'}"
+
+
+@dataclass(frozen=True)
+class DirFit:
+    """How a toggling channel ``d`` fits as the DIR of pulse channel ``s``."""
+
+    d: Channel
+    s: Channel
+    toggles: int
+    at_reversal: int  # toggles whose period is longer than the periods beside it
+    outside: int  # toggles before the first or after the last pulse
+    per_level: tuple[int, int]  # pulses of s while d is low, high
+    near: npt.NDArray[np.float64]  # per change: ticks to the nearest pulse of s (setup or hold)
+
+    @property
+    def score(self) -> int:
+        """Toggles that sit where a DIR change belongs (a reversal, or outside the motion)."""
+        return self.at_reversal + self.outside
+
+    def evidence(self) -> str:
+        where = f"{self.at_reversal:,} of {self.toggles:,} at reversals of its rate"
+        if self.outside:
+            where += f", {self.outside:,} before its first or after its last pulse"
+        lo, hi = self.per_level
+        return (
+            f"toggles {_plural(self.toggles, 'time')}, only between pulses of {self.s.name!r} "
+            f"(never inside one, and with a pulse after each change), {where}; its pulses "
+            f"happen at both levels ({lo:,} low, {hi:,} high)"
+        )
+
+
+def _dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
+    """The fit of ``d`` as DIR of ``s`` (pulses ``p``), or None when a hard rule fails: an edge of
+    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, or pulses of
+    ``s`` at only one level of ``d``."""
+    t = d.edges
+    n = len(t)
+    if n == 0 or p.count == 0:
+        return None
+    i = np.searchsorted(s.edges, t, side="left")
+    j = np.searchsorted(s.edges, t, side="right")
+    if np.any((i == j) & ((s.initial ^ (i & 1)) == p.level)):
+        return None  # a change inside a pulse
+    # pulses per level interval of d (0 = before its first change); a pulse starting at the
+    # tick of a change belongs after it (DIR setup 0)
+    k = np.searchsorted(t, p.starts, side="right")
+    counts = np.bincount(k, minlength=n + 1)
+    if n >= 2 and np.any(counts[1:n] == 0):
+        return None  # changed twice with no step between: not a direction
+    levels = d.initial ^ (np.arange(n + 1) & 1)
+    lo, hi = int(counts[levels == 0].sum()), int(counts[levels == 1].sum())
+    if lo == 0 or hi == 0:
+        return None
+    # where each change sits in s's pulse train: between pulse a-1 and pulse a
+    a = np.searchsorted(p.starts, t, side="left")
+    outside = int(np.count_nonzero((a == 0) | (a == p.count)))
+    inner = a[(a > 0) & (a < p.count)]
+    st = p.starts
+    period = (st[inner] - st[inner - 1]).astype(np.float64)
+    before = np.where(inner >= 2, st[inner - 1] - st[np.maximum(inner - 2, 0)], 0)
+    after = np.where(inner + 1 < p.count, st[np.minimum(inner + 1, p.count - 1)] - st[inner], 0)
+    beside = np.maximum(before, after).astype(np.float64)
+    at_rev = int(np.count_nonzero(period >= _REVERSAL_GAP * beside))
+    hold = np.where(a > 0, t - p.ends[np.maximum(a - 1, 0)], np.inf)
+    setup = np.where(a < p.count, st[np.minimum(a, p.count - 1)] - t, np.inf)
+    return DirFit(d, s, n, at_rev, outside, (lo, hi), np.minimum(hold, setup))
+
+
+def _pulses_inside(d: Channel, dp: Pulses, s_starts: I64) -> int:
+    """Number of ``s_starts`` that fall while ``d`` is at its pulse level."""
+    return int(np.count_nonzero(_level_at(d, s_starts) == dp.level))
+
+
+@dataclass(frozen=True)
+class UpDownFit:
+    """Two pulse lines that never pulse together and take turns."""
+
+    switches: int
+
+    def evidence(self, other: Channel) -> str:
+        return (
+            f"takes turns with {other.name!r}: never pulses while it runs "
+            f"(switches {self.switches:,} times, always after a pause no shorter than the "
+            "periods beside it), and no DIR line"
+        )
+
+
+def _up_down(p: Pulses, q: Pulses, resolution: int) -> UpDownFit | None:
+    """The fit of two pulse trains as an up/down pair, or None when they run at the same time."""
+    if p.count == 0 or q.count == 0 or p.level != q.level:
+        return None
+    wp, wq = float(np.median(p.widths)), float(np.median(q.widths))
+    if max(wp, wq) > _SAME_WIDTH * min(wp, wq) + 2 * resolution:
+        return None  # one step generator drives both lines: same pulse level and width
+    s = np.concatenate([p.starts, q.starts])
+    e = np.concatenate([p.ends, q.ends])
+    lab = np.concatenate([np.zeros(p.count, np.int8), np.ones(q.count, np.int8)])
+    o = np.argsort(s, kind="stable")
+    s, e, lab = s[o], e[o], lab[o]
+    sw = np.flatnonzero(lab[1:] != lab[:-1])
+    if np.any(e[sw] > s[sw + 1]):
+        return None  # pulses overlap
+    per = (s[sw + 1] - s[sw]).astype(np.float64)
+    m = len(s)
+    prev_ok = (sw >= 1) & (lab[np.maximum(sw - 1, 0)] == lab[sw])
+    prev = np.where(prev_ok, s[sw] - s[np.maximum(sw - 1, 0)], 0)
+    nxt_ok = (sw + 2 < m) & (lab[np.minimum(sw + 2, m - 1)] == lab[sw + 1])
+    nxt = np.where(nxt_ok, s[np.minimum(sw + 2, m - 1)] - s[sw + 1], 0)
+    if np.any(per < _SWITCH_GAP * np.maximum(prev, nxt)):
+        return None  # one line pulses within the other's run: they run together
+    return UpDownFit(len(sw))
+
+
+@dataclass(eq=False)
+class _Axis:
+    kind: str
+    step_type: int
+    roles: list[RoleChoice]
+    channels: list[Channel]  # the pulse / phase channels
+    motion: I64  # ticks at which the axis moves (pulse starts, phase changes)
+    notes: list[str]
+
+
+class _Inference:
+    def __init__(self, cap: Capture) -> None:
+        self.cap = cap
+        self.looks: dict[int, ChannelLook] = {c.index: look_at(c, cap) for c in cap.channels}
+        self.hints: dict[int, NameHint] = {c.index: name_hint(c.name) for c in cap.channels}
+        self.refs = self._refs()
+        self.taken: set[int] = set()
+        self.axes: list[_Axis] = []
+        self.shared: list[tuple[Channel, str, list[_Axis]]] = []
+        self.unassigned: list[Unassigned] = []
+        self.conflicts: list[Conflict] = []
+        self.why: dict[int, str] = {}  # reason for channels left out
+        self.dir_notes: dict[int, str] = {}  # DIR index -> how elimination decided
+        self.turns: dict[int, set[int]] = {}  # pulse line -> lines it takes turns with
+        self.unsure_steps: set[int] = set()  # pulse lines named in a DIR conflict
+
+    def _refs(self) -> dict[int, str]:
+        refs: dict[int, str] = {}
+        for c in self.cap.channels:
+            ok = bool(c.name) and "," not in c.name and "=" not in c.name
+            ok = ok and c.name.strip() == c.name
+            if ok:
+                try:
+                    ok = self.cap.channel(c.name).index == c.index
+                except Exception:
+                    ok = False
+            refs[c.index] = c.name if ok else str(c.index)
+        return refs
+
+    def choice(
+        self, role: str, ch: Channel, evidence: str, basis: Basis = "waveform",
+        active: int | None = None,
+    ) -> RoleChoice:
+        hint = self.hints[ch.index]
+        if basis == "waveform" and not hint.neutral and not hint.fits(role):
+            evidence += f" (its name suggests {'/'.join(sorted(hint.roles))}; the waveform decides)"
+        self.taken.add(ch.index)
+        return RoleChoice(role, ch.name, ch.index, self.refs[ch.index], evidence, basis, active)
+
+    def name_of(self, c: Channel) -> str:
+        return f"{c.index}={c.name!r}"
+
+    # ---------------------------------------------------------------- stages
+    def run(self) -> Proposal:
+        chans = [c for c in self.cap.channels if len(c.xz_times) == 0]
+        for c in self.cap.channels:
+            if len(c.xz_times):
+                self.why[c.index] = f"goes x/z {_plural(len(c.xz_times), 'time')}"
+        # stepgen's phase outputs change only on its base period, so they can pass as serial
+        for g in find_phase_groups([c for c in chans if len(c.edges)]):
+            self._phase_axis(g)
+        movers = [
+            c for c in chans
+            if self.looks[c.index].kind in ("pulses", "other") and c.index not in self.taken
+        ]
+        pulse = [c for c in movers if self.looks[c.index].is_step_like]
+        pulse = self._demote(pulse)
+        self.turns = self._takes_turns(pulse)
+        in_pulse = {c.index for c in pulse}
+        dirs = self._dirs(pulse, [c for c in movers if c.index not in in_pulse])
+        self._pulse_axes(pulse, dirs)
+        self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
+        self._enables([c for c in movers if c.index not in self.taken])
+        return self._finish()
+
+    def _phase_axis(self, g: PhaseGroup) -> None:
+        roles = [
+            self.choice(role, c, g.evidence() if k == 0 else f"phase {role[-1]} of that group")
+            for k, (role, c) in enumerate(zip(g.roles, g.channels, strict=True))
+        ]
+        notes = []
+        if not g.named:
+            notes.append(
+                "which output is phase-A is not told by the waveform (another order that fits "
+                "runs the other way); the lowest channel fitting was taken"
+            )
+        self.axes.append(_Axis("phases", g.step_type, roles, list(g.channels), g.times, notes))
+
+    def _demote(self, pulse: list[Channel]) -> list[Channel]:
+        """Drop pulse channels whose "pulses" are long enough to hold another line's pulses and
+        that fit as that line's DIR (a DIR that changed a few times with similar levels)."""
+        keep = []
+        for d in pulse:
+            dp = self.looks[d.index].pulses
+            assert dp is not None
+            demote = False
+            for s in pulse:
+                sp = self.looks[s.index].pulses
+                assert sp is not None
+                if s is d or sp.count <= dp.count:
+                    continue
+                if _pulses_inside(d, dp, sp.starts) >= dp.count and _dir_fit(d, s, sp):
+                    demote = True
+                    break
+            if not demote:
+                keep.append(d)
+        return keep
+
+    def _dirs(self, pulse: list[Channel], others: list[Channel]) -> dict[int, DirFit]:
+        """DIR fits, STEP channel index → fit; conflicts recorded.
+
+        A STEP has one DIR: a line that fits a single STEP line not yet given a DIR takes it,
+        and that STEP drops out of the other lines' candidates; repeated until nothing changes.
+        """
+        cands: dict[int, list[DirFit]] = {}
+        for d in others:
+            fits = []
+            for s in pulse:
+                sp = self.looks[s.index].pulses
+                assert sp is not None
+                f = _dir_fit(d, s, sp)
+                if f is not None:
+                    fits.append(f)
+            if fits:
+                cands[d.index] = fits
+        claimed: dict[int, DirFit] = {}  # STEP index -> fit, by elimination
+        while True:
+            owners = {f.d.index for f in claimed.values()}
+            picks: dict[int, list[DirFit]] = {}
+            for di, fits in cands.items():
+                live = [f for f in fits if f.s.index not in claimed]
+                if di not in owners and len(live) == 1:
+                    picks.setdefault(live[0].s.index, []).append(live[0])
+            if not picks:  # nothing forced: let evidence pick, then eliminate again
+                for di, fits in cands.items():
+                    live = [f for f in fits if f.s.index not in claimed]
+                    best = self._pick_dir(fits[0].d, live) if di not in owners and live else None
+                    if best is not None:
+                        picks.setdefault(best.s.index, []).append(best)
+            new = {si: fs[0] for si, fs in picks.items() if len(fs) == 1}
+            if not new:
+                break
+            claimed.update(new)
+        owners = {f.d.index for f in claimed.values()}
+        def other(g: DirFit) -> str:
+            has = claimed.get(g.s.index)
+            if has is not None:
+                return f"{self.name_of(g.s)} has DIR {self.name_of(has.d)}"
+            return f"{self.name_of(g.s)} fits it less well"
+
+        self.dir_notes = {
+            f.d.index: " (it also fits other STEP lines: "
+            + "; ".join(other(g) for g in cands[f.d.index] if g.s.index != f.s.index)
+            + ")"
+            for f in claimed.values()
+            if len(cands[f.d.index]) > 1
+        }
+        chosen: dict[int, list[DirFit]] = {si: [f] for si, f in claimed.items()}
+        for di, fits in cands.items():
+            if di in owners:
+                continue
+            d = fits[0].d
+            live = [f for f in fits if f.s.index not in claimed]
+            if not live:
+                self.why[di] = "fits as DIR only of STEP lines that have another DIR"
+                self.taken.add(di)
+                continue
+            best = self._pick_dir(d, live)
+            if best is None:
+                self.conflicts.append(
+                    Conflict(
+                        f"{self.name_of(d)} fits as the DIR of several STEP lines",
+                        tuple(f"DIR of {self.name_of(f.s)}: {f.evidence()}" for f in live),
+                    )
+                )
+                self.why[d.index] = "ambiguous DIR (see below)"
+                self.taken.add(d.index)
+                self.unsure_steps |= {f.s.index for f in live}
+                continue
+            chosen.setdefault(best.s.index, []).append(best)
+        out: dict[int, DirFit] = {}
+        for s_index, fits in chosen.items():
+            if len(fits) == 1:
+                out[s_index] = fits[0]
+                continue
+            named = [f for f in fits if self.hints[f.d.index].fits("dir")]
+            if len(named) == 1:
+                out[s_index] = named[0]
+                for f in fits:
+                    if f is not named[0]:
+                        self.why[f.d.index] = (
+                            f"also fits as DIR of {self.name_of(f.s)}, whose DIR is "
+                            f"{self.name_of(named[0].d)} by name"
+                        )
+                continue
+            s = fits[0].s
+            self.conflicts.append(
+                Conflict(
+                    f"{_plural(len(fits), 'channel')} fit as the DIR of {self.name_of(s)}",
+                    tuple(f"DIR {self.name_of(f.d)}: {f.evidence()}" for f in fits),
+                )
+            )
+            self.unsure_steps.add(s.index)
+            for f in fits:
+                self.why[f.d.index] = "ambiguous DIR (see below)"
+                self.taken.add(f.d.index)
+        return out
+
+    def _takes_turns(self, pulse: list[Channel]) -> dict[int, set[int]]:
+        """Pulse line → the lines it takes turns with (up/down candidates, before any DIR)."""
+        out: dict[int, set[int]] = {c.index: set() for c in pulse}
+        for i, p in enumerate(pulse):
+            for q in pulse[i + 1 :]:
+                pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
+                assert pp is not None and qp is not None
+                if _up_down(pp, qp, self.cap.resolution_ticks) is not None:
+                    out[p.index].add(q.index)
+                    out[q.index].add(p.index)
+        return out
+
+    def _pick_dir(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
+        best = self._pick_dir_by_evidence(d, fits)
+        if best is not None and len(fits) > 1 and self.turns.get(best.s.index):
+            return None  # an up/down line has no DIR: do not let a tie-break give it one
+        return best
+
+    def _pick_dir_by_evidence(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
+        if len(fits) == 1:
+            return fits[0]
+        axis = self.hints[d.index].axis
+        if axis is not None:
+            same = [f for f in fits if self.hints[f.s.index].axis == axis]
+            if len(same) == 1:
+                return same[0]
+        fits = sorted(fits, key=lambda f: -f.score)
+        top = [f for f in fits if f.score == fits[0].score]
+        if fits[0].score < fits[0].toggles:
+            return None
+        if len(top) == 1:
+            return top[0]
+        # tied: a DIR changes within setup/hold of its own STEP's pulses; take the STEP that is
+        # far nearer (_NEARER) at every change than every other tied one
+        for f in top:
+            if all(bool(np.all(_NEARER * f.near <= g.near)) for g in top if g is not f):
+                return f
+        return None
+
+    def _pulse_axes(self, pulse: list[Channel], dirs: dict[int, DirFit]) -> None:
+        # a line named in a DIR conflict may be a STEP (with that DIR) or an up/down line; so
+        # may every line it takes turns with, and theirs: leave them all to the user
+        unsure = set(self.unsure_steps)
+        todo = list(unsure)
+        while todo:
+            for j in self.turns.get(todo.pop(), ()):
+                if j not in unsure and j not in dirs:
+                    unsure.add(j)
+                    todo.append(j)
+        unsure = {i for i in unsure if i not in dirs and self.turns.get(i)}
+        if unsure:
+            lines = [c for c in pulse if c.index in unsure]
+            self.conflicts.append(
+                Conflict(
+                    "pulse lines that may be STEPs of the ambiguous DIRs or up/down lines",
+                    tuple(f"{self.name_of(c)}: {self.looks[c.index].evidence}" for c in lines),
+                )
+            )
+            for c in lines:
+                self.why[c.index] = "a STEP or an up/down line (see below)"
+                self.taken.add(c.index)
+        free = [s for s in pulse if s.index not in dirs and s.index not in unsure]
+        pairs = self._up_down_pairs(free)
+        paired = {c.index for pr in pairs for c in pr[:2]}
+        for up, down, ud in pairs:
+            upl, downl = self.looks[up.index], self.looks[down.index]
+            assert upl.pulses is not None and downl.pulses is not None
+            roles = [
+                self.choice("up", up, f"{upl.evidence}; {ud.evidence(down)}",
+                            active=upl.pulses.level),
+                self.choice("down", down, f"{downl.evidence}; {ud.evidence(up)}",
+                            active=downl.pulses.level),
+            ]
+            notes = []
+            if not (self.hints[up.index].fits("up") and self.hints[down.index].fits("down")):
+                notes.append(
+                    "which line is UP is not told by the waveform; the lower channel was taken "
+                    "(swap them if the axis runs backwards)"
+                )
+            motion = np.sort(np.concatenate([upl.pulses.starts, downl.pulses.starts]))
+            self.axes.append(_Axis("up-down", 1, roles, [up, down], motion, notes))
+        for s in pulse:
+            if s.index in paired or s.index in self.taken:
+                continue
+            look = self.looks[s.index]
+            assert look.pulses is not None
+            roles = [self.choice("step", s, look.evidence, active=look.pulses.level)]
+            fit = dirs.get(s.index)
+            if fit is not None:
+                note = self.dir_notes.get(fit.d.index, "")
+                roles.append(self.choice("dir", fit.d, fit.evidence() + note))
+            self.axes.append(_Axis("step-dir", 0, roles, [s], look.pulses.starts, []))
+
+    def _up_down_pairs(self, free: list[Channel]) -> list[tuple[Channel, Channel, UpDownFit]]:
+        partners: dict[int, list[tuple[Channel, UpDownFit]]] = {c.index: [] for c in free}
+        for i, p in enumerate(free):
+            for q in free[i + 1 :]:
+                hp, hq = self.hints[p.index], self.hints[q.index]
+                if hp.fits("step") or hq.fits("step"):
+                    continue  # named STEP: an axis of its own
+                pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
+                assert pp is not None and qp is not None
+                fit = _up_down(pp, qp, self.cap.resolution_ticks)
+                if fit is not None:
+                    partners[p.index].append((q, fit))
+                    partners[q.index].append((p, fit))
+        spare = [
+            c for c in self.cap.channels
+            if self.looks[c.index].kind == "constant"
+            and (self.hints[c.index].neutral or self.hints[c.index].fits("dir"))
+        ]
+        pairs: list[tuple[Channel, Channel, UpDownFit]] = []
+        done: set[int] = set()
+        for p in free:
+            if p.index in done or not partners[p.index]:
+                continue
+            cands = partners[p.index]
+            q, fit = cands[0]
+            named = all(
+                self.hints[c.index].fits("up") or self.hints[c.index].fits("down") for c in (p, q)
+            )
+            if len(cands) > 1 or len(partners[q.index]) > 1:
+                group = {p.index, *(c.index for c, _ in cands)}
+                for c, _ in cands:
+                    group |= {x.index for x, _ in partners[c.index]}
+                members = [c for c in free if c.index in group]
+                self.conflicts.append(
+                    Conflict(
+                        "several pulse lines take turns with each other: which are up/down pairs?",
+                        tuple(self.name_of(c) for c in members),
+                    )
+                )
+                done |= group
+                for c in members:
+                    self.why[c.index] = "ambiguous up/down pairing (see below)"
+                    self.taken.add(c.index)
+                continue
+            done |= {p.index, q.index}
+            if len(spare) >= 2 and not named:  # two DIRs that never changed?
+                for c in (p, q):
+                    self.why[c.index] = "up/down or a step axis of its own (see below)"
+                    self.taken.add(c.index)
+                self.conflicts.append(
+                    Conflict(
+                        f"{self.name_of(p)} and {self.name_of(q)} take turns and neither has a "
+                        "DIR that changes",
+                        (
+                            f"an up/down pair: up={self.name_of(p)}, down={self.name_of(q)}",
+                            "two step/dir axes moving one after the other, whose DIR never "
+                            "changed (unchanging channels: "
+                            + ", ".join(self.name_of(c) for c in spare) + ")",
+                        ),
+                    )
+                )
+                continue
+            up, down = (q, p) if self.hints[q.index].fits("up") or self.hints[p.index].fits(
+                "down"
+            ) else (p, q)
+            pairs.append((up, down, fit))
+        return pairs
+
+    def _constant_dirs(self, constants: list[Channel]) -> None:
+        missing = [a for a in self.axes if a.kind == "step-dir" and len(a.roles) == 1]
+        if not missing:
+            return
+        free = [c for c in constants if c.index not in self.taken]
+        # by name: a DIR-named unchanging channel with the STEP's axis (or the only pair)
+        for a in list(missing):
+            axis = self.hints[a.channels[0].index].axis
+            named = [
+                c for c in free
+                if self.hints[c.index].fits("dir")
+                and (self.hints[c.index].axis == axis or (axis is None and len(missing) == 1))
+            ]
+            if len(named) == 1:
+                c = named[0]
+                a.roles.append(self.choice(
+                    "dir", c, f"{self.looks[c.index].evidence}: no waveform evidence; named like "
+                    "the DIR of this axis", "name"))
+                free = [f for f in free if f.index != c.index]
+                missing.remove(a)
+        by_index = {c.index: c for c in free}
+        nexts = [by_index.get(a.channels[0].index + 1) for a in missing]
+        unsure = any("DIR" in c.question for c in self.conflicts)  # a changing DIR is unplaced
+        if missing and not unsure and all(c is not None and self.hints[c.index].neutral for c in nexts):
+            for a, nxt in zip(missing, nexts, strict=True):
+                assert nxt is not None
+                step = a.channels[0]
+                a.roles.append(self.choice(
+                    "dir", nxt, f"{self.looks[nxt.index].evidence}: no waveform evidence; taken as "
+                    f"the DIR of {self.name_of(step)} because it is the next channel, as every "
+                    "STEP without a changing DIR is followed by an unchanging one (check the "
+                    "wiring)", "layout"))
+                a.notes.append(
+                    "its DIR never changes: direction and final position rest on a guess"
+                )
+        for a in self.axes:
+            if a.kind == "step-dir" and len(a.roles) == 1:
+                a.notes.append("no DIR found: direction and final position are unknown")
+
+    def _enables(self, cands: list[Channel]) -> None:
+        moving = [a for a in self.axes if len(a.motion)]
+        for e in cands:
+            per_axis = []
+            for a in moving:
+                lv = _level_at(e, a.motion)
+                per_axis.append((int(np.count_nonzero(lv == 0)), int(np.count_nonzero(lv == 1))))
+            served: dict[int, list[int]] = {0: [], 1: []}
+            for k, (lo, hi) in enumerate(per_axis):
+                if lo and not hi:
+                    served[0].append(k)
+                elif hi and not lo:
+                    served[1].append(k)
+            mixed = [k for k, (lo, hi) in enumerate(per_axis) if lo and hi]
+            if served[0] and served[1] or not (served[0] or served[1]):
+                continue
+            active = 0 if served[0] else 1
+            axes = [moving[k] for k in served[active]]
+            n_events = sum(per_axis[k][active] for k in served[active])
+            ev = (
+                f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
+                f"{', '.join(self.name_of(a.channels[0]) for a in axes)} happen while it is "
+                f"{'high' if active else 'low'}, none while it is {'low' if active else 'high'}"
+            )
+            if mixed:
+                ev += f"; other axes move at both levels ({len(mixed)})"
+            existing = [a for a in axes if any(r.role == "enable" for r in a.roles)]
+            if existing:
+                self.conflicts.append(
+                    Conflict(
+                        f"{self.name_of(e)} and another line both fit as ENABLE",
+                        (f"ENABLE {self.name_of(e)}: {ev}",)
+                        + tuple(
+                            f"ENABLE {r.index}={r.channel!r}: {r.evidence}"
+                            for a in existing for r in a.roles if r.role == "enable"
+                        ),
+                    )
+                )
+                self.why[e.index] = "ambiguous ENABLE (see below)"
+                self.taken.add(e.index)
+                continue
+            for a in axes:
+                a.roles.append(self.choice("enable", e, ev, active=active))
+            if len(axes) > 1:
+                self.shared.append((e, ev, axes))
+
+    # ---------------------------------------------------------------- result
+    def _axis_names(self) -> list[str]:
+        wanted: list[str | None] = []
+        for a in self.axes:
+            hints = {self.hints[c.index].axis for c in a.channels}
+            name = hints.pop() if len(hints) == 1 else None
+            if name is None:
+                dir_role = next((r for r in a.roles if r.role == "dir"), None)
+                if dir_role is not None:
+                    name = self.hints[dir_role.index].axis
+            wanted.append(name)
+        dup = {n for n in wanted if n is not None and wanted.count(n) > 1}
+        used = {n for n in wanted if n is not None and n not in dup}
+        letters = (ch for ch in _AXIS_LETTERS if ch not in used)
+        return [n if n is not None and n not in dup else next(letters) for n in wanted]
+
+    def _finish(self) -> Proposal:
+        self.axes.sort(key=lambda a: min(c.index for c in a.channels))
+        names = self._axis_names()
+        by_axis = {id(a): n for a, n in zip(self.axes, names, strict=True)}
+        shared = tuple(
+            SharedLine("enable", e.name, e.index, tuple(by_axis[id(a)] for a in axes), ev)
+            for e, ev, axes in self.shared
+        )
+        axes = tuple(
+            AxisProposal(
+                name,
+                "step-dir" if a.kind == "step-dir" else "up-down" if a.kind == "up-down"
+                else "phases",
+                a.step_type,
+                tuple(a.roles),
+                tuple(a.notes),
+            )
+            for a, name in zip(self.axes, names, strict=True)
+        )
+        unassigned = []
+        for c in self.cap.channels:
+            if c.index in self.taken and c.index not in self.why:
+                continue
+            if c.index in self.why:
+                why = self.why[c.index]
+            else:
+                look = self.looks[c.index]
+                why = look.evidence
+                if look.kind == "other":
+                    why += ": not a pulse train, and not a DIR or ENABLE of any pulse line"
+                elif look.kind == "constant":
+                    why += ": an unused probe, or a line that did not change while captured"
+            unassigned.append(Unassigned(c.name, c.index, why))
+        return Proposal(axes, shared, tuple(unassigned), tuple(self.conflicts))
+
+
+def propose(capture: Capture) -> Proposal:
+    """Propose axes and roles for ``capture``'s channels from their waveforms.
+
+    The proposal is :attr:`~wavecheck.roles.model.Proposal.unambiguous` when it may be used without
+    asking; otherwise :attr:`~wavecheck.roles.model.Proposal.ambiguous` lists the conflicts.
+    """
+    return _Inference(capture).run()
+

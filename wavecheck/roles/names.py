@@ -1,0 +1,89 @@
+"""What a channel's name says: a role keyword and an axis, when it has them.
+
+Names only help: they break ties between waveform candidates and name the axes; the waveform
+decides. Matching is case-insensitive on the name's words (split at anything not a letter or
+digit, and between letters and digits):
+
+- STEP: ``step``, ``stp``, ``pul``, ``pulse``, ``clk``, ``clock``;
+  DIR: ``dir``, ``direction``; ``cw``/``ccw`` fit a DIR or, on pulse lines, UP/DOWN;
+  UP/DOWN: ``up``, ``down``, ``dn``; ENABLE: ``en``, ``ena``, ``enable``, ``enbl``;
+  phases: ``phase``/``ph`` followed by a letter A..E (``phase-A``, ``PHB``).
+- The axis is a single letter X Y Z A B C U V W, or a number (LinuxCNC's ``stepgen.2.step`` →
+  axis ``"2"``), written apart from the role word or glued to it (``X_STEP``, ``xstep``,
+  ``STEP (Y axis)``, ``dirz``). A name gives an axis only together with a role word, so ``D3``,
+  ``A0`` or ``ch3`` give neither.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+__all__ = ["NameHint", "name_hint"]
+
+_KEYWORDS: dict[str, frozenset[str]] = {
+    **dict.fromkeys(("step", "stp", "pul", "pulse", "clk", "clock"), frozenset({"step"})),
+    **dict.fromkeys(("dir", "direction"), frozenset({"dir"})),
+    "cw": frozenset({"dir", "up"}),
+    "ccw": frozenset({"dir", "down"}),
+    "up": frozenset({"up"}),
+    **dict.fromkeys(("down", "dn"), frozenset({"down"})),
+    **dict.fromkeys(("en", "ena", "enable", "enbl"), frozenset({"enable"})),
+}
+_AXES = "xyzabcuvw"
+_NOISE = {"axis", "stepgen", "joint", "motor", "out", "pin"}
+
+
+@dataclass(frozen=True)
+class NameHint:
+    """Roles a name fits (empty when it names none) and the axis it names (or None)."""
+
+    roles: frozenset[str]
+    axis: str | None
+
+    def fits(self, role: str) -> bool:
+        """True when the name names ``role``."""
+        return role in self.roles
+
+    @property
+    def neutral(self) -> bool:
+        """True when the name names no role."""
+        return not self.roles
+
+
+def _words(name: str) -> list[str]:
+    out: list[str] = []
+    for word in re.split(r"[^0-9a-z]+", name.lower()):
+        out += [w for w in re.findall(r"[a-z]+|[0-9]+", word) if w]
+    return out
+
+
+def name_hint(name: str) -> NameHint:
+    """The roles and axis ``name`` gives (see the module docstring)."""
+    words = _words(name)
+    roles: set[str] = set()
+    axes: list[str] = []
+    i = 0
+    while i < len(words):
+        w = words[i]
+        if w in ("phase", "ph") and i + 1 < len(words) and words[i + 1] in "abcde":
+            roles.add(f"phase-{words[i + 1].upper()}")
+            i += 2
+            continue
+        if len(w) == 3 and w.startswith("ph") and w[2] in "abcde":
+            roles.add(f"phase-{w[2].upper()}")
+        elif w in _KEYWORDS:
+            roles |= _KEYWORDS[w]
+        elif len(w) == 1 and w in _AXES or w.isdigit():
+            axes.append(w)
+        elif w not in _NOISE:
+            for kw, fit in _KEYWORDS.items():  # xstep, stepx, ydir
+                if len(kw) >= 2 and len(w) == len(kw) + 1 and kw in (w[1:], w[:-1]):
+                    letter = w[0] if w[1:] == kw else w[-1]
+                    if letter in _AXES:
+                        roles |= fit
+                        axes.append(letter)
+                        break
+        i += 1
+    axis = axes[0] if roles and len(set(axes)) == 1 else None
+    return NameHint(frozenset(roles), axis)
