@@ -123,7 +123,16 @@ def pid_gains(args: argparse.Namespace, defaults: PidGains) -> PidGains:
 
 def servo_params(args: argparse.Namespace) -> ServoParams:
     """The :class:`ServoParams` from the options (validated)."""
-    p = ServoParams(**{f: float(getattr(args, d)) for d, f in SERVO_OPTIONS.items()})
+    v = {f: float(getattr(args, d)) for d, f in SERVO_OPTIONS.items()}
+    p = ServoParams(
+        inertia=v["inertia"],
+        viscous=v["viscous"],
+        torque_constant=v["torque_constant"],
+        coulomb=v["coulomb"],
+        load=v["load"],
+        counts_per_unit=v["counts_per_unit"],
+        amp_limit=v["amp_limit"],
+    )
     p.validate()
     return p
 
