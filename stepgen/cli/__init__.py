@@ -8,7 +8,7 @@ from wavecheck.cli._main import run_cli
 
 __all__ = ["main"]
 
-COMMANDS = ("stepgen.cli.simulate", "stepgen.cli.plan")
+COMMANDS = ("stepgen.cli.simulate", "stepgen.cli.plan", "stepgen.cli.tune")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
+from stepgen.cli.servo import add_servo_loop_arguments, run_servo_loop
 from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.model import StepgenConfig, update_schedule
 from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
@@ -139,6 +140,7 @@ def register(sub: Any) -> None:
         help="fast (default) or the plain per-period loop",
     )
     o.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    add_servo_loop_arguments(p)  # --pid: the closed loop (stepgen.cli.servo)
     add_simulate_arguments(p)  # --ini/--hal/--channel fill the options left at their defaults
     p.set_defaults(func=run)
 
@@ -271,11 +273,13 @@ def run(args: argparse.Namespace) -> int:
     updates = None  # the worst-case motion is designed for the run's servo updates
     if worst and n is not None and n <= MAX_PERIODS:  # (simulate refuses longer runs)
         updates = len(update_schedule(cfg, n))
-    motion = build_motion(args, cfg, n_updates=updates)
+    motion = build_motion(args, replace(cfg, mode="position") if args.pid else cfg, n_updates=updates)
     if n is None:
         if motion.natural_duration_s is None:
             raise ConfigError("give --duration (e.g. 1s) or --periods N")
         n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
+    if args.pid:  # the closed loop: pid between the position command and the plant
+        return run_servo_loop(args, cfg, motion, n)
     catchup_given = not isinstance(args.catchup, _DefaultText)
     catchup_ns = _ns(args.catchup, "--catchup", allow_zero=False)
     with activate("simulating", quiet=args.quiet, unit="periods"):

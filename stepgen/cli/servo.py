@@ -1,0 +1,157 @@
+"""``stepgen simulate --pid``: the servo thread's pid closing the loop around the plant.
+
+The motion options give the joint's position command (``--move``, ``--command``,
+``--position``); pid's output drives stepgen's velocity-cmd (``--plant stepgen``, the stepgen
+running as ever in the base thread under the latency model) or a servo amplifier (``--plant
+servo``: motor, load, encoder; its A/B quadrature goes to the VCD). Prints the following error
+(max and where), LinuxCNC's FERROR/MIN_FERROR verdict (exit 1 when it trips) and, for a
+constant command (a step), the step response figures; ``--plot`` draws them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from stepgen.cli.tune import add_pid_arguments, add_servo_arguments, pid_gains, servo_params
+from stepgen.latency import catchup_for, invocation_times, parse_latency
+from stepgen.loop import LoopResult, ferror_check, run_loop, step_metrics
+from stepgen.model import StepgenConfig
+from stepgen.motion import Motion
+from stepgen.pid import PidGains
+from stepgen.plant import ServoPlant, StepgenPlant, quadrature_edges
+from stepgen.simulate import Trace
+from stepgen.vcdout import write_vcd
+from wavecheck.capture.vcd.writer import VcdVector, VcdWire
+from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
+from wavecheck.errors import ConfigError
+from wavecheck.output import atomic_path, output_file
+from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
+
+__all__ = ["add_servo_loop_arguments", "run_servo_loop"]
+
+
+def add_servo_loop_arguments(parser: Any) -> None:
+    """The ``--pid`` option group of ``stepgen simulate``."""
+    g = parser.add_argument_group("closed loop (--pid: LinuxCNC's pid between the command and the plant)")
+    g.add_argument("--pid", action="store_true", help="close the loop with pid (see stepgen tune)")
+    g.add_argument(
+        "--plant",
+        choices=("stepgen", "servo"),
+        default="stepgen",
+        help="stepgen: pid.output → stepgen velocity-cmd (default; unset gains are pncconf's "
+        "P = 1/servo period, FF1 = 1); servo: pid.output → amplifier of a motor and load",
+    )
+    add_pid_arguments(g)
+    g.add_argument("--ferror", type=float, default=1.0, help="[JOINT_n]FERROR (default 1.0)")
+    g.add_argument("--min-ferror", type=float, help="[JOINT_n]MIN_FERROR (default FERROR)")
+    g.add_argument("--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)")
+    g.add_argument("--plot", type=output_file, help="PNG: command, feedback, following error")
+    add_servo_arguments(parser.add_argument_group("servo plant (--pid --plant servo)"))
+
+
+def _trace(cfg: StepgenConfig, plant: StepgenPlant, n: int, args: argparse.Namespace) -> Trace:
+    """The recorded base periods as a :class:`Trace`, timed by the latency model as
+    :func:`stepgen.simulate.simulate` does."""
+    run = plant.invocation_run(n)
+    model = parse_latency(args.latency)
+    catchup, _ = catchup_for(model, cfg.base_period_ns, None)
+    times = invocation_times(model, run, seed=args.seed, active_edge=args.active_edge, catchup_ns=catchup)
+    base = cfg.base_period_ns
+
+    def at(idx: np.ndarray) -> np.ndarray:
+        return idx * base if times is None else times[idx]
+
+    last_t = (n - 1) * base if times is None else int(times[-1])
+    return Trace(
+        config=cfg, latency=model, seed=args.seed, active_edge=args.active_edge, n_periods=n,
+        pins=run.pins, edges={p: at(run.toggles[p]) for p in run.pins}, counts_t=at(run.counts_at),
+        counts_val=run.counts_val, steps=run.steps, final_counts=int(run.final["counts"]),
+        end_ns=int(max(n * base, last_t + 1)), run=run,
+    )
+
+
+def run_servo_loop(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion, n: int) -> int:
+    """Run the closed loop for ``n`` base periods, write the output, print the report."""
+    servo_ns = cfg.servo_ns
+    n_servo = -(-n // cfg.servo_multiple)
+    cmds = motion.commands(n_servo, servo_ns, "position")
+    out = str(args.output)
+    if args.plant == "stepgen":
+        vcfg = replace(cfg, mode="velocity")
+        defaults = PidGains(Pgain=round(1e9 / servo_ns, 9), FF1=1.0)
+        plant_s = StepgenPlant(vcfg, record=True)
+        result = run_loop(plant_s, pid_gains(args, defaults), cmds)
+        trace = _trace(vcfg, plant_s, n, args)
+        if not out.lower().endswith(".vcd"):
+            raise ConfigError(f"-o {out!r}: the closed loop writes a .vcd")
+        write_vcd(trace, out)
+    else:
+        params = servo_params(args)
+        plant_v = ServoPlant(params, servo_ns, record=True)
+        result = run_loop(plant_v, pid_gains(args, PidGains()), cmds)
+        if not out.lower().endswith(".vcd"):
+            raise ConfigError(f"-o {out!r}: the closed loop writes a .vcd")
+        t, counts = plant_v.count_changes()
+        edges, init = quadrature_edges(t, counts)
+        write_vcd_file(
+            out,
+            [VcdWire(p, init[p], edges[p]) for p in ("A", "B")],
+            vectors=[VcdVector("counts", t, counts, size=32)],
+            timescale="1 ns",
+            end=n_servo * servo_ns,
+            scope="encoder",
+            comment="stepgen servo plant: encoder A/B quadrature (stepgen type 2 table)",
+        )
+    return report(args, result)
+
+
+def report(args: argparse.Namespace, r: LoopResult) -> int:
+    """Print following error, the FERROR verdict and step figures; draw the plot."""
+    worst, at = r.max_ferror()
+    check = ferror_check(r, args.ferror, args.min_ferror, args.joint_max_velocity)
+    verdict = "pass" if check.ok else "FAIL"
+    if not args.quiet:
+        print(f"following error: max {worst:.6g} units at {at:.6g} s ({r.n} servo periods)")
+        print(
+            f"following-error check {verdict}: limit max(FERROR {check.ferror_limit:g}·|v|/"
+            f"{check.max_velocity:g}, MIN_FERROR {check.min_ferror:g}); worst |ferror|/limit "
+            f"{check.worst_ratio:.3g} at {check.worst_t_s:.6g} s"
+            + ("" if check.first_fail_t_s is None else f"; trips first at {check.first_fail_t_s:.6g} s")
+        )
+        for note in check.notes:
+            print(f"stepgen: note: {note}", file=sys.stderr)
+        c = r.command
+        if len(c) > 2 and np.all(c == c[0]) and c[0] != 0:  # a step from rest at 0
+            m = step_metrics(r.t_s, r.feedback, 0.0, float(c[0]))
+            print(
+                f"step response: rise {m.rise_s} s, overshoot {m.overshoot:.1%}, settling "
+                f"({m.band:.0%}) {m.settling_s} s, steady-state error {m.steady_state_error:.3g}"
+            )
+    if args.plot:
+        _plot(r, args.plot)
+    return EXIT_PASS if check.ok else EXIT_FAIL
+
+
+def _plot(r: LoopResult, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    t = r.t_s * 1e3
+    a1.plot(t, r.command, label="command", lw=1)
+    a1.plot(t, r.feedback, label="feedback", lw=1)
+    a1.set_ylabel("position")
+    a1.legend(fontsize=7)
+    a2.plot(t, r.ferror, lw=1, color="C3")
+    a2.set_ylabel("following error")
+    a2.set_xlabel("time (ms)")
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)

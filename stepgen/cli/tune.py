@@ -1,0 +1,303 @@
+"""``stepgen tune``: the integrator's manual PID tuning method, run on a model plant.
+
+I = D = 0, raise P until the loop sustains oscillation (ultimate gain Ku, period Pu), P = Ku/2,
+raise I until the offset is corrected within --settle (stopping before instability), then D
+while it reduces the overshoot. Prints each stage's step response and the final gains as
+[JOINT_n] INI lines and the setp lines that read them; for a velocity-mode stepgen also the
+feed-forward LinuxCNC configurations use (P = 1/servo period, FF1 = 1) and the following error
+at cruise with each. Exit 0, or 2 with one line on bad settings.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from collections.abc import Callable
+from typing import Any
+
+from stepgen.model import StepgenConfig
+from stepgen.pid import PidGains
+from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
+from stepgen.tune import TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
+from wavecheck.errors import ConfigError, UnitError
+from wavecheck.output import atomic_path, output_file
+from wavecheck.units import time_ns
+
+__all__ = [
+    "add_pid_arguments",
+    "add_servo_arguments",
+    "pid_gains",
+    "register",
+    "run",
+    "servo_params",
+    "time_s",
+]
+
+#: option dest → PidGains field.
+GAIN_OPTIONS = {
+    "pgain": "Pgain",
+    "igain": "Igain",
+    "dgain": "Dgain",
+    "bias": "bias",
+    "ff0": "FF0",
+    "ff1": "FF1",
+    "ff2": "FF2",
+    "ff3": "FF3",
+    "deadband": "deadband",
+    "maxerror": "maxerror",
+    "maxerror_i": "maxerrorI",
+    "maxerror_d": "maxerrorD",
+    "maxcmd_d": "maxcmdD",
+    "maxcmd_dd": "maxcmdDD",
+    "maxcmd_ddd": "maxcmdDDD",
+    "maxoutput": "maxoutput",
+}
+#: option dest → ServoParams field.
+SERVO_OPTIONS = {
+    "inertia": "inertia",
+    "viscous": "viscous",
+    "torque_constant": "torque_constant",
+    "coulomb": "coulomb",
+    "load": "load",
+    "encoder_counts": "counts_per_unit",
+    "amp_limit": "amp_limit",
+}
+
+
+def time_s(text: str, option: str) -> float:
+    """A time option with a unit (``200ms``) in seconds, > 0."""
+    try:
+        value = time_ns(str(text))
+    except UnitError as err:
+        raise ConfigError(f"{option} {text!r}: {err}") from None
+    if value <= 0:
+        raise ConfigError(f"{option} {text!r} must be > 0")
+    return float(value) * 1e-9
+
+
+def add_pid_arguments(group: Any) -> None:
+    """pid's pins as options (LinuxCNC names; unset = the component's or the files' value)."""
+    for dest, pin in GAIN_OPTIONS.items():
+        group.add_argument(
+            "--" + dest.replace("_", "-"), dest=dest, type=float, help=f"pid.N.{pin}"
+        )
+    group.add_argument(
+        "--no-error-previous-target",
+        dest="error_previous_target",
+        action="store_false",
+        default=True,
+        help="pid.N.error-previous-target FALSE (default TRUE, as LinuxCNC)",
+    )
+
+
+def add_servo_arguments(group: Any) -> None:
+    """The servo plant's options (``--plant servo``)."""
+    d = ServoParams()
+    group.add_argument("--inertia", type=float, default=d.inertia, help="J, F·s²/unit")
+    group.add_argument("--viscous", type=float, default=d.viscous, help="B, F·s/unit")
+    group.add_argument(
+        "--torque-constant", type=float, default=d.torque_constant, help="Kt, F per amp unit"
+    )
+    group.add_argument("--coulomb", type=float, default=0.0, help="Coulomb friction, F")
+    group.add_argument("--load", type=float, default=0.0, help="constant load, F (e.g. gravity)")
+    group.add_argument(
+        "--encoder-counts", type=float, default=0.0, help="encoder counts per unit (0 = exact)"
+    )
+    group.add_argument("--amp-limit", type=float, default=0.0, help="amplifier limit (0 = none)")
+
+
+def pid_gains(args: argparse.Namespace, defaults: PidGains) -> PidGains:
+    """``defaults`` with every gain option given on the command line applied."""
+    values: dict[str, Any] = {}
+    for dest, name in GAIN_OPTIONS.items():
+        v = getattr(args, dest, None)
+        if v is not None:
+            if not math.isfinite(v):
+                raise ConfigError(f"--{dest.replace('_', '-')} {v} is not finite")
+            values[name] = float(v)
+    if not getattr(args, "error_previous_target", True):
+        values["error_previous_target"] = False
+    return PidGains(**{**defaults.__dict__, **values})
+
+
+def servo_params(args: argparse.Namespace) -> ServoParams:
+    """The :class:`ServoParams` from the options (validated)."""
+    v = {f: float(getattr(args, d)) for d, f in SERVO_OPTIONS.items()}
+    p = ServoParams(
+        inertia=v["inertia"],
+        viscous=v["viscous"],
+        torque_constant=v["torque_constant"],
+        coulomb=v["coulomb"],
+        load=v["load"],
+        counts_per_unit=v["counts_per_unit"],
+        amp_limit=v["amp_limit"],
+    )
+    p.validate()
+    return p
+
+
+def register(sub: Any) -> None:
+    """Add the ``tune`` subcommand."""
+    p = sub.add_parser(
+        "tune",
+        help="tune pid by the integrator's manual method on a model plant (stepgen or servo)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    g = p.add_argument_group("plant")
+    g.add_argument(
+        "--plant",
+        choices=("stepgen", "servo"),
+        default="servo",
+        help="servo: a motor and load (options below); stepgen: LinuxCNC's stepgen in velocity mode",
+    )
+    g.add_argument("--servo-period", default="1ms", help="servo thread period (default 1ms)")
+    g.add_argument("--base-period", default="25us", help="base thread period (stepgen plant)")
+    g.add_argument("--position-scale", type=float, default=200.0, help="steps per unit (stepgen)")
+    g.add_argument("--maxvel", type=float, default=0.0, help="stepgen maxvel, units/s")
+    g.add_argument("--maxaccel", type=float, default=0.0, help="stepgen maxaccel, units/s²")
+    add_servo_arguments(p.add_argument_group("servo plant (--plant servo)"))
+    t = p.add_argument_group("method")
+    t.add_argument("--step", type=float, default=0.01, help="step size, position units (0.01)")
+    t.add_argument("--settle", default="200ms", help="the offset must go within this (200ms)")
+    t.add_argument("--band", type=float, default=0.02, help="settling band, fraction of the step")
+    t.add_argument("--window", default="1s", help="length of each step response (1s)")
+    t.add_argument("--p-start", type=float, default=1.0, help="first P tried (1)")
+    t.add_argument("--joint", type=int, default=0, help="joint number of the INI/HAL lines")
+    t.add_argument("--ff-velocity", type=float, help="cruise speed of the FF comparison (stepgen)")
+    o = p.add_argument_group("output")
+    o.add_argument("--format", choices=("text", "json"), default="text")
+    o.add_argument("--plot", type=output_file, help="PNG of every stage's step response")
+    p.set_defaults(func=run)
+
+
+def _plant_factory(args: argparse.Namespace) -> tuple[Callable[[], Plant], int, StepgenConfig | None]:
+    servo = round(time_s(args.servo_period, "--servo-period") * 1e9)
+    if args.plant == "stepgen":
+        cfg = StepgenConfig(
+            base_period_ns=round(time_s(args.base_period, "--base-period") * 1e9),
+            servo_period_ns=servo,
+            mode="velocity",
+            position_scale=args.position_scale,
+            maxvel=args.maxvel,
+            maxaccel=args.maxaccel,
+            thread_order="pulses-first",
+        )
+        cfg.validate()
+        return (lambda: StepgenPlant(cfg)), cfg.servo_ns, cfg
+    params = servo_params(args)
+    return (lambda: ServoPlant(params, servo)), servo, None
+
+
+def _fmt(x: float | None, unit: str = "s") -> str:
+    return "-" if x is None else f"{x:.4g} {unit}"
+
+
+def report_text(res: TuneResult, args: argparse.Namespace, ff_lines: list[str]) -> str:
+    """The human-readable report."""
+    lines = [f"ultimate gain Ku = {res.ku:.6g}, oscillation period Pu = {res.pu:.6g} s ({res.tries} responses)"]
+    for s in res.stages:
+        m = s.metrics
+        lines.append(
+            f"  {s.name:<14} P {s.gains.Pgain:<10.6g} I {s.gains.Igain:<10.6g} D {s.gains.Dgain:<10.6g} "
+            f"rise {_fmt(m.rise_s)}, overshoot {m.overshoot:.1%}, settling ({m.band:.0%}) "
+            f"{_fmt(m.settling_s)}, steady-state error {m.steady_state_error:.3g} — {s.note}"
+        )
+    lines += [f"note: {n}" for n in res.notes]
+    lines.append("")
+    lines += ini_lines(res.final, args.joint)
+    lines.append("")
+    lines += hal_lines(args.joint)
+    lines += ff_lines
+    return "\n".join(lines) + "\n"
+
+
+def write_plot(res: TuneResult, path: str) -> None:
+    """One panel per stage kind: position vs time of each response."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 5))
+    for s in res.stages:
+        r = s.result
+        ax.plot(r.t_s * 1e3, r.feedback, lw=1.0, label=f"{s.name}: P {s.gains.Pgain:.4g} I {s.gains.Igain:.4g} D {s.gains.Dgain:.4g}")
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("position (units)")
+    ax.set_title(f"step responses (Ku = {res.ku:.4g}, Pu = {res.pu * 1e3:.4g} ms)")
+    ax.legend(fontsize=6)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+
+
+def _finite(x: Any) -> Any:
+    """JSON has no inf/NaN: they become null."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_finite(v) for v in x]
+    return x
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``stepgen tune``; returns the exit code."""
+    make, servo_ns, cfg = _plant_factory(args)
+    res = tune(
+        make,
+        step=args.step,
+        settle_s=time_s(args.settle, "--settle"),
+        window_s=time_s(args.window, "--window"),
+        band=args.band,
+        p_start=args.p_start,
+    )
+    ff_lines: list[str] = []
+    ff = None
+    if cfg is not None:
+        v = args.ff_velocity if args.ff_velocity is not None else (0.5 * cfg.maxvel or 1.0)
+        ff = feedforward_comparison(make, res.final, v, servo_ns)
+        ff_lines = [
+            "",
+            f"velocity-mode stepgen: LinuxCNC configurations use P = 1/servo period = "
+            f"{ff.configured.Pgain:g} and FF1 = 1 (pncconf); following error at {v:g} units/s cruise: "
+            f"tuned {ff.tuned_ferror:.4g}, configured {ff.configured_ferror:.4g} units",
+        ]
+    if args.plot:
+        write_plot(res, args.plot)
+    if args.format == "json":
+        doc = {
+            "ku": res.ku,
+            "pu_s": res.pu,
+            "responses": res.tries,
+            "stages": [
+                {
+                    "name": s.name,
+                    "gains": {"P": s.gains.Pgain, "I": s.gains.Igain, "D": s.gains.Dgain},
+                    "rise_s": s.metrics.rise_s,
+                    "overshoot": s.metrics.overshoot,
+                    "settling_s": s.metrics.settling_s,
+                    "steady_state_error": s.metrics.steady_state_error,
+                    "note": s.note,
+                }
+                for s in res.stages
+            ],
+            "final": {"P": res.final.Pgain, "I": res.final.Igain, "D": res.final.Dgain},
+            "ini": ini_lines(res.final, args.joint),
+            "hal": hal_lines(args.joint),
+            "notes": res.notes,
+        }
+        if ff is not None:
+            doc["feedforward"] = {
+                "velocity": ff.velocity,
+                "configured": {"P": ff.configured.Pgain, "FF1": ff.configured.FF1},
+                "tuned_ferror": ff.tuned_ferror,
+                "configured_ferror": ff.configured_ferror,
+            }
+        print(json.dumps(_finite(doc), indent=2, allow_nan=False))
+    else:
+        print(report_text(res, args, ff_lines), end="")
+    return 0
