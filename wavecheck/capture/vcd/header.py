@@ -27,7 +27,9 @@ __all__ = [
     "Layout",
     "SignalEdges",
     "VarDecl",
+    "ANALYZER_WRITERS",
     "VcdHeader",
+    "analyzer_writer",
     "build_capture",
     "header_timebase",
     "layout_of",
@@ -35,12 +37,34 @@ __all__ = [
     "parse_header",
     "read_header",
     "resolution_of",
+    "stated_samplerate",
 ]
 
 _MAX_HEADER_BYTES = 64 << 20
 _MAX_ID_LEN = 8
 _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
-_SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
+_RATE = r"(\d+(?:\.\d+)?\s*[kMG]?Hz)\b"
+#: A stated sample rate: libsigrok/PulseView/DSView's "Acquisition with 8/8 channels at 12 MHz",
+#: or "sample rate: 12 MHz", "samplerate=12MHz", "sampling rate 12 MHz".
+_SAMPLERATE_RES = (
+    re.compile(r"\bchannels\s+at\s+" + _RATE),
+    re.compile(r"\bsampl(?:e|ing)[ _-]?rate\s*[:=]?\s*" + _RATE, re.IGNORECASE),
+)
+#: Programs that write VCDs of logic-analyzer samples, recognised in ``$version``/``$comment``
+#: text: their timestamps are sample numbers on the timescale, not exact simulation times.
+#: (Simulators — Icarus, GHDL, Verilator, pyvcd, ModelSim … — write exact times.)
+ANALYZER_WRITERS: tuple[tuple[str, str], ...] = (
+    (r"libsigrok|sigrok|pulseview", "sigrok"),
+    (r"chronovu", "ChronoVu"),
+    (r"saleae", "Saleae Logic"),
+    (r"dsview|dreamsourcelab", "DSView"),
+    (r"logicport|intronix", "Intronix LogicPort"),
+    (r"kingst", "Kingst"),
+    (r"waveforms|digilent", "Digilent WaveForms"),
+    (r"scanalogic|ikalogic", "Ikalogic ScanaStudio"),
+    (r"logic[ -]?analy[sz]er", "a logic analyzer"),
+)
+_ANALYZER_RES = [(re.compile(rf"\b(?:{p})", re.IGNORECASE), name) for p, name in ANALYZER_WRITERS]
 _END_RE = re.compile(rb"\$end(\s|$)")
 _NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
 #: Scalar value character → 0, 1, 2 (unknown: x u w -) or 3 (z).
@@ -359,6 +383,30 @@ def layout_of(header: VcdHeader) -> Layout:
     )
 
 
+def analyzer_writer(texts: list[str]) -> str | None:
+    """The logic-analyzer program named in ``texts`` (``$version``, ``$comment``), or None."""
+    for text in texts:
+        for pattern, name in _ANALYZER_RES:
+            if pattern.search(text):
+                return name
+    return None
+
+
+def stated_samplerate(texts: list[str]) -> tuple[Fraction, str] | None:
+    """The sample rate ``texts`` state (``"… channels at 12 MHz"``): (Hz, as written), or None."""
+    for text in texts:
+        for pattern in _SAMPLERATE_RES:
+            match = pattern.search(text)
+            if match:
+                try:
+                    rate = parse_frequency(match.group(1))
+                except UnitError:
+                    continue
+                if rate > 0:
+                    return rate, match.group(1)
+    return None
+
+
 def resolution_of(
     path: str | os.PathLike[str],
     tb: Timebase,
@@ -366,19 +414,18 @@ def resolution_of(
     samplerate: Fraction | None,
     resolution_s: Fraction | None,
     notes: list[str],
+    version: str | None = None,
 ) -> tuple[int, Fraction | None]:
-    """Resolution in ticks and sample rate: user values first, then sigrok's ``$comment``."""
+    """Resolution in ticks and sample rate: user values first, then a rate the file states
+    (``$comment``), then one tick for a file written by a logic analyzer's software (its
+    timestamps are samples); a simulator's VCD (none of these) is exact, resolution 0."""
+    texts = ([version] if version else []) + comments
     rate = samplerate
     if rate is None:
-        for text in comments:
-            match = _SAMPLERATE_RE.search(text)
-            if match:
-                try:
-                    rate = parse_frequency(match.group(1))
-                except UnitError:
-                    continue
-                notes.append(f"sample rate {match.group(1)} from the file's $comment")
-                break
+        stated = stated_samplerate(texts)
+        if stated is not None:
+            rate = stated[0]
+            notes.append(f"sample rate {stated[1]} from the file's $comment")
     sample_res: int | None = None
     if rate:
         # a sampled capture: an edge is known to one sample period T; when T is not a whole
@@ -393,6 +440,13 @@ def resolution_of(
                 f"{float(tb.tick_ns):g} ns ticks, so the timestamps are rounded; resolution "
                 f"{sample_res} ticks covers the period and the rounding"
             )
+    elif (writer := analyzer_writer(texts)) is not None:
+        sample_res = 1
+        notes.append(
+            f"written by {writer} (a logic analyzer's software) with no sample rate stated: its "
+            f"timestamps are samples, so the resolution is one {float(tb.tick_ns):g} ns tick of "
+            "the timescale (give --samplerate or --resolution if it sampled more coarsely)"
+        )
     if resolution_s is None:
         return (0 if sample_res is None else sample_res), rate
     if resolution_s < 0:
@@ -460,7 +514,9 @@ def build_capture(
     end = last_time
     if not layout.ids:
         notes.append("no 1-bit signals in this file")
-    res, rate = resolution_of(path, tb, header.comments, samplerate, resolution_s, notes)
+    res, rate = resolution_of(
+        path, tb, header.comments, samplerate, resolution_s, notes, header.version
+    )
     channels = [
         Channel(
             name=name,
