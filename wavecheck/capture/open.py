@@ -67,6 +67,7 @@ def open_capture(
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
     input_format: str | None = None,
+    require_time: bool = True,
 ) -> Capture:
     """Read a capture file into a :class:`Capture`.
 
@@ -78,6 +79,8 @@ def open_capture(
         input_format: ``"sr"``, ``"vcd"`` or a sigrok-cli input format (may carry options,
             ``"binary:numchannels=4"``); default: detected from content and extension. A VCD
             with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
+        require_time: with False, a file that states no sample rate is read anyway, untimed
+            (:attr:`Capture.time_known` False: counts in samples; for ``wavecheck info``).
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
@@ -96,14 +99,18 @@ def open_capture(
     if name == "sr":
         from wavecheck.capture.sr import read_sr
 
-        return read_sr(path, samplerate=samplerate, resolution_s=resolution_s)
+        return read_sr(
+            path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
+        )
     if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 
         return read_vcd(path, samplerate=samplerate, resolution_s=resolution_s)
     from wavecheck.capture.sigrokcli import read_with_sigrok
 
-    return read_with_sigrok(path, fmt, samplerate=samplerate, resolution_s=resolution_s)
+    return read_with_sigrok(
+        path, fmt, samplerate=samplerate, resolution_s=resolution_s, require_time=require_time
+    )
 
 
 def detect_path_exists(path: str | os.PathLike[str]) -> None:

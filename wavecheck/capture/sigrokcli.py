@@ -260,6 +260,7 @@ def read_with_sigrok(
     *,
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
+    require_time: bool = True,
 ) -> Capture:
     """Read ``path`` in any sigrok-cli input format: convert to a temporary ``.sr``, read that.
 
@@ -271,6 +272,7 @@ def read_with_sigrok(
     Args:
         input_format: sigrok-cli ``-I`` value, with options if needed (``"binary:numchannels=4"``).
         samplerate: passed to formats that take a ``samplerate`` option, and to the ``.sr`` reader.
+        require_time: with False, data without a sample rate is read untimed (counts only).
     """
     from wavecheck.capture.sr import read_sr
 
@@ -321,14 +323,16 @@ def read_with_sigrok(
                 f"read 0 samples as {name!r} (empty, cut off or another format?)",
             )
         rate = samplerate
-        if rate is None and not info.samplerate:
+        if rate is None and not info.samplerate and require_time:
             raise CaptureError(
                 path,
                 None,
                 f"the {name} data states no sample rate (give it, e.g. --samplerate 1MHz)",
             )
         try:
-            cap = read_sr(out, samplerate=rate, resolution_s=resolution_s)
+            cap = read_sr(
+                out, samplerate=rate, resolution_s=resolution_s, require_rate=require_time
+            )
         except CaptureError as err:
             raise CaptureError(path, err.where, err.msg) from None
     if cap.end != info.sample_count:

@@ -483,6 +483,7 @@ def read_sr(
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
     max_member_bytes: int = MAX_MEMBER_BYTES,
     max_total_bytes: int = MAX_TOTAL_BYTES,
+    require_rate: bool = True,
 ) -> Capture:
     """Read a sigrok ``.sr`` file chunk by chunk into edge arrays (tick = one sample).
 
@@ -493,6 +494,8 @@ def read_sr(
         resolution_s: resolution in seconds, if coarser than one sample period.
         chunk_bytes: bytes inflated and scanned at a time (tests use tiny values).
         max_member_bytes / max_total_bytes: refuse files that would unpack to more.
+        require_rate: with False, a file without a sample rate (and none given) is read anyway
+            as an untimed capture (``time_known`` False: counts only, ticks are samples).
 
     Raises:
         CaptureError: unreadable zip, bad metadata, missing/corrupt chunk (names the member).
@@ -519,11 +522,16 @@ def read_sr(
                     "given by the user"
                 )
             rate = samplerate
-        if rate is None:
+        if rate is None and require_rate:
             raise CaptureError(
                 path,
                 "metadata",
                 "states no samplerate, so its time base is unknown (give it, e.g. --samplerate 12MHz)",
+            )
+        if rate is None:
+            notes.append(
+                "the file states no sample rate: edges and durations are in samples; "
+                "times need --samplerate (e.g. --samplerate 12MHz)"
             )
         bits = sorted(meta.probes)
         finder = _EdgeFinder(meta.unitsize, bits)
@@ -570,7 +578,8 @@ def read_sr(
         disabled = meta.total_probes - len(bits)
         if disabled:
             notes.append(f"{disabled} of {meta.total_probes} logic channels were disabled")
-        tb = Timebase.from_samplerate(rate)
+        # untimed (no rate): a placeholder of 1 s per sample, flagged by time_known=False
+        tb = Timebase.from_samplerate(rate if rate is not None else 1)
         res = 1
         if resolution_s is not None:
             ticks = resolution_s / tb.tick_s
@@ -598,4 +607,5 @@ def read_sr(
         end=finder.nsamples,
         channels=channels,
         notes=notes,
+        time_known=rate is not None,
     )
