@@ -34,6 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.srzip import EXACT_SECTION
 from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase
@@ -101,6 +102,7 @@ class SrMetadata:
         self.total_analog = total_analog
         self.ignored: list[str] = []  # members named like chunks that libsigrok does not read
         self.data_end: dict[int, int] = {}  # header offset → where the entry's room ends
+        self.exact_source: str | None = None  # set when [wavecheck] says edges=exact
 
     @property
     def nsamples(self) -> int:
@@ -242,6 +244,8 @@ def read_sr_metadata(
     meta = SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
     meta.ignored = ignored
     meta.data_end = extents
+    if EXACT_SECTION in cp and cp[EXACT_SECTION].get("edges", "").strip() == "exact":
+        meta.exact_source = cp[EXACT_SECTION].get("source", "").strip() or "unnamed"
     return meta
 
 
@@ -581,7 +585,17 @@ def read_sr(
         # untimed (no rate): a placeholder of 1 s per sample, flagged by time_known=False
         tb = Timebase.from_samplerate(rate if rate is not None else 1)
         res = 1
-        if resolution_s is not None:
+        if meta.exact_source is not None and resolution_s is None:
+            res = 0
+            notes.append(
+                f"the file states its edges are exact (simulated by {meta.exact_source}, each "
+                "edge on its sample): resolution 0"
+            )
+        elif meta.exact_source is not None and resolution_s is not None:
+            ticks = resolution_s / tb.tick_s
+            res = -((-ticks.numerator) // ticks.denominator)
+            notes.append(f"resolution set to {res} samples by the user (the file says exact)")
+        elif resolution_s is not None:
             ticks = resolution_s / tb.tick_s
             res = -((-ticks.numerator) // ticks.denominator)
             if ticks < 1:

@@ -259,3 +259,22 @@ def test_overlapping_entries_bomb_is_refused_quickly(tmp_path: Path) -> None:
     with pytest.raises(CaptureError, match="overlap"):
         read_sr(path)
     assert time.monotonic() - start < 5
+
+
+def test_exact_edges_section_gives_resolution_zero(tmp_path: Path) -> None:
+    """A .sr of simulated edges (stepgen) says ``[wavecheck] edges=exact``: resolution 0 with a
+    note naming the source; the same file without the section is sampled (one period)."""
+    from wavecheck.capture.srzip import write_sr_edges
+
+    edges = [np.array([2, 7], dtype=np.int64), np.array([5], dtype=np.int64)]
+    exact = tmp_path / "exact.sr"
+    write_sr_edges(exact, ["STEP", "DIR"], edges, [0, 0], 10, samplerate=40_000,
+                   exact_source="a test\nsimulation")  # fmt: skip
+    plain = tmp_path / "plain.sr"
+    write_sr_edges(plain, ["STEP", "DIR"], edges, [0, 0], 10, samplerate=40_000)
+    cap = read_sr(exact)
+    assert cap.resolution_ticks == 0 and cap.resolution_ns == 0
+    assert any("exact" in n and "a test simulation" in n for n in cap.notes), cap.notes
+    assert cap.channel("STEP").edges.tolist() == [2, 7]
+    assert read_sr(plain).resolution_ticks == 1
+    assert read_sr(exact, resolution_s=Fraction(50, 10**6)).resolution_ticks == 2
