@@ -133,3 +133,24 @@ def test_csv_first_row_taken_as_header_is_refused(tmp_path: Path) -> None:
         open_capture(path, samplerate=Fraction(1000))
     cap = open_capture(path, samplerate=Fraction(1000), input_format="csv:header=false")
     assert cap.end == 5 and cap.channels[0].edges.tolist() == [1, 2, 3, 4]
+
+
+def test_utf8_channel_names_in_sigrok_cli_vcd(tmp_path: Path) -> None:
+    """sigrok-cli writes a probe named ``STÉP`` into its VCD as UTF-8: the name is read as
+    ``STÉP`` (it was latin-1 mojibake, ``STÃ\\x89P``) and can be mapped."""
+    from wavecheck.capture.srzip import write_sr_edges
+
+    src = tmp_path / "utf8.sr"
+    edges = [np.array([10, 12, 20, 22], dtype=np.int64), np.array([15], dtype=np.int64)]
+    write_sr_edges(src, ["STÉP", "DIR→"], edges, [0, 0], 30, samplerate=1_000_000)
+    vcd = convert(src, tmp_path / "utf8.vcd", output_format="vcd")
+    assert "STÉP".encode() in vcd.read_bytes()
+    cap = read_vcd(vcd)
+    assert [c.name for c in cap.channels] == ["STÉP", "DIR→"]
+    assert not any("latin-1" in n for n in cap.notes)
+    scale = int(read_sr(src).timebase.tick_s / cap.timebase.tick_s)
+    assert cap.channel("STÉP").edges.tolist() == [t * scale for t in (10, 12, 20, 22)]
+    from wavecheck.interface import build_interface
+
+    iface = build_interface(cap, {"step": "STÉP", "dir": "DIR→"})
+    assert iface is not None
