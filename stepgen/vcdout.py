@@ -8,7 +8,11 @@ reproducible byte for byte) and no sample-rate comment (a simulated VCD is exact
 
 ``.sr`` (srzip, reference sigrok.md §5): ``version`` "2", ``metadata``, ``logic-1-N`` chunks of
 4 MiB. The sample period is the largest exact one: g = gcd(every edge time, the end, 10^9) ns,
-so the rate 10^9/g Hz is a whole number and every edge falls on a sample. ``counts`` is not a
+so the rate 10^9/g Hz is a whole number and every edge falls on a sample. Because the edges are
+simulated, not sampled, the metadata also says so (``[wavecheck] edges=exact``, ignored by
+libsigrok): a reader that took the file as sampled would give every interval ± one period g
+(at 40 kHz base period that is ±25 µs: a 25 µs pulse against a 4.5 µs limit was
+indeterminate), and no finer rate could help a pulse exactly at its limit. ``counts`` is not a
 logic signal and is left out. Runs longer than ``max_samples`` at that rate are refused.
 """
 
@@ -29,6 +33,8 @@ __all__ = ["DEFAULT_MAX_SAMPLES", "header_comment", "sr_sample_period_ns", "writ
 
 DEFAULT_MAX_SAMPLES = 200_000_000
 SR_CHUNK = SR_CHUNK_BYTES
+#: How a stepgen .sr names the simulation its exact edges come from.
+SR_SOURCE = "stepgen, a model of LinuxCNC's stepgen"
 
 
 def header_comment(trace: Trace) -> str:
@@ -102,5 +108,6 @@ def write_sr(
         int(n_samples),
         samplerate=10**9 // g,
         chunk_bytes=SR_CHUNK,
+        exact_source=SR_SOURCE,
     )
     return 10**9 // g, int(n_samples)

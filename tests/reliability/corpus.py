@@ -9,6 +9,7 @@ longer fuzz run (``fuzz.py``).
 
 from __future__ import annotations
 
+import functools
 import io
 import re
 import struct
@@ -24,6 +25,9 @@ import numpy.typing as npt
 from wavecheck.capture.srzip import write_sr
 
 Expect = Literal["error", "ok", "either"]
+#: A body token longer than this many bytes is the "no whitespace" hostile shape in the corpus
+#: (above the reader's 16 MiB cap, so a reader holding tokens whole is refused, not starved).
+MAX_TOKEN_TEST = 17 << 20
 
 
 @dataclass(frozen=True)
@@ -211,7 +215,7 @@ def sr_cases() -> Iterator[Case]:
         "samplerate-junk": {"samplerate": "fast"},
         "samplerate-huge": {"samplerate": "99999999999999999999999 EHz"},
         "samplerate-nan": {"samplerate": "nan Hz"},
-        "samplerate-missing": {"samplerate": None},
+
         "unitsize-0": {"unitsize": 0},
         "unitsize-missing": {"unitsize": None},
         "unitsize-negative": {"unitsize": -1},
@@ -226,6 +230,8 @@ def sr_cases() -> Iterator[Case]:
     }.items():
         meta = sr_metadata(**kw)  # type: ignore[arg-type]
         yield Case(f"meta-{label}", sr_bytes(raw, metadata=meta), ".sr")
+    # no rate: `info` lists it in samples, `check` refuses (info_then_check allows that pair)
+    yield Case("meta-samplerate-missing", sr_bytes(raw, metadata=sr_metadata(samplerate=None)), ".sr", "either")
     # 65 probes that do fit (unitsize 9): a valid, if odd, file
     names65 = [f"D{i}" for i in range(65)]
     raw65 = samples_from_edges(100, [(0, [10, 20])] + [(0, [])] * 64, unitsize=9).tobytes()
@@ -274,6 +280,11 @@ def sr_cases() -> Iterator[Case]:
         ".sr",
     )
     yield Case("size-lie-inflates-more", bomb_lying_size(), ".sr")
+    # hostile shapes of issue 12: a chunk number far beyond the others (a reader listing the
+    # missing numbers allocated 14 GB), and 1,000 directory entries on one deflate stream
+    yield Case("chunk-number-1e11", sr_far_chunk(), ".sr")
+    yield Case("overlapping-entries-1000", sr_overlapping_entries(), ".sr")
+    yield Case("chunk-names-not-libsigrok", sr_odd_chunk_names(), ".sr", "ok")
     # wrong file types
     yield Case("png", b"\x89PNG\r\n\x1a\n" + bytes(200), ".sr")
     yield Case("text", b"hello, this is not a capture\n", ".sr")
@@ -333,6 +344,67 @@ def bomb_lying_size(inflated: int = 64 << 20) -> bytes:
     (cd_off,) = struct.unpack_from("<I", fixed, eocd + 16)
     struct.pack_into("<I", fixed, eocd + 16, cd_off + delta)
     return bytes(fixed)
+
+
+def sr_far_chunk(number: int = 100_000_000_000) -> bytes:
+    """A tiny ``.sr`` with chunks ``logic-1-1`` and ``logic-1-<number>`` (a gap of ``number``
+    missing chunks: a reader that lists the missing numbers allocates all of them)."""
+    raw = base_sr_raw(200)
+    return sr_bytes(raw, members={"logic-1-1": raw, f"logic-1-{number}": raw})
+
+
+def sr_odd_chunk_names(names: Sequence[str] = ("logic-1-02", "logic-1-0")) -> bytes:
+    """A valid ``.sr`` plus members named like chunks that libsigrok never opens (it asks for
+    ``"%s-%d"`` by exact name), holding a busy waveform that would change the verdict if read."""
+    raw = base_sr_raw()
+    busy = samples_from_edges(len(raw), [(0, range(1, len(raw) - 1)), (0, [])]).tobytes()
+    members = {"logic-1-1": raw[:1000], "logic-1-2": raw[1000:]}
+    members.update({name: busy for name in names})
+    return sr_bytes(raw, members=members)
+
+
+@functools.lru_cache(maxsize=4)
+def sr_overlapping_entries(entries: int = 1000, inflated: int = 64 << 20) -> bytes:
+    """A zip bomb by overlap: ``entries`` central-directory entries ``logic-1-1`` … all point
+    at one deflate stream of ``inflated`` zero bytes (the file stays small; a reader that
+    trusts the directory inflates ``entries × inflated`` bytes)."""
+    comp = zlib.compressobj(6, zlib.DEFLATED, -15)
+    zero = bytes(1 << 20)
+    body = b"".join(comp.compress(zero) for _ in range(inflated >> 20)) + comp.flush()
+    crc = 0
+    for _ in range(inflated >> 20):
+        crc = zlib.crc32(zero, crc)
+    meta = sr_metadata().encode()
+    out = io.BytesIO()
+    central: list[bytes] = []
+
+    def local(name: bytes, data: bytes, method: int, size: int, crc32: int) -> int:
+        offset = out.tell()
+        out.write(struct.pack("<4sHHHHHIIIHH", b"PK\x03\x04", 20, 0, method, 0, 0x21,
+                              crc32, len(data), size, len(name), 0))  # fmt: skip
+        out.write(name + data)
+        return offset
+
+    def cd_entry(name: bytes, method: int, csize: int, size: int, crc32: int, off: int) -> bytes:
+        return struct.pack("<4sHHHHHHIIIHHHHHII", b"PK\x01\x02", 20, 20, 0, method, 0, 0x21,
+                           crc32, csize, size, len(name), 0, 0, 0, 0, 0, off) + name  # fmt: skip
+
+    off = local(b"version", b"2", 0, 1, zlib.crc32(b"2"))
+    central.append(cd_entry(b"version", 0, 1, 1, zlib.crc32(b"2"), off))
+    mc = zlib.compressobj(6, zlib.DEFLATED, -15)
+    mdata = mc.compress(meta) + mc.flush()
+    off = local(b"metadata", mdata, 8, len(meta), zlib.crc32(meta))
+    central.append(cd_entry(b"metadata", 8, len(mdata), len(meta), zlib.crc32(meta), off))
+    off = local(b"logic-1-1", body, 8, inflated, crc)
+    for k in range(1, entries + 1):
+        central.append(cd_entry(f"logic-1-{k}".encode(), 8, len(body), inflated, crc, off))
+    cd_start = out.tell()
+    for entry in central:
+        out.write(entry)
+    cd_size = out.tell() - cd_start
+    out.write(struct.pack("<4sHHHHIIH", b"PK\x05\x06", 0, 0, len(central), len(central),
+                          cd_size, cd_start, 0))  # fmt: skip
+    return out.getvalue()
 
 
 def bad_utf8_local_name(data: bytes, member: str) -> bytes:
@@ -399,6 +471,34 @@ def vcd_text(
     return "\n".join(x for x in lines if x != "") + "\n"
 
 
+def vcd_id(k: int) -> str:
+    """The ``k``-th VCD id code in printable ASCII ``!`` … ``~`` (as simulators number them)."""
+    chars = []
+    while True:
+        k, r = divmod(k, 94)
+        chars.append(chr(33 + r))
+        if k == 0:
+            return "".join(chars)
+        k -= 1
+
+
+def vcd_many_vars(count: int = 200_000) -> bytes:
+    """A VCD declaring ``count`` 1-bit wires (plus STEP and DIR), each changing once: a header
+    parser that recounts lines from the start per ``$var`` is quadratic on it."""
+    ids = [vcd_id(k + 2) for k in range(count)]
+    decl = "".join(f"$var wire 1 {c} w{k} $end\n" for k, c in enumerate(ids))
+    head = vcd_text(var_lines=[decl.rstrip("\n")])
+    changes = "#3500\n" + "".join(f"1{c}\n" for c in ids) + "#4000\n"
+    return (head + changes).encode()
+
+
+def vcd_no_whitespace_body(size: int = 2 << 30) -> tuple[bytes, int]:
+    """A valid header and then ``size`` NUL bytes and no whitespace (as a sparse file of that
+    size reads): returns (the header bytes, the total size to extend the file to)."""
+    head = vcd_text().encode()
+    return head, len(head) + size
+
+
 def vcd_cases() -> Iterator[Case]:
     """The fixed VCD corpus (truncations are generated separately)."""
     good = vcd_text()
@@ -428,6 +528,11 @@ def vcd_cases() -> Iterator[Case]:
     yield Case("time-backwards", good.replace("#1100", "#50").encode(), ".vcd")
     yield Case("negative-time", good.replace("#1100", "#-1100").encode(), ".vcd")
     yield Case("time-21-digits", good.replace("#3000", "#" + "9" * 21).encode(), ".vcd")
+    yield Case("time-19-digits", good.replace("#3000", "#9" + "0" * 18).encode(), ".vcd", "ok")
+    yield Case("time-2^63-1", good.replace("#3000", f"#{(1 << 63) - 1}").encode(), ".vcd", "ok")
+    yield Case("time-2^63", good.replace("#3000", f"#{1 << 63}").encode(), ".vcd")
+    yield Case("many-vars-5000", vcd_many_vars(5_000), ".vcd", "ok")  # 200,000: test_hostile
+    yield Case("no-whitespace-body", good.encode() + b"\x01" * (MAX_TOKEN_TEST + 1), ".vcd")
     yield Case("time-not-number", good.replace("#1100", "#11a0").encode(), ".vcd")
     yield Case("bare-hash", good.replace("#1100", "#").encode(), ".vcd")
     yield Case(

@@ -8,7 +8,11 @@ Each reader gets its fixed corpus (``corpus.py``), the truncations of a valid fi
 offset, and ``-n`` random mutants of valid files (byte flips, cuts, splices of other files,
 inserted tokens, repeated ranges). The contract: a result, or a :class:`WavecheckError` whose
 message is one line naming the file; any other exception is a failure, grouped by type and
-place and printed with a reproducer. ``make fuzz`` runs the default. Exit 1 if anything failed.
+place and printed with a reproducer. Each case is also bounded: a case taking more than
+``MAX_CASE_SECONDS`` or a peak of more than ``MAX_CASE_BYTES`` traced memory (tracemalloc) is a
+failure too, so the hostile shapes (chunk numbers far apart, overlapping zip entries, 20,000
+``$var`` lines, a body without whitespace) must cost bounded time and memory. ``make fuzz`` runs
+the default. Exit 1 if anything failed.
 
 ``--atheris`` uses atheris (``pip install atheris``) when it is installed: libFuzzer-style
 coverage-guided mutation of the same targets; arguments after ``--`` go to libFuzzer.
@@ -22,6 +26,7 @@ import sys
 import tempfile
 import time
 import traceback
+import tracemalloc
 from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
@@ -103,9 +108,20 @@ def mutate(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
     return bytes(b)
 
 
+#: Bounds for one case in-process (the hostile shapes of issue 12 included): wall time and the
+#: peak of memory allocated while reading (tracemalloc sees Python objects and numpy buffers).
+MAX_CASE_SECONDS = 20.0
+MAX_CASE_BYTES = 256 << 20
+
+
 class Tally:
-    def __init__(self, name: str) -> None:
+    def __init__(
+        self, name: str, max_seconds: float | None = None, max_bytes: int | None = None
+    ) -> None:
         self.name = name
+        self.max_seconds = max_seconds
+        self.max_bytes = max_bytes
+        self.peak_bytes = 0
         self.cases = 0
         self.errors = 0
         self.results = 0
@@ -116,6 +132,8 @@ class Tally:
     def run(self, reader: Callable[[Path], None], path: Path, data: bytes) -> None:
         path.write_bytes(data)
         self.cases += 1
+        if self.max_bytes is not None:
+            tracemalloc.start()
         start = time.monotonic()
         try:
             reader(path)
@@ -132,13 +150,29 @@ class Tally:
             key = f"{type(exc).__name__}: {str(exc)[:80]} at {Path(tb.filename).name}:{tb.lineno}"
             self.failures[key] += 1
             self.examples.setdefault(key, data)
-        self.slowest = max(self.slowest, time.monotonic() - start)
+        finally:
+            took = time.monotonic() - start
+            peak = 0
+            if self.max_bytes is not None:
+                peak = tracemalloc.get_traced_memory()[1]
+                tracemalloc.stop()
+        self.slowest = max(self.slowest, took)
+        self.peak_bytes = max(self.peak_bytes, peak)
+        for what, value, bound in (
+            ("slow", took, self.max_seconds),
+            ("memory", peak, self.max_bytes),
+        ):
+            if bound is not None and value > bound:
+                key = f"bound: {what} {value:.4g} > {bound:.4g} on a {len(data)}-byte input"
+                self.failures[key] += 1
+                self.examples.setdefault(key, data)
 
     def report(self, out: Path) -> str:
         lines = [
             f"{self.name}: {self.cases} cases, {self.errors} refused (exit 2), {self.results} read, "
             f"{sum(self.failures.values())} failures of {len(self.failures)} kinds, "
             f"slowest {self.slowest:.2f} s"
+            + (f", peak {self.peak_bytes / 2**20:.1f} MiB" if self.max_bytes is not None else "")
         ]
         for i, (key, n) in enumerate(self.failures.most_common()):
             repro = out / f"{self.name}-failure-{i}{READERS[self.name][1]}"
@@ -147,9 +181,19 @@ class Tally:
         return "\n".join(lines)
 
 
-def run_random(name: str, n: int, seed: int, out: Path) -> Tally:
+def run_random(
+    name: str,
+    n: int,
+    seed: int,
+    out: Path,
+    *,
+    max_seconds: float | None = MAX_CASE_SECONDS,
+    max_bytes: int | None = MAX_CASE_BYTES,
+) -> Tally:
+    """The fixed corpus, the truncations and ``n`` mutants of ``name``'s reader; a case past
+    ``max_seconds`` or ``max_bytes`` (None: unmeasured) is a failure like an exception."""
     reader, suffix, seeds = READERS[name]
-    tally = Tally(name)
+    tally = Tally(name, max_seconds, max_bytes)
     rng = random.Random(seed)
     with tempfile.TemporaryDirectory(prefix=f"fuzz-{name}-") as tmp:
         # a rule file's name must be its id
@@ -161,7 +205,8 @@ def run_random(name: str, n: int, seed: int, out: Path) -> Tally:
             for s in seeds:
                 for cut in range(len(s)):
                     tally.run(reader, path, s[:cut])
-        others = [c.data for c in FIXED[name]()] if name in FIXED else seeds
+        # splice material: the small fixed cases (the big hostile shapes run once, above)
+        others = [c.data for c in FIXED[name]() if len(c.data) < 1 << 16] if name in FIXED else seeds
         for _ in range(n):
             tally.run(reader, path, mutate(rng, rng.choice(seeds), others + seeds))
     return tally

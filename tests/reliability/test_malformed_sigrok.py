@@ -18,6 +18,9 @@ CASES: list[tuple[str, bytes, str, list[str], str]] = [
     ("csv-no-rate", b"a,b\n1,0\n0,1\n", ".csv", [], "error"),
     ("csv-ok", b"a,b\n1,0\n0,1\n1,1\n", ".csv", ["--samplerate", "1MHz"], "either"),
     ("csv-junk", b"junk", ".csv", ["--samplerate", "1MHz"], "error"),
+    # sigrok-cli stops at a NUL silently (issue 12): refused, not half-checked
+    ("csv-nul-byte", b"a,b\n1,0\n0,1\n\x001,1\n0,0\n", ".csv", ["--samplerate", "1MHz"], "error"),
+    ("csv-first-row-is-data", b"1,0\n0,1\n1,1\n", ".csv", ["--samplerate", "1MHz"], "error"),
     ("csv-empty", b"", ".csv", ["--samplerate", "1MHz"], "error"),
     ("csv-binary", bytes(range(256)), ".csv", ["--samplerate", "1MHz"], "error"),
     ("csv-fraction-rate", b"a\n1\n0\n", ".csv", ["--samplerate", "1.5Hz"], "error"),

@@ -78,6 +78,9 @@ class Capture:
             (``"an 8-bit vector"``, ``"a real"``), so mapping one gives a precise error.
         aliases: other names of a channel (a VCD id code declared more than once), name →
             channel name, so mapping any of them finds it.
+        time_known: False when the file states no sample rate and none was given (read for
+            ``wavecheck info`` only): ticks are samples of unknown length, the timebase is a
+            placeholder, and only counts (edges, samples) mean anything.
     """
 
     path: str
@@ -91,6 +94,7 @@ class Capture:
     notes: list[str] = field(default_factory=list)
     skipped: dict[str, str] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
+    time_known: bool = True
 
     @property
     def duration_s(self) -> Fraction:

@@ -6,14 +6,20 @@ chronovu-la8, logicport, …) is converted by sigrok-cli to a temporary ``.sr`` 
 
 from __future__ import annotations
 
+import io
 import os
+import shutil
+import stat
+import sys
+import tempfile
 from fractions import Fraction
 from pathlib import Path
+from typing import Any, BinaryIO
 
 from wavecheck.capture.model import Capture
 from wavecheck.errors import CaptureError, UsageError
 
-__all__ = ["detect_format", "open_capture"]
+__all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
 
 _ALIASES = {"srzip": "sr", "sigrok": "sr"}
 _BY_EXTENSION = {
@@ -24,6 +30,9 @@ _BY_EXTENSION = {
     ".lpf": "logicport",
 }
 _ZIP_MAGIC = b"PK\x03\x04"
+_SNIFF_BYTES = 4096
+#: The capture path that means standard input.
+STDIN = "-"
 
 
 def detect_format(path: str | os.PathLike[str]) -> str:
@@ -39,12 +48,20 @@ def detect_format(path: str | os.PathLike[str]) -> str:
         raise CaptureError(path, None, "is a folder, not a capture file")
     try:
         with open(p, "rb") as f:
-            head = f.read(4096)
+            head = f.read(_SNIFF_BYTES)
     except OSError as err:
         raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+    return format_of(path, head, p.suffix.lower())
+
+
+def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
+    """The format told by the first bytes ``head`` of a capture, else by its extension ``ext``.
+
+    Raises:
+        CaptureError: an empty input, or a format that cannot be told.
+    """
     if not head.strip():
         raise CaptureError(path, None, "the file is empty")
-    ext = p.suffix.lower()
     if head.startswith(_ZIP_MAGIC):
         return "sr"
     if head.lstrip().startswith(b"$"):
@@ -61,14 +78,117 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     return _BY_EXTENSION[ext]
 
 
+def is_stream(path: str | os.PathLike[str]) -> bool:
+    """True for ``-`` (standard input) and for a pipe, FIFO, socket or character device (such as
+    ``/dev/stdin`` on a pipe): inputs that cannot be read twice or seeked."""
+    if str(path) == STDIN:
+        return True
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISCHR(mode) or stat.S_ISSOCK(mode)
+
+
+class _Prefixed(io.RawIOBase):
+    """A stream that gives ``head`` (bytes already read from ``rest``) and then ``rest``."""
+
+    def __init__(self, head: bytes, rest: BinaryIO) -> None:
+        super().__init__()
+        self._head = memoryview(head)
+        self._rest = rest
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        out = memoryview(buffer).cast("B")
+        if self._head.nbytes:
+            n = min(len(out), self._head.nbytes)
+            out[:n] = self._head[:n]
+            self._head = self._head[n:]
+            return n
+        data = self._rest.read(len(out))
+        out[: len(data)] = data
+        return len(data)
+
+
+def _read_head(f: BinaryIO, size: int) -> bytes:
+    """Up to ``size`` bytes from ``f`` (a pipe may give them in several reads)."""
+    parts: list[bytes] = []
+    got = 0
+    while got < size and (block := f.read(size - got)):
+        parts.append(block)
+        got += len(block)
+    return b"".join(parts)
+
+
+def _open_stream(
+    path: str | os.PathLike[str],
+    *,
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    input_format: str | None,
+    require_time: bool,
+) -> Capture:
+    """Read a capture from standard input or a pipe without losing what format detection read.
+
+    The first bytes are sniffed and then handed on: a VCD is read from the stream itself (held
+    whole only as far as the VCD reader holds any file); a ``.sr`` (a zip, which needs seeking)
+    or a sigrok-cli format is copied to a temporary file first. Messages name ``path`` (``-``
+    is named ``<stdin>``).
+    """
+    name = "<stdin>" if str(path) == STDIN else str(path)
+    try:
+        f: BinaryIO = sys.stdin.buffer if str(path) == STDIN else open(path, "rb")
+    except OSError as err:
+        raise CaptureError(name, None, f"cannot open: {err.strerror or err}") from None
+    try:
+        head = _read_head(f, _SNIFF_BYTES)
+        if input_format:
+            fmt = input_format.strip()
+            if not head.strip():
+                raise CaptureError(name, None, "the input is empty")
+        else:
+            fmt = format_of(name, head, "")
+        kind = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
+        stream = io.BufferedReader(_Prefixed(head, f), buffer_size=1 << 20)
+        if kind == "vcd" and ":" not in fmt:
+            from wavecheck.capture.vcd import read_vcd
+
+            return read_vcd(name, samplerate=samplerate, resolution_s=resolution_s, source=stream)
+        suffix = ".sr" if kind == "sr" else f".{kind}"
+        with tempfile.TemporaryDirectory(prefix="wavecheck-stdin-") as tmp:
+            spool = Path(tmp) / f"input{suffix}"
+            with open(spool, "wb") as out:
+                shutil.copyfileobj(stream, out, 1 << 20)
+            try:
+                cap = open_capture(
+                    spool,
+                    samplerate=samplerate,
+                    resolution_s=resolution_s,
+                    input_format=fmt,
+                    require_time=require_time,
+                )
+            except CaptureError as err:
+                raise CaptureError(name, err.where, err.msg) from None
+        cap.path = name
+        return cap
+    finally:
+        if f is not sys.stdin.buffer:
+            f.close()
+
+
 def open_capture(
     path: str | os.PathLike[str],
     *,
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
     input_format: str | None = None,
+    require_time: bool = True,
 ) -> Capture:
-    """Read a capture file into a :class:`Capture`.
+    """Read a capture file into a :class:`Capture`; ``-`` (or a pipe such as ``/dev/stdin``)
+    is read from standard input, its format detected without losing the bytes sniffed.
 
     Args:
         path: the capture.
@@ -78,6 +198,8 @@ def open_capture(
         input_format: ``"sr"``, ``"vcd"`` or a sigrok-cli input format (may carry options,
             ``"binary:numchannels=4"``); default: detected from content and extension. A VCD
             with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
+        require_time: with False, a file that states no sample rate is read anyway, untimed
+            (:attr:`Capture.time_known` False: counts in samples; for ``wavecheck info``).
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
@@ -86,6 +208,14 @@ def open_capture(
         raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
     if resolution_s is not None and resolution_s < 0:
         raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+    if is_stream(path):
+        return _open_stream(
+            path,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            input_format=input_format,
+            require_time=require_time,
+        )
     fmt = input_format.strip() if input_format else detect_format(path)
     name = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
     if input_format:
@@ -96,14 +226,18 @@ def open_capture(
     if name == "sr":
         from wavecheck.capture.sr import read_sr
 
-        return read_sr(path, samplerate=samplerate, resolution_s=resolution_s)
+        return read_sr(
+            path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
+        )
     if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 
         return read_vcd(path, samplerate=samplerate, resolution_s=resolution_s)
     from wavecheck.capture.sigrokcli import read_with_sigrok
 
-    return read_with_sigrok(path, fmt, samplerate=samplerate, resolution_s=resolution_s)
+    return read_with_sigrok(
+        path, fmt, samplerate=samplerate, resolution_s=resolution_s, require_time=require_time
+    )
 
 
 def detect_path_exists(path: str | os.PathLike[str]) -> None:

@@ -34,6 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.srzip import EXACT_SECTION
 from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase
@@ -69,6 +70,7 @@ _READ_ERRORS: tuple[type[BaseException], ...] = (
     zipfile.BadZipFile, zlib.error, _zlib.error, EOFError, OSError
 )  # fmt: skip
 _BYTE_OFFSETS = np.arange(8, dtype=np.int64)
+_DIGITS = re.compile(r"[0-9]+")
 # zipfile refuses some corrupt or exotic headers with these rather than BadZipFile: encryption
 # (RuntimeError), flag bits 5/6, "version needed", unknown methods (NotImplementedError), a
 # non-UTF-8 name under the UTF-8 flag (UnicodeDecodeError), bogus LZMA data (LZMAError)
@@ -98,6 +100,9 @@ class SrMetadata:
         self.probes = probes  # probe index from 0 → name (enabled probes only)
         self.members = members
         self.total_analog = total_analog
+        self.ignored: list[str] = []  # members named like chunks that libsigrok does not read
+        self.data_end: dict[int, int] = {}  # header offset → where the entry's room ends
+        self.exact_source: str | None = None  # set when [wavecheck] says edges=exact
 
     @property
     def nsamples(self) -> int:
@@ -144,6 +149,7 @@ def read_sr_metadata(
     for member in ("version", "metadata"):
         if member not in names:
             raise CaptureError(path, None, f"no {member!r} member: not a sigrok .sr file")
+    extents = _entry_extents(path, zf)
     for member in ("version", "metadata"):
         if zf.getinfo(member).file_size > _MAX_METADATA_BYTES:
             raise CaptureError(path, f"member {member}", "is implausibly large (corrupt file?)")
@@ -204,26 +210,11 @@ def read_sr_metadata(
         if rate <= 0:
             raise CaptureError(path, "metadata", f"samplerate={rate_text!r} must be positive")
     base = dev.get("capturefile", "logic-1").strip()
+    ignored: list[str] = []
     if base in names:
         members = [zf.getinfo(base)]
     else:
-        numbered: dict[int, zipfile.ZipInfo] = {}
-        pattern = re.compile(re.escape(base) + r"-(\d+)")
-        for info in zf.infolist():
-            match = pattern.fullmatch(info.filename)
-            if match:
-                numbered[int(match.group(1))] = info
-        if not numbered:
-            raise CaptureError(path, None, f"no logic data (no member {base!r} or {base}-1)")
-        missing = sorted(set(range(1, max(numbered) + 1)) - set(numbered))
-        if missing:
-            raise CaptureError(
-                path,
-                f"member {base}-{missing[0]}",
-                f"is missing ({len(numbered)} chunks present, numbered up to {max(numbered)}); "
-                "the capture has a gap",
-            )
-        members = [numbered[k] for k in sorted(numbered)]
+        members, ignored = _chunk_members(path, zf, base)
     total_bytes = 0
     for info in members:
         if info.file_size % unitsize:
@@ -250,7 +241,99 @@ def read_sr_metadata(
     if total_bytes == 0:
         raise CaptureError(path, None, "holds no samples")
     analog = _int(path, dev, "total analog") or 0
-    return SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
+    meta = SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
+    meta.ignored = ignored
+    meta.data_end = extents
+    if EXACT_SECTION in cp and cp[EXACT_SECTION].get("edges", "").strip() == "exact":
+        meta.exact_source = cp[EXACT_SECTION].get("source", "").strip() or "unnamed"
+    return meta
+
+
+def _chunk_members(
+    path: str | os.PathLike[str], zf: zipfile.ZipFile, base: str
+) -> tuple[list[zipfile.ZipInfo], list[str]]:
+    """The chunk members ``base-1``, ``base-2``, … in order, and the names that look like chunks
+    but are not read.
+
+    libsigrok (``session_driver.c``) opens ``"%s-%d" % (base, n)`` by exact name for n = 1, 2, …
+    and stops at the first missing one, so ``logic-1-02`` or ``logic-1-0`` are never read. A
+    later chunk after a missing one is refused as a gap (sigrok would silently stop there). Time
+    and memory are linear in the members present, whatever numbers they carry.
+
+    Raises:
+        CaptureError: no chunk, a gap, or a chunk name twice.
+    """
+    prefix = base + "-"
+    present: dict[int, zipfile.ZipInfo] = {}
+    unreachable = 0  # chunk names with a number too large to ever be reached
+    ignored: list[str] = []
+    for info in zf.infolist():
+        name = info.filename
+        if not name.startswith(prefix):
+            continue
+        tail = name[len(prefix) :]
+        if not _DIGITS.fullmatch(tail):
+            continue
+        if tail[0] == "0":
+            ignored.append(name)
+        elif len(tail) > 18:
+            unreachable += 1
+        elif int(tail) in present:
+            raise CaptureError(path, f"member {name}", "appears twice in the zip directory")
+        else:
+            present[int(tail)] = info
+    members: list[zipfile.ZipInfo] = []
+    while (chunk := present.get(len(members) + 1)) is not None:
+        members.append(chunk)
+    if not present and not unreachable:
+        raise CaptureError(path, None, f"no logic data (no member {base!r} or {base}-1)")
+    if len(members) < len(present) + unreachable:
+        top = "a huge number" if unreachable else str(max(present))
+        raise CaptureError(
+            path,
+            f"member {base}-{len(members) + 1}",
+            f"is missing ({len(present) + unreachable} chunks present, numbered up to {top}); "
+            "the capture has a gap",
+        )
+    return members, ignored
+
+
+def _name_len(info: zipfile.ZipInfo) -> int:
+    """Length in bytes of the entry's name as stored (UTF-8 under flag bit 11, else cp437)."""
+    if info.flag_bits & 0x800:
+        return len(info.filename.encode("utf-8", "surrogateescape"))
+    return len(info.filename.encode("cp437", "replace"))
+
+
+def _entry_extents(path: str | os.PathLike[str], zf: zipfile.ZipFile) -> dict[int, int]:
+    """Where each zip entry's room ends (the next entry's local header, or the central
+    directory), by header offset; refuses entries whose ranges overlap.
+
+    An entry takes at least its 30-byte local header, its name and its compressed data; two
+    directory entries sharing bytes are how a zip bomb makes a small file inflate many times
+    (a 1 MB file with 1,000 entries on one 1 GiB stream). Linear in the entries after a sort.
+
+    Raises:
+        CaptureError: two entries overlap, or one reaches into the central directory.
+    """
+    infos = sorted(zf.infolist(), key=lambda i: i.header_offset)
+    stop = getattr(zf, "start_dir", None)
+    extents: dict[int, int] = {}
+    for k, info in enumerate(infos):
+        nxt = infos[k + 1] if k + 1 < len(infos) else None
+        limit = nxt.header_offset if nxt is not None else stop
+        need = info.header_offset + 30 + _name_len(info) + info.compress_size
+        if limit is not None and need > limit:
+            other = repr(nxt.filename) if nxt is not None else "the zip directory"
+            raise CaptureError(
+                path,
+                None,
+                f"zip entries {info.filename!r} and {other} overlap (bytes "
+                f"{info.header_offset}…{need} and {limit}…): refused as a zip bomb or a "
+                "corrupt archive",
+            )
+        extents[info.header_offset] = limit if limit is not None else need
+    return extents
 
 
 class _EdgeFinder:
@@ -335,13 +418,14 @@ def _nonzero_bytes(d: npt.NDArray[np.uint8]) -> npt.NDArray[np.int64]:
 
 
 def _member_blocks(
-    zf: zipfile.ZipFile, raw: BinaryIO, info: zipfile.ZipInfo, step: int
+    zf: zipfile.ZipFile, raw: BinaryIO, info: zipfile.ZipInfo, step: int, room: int | None = None
 ) -> Iterator[bytes]:
     """The inflated bytes of chunk member ``info`` in blocks of at most ``step`` bytes.
 
     Stored and deflated members are read straight from the file (``raw``): the local header is
     skipped, the data inflated with zlib-ng (or zlib) and its CRC-32 checked at the end, like
-    ``zipfile`` does. Anything else (encrypted, bzip2, lzma) goes through ``zipfile``.
+    ``zipfile`` does. Anything else (encrypted, bzip2, lzma) goes through ``zipfile``. ``room``
+    is the offset where the entry's room ends (the next entry): data reaching past it is refused.
 
     Raises:
         zipfile.BadZipFile: a bad local header or CRC; zlib errors for a corrupt stream.
@@ -359,7 +443,10 @@ def _member_blocks(
     if len(head) < 30 or head[:4] != b"PK\x03\x04":
         raise zipfile.BadZipFile("bad local file header")
     name_len, extra_len = struct.unpack("<HH", head[26:30])
-    raw.seek(info.header_offset + 30 + name_len + extra_len)
+    start = info.header_offset + 30 + name_len + extra_len
+    if room is not None and start + info.compress_size > room:
+        raise zipfile.BadZipFile("its data overlaps the next zip entry (a zip bomb?)")
+    raw.seek(start)
     left_in, left_out, crc = info.compress_size, info.file_size, 0
     if info.compress_type == zipfile.ZIP_STORED:
         while left_in:
@@ -400,6 +487,7 @@ def read_sr(
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
     max_member_bytes: int = MAX_MEMBER_BYTES,
     max_total_bytes: int = MAX_TOTAL_BYTES,
+    require_rate: bool = True,
 ) -> Capture:
     """Read a sigrok ``.sr`` file chunk by chunk into edge arrays (tick = one sample).
 
@@ -410,6 +498,8 @@ def read_sr(
         resolution_s: resolution in seconds, if coarser than one sample period.
         chunk_bytes: bytes inflated and scanned at a time (tests use tiny values).
         max_member_bytes / max_total_bytes: refuse files that would unpack to more.
+        require_rate: with False, a file without a sample rate (and none given) is read anyway
+            as an untimed capture (``time_known`` False: counts only, ticks are samples).
 
     Raises:
         CaptureError: unreadable zip, bad metadata, missing/corrupt chunk (names the member).
@@ -436,11 +526,16 @@ def read_sr(
                     "given by the user"
                 )
             rate = samplerate
-        if rate is None:
+        if rate is None and require_rate:
             raise CaptureError(
                 path,
                 "metadata",
                 "states no samplerate, so its time base is unknown (give it, e.g. --samplerate 12MHz)",
+            )
+        if rate is None:
+            notes.append(
+                "the file states no sample rate: edges and durations are in samples; "
+                "times need --samplerate (e.g. --samplerate 12MHz)"
             )
         bits = sorted(meta.probes)
         finder = _EdgeFinder(meta.unitsize, bits)
@@ -452,7 +547,8 @@ def read_sr(
             got = 0
             try:
                 carry = b""
-                for data in _member_blocks(zf, raw, info, step):
+                room = meta.data_end.get(info.header_offset)
+                for data in _member_blocks(zf, raw, info, step, room):
                     got += len(data)
                     if carry:
                         data, carry = carry + data, b""
@@ -474,14 +570,32 @@ def read_sr(
                     f"gave {got} bytes, not the {info.file_size} it declares (the file is damaged)",
                 )
             done += got
+        if meta.ignored:
+            listed = ", ".join(meta.ignored[:5]) + (" …" if len(meta.ignored) > 5 else "")
+            notes.append(
+                f"ignored {len(meta.ignored)} member(s) named like chunks that libsigrok never "
+                f"reads (it opens {meta.members[0].filename.rsplit('-', 1)[0]}-1, -2, … by exact "
+                f"name): {listed}"
+            )
         if meta.total_analog:
             notes.append(f"skipped {meta.total_analog} analog channel(s)")
         disabled = meta.total_probes - len(bits)
         if disabled:
             notes.append(f"{disabled} of {meta.total_probes} logic channels were disabled")
-        tb = Timebase.from_samplerate(rate)
+        # untimed (no rate): a placeholder of 1 s per sample, flagged by time_known=False
+        tb = Timebase.from_samplerate(rate if rate is not None else 1)
         res = 1
-        if resolution_s is not None:
+        if meta.exact_source is not None and resolution_s is None:
+            res = 0
+            notes.append(
+                f"the file states its edges are exact (simulated by {meta.exact_source}, each "
+                "edge on its sample): resolution 0"
+            )
+        elif meta.exact_source is not None and resolution_s is not None:
+            ticks = resolution_s / tb.tick_s
+            res = -((-ticks.numerator) // ticks.denominator)
+            notes.append(f"resolution set to {res} samples by the user (the file says exact)")
+        elif resolution_s is not None:
             ticks = resolution_s / tb.tick_s
             res = -((-ticks.numerator) // ticks.denominator)
             if ticks < 1:
@@ -507,4 +621,5 @@ def read_sr(
         end=finder.nsamples,
         channels=channels,
         notes=notes,
+        time_known=rate is not None,
     )

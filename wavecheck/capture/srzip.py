@@ -8,6 +8,10 @@ members ``logic-1-1``, ``logic-1-2`` … of ``chunk_bytes`` each (deflated). A s
 :func:`sr_metadata` builds the metadata text, :func:`samples_from_edges` packs edge arrays into
 sample bytes, :func:`write_sr` writes the file from sample bytes (one buffer or an iterable of
 member-sized pieces, for files larger than memory) and :func:`write_sr_edges` from edges.
+
+A writer of simulated data (stepgen) adds :func:`exact_edges_section`: a ``[wavecheck]`` group
+that libsigrok ignores, saying every edge lies exactly on its sample, so the reader
+(:mod:`wavecheck.capture.sr`) gives resolution 0 instead of one sample period.
 """
 
 from __future__ import annotations
@@ -24,7 +28,9 @@ import numpy.typing as npt
 from wavecheck.output import atomic_path
 
 __all__ = [
+    "EXACT_SECTION",
     "SR_CHUNK_BYTES",
+    "exact_edges_section",
     "rate_text",
     "samples_from_edges",
     "sr_metadata",
@@ -34,6 +40,15 @@ __all__ = [
 
 #: libsigrok's member size: 4 MiB of sample bytes per ``logic-1-N``.
 SR_CHUNK_BYTES = 4 * 1024 * 1024
+#: Metadata group (ignored by libsigrok, which reads only ``[global]`` and ``[device N]``) in
+#: which ``edges=exact`` states that the samples are simulated: each edge is exactly at its sample.
+EXACT_SECTION = "wavecheck"
+
+
+def exact_edges_section(source: str) -> str:
+    """The metadata text stating exact edges, ``source`` naming the simulation (one line)."""
+    one_line = " ".join(source.split())
+    return f"\n[{EXACT_SECTION}]\nedges=exact\nsource={one_line}\n"
 
 
 def rate_text(hz: int) -> str:
@@ -203,13 +218,19 @@ def write_sr_edges(
     *,
     samplerate: int | str | None,
     chunk_bytes: int = SR_CHUNK_BYTES,
+    exact_source: str | None = None,
 ) -> int:
     """Write channels given as edges (sample numbers, see :func:`samples_from_edges`) as an
-    srzip file, one bit per channel in ``names`` order; returns the number of sample bytes."""
+    srzip file, one bit per channel in ``names`` order; returns the number of sample bytes.
+
+    ``exact_source``: the edges are simulated, exactly on their samples (not sampled from a
+    signal); the metadata says so (:func:`exact_edges_section`), naming this source.
+    """
     if len(names) != len(edges) or len(names) != len(initial):
         raise ValueError("names, edges and initial levels must have one entry per channel")
     unit = max(1, (len(names) + 7) // 8)
     raw = samples_from_edges(edges, initial, n_samples, unitsize=unit)
-    meta = sr_metadata(names, samplerate=samplerate, unitsize=unit)
+    extra = exact_edges_section(exact_source) if exact_source is not None else ""
+    meta = sr_metadata(names, samplerate=samplerate, unitsize=unit, extra=extra)
     step = max(unit, chunk_bytes - chunk_bytes % unit)
     return write_sr(target, raw, metadata=meta, chunk_bytes=step)

@@ -40,7 +40,9 @@ def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def capture_from_args(args: argparse.Namespace, path: str | os.PathLike[str]) -> Capture:
+def capture_from_args(
+    args: argparse.Namespace, path: str | os.PathLike[str], *, require_time: bool = True
+) -> Capture:
     """Open ``path`` with the options added by :func:`add_capture_arguments`.
 
     Raises:
@@ -62,4 +64,5 @@ def capture_from_args(args: argparse.Namespace, path: str | os.PathLike[str]) ->
         samplerate=samplerate,
         resolution_s=resolution_s,
         input_format=getattr(args, "input_format", None),
+        require_time=require_time,
     )

@@ -2,7 +2,11 @@
 
 JSON keys (a contract): ``format``, ``samplerate_hz`` (null for a VCD without one),
 ``resolution_ns``, ``duration_s``, ``channels`` [{name, index, initial, edges, rising, falling}];
-also ``path``, ``tick_ns``, ``notes``.
+also ``path``, ``tick_ns``, ``notes``, ``samples`` (the window in ticks) and ``time_known``.
+
+A capture that states no sample rate (a ``.sr`` without one, and no ``--samplerate``) is still
+listed: channels and edge counts in samples, with ``tick_ns``, ``resolution_ns`` and
+``duration_s`` null and a note that times need ``--samplerate``.
 """
 
 from __future__ import annotations
@@ -39,13 +43,16 @@ def _number(value: Fraction) -> int | float:
 
 def info_dict(cap: Capture) -> dict[str, Any]:
     """The JSON form of ``wavecheck info``."""
+    timed = cap.time_known
     return {
         "path": cap.path,
         "format": cap.format,
         "samplerate_hz": None if cap.samplerate_hz is None else _number(cap.samplerate_hz),
-        "tick_ns": _number(cap.timebase.tick_ns),
-        "resolution_ns": _number(cap.resolution_ns),
-        "duration_s": float(cap.duration_s),
+        "tick_ns": _number(cap.timebase.tick_ns) if timed else None,
+        "resolution_ns": _number(cap.resolution_ns) if timed else None,
+        "duration_s": float(cap.duration_s) if timed else None,
+        "samples": cap.end - cap.start,
+        "time_known": timed,
         "channels": [
             {
                 "name": ch.name,
@@ -65,14 +72,25 @@ def info_text(cap: Capture) -> str:
     """The text form of ``wavecheck info``."""
     rate = "none stated" if cap.samplerate_hz is None else format_frequency(cap.samplerate_hz)
     res = "exact (0)" if cap.resolution_ticks == 0 else format_time(cap.resolution_ns / 10**9)
+    if cap.time_known:
+        timing = [
+            f"tick        {format_time(cap.timebase.tick_s)}"
+            + (" (timescale)" if cap.format == "vcd" else ""),
+            f"resolution  {res}",
+            f"duration    {format_time(cap.duration_s)} ({cap.end - cap.start} ticks)",
+        ]
+    else:
+        rate += " (times need --samplerate)"
+        timing = [
+            "tick        1 sample",
+            "resolution  1 sample",
+            f"duration    {cap.end - cap.start} samples",
+        ]
     lines = [
         f"capture     {cap.path}",
         f"format      {cap.format}",
         f"sample rate {rate}",
-        f"tick        {format_time(cap.timebase.tick_s)}"
-        + (" (timescale)" if cap.format == "vcd" else ""),
-        f"resolution  {res}",
-        f"duration    {format_time(cap.duration_s)} ({cap.end - cap.start} ticks)",
+        *timing,
         "",
     ]
     width = max([len("name")] + [len(ch.name) for ch in cap.channels])
@@ -98,7 +116,7 @@ def info_text(cap: Capture) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    cap = capture_from_args(args, args.capture)
+    cap = capture_from_args(args, args.capture, require_time=False)
     if args.format == "json":
         json.dump(info_dict(cap), sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -87,3 +87,70 @@ def test_failures_become_capture_errors(
     with pytest.raises(CaptureError, match=match) as info:
         open_capture(path, input_format=fmt, samplerate=Fraction(1000))
     assert "\n" not in str(info.value)
+
+
+# --- issue 12: CSV conversions are checked, and sigrok-cli's own CSV is understood ------------
+
+
+def test_csv_written_by_sigrok_cli_gives_rate_and_names(smoothie_sr: Path, tmp_path: Path) -> None:
+    """``sigrok-cli -i X.sr -O csv`` states "; Samplerate: 12 MHz" and "; Channels (8/8): 0, …"
+    (its header row says ``logic`` for every column): both are used, and the capture equals the
+    native read of the .sr (it was refused for want of a rate, and every channel was ``logic``)."""
+    csv = convert(smoothie_sr, tmp_path / "smoothie.csv", output_format="csv")
+    head = csv.read_bytes()[:400].decode()
+    assert "; Samplerate: 12 MHz" in head and "logic,logic" in head
+    cap = open_capture(csv)
+    native = read_sr(smoothie_sr)
+    assert cap.samplerate_hz == native.samplerate_hz == 12_000_000
+    assert [c.name for c in cap.channels] == [c.name for c in native.channels]
+    assert cap.end == native.end
+    for a, b in zip(cap.channels, native.channels, strict=True):
+        assert a.initial == b.initial
+        np.testing.assert_array_equal(a.edges, b.edges)
+    assert any("Samplerate" in n for n in cap.notes) and any("Channels" in n for n in cap.notes)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [b"1,0\n0,1\n1,\x001\n0,0\n1,0\n", b"1,0\n0,1\n\x001,1\n0,0\n1,0\n", b"1,0\n0,1\n1,1\n\x00\n0,0\n"],
+    ids=["mid-line", "line-start", "own-line"],
+)
+def test_csv_with_nul_byte_is_refused(tmp_path: Path, body: bytes) -> None:
+    """sigrok-cli stops at a NUL without a word (2 or 3 of 5 rows, exit 0): the rest of the
+    capture would go unchecked, so the file is refused, naming the byte."""
+    path = tmp_path / "nul.csv"
+    path.write_bytes(b"STEP,DIR\n" + body)
+    with pytest.raises(CaptureError, match=f"byte {path.read_bytes().index(0)}: is a NUL byte"):
+        open_capture(path, samplerate=Fraction(1000))
+
+
+def test_csv_first_row_taken_as_header_is_refused(tmp_path: Path) -> None:
+    """Without a header line sigrok-cli silently eats the first row of samples as channel
+    names: refused with the fix; with ``csv:header=false`` every row is a sample."""
+    path = tmp_path / "nohdr.csv"
+    path.write_bytes(b"1,0\n0,1\n1,1\n0,0\n1,0\n")
+    with pytest.raises(CaptureError, match="header=false"):
+        open_capture(path, samplerate=Fraction(1000))
+    cap = open_capture(path, samplerate=Fraction(1000), input_format="csv:header=false")
+    assert cap.end == 5 and cap.channels[0].edges.tolist() == [1, 2, 3, 4]
+
+
+def test_utf8_channel_names_in_sigrok_cli_vcd(tmp_path: Path) -> None:
+    """sigrok-cli writes a probe named ``STÉP`` into its VCD as UTF-8: the name is read as
+    ``STÉP`` (it was latin-1 mojibake, ``STÃ\\x89P``) and can be mapped."""
+    from wavecheck.capture.srzip import write_sr_edges
+
+    src = tmp_path / "utf8.sr"
+    edges = [np.array([10, 12, 20, 22], dtype=np.int64), np.array([15], dtype=np.int64)]
+    write_sr_edges(src, ["STÉP", "DIR→"], edges, [0, 0], 30, samplerate=1_000_000)
+    vcd = convert(src, tmp_path / "utf8.vcd", output_format="vcd")
+    assert "STÉP".encode() in vcd.read_bytes()
+    cap = read_vcd(vcd)
+    assert [c.name for c in cap.channels] == ["STÉP", "DIR→"]
+    assert not any("latin-1" in n for n in cap.notes)
+    scale = int(read_sr(src).timebase.tick_s / cap.timebase.tick_s)
+    assert cap.channel("STÉP").edges.tolist() == [t * scale for t in (10, 12, 20, 22)]
+    from wavecheck.interface import build_interface
+
+    iface = build_interface(cap, {"step": "STÉP", "dir": "DIR→"})
+    assert iface is not None

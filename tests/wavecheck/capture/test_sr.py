@@ -186,3 +186,95 @@ def test_not_a_zip_and_missing(tmp_path: Path) -> None:
         read_sr(tmp_path / "g.sr")
     with pytest.raises(CaptureError, match="no such file"):
         read_sr(tmp_path / "missing.sr")
+
+
+# --- issue 12: chunk names as libsigrok reads them; zip entries that overlap -----------------
+
+
+@pytest.mark.parametrize("odd", [["logic-1-02"], ["logic-1-0"], ["logic-1-02", "logic-1-0"]])
+def test_chunk_names_follow_libsigrok(tmp_path: Path, odd: list[str]) -> None:
+    """libsigrok opens ``"%s-%d"`` for 1, 2, … by exact name: ``logic-1-02`` and ``logic-1-0``
+    are never read, so their (busy) data must not change the capture; a note names them."""
+    chunks = {"logic-1-1": bytes([0, 0, 1, 1]), "logic-1-2": bytes([0, 0, 0, 1])}
+    plain = read_sr(write_sr(tmp_path / "plain.sr", b"", members=chunks))
+    busy = bytes([0, 1] * 50)
+    path = write_sr(tmp_path / "odd.sr", b"", members={**chunks, **dict.fromkeys(odd, busy)})
+    cap = read_sr(path)
+    assert cap.end == plain.end == 8
+    assert cap.channel("D0").edges.tolist() == plain.channel("D0").edges.tolist() == [2, 4, 7]
+    assert any("never reads" in n and all(o in n for o in odd) for n in cap.notes), cap.notes
+
+
+def test_chunk_numbers_far_apart_cost_nothing(tmp_path: Path) -> None:
+    """``logic-1-1`` and ``logic-1-100000000000``: a gap reported at once (the old reader built a
+    set of every missing number: 14 GB); numbers past any int are a gap too."""
+    for far in ("100000000000", "9" * 5000):
+        members = {"logic-1-1": b"\0", f"logic-1-{far}": b"\1"}
+        path = write_sr(tmp_path / "far.sr", b"", members=members)
+        with pytest.raises(CaptureError, match="member logic-1-2: is missing") as exc:
+            read_sr(path)
+        assert "\n" not in str(exc.value)
+
+
+def _repoint(path: Path, member: str, to: str) -> Path:
+    """Make ``member``'s central directory entry point at ``to``'s local header (overlap)."""
+    import struct
+
+    with zipfile.ZipFile(path) as z:
+        target = z.getinfo(to)
+    data = bytearray(path.read_bytes())
+    pos = 0
+    while (pos := data.find(b"PK\x01\x02", pos)) >= 0:
+        (nlen,) = struct.unpack_from("<H", data, pos + 28)
+        if data[pos + 46 : pos + 46 + nlen] == member.encode():
+            struct.pack_into("<I", data, pos + 42, target.header_offset)
+            for off, value in ((16, target.CRC), (20, target.compress_size), (24, target.file_size)):
+                struct.pack_into("<I", data, pos + off, value)
+        pos += 4
+    out = path.with_name("overlap.sr")
+    out.write_bytes(bytes(data))
+    return out
+
+
+def test_overlapping_zip_entries_refused(tmp_path: Path) -> None:
+    """Two directory entries on the same data (how a 1 MB file inflates to 1 TB) are refused
+    as a zip bomb with one line, before anything is inflated."""
+    raw = bytes(range(4)) * 64
+    path = write_sr(tmp_path / "a.sr", raw, chunk=64)
+    assert read_sr(path).end == 256
+    with pytest.raises(CaptureError, match="overlap.*zip bomb") as exc:
+        read_sr(_repoint(path, "logic-1-3", "logic-1-2"))
+    assert "\n" not in str(exc.value) and "overlap.sr" in str(exc.value)
+
+
+def test_overlapping_entries_bomb_is_refused_quickly(tmp_path: Path) -> None:
+    """1,000 entries on one 64 MiB stream: refused in well under a second, nothing inflated."""
+    import time
+
+    from tests.reliability.corpus import sr_overlapping_entries
+
+    path = tmp_path / "bomb.sr"
+    path.write_bytes(sr_overlapping_entries())
+    start = time.monotonic()
+    with pytest.raises(CaptureError, match="overlap"):
+        read_sr(path)
+    assert time.monotonic() - start < 5
+
+
+def test_exact_edges_section_gives_resolution_zero(tmp_path: Path) -> None:
+    """A .sr of simulated edges (stepgen) says ``[wavecheck] edges=exact``: resolution 0 with a
+    note naming the source; the same file without the section is sampled (one period)."""
+    from wavecheck.capture.srzip import write_sr_edges
+
+    edges = [np.array([2, 7], dtype=np.int64), np.array([5], dtype=np.int64)]
+    exact = tmp_path / "exact.sr"
+    write_sr_edges(exact, ["STEP", "DIR"], edges, [0, 0], 10, samplerate=40_000,
+                   exact_source="a test\nsimulation")  # fmt: skip
+    plain = tmp_path / "plain.sr"
+    write_sr_edges(plain, ["STEP", "DIR"], edges, [0, 0], 10, samplerate=40_000)
+    cap = read_sr(exact)
+    assert cap.resolution_ticks == 0 and cap.resolution_ns == 0
+    assert any("exact" in n and "a test simulation" in n for n in cap.notes), cap.notes
+    assert cap.channel("STEP").edges.tolist() == [2, 7]
+    assert read_sr(plain).resolution_ticks == 1
+    assert read_sr(exact, resolution_s=Fraction(50, 10**6)).resolution_ticks == 2

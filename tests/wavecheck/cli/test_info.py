@@ -120,15 +120,36 @@ def test_unknown_unit(
     assert match in err and err.count("\n") == 1
 
 
+def test_file_without_samplerate_is_listed_in_samples(
+    smoothie_no_rate_sr: Path, smoothie_sr: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A .sr with no sample rate: ``info`` lists the channels and edge counts in samples, says
+    that times need --samplerate (it refused outright); ``check`` still refuses."""
+    timed = open_capture(smoothie_sr)
+    assert main(["info", str(smoothie_no_rate_sr)]) == 0
+    out = capsys.readouterr().out
+    assert "none stated (times need --samplerate)" in out
+    assert f"duration    {timed.end} samples" in out
+    for ch in timed.channels:
+        assert f"{ch.index:>5}  {ch.name}  " in out and f"  {len(ch.edges):>9}  " in out
+    assert main(["info", str(smoothie_no_rate_sr), "--format", "json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["time_known"] is False and data["samples"] == timed.end
+    assert data["duration_s"] is None and data["tick_ns"] is None
+    assert [c["edges"] for c in data["channels"]] == [len(c.edges) for c in timed.channels]
+    assert any("--samplerate" in n for n in data["notes"])
+    rc = main(["check", str(smoothie_no_rate_sr), "--drive", "gecko-g202", "--map", "step=3,dir=4"])
+    assert rc == 2 and "--samplerate" in capsys.readouterr().err
+
+
 def test_samplerate_option_rescues_file_without_one(
     smoothie_no_rate_sr: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert main(["info", str(smoothie_no_rate_sr)]) == 2
-    assert "--samplerate" in capsys.readouterr().err
     assert (
         main(["info", str(smoothie_no_rate_sr), "--samplerate", "12MHz", "--format", "json"]) == 0
     )
-    assert json.loads(capsys.readouterr().out)["samplerate_hz"] == 12_000_000
+    data = json.loads(capsys.readouterr().out)
+    assert data["samplerate_hz"] == 12_000_000 and data["time_known"] is True
 
 
 def test_missing_channel_in_map(grbl_sr: Path) -> None:

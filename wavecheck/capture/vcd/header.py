@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import BinaryIO
 
@@ -27,7 +27,9 @@ __all__ = [
     "Layout",
     "SignalEdges",
     "VarDecl",
+    "ANALYZER_WRITERS",
     "VcdHeader",
+    "analyzer_writer",
     "build_capture",
     "header_timebase",
     "layout_of",
@@ -35,12 +37,34 @@ __all__ = [
     "parse_header",
     "read_header",
     "resolution_of",
+    "stated_samplerate",
 ]
 
 _MAX_HEADER_BYTES = 64 << 20
 _MAX_ID_LEN = 8
 _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
-_SAMPLERATE_RE = re.compile(r"\bat\s+(\d+(?:\.\d+)?\s*[kMG]?Hz)\b")
+_RATE = r"(\d+(?:\.\d+)?\s*[kMG]?Hz)\b"
+#: A stated sample rate: libsigrok/PulseView/DSView's "Acquisition with 8/8 channels at 12 MHz",
+#: or "sample rate: 12 MHz", "samplerate=12MHz", "sampling rate 12 MHz".
+_SAMPLERATE_RES = (
+    re.compile(r"\bchannels\s+at\s+" + _RATE),
+    re.compile(r"\bsampl(?:e|ing)[ _-]?rate\s*[:=]?\s*" + _RATE, re.IGNORECASE),
+)
+#: Programs that write VCDs of logic-analyzer samples, recognised in ``$version``/``$comment``
+#: text: their timestamps are sample numbers on the timescale, not exact simulation times.
+#: (Simulators — Icarus, GHDL, Verilator, pyvcd, ModelSim … — write exact times.)
+ANALYZER_WRITERS: tuple[tuple[str, str], ...] = (
+    (r"libsigrok|sigrok|pulseview", "sigrok"),
+    (r"chronovu", "ChronoVu"),
+    (r"saleae", "Saleae Logic"),
+    (r"dsview|dreamsourcelab", "DSView"),
+    (r"logicport|intronix", "Intronix LogicPort"),
+    (r"kingst", "Kingst"),
+    (r"waveforms|digilent", "Digilent WaveForms"),
+    (r"scanalogic|ikalogic", "Ikalogic ScanaStudio"),
+    (r"logic[ -]?analy[sz]er", "a logic analyzer"),
+)
+_ANALYZER_RES = [(re.compile(rf"\b(?:{p})", re.IGNORECASE), name) for p, name in ANALYZER_WRITERS]
 _END_RE = re.compile(rb"\$end(\s|$)")
 _NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
 #: Scalar value character → 0, 1, 2 (unknown: x u w -) or 3 (z).
@@ -67,7 +91,11 @@ class VarDecl:
 
 @dataclass
 class VcdHeader:
-    """What the header declares; ``body_offset`` is the byte after ``$enddefinitions $end``."""
+    """What the header declares; ``body_offset`` is the byte after ``$enddefinitions $end``.
+
+    ``version`` is the ``$version`` text (the writing program), ``notes`` what parsing assumed
+    (names that are not UTF-8).
+    """
 
     timescale: Timebase | None
     timescale_text: str | None
@@ -75,94 +103,141 @@ class VcdHeader:
     comments: list[str]
     body_offset: int
     body_line: int
+    version: str | None = None
+    notes: list[str] = field(default_factory=list)
 
 
-def _line_of(data: bytes, offset: int) -> int:
-    return data.count(b"\n", 0, offset) + 1
+class _Lines:
+    """Line numbers of increasing offsets in ``data``, counted incrementally (linear overall)."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data, self.pos, self.line = data, 0, 1
+
+    def at(self, offset: int) -> int:
+        if offset < self.pos:  # not expected; stay correct
+            return self.data.count(b"\n", 0, offset) + 1
+        self.line += self.data.count(b"\n", self.pos, offset)
+        self.pos = offset
+        return self.line
+
+
+def _name(raw: bytes, not_utf8: list[str]) -> str:
+    """A name as text: UTF-8 (as sigrok-cli and GTKWave write it), else latin-1 (noted)."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+        not_utf8.append(text)
+        return text
 
 
 def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
     """Parse the declarations at the start of ``data`` (which must contain the whole header).
 
+    Time and memory are linear in the header: tokens are taken one at a time and line numbers
+    are counted on from the previous token. Names (references, scopes) are decoded as UTF-8,
+    falling back to latin-1 with a note; id codes and keywords are bytes read as latin-1.
+
     Raises:
         CaptureError: with the line number, for a bad timescale, ``$var`` or missing
             ``$enddefinitions``.
     """
-    tokens = [(m.group().decode("latin-1"), m.start(), m.end()) for m in re.finditer(rb"\S+", data)]
+    tokens = re.finditer(rb"\S+", data)
+    lines = _Lines(data)
     scope: list[str] = []
     decls: list[VarDecl] = []
     comments: list[str] = []
+    version: str | None = None
+    not_utf8: list[str] = []
     timescale: Timebase | None = None
     timescale_text: str | None = None
-    i, n = 0, len(tokens)
 
-    def section(start: int) -> tuple[list[str], int]:
-        j = start + 1
-        while j < n and tokens[j][0] != "$end":
-            j += 1
-        if j >= n:
-            raise CaptureError(
-                path,
-                f"line {_line_of(data, tokens[start][1])}",
-                f"{tokens[start][0]} without $end (the header is cut off)",
-            )
-        return [t[0] for t in tokens[start + 1 : j]], j + 1
+    def section(start: re.Match[bytes], line: int) -> tuple[list[bytes], int]:
+        body: list[bytes] = []
+        for m in tokens:
+            if m.group() == b"$end":
+                return body, m.end()
+            body.append(m.group())
+        raise CaptureError(
+            path,
+            f"line {line}",
+            f"{start.group().decode('latin-1')[:40]} without $end (the header is cut off)",
+        )
 
-    while i < n:
-        word, off, _ = tokens[i]
-        where = f"line {_line_of(data, off)}"
+    def latin(body: list[bytes]) -> list[str]:
+        return [t.decode("latin-1") for t in body]
+
+    for tok in tokens:
+        word = tok.group().decode("latin-1")
+        line = lines.at(tok.start())
+        where = f"line {line}"
         if word == "$enddefinitions":
-            _, i = section(i)
-            end = tokens[i - 1][2]
-            return VcdHeader(timescale, timescale_text, decls, comments, end, _line_of(data, end))
+            _, end = section(tok, line)
+            notes = []
+            if not_utf8:
+                listed = ", ".join(repr(n) for n in not_utf8[:5])
+                notes.append(
+                    f"{len(not_utf8)} name(s) are not valid UTF-8 and were read as latin-1: "
+                    f"{listed}" + (" …" if len(not_utf8) > 5 else "")
+                )
+            return VcdHeader(
+                timescale, timescale_text, decls, comments, end, lines.at(end), version, notes
+            )
         if word == "$timescale":
-            body, i = section(i)
+            body_b, _ = section(tok, line)
+            body = latin(body_b)
             text = "".join(body)
             match = _TIMESCALE_RE.match(text)
             if not match or int(match.group(1)) == 0:
                 raise CaptureError(
                     path,
                     where,
-                    f"bad $timescale {' '.join(body)!r} (write e.g. '$timescale 1 ns $end')",
+                    f"bad $timescale {' '.join(body)[:60]!r} (write e.g. '$timescale 1 ns $end')",
                 )
             tb = Timebase.from_timescale(int(match.group(1)), match.group(2))
             if not Fraction(1, 10**15) <= tb.tick_s <= 100:
                 raise CaptureError(path, where, f"$timescale {text} is outside 1 fs … 100 s")
             timescale, timescale_text = tb, f"{match.group(1)} {match.group(2)}"
         elif word == "$scope":
-            body, i = section(i)
-            scope.append(body[-1] if body else "")
+            body_b, _ = section(tok, line)
+            scope.append(_name(body_b[-1], not_utf8) if body_b else "")
         elif word == "$upscope":
-            _, i = section(i)
+            section(tok, line)
             if scope:
                 scope.pop()
         elif word == "$var":
-            body, i = section(i)
-            if len(body) < 4 or not re.fullmatch(r"[0-9]+", body[1]) or int(body[1]) < 1:
+            body_b, _ = section(tok, line)
+            body = latin(body_b[:3])
+            if len(body_b) < 4 or not re.fullmatch(r"[0-9]+", body[1]) or int(body[1]) < 1:
                 raise CaptureError(
-                    path, where, f"bad $var {' '.join(body)!r} (expected '$var wire 1 ! name $end')"
+                    path,
+                    where,
+                    f"bad $var {' '.join(latin(body_b))[:80]!r} (expected '$var wire 1 ! name $end')",
                 )
             id_code = body[2]
             if len(id_code) > _MAX_ID_LEN:
                 raise CaptureError(
-                    path, where, f"id code {id_code!r} is longer than {_MAX_ID_LEN} characters"
+                    path, where, f"id code {id_code[:40]!r} is longer than {_MAX_ID_LEN} characters"
                 )
-            ref = body[3:]
+            ref = body_b[3:]
             # "data [3]" → "data[3]"; sigrok's "STEP (Y axis)" keeps its spaces
-            name = (
-                " ".join(ref[:-1]) + ref[-1]
-                if len(ref) > 1 and ref[-1].startswith("[")
-                else " ".join(ref)
+            raw = (
+                b" ".join(ref[:-1]) + ref[-1]
+                if len(ref) > 1 and ref[-1].startswith(b"[")
+                else b" ".join(ref)
             )
             decls.append(
-                VarDecl(body[0], int(body[1]), id_code, name, tuple(scope), int(where[5:]))
+                VarDecl(body[0], int(body[1]), id_code, _name(raw, not_utf8), tuple(scope), line)
             )
         elif word in ("$comment", "$date", "$version"):
-            body, i = section(i)
+            body_b, _ = section(tok, line)
+            text = _name(b" ".join(body_b), [])
             if word == "$comment":
-                comments.append(" ".join(body))
+                comments.append(text)
+            elif word == "$version":
+                version = text
         elif word.startswith("$"):
-            _, i = section(i)  # $attrbegin and friends: ignored
+            section(tok, line)  # $attrbegin and friends: ignored
         else:
             raise CaptureError(
                 path, where, f"unexpected {word[:40]!r} in the header (is this a VCD file?)"
@@ -189,24 +264,34 @@ def open_vcd(path: str | os.PathLike[str]) -> BinaryIO:
 
 
 def read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, bytes]:
-    """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far."""
-    data = b""
-    end = len(data)
+    """Read until ``$enddefinitions ... $end``; return the header and the body bytes read so far.
+
+    Linear in the header: each block is searched once (with a few bytes of overlap), and at most
+    ``_MAX_HEADER_BYTES`` plus one block is held.
+    """
+    data = bytearray()
+    end = -1
+    pos = -1
     while True:
         block = f.read(1 << 20)
+        before = len(data)
         data += block
-        pos = data.find(b"$enddefinitions")
-        match = _END_RE.search(data, pos + 15) if pos >= 0 else None
-        if match is not None:
-            end = match.start() + 4
-            break
-        end = len(data)
+        if pos < 0:
+            pos = data.find(b"$enddefinitions", max(0, before - 15))
+        if pos >= 0:
+            match = _END_RE.search(data, max(pos + 15, before - 5))
+            if match is not None and (match.end() < len(data) or not block):
+                end = match.start() + 4
+                break
         if not block or len(data) > _MAX_HEADER_BYTES:
+            end = len(data)
             break
     if not data.strip():
         raise CaptureError(path, None, "the file is empty (no VCD header)")
-    header = parse_header(path, data[:end])
-    return header, data[header.body_offset :]
+    whole = bytes(data)
+    del data
+    header = parse_header(path, whole[:end])
+    return header, whole[header.body_offset :]
 
 
 @dataclass
@@ -238,15 +323,21 @@ def layout_of(header: VcdHeader) -> Layout:
         ids_by_short.setdefault(d.reference, set()).add(d.id_code)
     names: list[str] = []
     used: set[str] = set()
+    next_k: dict[str, int] = {}  # per base name: the next "#k" to try (linear, not k² probes)
     for d in scalar:
         name = d.reference if len(ids_by_short[d.reference]) == 1 else d.full_name
-        base, k = name, 2
-        while name in used:
-            name, k = f"{base}#{k}", k + 1
+        if name in used:
+            base, k = name, next_k.get(name, 2)
+            while f"{base}#{k}" in used:
+                k += 1
+            name, next_k[base] = f"{base}#{k}", k + 1
         used.add(name)
         names.append(name)
     skipped: dict[str, str] = {}
-    notes: list[str] = []
+    notes: list[str] = list(header.notes)
+    decls_by_id: dict[str, list[VarDecl]] = {}
+    for d in header.vars:
+        decls_by_id.setdefault(d.id_code, []).append(d)
     for d in others:
         if d.type in ("real", "realtime", "shortreal"):
             what = "a real"
@@ -254,14 +345,13 @@ def layout_of(header: VcdHeader) -> Layout:
             what = f"an {d.type}" if d.type == "event" else "a string"
         else:
             what = f"a {d.size}-bit {'integer' if d.type == 'integer' else 'vector'}"
-        for d2 in header.vars:
-            if d2.id_code == d.id_code:
-                skipped.setdefault(d2.full_name, what)
-                if len(ids_by_short[d2.reference]) == 1 or d2.reference not in used:
-                    skipped.setdefault(d2.reference, what)
-                    bare = d2.reference.split("[", 1)[0]
-                    if bare and bare not in used:
-                        skipped.setdefault(bare, what)
+        for d2 in decls_by_id[d.id_code]:
+            skipped.setdefault(d2.full_name, what)
+            if len(ids_by_short[d2.reference]) == 1 or d2.reference not in used:
+                skipped.setdefault(d2.reference, what)
+                bare = d2.reference.split("[", 1)[0]
+                if bare and bare not in used:
+                    skipped.setdefault(bare, what)
     if others:
         listed = ", ".join(d.full_name for d in others[:10])
         more = f" and {len(others) - 10} more" if len(others) > 10 else ""
@@ -269,7 +359,8 @@ def layout_of(header: VcdHeader) -> Layout:
             f"skipped {len(others)} signal(s) that are not 1-bit wires "
             f"(vectors, integers, reals): {listed}{more}"
         )
-    n_alias = sum(len(v) for k, v in aliases.items() if k in {d.id_code for d in scalar})
+    scalar_ids = {d.id_code for d in scalar}
+    n_alias = sum(len(v) for k, v in aliases.items() if k in scalar_ids)
     alias_names: dict[str, str] = {}
     by_id = {d.id_code: name for d, name in zip(scalar, names, strict=True)}
     for d in header.vars:
@@ -292,6 +383,30 @@ def layout_of(header: VcdHeader) -> Layout:
     )
 
 
+def analyzer_writer(texts: list[str]) -> str | None:
+    """The logic-analyzer program named in ``texts`` (``$version``, ``$comment``), or None."""
+    for text in texts:
+        for pattern, name in _ANALYZER_RES:
+            if pattern.search(text):
+                return name
+    return None
+
+
+def stated_samplerate(texts: list[str]) -> tuple[Fraction, str] | None:
+    """The sample rate ``texts`` state (``"… channels at 12 MHz"``): (Hz, as written), or None."""
+    for text in texts:
+        for pattern in _SAMPLERATE_RES:
+            match = pattern.search(text)
+            if match:
+                try:
+                    rate = parse_frequency(match.group(1))
+                except UnitError:
+                    continue
+                if rate > 0:
+                    return rate, match.group(1)
+    return None
+
+
 def resolution_of(
     path: str | os.PathLike[str],
     tb: Timebase,
@@ -299,19 +414,18 @@ def resolution_of(
     samplerate: Fraction | None,
     resolution_s: Fraction | None,
     notes: list[str],
+    version: str | None = None,
 ) -> tuple[int, Fraction | None]:
-    """Resolution in ticks and sample rate: user values first, then sigrok's ``$comment``."""
+    """Resolution in ticks and sample rate: user values first, then a rate the file states
+    (``$comment``), then one tick for a file written by a logic analyzer's software (its
+    timestamps are samples); a simulator's VCD (none of these) is exact, resolution 0."""
+    texts = ([version] if version else []) + comments
     rate = samplerate
     if rate is None:
-        for text in comments:
-            match = _SAMPLERATE_RE.search(text)
-            if match:
-                try:
-                    rate = parse_frequency(match.group(1))
-                except UnitError:
-                    continue
-                notes.append(f"sample rate {match.group(1)} from the file's $comment")
-                break
+        stated = stated_samplerate(texts)
+        if stated is not None:
+            rate = stated[0]
+            notes.append(f"sample rate {stated[1]} from the file's $comment")
     sample_res: int | None = None
     if rate:
         # a sampled capture: an edge is known to one sample period T; when T is not a whole
@@ -326,6 +440,13 @@ def resolution_of(
                 f"{float(tb.tick_ns):g} ns ticks, so the timestamps are rounded; resolution "
                 f"{sample_res} ticks covers the period and the rounding"
             )
+    elif (writer := analyzer_writer(texts)) is not None:
+        sample_res = 1
+        notes.append(
+            f"written by {writer} (a logic analyzer's software) with no sample rate stated: its "
+            f"timestamps are samples, so the resolution is one {float(tb.tick_ns):g} ns tick of "
+            "the timescale (give --samplerate or --resolution if it sampled more coarsely)"
+        )
     if resolution_s is None:
         return (0 if sample_res is None else sample_res), rate
     if resolution_s < 0:
@@ -393,7 +514,9 @@ def build_capture(
     end = last_time
     if not layout.ids:
         notes.append("no 1-bit signals in this file")
-    res, rate = resolution_of(path, tb, header.comments, samplerate, resolution_s, notes)
+    res, rate = resolution_of(
+        path, tb, header.comments, samplerate, resolution_s, notes, header.version
+    )
     channels = [
         Channel(
             name=name,

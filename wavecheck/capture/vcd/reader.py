@@ -25,7 +25,9 @@ deliberately simple path):
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 from fractions import Fraction
 from typing import BinaryIO
 
@@ -44,9 +46,15 @@ from wavecheck.capture.vcd.header import (
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
 
-__all__ = ["DEFAULT_CHUNK_BYTES", "read_vcd"]
+__all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "read_vcd"]
 
 DEFAULT_CHUNK_BYTES = 1 << 20  # 1 MiB: as fast as 4 MiB here, ~50 MB less working memory
+#: Longest token (or body ``$comment``) held whole: a 16-Mbit vector value. Longer is refused, so
+#: a body without whitespace (binary junk, a sparse file) cannot take the memory.
+MAX_TOKEN_BYTES = 16 << 20
+_MAX_TIME_DIGITS = 19
+_LEADING_WS = re.compile(rb"\s*")
+_INT64_MAX = (1 << 63) - 1
 
 # Byte classes of the body tokenizer.
 _WS = np.zeros(256, dtype=bool)
@@ -149,11 +157,14 @@ class _EdgeBuilder:
     ) -> None:
         if len(s) == 0:
             return
-        bounds = np.searchsorted(s, np.arange(self.nsig + 1))
-        for i in np.flatnonzero(np.diff(bounds)):
+        # runs of one signal in ``s`` (sorted): linear in the batch, not in the signal count
+        cuts = np.flatnonzero(s[1:] != s[:-1]) + 1
+        lo = np.concatenate(([0], cuts))
+        hi = np.concatenate((cuts, [len(s)]))
+        for i, a, b in zip(s[lo].tolist(), lo.tolist(), hi.tolist(), strict=True):
             # a copy, not a view: a view would keep this batch's whole array alive until every
             # channel is joined, doubling the peak memory of :meth:`channels`
-            into[i].append(t[bounds[i] : bounds[i + 1]].astype(np.int64, copy=True))
+            into[i].append(t[a:b].astype(np.int64, copy=True))
 
     def signals(self) -> list[SignalEdges]:
         """Each signal's edges, joined (the pieces are released as they are joined)."""
@@ -382,13 +393,20 @@ class _Body:
         if len(s) == 0:
             return np.zeros(0, dtype=np.int64)
         ndig = e - s - 1
-        if (ndig < 1).any() or (ndig > 18).any():
-            j = int(np.flatnonzero((ndig < 1) | (ndig > 18))[0])
+        if (ndig < 1).any():
+            j = int(np.flatnonzero(ndig < 1)[0])
+            raise self.error(buf, int(s[j]), "bad timestamp '#' (no number after it)")
+        if (ndig > _MAX_TIME_DIGITS).any():
+            j = int(np.flatnonzero(ndig > _MAX_TIME_DIGITS)[0])
             raise self.error(
-                buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
+                buf,
+                int(s[j]),
+                f"timestamp {_clip(buf[s[j] : e[j]])} has {int(ndig[j])} digits; times up to "
+                f"2^63−1 ticks ({_INT64_MAX}, 19 digits) are supported",
             )
         out = np.zeros(len(s), dtype=np.int64)
         bad = np.zeros(len(s), dtype=bool)
+        over = np.zeros(len(s), dtype=bool)
         last = e - 1
         scale = 1
         for col in range(int(ndig.max())):
@@ -396,12 +414,26 @@ class _Body:
             dig = a[np.maximum(last - col, 0)].astype(np.int64) - 48
             valid = ndig > col
             bad |= valid & ((dig < 0) | (dig > 9))
-            out += np.where(valid, dig, 0) * scale
+            add = np.where(valid & ~bad, dig, 0) * scale  # 19th digit: at most 9·10^18 < 2^63
+            if col == _MAX_TIME_DIGITS - 1:
+                over |= out > _INT64_MAX - add  # the sum would pass 2^63 − 1
+                add[over] = 0
+            out += add
             scale *= 10
         if bad.any():
             j = int(np.flatnonzero(bad)[0])
             raise self.error(
-                buf, int(s[j]), f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r}"
+                buf,
+                int(s[j]),
+                f"bad timestamp {buf[s[j] : e[j]][:30].decode('latin-1')!r} (not a whole number)",
+            )
+        if over.any():
+            j = int(np.flatnonzero(over)[0])
+            raise self.error(
+                buf,
+                int(s[j]),
+                f"timestamp {buf[s[j] : e[j]].decode('latin-1')!r} is larger than 2^63−1 "
+                f"({_INT64_MAX}), the largest time wavecheck holds",
             )
         prev = np.empty(len(out), dtype=np.int64)
         prev[1:] = out[:-1]
@@ -445,6 +477,8 @@ def read_vcd(
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+    max_token_bytes: int = MAX_TOKEN_BYTES,
+    source: BinaryIO | None = None,
 ) -> Capture:
     """Read the 1-bit signals of a VCD file (fast, streaming path).
 
@@ -454,13 +488,16 @@ def read_vcd(
             otherwise sigrok's ``$comment`` ("… at 8 MHz") is used, else the VCD is exact.
         resolution_s: the resolution in seconds, overriding the sample rate's period.
         chunk_bytes: bytes of text tokenized at a time (tests use tiny values).
+        max_token_bytes: the longest token (or body ``$comment``) accepted.
+        source: an open binary stream to read instead of opening ``path`` (a pipe); ``path``
+            then only names it in messages.
 
     Raises:
         CaptureError: the file cannot be read as a VCD; the message gives the line.
     """
     if chunk_bytes < 1:
         raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
-    with open_vcd(path) as f:
+    with contextlib.nullcontext(source) if source is not None else open_vcd(path) as f:
         header, rest = read_header(path, f)
         notes: list[str] = []
         tb = header_timebase(header, notes)
@@ -490,8 +527,16 @@ def read_vcd(
             body.offset0 += n
             report(body.offset0, size)
             buf = buf[n:]
-            # nothing consumed: a token or $comment longer than a chunk, read more
-            want = chunk_bytes if n else max(2 * want, len(buf) + 1)
+            if not n and len(buf) > max_token_bytes:
+                lead = _LEADING_WS.match(buf).end()  # type: ignore[union-attr]  # always matches
+                raise body.error(
+                    buf,
+                    lead,
+                    f"a token (or $comment) longer than {max_token_bytes} bytes starts here: "
+                    "not VCD text (binary data, NUL padding?)",
+                )
+            # nothing consumed: a token or $comment longer than a chunk, read more (up to the cap)
+            want = chunk_bytes if n else min(max(2 * want, len(buf) + 1), max_token_bytes + 1)
     return build_capture(
         path,
         header,
@@ -505,6 +550,12 @@ def read_vcd(
         samplerate,
         resolution_s,
     )
+
+
+def _clip(token: bytes, keep: int = 30) -> str:
+    """``token`` for a message: quoted, cut to ``keep`` bytes with an ellipsis."""
+    text = repr(token[:keep].decode("latin-1"))
+    return text + "…" if len(token) > keep else text
 
 
 def _file_size(f: BinaryIO) -> int | None:

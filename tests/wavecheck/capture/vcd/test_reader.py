@@ -58,7 +58,10 @@ def test_chronovu_channels_and_edges() -> None:
     cap = read_vcd(shared_capture(CORPUS[0]))
     assert [c.name for c in cap.channels] == [f"Channel_{i}" for i in range(8)]
     assert cap.timebase.tick_ns == 10
-    assert cap.samplerate_hz is None and cap.resolution_ticks == 0
+    # written by the ChronoVu LA-8 software: timestamps are samples, one 10 ns tick (issue 12:
+    # it was read as exact, resolution 0)
+    assert cap.samplerate_hz is None and cap.resolution_ticks == 1
+    assert any("ChronoVu" in n and "logic analyzer" in n for n in cap.notes)
     # count the toggles of Channel_3 (id "3") with a plain text scan, independent of both readers
     level, edges = None, 0
     for line in shared_capture(CORPUS[0]).read_text().split("$enddefinitions $end")[1].split():
@@ -335,3 +338,138 @@ def test_aliased_id_is_found_by_every_name(tmp_path: Path) -> None:
     assert [c.name for c in cap.channels] == ["step_out"]
     for ref in ("step_out", "STEP", "tb.dut.STEP"):
         assert cap.channel(ref).edges.tolist() == [5]
+
+
+# --- issue 12: hostile and unusual input -------------------------------------------------------
+
+
+@pytest.mark.parametrize("end", [9_000_000_000_000_000_000, (1 << 63) - 1, 10**18])
+def test_19_digit_timestamps_are_read(tmp_path: Path, end: int) -> None:
+    """A valid timestamp below 2^63 is a time like any other (it was "bad timestamp")."""
+    path = write(tmp_path, HEAD + f"#0\n0!\n1\"\n#5\n1!\n#{end}\n")
+    for chunk in (1 << 20, 7):
+        cap = read_vcd(path, chunk_bytes=chunk)
+        assert cap.end == end and cap.channel("a").edges.tolist() == [5]
+    assert_same(read_vcd(path), read_vcd_reference(path))
+
+
+@pytest.mark.parametrize(
+    ("stamp", "match"),
+    [
+        (str(1 << 63), r"larger than 2\^63−1 \(9223372036854775807\)"),
+        ("9" * 21, "has 21 digits; times up to 2\\^63−1 ticks"),
+        ("12a4", "not a whole number"),
+    ],
+)
+def test_too_large_timestamp_says_why(tmp_path: Path, stamp: str, match: str) -> None:
+    path = write(tmp_path, HEAD + f"#0\n0!\n#{stamp}\n")
+    with pytest.raises(CaptureError, match=match) as exc:
+        read_vcd(path)
+    assert "line 9 (byte 127)" in str(exc.value)
+
+
+def test_body_without_whitespace_is_refused_within_bounded_memory(tmp_path: Path) -> None:
+    """64 MiB of NUL bytes after the header (a sparse file): refused at the token cap with the
+    byte offset, holding at most about two caps (it was read whole: 2 GB took 8.2 GB)."""
+    import tracemalloc
+
+    from wavecheck.capture.vcd.reader import MAX_TOKEN_BYTES
+
+    path = tmp_path / "sparse.vcd"
+    head = (HEAD + "#0\n0!\n").encode()
+    with open(path, "wb") as f:
+        f.write(head)
+        f.truncate(len(head) + (64 << 20))
+    tracemalloc.start()
+    try:
+        with pytest.raises(CaptureError, match=f"byte {len(head)}\\).*longer than") as exc:
+            read_vcd(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert "\n" not in str(exc.value)
+    assert peak < 3 * MAX_TOKEN_BYTES, f"peak {peak / 2**20:.0f} MiB"
+
+
+def test_long_tokens_below_the_cap_are_fine(tmp_path: Path) -> None:
+    """A wide vector value longer than a chunk is still read (skipped as a vector)."""
+    head = HEAD.replace("$upscope", "$var wire 5000 # v $end\n$upscope")
+    path = write(tmp_path, head + "#0\n0!\nb" + "1" * 5000 + " #\n#10\n1!\n#20\n")
+    cap = read_vcd(path, chunk_bytes=64, max_token_bytes=8000)
+    assert cap.channel("a").edges.tolist() == [10]
+    with pytest.raises(CaptureError, match="longer than 4000 bytes"):
+        read_vcd(path, chunk_bytes=64, max_token_bytes=4000)
+
+
+def test_utf8_names_are_decoded(tmp_path: Path) -> None:
+    """Names are UTF-8 (as sigrok-cli writes ``STÉP``); a name that is not UTF-8 is read as
+    latin-1 with a note, not dropped. (pyvcd's tokenizer, under the reference reader, takes
+    ASCII names only, so there is no fast = simple comparison here.)"""
+    text = HEAD.replace(" a $end", " STÉP $end").replace("module top", "module tôp")
+    path = tmp_path / "u.vcd"
+    path.write_bytes((text + "#0\n0!\n#5\n1!\n#9\n").encode("utf-8"))
+    cap = read_vcd(path)
+    assert cap.channel("STÉP").edges.tolist() == [5]
+    assert not any("latin-1" in n for n in cap.notes)
+    path.write_bytes((HEAD.replace(" a $end", " caf\xe9 $end") + "#0\n#9\n").encode("latin-1"))
+    cap = read_vcd(path)
+    assert cap.channel("caf\xe9").name == "café"
+    assert any("not valid UTF-8" in n and "café" in n for n in cap.notes), cap.notes
+
+
+def test_header_parsing_is_linear(tmp_path: Path) -> None:
+    """20,000 ``$var`` lines parse in about a tenth of the time of 200,000 (the old parser
+    recounted lines from the start for each: quadratic). Ratio of best-of-3 times, bounded
+    loosely so a loaded machine does not fail it; quadratic would be ~100×."""
+    import time
+
+    from tests.reliability.corpus import vcd_many_vars
+    from wavecheck.capture.vcd.header import parse_header
+
+    def best(data: bytes) -> float:
+        times = []
+        for _ in range(3):
+            start = time.perf_counter()
+            parse_header(tmp_path, data)
+            times.append(time.perf_counter() - start)
+        return min(times)
+
+    small, big = vcd_many_vars(10_000), vcd_many_vars(100_000)
+    assert len(parse_header(tmp_path, big).vars) == 100_002
+    ratio = best(big) / best(small)
+    assert ratio < 30, f"10× the $var lines took {ratio:.0f}× the time"
+
+
+@pytest.mark.parametrize(
+    ("head", "res", "says"),
+    [
+        ("$version ChronoVu LA-8 Version 4.00 $end", 1, "ChronoVu"),
+        ("$version Saleae Logic 1.2.18 $end", 1, "Saleae"),
+        ("$version DSView v1.3.1 $end", 1, "DSView"),
+        ("$version libsigrok 0.5.2 $end", 1, "sigrok"),
+        ("$comment exported from my logic analyser $end", 1, "a logic analyzer"),
+        # a stated rate wins: 1 MHz on a 1 ns timescale is 1000 ticks
+        ("$version Saleae Logic $end $comment sample rate: 1 MHz $end", 1000, "1 MHz"),
+        ("$comment Acquisition with 2/2 channels at 1 MHz $end", 1000, "1 MHz"),
+        ("$comment samplerate=250kHz $end", 4000, "250kHz"),
+        # simulators stay exact
+        ("$version Icarus Verilog $end", 0, None),
+        ("$version GHDL v0 $end", 0, None),
+        ("$version Generated by VerilatedVcd $end", 0, None),
+        ("$comment a clock at 50 MHz drives the design $end", 0, None),
+        ("", 0, None),
+    ],
+)
+def test_analyzer_vcds_get_a_resolution(
+    tmp_path: Path, head: str, res: int, says: str | None
+) -> None:
+    """A VCD from a logic analyzer's software (by its $version/$comment) or stating a sample rate
+    is not exact: one tick, or the stated period; a simulator's VCD stays exact (0)."""
+    path = write(tmp_path, head + "\n" + HEAD + "#0\n0!\n#5000\n1!\n#9000\n")
+    cap = read_vcd(path)
+    assert cap.resolution_ticks == res
+    if says is None:
+        assert not any("logic analyzer" in n or "sample rate" in n for n in cap.notes), cap.notes
+    else:
+        assert any(says in n for n in cap.notes), cap.notes
+    assert_same(cap, read_vcd_reference(path))
