@@ -1,8 +1,9 @@
 """``stepgen simulate``: run the LinuxCNC stepgen model under a latency model, write VCD or .sr.
 
-Options are named after LinuxCNC's parameters; timing values are ns as bare numbers (as with
-halcmd) or carry a unit (``5us``). Exit 0 on success, 2 with a one-line message on bad settings
-(nothing is written).
+Options are named after LinuxCNC's parameters; every time carries its unit (``25us``, ``5000ns``;
+a bare number other than 0 is refused, README "Numbers and units"), while the numbers in
+``--ini``/``--hal`` files stay LinuxCNC's bare ns. A base period below 1 us is refused as a unit
+slip. Exit 0 on success, 2 with a one-line message on bad settings (nothing is written).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from stepgen.simulate import n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.progress import activate
-from wavecheck.units import time_ns
+from wavecheck.units import BASE_PERIOD, Plausible, option_ns, shorten
 
 __all__ = ["build_config", "build_motion", "register", "run"]
 
@@ -39,7 +40,9 @@ def register(sub: Any) -> None:
     g.add_argument("--type", type=int, default=0, help="step_type 0..15 (default 0 = step/dir)")
     g.add_argument("--user-step-type", default="", help="type 15 table, e.g. 1,3,2,0")
     g.add_argument(
-        "--base-period", default="25us", help="base thread period (bare number = ns; default 25us)"
+        "--base-period",
+        default="25us",
+        help="base thread period with its unit (default 25us; below 1 us is refused)",
     )
     g.add_argument(
         "--servo-period",
@@ -61,7 +64,7 @@ def register(sub: Any) -> None:
     )
     for name in ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay"):
         g.add_argument(
-            f"--{name}", default="1", help=f"{name} (ns, or with a unit; default 1 ns → 1 period)"
+            f"--{name}", default="1ns", help=f"{name} with its unit (default 1ns → 1 period)"
         )
     g.add_argument(
         "--thread-order",
@@ -82,13 +85,14 @@ def register(sub: Any) -> None:
     )
     m.add_argument("--move-vel", type=float, help="peak velocity of --move (default --maxvel)")
     m.add_argument("--move-accel", type=float, help="acceleration of --move (default --maxaccel)")
-    m.add_argument("--duration", help="simulated time (e.g. 2s, 500ms)")
+    m.add_argument("--duration", help="simulated time with its unit (e.g. 2s, 500ms)")
     m.add_argument("--periods", type=int, help="simulated base periods")
     lat = p.add_argument_group("latency")
     lat.add_argument(
         "--latency",
         default="none",
-        help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE",
+        help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE "
+        "(times with their unit, e.g. worst:11us:dir_hold; below 100 ns gives a warning)",
     )
     lat.add_argument(
         "--seed", type=int, default=0, help="seed of the random latency models (default 0)"
@@ -101,8 +105,8 @@ def register(sub: Any) -> None:
     )
     lat.add_argument(
         "--catchup",
-        default=str(DEFAULT_CATCHUP_NS),
-        help="run time of an overdue invocation (default 1000 ns)",
+        default=f"{DEFAULT_CATCHUP_NS}ns",
+        help=f"run time of an overdue invocation, with its unit (default {DEFAULT_CATCHUP_NS}ns)",
     )
     o = p.add_argument_group("output")
     o.add_argument("-o", "--output", required=True, help="OUT.vcd or OUT.sr")
@@ -120,15 +124,18 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _ns(text: str, option: str, allow_zero: bool = True) -> int:
+def _ns(
+    text: str, option: str, allow_zero: bool = True, plausible: Plausible | None = None
+) -> int:
+    """An option's time in whole ns; its unit is required (:func:`parse_option`)."""
     try:
-        value = time_ns(str(text), default_unit="ns")
+        value = option_ns(str(text), option, plausible)
     except UnitError as err:
-        raise ConfigError(f"{option} {text!r}: {err}") from None
+        raise ConfigError(str(err)) from None
     if value.denominator != 1:
-        raise ConfigError(f"{option} {text!r} is not a whole number of ns")
+        raise ConfigError(f"{option} {shorten(text)}: not a whole number of ns")
     if value < 0 or (value == 0 and not allow_zero):
-        raise ConfigError(f"{option} {text!r} must be {'>= 0' if allow_zero else '> 0'}")
+        raise ConfigError(f"{option} {shorten(text)}: must be {'>= 0' if allow_zero else '> 0'}")
     return int(value)
 
 
@@ -143,7 +150,7 @@ def build_config(args: argparse.Namespace) -> StepgenConfig:
             raise ConfigError(
                 f"--user-step-type {args.user_step_type!r} is not a list of integers (e.g. 1,3,2,0)"
             ) from None
-    base = _ns(args.base_period, "--base-period", allow_zero=False)
+    base = _ns(args.base_period, "--base-period", allow_zero=False, plausible=BASE_PERIOD)
     servo = _ns(args.servo_period, "--servo-period", allow_zero=False)
     order = args.thread_order
     if order == "auto":
