@@ -217,7 +217,9 @@ def build_interface(
     inverted = {_role(r) for r in invert}
     for role in inverted:
         if role not in mapping:
-            raise UsageError(f"--invert {role}: role {role!r} is not mapped (add --map {role}=CHANNEL)")
+            raise UsageError(
+                f"--invert {role}: role {role!r} is not mapped (add --map {role}=CHANNEL)"
+            )
     signals: dict[str, RoleSignal] = {}
     roles_of: dict[int, str] = {}  # channel index -> the role it has
     for role, ref in mapping.items():
