@@ -14,7 +14,7 @@ from wavecheck.capture.model import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.engine import run_check
 from wavecheck.report.model import Report
-from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option, parse_time
+from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 
 __all__ = ["check"]
 
@@ -82,10 +82,12 @@ def check(
         stepgen = read_config(ini, hals, channel)
     j = None
     if latency is not None:
-        j = (parse_time(latency) if isinstance(latency, str) else Fraction(latency)) * 10**9
+        j = (
+            parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
+        ) * 10**9
     res: str | Fraction | None = resolution
     if isinstance(resolution, str):
-        res = parse_time(resolution)
+        res = parse_option(resolution, "resolution", "time")
     return run_check(
         capture,
         drive,

@@ -47,7 +47,7 @@ def register(sub: Any) -> None:
     g.add_argument(
         "--servo-period",
         default="1ms",
-        help="servo thread period, rounded by HAL to n·base (default 1ms)",
+        help="servo thread period with its unit, rounded by HAL to n·base (default 1ms)",
     )
     g.add_argument(
         "--mode",
