@@ -13,7 +13,8 @@ G = P − J when the run time was left at its default (a shorter run time only m
 shorter: still the worst case), and notes it; a run time given explicitly is kept, with a
 warning saying which length the intervals get instead (see :func:`catchup_for`).
 
-Models (``--latency``; times take units, bare numbers are ns as in LinuxCNC):
+Models (``--latency``; every time carries its unit, README "Numbers and units"; a J, SIGMA or
+MAX below 100 ns other than 0 gives a warning):
 
 ``none``                every invocation on time: all edges on the k·P grid.
 ``uniform:J``           l_k uniform on the integers [0, J] ns (``--seed``).
@@ -39,6 +40,7 @@ edge active, dir_hold runs from the end of the pulse to the DIR change: dirhold�
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,7 +51,7 @@ from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc.steptypes import kind_of
 from wavecheck.rules import RULES as TABLE
-from wavecheck.units import time_ns
+from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
 __all__ = [
     "DEFAULT_CATCHUP_NS",
@@ -87,14 +89,21 @@ class LatencyModel:
         return self.kind in ("uniform", "normal", "histogram")
 
 
-def _ns(text: str, what: str, model: str) -> int:
+def _warn(message: str) -> None:
+    print(f"stepgen: warning: {message}", file=sys.stderr)
+
+
+def _ns(text: str, what: str, model: str, plausible: Plausible | None = LATENCY) -> int:
+    """One time of a latency model in whole ns; a unit is required (:func:`parse_option`), and
+    a latency below 100 ns is warned about."""
     try:
-        value = time_ns(text.strip(), default_unit="ns")
+        value = option_ns(text.strip(), f"latency model {shorten(model)!r}: {what}", plausible, _warn)
     except UnitError as err:
-        raise ConfigError(f"latency model {model!r}: {what} {text!r}: {err}") from None
+        raise ConfigError(str(err)) from None
     if value < 0 or value.denominator != 1:
         raise ConfigError(
-            f"latency model {model!r}: {what} {text!r} must be a whole number of ns >= 0"
+            f"latency model {shorten(model)!r}: {what} {shorten(text)!r} must be a whole number "
+            "of ns >= 0"
         )
     return int(value)
 
@@ -121,7 +130,7 @@ def parse_latency(text: str) -> LatencyModel:
         )
     if kind == "spike" and "@" in rest:
         j, every = rest.split("@", 1)
-        every_ns = _ns(every, "EVERY", t)
+        every_ns = _ns(every, "EVERY", t, None)
         if every_ns <= 0:
             raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
         return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)

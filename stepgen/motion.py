@@ -9,7 +9,7 @@ Update u happens at t = u·S (S = the HAL-rounded servo period) and sees the com
 
   - ``X``          move to X (position units) at ``--move-vel`` / ``--move-accel``;
   - ``X@V``        move to X with peak velocity V (units/s) for this move only;
-  - ``pause T``    stay still for T (``pause 20ms``; a bare number is seconds).
+  - ``pause T``    stay still for T, with its unit (``pause 20ms``).
 
   e.g. ``--move "0.04, pause 10ms, 0"`` is a move forward and back: a reversal. In position mode
   the pin gets the sampled position profile; in velocity mode its exact velocity.
@@ -39,7 +39,7 @@ import numpy as np
 
 from stepgen.model import PICKOFF, Component, StepgenConfig, make_pulses_channel
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.units import parse_time
+from wavecheck.units import parse_option
 
 __all__ = ["Motion", "Segment", "parse_command_csv", "parse_moves", "worst_motion"]
 
@@ -108,9 +108,11 @@ def parse_moves(spec: str, vel: float, accel: float) -> list[Segment]:
             if len(word) != 2:
                 raise ConfigError(f"--move item {item!r}: write 'pause 20ms'")
             try:
-                secs = float(parse_time(word[1], default_unit="s"))
+                secs = float(parse_option(word[1], "pause", "time"))
             except UnitError as err:
-                raise ConfigError(f"--move item {item!r}: {err}") from None
+                raise ConfigError(f"--move: {err}") from None
+            if secs < 0:
+                raise ConfigError(f"--move item {item!r}: a pause must not be negative")
             segments.append(Segment(pos, 0.0, vel, accel, secs))
             continue
         target_text, _, v_text = item.partition("@")

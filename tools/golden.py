@@ -50,7 +50,7 @@ class Scenario:
 SCENARIOS: tuple[Scenario, ...] = (
     Scenario(
         "stepgen0",
-        "--base-period 100000 --servo-period 100000 --position-scale 32000 --maxvel 0.15 "
+        "--base-period 100us --servo-period 100us --position-scale 32000 --maxvel 0.15 "
         "--maxaccel 2 --position 0.04 --periods 3500",
         "gecko-g202",
         "pass",
@@ -58,7 +58,7 @@ SCENARIOS: tuple[Scenario, ...] = (
     ),
     Scenario(
         "stepgen1-quadrature",
-        "--type 2 --base-period 100000 --servo-period 100000 --position-scale 32000 --maxvel 0.15 "
+        "--type 2 --base-period 100us --servo-period 100us --position-scale 32000 --maxvel 0.15 "
         "--maxaccel 2 --position 0.04 --periods 3500",
         why="LinuxCNC tests/stepgen.1: quadrature decodes to counts at every period",
     ),

@@ -14,7 +14,7 @@ from wavecheck.capture.model import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.engine import run_check
 from wavecheck.report.model import Report
-from wavecheck.units import parse_frequency, parse_time
+from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 
 __all__ = ["check"]
 
@@ -66,7 +66,11 @@ def check(
     if not isinstance(capture, Capture):
         from wavecheck.capture.open import open_capture
 
-        rate = parse_frequency(samplerate, default_unit="Hz") if samplerate is not None else None
+        rate = None
+        if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
+            rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
+        elif samplerate is not None:
+            rate = parse_frequency(samplerate, default_unit="Hz")
         capture = open_capture(capture, samplerate=rate, input_format=input_format)
     if not isinstance(drive, Drive):
         from wavecheck.drives.library import load_drive
@@ -80,10 +84,12 @@ def check(
         stepgen = read_config(ini, hals, channel)
     j = None
     if latency is not None:
-        j = (parse_time(latency) if isinstance(latency, str) else Fraction(latency)) * 10**9
+        j = (
+            parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
+        ) * 10**9
     res: str | Fraction | None = resolution
     if isinstance(resolution, str):
-        res = parse_time(resolution)
+        res = parse_option(resolution, "resolution", "time")
     return run_check(
         capture,
         drive,

@@ -17,7 +17,7 @@ from wavecheck.checks.rates import pulse_level as generator_pulse_level
 from wavecheck.decode import decode
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.errors import UsageError
-from wavecheck.interface import build_interface
+from wavecheck.interface import build_interface, mapped_channel_names
 from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.report.model import Report
@@ -30,17 +30,19 @@ def _leaf(name: str) -> str:
     return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
 
 
-def auto_map(capture: Capture, st: StepType) -> dict[str, str]:
+def auto_map(capture: Capture, st: StepType, taken: Iterable[str] = ()) -> dict[str, str]:
     """Map roles to channels named after them (``STEP``, ``dir``, ``stepgen.0.phase-A`` …).
 
     A role is mapped only when exactly one channel's name (its last dotted part, any case) is the
-    role's name; roles the user maps explicitly take precedence over this.
+    role's name; roles the user maps explicitly take precedence over this, and a channel in
+    ``taken`` (the channels the user mapped, by name) is never mapped again to another role.
     """
     roles = (*st.outputs, "enable")
+    used = set(taken)
     mapping: dict[str, str] = {}
     for role in roles:
         hits = [c for c in capture.channels if _leaf(c.name) == role.lower()]
-        if len(hits) == 1:
+        if len(hits) == 1 and hits[0].name not in used:
             mapping[role] = hits[0].name
     return mapping
 
@@ -73,15 +75,30 @@ def default_step_type(drive: Drive) -> int:
     return 0
 
 
-def resolve_resolution_ns(capture: Capture, resolution: str | Fraction | None) -> Fraction:
-    """T in exact ns: the user's ``--resolution`` (a time such as ``"500ns"``, or exact seconds as
-    a Fraction) if given, else the capture's own (one sample period; 0 for a simulator VCD)."""
+def resolve_resolution_ns(
+    capture: Capture, resolution: str | Fraction | None
+) -> tuple[Fraction, str | None]:
+    """T in exact ns, and a note for the report: the user's ``--resolution`` (a time such as
+    ``"500ns"``, or exact seconds as a Fraction) if given, else the capture's own (one sample
+    period; 0 for a simulator VCD).
+
+    The user's value is taken exactly as given, a fraction of a tick included (100 ns on a 1 us
+    timescale stays 100 ns); a value finer than a sampled capture's own resolution is used too,
+    with a note that the verdicts assume it.
+    """
     if resolution is None:
-        return capture.resolution_ns
+        return capture.resolution_ns, None
     seconds = parse_time(resolution) if isinstance(resolution, str) else Fraction(resolution)
     if seconds < 0:
         raise UsageError(f"--resolution must not be negative, got {format_time(seconds)}")
-    return seconds * 10**9
+    ns = seconds * 10**9
+    own = capture.resolution_ns
+    if own and ns < own:
+        return ns, (
+            f"--resolution {format_time(seconds)} is finer than the capture's sample period "
+            f"{format_time(own / 10**9)}: verdicts assume it"
+        )
+    return ns, None
 
 
 def run_check(
@@ -128,15 +145,16 @@ def run_check(
     st = step_type(
         default_step_type(drive) if step_type_number is None else step_type_number, user_table
     )
-    full_map = auto_map(capture, st)
-    full_map.update(mapping or {})
+    explicit = dict(mapping or {})
+    full_map = auto_map(capture, st, mapped_channel_names(capture, explicit))
+    full_map.update(explicit)
     iface = build_interface(capture, full_map, invert)
     edge: ActiveEdge = active_edge or drive.active_edge
     for role in st.pulse_roles:
         if iface.get(role) is None:
             _suggest_type(capture, st)
         iface.require(role)
-    resolution_ns = resolve_resolution_ns(capture, resolution)
+    resolution_ns, resolution_note = resolve_resolution_ns(capture, resolution)
     steps = decode(
         iface, st.number, active_edge=edge, forward_level=forward_level, user_table=user_table
     )
@@ -173,11 +191,8 @@ def run_check(
             f"{len(steps.ambiguous)} step(s) of ambiguous direction (DIR changed at the same "
             f"sample as the active edge; first at {first}); counted as neither forward nor reverse"
         )
-    if resolution is not None and capture.resolution_ns and resolution_ns < capture.resolution_ns:
-        notes.append(
-            f"--resolution {format_time(resolution_ns / 10**9)} is finer than the capture's sample "
-            f"period {format_time(capture.resolution_ns / 10**9)}: verdicts assume it"
-        )
+    if resolution_note:
+        notes.append(resolution_note)
     return Report(
         capture=capture,
         drive=drive,

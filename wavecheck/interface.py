@@ -9,10 +9,18 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
-from wavecheck.capture.model import Capture, EdgeArray
+from wavecheck.capture.model import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
 
-__all__ = ["ROLES", "RoleSignal", "StepInterface", "build_interface", "parse_map"]
+__all__ = [
+    "ROLES",
+    "RoleSignal",
+    "StepInterface",
+    "build_interface",
+    "find_channel",
+    "mapped_channel_names",
+    "parse_map",
+]
 
 ROLES: tuple[str, ...] = (
     "step",
@@ -38,13 +46,20 @@ def _role(name: str) -> str:
     raise UsageError(f"unknown role {name!r} (roles: {', '.join(ROLES)})")
 
 
-def parse_map(items: Iterable[str]) -> dict[str, str]:
+def parse_map(items: Iterable[str], option: str = "--map") -> dict[str, str]:
     """Parse ``--map`` values (``"step=STEP (Y axis),dir=3"``, repeatable) into role → channel.
 
     A comma separates pairs only where it is followed by ``role=``, so channel names may
     contain commas and spaces.
+
+    Raises:
+        UsageError: not ``ROLE=CHANNEL``, an unknown role, a role given twice (in one value or
+            across repeated options) or one channel written for two roles. A check covers one
+            step interface for now, so a repeated role has no meaning yet (it would silently
+            check another axis than the user meant).
     """
     mapping: dict[str, str] = {}
+    written: dict[str, str] = {}  # role -> its pair as written
     for item in items:
         parts: list[str] = []
         for chunk in item.split(","):
@@ -54,12 +69,89 @@ def parse_map(items: Iterable[str]) -> dict[str, str]:
                 parts.append(chunk)
         for part in parts:
             if "=" not in part:
-                raise UsageError(f"--map {part!r} is not ROLE=CHANNEL (e.g. --map step=STEP,dir=3)")
-            role, channel = part.split("=", 1)
+                raise UsageError(
+                    f"{option} {part!r} is not ROLE=CHANNEL (e.g. {option} step=STEP,dir=3)"
+                )
+            role_text, channel = part.split("=", 1)
             if not channel:
-                raise UsageError(f"--map {part!r} names no channel (e.g. --map step=STEP)")
-            mapping[_role(role)] = channel
+                raise UsageError(f"{option} {part!r} names no channel (e.g. {option} step=STEP)")
+            role = _role(role_text)
+            if role in mapping:
+                raise UsageError(
+                    f"{option}: role {role} is mapped twice ({written[role]} and {part.strip()}); "
+                    "one check takes one channel per role (several axes are not supported yet: "
+                    "check each axis on its own)"
+                )
+            for other, ch in mapping.items():
+                if ch.strip() == channel.strip():
+                    raise UsageError(
+                        f"{option}: channel {channel.strip()!r} is mapped as both {other} and "
+                        f"{role}; one channel can have one role"
+                    )
+            mapping[role] = channel
+            written[role] = part.strip()
     return mapping
+
+
+def _ambiguous_name(capture: Capture, ref: str, hits: list[Channel], role: str | None) -> str:
+    what = f"--map {role}={ref}" if role else f"channel {ref!r}"
+    indices = [str(c.index) for c in hits]
+    listed = ", ".join(indices[:-1]) + f" and {indices[-1]}"
+    return (
+        f"{capture.path}: {what} is ambiguous: indices {listed} are both {hits[0].name!r}; "
+        f"map by index (e.g. --map {role or 'step'}={hits[0].index})"
+    )
+
+
+def _hierarchical(channels: list[Channel], ref: str) -> list[Channel]:
+    """Channels whose dotted name ends with ``ref`` (``s2.step`` → ``tb.s2.step``): exact case
+    first, else any case."""
+    hits = [c for c in channels if c.name.strip().endswith("." + ref)]
+    if not hits:
+        low = "." + ref.lower()
+        hits = [c for c in channels if c.name.strip().lower().endswith(low)]
+    return hits
+
+
+def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> Channel:
+    """The channel ``ref`` names: its exact name, else its index (``"3"``), else another name
+    the file gives it, else the unique channel whose hierarchical name ends with ``ref``
+    (``s2.step`` for ``tb.s2.step``; any case if no exact-case one).
+
+    Raises:
+        UsageError: no such channel (the channels are listed); a name two channels share
+            ("ambiguous: indices 2 and 5 are both 'STEP'; map by index"); a partial name that
+            several channels end with ("ambiguous: candidates …").
+    """
+    if isinstance(ref, int):
+        return capture.channel(ref)
+    hits = [c for c in capture.channels if c.name == ref]
+    if not hits:
+        hits = [c for c in capture.channels if c.name.strip() == ref.strip()]
+    if len(hits) > 1:
+        raise UsageError(_ambiguous_name(capture, ref, hits, role))
+    if hits:
+        return hits[0]
+    stripped = ref.strip()
+    known = stripped.isdigit() or ref in capture.aliases or stripped in capture.aliases
+    if stripped and not known and ref not in capture.skipped and stripped not in capture.skipped:
+        cands = _hierarchical(capture.channels, stripped)
+        if len(cands) == 1:
+            return cands[0]
+        if len(cands) > 1:
+            what = f"--map {role}={ref}" if role else f"channel {ref!r}"
+            names = ", ".join(f"{c.index}={c.name!r}" for c in cands[:8])
+            more = f" and {len(cands) - 8} more" if len(cands) > 8 else ""
+            raise UsageError(
+                f"{capture.path}: {what} is ambiguous: candidates {names}{more}; "
+                "map by the full name or by index"
+            )
+    return capture.channel(ref)
+
+
+def mapped_channel_names(capture: Capture, mapping: Mapping[str, str]) -> set[str]:
+    """The names of the channels ``mapping`` (role → channel name or index) resolves to."""
+    return {find_channel(capture, ref, role).name for role, ref in mapping.items()}
 
 
 @dataclass
@@ -118,16 +210,26 @@ def build_interface(
     """Resolve ``mapping`` (role → channel name or index) against ``capture``.
 
     Raises:
-        UsageError: unknown role or channel, an inverted role that is not mapped, or a mapped
-            channel that goes ``x``/``z`` in the middle of the capture.
+        UsageError: unknown role or channel, an ambiguous channel name (see
+            :func:`find_channel`), one channel mapped to two roles, an inverted role that is
+            not mapped, or a mapped channel that goes ``x``/``z`` in the middle of the capture.
     """
     inverted = {_role(r) for r in invert}
     for role in inverted:
         if role not in mapping:
-            raise UsageError(f"--invert {role}: role {role!r} is not mapped (add --map {role}=CHANNEL)")
+            raise UsageError(
+                f"--invert {role}: role {role!r} is not mapped (add --map {role}=CHANNEL)"
+            )
     signals: dict[str, RoleSignal] = {}
+    roles_of: dict[int, str] = {}  # channel index -> the role it has
     for role, ref in mapping.items():
-        ch = capture.channel(ref)
+        ch = find_channel(capture, ref, role)
+        if ch.index in roles_of:
+            raise UsageError(
+                f"{capture.path}: channel {ch.index} {ch.name!r} is mapped as both "
+                f"{roles_of[ch.index]} and {role}; one channel can have one role"
+            )
+        roles_of[ch.index] = role
         if len(ch.xz_times):
             t = capture.timebase.seconds(int(ch.xz_times[0]))
             raise UsageError(

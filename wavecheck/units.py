@@ -3,6 +3,23 @@
 Every option, rule file and stepgen setting goes through here. Values are exact
 :class:`fractions.Fraction` in SI base units (seconds or hertz); nothing is a float until printed.
 
+Numbers and units, the one policy of both tools (README "Numbers and units"):
+
+* On the command line and in rule and ``wavecheck.toml`` files a time or a frequency carries its
+  unit (``16us``, ``12 MHz``). A bare number is refused with the fix spelled out
+  (``--base-period 16: give a unit, e.g. 16us or 16000ns``), see :func:`parse_option`. The one
+  exception is ``0``, which is zero in every unit.
+* Numbers inside LinuxCNC's own files (INI ``BASE_PERIOD``, HAL ``setp stepgen.0.steplen``) stay
+  bare ns, as LinuxCNC reads them; a latency file (cyclictest, ``latency-histogram``,
+  ``~/.latency``) and a sigrok ``.sr`` file's metadata keep their own documented units. Their
+  readers pass ``default_unit``.
+* A value outside what any capture or machine can mean (``1e400us``, ``1e-400 Hz``, a time
+  beyond 10^9 s or below 1 fs) is a :class:`~wavecheck.errors.UnitError`; a refused value is
+  shown shortened, never as a 400-digit number.
+* Values that are almost surely a unit slip are judged by :func:`check_plausible` with an
+  option's :class:`Plausible` bounds: a base period below 1 us and a sample rate below 1 kHz are
+  refused, a latency below 100 ns (other than 0) is warned about on stderr.
+
 >>> parse_time("4.5us")
 Fraction(9, 2000000)
 >>> time_ns("200 ns")
@@ -14,6 +31,9 @@ Fraction(31000, 1)
 from __future__ import annotations
 
 import re
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 from typing import Literal
@@ -21,16 +41,27 @@ from typing import Literal
 from wavecheck.errors import UnitError
 
 __all__ = [
+    "BASE_PERIOD",
+    "LATENCY",
+    "SAMPLE_RATE",
     "Dimension",
+    "Plausible",
+    "check_plausible",
     "exact_ns",
     "format_frequency",
     "format_ns",
     "format_rate",
     "format_time",
+    "is_bare_number",
+    "is_number",
     "json_number",
+    "option_ns",
     "parse_frequency",
+    "parse_option",
     "parse_quantity",
     "parse_time",
+    "shorten",
+    "shown",
     "time_ns",
 ]
 
@@ -58,11 +89,75 @@ _QUANTITY = re.compile(rf"^\s*({_NUMBER})\s*([A-Za-zµμ]*)\s*$")
 _KNOWN = "s, ms, us (µs), ns, ps, fs, Hz, kHz, MHz, GHz"
 
 
+#: Largest decimal exponent a written number may have (before its unit): beyond this it cannot
+#: be a time or frequency of a capture or a machine, and exact arithmetic on it would be costly.
+_MAX_EXPONENT = 40
+#: Most significant digits a written number may have.
+_MAX_DIGITS = 40
+#: The magnitudes a nonzero quantity may have, in SI base units (1 fs to 10^9 s; 10^-9 Hz to
+#: 10^15 Hz, so that every period is a time in range too).
+_RANGE: dict[Dimension, tuple[Fraction, Fraction, str]] = {
+    "time": (Fraction(1, 10**15), Fraction(10**9), "1 fs to 1e9 s"),
+    "frequency": (Fraction(1, 10**9), Fraction(10**15), "1e-9 Hz to 1e15 Hz"),
+}
+
+
+class _Bad(UnitError):
+    """A UnitError that also knows its reason without the value (for an option's message)."""
+
+    def __init__(self, message: str, reason: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+def shorten(text: object, limit: int = 24) -> str:
+    """``text`` for a message, shortened to about ``limit`` characters (``1111…1111us``)."""
+    s = str(text)
+    if len(s) <= limit:
+        return s
+    keep = max(limit // 2 - 2, 4)
+    return s[:keep] + "…" + s[-keep:]
+
+
+def shown(text: object) -> str:
+    """``text`` quoted for a message, shortened (:func:`shorten`)."""
+    return repr(shorten(text))
+
+
 def _exact(number: str, text: str) -> Fraction:
     try:
-        return Fraction(Decimal(number))
+        d = Decimal(number)
     except (InvalidOperation, ValueError):
-        raise UnitError(f"cannot read the number in {text!r}") from None
+        raise _Bad(f"cannot read the number in {shown(text)}", "cannot read the number") from None
+    if not d.is_finite():
+        raise _Bad(f"cannot read the number in {shown(text)}", "cannot read the number")
+    if d and (abs(d.adjusted()) > _MAX_EXPONENT or len(d.as_tuple().digits) > _MAX_DIGITS):
+        why = "out of range (too many digits or too large an exponent)"
+        raise _Bad(f"{shown(text)} is {why}", why)
+    return Fraction(d)
+
+
+def _in_range(value: Fraction, dim: Dimension, text: object) -> None:
+    low, high, span = _RANGE[dim]
+    if value and not low <= abs(value) <= high:
+        why = f"out of range (a {dim} is from {span})"
+        raise _Bad(f"{shown(text)} is {why}", why)
+
+
+def is_number(text: object) -> bool:
+    """True if ``text`` is written as a number, with or without a unit (``"11"``, ``"11us"``,
+    ``"1e400 s"``), as opposed to a name such as a file path."""
+    return isinstance(text, str) and _QUANTITY.match(text) is not None
+
+
+def is_bare_number(text: object) -> bool:
+    """True if ``text`` is a number written without a unit (``"16"``, ``"1e3"``, ``16``)."""
+    if isinstance(text, (int, Fraction)) and not isinstance(text, bool):
+        return True
+    if not isinstance(text, str):
+        return False
+    match = _QUANTITY.match(text)
+    return match is not None and not match.group(2)
 
 
 def parse_quantity(
@@ -73,36 +168,53 @@ def parse_quantity(
     Args:
         text: a number with a unit (``"4.5us"``, ``"31 kHz"``); an int or Fraction is taken as
             a bare number.
-        default_unit: unit for a bare number (e.g. ``"ns"``); without it a bare number is an error.
+        default_unit: unit for a bare number, only for the fields of files that define one
+            (LinuxCNC's bare ns, a ``.sr`` file's bare Hz); without it a bare number is an error.
 
     Raises:
-        UnitError: unknown unit, missing unit, or unreadable number.
+        UnitError: unknown unit, missing unit, unreadable number, or a value out of range.
     """
     if isinstance(text, (int, Fraction)) and not isinstance(text, bool):
         number, unit = Fraction(text), ""
     elif isinstance(text, str):
         match = _QUANTITY.match(text)
         if not match:
-            raise UnitError(f"cannot read {text!r} as a quantity (write e.g. '4.5us' or '31 kHz')")
+            raise _Bad(
+                f"cannot read {shown(text)} as a quantity (write e.g. '4.5us' or '31 kHz')",
+                "not a quantity (write e.g. '4.5us' or '31 kHz')",
+            )
         number, unit = _exact(match.group(1), text), match.group(2)
     else:
-        raise UnitError(f"expected a quantity such as '4.5us', got {text!r}")
+        raise _Bad(
+            f"expected a quantity such as '4.5us', got {shown(text)}",
+            "not a quantity (write e.g. '4.5us' or '31 kHz')",
+        )
     if not unit:
         if default_unit is None:
-            raise UnitError(f"{text!r} has no unit (write e.g. '{text}us' or '{text} kHz')")
+            raise _Bad(
+                f"{shown(text)} has no unit (write e.g. '{text}us' or '{text} kHz')", "no unit"
+            )
         unit = default_unit
+    dim: Dimension
     if unit in _TIME_UNITS:
-        return number * _TIME_UNITS[unit], "time"
-    if unit.lower() in _FREQ_UNITS:
-        return number * _FREQ_UNITS[unit.lower()], "frequency"
-    raise UnitError(f"unknown unit {unit!r} in {text!r} (known units: {_KNOWN})")
+        value, dim = number * _TIME_UNITS[unit], "time"
+    elif unit.lower() in _FREQ_UNITS:
+        value, dim = number * _FREQ_UNITS[unit.lower()], "frequency"
+    else:
+        raise _Bad(
+            f"unknown unit {shown(unit)} in {shown(text)} (known units: {_KNOWN})",
+            f"unknown unit {shown(unit)} (known units: {_KNOWN})",
+        )
+    _in_range(value, dim, text)
+    return value, dim
 
 
 def parse_time(text: str | int | Fraction, default_unit: str | None = None) -> Fraction:
     """Parse a duration; returns exact seconds. A frequency is refused (say which you meant)."""
     value, dim = parse_quantity(text, default_unit)
     if dim != "time":
-        raise UnitError(f"{text!r} is a frequency where a time is expected (write e.g. '5us')")
+        why = "a frequency where a time is expected (write e.g. '5us')"
+        raise _Bad(f"{shown(text)} is {why}", why)
     return value
 
 
@@ -116,9 +228,140 @@ def parse_frequency(text: str | int | Fraction, default_unit: str | None = None)
     value, dim = parse_quantity(text, default_unit)
     if dim == "time":
         if value <= 0:
-            raise UnitError(f"period {text!r} must be positive to give a frequency")
+            why = "a period must be positive to give a frequency"
+            raise _Bad(f"period {shown(text)} must be positive to give a frequency", why)
         return 1 / value
     return value
+
+
+# -- command-line options ----------------------------------------------------------------------
+@dataclass(frozen=True)
+class Plausible:
+    """Values of an option that are almost surely a unit slip (SI base units: s or Hz).
+
+    A nonzero value below ``refuse_below`` is refused (exit 2), one below ``warn_below`` is
+    warned about on stderr; ``typical`` says what real values are. Zero is never judged here
+    (it means "none"; each option decides whether it allows it).
+    """
+
+    what: str
+    typical: str
+    refuse_below: Fraction | None = None
+    warn_below: Fraction | None = None
+    frequency: bool = False
+
+
+#: LinuxCNC's software base thread cannot run faster than about 1 us: refused below.
+BASE_PERIOD = Plausible(
+    "a base period", "LinuxCNC base threads run at 10-100 us", refuse_below=Fraction(1, 10**6)
+)
+#: A logic analyzer below 1 kHz cannot resolve a step pulse: refused below.
+SAMPLE_RATE = Plausible(
+    "a sample rate",
+    "logic analyzers sample at 1-500 MHz",
+    refuse_below=Fraction(1000),
+    frequency=True,
+)
+#: A base-thread latency below 100 ns is not a PC's: warned about (the run goes on).
+LATENCY = Plausible(
+    "a latency", "a PC's base-thread latency is 1-100 us", warn_below=Fraction(100, 10**9)
+)
+
+
+def _stderr(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr)
+
+
+def _suggest(number: str, dimension: Dimension) -> str:
+    """The fix for a bare ``number``: ``16us or 16000ns`` (``12MHz or 12kHz``); empty for a
+    number no unit could make sensible."""
+    try:
+        d = Decimal(number)
+    except InvalidOperation:  # pragma: no cover - matched as a number already
+        return ""
+    if not d.is_finite() or abs(d.adjusted()) > 9:
+        return ""
+    if dimension == "frequency":
+        return f", e.g. {number}MHz or {number}kHz"
+    return f", e.g. {number}us or {d.scaleb(3).normalize():f}ns"
+
+
+def check_plausible(
+    value: Fraction,
+    option: str,
+    text: object,
+    bounds: Plausible,
+    warn: Callable[[str], None] | None = None,
+) -> None:
+    """Refuse or warn about ``value`` (of ``option``, written ``text``) when ``bounds`` say it is
+    almost surely a unit slip; ``warn`` takes the warning (default: a line on stderr).
+
+    Raises:
+        UnitError: below ``bounds.refuse_below``.
+    """
+    if not value:
+        return
+    size = abs(value)
+    fmt = format_frequency if bounds.frequency else format_time
+    if bounds.refuse_below is not None and size < bounds.refuse_below:
+        raise UnitError(
+            f"{option} {shorten(text)}: {fmt(size)} is below {fmt(bounds.refuse_below)}, "
+            f"implausible for {bounds.what} ({bounds.typical}); check the unit"
+        )
+    if bounds.warn_below is not None and size < bounds.warn_below:
+        (warn or _stderr)(
+            f"{option} {shorten(text)}: {fmt(size)} is below {fmt(bounds.warn_below)}, "
+            f"unusual for {bounds.what} ({bounds.typical}); check the unit"
+        )
+
+
+def parse_option(
+    text: str,
+    option: str,
+    dimension: Dimension,
+    plausible: Plausible | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> Fraction:
+    """A command-line or ``wavecheck.toml`` value of ``option``: exact seconds or hertz.
+
+    A time or a frequency needs its unit; a bare number other than ``0`` is refused with the
+    fix spelled out. A frequency option also takes a period (``"500ns"`` → 2 MHz). With
+    ``plausible``, :func:`check_plausible` judges the value.
+
+    Raises:
+        UnitError: one line naming the option: no unit, unknown unit, wrong dimension, out of
+            range, or refused as implausible.
+    """
+    stripped = str(text).strip()
+    if is_bare_number(stripped):
+        try:
+            zero = not Decimal(stripped)
+        except InvalidOperation:  # pragma: no cover - matched as a number
+            zero = False
+        if zero:
+            return Fraction(0)
+        hint = _suggest(stripped, dimension) if len(stripped) <= 24 else ""
+        raise UnitError(f"{option} {shorten(stripped)}: give a unit{hint}")
+    try:
+        if dimension == "time":
+            value = parse_time(stripped)
+        else:
+            value = parse_frequency(stripped)
+    except _Bad as err:
+        raise UnitError(f"{option} {shorten(stripped)}: {err.reason}") from None
+    if plausible is not None:
+        check_plausible(value, option, stripped, plausible, warn)
+    return value
+
+
+def option_ns(
+    text: str,
+    option: str,
+    plausible: Plausible | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> Fraction:
+    """:func:`parse_option` for a time, in exact nanoseconds."""
+    return parse_option(text, option, "time", plausible, warn) * 10**9
 
 
 _SCALES: tuple[tuple[Fraction, str], ...] = (

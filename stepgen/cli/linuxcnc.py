@@ -54,8 +54,9 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
     cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
     defaults: dict[str, Any] = getattr(args, "_linuxcnc_defaults", {})
     values: dict[str, Any] = {
-        "base_period": None if cfg.base_period_ns is None else str(cfg.base_period_ns),
-        "servo_period": None if cfg.servo_period_ns is None else str(cfg.servo_period_ns),
+        # LinuxCNC's files hold bare ns; the options need the unit
+        "base_period": None if cfg.base_period_ns is None else f"{cfg.base_period_ns}ns",
+        "servo_period": None if cfg.servo_period_ns is None else f"{cfg.servo_period_ns}ns",
         "type": cfg.step_type,
         "user_step_type": ",".join(str(v) for v in cfg.user_step_type) or None,
         "mode": cfg.ctrl_type,
@@ -65,7 +66,7 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
     }
     values["thread_order"] = cfg.thread_order
     for name in TIMING_PARAMS:
-        values[name] = str(cfg.params[name]) if name in cfg.params else None
+        values[name] = f"{cfg.params[name]}ns" if name in cfg.params else None
     for dest, value in values.items():
         if value is None or not hasattr(args, dest):
             continue

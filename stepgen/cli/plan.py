@@ -3,10 +3,12 @@
 ``stepgen plan --drive ID|FILE --latency J|FILE [--base-period P] [--invert-step]
 [--format text|json|ini|hal] [--channel N] [-o FILE]``
 
-Times: a number with a unit (``11us``, ``15500ns``); a bare number follows LinuxCNC's
-latency-test: below 1000 it is µs, otherwise ns (``11`` = 11 µs, ``11000`` = 11 µs). The reading
-is printed. ``--latency`` also takes a file: cyclictest summary or ``-h`` histogram output,
-``latency-histogram --nox`` output, or latency-test's one-number ``~/.latency`` (ns).
+Times carry their unit (``11us``, ``15500ns``); a bare number other than 0 is refused with the
+fix spelled out (README "Numbers and units"). A base period below 1 us is refused and a latency
+below 100 ns warned about, as almost surely a unit slip. ``--latency`` also takes a file (any
+value not written as a number): cyclictest summary or ``-h`` histogram output,
+``latency-histogram --nox`` output, or latency-test's one-number ``~/.latency`` (ns), each read
+in its own documented unit.
 
 Exit codes: 0 a plan was made, 2 unusable input (one line on stderr).
 """
@@ -22,9 +24,9 @@ from typing import Any
 from stepgen.latencyfiles import read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
-from wavecheck.errors import UnitError, UsageError, WavecheckError
+from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import atomic_write, output_file
-from wavecheck.units import parse_quantity
+from wavecheck.units import BASE_PERIOD, LATENCY, Plausible, is_number, option_ns, shorten
 
 __all__ = ["parse_latency_arg", "parse_time_arg", "register", "run"]
 
@@ -40,7 +42,7 @@ def register(sub: Any) -> None:
             "The step timing calculator: from a drive's datasheet figures and the worst latency J "
             "it gives the minimum and the simple BASE_PERIOD, each stepgen parameter as "
             "n = ceil((T + J) / P) periods, the max step rate and each requirement's margin. "
-            "A bare time below 1000 is us, otherwise ns (as LinuxCNC's latency-test reads it)."
+            "Times carry their unit (11us, 16000ns); a bare number is refused."
         ),
     )
     p.add_argument(
@@ -50,7 +52,8 @@ def register(sub: Any) -> None:
         "--latency",
         required=True,
         metavar="J|FILE",
-        help="worst latency (e.g. 11us), or a cyclictest / latency-histogram --nox / ~/.latency file",
+        help="worst latency with its unit (e.g. 11us; below 100 ns gives a warning), or a "
+        "cyclictest / latency-histogram --nox / ~/.latency file",
     )
     p.add_argument(
         "--cyclictest-nsecs",
@@ -60,7 +63,8 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--base-period",
         metavar="P",
-        help="BASE_PERIOD to plan for (default: the minimum rounded up to a whole us)",
+        help="BASE_PERIOD to plan for, with its unit (e.g. 16us; below 1 us is refused); "
+        "default: the minimum rounded up to a whole us",
     )
     p.add_argument(
         "--invert-step",
@@ -84,50 +88,36 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def parse_time_arg(text: str, option: str) -> tuple[Fraction, str]:
-    """Read a time option as exact ns, LinuxCNC latency-test style; returns ``(ns, reading)``.
+def _warn(message: str) -> None:
+    print(f"stepgen: warning: {message}", file=sys.stderr)
 
-    A number with a unit is taken as given. A bare number below 1000 is µs, otherwise ns.
+
+def parse_time_arg(
+    text: str, option: str, plausible: Plausible | None = None
+) -> tuple[Fraction, str]:
+    """Read a time option as exact ns; returns ``(ns, where it came from)``. Its unit is
+    required (:func:`wavecheck.units.parse_option`), ``plausible`` judges the value.
 
     Raises:
-        UnitError: not a time.
+        UnitError: no unit, not a time, out of range, or implausible.
     """
-    try:
-        value, dim = parse_quantity(text, default_unit="ns")
-    except UnitError as err:
-        raise UnitError(f"{option} {text!r}: {err}") from None
-    if dim != "time":
-        raise UnitError(f"{option} {text!r} is a frequency; give a time such as '11us'")
-    ns = value * 10**9
-    stripped = text.strip()
-    bare = bool(stripped) and (stripped[-1].isdigit() or stripped[-1] == ".")
-    if bare:
-        if abs(ns) < 1000:
-            return (
-                ns * 1000,
-                f"{option} {text} (a bare number below 1000 is us, as latency-test reads it)",
-            )
-        return (
-            ns,
-            f"{option} {text} (a bare number of 1000 or more is ns, as latency-test reads it)",
-        )
-    return ns, f"{option} {text}"
+    return option_ns(text, option, plausible, _warn), f"{option} {text}"
 
 
 def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction, str]:
     """``--latency``: a time, or a file of a latency tool; returns ``(ns, where it came from)``.
 
+    Text written as a number (``11us``, ``11``, ``1e400s``) is a time, anything else a file.
     ``cyclictest_unit`` is the unit of a cyclictest summary's numbers (``"ns"`` if it ran with -N).
     """
-    try:
-        return parse_time_arg(text, "--latency")
-    except UnitError:
-        path = Path(text).expanduser()
-        if not path.exists():
-            raise UsageError(
-                f"--latency {text!r} is neither a time such as '11us' nor an existing file "
-                "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file)"
-            ) from None
+    if is_number(text.strip()):
+        return parse_time_arg(text, "--latency", LATENCY)
+    path = Path(text).expanduser()
+    if not path.exists():
+        raise UsageError(
+            f"--latency {shorten(text)!r} is neither a time such as '11us' nor an existing file "
+            "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file)"
+        )
     worst_ns, description = read_latency_file(path, cyclictest_unit=cyclictest_unit)
     return Fraction(worst_ns), description
 
@@ -141,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     latency, source = parse_latency_arg(args.latency, "ns" if args.cyclictest_nsecs else "us")
     period = None
     if args.base_period is not None:
-        period, _ = parse_time_arg(args.base_period, "--base-period")
+        period, _ = parse_time_arg(args.base_period, "--base-period", BASE_PERIOD)
     drive = load_drive(args.drive)
     result = plan(drive, latency, period, step_inverted=args.invert_step, latency_source=source)
     if args.format == "json":

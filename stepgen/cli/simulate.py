@@ -1,8 +1,9 @@
 """``stepgen simulate``: run the LinuxCNC stepgen model under a latency model, write VCD or .sr.
 
-Options are named after LinuxCNC's parameters; timing values are ns as bare numbers (as with
-halcmd) or carry a unit (``5us``). Exit 0 on success, 2 with a one-line message on bad settings
-(nothing is written).
+Options are named after LinuxCNC's parameters; every time carries its unit (``25us``, ``5000ns``;
+a bare number other than 0 is refused, README "Numbers and units"), while the numbers in
+``--ini``/``--hal`` files stay LinuxCNC's bare ns. A base period below 1 us is refused as a unit
+slip. Exit 0 on success, 2 with a one-line message on bad settings (nothing is written).
 
 What a worst-case run proves: with --latency worst:J:RULE and the worst-case motion (--motion
 worst, the default when no other motion is given), every interval of RULE that make-pulses can
@@ -35,7 +36,7 @@ from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import output_file
 from wavecheck.progress import activate
-from wavecheck.units import time_ns
+from wavecheck.units import BASE_PERIOD, Plausible, option_ns, shorten
 
 __all__ = ["build_config", "build_motion", "register", "run"]
 
@@ -52,12 +53,14 @@ def register(sub: Any) -> None:
     g.add_argument("--type", type=int, default=0, help="step_type 0..15 (default 0 = step/dir)")
     g.add_argument("--user-step-type", default="", help="type 15 table, e.g. 1,3,2,0")
     g.add_argument(
-        "--base-period", default="25us", help="base thread period (bare number = ns; default 25us)"
+        "--base-period",
+        default="25us",
+        help="base thread period with its unit (default 25us; below 1 us is refused)",
     )
     g.add_argument(
         "--servo-period",
         default="1ms",
-        help="servo thread period, rounded by HAL to n·base (default 1ms)",
+        help="servo thread period with its unit, rounded by HAL to n·base (default 1ms)",
     )
     g.add_argument(
         "--mode",
@@ -74,7 +77,7 @@ def register(sub: Any) -> None:
     )
     for name in ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay"):
         g.add_argument(
-            f"--{name}", default="1", help=f"{name} (ns, or with a unit; default 1 ns → 1 period)"
+            f"--{name}", default="1ns", help=f"{name} with its unit (default 1ns → 1 period)"
         )
     g.add_argument(
         "--thread-order",
@@ -102,14 +105,15 @@ def register(sub: Any) -> None:
     )
     m.add_argument("--move-vel", type=float, help="peak velocity of --move (default --maxvel)")
     m.add_argument("--move-accel", type=float, help="acceleration of --move (default --maxaccel)")
-    m.add_argument("--duration", help="simulated time (e.g. 2s, 500ms)")
+    m.add_argument("--duration", help="simulated time with its unit (e.g. 2s, 500ms)")
     m.add_argument("--periods", type=int, help="simulated base periods")
     lat = p.add_argument_group("latency")
     lat.add_argument(
         "--latency",
         default="none",
         help="none | uniform:J | normal:SIGMA,MAX | spike:J@EVERY | histogram:FILE | worst:J:RULE "
-        "(every interval of RULE the motion makes is n·P − J long; see above for what a pass proves)",
+        "(times with their unit, e.g. worst:11us:dir_hold; every interval of RULE the motion "
+        "makes is n·P − J long; see above for what a pass proves; below 100 ns warns)",
     )
     lat.add_argument(
         "--seed", type=int, default=0, help="seed of the random latency models (default 0)"
@@ -123,8 +127,9 @@ def register(sub: Any) -> None:
     lat.add_argument(
         "--catchup",
         default=_CATCHUP_DEFAULT,
-        help="run time of an invocation: the next cannot start before it ends (default 1000 ns; "
-        "P − J under worst:J:RULE when that is shorter, so the bound n·P − J is reached)",
+        help=f"run time of an invocation, with its unit: the next cannot start before it ends "
+        f"(default {DEFAULT_CATCHUP_NS}ns; P − J under worst:J:RULE when that is shorter, so the "
+        "bound n·P − J is reached)",
     )
     o = p.add_argument_group("output")
     o.add_argument(  # output_file: checked before any work (wavecheck.output)
@@ -151,18 +156,21 @@ class _DefaultText(str):
     __slots__ = ()
 
 
-_CATCHUP_DEFAULT = _DefaultText(DEFAULT_CATCHUP_NS)
+_CATCHUP_DEFAULT = _DefaultText(f"{DEFAULT_CATCHUP_NS}ns")
 
 
-def _ns(text: str, option: str, allow_zero: bool = True) -> int:
+def _ns(
+    text: str, option: str, allow_zero: bool = True, plausible: Plausible | None = None
+) -> int:
+    """An option's time in whole ns; its unit is required (:func:`parse_option`)."""
     try:
-        value = time_ns(str(text), default_unit="ns")
+        value = option_ns(str(text), option, plausible)
     except UnitError as err:
-        raise ConfigError(f"{option} {text!r}: {err}") from None
+        raise ConfigError(str(err)) from None
     if value.denominator != 1:
-        raise ConfigError(f"{option} {text!r} is not a whole number of ns")
+        raise ConfigError(f"{option} {shorten(text)}: not a whole number of ns")
     if value < 0 or (value == 0 and not allow_zero):
-        raise ConfigError(f"{option} {text!r} must be {'>= 0' if allow_zero else '> 0'}")
+        raise ConfigError(f"{option} {shorten(text)}: must be {'>= 0' if allow_zero else '> 0'}")
     return int(value)
 
 
@@ -177,7 +185,7 @@ def build_config(args: argparse.Namespace) -> StepgenConfig:
             raise ConfigError(
                 f"--user-step-type {args.user_step_type!r} is not a list of integers (e.g. 1,3,2,0)"
             ) from None
-    base = _ns(args.base_period, "--base-period", allow_zero=False)
+    base = _ns(args.base_period, "--base-period", allow_zero=False, plausible=BASE_PERIOD)
     servo = _ns(args.servo_period, "--servo-period", allow_zero=False)
     order = args.thread_order
     if order == "auto":

@@ -23,7 +23,7 @@ CASES: list[tuple[str, bytes, str, list[str], str]] = [
     ("csv-first-row-is-data", b"1,0\n0,1\n1,1\n", ".csv", ["--samplerate", "1MHz"], "error"),
     ("csv-empty", b"", ".csv", ["--samplerate", "1MHz"], "error"),
     ("csv-binary", bytes(range(256)), ".csv", ["--samplerate", "1MHz"], "error"),
-    ("csv-fraction-rate", b"a\n1\n0\n", ".csv", ["--samplerate", "1.5Hz"], "error"),
+    ("csv-fraction-rate", b"a\n1\n0\n", ".csv", ["--samplerate", "1000.5Hz"], "error"),
     (
         "binary-ok",
         bytes([1, 2, 3, 0] * 50),

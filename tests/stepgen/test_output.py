@@ -14,9 +14,9 @@ from tools.golden import GOLDEN, SCENARIOS, generate
 S0 = [
     "simulate",
     "--base-period",
-    "100000",
+    "100us",
     "--servo-period",
-    "100000",
+    "100us",
     "--position-scale",
     "32000",
     "--maxvel",

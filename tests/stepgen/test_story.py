@@ -187,14 +187,14 @@ def _cli_chain(
     argv = [
         "simulate",
         "--base-period",
-        str(period),
+        f"{period}ns",
         "--servo-period",
-        str(period),
+        f"{period}ns",
         "--mode",
         "velocity",
     ]
     for name, ns in params.items():
-        argv += [f"--{name}", str(ns)]
+        argv += [f"--{name}", f"{ns}ns"]  # the HAL's bare ns, with the unit an option needs
     argv += [
         "--thread-order", "pulses-first", "--command", str(csv), "--periods", str(n),
         "--latency", f"worst:{J}ns:dir_hold", "--active-edge", "falling", "-q", "-o", str(vcd),

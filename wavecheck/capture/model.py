@@ -113,9 +113,14 @@ class Capture:
             UsageError: no such channel; the message lists the channels there are.
         """
         if isinstance(ref, str):
-            for ch in self.channels:
-                if ch.name == ref:
-                    return ch
+            same = [ch for ch in self.channels if ch.name == ref]
+            if len(same) > 1:  # never the first of several silently (wavecheck.interface)
+                raise UsageError(
+                    f"{self.path}: channel {ref!r} is ambiguous: indices "
+                    f"{', '.join(str(c.index) for c in same)} share the name; map by index"
+                )
+            if same:
+                return same[0]
             stripped = ref.strip()
             for ch in self.channels:
                 if ch.name.strip() == stripped:

@@ -1,20 +1,22 @@
 """Capture options shared by info, check, compare and crosscheck.
 
 ``--samplerate 12MHz``, ``--resolution 500ns``, ``--input-format csv``; values go through the
-one units helper (:mod:`wavecheck.units`).
+one units helper (:mod:`wavecheck.units`): a unit is required (a bare ``0`` excepted), and a
+sample rate below 1 kHz is refused as a unit slip.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+from fractions import Fraction
 
 from wavecheck.capture.model import Capture
 from wavecheck.capture.open import open_capture
-from wavecheck.errors import UnitError
-from wavecheck.units import parse_frequency, parse_time
+from wavecheck.errors import UsageError
+from wavecheck.units import SAMPLE_RATE, parse_option
 
-__all__ = ["add_capture_arguments", "capture_from_args"]
+__all__ = ["add_capture_arguments", "capture_from_args", "resolution_from_args"]
 
 
 def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
@@ -23,14 +25,14 @@ def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--samplerate",
         metavar="RATE",
-        help="sample rate of the capture (e.g. 12MHz); needed when the file has none, "
-        "overrides the file's",
+        help="sample rate of the capture, with its unit (e.g. 12MHz); needed when the file has "
+        "none, overrides the file's; below 1 kHz is refused as a unit slip",
     )
     group.add_argument(
         "--resolution",
         metavar="TIME",
-        help="time resolution of the capture (e.g. 500ns); default: one sample period "
-        "(0 for a simulator VCD)",
+        help="time resolution of the capture, with its unit (e.g. 500ns, or 0), kept exact; "
+        "default: one sample period (0 for a simulator VCD)",
     )
     group.add_argument(
         "--input-format",
@@ -40,29 +42,44 @@ def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def resolution_from_args(args: argparse.Namespace) -> Fraction | None:
+    """``--resolution`` in exact seconds (None when not given).
+
+    Raises:
+        UnitError: no unit, not a time, out of range, or negative.
+    """
+    res = getattr(args, "resolution", None)
+    if res is None:
+        return None
+    seconds = parse_option(res, "--resolution", "time")
+    if seconds < 0:
+        raise UsageError(f"--resolution {res}: must not be negative")
+    return seconds
+
+
 def capture_from_args(
-    args: argparse.Namespace, path: str | os.PathLike[str], *, require_time: bool = True
+    args: argparse.Namespace, path: str | os.PathLike[str], *, resolution: bool = True, require_time: bool = True
 ) -> Capture:
     """Open ``path`` with the options added by :func:`add_capture_arguments`.
+
+    ``resolution=False`` leaves ``--resolution`` to the caller (``check`` hands it to the engine,
+    which keeps it exact; see :func:`resolution_from_args`).
 
     Raises:
         UnitError: a bad ``--samplerate``/``--resolution`` value.
         CaptureError: the file cannot be read.
     """
     rate = getattr(args, "samplerate", None)
-    res = getattr(args, "resolution", None)
-    try:
-        samplerate = parse_frequency(rate, default_unit="Hz") if rate else None
-    except UnitError as err:
-        raise UnitError(f"--samplerate: {err}") from None
-    try:
-        resolution_s = parse_time(res) if res else None
-    except UnitError as err:
-        raise UnitError(f"--resolution: {err}") from None
+    samplerate = None
+    if rate is not None:
+        samplerate = parse_option(rate, "--samplerate", "frequency", SAMPLE_RATE)
+        if samplerate <= 0:
+            raise UsageError(f"--samplerate {rate}: must be positive")
+    resolution_s = resolution_from_args(args)
     return open_capture(
         path,
         samplerate=samplerate,
-        resolution_s=resolution_s,
+        resolution_s=resolution_s if resolution else None,
         input_format=getattr(args, "input_format", None),
         require_time=require_time,
     )

@@ -34,7 +34,7 @@ from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
-from wavecheck.units import format_time, parse_time, time_ns
+from wavecheck.units import BASE_PERIOD, LATENCY, format_time, option_ns
 from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
@@ -75,10 +75,14 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         cfg.add_argument(
             f"--{name.replace('_', '-')}",
             metavar="T",
-            help=f"{what} (ns, or with a unit; overrides --ini/--hal)",
+            help=f"{what}, with its unit (e.g. 16us; overrides --ini/--hal)"
+            + ("; below 1 us is refused as a unit slip" if name == "base_period" else ""),
         )
     cfg.add_argument(
-        "--latency", metavar="J", help="worst base-thread latency (e.g. 11us) for latency_safe"
+        "--latency",
+        metavar="J",
+        help="worst base-thread latency, with its unit (e.g. 11us), for latency_safe; "
+        "below 100 ns gives a warning",
     )
 
 
@@ -122,9 +126,9 @@ def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
             if text is None:
                 continue
             option = f"--{name.replace('_', '-')}"
-            ns = time_ns(text, default_unit="ns")
+            ns = option_ns(text, option, BASE_PERIOD if name == "base_period" else None)
             if ns.denominator != 1 or ns < 0 or (name == "base_period" and ns == 0):
-                raise UsageError(f"{option} {text!r} must be a whole, positive number of ns")
+                raise UsageError(f"{option} {text}: must be a whole, positive number of ns")
             if name == "base_period":
                 cfg.base_period_ns = int(ns)
             else:
@@ -139,14 +143,23 @@ def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
 
 
 def latency_ns(args: argparse.Namespace) -> Fraction | None:
-    """``--latency`` in exact ns (None when not given)."""
+    """``--latency`` in exact ns (None when not given); read (and warned about) once, kept on
+    ``args``."""
+    if hasattr(args, "_latency_ns"):
+        cached: Fraction | None = args._latency_ns
+        return cached
     text = getattr(args, "latency", None)
-    if not text:
-        return None
-    j = parse_time(text, default_unit="ns") * 10**9
-    if j < 0:
-        raise UsageError(f"--latency must not be negative, got {text}")
+    j = None
+    if text is not None:
+        j = option_ns(text, "--latency", LATENCY, _warn)
+        if j < 0:
+            raise UsageError(f"--latency {text}: must not be negative")
+    args._latency_ns = j
     return j
+
+
+def _warn(message: str) -> None:
+    print(f"wavecheck: warning: {message}", file=sys.stderr)
 
 
 def render_text_report(report: Report, args: argparse.Namespace) -> str:

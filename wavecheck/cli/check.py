@@ -15,7 +15,11 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._capture_args import (
+    add_capture_arguments,
+    capture_from_args,
+    resolution_from_args,
+)
 from wavecheck.cli._reports import (
     add_report_arguments,
     latency_ns,
@@ -68,7 +72,8 @@ def register(sub: Any) -> None:
         action="append",
         default=[],
         metavar="ROLE=CH",
-        help="map roles to channels by name or index (step=STEP,dir=3; repeatable); channels "
+        help="map roles to channels by name, index or the end of a hierarchical name "
+        "(step=STEP,dir=3, step=s2.step; repeatable); each role and each channel once; channels "
         "named after a role (STEP, dir, stepgen.0.phase-A) are mapped by default",
     )
     p.add_argument(
@@ -139,14 +144,14 @@ def build_report(args: argparse.Namespace, path: str) -> Report:
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
     drive = load_drive(args.drive)
-    capture = capture_from_args(args, path)
+    capture = capture_from_args(args, path, resolution=False)
     return run_check(
         capture,
         drive,
         parse_map(args.map),
         args.invert,
         args.type,
-        None,  # --resolution was applied by the capture reader
+        resolution_from_args(args),  # exact, a fraction of a tick included
         forward_level=1 if args.dir_forward == "high" else 0,
         active_edge=args.active_edge,
         user_table=_user_table(args.user_step_type),

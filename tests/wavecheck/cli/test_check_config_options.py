@@ -23,13 +23,13 @@ def _rates(capsys: pytest.CaptureFixture[str], *argv: str) -> dict:
     ("argv", "config", "latency_safe"),
     [
         # seed: P = 16 us, dirhold 2 periods, J = 11 us -> 1/(2 x 16 us) = 31,250 steps/s
-        (["--base-period", "16us", "--dirhold", "32000", "--latency", "11us"], 31250, 31250),
+        (["--base-period", "16us", "--dirhold", "32000ns", "--latency", "11us"], 31250, 31250),
         # the same drive at P = 16 us but dirhold 1: hold 16 - 11 = 5 us < 20 us at any rate
         (["--base-period", "16us", "--latency", "11us"], 31250, None),
         # P = 31 us, defaults: 1/(2 x 31 us) = 16,129 steps/s
         (["--base-period", "31us", "--latency", "11us"], 1 / 62e-6, 1 / 62e-6),
         # steplen 2 periods at 20 us: 1/(3 x 20 us)
-        (["--base-period", "20000", "--steplen", "40us"], 1 / 60e-6, None),
+        (["--base-period", "20000ns", "--steplen", "40us"], 1 / 60e-6, None),
     ],
 )
 def test_config_rates_from_options(

@@ -107,8 +107,8 @@ def test_bad_files_exit_2_one_line(
 @pytest.mark.parametrize(
     ("args", "match"),
     [
-        (["--samplerate", "3 parsecs"], "--samplerate: unknown unit 'parsecs'"),
-        (["--resolution", "5 furlongs"], "--resolution: unknown unit 'furlongs'"),
+        (["--samplerate", "3 parsecs"], "--samplerate 3 parsecs: unknown unit 'parsecs'"),
+        (["--resolution", "5 furlongs"], "--resolution 5 furlongs: unknown unit 'furlongs'"),
     ],
 )
 def test_unknown_unit(
