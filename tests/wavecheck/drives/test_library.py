@@ -231,7 +231,7 @@ BAD = [
     ('status = "datasheet"', 'status = "datasheat"', "limits.step_high.status"),
     ('interface = "step-dir"', 'interface = "pwm"', "interface"),
     ('active_edge = "rising"', 'active_edge = "up"', "active_edge"),
-    ('id = "mine"', 'id = "yours"', "id"),
+    ('id = "mine"', 'id = "Mine X"', "id"),  # any valid id is fine for a file given by path
     ("[limits.step_high]", "[limits.step_hi]", "limits.step_hi"),
     (
         'source = "M"\nstatus = "datasheet"',
