@@ -14,6 +14,7 @@ COMMANDS = (
     "wavecheck.cli.drives",
     "wavecheck.cli.compare",
     "wavecheck.cli.crosscheck",
+    "wavecheck.cli.config",
 )
 
 

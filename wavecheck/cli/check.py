@@ -29,7 +29,9 @@ from wavecheck.cli._reports import (
     run_checks,
     stepgen_config,
 )
+from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
 from wavecheck.drives.library import load_drive
+from wavecheck.drives.tune import tune_drive
 from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
@@ -111,6 +113,8 @@ def register(sub: Any) -> None:
         choices=("rising", "falling", "both"),
         help="override the drive's active STEP edge",
     )
+    add_tuning_arguments(p)
+    add_firmware_arguments(p)
     add_capture_arguments(p)
     p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
@@ -143,9 +147,9 @@ def build_report(args: argparse.Namespace, path: str) -> Report:
     """Read ``path`` and the drive named in ``args`` and check it (no output)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    drive = load_drive(args.drive)
+    drive = tune_drive(load_drive(args.drive), args.limit, args.margin)
     capture = capture_from_args(args, path, resolution=False)
-    return run_check(
+    report = run_check(
         capture,
         drive,
         parse_map(args.map),
@@ -159,6 +163,9 @@ def build_report(args: argparse.Namespace, path: str) -> Report:
         pulse_level=1 if args.pulse_level == "high" else 0,
         latency_ns=latency_ns(args),
     )
+    if args.firmware:  # the capture against its own firmware configuration
+        report.firmware = check_firmware(args, report)
+    return report
 
 
 def write_outputs(args: argparse.Namespace, report: Report) -> None:

@@ -49,6 +49,8 @@ _TOP_OPTIONAL = ("notes", "step_type", "opto")
 _FIGURE_REQUIRED = ("value", "source", "status")
 _FIGURE_OPTIONAL = ("note",)
 _EDGE_REQUIRED = ("value", "source", "status")
+#: The citation key of a user file's plain string limits (``step_high = "2.5us"``).
+_USER_SOURCE = "user"
 # Sanity bounds: beyond them a figure is a typo (and would overflow float formatting).
 _MAX_LIMIT_S = 1000
 _MAX_RATE_HZ = 10**12
@@ -100,7 +102,7 @@ def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
             raise RuleError(
                 path, None, "no such rule file (give a drive id or a path to a .toml file)"
             )
-        return _load_file(path)
+        return _load_file(path, user=not _in_library(path))
     files = _rule_files()
     if text in files:
         return _load_file(files[text])
@@ -113,7 +115,19 @@ def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
 # parsing and validation
 
 
-def _load_file(path: Path) -> Drive:
+def _in_library(path: Path) -> bool:
+    try:
+        path.resolve().relative_to(rules_dir())
+    except ValueError:
+        return False
+    return True
+
+
+#: How deep ``extends`` may chain (a cycle is an error long before this).
+_MAX_EXTENDS = 8
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
     try:
         with path.open("rb") as fh:
             data = tomllib.load(fh)
@@ -125,7 +139,54 @@ def _load_file(path: Path) -> Drive:
         ) from None
     except OSError as err:
         raise RuleError(path, None, f"cannot read: {err.strerror}") from None
-    return _parse(path, data)
+    return data
+
+
+def _load_file(path: Path, user: bool = False) -> Drive:
+    data = _read_toml(path)
+    if user:
+        data = _resolve_extends(path, data, ())
+    return _parse(path, data, user=user)
+
+
+def _resolve_extends(path: Path, data: dict[str, Any], seen: tuple[Path, ...]) -> dict[str, Any]:
+    """A user file's ``extends = "ID|PATH"``: the base file's keys, the user's on top (``limits``
+    and ``sources`` merged per key); ``id`` defaults to the file name."""
+    data = dict(data)
+    base_ref = data.pop("extends", None)
+    if base_ref is None:
+        return data
+    data.setdefault("id", path.stem)
+    if not isinstance(base_ref, str) or not base_ref.strip():
+        raise RuleError(path, "extends", f"expected a drive id or a path, got {base_ref!r}")
+    if len(seen) >= _MAX_EXTENDS or path.resolve() in seen:
+        raise RuleError(path, "extends", f"{base_ref!r}: extends chain loops or is too long")
+    looks_like_path = base_ref.endswith(".toml") or "/" in base_ref or os.sep in base_ref
+    files = _rule_files()
+    if looks_like_path:
+        base_path = (path.parent / base_ref) if not Path(base_ref).is_absolute() else Path(base_ref)
+    elif base_ref in files:
+        base_path = files[base_ref]
+    else:
+        close = difflib.get_close_matches(base_ref, list(files), n=3, cutoff=0.5)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        raise RuleError(path, "extends", f"unknown drive {base_ref!r}{hint}")
+    if not base_path.is_file():
+        raise RuleError(path, "extends", f"no such rule file {str(base_path)!r}")
+    base = _read_toml(base_path)
+    base = _resolve_extends(base_path, base, (*seen, path.resolve()))
+    merged = {**base, **data}
+    for key in ("limits", "sources"):
+        if isinstance(base.get(key), dict) and isinstance(data.get(key), dict):
+            merged[key] = {**base[key], **data[key]}
+    merged["notes"] = [
+        *(base.get("notes", []) if isinstance(base.get("notes", []), list) else []),
+        f"extends {base['id'] if 'id' in base else base_ref} ({base_path})",
+        *(data.get("notes", []) if isinstance(data.get("notes", []), list) else []),
+    ]
+    if "kind" not in data:
+        merged["kind"] = "user"
+    return merged
 
 
 def _check_keys(
@@ -165,8 +226,12 @@ def _source(path: Path, key: str, value: Any, sources: dict[str, str]) -> str:
     return cite
 
 
-def _figure(path: Path, rule: str, table: Any, sources: dict[str, str]) -> Figure:
+def _figure(
+    path: Path, rule: str, table: Any, sources: dict[str, str], user: bool = False
+) -> Figure:
     where = f"limits.{rule}"
+    if user and isinstance(table, str):
+        table = {"value": table, "source": _USER_SOURCE, "status": "user"}
     if not isinstance(table, dict):
         raise RuleError(path, where, "expected a table with value, source, status")
     _check_keys(path, where + ".", table, _FIGURE_REQUIRED, _FIGURE_OPTIONAL)
@@ -220,37 +285,70 @@ def _figure(path: Path, rule: str, table: Any, sources: dict[str, str]) -> Figur
     )
 
 
-def _parse(path: Path, data: dict[str, Any]) -> Drive:
+class _Errors:
+    """Collects a rule file's errors so that a user file's are reported all at once."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.found: list[RuleError] = []
+
+    def run(self, fn: Any, *args: Any, default: Any = None) -> Any:
+        try:
+            return fn(*args)
+        except RuleError as err:
+            self.found.append(err)
+            return default
+
+    def raise_any(self) -> None:
+        if len(self.found) == 1:
+            raise self.found[0]
+        if self.found:
+            prefix = f"{self.path}: "
+            parts = "; ".join(str(e).removeprefix(prefix) for e in self.found)
+            raise RuleError(self.path, None, f"{len(self.found)} errors: {parts}")
+
+
+def _parse(path: Path, data: dict[str, Any], user: bool = False) -> Drive:
+    errors = _Errors(path)
+    if user:
+        data = dict(data)
+        if isinstance(data.get("sources"), dict) and _USER_SOURCE not in data["sources"]:
+            data["sources"] = {**data["sources"], _USER_SOURCE: f"user rule file {path}"}
     _check_keys(path, "", data, _TOP_REQUIRED, _TOP_OPTIONAL)
     drive_id = _string(path, "id", data["id"])
-    if drive_id != path.stem:
+    if drive_id != path.stem and not user:
         raise RuleError(
             path, "id", f"{drive_id!r} does not match the file name {path.stem!r} (rename one)"
         )
     if not _ID.match(drive_id):
-        raise RuleError(path, "id", f"{drive_id!r} must be lower case letters, digits and hyphens")
+        errors.found.append(
+            RuleError(path, "id", f"{drive_id!r} must be lower case letters, digits and hyphens")
+        )
 
     sources = data["sources"]
     if not isinstance(sources, dict) or not sources:
         raise RuleError(path, "sources", "expected a table of citation key = full reference")
     for key, text in sources.items():
-        _string(path, f"sources.{key}", text)
+        errors.run(_string, path, f"sources.{key}", text)
 
-    kind = _choice(path, "kind", data["kind"], KINDS)
-    interface = _choice(path, "interface", data["interface"], INTERFACES)
+    kind = errors.run(_choice, path, "kind", data["kind"], KINDS, default="user")
+    interface = errors.run(_choice, path, "interface", data["interface"], INTERFACES, default="step-dir")
 
     edge_raw = data["active_edge"]
     edge_source, edge_status, edge_note = "", None, ""
+    edge: Any = "rising"
     if isinstance(edge_raw, dict):
-        _check_keys(path, "active_edge.", edge_raw, _EDGE_REQUIRED, _FIGURE_OPTIONAL)
-        edge = _choice(path, "active_edge.value", edge_raw["value"], EDGES)
-        edge_source = _source(path, "active_edge.source", edge_raw["source"], sources)
-        edge_status = _choice(path, "active_edge.status", edge_raw["status"], STATUSES)
+        errors.run(_check_keys, path, "active_edge.", edge_raw, _EDGE_REQUIRED, _FIGURE_OPTIONAL)
+        if all(k in edge_raw for k in _EDGE_REQUIRED):
+            edge = errors.run(_choice, path, "active_edge.value", edge_raw["value"], EDGES, default="rising")
+            edge_source = errors.run(_source, path, "active_edge.source", edge_raw["source"], sources, default="")
+            edge_status = errors.run(_choice, path, "active_edge.status", edge_raw["status"], STATUSES)
         edge_note = edge_raw.get("note", "")
         if not isinstance(edge_note, str):
-            raise RuleError(path, "active_edge.note", f"expected a string, got {edge_note!r}")
+            errors.found.append(RuleError(path, "active_edge.note", f"expected a string, got {edge_note!r}"))
+            edge_note = ""
     else:
-        edge = _choice(path, "active_edge", edge_raw, EDGES)
+        edge = errors.run(_choice, path, "active_edge", edge_raw, EDGES, default="rising")
 
     limits_raw = data["limits"]
     if not isinstance(limits_raw, dict):
@@ -261,8 +359,11 @@ def _parse(path: Path, data: dict[str, Any]) -> Drive:
         if rule not in LIMIT_KEYS:
             close = difflib.get_close_matches(rule, LIMIT_KEYS, n=1)
             hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(LIMIT_KEYS)}"
-            raise RuleError(path, f"limits.{rule}", f"unknown rule ({hint})")
-        fig = _figure(path, rule, table, sources)
+            errors.found.append(RuleError(path, f"limits.{rule}", f"unknown rule ({hint})"))
+            continue
+        fig = errors.run(_figure, path, rule, table, sources, user)
+        if fig is None:
+            continue
         if rule == "max_rate":
             max_rate = fig
         else:
@@ -270,31 +371,33 @@ def _parse(path: Path, data: dict[str, Any]) -> Drive:
 
     notes = data.get("notes", [])
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
-        raise RuleError(path, "notes", "expected a list of strings")
+        errors.found.append(RuleError(path, "notes", "expected a list of strings"))
+        notes = []
     step_type = data.get("step_type")
     if step_type is not None and (
         not isinstance(step_type, int) or isinstance(step_type, bool) or not 0 <= step_type <= 15
     ):
-        raise RuleError(
+        errors.found.append(RuleError(
             path, "step_type", f"expected a LinuxCNC step type 0..15, got {step_type!r}"
-        )
+        ))
     opto = data.get("opto")
     if opto is not None and not isinstance(opto, bool):
-        raise RuleError(path, "opto", f"expected true or false, got {opto!r}")
+        errors.found.append(RuleError(path, "opto", f"expected true or false, got {opto!r}"))
+    errors.raise_any()
 
     return Drive(
         id=drive_id,
         name=_string(path, "name", data["name"]),
         path=path,
-        kind=kind,  # type: ignore[arg-type]
-        interface=interface,  # type: ignore[arg-type]
-        active_edge=edge,  # type: ignore[arg-type]
+        kind=kind,
+        interface=interface,
+        active_edge=edge,
         limits=limits,
         max_rate=max_rate,
         sources=dict(sources),
         notes=tuple(notes),
         edge_source=edge_source,
-        edge_status=edge_status,  # type: ignore[arg-type]
+        edge_status=edge_status,
         edge_note=edge_note,
         step_type=step_type,
         opto=opto,

@@ -26,7 +26,7 @@ __all__ = [
     "status_mark",
 ]
 
-Status = Literal["datasheet", "secondary", "firmware-default", "preset", "uncertain"]
+Status = Literal["datasheet", "secondary", "firmware-default", "preset", "uncertain", "user"]
 Interface = Literal["step-dir", "up-down", "phases"]
 ActiveEdge = Literal["rising", "falling", "both"]
 
@@ -51,6 +51,10 @@ class Figure:
     source: str
     status: Status
     note: str = ""
+    datasheet: Fraction | None = None
+    """The figure before ``--limit``/``--margin`` changed it (None: not changed)."""
+    applied: str = ""
+    """How it was changed (``"--margin 2x"``, ``"--limit step_high=5us"``), "" when not."""
 
     @property
     def mark(self) -> str:

@@ -15,6 +15,7 @@ up to the cap is listed one by one (the text and HTML reports group identical on
 from __future__ import annotations
 
 import json
+from fractions import Fraction
 from typing import Any
 
 from wavecheck.checks.result import RuleResult, Violation
@@ -43,7 +44,17 @@ def _rule(r: RuleResult) -> dict[str, Any]:
         "decide_samplerate_hz": json_number(r.decide_samplerate_hz),
         "limit_source": fig.source if fig else None,
         "limit_status": fig.status if fig else None,
+        # --limit / --margin: the datasheet figure beside the applied one
+        "limit_datasheet_ns": json_number(_datasheet_ns(r)),
+        "limit_applied": fig.applied if fig else "",
     }
+
+
+def _datasheet_ns(r: RuleResult) -> Fraction | None:
+    fig = r.figure
+    if fig is None or fig.datasheet is None:
+        return None
+    return Fraction(10**9) / fig.datasheet if r.rule == "step_period" else fig.datasheet
 
 
 def _violation(v: Violation) -> dict[str, Any]:
@@ -128,7 +139,17 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             **_configured(rates.configured),
         },
         "verdict": report.verdict,
+        **_firmware(report),
     }
+
+
+def _firmware(report: Report) -> dict[str, Any]:
+    """``check --firmware``: the capture against its own configuration (key absent otherwise)."""
+    if report.firmware is None:
+        return {}
+    from wavecheck.firmware.render import firmware_check_dict
+
+    return {"firmware": firmware_check_dict(report.firmware)}
 
 
 def _configured(cfg: ConfigRates | None) -> dict[str, Any]:

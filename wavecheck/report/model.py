@@ -11,6 +11,7 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from wavecheck.capture.model import Capture
 from wavecheck.checks.rates import MaxStepRates
@@ -20,6 +21,9 @@ from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.interface import StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
+
+if TYPE_CHECKING:
+    from wavecheck.firmware.capture import FirmwareCheck
 
 __all__ = ["Report", "overall_verdict"]
 
@@ -57,11 +61,15 @@ class Report:
     not_applicable: tuple[str, ...]
     rates: MaxStepRates
     notes: list[str] = field(default_factory=list)
+    firmware: FirmwareCheck | None = None
+    """``check --firmware``: the capture against its own configuration (apart from the rules)."""
 
     @property
     def verdict(self) -> Verdict:
-        """The overall verdict (see :func:`overall_verdict`)."""
-        return overall_verdict([r.verdict for r in self.rules])
+        """The overall verdict (see :func:`overall_verdict`); a capture that violates its own
+        firmware configuration (``firmware``) fails too."""
+        own = [self.firmware.verdict] if self.firmware is not None else []
+        return overall_verdict([r.verdict for r in self.rules] + own)
 
     @property
     def exit_code(self) -> int:

@@ -161,6 +161,12 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
             ]
         )
     out += _table(rows)
+    out += [
+        f"{r.rule}: limit {_ns(r.limit_ns)} applied ({r.figure.applied}); datasheet "
+        f"{_ns(r.figure.datasheet) if r.rule != 'step_period' else _ns(10**9 / r.figure.datasheet)}"
+        for r in report.rules
+        if r.figure is not None and r.figure.applied and r.figure.datasheet is not None
+    ]
     if any(_mark(r) for r in report.rules):
         out.append(f"{MARK_LEGEND}; `wavecheck drives {drive.id}` shows every figure's source")
     if report.not_stated:
@@ -189,4 +195,8 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
     out += [f"note: {note}" for note in report.notes]
     out += [f"note: {a}" for a in assumptions(report)]
     out += configured
+    if report.firmware is not None:  # check --firmware
+        from wavecheck.firmware.render import firmware_check_lines
+
+        out += ["", *firmware_check_lines(report.firmware)]
     return "\n".join(out) + "\n"

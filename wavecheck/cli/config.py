@@ -1,0 +1,159 @@
+"""``wavecheck config FILE --drive ID [--drive AXIS=ID]``: can this firmware configuration meet
+the drive? No capture needed.
+
+FILE is a grbl/grblHAL ``$$`` dump, a Klipper ``printer.cfg``, a Marlin ``Configuration.h`` (its
+``Configuration_adv.h`` is read beside it), a RepRapFirmware ``config.g``, a Smoothieware
+``config``, or a LinuxCNC INI (software stepgen or Mesa hm2 stepgen; its HALFILEs are read). The
+format is detected by content (``--firmware-format`` forces it). For every axis and every rule:
+the generator's guaranteed figure, the drive's limit, the margin, pass/fail, the max step rate the
+pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 something cannot be
+proven from the configuration (measure it), 2 unusable input.
+
+Also here: the options ``check`` shares (``--firmware``, ``--limit``, ``--margin``) and
+:func:`check_firmware`, which ``check --firmware`` runs on each report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from wavecheck.drives.library import load_drive
+from wavecheck.drives.model import Drive
+from wavecheck.drives.tune import tune_drive
+from wavecheck.errors import UsageError
+from wavecheck.firmware import FIRMWARES, read_firmware
+from wavecheck.firmware.capture import FirmwareCheck, firmware_check
+from wavecheck.firmware.evaluate import PairResult, evaluate_pair
+from wavecheck.firmware.model import FirmwareConfig
+from wavecheck.firmware.render import config_dict, config_text
+from wavecheck.output import atomic_write, output_file
+from wavecheck.units import parse_frequency, time_ns
+from wavecheck.verdict import exit_code, overall_verdict
+
+__all__ = [
+    "add_firmware_arguments",
+    "add_tuning_arguments",
+    "check_firmware",
+    "register",
+    "run",
+]
+
+
+def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
+    """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``."""
+    p.add_argument(
+        "--limit", action="append", default=[], metavar="RULE=VALUE",
+        help="override one drive figure (step_high=5us, max_rate=100kHz; repeatable); the "
+        "report shows the datasheet figure beside it",
+    )
+    p.add_argument(
+        "--margin", metavar="2x|+500ns",
+        help="tighten every datasheet figure: a factor (2x, as StepConf advises for 3.3 V "
+        "parallel ports) or an added time (+500ns); --limit figures are taken as given",
+    )
+
+
+def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = False) -> None:
+    """``--firmware FILE`` (unless ``positional``), ``--firmware-format``, ``--axis``,
+    ``--hm2-clock``; LinuxCNC's ``--latency`` comes from the stepgen options where present."""
+    if not positional:
+        p.add_argument(
+            "--firmware", metavar="FILE",
+            help="the firmware configuration that made the capture: a capture violating its "
+            "own configuration is reported apart from the drive rules",
+        )
+        p.add_argument("--axis", metavar="NAME", help="the axis of --firmware FILE captured (default: the first)")
+    p.add_argument("--firmware-format", choices=FIRMWARES, help="the firmware (default: detected from the content)")
+    p.add_argument("--hm2-clock", metavar="F", help="Mesa stepgen clock (e.g. 33MHz) for exact rounding")
+
+
+def _read(args: argparse.Namespace, path: str) -> FirmwareConfig:
+    j = getattr(args, "latency", None)
+    clock = getattr(args, "hm2_clock", None)
+    return read_firmware(
+        path,
+        args.firmware_format,
+        latency_ns=time_ns(j) if j else None,
+        clock_hz=parse_frequency(clock) if clock else None,
+    )
+
+
+def check_firmware(args: argparse.Namespace, report: Any) -> FirmwareCheck:
+    """``check --firmware``: the report's capture against the configured axis."""
+    cached = getattr(args, "_firmware_config", None)
+    cfg: FirmwareConfig = cached if cached is not None else _read(args, args.firmware)
+    args._firmware_config = cfg
+    try:
+        axis = cfg.axis(args.axis) if args.axis else cfg.axes[0]
+    except KeyError as err:
+        raise UsageError(f"--axis: {err.args[0]}") from None
+    return firmware_check(report, cfg, axis)
+
+
+def register(sub: Any) -> None:
+    """Add the ``config`` subcommand."""
+    p = sub.add_parser(
+        "config",
+        help="can a firmware configuration meet the drive? (no capture needed)",
+        description=__doc__.split("\n\n")[0] if __doc__ else None,
+    )
+    p.add_argument("file", metavar="FILE", help="the firmware configuration file")
+    p.add_argument(
+        "--drive", action="append", required=True, metavar="ID|FILE|AXIS=ID",
+        help="the drive of every axis, or AXIS=ID for one axis (repeatable)",
+    )
+    add_tuning_arguments(p)
+    add_firmware_arguments(p, positional=True)
+    p.add_argument("--latency", metavar="J", help="LinuxCNC: worst base-thread latency (e.g. 11us)")
+    p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    p.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE")
+    p.set_defaults(func=run)
+
+
+def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Drive]]:
+    default: Drive | None = None
+    per_axis: dict[str, Drive] = {}
+    names = {a.lower(): a for a in cfg.axis_names}
+    for text in args.drive:
+        axis, sep, ident = text.partition("=")
+        drive = tune_drive(load_drive(ident if sep else text), args.limit, args.margin)
+        if sep:
+            if axis.lower() not in names:
+                raise UsageError(f"--drive {text}: no axis {axis!r} in {cfg.path} (axes: {', '.join(cfg.axis_names)})")
+            per_axis[names[axis.lower()]] = drive
+        elif default is None:
+            default = drive
+        else:
+            raise UsageError("--drive: give one drive for every axis, the others as AXIS=ID")
+    out = []
+    for a in cfg.axis_names:
+        d = per_axis.get(a, default)
+        if d is not None:
+            out.append((a, d))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``wavecheck config``; returns the exit code."""
+    cfg = _read(args, args.file)
+    results: list[PairResult] = [evaluate_pair(cfg, cfg.axis(a), d) for a, d in _drives(args, cfg)]
+    if not results:
+        raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")
+    verdict = overall_verdict(r.verdict for r in results)
+    code = exit_code(verdict)
+    if args.format == "json":
+        text = json.dumps(config_dict(cfg, results, verdict, code), indent=2, ensure_ascii=False) + "\n"
+    else:
+        text = config_text(cfg, results, verdict)
+    if args.output:
+        atomic_write(args.output, text)
+        print(f"{verdict}: {len(results)} axis/drive pair(s); report written to {args.output}")
+    else:
+        sys.stdout.write(text)
+    return code
+
+
+

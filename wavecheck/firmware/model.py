@@ -1,0 +1,193 @@
+"""What a step generator guarantees on the wire, per axis, and where each figure came from.
+
+Every firmware reader (:mod:`wavecheck.firmware.grbl`, ``klipper``, ``marlin``, ``rrf``,
+``smoothie``, ``hm2``, ``linuxcnc``) turns a configuration file into one
+:class:`FirmwareConfig`: a :class:`GeneratorGuarantee` per axis, each figure a
+:class:`Guaranteed` lower bound with the setting, the file and line, and the unit it was written
+in. Times are exact ns, rates exact Hz (:class:`~fractions.Fraction`). A figure the configuration
+cannot prove is ``None`` with a note saying why ("measure it"), never a guess.
+
+Levels are the generator's *output pin*, after the firmware's own pin inversion: ``pulse`` is the
+level the firmware drives for a step (high unless inverted), ``idle`` the time between pulses.
+DIR setup and hold count from the pulse's *leading* edge (the edge the firmware writes as its
+step); :attr:`GeneratorGuarantee.dir_hold_trailing`, when known, counts from its trailing edge.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Literal
+
+from wavecheck.drives.model import ActiveEdge
+
+__all__ = [
+    "FIRMWARES",
+    "Fixer",
+    "FirmwareConfig",
+    "GStatus",
+    "GeneratorGuarantee",
+    "Guaranteed",
+    "Role",
+    "ceil_to",
+    "unknown",
+]
+
+#: Firmware names (``--firmware-format`` choices), in detection order.
+FIRMWARES: tuple[str, ...] = (
+    "grbl",
+    "klipper",
+    "marlin",
+    "reprapfirmware",
+    "smoothieware",
+    "hm2",
+    "linuxcnc",
+)
+
+Role = Literal["pulse", "idle", "dir_setup", "dir_hold", "max_rate"]
+"""A generator figure: pulse width, time between pulses, DIR setup/hold, max step rate."""
+
+GStatus = Literal["set", "default", "derived", "uncertain", "unknown"]
+"""``set`` = written in the file; ``default`` = the firmware's default (the file says nothing);
+``derived`` = computed from settings (rounding, rate → low time); ``uncertain`` = the firmware
+aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding); ``unknown`` =
+no bound can be read from the configuration."""
+
+
+@dataclass(frozen=True)
+class Guaranteed:
+    """One lower bound (upper bound for ``max_rate``) and where it comes from."""
+
+    value: Fraction | None
+    """ns (Hz for ``max_rate``); None when the configuration cannot prove any bound."""
+    setting: str
+    """The setting's own name (``$0``, ``MINIMUM_STEPPER_PULSE_NS``, ``step_pulse_duration``)."""
+    where: str
+    """``file:line``, or ``"firmware default"``."""
+    unit: str = ""
+    """The unit the setting is written in (``us``, ``ns``, ``s``, ``Hz``, ``mm/min`` …)."""
+    status: GStatus = "set"
+    note: str = ""
+
+    @property
+    def known(self) -> bool:
+        """True when a bound is known."""
+        return self.value is not None
+
+
+def unknown(setting: str, note: str, where: str = "") -> Guaranteed:
+    """A figure the configuration cannot prove (``value`` None, status ``unknown``)."""
+    return Guaranteed(None, setting, where, "", "unknown", note)
+
+
+@dataclass(frozen=True)
+class GeneratorGuarantee:
+    """What one axis's step generator guarantees at its output pins.
+
+    Attributes:
+        axis: the firmware's axis or stepper name (``X``, ``stepper_x``, ``joint 0``).
+        pulse: the minimum pulse width (ns).
+        idle: the minimum time between pulses (ns).
+        dir_setup: DIR change → the pulse's leading edge (ns).
+        dir_hold: the pulse's leading edge → a DIR change (ns).
+        max_rate: the highest step rate this axis is configured to reach (Hz).
+        pulse_level: 1 when a pulse is high at the pin, 0 when low (firmware inversion applied).
+        both_edges: every STEP edge is a step (TMC ``dedge``: Klipper, Marlin ``EDGE_STEPPING``).
+        dir_hold_trailing: DIR hold counted from the pulse's trailing edge, when known.
+        dir_inverted: the firmware inverts this axis's DIR pin (information only).
+        info: further settings read (steps/unit, max speed …), name → text with source.
+        notes: what the user should know about this axis.
+    """
+
+    axis: str
+    pulse: Guaranteed
+    idle: Guaranteed
+    dir_setup: Guaranteed
+    dir_hold: Guaranteed
+    max_rate: Guaranteed
+    pulse_level: int = 1
+    both_edges: bool = False
+    dir_hold_trailing: Guaranteed | None = None
+    dir_inverted: bool = False
+    info: Mapping[str, str] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+    @property
+    def leading_edge(self) -> ActiveEdge:
+        """The edge that starts a pulse: ``rising`` for high pulses, ``falling`` for low ones."""
+        return "rising" if self.pulse_level else "falling"
+
+    @property
+    def active_edge(self) -> ActiveEdge:
+        """The edge(s) the generator means as a step: ``both`` in both-edge mode."""
+        return "both" if self.both_edges else self.leading_edge
+
+    @property
+    def step_high(self) -> Guaranteed:
+        """The minimum high time (the pulse when pulses are high, else the idle time)."""
+        return self.pulse if self.pulse_level else self.idle
+
+    @property
+    def step_low(self) -> Guaranteed:
+        """The minimum low time."""
+        return self.idle if self.pulse_level else self.pulse
+
+    def figure(self, role: Role) -> Guaranteed:
+        """The figure of ``role``."""
+        figure: Guaranteed = getattr(self, role)
+        return figure
+
+
+Fixer = Callable[[GeneratorGuarantee, "Role", Fraction], str]
+"""(axis, role, value needed: ns, or Hz for ``max_rate``) → the setting to change, in the
+firmware's own words ("set `$0` to at least 5 us")."""
+
+
+def _no_fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    return ""
+
+
+@dataclass(frozen=True)
+class FirmwareConfig:
+    """One configuration file read: its firmware and one guarantee per axis.
+
+    Attributes:
+        firmware: one of :data:`FIRMWARES`.
+        path: the file read (the main one).
+        axes: one guarantee per axis, in the file's order.
+        files: every file read (Marlin's pair, LinuxCNC's INI and HAL files).
+        unsupported: settings the file sets that wavecheck does not model, one line each with
+            its place (named, not guessed).
+        notes: global notes (scope of settings, rounding, defaults used).
+        fixer: how to say which setting to change (see :data:`Fixer`).
+    """
+
+    firmware: str
+    path: str
+    axes: tuple[GeneratorGuarantee, ...]
+    files: tuple[str, ...] = ()
+    unsupported: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    fixer: Fixer = _no_fix
+
+    def axis(self, name: str) -> GeneratorGuarantee:
+        """The axis called ``name`` (case-insensitive; KeyError lists the axes)."""
+        for a in self.axes:
+            if a.axis.lower() == name.lower():
+                return a
+        raise KeyError(f"no axis {name!r} in {self.path} (axes: {', '.join(self.axis_names)})")
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        """The axis names, in order."""
+        return tuple(a.axis for a in self.axes)
+
+    def fix(self, axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+        """The setting to change so that ``role`` reaches ``need``."""
+        return self.fixer(axis, role, need)
+
+
+def ceil_to(value: Fraction, step: Fraction) -> Fraction:
+    """``value`` rounded up to a whole multiple of ``step``."""
+    return -(-value // step) * step

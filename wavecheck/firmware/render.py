@@ -1,0 +1,166 @@
+"""Text and JSON of ``wavecheck config`` (one shape for every firmware) and of the ``firmware``
+section of ``check --firmware``."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any
+
+from wavecheck.drives.model import Figure
+from wavecheck.firmware.capture import FirmwareCheck
+from wavecheck.firmware.evaluate import PairResult
+from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.units import format_ns, format_rate, json_number
+
+__all__ = ["config_dict", "config_text", "firmware_check_dict", "firmware_check_lines", "guaranteed_dict"]
+
+_MARK = {"uncertain": "?", "default": "*", "unknown": ""}
+
+
+def _g(fig: Guaranteed | None, rate: bool = False) -> str:
+    if fig is None or fig.value is None:
+        return "unknown"
+    text = format_rate(fig.value) if rate else format_ns(fig.value)
+    return text + _MARK.get(fig.status, "")
+
+
+def _limit(fig: Figure | None, ns: Fraction | None) -> str:
+    if ns is None:
+        return "-"
+    text = format_ns(ns) + (fig.mark if fig else "")
+    if fig is not None and fig.datasheet is not None:
+        text += f" (datasheet {format_ns(fig.datasheet)}, {fig.applied})"
+    return text
+
+
+def _axis_head(a: GeneratorGuarantee) -> str:
+    level = "high" if a.pulse_level else "low"
+    edges = "every edge is a step" if a.both_edges else f"{a.leading_edge} edge starts a pulse"
+    return f"axis {a.axis}: pulses {level} at the pin, {edges}"
+
+
+def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) -> str:
+    """The text report of ``wavecheck config``."""
+    out = [f"{cfg.firmware} configuration {cfg.path}"]
+    out += [f"  read: {f}" for f in cfg.files if f != cfg.path]
+    out += [f"  note: {n}" for n in cfg.notes]
+    out += [f"  not modelled: {u}" for u in cfg.unsupported]
+    for res in results:
+        a = res.axis
+        out += ["", f"{_axis_head(a)}; drive {res.drive.id} ({res.drive.active_edge} edge)"]
+        out += [f"  {k}: {v}" for k, v in a.info.items()]
+        rows = [["rule", "generator", "limit", "margin", "verdict", "from"]]
+        for r in res.rows:
+            rate = r.rule == "step_period"
+            gen = "-" if r.source is None else (_g(r.source, rate=True) if rate else
+                                                 (format_ns(r.guaranteed_ns) + _MARK.get(r.source.status, "")
+                                                  if r.guaranteed_ns is not None else "unknown"))
+            lim = (format_rate(r.limit.value) + r.limit.mark if r.limit else "-") if rate else _limit(r.limit, r.limit_ns)
+            where = f"{r.source.setting} ({r.source.where})" if r.source is not None and r.source.where else (r.source.setting if r.source else "")
+            rows.append([r.rule, gen, lim, format_ns(r.margin_ns, signed=True), r.verdict.upper(), where])
+        widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+        out += ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+        out.append(f"  max step rate this pair allows: {format_rate(res.max_rate_hz)}")
+        for r in res.rows:
+            if r.fix:
+                out.append(f"  fix {r.rule}: {r.fix}")
+            if r.verdict == "indeterminate" or (r.note and r.verdict != "unchecked"):
+                out.append(f"  {r.rule}: {r.note}")
+        out += [f"  note: {n}" for n in res.notes]
+    out += ["", "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
+            f"verdict: {verdict.upper()}"]
+    return "\n".join(out) + "\n"
+
+
+def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
+    """A guaranteed figure as JSON."""
+    if fig is None:
+        return None
+    return {"value": json_number(fig.value), "setting": fig.setting, "where": fig.where,
+            "unit": fig.unit, "status": fig.status, "note": fig.note}
+
+
+def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
+    return {
+        "axis": a.axis,
+        "pulse_level": a.pulse_level,
+        "active_edge": a.active_edge,
+        "both_edges": a.both_edges,
+        "dir_inverted": a.dir_inverted,
+        "step_high_ns": guaranteed_dict(a.step_high),
+        "step_low_ns": guaranteed_dict(a.step_low),
+        "pulse_ns": guaranteed_dict(a.pulse),
+        "idle_ns": guaranteed_dict(a.idle),
+        "dir_setup_ns": guaranteed_dict(a.dir_setup),
+        "dir_hold_ns": guaranteed_dict(a.dir_hold),
+        "dir_hold_trailing_ns": guaranteed_dict(a.dir_hold_trailing),
+        "max_rate_hz": guaranteed_dict(a.max_rate),
+        "info": dict(a.info),
+        "notes": list(a.notes),
+    }
+
+
+def config_dict(cfg: FirmwareConfig, results: list[PairResult], verdict: str, code: int) -> dict[str, Any]:
+    """The JSON report of ``wavecheck config``."""
+    return {
+        "firmware": cfg.firmware,
+        "path": cfg.path,
+        "files": list(cfg.files),
+        "notes": list(cfg.notes),
+        "unsupported": list(cfg.unsupported),
+        "axes": [_axis_dict(a) for a in cfg.axes],
+        "pairs": [
+            {
+                "axis": res.axis.axis,
+                "drive": res.drive.id,
+                "verdict": res.verdict,
+                "max_rate_hz": json_number(res.max_rate_hz),
+                "notes": list(res.notes),
+                "rules": [
+                    {
+                        "rule": r.rule,
+                        "generator_ns": json_number(r.guaranteed_ns),
+                        "generator": guaranteed_dict(r.source),
+                        "limit_ns": json_number(r.limit_ns),
+                        "limit_status": r.limit.status if r.limit else None,
+                        "limit_datasheet_ns": json_number(
+                            (Fraction(10**9) / r.limit.datasheet if r.rule == "step_period" else r.limit.datasheet)
+                            if r.limit is not None and r.limit.datasheet is not None else None),
+                        "margin_ns": json_number(r.margin_ns),
+                        "verdict": r.verdict,
+                        "fix": r.fix,
+                        "note": r.note,
+                    }
+                    for r in res.rows
+                ],
+            }
+            for res in results
+        ],
+        "verdict": verdict,
+        "exit_code": code,
+    }
+
+
+def firmware_check_lines(fc: FirmwareCheck) -> list[str]:
+    """The ``firmware`` section of the text report of ``check --firmware``."""
+    out = [f"firmware: {fc.firmware} {fc.path}, axis {fc.axis.axis} (apart from the drive rules): {fc.verdict.upper()}"]
+    for c in fc.comparisons:
+        out.append(f"  {c.what:<10} {c.verdict.upper():<13} {c.message}")
+    return out
+
+
+def firmware_check_dict(fc: FirmwareCheck) -> dict[str, Any]:
+    """The ``firmware`` section of the JSON report of ``check --firmware``."""
+    return {
+        "firmware": fc.firmware,
+        "path": fc.path,
+        "axis": fc.axis.axis,
+        "verdict": fc.verdict,
+        "findings": sum(c.verdict == "fail" for c in fc.comparisons),
+        "comparisons": [
+            {"what": c.what, "rule": c.rule, "configured": json_number(c.configured),
+             "measured": json_number(c.measured), "unit": c.unit, "at_s": json_number(c.at_s),
+             "setting": c.setting, "where": c.where, "verdict": c.verdict, "message": c.message}
+            for c in fc.comparisons
+        ],
+    }
