@@ -413,7 +413,7 @@ class LatencyReport:
         idx = np.minimum(((t - lo) / width).astype(np.int64), nb - 1)
         mx = np.full(nb, np.nan)
         np.fmax.at(mx, idx, self.lateness_ns)
-        return lo + np.arange(nb) * width, mx
+        return (lo + np.arange(nb) * width).astype(np.float64), mx
 
     def spikes(self) -> list[Spike]:
         """Edges far later than the bulk (above the middle between the 99th percentile and the
@@ -428,7 +428,7 @@ class LatencyReport:
             return []
         threshold = (p99 + top) / 2
         thr_num = threshold / self.tick_ns * self.lateness_den
-        hits = np.flatnonzero(self.lateness_num >= thr_num)
+        hits = np.flatnonzero(self.lateness_num >= math.ceil(thr_num))
         gap = 16 * self.fit.period
         out: list[Spike] = []
         start = 0
@@ -561,7 +561,7 @@ def _choose(times: Ints, fits: list[LatticeFit], res_ticks: int) -> LatticeFit:
             continue
         _, lat = _lateness(times, big)
         b = big.period.denominator
-        on_time = lat[lat * 2 < best.period * b]
+        on_time = lat[lat * 2 < math.ceil(best.period * b)]
         rank = max(1, math.ceil(0.99 * len(on_time)))
         spread0 = Fraction(int(np.partition(on_time, rank - 1)[rank - 1]), b)
         if best.p99 > spread0 + res_ticks:

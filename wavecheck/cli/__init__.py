@@ -1,4 +1,4 @@
-"""The ``wavecheck`` command: info, check, drives, compare, crosscheck."""
+"""The ``wavecheck`` command: info, check, drives, compare, crosscheck, latency."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ COMMANDS = (
     "wavecheck.cli.drives",
     "wavecheck.cli.compare",
     "wavecheck.cli.crosscheck",
+    "wavecheck.cli.latency",
 )
 
 
