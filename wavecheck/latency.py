@@ -29,7 +29,7 @@ which m lie within an arc of a fraction f of P, the chance of that is about
 ``trials · n · f^(m − 1)`` (trials: the periods one could have tried, span × 10). The capture is
 lattice-timed only if that chance is below 10⁻⁶, f ≤ 3/4 (the 99th percentile lateness plus one
 sample within three quarters of a period: beyond that lateness cannot be told from the next
-invocation), P ≥ 1 µs and ≥ 8 samples, and there are at least :data:`MIN_EDGES` edges.
+invocation), P ≥ 5 µs (latency-histogram's shortest --base) and ≥ 8 samples, and there are at least :data:`MIN_EDGES` edges.
 
 Limits stated in every report: every edge is seen up to one sample period late (T), and the
 phase comes from an edge too, so every lateness is exact to ± T. Lateness of P or more (a
@@ -68,7 +68,7 @@ MAX_ARC_FRACTION = 0.75
 #: Largest chance (log10) that hardware-timed edges fit the lattice as well.
 MAX_LOG10_CHANCE = -6.0
 #: Shortest base period considered (ns), and in samples.
-MIN_PERIOD_NS = 1000
+MIN_PERIOD_NS = 5000  # latency-histogram refuses a --base below 5 us
 MIN_PERIOD_SAMPLES = 8
 
 Ints = npt.NDArray[np.int64]
@@ -672,7 +672,8 @@ def analyse_times(
     report.channel_mask = mask
     report.lattice = not bad
     report.reason = "edges lie on a periodic lattice: a software base thread" if not bad else bad[0]
-    if given and fit.envelope_period != fit.period:
+    drift_ticks = abs(fit.envelope_period - fit.period) * fit.span_periods
+    if given and drift_ticks > max(res_ticks, 1) + fit.p99:  # a drift beyond the lateness spread
         drift = float((fit.envelope_period - fit.period) / fit.period) * 1e6
         report.notes.append(
             f"the edges' own lower envelope has a period of {float(fit.envelope_period * tick_ns):.9g} ns "
