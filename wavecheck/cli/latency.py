@@ -160,7 +160,10 @@ def render_text(r: LatencyReport, source: str = "") -> str:
                 f"    {float(s.time_ns) * 1e-9:.9g} s  {_ns(s.lateness_ns)}  {', '.join(s.channels)}"
             )
         if len(spikes) >= 2:
-            gaps = [float(b.time_ns - a.time_ns) * 1e-9 for a, b in zip(spikes, spikes[1:], strict=False)]
+            gaps = [
+                float(b.time_ns - a.time_ns) * 1e-9
+                for a, b in zip(spikes, spikes[1:], strict=False)
+            ]
             lines.append(f"    every {sorted(gaps)[len(gaps) // 2]:.6g} s (median spacing)")
     width, counts = r.histogram()
     lines.append(f"  histogram (bin {_ns(width)}):")
