@@ -69,3 +69,14 @@ def test_pytest_blocks(pytester: pytest.Pytester) -> None:
     assert "wavecheck.toml::g202-p20::dir_hold PASSED" in out
     assert "test_g202_at_20us_breaks_dir_hold PASSED" in out
     result.assert_outcomes(passed=7)  # verdict + 5 rules + the fixture test
+
+
+def test_latency_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The latency section's commands run as written (issue 17)."""
+    from stepgen.cli import main as stepgen_main
+
+    monkeypatch.chdir(tmp_path)
+    for line in _block("latency").strip().splitlines():
+        argv = shlex.split(line)
+        tool = main if argv[0] == "wavecheck" else stepgen_main
+        assert tool(argv[1:]) == 0, line

@@ -21,7 +21,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from stepgen.latencyfiles import read_latency_file
+from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_capture_latency, read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
 from wavecheck.errors import UsageError, WavecheckError
@@ -50,10 +50,16 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--latency",
-        required=True,
         metavar="J|FILE",
         help="worst latency with its unit (e.g. 11us; below 100 ns gives a warning), or a "
-        "cyclictest / latency-histogram --nox / ~/.latency file",
+        "cyclictest / latency-histogram --nox / ~/.latency file, or a capture (.sr/.vcd) of the "
+        "step pins (see --latency-from)",
+    )
+    p.add_argument(
+        "--latency-from",
+        metavar="CAPTURE",
+        help="a capture of the running machine's step pins: the worst base-thread lateness read "
+        "from it (wavecheck latency) plus one sample period",
     )
     p.add_argument(
         "--cyclictest-nsecs",
@@ -116,9 +122,13 @@ def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction,
     if not path.exists():
         raise UsageError(
             f"--latency {shorten(text)!r} is neither a time such as '11us' nor an existing file "
-            "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file)"
+            "(give the worst latency, or a cyclictest / latency-histogram / ~/.latency file, or a "
+            "capture)"
         )
-    worst_ns, description = read_latency_file(path, cyclictest_unit=cyclictest_unit)
+    if path.suffix.lower() in CAPTURE_SUFFIXES:
+        worst_ns, description = read_capture_latency(path)
+    else:
+        worst_ns, description = read_latency_file(path, cyclictest_unit=cyclictest_unit)
     return Fraction(worst_ns), description
 
 
@@ -128,7 +138,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.channel < 0 or args.channel > 15:
         raise UsageError(f"--channel {args.channel}: stepgen has channels 0..15")
-    latency, source = parse_latency_arg(args.latency, "ns" if args.cyclictest_nsecs else "us")
+    if (args.latency is None) == (args.latency_from is None):
+        raise UsageError("give --latency J|FILE or --latency-from CAPTURE (one of them)")
+    if args.latency_from is not None:
+        worst_ns, source = read_capture_latency(args.latency_from)
+        latency = Fraction(worst_ns)
+    else:
+        latency, source = parse_latency_arg(args.latency, "ns" if args.cyclictest_nsecs else "us")
     period = None
     if args.base_period is not None:
         period, _ = parse_time_arg(args.base_period, "--base-period", BASE_PERIOD)

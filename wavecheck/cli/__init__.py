@@ -1,4 +1,4 @@
-"""The ``wavecheck`` command: info, check, drives, compare, crosscheck."""
+"""The ``wavecheck`` command: info, check, drives, compare, crosscheck, latency."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ COMMANDS = (
     "wavecheck.cli.compare",
     "wavecheck.cli.crosscheck",
     "wavecheck.cli.config",
+    "wavecheck.cli.latency",
 )
 
 
