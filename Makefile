@@ -82,6 +82,7 @@ golden: setup
 
 golden-check: setup
 	$(PY) -m tools.golden --check
+	$(PY) -m tools.examples --check
 
 story: setup
 	$(PY) -m tools.story

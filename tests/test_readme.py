@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
 import shutil
@@ -53,6 +54,16 @@ def test_cli_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     root = ET.parse(workdir / "junit.xml").getroot()
     assert len(root.findall("testsuite")) == len(list((workdir / "captures/golden").glob("g202-*.vcd")))
     assert root.get("errors") == "0"
+
+
+def test_axes_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Two axes, x failing dir_hold (the 20 us story trace) and y passing (the 16 us plan)."""
+    shutil.copytree(REPO / "captures" / "examples", workdir / "captures" / "examples")
+    codes = [main(shlex.split(line)[1:]) for line in _block("axes").replace("\\\n", " ").strip().splitlines()]
+    out = capsys.readouterr().out
+    assert codes == [1, 1] and "== axis x ==" in out and "== axis y ==" in out
+    data = json.loads((workdir / "machine.json").read_text())
+    assert {a["name"]: a["verdict"] for a in data["axes"]} == {"x": "fail", "y": "pass"}
 
 
 def test_python_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -115,6 +115,7 @@ def run_check(
     stepgen: LinuxCNCConfig | None = None,
     latency_ns: Fraction | None = None,
     pulse_level: int = 1,
+    axis: str | None = None,
 ) -> Report:
     """Check ``capture`` against ``drive``.
 
@@ -135,6 +136,7 @@ def run_check(
             ``latency_safe`` step rates; the STEP pin counts as inverted between stepgen and the
             drive when ``invert`` holds ``step``.
         latency_ns: the worst base-thread latency ``J`` for ``latency_safe`` (ns).
+        axis: the axis name in a run of several axes (kept on the report).
         pulse_level: the level of the generator's step pulses at its output (1 high, as LinuxCNC,
             grbl, Marlin, Klipper and Smoothieware make them by default; 0 low); with ``invert``
             the drive sees the other level.
@@ -207,4 +209,5 @@ def run_check(
         not_applicable=ruleset.not_applicable,
         rates=rates,
         notes=notes,
+        axis=axis,
     )

@@ -20,6 +20,7 @@ __all__ = [
     "find_channel",
     "mapped_channel_names",
     "parse_map",
+    "role_name",
 ]
 
 ROLES: tuple[str, ...] = (
@@ -37,7 +38,8 @@ ROLES: tuple[str, ...] = (
 _ROLE_BY_KEY = {r.lower().replace("_", "-"): r for r in ROLES}
 
 
-def _role(name: str) -> str:
+def role_name(name: str) -> str:
+    """The role ``name`` means (``STEP``, ``Phase_a``, ``a`` → ``step``, ``phase-A``, ``phase-A``)."""
     key = name.strip().lower().replace("_", "-")
     if key in _ROLE_BY_KEY:
         return _ROLE_BY_KEY[key]
@@ -75,12 +77,12 @@ def parse_map(items: Iterable[str], option: str = "--map") -> dict[str, str]:
             role_text, channel = part.split("=", 1)
             if not channel:
                 raise UsageError(f"{option} {part!r} names no channel (e.g. {option} step=STEP)")
-            role = _role(role_text)
+            role = role_name(role_text)
             if role in mapping:
                 raise UsageError(
                     f"{option}: role {role} is mapped twice ({written[role]} and {part.strip()}); "
-                    "one check takes one channel per role (several axes are not supported yet: "
-                    "check each axis on its own)"
+                    "one axis takes one channel per role (several axes are named: "
+                    f"{option} x.step=5,x.dir=6 {option} y.step=3,y.dir=4)"
                 )
             for other, ch in mapping.items():
                 if ch.strip() == channel.strip():
@@ -214,7 +216,7 @@ def build_interface(
             :func:`find_channel`), one channel mapped to two roles, an inverted role that is
             not mapped, or a mapped channel that goes ``x``/``z`` in the middle of the capture.
     """
-    inverted = {_role(r) for r in invert}
+    inverted = {role_name(r) for r in invert}
     for role in inverted:
         if role not in mapping:
             raise UsageError(

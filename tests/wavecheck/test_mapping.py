@@ -35,7 +35,7 @@ def test_parse_map_refuses_repeats(items: list[str], words: list[str]) -> None:
         parse_map(items)
     for word in words:
         assert word in str(info.value)
-    assert "not supported yet" in str(info.value) or "one channel can have one role" in str(
+    assert "several axes are named" in str(info.value) or "one channel can have one role" in str(
         info.value
     )
 

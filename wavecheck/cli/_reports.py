@@ -32,6 +32,7 @@ from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
+from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
 from wavecheck.units import BASE_PERIOD, LATENCY, format_time, option_ns
@@ -162,32 +163,52 @@ def _warn(message: str) -> None:
     print(f"wavecheck: warning: {message}", file=sys.stderr)
 
 
-def render_text_report(report: Report, args: argparse.Namespace) -> str:
+Checked = Report | MachineReport
+"""What one capture gives: a report, or one per axis."""
+
+
+def axis_reports(checked: Checked) -> list[Report]:
+    """The reports of ``checked``: its axes, or itself."""
+    return checked.axes if isinstance(checked, MachineReport) else [checked]
+
+
+def render_text_report(report: Checked, args: argparse.Namespace) -> str:
     """The text report (``--max-violations`` listed)."""
     cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
+    if isinstance(report, MachineReport):
+        return render_machine_text(report, cap)
     return render_text(report, cap)
 
 
-def _dict(report: Report, args: argparse.Namespace) -> dict[str, Any]:
+def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
     cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
+    if isinstance(report, MachineReport):
+        return machine_dict(report, cap)
     return report_dict(report, cap)
 
 
-def render_json_report(report: Report, args: argparse.Namespace) -> str:
+def render_json_report(report: Checked, args: argparse.Namespace) -> str:
     """The JSON report (``--max-violations`` listed)."""
     return json.dumps(_dict(report, args), indent=2, ensure_ascii=False) + "\n"
 
 
-def render_junit_report(report: Report, args: argparse.Namespace) -> str:
-    """JUnit XML of one report."""
+def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
+    """JUnit XML of one capture (a testsuite per axis)."""
     from wavecheck.report.junit import render_junit
 
-    return render_junit([report])
+    return render_junit(axis_reports(report))
 
 
 # -- several captures --------------------------------------------------------------------------------
-def summary_line(report: Report) -> str:
-    """One line: verdict, capture, violations, steps and the worst rule."""
+def summary_line(checked: Checked) -> str:
+    """One line: verdict, capture, violations, steps (per axis) and the worst rule."""
+    if isinstance(checked, MachineReport):
+        steps = ", ".join(f"{r.axis} {r.steps.count}" for r in checked.axes)
+        return (
+            f"{checked.verdict.upper():<13} {checked.capture.path}: {checked.total_violations} "
+            f"violation(s), steps {steps}"
+        )
+    report = checked
     worst = ""
     margins = [(r.min_margin_ns, r.rule) for r in report.rules if r.min_margin_ns is not None]
     if margins:
@@ -201,18 +222,25 @@ def summary_line(report: Report) -> str:
 
 
 def _per_capture(path: str, capture: str, index: int, stems: dict[str, int]) -> str:
-    """``out.png`` → ``out-<capture stem>.png`` (a number added when stems repeat)."""
+    """``out.png`` → ``out-<capture stem>.png`` (a number added when stems repeat); ``capture``
+    may end in ``#AXIS`` for one axis of several (``out-<stem>-<axis>.png``)."""
     p = Path(path)
-    stem = Path(capture).stem
+    capture, _, axis = capture.partition("#")
+    stem = Path(capture).stem + (f"-{axis}" if axis else "")
     n = stems.get(stem, 0)
     stems[stem] = n + 1
     tag = stem if n == 0 else f"{stem}-{n + 1}"
     return str(p.with_name(f"{p.stem}-{tag}{p.suffix}"))
 
 
+def _tagged(r: Report) -> str:
+    return r.capture.path if r.axis is None else f"{r.capture.path}#{r.axis}"
+
+
 def _side_outputs(
-    args: argparse.Namespace, reports: list[Report], errors: list[tuple[str, str]]
+    args: argparse.Namespace, checked: list[Checked], errors: list[tuple[str, str]]
 ) -> None:
+    reports = [r for c in checked for r in axis_reports(c)]
     several = len(reports) + len(errors) > 1
     stems: dict[str, int] = {}
     gstems: dict[str, int] = {}
@@ -222,14 +250,14 @@ def _side_outputs(
         if args.plot:
             from wavecheck.report.plot import render_png
 
-            target = _per_capture(args.plot, r.capture.path, k, stems) if several else args.plot
+            target = _per_capture(args.plot, _tagged(r), k, stems) if several else args.plot
             png = render_png(r)
             atomic_write(target, png)
         pngs.append(png)  # rendered once, embedded in the HTML page too
         if args.gtkw:
             from wavecheck.report.gtkw import write_gtkw
 
-            target = _per_capture(args.gtkw, r.capture.path, k, gstems) if several else args.gtkw
+            target = _per_capture(args.gtkw, _tagged(r), k, gstems) if several else args.gtkw
             write_gtkw(r, target)
     if args.html:
         from wavecheck.report.html import write_html
@@ -247,8 +275,8 @@ def _side_outputs(
 
 def run_checks(
     args: argparse.Namespace,
-    build_report: Callable[[argparse.Namespace, str], Report],
-    write_outputs: Callable[[argparse.Namespace, Report], None],
+    build_report: Callable[[argparse.Namespace, str], Checked],
+    write_outputs: Callable[[argparse.Namespace, Checked], None],
 ) -> int:
     """Check every capture of ``args.capture`` and write every requested output.
 
@@ -265,7 +293,7 @@ def run_checks(
         write_outputs(args, report)
         _side_outputs(args, [report], [])
         return report.exit_code
-    reports: list[Report] = []
+    reports: list[Checked] = []
     errors: list[tuple[str, str]] = []
     codes: list[int] = []
     for path in paths:
@@ -284,7 +312,7 @@ def run_checks(
 
 
 def _write_many(
-    args: argparse.Namespace, reports: list[Report], errors: list[tuple[str, str]], code: int
+    args: argparse.Namespace, reports: list[Checked], errors: list[tuple[str, str]], code: int
 ) -> None:
     summary = [summary_line(r) for r in reports] + [
         f"{'ERROR':<13} {e if e.startswith(p) else f'{p}: {e}'}" for p, e in errors
@@ -309,7 +337,9 @@ def _write_many(
     elif args.format == "junit":
         from wavecheck.report.junit import Unreadable, render_junit
 
-        text = render_junit(reports, [Unreadable(p, e) for p, e in errors])
+        text = render_junit(
+            [r for c in reports for r in axis_reports(c)], [Unreadable(p, e) for p, e in errors]
+        )
     else:
         parts = [f"== {r.capture.path} ==\n{render_text_report(r, args)}" for r in reports]
         text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"

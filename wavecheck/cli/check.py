@@ -15,13 +15,17 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
+from wavecheck.capture.model import Capture
 from wavecheck.cli._capture_args import (
     add_capture_arguments,
     capture_from_args,
     resolution_from_args,
 )
 from wavecheck.cli._reports import (
+    Checked,
     add_report_arguments,
+    axis_reports,
     latency_ns,
     render_json_report,
     render_junit_report,
@@ -31,19 +35,19 @@ from wavecheck.cli._reports import (
 )
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
 from wavecheck.drives.library import load_drive
+from wavecheck.drives.model import Drive
 from wavecheck.drives.tune import tune_drive
 from wavecheck.engine import run_check
 from wavecheck.errors import UsageError
-from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
-from wavecheck.report.model import Report
+from wavecheck.report.machine import MachineReport, common_timer
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
 
 #: ``--format`` name → renderer(report, args) → text.
-RENDERERS: dict[str, Callable[[Report, argparse.Namespace], str]] = {
+RENDERERS: dict[str, Callable[[Checked, argparse.Namespace], str]] = {
     # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
     "text": render_text_report,
     "json": render_json_report,
@@ -67,26 +71,37 @@ def register(sub: Any) -> None:
         "patterns ('runs/*.sr') give a summary line each and the worst exit code",
     )
     p.add_argument(
-        "--drive", required=True, metavar="ID|FILE", help="drive id from rules/ or a TOML file"
+        "--drive",
+        action="append",
+        required=True,
+        metavar="ID|FILE|AXIS=ID",
+        help="drive id from rules/ or a TOML file; AXIS=ID gives one axis its own drive "
+        "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542)",
     )
     p.add_argument(
         "--map",
         action="append",
         default=[],
-        metavar="ROLE=CH",
+        metavar="[AXIS.]ROLE=CH",
         help="map roles to channels by name, index or the end of a hierarchical name "
-        "(step=STEP,dir=3, step=s2.step; repeatable); each role and each channel once; channels "
-        "named after a role (STEP, dir, stepgen.0.phase-A) are mapped by default",
+        "(step=STEP,dir=3, step=s2.step; repeatable); each role and each channel once; several "
+        "axes: --map x.step=5,x.dir=6 --map y.step=3,y.dir=4 (a role without an axis, e.g. "
+        "enable=EN, is shared). Without --map, channels are mapped from their waveforms when "
+        "that is unambiguous (see wavecheck info)",
     )
     p.add_argument(
-        "--invert", action="append", default=[], metavar="ROLE", help="invert a role (repeatable)"
+        "--invert",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE",
+        help="invert a role (repeatable; x.step for one axis)",
     )
     p.add_argument(
         "--type",
-        type=int,
+        action="append",
         default=None,
-        metavar="N",
-        help="LinuxCNC step type 0..15 (default: the drive's; 0 step/dir)",
+        metavar="N|AXIS=N",
+        help="LinuxCNC step type 0..15 (default: the drive's; 0 step/dir); AXIS=N for one axis",
     )
     p.add_argument(
         "--user-step-type",
@@ -95,10 +110,11 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--dir-forward",
-        choices=("low", "high"),
-        default="low",
+        action="append",
+        default=None,
+        metavar="low|high|AXIS=low|high",
         help="DIR level that means forward (default low: LinuxCNC and grbl drive DIR high for "
-        "negative moves)",
+        "negative moves); AXIS=high for one axis",
     )
     p.add_argument(
         "--pulse-level",
@@ -143,38 +159,102 @@ def _user_table(text: str | None) -> tuple[int, ...] | None:
         ) from None
 
 
-def build_report(args: argparse.Namespace, path: str) -> Report:
-    """Read ``path`` and the drive named in ``args`` and check it (no output)."""
+def _int_option(text: str, option: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise UsageError(f"{option} {text!r} is not a whole number (e.g. {option} 2)") from None
+
+
+def _forward(text: str) -> int:
+    if text not in ("low", "high"):
+        raise UsageError(f"--dir-forward {text!r}: give low or high")
+    return 1 if text == "high" else 0
+
+
+def _axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
+    """The axes of the run and a note on how they were found.
+
+    ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
+    ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
+    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
+    lists the candidates and the ``--map`` line to copy.
+    """
+    if args.map:
+        return parse_axes(args.map), []
+    if any(c.name.rsplit(".", 1)[-1].strip().lower() in ("step", "up", "phase-a") for c in capture.channels):
+        return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
+    from wavecheck.roles import propose
+
+    proposal = propose(capture)
+    if not proposal.unambiguous:
+        conflicts = "; ".join(
+            f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous
+        ) or "no STEP, UP/DOWN or phase channel found"
+        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
+            f"give --map{hint}"
+        )
+    single = len(proposal.axes) == 1
+    axes = [
+        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
+        for a in proposal.axes
+    ]
+    return axes, [f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}".rstrip()]
+
+
+def build_report(args: argparse.Namespace, path: str) -> Checked:
+    """Read ``path`` once and check every axis of ``args`` against its drive (no output)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    drive = tune_drive(load_drive(args.drive), args.limit, args.margin)
     capture = capture_from_args(args, path, resolution=False)
-    report = run_check(
-        capture,
-        drive,
-        parse_map(args.map),
-        args.invert,
-        args.type,
-        resolution_from_args(args),  # exact, a fraction of a tick included
-        forward_level=1 if args.dir_forward == "high" else 0,
-        active_edge=args.active_edge,
-        user_table=_user_table(args.user_step_type),
-        stepgen=stepgen_config(args),
-        pulse_level=1 if args.pulse_level == "high" else 0,
-        latency_ns=latency_ns(args),
-    )
-    if args.firmware:  # the capture against its own firmware configuration
-        report.firmware = check_firmware(args, report)
-    return report
+    axes, found = _axes_of(args, capture)
+    names = [a.name for a in axes]
+    drives = per_axis(args.drive, "--drive", names)
+    types = per_axis(args.type, "--type", names)
+    forward = per_axis(args.dir_forward, "--dir-forward", names)
+    inverts = split_invert(args.invert, names)
+    loaded: dict[str, Drive] = {}
+    reports = []
+    for axis in axes:
+        if axis.name not in drives:
+            raise UsageError(f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)")
+        ref = drives[axis.name]
+        if ref not in loaded:
+            loaded[ref] = tune_drive(load_drive(ref), args.limit, args.margin)
+        report = run_check(
+            capture,
+            loaded[ref],
+            axis.roles,
+            [*inverts[axis.name], *axis.invert],
+            _int_option(types[axis.name], "--type") if axis.name in types else axis.step_type,
+            resolution_from_args(args),  # exact, a fraction of a tick included
+            forward_level=_forward(forward.get(axis.name, "low")),
+            active_edge=args.active_edge,
+            user_table=_user_table(args.user_step_type),
+            stepgen=stepgen_config(args),
+            pulse_level=1 if args.pulse_level == "high" else 0,
+            latency_ns=latency_ns(args),
+            axis=axis.name,
+        )
+        if args.firmware:  # the capture against its own firmware configuration
+            report.firmware = check_firmware(args, report)
+        report.notes[:0] = found
+        reports.append(report)
+    if len(reports) == 1 and reports[0].axis is None:
+        return reports[0]
+    return MachineReport(capture, reports, [common_timer(reports)])
 
 
-def write_outputs(args: argparse.Namespace, report: Report) -> None:
+def write_outputs(args: argparse.Namespace, report: Checked) -> None:
     """Render ``report`` in ``--format`` to ``-o`` FILE (a one-line summary on stdout) or stdout."""
     text = RENDERERS[args.format](report, args)
     if args.output:
         atomic_write(args.output, text)
+        steps = sum(r.steps.count for r in axis_reports(report))
         print(
-            f"{report.verdict}: {report.total_violations} violation(s), {report.steps.count} steps; "
+            f"{report.verdict}: {report.total_violations} violation(s), {steps} steps; "
             f"report written to {args.output}"
         )
     else:

@@ -201,7 +201,9 @@ def _section(
     edge_mark = report.drive.edge_mark if report.active_edge == report.drive.active_edge else ""
     parts = [
         f'<section class="capture" id="capture-{index}" data-verdict="{_e(report.verdict)}">',
-        f"<h2>{_badge(report.verdict)} {_e(cap.path)}</h2>",
+        f"<h2>{_badge(report.verdict)} {_e(cap.path)}"
+        + (f" — axis {_e(report.axis)}" if report.axis is not None else "")
+        + "</h2>",
         "<dl>",
         f"<dt>drive</dt><dd>{_e(report.drive.id)} — {_e(report.drive.name)} "
         f"(steps on the {_e(report.active_edge)}{_e(edge_mark)} edge)</dd>",

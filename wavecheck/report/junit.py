@@ -47,6 +47,11 @@ def classname(path: str) -> str:
     return str(p.with_suffix("")) if p.suffix else str(p)
 
 
+def _classname(report: Report) -> str:
+    """:func:`classname`, with ``.AXIS`` for one axis of several."""
+    return classname(report.capture.path) + (f".{report.axis}" if report.axis is not None else "")
+
+
 def _describe(v: Violation) -> str:
     if v.margin_ns is None:
         return f"{v.rule} at {float(v.time_s):.9f} s: {v.detail or 'state sequence error'}"
@@ -59,7 +64,7 @@ def _describe(v: Violation) -> str:
 
 def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
     case = ET.SubElement(
-        suite, "testcase", classname=classname(report.capture.path), name=r.rule, time="0"
+        suite, "testcase", classname=_classname(report), name=r.rule, time="0"
     )
     if r.verdict == "fail":
         worst = r.worst_violations(_LISTED)
@@ -98,7 +103,8 @@ def _rate_properties(report: Report) -> list[tuple[str, str]]:
 
 
 def _suite(root: ET.Element, report: Report) -> None:
-    suite = ET.SubElement(root, "testsuite", name=report.capture.path)
+    name = report.capture.path + (f" [axis {report.axis}]" if report.axis is not None else "")
+    suite = ET.SubElement(root, "testsuite", name=name)
     props = ET.SubElement(suite, "properties")
     for key, value in (
         ("drive", report.drive.id),
@@ -113,14 +119,14 @@ def _suite(root: ET.Element, report: Report) -> None:
         counts[_testcase(suite, report, r)] += 1
     for rule in report.not_stated:
         case = ET.SubElement(
-            suite, "testcase", classname=classname(report.capture.path), name=rule, time="0"
+            suite, "testcase", classname=_classname(report), name=rule, time="0"
         )
         ET.SubElement(case, "skipped", message=f"drive {report.drive.id} states no {rule} limit")
         counts["skipped"] += 1
     if report.verdict == "unchecked":
         # Nothing could be checked: the command exits 3, so the suite must not read as green.
         case = ET.SubElement(
-            suite, "testcase", classname=classname(report.capture.path), name="verdict", time="0"
+            suite, "testcase", classname=_classname(report), name="verdict", time="0"
         )
         ET.SubElement(
             case,

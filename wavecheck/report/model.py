@@ -62,6 +62,8 @@ class Report:
     rates: MaxStepRates
     notes: list[str] = field(default_factory=list)
     firmware: FirmwareCheck | None = None
+    axis: str | None = None
+    """The axis name in a run of several axes (``--map x.step=…``), None for a single axis."""
     """``check --firmware``: the capture against its own configuration (apart from the rules)."""
 
     @property

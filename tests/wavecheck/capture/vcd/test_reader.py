@@ -419,7 +419,7 @@ def test_utf8_names_are_decoded(tmp_path: Path) -> None:
 
 def test_header_parsing_is_linear(tmp_path: Path) -> None:
     """20,000 ``$var`` lines parse in about a tenth of the time of 200,000 (the old parser
-    recounted lines from the start for each: quadratic). Ratio of best-of-3 times, bounded
+    recounted lines from the start for each: quadratic). Ratio of best-of-5 times, bounded
     loosely so a loaded machine does not fail it; quadratic would be ~100×."""
     import time
 
@@ -437,7 +437,7 @@ def test_header_parsing_is_linear(tmp_path: Path) -> None:
     small, big = vcd_many_vars(10_000), vcd_many_vars(100_000)
     assert len(parse_header(tmp_path, big).vars) == 100_002
     ratio = best(big) / best(small)
-    assert ratio < 30, f"10× the $var lines took {ratio:.0f}× the time"
+    assert ratio < 50, f"10× the $var lines took {ratio:.0f}× the time (quadratic: ~100×)"
 
 
 @pytest.mark.parametrize(
