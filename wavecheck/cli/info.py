@@ -7,6 +7,10 @@ also ``path``, ``tick_ns``, ``notes``, ``samples`` (the window in ticks) and ``t
 A capture that states no sample rate (a ``.sr`` without one, and no ``--samplerate``) is still
 listed: channels and edge counts in samples, with ``tick_ns``, ``resolution_ns`` and
 ``duration_s`` null and a note that times need ``--samplerate``.
+
+``roles`` is the channel roles proposed from the waveforms (:func:`wavecheck.roles.propose`): the
+axes with each role's channel and the evidence that decided it, shared lines, unassigned channels
+with why, the ambiguities, and the ``--map`` line to copy (``map_args``).
 """
 
 from __future__ import annotations
@@ -14,12 +18,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from fractions import Fraction
 from typing import Any
 
 from wavecheck.capture.model import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.units import format_frequency, format_time
+from wavecheck.units import format_frequency, format_time, json_number
 
 __all__ = ["info_dict", "info_text", "register", "run"]
 
@@ -37,19 +40,15 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _number(value: Fraction) -> int | float:
-    return int(value) if value.denominator == 1 else float(value)
-
-
 def info_dict(cap: Capture) -> dict[str, Any]:
     """The JSON form of ``wavecheck info``."""
     timed = cap.time_known
     return {
         "path": cap.path,
         "format": cap.format,
-        "samplerate_hz": None if cap.samplerate_hz is None else _number(cap.samplerate_hz),
-        "tick_ns": _number(cap.timebase.tick_ns) if timed else None,
-        "resolution_ns": _number(cap.resolution_ns) if timed else None,
+        "samplerate_hz": None if cap.samplerate_hz is None else json_number(cap.samplerate_hz),
+        "tick_ns": json_number(cap.timebase.tick_ns) if timed else None,
+        "resolution_ns": json_number(cap.resolution_ns) if timed else None,
         "duration_s": float(cap.duration_s) if timed else None,
         "samples": cap.end - cap.start,
         "time_known": timed,
@@ -116,10 +115,21 @@ def info_text(cap: Capture) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``wavecheck info``: the capture, then the roles its waveforms suggest."""
+    from wavecheck.roles import propose
+
     cap = capture_from_args(args, args.capture, require_time=False)
+    proposal = propose(cap) if cap.time_known else None
     if args.format == "json":
-        json.dump(info_dict(cap), sys.stdout, indent=2)
+        data = info_dict(cap)
+        if proposal is not None:
+            data["roles"] = {**proposal.as_dict(), "map_args": proposal.map_args()}
+        json.dump(data, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         print(info_text(cap))
+        if proposal is not None:
+            print()
+            print("proposed roles (from the waveforms; names only help):")
+            print(proposal.text().rstrip("\n"))
     return 0

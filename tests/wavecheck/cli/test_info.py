@@ -157,3 +157,18 @@ def test_missing_channel_in_map(grbl_sr: Path) -> None:
     with pytest.raises(UsageError, match=r"grbl_cnc_1.sr: no channel 'DIR' \(channels: 0='EN'"):
         build_interface(cap, {"step": "STEP (Y axis)", "dir": "DIR"})
     assert build_interface(cap, {"step": "1"}).require("step").channel == "STEP (Y axis)"
+
+
+def test_info_proposes_roles_with_evidence(grbl_sr, smoothie_sr, capsys) -> None:  # type: ignore[no-untyped-def]
+    """Issue 13: info proposes roles from the waveforms and says which evidence decided."""
+    import json
+
+    from wavecheck.cli import main
+
+    assert main(["info", str(grbl_sr)]) == 0
+    out = capsys.readouterr().out
+    assert "proposed roles" in out and "serial line" in out
+    assert "--map 'step=STEP (Y axis),enable=EN'" in out
+    assert main(["info", str(smoothie_sr), "--format", "json"]) == 0
+    roles = json.loads(capsys.readouterr().out)["roles"]
+    assert roles["map_args"] == "--map a.step=3,a.dir=4 --map b.step=5,b.dir=6"
