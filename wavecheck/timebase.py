@@ -16,21 +16,13 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.errors import UsageError
+from wavecheck.units import SI_TIME
 
 __all__ = ["Rounding", "Timebase"]
 
 Rounding = Literal["floor", "ceil", "exact"]
 
-_TIMESCALE_UNITS = {
-    "s": 0,
-    "ms": -3,
-    "us": -6,
-    "ns": -9,
-    "ps": -12,
-    "fs": -15,
-    "as": -18,
-    "zs": -21,
-}
+_TIMESCALE_UNITS = dict(SI_TIME)
 
 
 @dataclass(frozen=True)

@@ -67,16 +67,23 @@ __all__ = [
 
 Dimension = Literal["time", "frequency"]
 
+#: THE table of time units: name → power of ten of a second, coarsest first (VCD's timescale
+#: units; the parser, the formatters, the timebase and the writers all take theirs from it).
+SI_TIME: tuple[tuple[str, int], ...] = (
+    ("s", 0),
+    ("ms", -3),
+    ("us", -6),
+    ("ns", -9),
+    ("ps", -12),
+    ("fs", -15),
+    ("as", -18),
+    ("zs", -21),
+)
 _TIME_UNITS: dict[str, Fraction] = {
-    "s": Fraction(1),
+    **{name: Fraction(10) ** exp for name, exp in SI_TIME[:6]},  # options: s down to fs
     "sec": Fraction(1),
-    "ms": Fraction(1, 10**3),
-    "us": Fraction(1, 10**6),
     "µs": Fraction(1, 10**6),  # micro sign U+00B5
     "μs": Fraction(1, 10**6),  # Greek mu U+03BC
-    "ns": Fraction(1, 10**9),
-    "ps": Fraction(1, 10**12),
-    "fs": Fraction(1, 10**15),
 }
 _FREQ_UNITS: dict[str, Fraction] = {
     "hz": Fraction(1),
@@ -364,13 +371,8 @@ def option_ns(
     return parse_option(text, option, "time", plausible, warn) * 10**9
 
 
-_SCALES: tuple[tuple[Fraction, str], ...] = (
-    (Fraction(1), "s"),
-    (Fraction(1, 10**3), "ms"),
-    (Fraction(1, 10**6), "us"),
-    (Fraction(1, 10**9), "ns"),
-    (Fraction(1, 10**12), "ps"),
-    (Fraction(1, 10**15), "fs"),
+_SCALES: tuple[tuple[Fraction, str], ...] = tuple(
+    (Fraction(10) ** exp, name) for name, exp in SI_TIME[:6]
 )
 
 

@@ -23,6 +23,7 @@ from wavecheck.capture.sigrokcli import SAMPLERATE_OPTION_FORMATS, convert, run_
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import CaptureError, UsageError
+from wavecheck.units import SI_TIME
 
 __all__ = [
     "MAX_SAMPLES",
@@ -37,7 +38,7 @@ __all__ = [
 #: Above this many samples a VCD conversion is refused (sigrok-cli needs ~1 min per 1e10).
 MAX_SAMPLES = 2 * 10**9
 _LINE = re.compile(r"^(\d+)-(\d+) (\S+?)-\d+: (.*)$")
-_UNITS = ((0, "s"), (3, "ms"), (6, "us"), (9, "ns"), (12, "ps"), (15, "fs"))
+_UNITS = tuple((-exp, name) for name, exp in SI_TIME[:6])  # s down to fs
 
 
 @dataclass(frozen=True)

@@ -43,7 +43,7 @@ from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
 from wavecheck.report.plot import Place, choose_places
-from wavecheck.units import format_time
+from wavecheck.units import SI_TIME, format_time
 
 __all__ = [
     "MAX_MARKERS",
@@ -65,7 +65,7 @@ SIGNALS_WIDTH = 220
 #: Width of the wave area GTKWave 3.3 (Debian) draws in that window with the search tree collapsed.
 WAVE_PIXELS = 916
 _PIXELS_PER_FRAME = 200  # GTKWave shows 2 ** -zoom time units per 200 pixels
-_UNITS = (("s", 0), ("ms", -3), ("us", -6), ("ns", -9), ("ps", -12))
+_UNITS = SI_TIME[:5]  # s down to ps: GTKWave's save files take no finer unit here
 
 
 def vcd_timescale(tick_s: Fraction) -> tuple[int, str, Fraction]:

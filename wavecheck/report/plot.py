@@ -30,7 +30,7 @@ import numpy.typing as npt
 from wavecheck.checks.result import FAIL, RuleResult
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
-from wavecheck.units import format_time
+from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -141,7 +141,9 @@ def _argmin(r: RuleResult) -> int | None:
 
 
 # -- units ----------------------------------------------------------------------------------------
-_UNITS: tuple[tuple[str, float], ...] = (("ns", 1.0), ("µs", 1e3), ("ms", 1e6), ("s", 1e9))
+_UNITS: tuple[tuple[str, float], ...] = tuple(  # ns up to s, µ for the axis labels
+    (name.replace("us", "µs"), 10.0 ** (exp + 9)) for name, exp in reversed(SI_TIME[:4])
+)
 
 
 def _unit_for(ns: float) -> tuple[str, float]:
