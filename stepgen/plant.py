@@ -30,8 +30,9 @@ from stepgen.model import (
     Component,
     InvocationRun,
     StepgenConfig,
-    _run_from_arrays,
+    final_state,
     make_pulses_channel,
+    run_from_arrays,
 )
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.steptypes import STATE_TABLES
@@ -104,14 +105,8 @@ class StepgenPlant(Plant):
         """The recorded base periods (the first ``n_periods``) as an :class:`InvocationRun`."""
         outs = np.asarray(self._outs[:n_periods], dtype=np.int64)
         counts = np.asarray(self._counts[:n_periods], dtype=np.int64)
-        run = _run_from_arrays(self.config, self.config.kind(), outs, counts, self.steps)
-        run.final = {
-            "counts": self.ch.accum >> 28,
-            "steplen": self.ch.step_len,
-            "stepspace": self.ch.step_space,
-            "dirsetup": self.ch.dir_setup,
-            "dirhold": self.ch.dir_hold_dly,
-        }
+        run = run_from_arrays(self.config, self.config.kind(), outs, counts, self.steps)
+        run.final = final_state(self.comp)
         run.warnings = list(self.ch.warnings)
         return run
 

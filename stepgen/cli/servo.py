@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 
 from stepgen.cli.tune import add_pid_arguments, add_servo_arguments, pid_gains, servo_params
-from stepgen.latency import catchup_for, invocation_times, parse_latency
+from stepgen.latency import catchup_for, parse_latency
 from stepgen.loop import LoopResult, ferror_check, run_loop, step_metrics
 from stepgen.model import StepgenConfig
 from stepgen.motion import Motion
 from stepgen.pid import PidGains
 from stepgen.plant import ServoPlant, StepgenPlant, quadrature_edges
-from stepgen.simulate import Trace
+from stepgen.simulate import Trace, trace_from_run
 from stepgen.vcdout import write_vcd
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
@@ -56,22 +56,11 @@ def add_servo_loop_arguments(parser: Any) -> None:
 
 def _trace(cfg: StepgenConfig, plant: StepgenPlant, n: int, args: argparse.Namespace) -> Trace:
     """The recorded base periods as a :class:`Trace`, timed by the latency model as
-    :func:`stepgen.simulate.simulate` does."""
-    run = plant.invocation_run(n)
+    :func:`stepgen.simulate.simulate` times them."""
     model = parse_latency(args.latency)
     catchup, _ = catchup_for(model, cfg.base_period_ns, None)
-    times = invocation_times(model, run, seed=args.seed, active_edge=args.active_edge, catchup_ns=catchup)
-    base = cfg.base_period_ns
-
-    def at(idx: np.ndarray) -> np.ndarray:
-        return idx * base if times is None else times[idx]
-
-    last_t = (n - 1) * base if times is None else int(times[-1])
-    return Trace(
-        config=cfg, latency=model, seed=args.seed, active_edge=args.active_edge, n_periods=n,
-        pins=run.pins, edges={p: at(run.toggles[p]) for p in run.pins}, counts_t=at(run.counts_at),
-        counts_val=run.counts_val, steps=run.steps, final_counts=int(run.final["counts"]),
-        end_ns=int(max(n * base, last_t + 1)), run=run,
+    return trace_from_run(
+        plant.invocation_run(n), model, seed=args.seed, active_edge=args.active_edge, catchup_ns=catchup
     )
 
 
