@@ -11,8 +11,9 @@ constant command (a step), the step response figures; ``--plot`` draws them.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
@@ -25,7 +26,8 @@ from stepgen.motion import Motion
 from stepgen.pid import PidGains
 from stepgen.plant import ServoPlant, StepgenPlant, quadrature_edges
 from stepgen.simulate import Trace, trace_from_run
-from stepgen.vcdout import write_vcd
+from stepgen.vcdout import write_sr, write_vcd
+from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
@@ -47,7 +49,7 @@ def add_servo_loop_arguments(parser: Any) -> None:
         "P = 1/servo period, FF1 = 1); servo: pid.output → amplifier of a motor and load",
     )
     add_pid_arguments(g)
-    g.add_argument("--ferror", type=float, default=1.0, help="[JOINT_n]FERROR (default 1.0)")
+    g.add_argument("--ferror", type=float, help="[JOINT_n]FERROR (default 1.0)")
     g.add_argument("--min-ferror", type=float, help="[JOINT_n]MIN_FERROR (default FERROR)")
     g.add_argument("--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)")
     g.add_argument("--plot", type=output_file, help="PNG: command, feedback, following error")
@@ -64,47 +66,136 @@ def _trace(cfg: StepgenConfig, plant: StepgenPlant, n: int, args: argparse.Names
     )
 
 
-def run_servo_loop(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion, n: int) -> int:
-    """Run the closed loop for ``n`` base periods, write the output, print the report."""
-    servo_ns = cfg.servo_ns
-    n_servo = -(-n // cfg.servo_multiple)
-    cmds = motion.commands(n_servo, servo_ns, "position")
-    out = str(args.output)
-    if args.plant == "stepgen":
-        vcfg = replace(cfg, mode="velocity")
-        defaults = PidGains(Pgain=round(1e9 / servo_ns, 9), FF1=1.0)
-        plant_s = StepgenPlant(vcfg, record=True)
-        result = run_loop(plant_s, pid_gains(args, defaults), cmds)
-        trace = _trace(vcfg, plant_s, n, args)
-        if not out.lower().endswith(".vcd"):
-            raise ConfigError(f"-o {out!r}: the closed loop writes a .vcd")
-        write_vcd(trace, out)
-    else:
-        params = servo_params(args)
-        plant_v = ServoPlant(params, servo_ns, record=True)
-        result = run_loop(plant_v, pid_gains(args, PidGains()), cmds)
-        if not out.lower().endswith(".vcd"):
-            raise ConfigError(f"-o {out!r}: the closed loop writes a .vcd")
-        t, counts = plant_v.count_changes()
-        edges, init = quadrature_edges(t, counts)
+def _limits(args: argparse.Namespace) -> tuple[float, float | None, float | None]:
+    """(FERROR, MIN_FERROR, MAX_VELOCITY) from the options (or the INI), checked before any
+    work: FERROR and MAX_VELOCITY > 0, MIN_FERROR >= 0, all finite."""
+    ferror = 1.0 if args.ferror is None else args.ferror  # LinuxCNC's default (pid reference §4.4)
+    checks = (
+        ("--ferror", ferror, False),
+        ("--min-ferror", args.min_ferror, True),
+        ("--joint-max-velocity", args.joint_max_velocity, False),
+    )
+    for option, value, zero_ok in checks:
+        if value is None:
+            continue
+        if not (math.isfinite(value) and (value >= 0 if zero_ok else value > 0)):
+            raise ConfigError(f"{option} {value!r} must be a number {'>= 0' if zero_ok else '> 0'}")
+    return ferror, args.min_ferror, args.joint_max_velocity
+
+
+def _write_encoder(
+    out: str, plant: ServoPlant, end_ns: int, max_samples: int
+) -> None:
+    """The encoder's A/B quadrature (and its count in a VCD) as ``out`` (.vcd or .sr)."""
+    t, counts = plant.count_changes()
+    edges, init = quadrature_edges(t, counts)
+    if out.lower().endswith(".vcd"):
         write_vcd_file(
             out,
             [VcdWire(p, init[p], edges[p]) for p in ("A", "B")],
             vectors=[VcdVector("counts", t, counts, size=32)],
             timescale="1 ns",
-            end=n_servo * servo_ns,
+            end=end_ns,
             scope="encoder",
             comment="stepgen servo plant: encoder A/B quadrature (stepgen type 2 table)",
         )
-    return report(args, result)
+        return
+    g = math.gcd(end_ns, 10**9)
+    for p in ("A", "B"):
+        if len(edges[p]):
+            g = math.gcd(g, int(np.gcd.reduce(edges[p])))
+    n_samples = end_ns // g
+    if n_samples > max_samples:
+        raise ConfigError(
+            f"{out}: a .sr of this run needs {n_samples} samples (edges on a {g} ns grid), more "
+            f"than --max-samples {max_samples} (write a .vcd instead, or shorten the run)"
+        )
+    write_sr_edges(
+        out,
+        ["A", "B"],
+        [edges[p][edges[p] < end_ns] // g for p in ("A", "B")],
+        [init["A"], init["B"]],
+        int(n_samples),
+        samplerate=10**9 // g,
+        exact_source=ENCODER_SOURCE,
+    )
 
 
-def report(args: argparse.Namespace, r: LoopResult) -> int:
-    """Print following error, the FERROR verdict and step figures; draw the plot."""
+#: How a servo-plant .sr names the simulation its exact edges come from.
+ENCODER_SOURCE = "stepgen servo plant, a model (encoder A/B quadrature)"
+#: A closed loop whose |command − feedback| passes this many times the command's reach has
+#: diverged: the run stops there (and fails) instead of running into inf/NaN.
+DIVERGED_FACTOR = 1e6
+
+
+def run_servo_loop(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion, n: int) -> int:
+    """Run the closed loop for ``n`` base periods, write the output, print the report."""
+    limits = _limits(args)
+    servo_ns = cfg.servo_ns
+    n_servo = -(-n // cfg.servo_multiple)
+    cmds = motion.commands(n_servo, servo_ns, "position")
+    reach = float(np.max(np.abs(cmds))) if len(cmds) else 0.0
+    stop = DIVERGED_FACTOR * max(reach, 1.0)
+    out = str(args.output)
+    from_files = getattr(args, "_pid_from_files", False)
+    for line in getattr(args, "_linuxcnc_ignored", []):
+        print(f"stepgen: {line}", file=sys.stderr)
+    if args.plant == "stepgen":
+        vcfg = replace(cfg, mode="velocity")
+        # pncconf's gains for a stepgen joint, unless the files set pid's pins (then the rest
+        # keep the component's own defaults, as in LinuxCNC)
+        defaults = PidGains() if from_files else PidGains(Pgain=round(1e9 / servo_ns, 9), FF1=1.0)
+        gains = pid_gains(args, defaults)
+        plant_s = StepgenPlant(vcfg, record=True)
+        result = run_loop(plant_s, gains, cmds, stop_if_diverged=stop)
+        trace = _trace(vcfg, plant_s, n, args)
+        if out.lower().endswith(".vcd"):
+            write_vcd(trace, out)
+        else:
+            write_sr(trace, out, max_samples=args.max_samples)
+    else:
+        params = servo_params(args)
+        gains = pid_gains(args, PidGains())
+        plant_v = ServoPlant(params, servo_ns, record=True)
+        result = run_loop(plant_v, gains, cmds, stop_if_diverged=stop)
+        _write_encoder(out, plant_v, n_servo * servo_ns, args.max_samples)
+    return report(args, result, gains, limits)
+
+
+def gains_text(g: PidGains) -> str:
+    """pid's pins that differ from the component's defaults (``Pgain 1000, FF1 1``)."""
+    d = PidGains()
+    parts = [
+        f"{f.name.replace('_', '-')} {getattr(g, f.name):g}"
+        if not isinstance(getattr(g, f.name), bool)
+        else f"{f.name.replace('_', '-')} {str(getattr(g, f.name)).lower()}"
+        for f in fields(g)
+        if getattr(g, f.name) != getattr(d, f.name) or f.name == "Pgain"
+    ]
+    return ", ".join(parts)
+
+
+def report(
+    args: argparse.Namespace,
+    r: LoopResult,
+    gains: PidGains,
+    limits: tuple[float, float | None, float | None],
+) -> int:
+    """Print the gains, following error, the FERROR verdict and step figures; draw the plot."""
     worst, at = r.max_ferror()
-    check = ferror_check(r, args.ferror, args.min_ferror, args.joint_max_velocity)
-    verdict = "pass" if check.ok else "FAIL"
+    check = ferror_check(r, *limits)
+    ok = check.ok and not r.diverged
+    verdict = "pass" if ok else "FAIL"
     if not args.quiet:
+        pc = getattr(args, "_pid_config", None)
+        origin = ""
+        if pc is not None and pc.name is not None:
+            origin = f" ({pc.name}, joint {pc.joint}: {pc.chosen})" if pc.chosen else f" ({pc.name})"
+        elif getattr(args, "_pid_from_files", False):
+            origin = f" ([JOINT_{pc.joint}] of the INI)" if pc is not None else ""
+        print(f"pid: {gains_text(gains)}{origin}")
+        if r.diverged:
+            print(f"the loop diverged: stopped after {r.n} servo periods ({r.t_s[-1]:.6g} s)")
         print(f"following error: max {worst:.6g} units at {at:.6g} s ({r.n} servo periods)")
         print(
             f"following-error check {verdict}: limit max(FERROR {check.ferror_limit:g}·|v|/"
@@ -123,7 +214,7 @@ def report(args: argparse.Namespace, r: LoopResult) -> int:
             )
     if args.plot:
         _plot(r, args.plot)
-    return EXIT_PASS if check.ok else EXIT_FAIL
+    return EXIT_PASS if ok else EXIT_FAIL
 
 
 def _plot(r: LoopResult, path: str) -> None:
