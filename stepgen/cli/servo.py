@@ -24,7 +24,13 @@ from stepgen.loop import LoopResult, ferror_check, run_loop, step_metrics
 from stepgen.model import StepgenConfig
 from stepgen.motion import Motion
 from stepgen.pid import PidGains
-from stepgen.plant import ServoPlant, StepgenPlant, quadrature_edges
+from stepgen.plant import (
+    MAX_COUNT_CHANGES,
+    QUADRATURE_PINS,
+    ServoPlant,
+    StepgenPlant,
+    quadrature_edges,
+)
 from stepgen.simulate import Trace, trace_from_run
 from stepgen.vcdout import write_sr, write_vcd
 from wavecheck.capture.srzip import write_sr_edges
@@ -92,7 +98,7 @@ def _write_encoder(
     if out.lower().endswith(".vcd"):
         write_vcd_file(
             out,
-            [VcdWire(p, init[p], edges[p]) for p in ("A", "B")],
+            [VcdWire(p, init[p], edges[p]) for p in QUADRATURE_PINS],
             vectors=[VcdVector("counts", t, counts, size=32)],
             timescale="1 ns",
             end=end_ns,
@@ -101,7 +107,7 @@ def _write_encoder(
         )
         return
     g = math.gcd(end_ns, 10**9)
-    for p in ("A", "B"):
+    for p in QUADRATURE_PINS:
         if len(edges[p]):
             g = math.gcd(g, int(np.gcd.reduce(edges[p])))
     n_samples = end_ns // g
@@ -112,9 +118,9 @@ def _write_encoder(
         )
     write_sr_edges(
         out,
-        ["A", "B"],
-        [edges[p][edges[p] < end_ns] // g for p in ("A", "B")],
-        [init["A"], init["B"]],
+        list(QUADRATURE_PINS),
+        [edges[p][edges[p] < end_ns] // g for p in QUADRATURE_PINS],
+        [init[p] for p in QUADRATURE_PINS],
         int(n_samples),
         samplerate=10**9 // g,
         exact_source=ENCODER_SOURCE,
@@ -125,7 +131,7 @@ def _write_encoder(
 ENCODER_SOURCE = "stepgen servo plant, a model (encoder A/B quadrature)"
 #: A closed loop whose |command − feedback| passes this many times the command's reach has
 #: diverged: the run stops there (and fails) instead of running into inf/NaN.
-DIVERGED_FACTOR = 1e6
+DIVERGED_FACTOR = 1e3
 
 
 def run_servo_loop(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion, n: int) -> int:
@@ -158,6 +164,17 @@ def run_servo_loop(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion,
         gains = pid_gains(args, PidGains())
         plant_v = ServoPlant(params, servo_ns, record=True)
         result = run_loop(plant_v, gains, cmds, stop_if_diverged=stop)
+        if plant_v.truncated_at_ns is not None:
+            if not result.diverged:
+                raise ConfigError(
+                    f"servo plant: the encoder makes more than {MAX_COUNT_CHANGES:.0e} count "
+                    "changes in this run (give fewer --encoder-counts per unit or a shorter run)"
+                )
+            print(
+                f"stepgen: note: the encoder's A/B stop at {plant_v.truncated_at_ns * 1e-9:.6g} s "
+                f"({MAX_COUNT_CHANGES:.0e} count changes): the loop diverged",
+                file=sys.stderr,
+            )
         _write_encoder(out, plant_v, n_servo * servo_ns, args.max_samples)
     return report(args, result, gains, limits)
 
@@ -208,9 +225,11 @@ def report(
         c = r.command
         if len(c) > 2 and np.all(c == c[0]) and c[0] != 0:  # a step from rest at 0
             m = step_metrics(r.t_s, r.feedback, 0.0, float(c[0]))
+            rise = "-" if m.rise_s is None else f"{m.rise_s:.6g} s"
+            settle = "not within the run" if m.settling_s is None else f"{m.settling_s:.6g} s"
             print(
-                f"step response: rise {m.rise_s} s, overshoot {m.overshoot:.1%}, settling "
-                f"({m.band:.0%}) {m.settling_s} s, steady-state error {m.steady_state_error:.3g}"
+                f"step response: rise {rise}, overshoot {m.overshoot:.1%}, settling "
+                f"({m.band:.0%}) {settle}, steady-state error {m.steady_state_error:.3g}"
             )
     if args.plot:
         _plot(r, args.plot)

@@ -172,8 +172,8 @@ def test_quadrature_round_trip() -> None:
     assert len(counts) > 10 and np.all(np.abs(np.diff(counts)) == 1)
     edges, init = quadrature_edges(t, counts)
     table = [1, 3, 2, 0]
-    state = {"A": init["A"], "B": init["B"]}
-    events = sorted([(int(x), p) for p in "AB" for x in edges[p]])
+    state = {"A": init["phase-A"], "B": init["phase-B"]}
+    events = sorted([(int(x), p[-1]) for p in ("phase-A", "phase-B") for x in edges[p]])
     pos = 0
     for _, p in events:
         state[p] ^= 1
