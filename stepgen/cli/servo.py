@@ -4,8 +4,12 @@ The motion options give the joint's position command (``--move``, ``--command``,
 ``--position``); pid's output drives stepgen's velocity-cmd (``--plant stepgen``, the stepgen
 running as ever in the base thread under the latency model) or a servo amplifier (``--plant
 servo``: motor, load, encoder; its A/B quadrature goes to the VCD). Prints the following error
-(max and where), LinuxCNC's FERROR/MIN_FERROR verdict (exit 1 when it trips) and, for a
-constant command (a step), the step response figures; ``--plot`` draws them.
+(max and where), LinuxCNC's FERROR/MIN_FERROR verdict (exit 1 when it trips, or when the loop
+diverges and the run stops) and, for a constant command (a step), the step response figures;
+``--plot`` draws them. ``-o`` takes ``.vcd`` or ``.sr`` (the encoder's ``phase-A``/``phase-B``
+for the servo plant). With ``--ini``/``--hal``, the gains and limits the files set fill the
+options not given (:mod:`stepgen.cli.linuxcnc`); the pins they leave unset keep the pid
+component's defaults, while a run without files assumes pncconf's P = 1/servo period, FF1 = 1.
 """
 
 from __future__ import annotations

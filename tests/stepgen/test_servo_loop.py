@@ -202,3 +202,4 @@ def test_readme_servo_block_runs(tmp_path, monkeypatch, capsys) -> None:
     assert "following-error check pass" in out
     assert "[JOINT_0]" in out and "setp pid.0.Pgain [JOINT_0]P" in out
     assert (tmp_path / "loop.vcd").stat().st_size > 0
+    assert "data:image/png;base64," in (tmp_path / "tune.html").read_text()
