@@ -94,6 +94,7 @@ def run_loop(
         gains: pid's pins.
         commands: the position command of each servo period (units).
         stop_if_diverged: stop when |command − feedback| exceeds this (units); None: never.
+            The run also stops when the plant says it diverged (:attr:`Plant.diverged`).
 
     Raises:
         ConfigError: more than :data:`MAX_SERVO_PERIODS` periods.
@@ -121,7 +122,7 @@ def run_loop(
         out[k] = u
         sat[k] = pid.saturated
         plant.advance(u)
-        if not abs(c - f) <= limit:  # also catches NaN
+        if not abs(c - f) <= limit or plant.diverged:  # also catches NaN
             diverged = True
             break
     m = k + 1 if n else 0
@@ -179,7 +180,8 @@ def ferror_check(
     limit = np.maximum(scaled, mn)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(limit > 0, np.abs(result.ferror) / limit, np.inf * np.abs(result.ferror))
-    ratio = np.nan_to_num(ratio, nan=0.0)
+    # 0 error within a 0 limit is fine (inf·0 = NaN there); a NaN error never is
+    ratio = np.where(np.isnan(result.ferror), np.inf, np.nan_to_num(ratio, nan=0.0, posinf=np.inf))
     bad = np.flatnonzero(ratio > 1.0)
     k = int(np.argmax(ratio)) if len(ratio) else 0
     return FerrorCheck(

@@ -38,7 +38,9 @@ __all__ = [
     "Component",
     "InvocationRun",
     "StepgenConfig",
+    "final_state",
     "hal_thread_period",
+    "run_from_arrays",
     "run_reference",
     "ulceil",
     "update_schedule",
@@ -597,16 +599,18 @@ def run_reference(
             steps += 1
         outs[k] = ch.outbits
         counts[k] = ch.accum >> PICKOFF
-    run = _run_from_arrays(config, kind, outs, counts, steps)
+    run = run_from_arrays(config, kind, outs, counts, steps)
     run.final = final_state(comp)
     run.warnings = list(ch.warnings)
     return run
 
 
-def _run_from_arrays(
+def run_from_arrays(
     config: StepgenConfig, kind: StepType, outs: np.ndarray, counts: np.ndarray, steps: int
 ) -> InvocationRun:
-    """Turn per-invocation output bits and counts into toggle lists."""
+    """An :class:`InvocationRun` from each invocation's output bits (``outs``, bit i = pin i of
+    ``kind.outputs``) and ``counts``: the toggle and counts-change indices (``final`` and
+    ``warnings`` left for the caller)."""
     toggles: dict[str, np.ndarray] = {}
     prev = np.concatenate(([0], outs[:-1])) if len(outs) else outs
     changed = outs ^ prev

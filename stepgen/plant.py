@@ -30,19 +30,41 @@ from stepgen.model import (
     Component,
     InvocationRun,
     StepgenConfig,
-    _run_from_arrays,
+    final_state,
     make_pulses_channel,
+    run_from_arrays,
 )
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.steptypes import STATE_TABLES
 
-__all__ = ["Plant", "ServoParams", "ServoPlant", "StepgenPlant", "quadrature_edges"]
+__all__ = [
+    "MAX_ABS_COUNT",
+    "MAX_COUNT_CHANGES",
+    "QUADRATURE_PINS",
+    "Plant",
+    "ServoParams",
+    "ServoPlant",
+    "StepgenPlant",
+    "quadrature_edges",
+]
+
+#: The encoder's A/B channels (LinuxCNC's ``encoder.N.phase-A``/``phase-B``; bit 0, bit 1).
+QUADRATURE_PINS = ("phase-A", "phase-B")
+#: Most encoder count changes one recorded run keeps (two Python ints each, then int64 arrays).
+MAX_COUNT_CHANGES = 2_000_000
+#: The encoder's count range (LinuxCNC's encoder counts are s32; beyond it the loop diverged).
+MAX_ABS_COUNT = 2**31
 
 
 class Plant:
-    """The interface a closed loop drives (see the module doc)."""
+    """The interface a closed loop drives (see the module doc).
+
+    ``diverged``: the plant left the range it can represent (a servo encoder's count range,
+    a non-finite position); the loop stops there.
+    """
 
     servo_ns: int
+    diverged: bool = False
 
     def feedback(self) -> float:
         """The position fed back now (start of a servo period), position units."""
@@ -104,14 +126,8 @@ class StepgenPlant(Plant):
         """The recorded base periods (the first ``n_periods``) as an :class:`InvocationRun`."""
         outs = np.asarray(self._outs[:n_periods], dtype=np.int64)
         counts = np.asarray(self._counts[:n_periods], dtype=np.int64)
-        run = _run_from_arrays(self.config, self.config.kind(), outs, counts, self.steps)
-        run.final = {
-            "counts": self.ch.accum >> 28,
-            "steplen": self.ch.step_len,
-            "stepspace": self.ch.step_space,
-            "dirsetup": self.ch.dir_setup,
-            "dirhold": self.ch.dir_hold_dly,
-        }
+        run = run_from_arrays(self.config, self.config.kind(), outs, counts, self.steps)
+        run.final = final_state(self.comp)
         run.warnings = list(self.ch.warnings)
         return run
 
@@ -180,16 +196,26 @@ class ServoPlant(Plant):
         self._t_counts: list[int] = []
         self._counts: list[int] = []
         self._k = 0
+        #: when the recording stopped at :data:`MAX_COUNT_CHANGES` (ns), None: complete
+        self.truncated_at_ns: int | None = None
         self.last_count = self._count(0.0)
 
     def _count(self, x: float) -> int:
         cpu = self.p.counts_per_unit
-        return math.floor(x * cpu) if cpu > 0 else 0
+        if cpu <= 0:
+            return 0
+        if not abs(x * cpu) < MAX_ABS_COUNT:  # also NaN: the loop diverged
+            self.diverged = True
+            return self.last_count
+        return math.floor(x * cpu)
 
     def feedback(self) -> float:
-        """The encoder position (whole counts / N), or the exact position without an encoder."""
+        """The encoder position (whole counts / N), or the exact position without an encoder
+        (a diverged, non-finite position is fed back as it is)."""
         cpu = self.p.counts_per_unit
-        return math.floor(self.x * cpu) / cpu if cpu > 0 else self.x
+        if cpu <= 0 or not math.isfinite(self.x * cpu):
+            return self.x
+        return math.floor(self.x * cpu) / cpu
 
     def advance(self, u: float) -> None:
         """Integrate one servo period with the amplifier command ``u`` (clamped)."""
@@ -221,12 +247,14 @@ class ServoPlant(Plant):
             if fc > 0 and v != 0.0 and (v_new > 0) != (v > 0):
                 v_new = 0.0  # friction stops the motion within the sub-step
             x, v = x_new, v_new
-            if self.record:
+            if self.record and not self.diverged and self.truncated_at_ns is None:
                 c = self._count(x)
                 if c != self.last_count:
                     self._record_counts(c, (self._k * self.sub + i + 1))
         self.x, self.v = x, v
         self._k += 1
+        if not math.isfinite(x):
+            self.diverged = True
 
     def _record_counts(self, c: int, sub_index: int) -> None:
         """Spread the counts between the last value and ``c`` evenly over the sub-step."""
@@ -234,6 +262,9 @@ class ServoPlant(Plant):
         t_start = (sub_index - 1) * self.servo_ns // self.sub
         d = c - self.last_count
         n = abs(d)
+        if len(self._counts) + n > MAX_COUNT_CHANGES:
+            self.truncated_at_ns = t_start  # the recording stops here
+            return
         step = 1 if d > 0 else -1
         for j in range(1, n + 1):
             self._t_counts.append(t_start + (t_end - t_start) * j // n)
@@ -250,7 +281,8 @@ def quadrature_edges(
 ) -> tuple[dict[str, np.ndarray], dict[str, int]]:
     """A/B quadrature of a count sequence (one count per entry), with stepgen type 2's table.
 
-    Returns ({"A": toggle times, "B": toggle times}, initial levels). State s = count mod 4
+    Returns ({"phase-A": toggle times, "phase-B": toggle times}, initial levels) — the names of
+    LinuxCNC's ``encoder`` inputs and of stepgen's type 2 outputs. State s = count mod 4
     gives bits (A = bit 0, B = bit 1) of ``STATE_TABLES[2]`` — what stepgen's type 2 outputs and
     what its decoder reads back.
     """
@@ -258,7 +290,7 @@ def quadrature_edges(
     states = table[np.mod(np.concatenate(([initial_count], counts)), len(table))]
     edges: dict[str, np.ndarray] = {}
     init: dict[str, int] = {}
-    for bit, pin in enumerate(("A", "B")):
+    for bit, pin in enumerate(QUADRATURE_PINS):
         lv = (states >> bit) & 1
         init[pin] = int(lv[0])
         edges[pin] = t_ns[np.flatnonzero(lv[1:] != lv[:-1])]

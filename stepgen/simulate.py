@@ -32,7 +32,7 @@ from stepgen.model import InvocationRun, StepgenConfig, run_reference, update_sc
 from stepgen.motion import Motion
 from wavecheck.errors import ConfigError
 
-__all__ = ["Trace", "n_periods_for", "simulate"]
+__all__ = ["Trace", "n_periods_for", "simulate", "trace_from_run"]
 
 
 @dataclass
@@ -79,6 +79,45 @@ class Trace:
 def n_periods_for(config: StepgenConfig, duration_ns: int) -> int:
     """Base periods needed to cover ``duration_ns`` (ceil)."""
     return -(-int(duration_ns) // config.base_period_ns)
+
+
+def trace_from_run(
+    run: InvocationRun,
+    latency: LatencyModel,
+    *,
+    seed: int | None,
+    active_edge: ActiveEdge,
+    catchup_ns: int,
+    n_periods: int | None = None,
+) -> Trace:
+    """A :class:`Trace` of ``run``'s first ``n_periods`` base periods (default all), each
+    invocation timed by ``latency`` (:func:`~stepgen.latency.invocation_times`; catch-up time
+    ``catchup_ns``): the edges and ``counts`` changes in ns, the end of the span, the run's
+    warnings as notes. The one place a per-period run becomes edge times."""
+    n = run.n_periods if n_periods is None else n_periods
+    times = invocation_times(latency, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns)
+    base = run.config.base_period_ns
+
+    def at(idx: np.ndarray) -> np.ndarray:
+        return idx * base if times is None else times[idx]
+
+    last_t = (n - 1) * base if times is None else int(times[-1])
+    return Trace(
+        config=run.config,
+        latency=latency,
+        seed=seed,
+        active_edge=active_edge,
+        n_periods=n,
+        pins=run.pins,
+        edges={pin: at(run.toggles[pin]) for pin in run.pins},
+        counts_t=at(run.counts_at),
+        counts_val=run.counts_val,
+        steps=run.steps,
+        final_counts=int(run.final["counts"]),
+        end_ns=int(max(n * base, last_t + 1)),
+        run=run,
+        notes=list(run.warnings),
+    )
 
 
 #: Most base periods one run simulates (per-period index/time arrays: 8 bytes each, a few of them).
@@ -138,35 +177,10 @@ def simulate(
     else:
         raise ConfigError(f"engine {engine!r} is not fast or reference")
     catchup_ns, catchup_note = catchup_for(model, config.base_period_ns, catchup_ns)
-    times = invocation_times(model, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns)
-    base = config.base_period_ns
-
-    def at(idx: np.ndarray) -> np.ndarray:
-        return idx * base if times is None else times[idx]
-
-    edges = {pin: at(run.toggles[pin]) for pin in run.pins}
-    counts_t = at(run.counts_at)
-    last_invocation = n_periods - 1
-    last_t = last_invocation * base if times is None else int(times[-1])
-    end_ns = max(n_periods * base, last_t + 1)
-    seconds = time.perf_counter() - t0
-    trace = Trace(
-        config=config,
-        latency=model,
-        seed=seed,
-        active_edge=active_edge,
-        n_periods=n_periods,
-        pins=run.pins,
-        edges=edges,
-        counts_t=counts_t,
-        counts_val=run.counts_val,
-        steps=run.steps,
-        final_counts=int(run.final["counts"]),
-        end_ns=int(end_ns),
-        run=run,
-        seconds=seconds,
-        notes=list(run.warnings),
+    trace = trace_from_run(
+        run, model, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns, n_periods=n_periods
     )
+    trace.seconds = time.perf_counter() - t0
     trace.notes += motion.notes
     if catchup_note is not None:
         trace.notes.append(catchup_note)

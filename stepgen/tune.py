@@ -47,6 +47,8 @@ __all__ = [
 SUSTAINED_RATIO = 0.99
 #: Oscillation smaller than this fraction of the step is noise (encoder counts, friction).
 MIN_AMPLITUDE = 0.02
+#: Most servo periods of one step response (the method runs dozens of them, ~µs per period).
+MAX_RESPONSE_PERIODS = 200_000
 #: Bisection stops when hi/lo is below this.
 KU_TOLERANCE = 1.01
 
@@ -176,6 +178,13 @@ def tune(
         raise ConfigError(f"--settle {settle_s:g} s must be > 0 and shorter than --window {window_s:g} s")
     if not (0 < band < 1):
         raise ConfigError(f"--band {band!r} must be between 0 and 1 (a fraction of the step)")
+    servo_s = make_plant().servo_ns * 1e-9
+    if window_s / servo_s > MAX_RESPONSE_PERIODS:
+        raise ConfigError(
+            f"--window {window_s:g} s is {window_s / servo_s:.3g} servo periods per response, "
+            f"more than {MAX_RESPONSE_PERIODS} (the method runs dozens of responses: give a "
+            "shorter --window)"
+        )
     g0 = replace(base or PidGains(), Igain=0.0, Dgain=0.0)
     ku, pu, tries = find_ultimate_gain(make_plant, step, window_s, p_start, g0)
     stages: list[Stage] = []

@@ -1,11 +1,26 @@
-"""``stepgen simulate --ini/--hal``: fill the simulate options from LinuxCNC's own files."""
+"""``stepgen simulate --ini/--hal``: fill the simulate options from LinuxCNC's own files.
+
+The stepgen settings (:func:`~wavecheck.linuxcnc.config.read_config`) and, with ``--pid``,
+the joint's pid and following-error limits (:func:`~wavecheck.linuxcnc.config.read_pid_config`:
+``setp pid.N.Pgain …``, ``[JOINT_n] P, I, D, FF0, FF1, FF2, BIAS, DEADBAND, MAX_OUTPUT, FERROR,
+MIN_FERROR, MAX_VELOCITY``; ``MAX_VELOCITY``/``MAX_ACCELERATION`` also as ``--move``'s limits)
+fill every option not given on the command line.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
+from stepgen.cli.tune import GAIN_OPTIONS
 from wavecheck.cli.linuxcnc import add_file_arguments
-from wavecheck.linuxcnc.config import TIMING_PARAMS, LinuxCNCConfig, read_config
+from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.config import (
+    TIMING_PARAMS,
+    LinuxCNCConfig,
+    PidConfig,
+    read_config,
+    read_pid_config,
+)
 
 __all__ = ["add_simulate_arguments", "apply_to_simulate_args"]
 
@@ -24,6 +39,10 @@ _SIMULATE_FIELDS = (
 )
 #: simulate's motion options: a command the files set fills one only when none is given.
 _MOTIONS = ("position", "velocity", "command", "move", "motion")
+#: pid pin → its ``--pid`` option's dest (``Pgain`` → ``pgain``).
+_PIN_DEST = {pin: dest for dest, pin in GAIN_OPTIONS.items()}
+#: PidConfig's following-error limits → their ``--pid`` option's dest.
+_LIMIT_DEST = {"ferror": "ferror", "min_ferror": "min_ferror", "max_velocity": "joint_max_velocity"}
 
 
 def add_simulate_arguments(parser: Any) -> None:
@@ -33,6 +52,18 @@ def add_simulate_arguments(parser: Any) -> None:
     another value on the command line wins.
     """
     add_file_arguments(parser.add_argument_group("LinuxCNC configuration files"))
+    g = parser.add_argument_group("LinuxCNC pid (--pid with --ini/--hal)")
+    g.add_argument(
+        "--joint",
+        type=int,
+        help="the joint whose [JOINT_n] gains and limits apply (default: the one the pid driving "
+        "stepgen.N.velocity-cmd is netted to, else --channel)",
+    )
+    g.add_argument(
+        "--pid-name",
+        help="the pid instance (pid.0, pid.x; default: the one whose output drives the channel's "
+        "velocity-cmd, else joint n's)",
+    )
     defaults = {
         a.dest: a.default for a in parser._actions if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
     }
@@ -93,4 +124,61 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
         else:
             setattr(args, kind, value)
     args._linuxcnc_ignored = ignored
+    _apply_pid(args, cfg)
     return cfg
+
+
+def _apply_pid(args: Any, cfg: LinuxCNCConfig) -> PidConfig | None:
+    """With ``--pid``: fill the pid and following-error options from the files (an option
+    given on the command line wins) and drop the stepgen parser's "net … velocity-cmd ignored"
+    line for the net pid's output drives (the closed loop honours it). Without ``--pid``: a
+    note when the files close a loop around the channel."""
+    hal = list(args.hal or [])
+    kwargs: dict[str, Any] = {
+        "channel": getattr(args, "channel", 0),
+        "joint": getattr(args, "joint", None),
+        "name": getattr(args, "pid_name", None),
+    }
+    ignored: list[str] = args._linuxcnc_ignored
+    if not getattr(args, "pid", False):
+        try:
+            pc = read_pid_config(args.ini, hal, **kwargs)
+        except ConfigError:
+            return None  # the open-loop run does not depend on the pid's settings
+        if pc.drives is not None:
+            ignored.append(
+                f"note: {pc.name}.output drives {pc.drives} ({pc.sources['drives']}): give --pid "
+                "to close the loop (now the motion options drive it)"
+            )
+        return pc
+    pc = read_pid_config(args.ini, hal, **kwargs)
+    for pin, value in pc.pins.items():
+        dest = _PIN_DEST[pin]
+        if getattr(args, dest, None) is None:
+            setattr(args, dest, value)
+    if pc.error_previous_target is False and getattr(args, "error_previous_target", True):
+        args.error_previous_target = False
+    for attr, dest in _LIMIT_DEST.items():
+        value = getattr(pc, attr)
+        if value is not None and getattr(args, dest, None) is None:
+            setattr(args, dest, value)
+    # the trajectory keeps to the joint's limits; stepgen's own (STEPGEN_MAXVEL/MAXACCEL,
+    # 1.25× these in pncconf's configurations) leave the loop its headroom (pid reference §3)
+    for attr, dest in (("max_velocity", "move_vel"), ("max_acceleration", "move_accel")):
+        value = getattr(pc, attr)
+        if value is not None and getattr(args, dest, None) is None:
+            setattr(args, dest, value)
+    args._pid_from_files = bool(pc.pins)
+    args._pid_config = pc
+    if pc.drives is not None:
+        net = f"({pc.sources['drives']})"
+        ignored[:] = [
+            line for line in ignored if not (line.startswith("ignored: net ") and net in line)
+        ]
+    if cfg.ctrl_type == "position":
+        ignored.append(
+            f"ignored: ctrl_type=p ({cfg.sources['ctrl_type']}): pid drives velocity-cmd, so the "
+            "closed loop runs the channel in velocity mode"
+        )
+    ignored += pc.ignored
+    return pc

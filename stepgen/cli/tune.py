@@ -11,6 +11,9 @@ at cruise with each. Exit 0, or 2 with one line on bad settings.
 from __future__ import annotations
 
 import argparse
+import base64
+import html
+import io
 import json
 import math
 from collections.abc import Callable
@@ -19,9 +22,9 @@ from typing import Any
 from stepgen.model import StepgenConfig
 from stepgen.pid import PidGains
 from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
-from stepgen.tune import TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
+from stepgen.tune import Stage, TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.output import atomic_path, output_file
+from wavecheck.output import atomic_path, atomic_write, output_file
 from wavecheck.units import time_ns
 
 __all__ = [
@@ -169,11 +172,34 @@ def register(sub: Any) -> None:
     o = p.add_argument_group("output")
     o.add_argument("--format", choices=("text", "json"), default="text")
     o.add_argument("--plot", type=output_file, help="PNG of every stage's step response")
+    o.add_argument(
+        "--html",
+        type=output_file,
+        help="self-contained page: every stage's figures and response plot, the INI/HAL lines",
+    )
     p.set_defaults(func=run)
 
 
+def _check_method(args: argparse.Namespace) -> None:
+    """The method's numbers, before any response is run (one line each)."""
+    if not (math.isfinite(args.p_start) and args.p_start > 0):
+        raise ConfigError(f"--p-start {args.p_start!r} must be a number > 0 (the first P tried)")
+    if args.joint < 0:
+        raise ConfigError(f"--joint {args.joint} must be 0 or more")
+    v = args.ff_velocity
+    if v is not None and not (math.isfinite(v) and v > 0):
+        raise ConfigError(f"--ff-velocity {v!r} must be a speed > 0 (units/s)")
+    for dest in ("position_scale", "maxvel", "maxaccel"):
+        value = getattr(args, dest)
+        if not math.isfinite(value):
+            raise ConfigError(f"--{dest.replace('_', '-')} {value!r} is not finite")
+
+
 def _plant_factory(args: argparse.Namespace) -> tuple[Callable[[], Plant], int, StepgenConfig | None]:
+    _check_method(args)
     servo = round(time_s(args.servo_period, "--servo-period") * 1e9)
+    if servo < 1000:
+        raise ConfigError(f"--servo-period {args.servo_period}: below 1 us is not a servo thread")
     if args.plant == "stepgen":
         cfg = StepgenConfig(
             base_period_ns=round(time_s(args.base_period, "--base-period") * 1e9),
@@ -233,6 +259,101 @@ def write_plot(res: TuneResult, path: str) -> None:
     plt.close(fig)
 
 
+def stage_png(stage: Stage, step: float) -> bytes:
+    """One stage's step response (command and feedback against time) as PNG bytes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    r = stage.result
+    fig, ax = plt.subplots(figsize=(8, 2.6))
+    t = r.t_s * 1e3
+    ax.plot(t, r.command, lw=1.0, color="0.5", label="command")
+    ax.plot(t, r.feedback, lw=1.0, color="C0", label="feedback")
+    m = stage.metrics
+    if m.band > 0:
+        ax.axhspan(step * (1 - m.band), step * (1 + m.band), color="C2", alpha=0.12, lw=0)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("position (units)")
+    ax.set_title(
+        f"{stage.name}: P {stage.gains.Pgain:.4g}, I {stage.gains.Igain:.4g}, "
+        f"D {stage.gains.Dgain:.4g}",
+        fontsize=9,
+    )
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+_CSS = """
+body{font-family:system-ui,sans-serif;margin:2rem auto;max-width:1100px;padding:0 1rem;color:#222}
+h1{font-size:1.4rem}h2{font-size:1.1rem;margin-top:1.6rem;border-bottom:1px solid #ddd}
+table{border-collapse:collapse;font-size:.9rem}th,td{border:1px solid #ddd;padding:.2rem .5rem}
+th{background:#f4f4f4}td.num{text-align:right;font-variant-numeric:tabular-nums}
+pre{background:#f7f7f7;padding:.5rem;font-size:.85rem}img{max-width:100%;border:1px solid #eee}
+.note{color:#555;font-size:.9rem}
+"""
+
+
+def render_html(res: TuneResult, args: argparse.Namespace, ff_lines: list[str]) -> str:
+    """The self-contained ``--html`` page: every stage's figures and its response plot as an
+    inline PNG, the notes, the INI/HAL lines and the feed-forward comparison (no external
+    request of any kind)."""
+    e = html.escape
+    rows = []
+    figures = []
+    for k, s in enumerate(res.stages, 1):
+        m = s.metrics
+        rows.append(
+            f'<tr><td><a href="#stage-{k}">{e(s.name)}</a></td>'
+            + "".join(
+                f'<td class="num">{v}</td>'
+                for v in (
+                    f"{s.gains.Pgain:.6g}",
+                    f"{s.gains.Igain:.6g}",
+                    f"{s.gains.Dgain:.6g}",
+                    e(_fmt(m.rise_s)),
+                    f"{m.overshoot:.1%}",
+                    e(_fmt(m.settling_s)),
+                    f"{m.steady_state_error:.3g}",
+                )
+            )
+            + f"<td>{e(s.note)}</td></tr>"
+        )
+        png = base64.b64encode(stage_png(s, args.step)).decode("ascii")
+        figures.append(
+            f'<h3 id="stage-{k}">{e(s.name)}</h3><p class="note">{e(s.note)}</p>'
+            f'<img alt="step response, {e(s.name)}" src="data:image/png;base64,{png}">'
+        )
+    notes = "".join(f"<li>{e(n)}</li>" for n in res.notes)
+    lines = ini_lines(res.final, args.joint) + [""] + hal_lines(args.joint)
+    ff = "\n".join(line for line in ff_lines if line)
+    body = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        "<title>stepgen tune</title>",
+        f"<style>{_CSS}</style></head><body>",
+        "<h1>stepgen tune: the integrator's manual method</h1>",
+        f'<p id="ultimate">Ultimate gain Ku = {res.ku:.6g}, oscillation period Pu = '
+        f"{res.pu:.6g} s ({res.tries} responses; plant {e(args.plant)}, step {args.step:g} "
+        f"units, settling band {args.band:.0%}, --settle {e(str(args.settle))}).</p>",
+        '<h2>Stages</h2><table class="stages"><tr><th>stage</th><th>P</th><th>I</th><th>D</th>'
+        "<th>rise</th><th>overshoot</th><th>settling</th><th>steady-state error</th>"
+        f"<th>decision</th></tr>{''.join(rows)}</table>",
+        f'<ul class="notes">{notes}</ul>' if notes else "",
+        f'<h2>Final gains</h2><pre class="ini">{e(chr(10).join(lines))}</pre>',
+        f'<p class="feedforward">{e(ff)}</p>' if ff else "",
+        "<h2>Step responses</h2>",
+        *figures,
+        '<p class="note">Made by stepgen tune (a model; times in s).</p></body></html>',
+    ]
+    return "\n".join(b for b in body if b) + "\n"
+
+
 def _finite(x: Any) -> Any:
     """JSON has no inf/NaN: they become null."""
     if isinstance(x, float):
@@ -268,6 +389,8 @@ def run(args: argparse.Namespace) -> int:
         ]
     if args.plot:
         write_plot(res, args.plot)
+    if args.html:
+        atomic_write(args.html, render_html(res, args, ff_lines))
     if args.format == "json":
         doc = {
             "ku": res.ku,

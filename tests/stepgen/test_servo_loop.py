@@ -172,8 +172,8 @@ def test_quadrature_round_trip() -> None:
     assert len(counts) > 10 and np.all(np.abs(np.diff(counts)) == 1)
     edges, init = quadrature_edges(t, counts)
     table = [1, 3, 2, 0]
-    state = {"A": init["A"], "B": init["B"]}
-    events = sorted([(int(x), p) for p in "AB" for x in edges[p]])
+    state = {"A": init["phase-A"], "B": init["phase-B"]}
+    events = sorted([(int(x), p[-1]) for p in ("phase-A", "phase-B") for x in edges[p]])
     pos = 0
     for _, p in events:
         state[p] ^= 1
@@ -202,3 +202,4 @@ def test_readme_servo_block_runs(tmp_path, monkeypatch, capsys) -> None:
     assert "following-error check pass" in out
     assert "[JOINT_0]" in out and "setp pid.0.Pgain [JOINT_0]P" in out
     assert (tmp_path / "loop.vcd").stat().st_size > 0
+    assert "data:image/png;base64," in (tmp_path / "tune.html").read_text()
