@@ -75,7 +75,9 @@ __all__ = [
 #: stepgen's timing parameters (ns, u32), in LinuxCNC's order.
 TIMING_PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay")
 _FLOAT_PARAMS = ("position-scale", "maxvel", "maxaccel")
-_INI_REF = re.compile(r"^\[([^\]]+)\](\S+)$")
+#: halcmd's INI substitutions: ``[SECTION]KEY`` and ``[SECTION](KEY)`` (the form that can sit
+#: inside a longer word).
+_INI_REF = re.compile(r"^\[([^\]]+)\](?:\(([^()\s]+)\)|([^()\s]+))$")
 
 
 @dataclass
@@ -239,7 +241,7 @@ def _resolve(value: str, ini: IniFile | None, where: str) -> str:
         return value
     if ini is None:
         raise ConfigError(f"{where}: {value} refers to the INI file (give --ini FILE)")
-    found = ini.get(m.group(1), m.group(2))
+    found = ini.get(m.group(1), m.group(2) or m.group(3))
     if found is None:
         raise ConfigError(f"{where}: {value} is not in {ini.path}")
     return found[0]
@@ -857,7 +859,7 @@ def read_pid_config(
             cfg.sources[pin] = where
             m = _INI_REF.match(raw)
             if m and m.group(1) == section:
-                read_keys.add(m.group(2))
+                read_keys.add(m.group(2) or m.group(3))
         for pin in ("command-deriv", "feedback-deriv", *PID_PINS):
             for signal, members in ph.nets.items():
                 at = next((w for p, w in members if p == f"{inst}.{pin}"), None)

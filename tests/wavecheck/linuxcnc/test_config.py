@@ -209,3 +209,23 @@ def test_bad_thread_period_names_the_line(tmp_path: Path) -> None:
     hal.write_text("\nloadrt threads name1=fast period1=soon\n")
     with pytest.raises(ConfigError, match=rf"{hal}:2: period1 'soon'"):
         read_config(None, hal)
+
+
+def test_parenthesised_ini_references_resolve(tmp_path: Path) -> None:
+    """halcmd substitutes [SECTION](KEY) as well as [SECTION]KEY; the real hm2-stepper HAL file
+    loads its driver with config=[HOSTMOT2](CONFIG)."""
+    ini = tmp_path / "m.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 25000\n[JOINT_0]\nSTEPLEN = 5000\n")
+    hal = tmp_path / "m.hal"
+    hal.write_text("loadrt stepgen step_type=0\nsetp stepgen.0.steplen [JOINT_0](STEPLEN)\n")
+    assert read_config(ini, [hal]).params["steplen"] == 5000
+
+
+def test_the_real_hm2_configuration_reads(tmp_path: Path) -> None:
+    from tests.conftest import SHARED_CAPTURES
+
+    folder = SHARED_CAPTURES.parent / "firmware" / "linuxcnc" / "hm2-stepper"
+    if not folder.exists():
+        pytest.skip(f"shared firmware folder not present: {folder}")
+    cfg = read_config(folder / "5i20.ini", [folder / "hm2-stepper.hal"])
+    assert cfg.base_period_ns is None or cfg.base_period_ns > 0
