@@ -7,7 +7,9 @@
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+import numpy as np
 
 from wavecheck.capture.model import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
@@ -154,6 +156,10 @@ def mapped_channel_names(capture: Capture, mapping: Mapping[str, str]) -> set[st
     return {find_channel(capture, ref, role).name for role, ref in mapping.items()}
 
 
+def _no_stretches() -> tuple[EdgeArray, EdgeArray]:
+    return np.zeros(0, np.int64), np.zeros(0, np.int64)
+
+
 @dataclass
 class RoleSignal:
     """One role's signal at the drive's input (after any inversion)."""
@@ -164,6 +170,8 @@ class RoleSignal:
     edges: EdgeArray
     known_from: int
     inverted: bool
+    unknown: tuple[EdgeArray, EdgeArray] = field(default_factory=_no_stretches)
+    """Closed tick ranges where the level is not known (:meth:`Channel.unknown_stretches`)."""
 
 
 @dataclass
@@ -212,7 +220,8 @@ def build_interface(
     Raises:
         UsageError: unknown role or channel, an ambiguous channel name (see
             :func:`find_channel`), one channel mapped to two roles, an inverted role that is
-            not mapped, or a mapped channel that goes ``x``/``z`` in the middle of the capture.
+            not mapped. A channel that goes ``x``/``z`` is mapped: its unknown stretches
+            (:attr:`RoleSignal.unknown`) are left out of the checks.
     """
     inverted = {_role(r) for r in invert}
     for role in inverted:
@@ -230,13 +239,6 @@ def build_interface(
                 f"{roles_of[ch.index]} and {role}; one channel can have one role"
             )
         roles_of[ch.index] = role
-        if len(ch.xz_times):
-            t = capture.timebase.seconds(int(ch.xz_times[0]))
-            raise UsageError(
-                f"{capture.path}: channel {ch.name!r} (mapped as {role}) is x/z at "
-                f"{float(t):.9g} s (and {len(ch.xz_times) - 1} more times); an unknown level "
-                "cannot be checked"
-            )
         flip = role in inverted
         signals[role] = RoleSignal(
             role=role,
@@ -245,5 +247,6 @@ def build_interface(
             edges=ch.edges,
             known_from=ch.known_from,
             inverted=flip,
+            unknown=ch.unknown_stretches(capture.start),
         )
     return StepInterface(capture=capture, signals=signals)

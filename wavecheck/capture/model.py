@@ -16,9 +16,11 @@ import numpy.typing as npt
 from wavecheck.errors import UsageError
 from wavecheck.timebase import Timebase
 
-__all__ = ["Capture", "Channel", "EdgeArray"]
+__all__ = ["NEVER", "Capture", "Channel", "EdgeArray"]
 
 EdgeArray = npt.NDArray[np.int64]
+#: The end of an unknown stretch that lasts to the end of the capture (the largest int64).
+NEVER = int(np.iinfo(np.int64).max)
 
 
 @dataclass
@@ -33,7 +35,11 @@ class Channel:
         known_from: first tick at which the level is known (later than the capture start when a
             VCD begins with ``x``).
         xz_times: ticks at which the value became ``x`` or ``z`` after :attr:`known_from`
-            (empty for logic-analyzer captures); a channel with any cannot be checked.
+            (empty for logic-analyzer captures).
+        xz_ends: for each of :attr:`xz_times`, the tick at which a known value came back
+            (:data:`NEVER` when it stays unknown to the end). An edge at that tick may be one
+            hidden in the stretch, so :meth:`unknown_stretches` include it.
+        never_known: the level is never known (``x`` all along); :attr:`initial` means nothing.
     """
 
     name: str
@@ -42,6 +48,23 @@ class Channel:
     edges: EdgeArray
     known_from: int = 0
     xz_times: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    xz_ends: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    never_known: bool = False
+
+    def unknown_stretches(self, start: int) -> tuple[EdgeArray, EdgeArray]:
+        """Where the level is not known, as closed tick ranges ``[starts[i], ends[i]]`` in time
+        order, for a capture starting at tick ``start``: ``[start, known_from]`` when the
+        level is known only later, then each ``x``/``z`` stretch up to the tick a known value
+        came back (:data:`NEVER` for one that lasts to the end)."""
+        starts, ends = self.xz_times, self.xz_ends
+        if len(ends) != len(starts):  # a reader that lists only where x/z began
+            ends = np.full(len(starts), NEVER, dtype=np.int64)
+        if self.never_known:
+            return np.array([start], np.int64), np.array([NEVER], np.int64)
+        if self.known_from > start:
+            starts = np.concatenate([[start], starts]).astype(np.int64)
+            ends = np.concatenate([[self.known_from], ends]).astype(np.int64)
+        return starts, ends
 
     @property
     def rising(self) -> int:

@@ -483,6 +483,7 @@ class SignalEdges:
     known_from: int | None  # tick of the first known value; None: never known
     edges: npt.NDArray[np.int64]  # ticks where the known level changes
     xz_times: npt.NDArray[np.int64]  # ticks where a known level turns x/z
+    xz_ends: npt.NDArray[np.int64]  # for each, the tick a known value comes back (or NEVER)
 
 
 def build_capture(
@@ -525,6 +526,8 @@ def build_capture(
             edges=sig.edges,
             known_from=sig.known_from if sig.known_from is not None else end,
             xz_times=sig.xz_times,
+            xz_ends=sig.xz_ends,
+            never_known=sig.known_from is None,
         )
         for i, (name, sig) in enumerate(zip(layout.names, signals, strict=True))
     ]
