@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
@@ -115,10 +116,14 @@ def _hierarchical(channels: list[Channel], ref: str) -> list[Channel]:
     return hits
 
 
+_BIT = re.compile(r"^(.+?)\s*\[\s*(\d+)\s*\]$")
+
+
 def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> Channel:
     """The channel ``ref`` names: its exact name, else its index (``"3"``), else another name
     the file gives it, else the unique channel whose hierarchical name ends with ``ref``
-    (``s2.step`` for ``tb.s2.step``; any case if no exact-case one).
+    (``s2.step`` for ``tb.s2.step``; any case if no exact-case one), else bit ``i`` of a
+    vector for ``name[i]`` (:meth:`Capture.bit`: ``stout[3]``, ``tb.dut.stout[3]``).
 
     Raises:
         UsageError: no such channel (the channels are listed); a name two channels share
@@ -148,6 +153,9 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
                 f"{capture.path}: {what} is ambiguous: candidates {names}{more}; "
                 "map by the full name or by index"
             )
+    bit = _BIT.match(stripped)
+    if bit and capture.vectors:
+        return capture.bit(bit.group(1), int(bit.group(2)))
     return capture.channel(ref)
 
 

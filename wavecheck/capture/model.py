@@ -16,7 +16,7 @@ import numpy.typing as npt
 from wavecheck.errors import UsageError
 from wavecheck.timebase import Timebase
 
-__all__ = ["NEVER", "Capture", "Channel", "EdgeArray"]
+__all__ = ["NEVER", "Capture", "Channel", "EdgeArray", "Vector"]
 
 EdgeArray = npt.NDArray[np.int64]
 #: The end of an unknown stretch that lasts to the end of the capture (the largest int64).
@@ -82,6 +82,34 @@ class Channel:
         return self.initial ^ ((i + 1) & 1)
 
 
+@dataclass(frozen=True)
+class Vector:
+    """A multi-bit signal of the file whose bits can be mapped as channels.
+
+    Attributes:
+        width: number of bits.
+        msb: the declared index of the leftmost bit (``3`` for ``[3:0]``).
+        lsb: the declared index of the rightmost bit.
+        key: the name the file's reader knows it by (for reading its changes again).
+    """
+
+    width: int
+    msb: int
+    lsb: int
+    key: str
+
+    @property
+    def range_text(self) -> str:
+        """The declared range, ``"[3:0]"``."""
+        return f"[{self.msb}:{self.lsb}]"
+
+    def position(self, bit: int) -> int | None:
+        """Position of declared index ``bit`` counted from the rightmost bit (0), or None when
+        it is outside the range."""
+        p = bit - self.lsb if self.msb >= self.lsb else self.lsb - bit
+        return p if 0 <= p < self.width else None
+
+
 @dataclass
 class Capture:
     """A whole capture: channels, exact time base, resolution and where it came from.
@@ -104,6 +132,10 @@ class Capture:
         time_known: False when the file states no sample rate and none was given (read for
             ``wavecheck info`` only): ticks are samples of unknown length, the timebase is a
             placeholder, and only counts (edges, samples) mean anything.
+        vectors: the file's bit vectors by full name (``tb.dut.stout``), whose bits
+            :meth:`bit` turns into channels when they are mapped.
+        bit_source: the file :meth:`bit` reads vector changes from (None: it cannot, e.g. a
+            capture read from standard input).
     """
 
     path: str
@@ -118,6 +150,49 @@ class Capture:
     skipped: dict[str, str] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
     time_known: bool = True
+    vectors: dict[str, Vector] = field(default_factory=dict)
+    bit_source: str | None = None
+
+    def bit(self, ref: str, bit: int) -> Channel:
+        """Bit ``bit`` (an index of the declared range, ``stout[3]``) of the vector ``ref`` as a
+        channel, its edges extracted from the vector's value changes on first use and then kept
+        in :attr:`channels`. ``ref`` is the vector's full name or any unique dotted tail of it
+        (``stout``, ``dut.stout``; any case when no exact-case one).
+
+        Raises:
+            UsageError: no such vector, several match, the bit is outside the range, or the
+                file cannot be read again (standard input).
+        """
+        from wavecheck.capture.wellen import load_bit
+
+        name = f"{ref}[{bit}]"
+        for ch in self.channels:
+            if ch.name == name:
+                return ch
+        hits = [k for k in self.vectors if k == ref]
+        if not hits:
+            hits = [k for k in self.vectors if k.endswith("." + ref)]
+        if not hits:
+            low = "." + ref.lower()
+            hits = [k for k in self.vectors if ("." + k.lower()).endswith(low)]
+        if not hits:
+            known = ", ".join(f"{k}{v.range_text}" for k, v in list(self.vectors.items())[:8])
+            raise UsageError(
+                f"{self.path}: no vector {ref!r} to take bit {bit} of (vectors: {known or 'none'})"
+            )
+        if len(hits) > 1:
+            raise UsageError(
+                f"{self.path}: {name!r} is ambiguous: vectors {', '.join(hits[:8])}; "
+                "give more of the hierarchical name"
+            )
+        vec = self.vectors[hits[0]]
+        full = f"{hits[0]}[{bit}]"
+        for ch in self.channels:
+            if ch.name == full:
+                return ch
+        ch = load_bit(self, hits[0], vec, bit)
+        self.channels.append(ch)
+        return ch
 
     @property
     def duration_s(self) -> Fraction:

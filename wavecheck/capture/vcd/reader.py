@@ -42,6 +42,7 @@ from wavecheck.capture.vcd.header import (
     layout_of,
     open_vcd,
     read_header,
+    vectors_of,
 )
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
@@ -188,6 +189,11 @@ class _EdgeBuilder:
                 )
             )
         return out
+
+
+#: The change-to-edge builder, shared with the other simulator-dump readers
+#: (:mod:`wavecheck.capture.wellen`) so every format has the VCD reader's semantics.
+EdgeBuilder = _EdgeBuilder
 
 
 def _concat(parts: list[npt.NDArray[np.int64]]) -> npt.NDArray[np.int64]:
@@ -551,7 +557,7 @@ def read_vcd(
                 )
             # nothing consumed: a token or $comment longer than a chunk, read more (up to the cap)
             want = chunk_bytes if n else min(max(2 * want, len(buf) + 1), max_token_bytes + 1)
-    return build_capture(
+    cap = build_capture(
         path,
         header,
         lay,
@@ -564,6 +570,9 @@ def read_vcd(
         samplerate,
         resolution_s,
     )
+    cap.vectors = vectors_of(header)
+    cap.bit_source = None if source is not None else os.fspath(path)
+    return cap
 
 
 def _clip(token: bytes, keep: int = 30) -> str:

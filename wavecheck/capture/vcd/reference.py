@@ -23,6 +23,7 @@ from wavecheck.capture.vcd.header import (
     layout_of,
     open_vcd,
     parse_header,
+    vectors_of,
 )
 from wavecheck.errors import CaptureError
 
@@ -117,6 +118,9 @@ def read_vcd_reference(
                 np.array(xz_end, dtype=np.int64),
             )
         )
-    return build_capture(
+    cap = build_capture(
         path, header, lay, tb, signals, first, time, pre, notes, samplerate, resolution_s
     )
+    cap.vectors = vectors_of(header)
+    cap.bit_source = os.fspath(path)
+    return cap
