@@ -143,6 +143,9 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
     known = stripped.isdigit() or ref in capture.aliases or stripped in capture.aliases
     if stripped and not known and ref not in capture.skipped and stripped not in capture.skipped:
         cands = _hierarchical(capture.channels, stripped)
+        if not cands:  # another name of a channel (a port of a submodule) may end with it
+            tails = {t for a, t in capture.aliases.items() if a.endswith("." + stripped)}
+            cands = [c for c in capture.channels if c.name in tails]
         if len(cands) == 1:
             return cands[0]
         if len(cands) > 1:

@@ -173,15 +173,25 @@ def _known(
     intervals: Intervals, iface: StepInterface, st: StepType, r: Rule
 ) -> tuple[Intervals, EdgeArray]:
     """Split off the intervals that touch an unknown stretch of a signal the rule involves (an
-    event of that signal may be hidden there): the rest, and the start ticks of those left out."""
+    event of that signal may be hidden there): the rest, and where the unknown ones are — the
+    start tick of each interval left out, and the start of each stretch no measured interval
+    touches (an interval hidden wholly inside it, such as a DIR change there before a step)."""
     starts, ends = unknown_stretches(iface, r.roles_for(st))
-    if len(starts) == 0 or len(intervals) == 0:
+    if len(starts) == 0:
         return intervals, np.zeros(0, dtype=np.int64)
     lo = np.minimum(intervals.start, intervals.end)
     hi = np.maximum(intervals.start, intervals.end)
     out = touches_stretches(lo, hi, starts, ends)
     keep = ~out
-    return Intervals(intervals.start[keep], intervals.end[keep]), intervals.start[out]
+    # stretches that an interval left out overlaps (by the running max of their ends)
+    order = np.argsort(lo[out], kind="stable")
+    olo, ohi = lo[out][order], np.maximum.accumulate(hi[out][order])
+    last = np.searchsorted(olo, ends, side="right") - 1
+    covered = np.zeros(len(starts), dtype=np.bool_)
+    has = last >= 0
+    covered[has] = ohi[last[has]] >= starts[has]
+    where = np.sort(np.concatenate([intervals.start[out], starts[~covered]]))
+    return Intervals(intervals.start[keep], intervals.end[keep]), where
 
 
 @dataclass(frozen=True)
