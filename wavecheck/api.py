@@ -85,9 +85,7 @@ def check(
     j = None
     if latency is not None:
         j = (
-            parse_option(latency, "latency", "time")
-            if isinstance(latency, str)
-            else Fraction(latency)
+            parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
         ) * 10**9
     res: str | Fraction | None = resolution
     if isinstance(resolution, str):

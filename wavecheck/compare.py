@@ -261,7 +261,5 @@ def compare(
             golden, drive, golden_map, golden_invert, step_type, forward_level=forward_level
         )
     except UsageError as err:
-        raise UsageError(
-            f"golden {err} (the golden's channels are mapped with --golden-map)"
-        ) from None
+        raise UsageError(f"golden {err} (the golden's channels are mapped with --golden-map)") from None
     return compare_reports(checked, reference, tolerance_ns, align)

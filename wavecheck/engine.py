@@ -25,7 +25,6 @@ from wavecheck.units import format_time, parse_time
 
 __all__ = ["auto_map", "default_step_type", "resolve_resolution_ns", "run_check"]
 
-
 def _leaf(name: str) -> str:
     """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
     return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
@@ -163,9 +162,7 @@ def run_check(
         raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {pulse_level!r}")
     level = generator_pulse_level(iface, st, pulse_level)
     ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge, level)
-    own = next(
-        (r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None
-    )
+    own = next((r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None)
     rates = max_step_rates(
         iface,
         st,

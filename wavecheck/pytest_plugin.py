@@ -274,9 +274,7 @@ def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str
     if r.verdict == "indeterminate" and r.decide_samplerate_hz is not None:
         from wavecheck.units import format_frequency
 
-        lines.append(
-            f"  sampling faster than {format_frequency(r.decide_samplerate_hz)} would decide it"
-        )
+        lines.append(f"  sampling faster than {format_frequency(r.decide_samplerate_hz)} would decide it")
     lines.append(
         f"  capture {report.capture.path} vs drive {report.drive.id} "
         f"(step type {report.step_type.number}, {report.steps.count} steps)"

@@ -49,7 +49,6 @@ __all__ = [
     "summary_line",
 ]
 
-
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
     out = p.add_argument_group("reports")  # output_file: checked before any work (wavecheck.output)
@@ -67,10 +66,8 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "written as FILE.vcd beside it)",
     )
     out.add_argument(
-        "-q",
-        "--quiet",
-        action="store_true",
-        help="no progress bar (it is off anyway when stderr is not a terminal)",
+        "-q", "--quiet", action="store_true", help="no progress bar (it is off anyway when "
+        "stderr is not a terminal)"
     )
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)

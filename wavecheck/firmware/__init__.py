@@ -18,14 +18,7 @@ from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smooth
 from wavecheck.firmware._text import read_text
 from wavecheck.firmware.model import FIRMWARES, FirmwareConfig, GeneratorGuarantee, Guaranteed
 
-__all__ = [
-    "FIRMWARES",
-    "FirmwareConfig",
-    "GeneratorGuarantee",
-    "Guaranteed",
-    "detect",
-    "read_firmware",
-]
+__all__ = ["FIRMWARES", "FirmwareConfig", "GeneratorGuarantee", "Guaranteed", "detect", "read_firmware"]
 
 _DETECT = (
     ("grbl", grbl.looks_like),

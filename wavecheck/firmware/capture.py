@@ -74,111 +74,44 @@ def _time(
     measured = rr.min_measured_ns if rr is not None else None
     at = rr.min_margin_at_s if rr is not None else None
     if configured is None:
-        return Comparison(
-            what,
-            rule,
-            None,
-            measured,
-            "ns",
-            at,
-            fig.setting,
-            where,
-            "unchecked",
-            f"the configuration guarantees no {label}",
-        )
+        return Comparison(what, rule, None, measured, "ns", at, fig.setting, where, "unchecked",
+                          f"the configuration guarantees no {label}")
     if measured is None:
-        return Comparison(
-            what,
-            rule,
-            configured,
-            None,
-            "ns",
-            None,
-            fig.setting,
-            where,
-            "unchecked",
-            f"configured {format_ns(configured)} {label}; not measured (the drive states no {rule})",
-        )
+        return Comparison(what, rule, configured, None, "ns", None, fig.setting, where, "unchecked",
+                          f"configured {format_ns(configured)} {label}; not measured (the drive states no {rule})")
     t = report.resolution_ns
-    exact = (
-        "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
-    )
+    exact = "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
     place = f" at {format_time(at)}" if at is not None else ""
     if measured + t < configured:
-        return Comparison(
-            what,
-            rule,
-            configured,
-            measured,
-            "ns",
-            at,
-            fig.setting,
-            where,
-            "fail",
-            f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
-            f"measured {format_ns(measured)}{place}{exact}",
-        )
-    return Comparison(
-        what,
-        rule,
-        configured,
-        measured,
-        "ns",
-        at,
-        fig.setting,
-        where,
-        "pass",
-        f"configured {format_ns(configured)} {label}; shortest measured {format_ns(measured)}",
-    )
+        return Comparison(what, rule, configured, measured, "ns", at, fig.setting, where, "fail",
+                          f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
+                          f"measured {format_ns(measured)}{place}{exact}")
+    return Comparison(what, rule, configured, measured, "ns", at, fig.setting, where, "pass",
+                      f"configured {format_ns(configured)} {label}; shortest measured {format_ns(measured)}")
 
 
-def firmware_check(
-    report: Report, config: FirmwareConfig, axis: GeneratorGuarantee
-) -> FirmwareCheck:
+def firmware_check(report: Report, config: FirmwareConfig, axis: GeneratorGuarantee) -> FirmwareCheck:
     """Compare ``report``'s capture with ``axis``'s configured figures (see the module doc)."""
     level = pulse_level(report.interface, report.step_type, axis.pulse_level)
     pulse_rule, space_rule = ("step_high", "step_low") if level else ("step_low", "step_high")
     leading = "rising" if level else "falling"
     out = [_time(report, "pulse", pulse_rule, axis.pulse, Fraction(0), "pulses")]
     if axis.both_edges:
-        out.append(
-            _time(report, "space", space_rule, axis.idle, Fraction(0), "space between edges")
-        )
+        out.append(_time(report, "space", space_rule, axis.idle, Fraction(0), "space between edges"))
     trailing = report.active_edge not in (leading, "both") and axis.pulse.value is not None
     offset = axis.pulse.value if trailing and axis.pulse.value is not None else Fraction(0)
     out.append(_time(report, "dir_setup", "dir_setup", axis.dir_setup, offset, "DIR setup"))
     cfg_rate, seen = axis.max_rate.value, report.rates.observed
     if cfg_rate is None or seen is None:
-        out.append(
-            Comparison(
-                "rate",
-                "",
-                cfg_rate,
-                seen,
-                "Hz",
-                None,
-                axis.max_rate.setting,
-                axis.max_rate.where,
-                "unchecked",
-                "no configured maximum or no steps",
-            )
-        )
+        out.append(Comparison("rate", "", cfg_rate, seen, "Hz", None, axis.max_rate.setting,
+                              axis.max_rate.where, "unchecked", "no configured maximum or no steps"))
     else:
         at = report.rates.observed_at_s
         ok = seen <= cfg_rate
-        out.append(
-            Comparison(
-                "rate",
-                "",
-                cfg_rate,
-                seen,
-                "Hz",
-                at,
-                axis.max_rate.setting,
-                axis.max_rate.where,
-                "pass" if ok else "fail",
-                f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
-                f"{format_rate(seen)}" + ("" if ok or at is None else f" at {format_time(at)}"),
-            )
-        )
+        out.append(Comparison(
+            "rate", "", cfg_rate, seen, "Hz", at, axis.max_rate.setting, axis.max_rate.where,
+            "pass" if ok else "fail",
+            f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
+            f"{format_rate(seen)}" + ("" if ok or at is None else f" at {format_time(at)}"),
+        ))
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out))

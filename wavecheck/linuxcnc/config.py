@@ -99,9 +99,7 @@ def read_ini(path: str | os.PathLike[str]) -> IniFile:
             continue
         if line.startswith("["):
             if not line.endswith("]"):
-                raise ConfigError(
-                    f"{path}: line {no}: bad section header {line!r} (expected [NAME])"
-                )
+                raise ConfigError(f"{path}: line {no}: bad section header {line!r} (expected [NAME])")
             section = line[1:-1].strip()
             ini.sections.setdefault(section, {})
             continue
@@ -296,9 +294,7 @@ def _parse_loadrt_stepgen(args: dict[str, str], cfg: LinuxCNCConfig, where: str)
             try:
                 cfg.user_step_type = tuple(int(v, 0) for v in value.split(",") if v)
             except ValueError:
-                raise ConfigError(
-                    f"{where}: user_step_type={value} is not a list of numbers"
-                ) from None
+                raise ConfigError(f"{where}: user_step_type={value} is not a list of numbers") from None
             cfg.sources["user_step_type"] = where
 
 
@@ -308,9 +304,7 @@ def _parse_loadrt_threads(args: dict[str, str], cfg: LinuxCNCConfig, where: str)
         period = args.get(f"period{i}")
         if period is None:
             if name is not None:
-                cfg.ignored.append(
-                    f"ignored: thread {name} ({where}) has no period{i}= (its period is not known)"
-                )
+                cfg.ignored.append(f"ignored: thread {name} ({where}) has no period{i}= (its period is not known)")
             continue
         name = name or f"thread{i}"
         cfg.threads[name] = _thread_period(period, where, f"period{i}")
@@ -392,9 +386,7 @@ def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: 
         cfg.enable = value.strip().lower() in ("1", "true")
         cfg.sources["enable"] = where
     else:
-        cfg.ignored.append(
-            f"ignored: setp {name} {value} ({where}) (not a stepgen setting the model has)"
-        )
+        cfg.ignored.append(f"ignored: setp {name} {value} ({where}) (not a stepgen setting the model has)")
 
 
 def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
@@ -551,9 +543,7 @@ def config_rates(
     p = cfg.require_base_period()
     j = None if latency_ns is None else Fraction(latency_ns)
 
-    def _rates(
-        config: Fraction | None, safe: Fraction | None, notes: tuple[str, ...]
-    ) -> ConfigRates:
+    def _rates(config: Fraction | None, safe: Fraction | None, notes: tuple[str, ...]) -> ConfigRates:
         return ConfigRates(config, safe, notes, cfg.channel, p, j)
 
     n = cfg.periods()
