@@ -17,11 +17,12 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from wavecheck.capture.model import Capture
+from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
 from wavecheck.errors import CaptureError, UsageError
 
 __all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
 
-_ALIASES = {"srzip": "sr", "sigrok": "sr"}
+_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv"}
 _BY_EXTENSION = {
     ".sr": "sr",
     ".vcd": "vcd",
@@ -70,6 +71,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(path, None, "the file is empty")
     if head.startswith(_ZIP_MAGIC):
         return "sr"
+    if head.removeprefix(b"\xef\xbb\xbf").startswith(SALEAE_CSV_HEADER):
+        return "saleae-csv"
     if head.startswith(_GHW_MAGIC):
         return "ghw"
     if head.startswith(_FST_MAGIC):
@@ -82,7 +85,7 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(
             path,
             None,
-            f"{what} (give --input-format: sr, vcd, fst, ghw, or a sigrok-cli format such "
+            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, or a sigrok-cli format such "
             "as csv, binary, chronovu-la8, logicport)",
         )
     return _BY_EXTENSION[ext]
@@ -240,6 +243,10 @@ def open_capture(
         return read_sr(
             path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
         )
+    if name == "saleae-csv":
+        from wavecheck.capture.saleae import read_saleae_csv
+
+        return read_saleae_csv(path, samplerate=samplerate, resolution_s=resolution_s)
     if name in ("fst", "ghw"):
         if options:
             raise UsageError(f"--input-format {fmt!r}: {name} takes no options")
