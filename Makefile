@@ -14,13 +14,17 @@ $(VENV_STAMP): pyproject.toml
 	@touch $@
 
 # Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks),
-# chromium (the HTML report test), gtkwave + xvfb (the save-file test). Installed when missing.
+# chromium (the HTML report test), gtkwave + xvfb (the save-file test; gtkwave's fst2vcd reads
+# FST), iverilog + ghdl (the simulators whose VCD, FST and GHW dumps the format tests compare).
+# Installed when missing.
 system-deps:
 	@missing=""; \
 	command -v sigrok-cli >/dev/null || missing="$$missing sigrok-cli"; \
 	command -v chromium   >/dev/null || missing="$$missing chromium"; \
 	command -v gtkwave    >/dev/null || missing="$$missing gtkwave"; \
 	command -v xvfb-run   >/dev/null || missing="$$missing xvfb xauth"; \
+	command -v iverilog   >/dev/null || missing="$$missing iverilog"; \
+	command -v ghdl       >/dev/null || missing="$$missing ghdl"; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "installing from Debian:$$missing"; \

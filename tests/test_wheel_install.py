@@ -102,7 +102,7 @@ def _installed_not_from_the_source_tree(venv: Path, outside: Path) -> None:
     code = (
         "import importlib.util as u, wavecheck, stepgen; "
         "print(wavecheck.__file__); print(stepgen.__file__); "
-        "print([m for m in ('pywellen', 'vcdvcd', 'tools', 'stepgen.story') if u.find_spec(m)])"
+        "print([m for m in ('vcdvcd', 'pylibfst', 'tools', 'stepgen.story') if u.find_spec(m)])"
     )
     lines = _must(_run([venv / "python", "-c", code], outside)).stdout.splitlines()
     for path in lines[:2]:

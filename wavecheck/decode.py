@@ -8,8 +8,10 @@ the drive's input (after ``--invert``).
   which DIR level is forward (default 0, LinuxCNC's and grbl's convention: DIR = 1 when moving
   negative). A DIR change at the same tick as an active edge makes that step's direction
   ambiguous: its direction is 0 and it is listed in :attr:`StepEvents.ambiguous` (the checks
-  report it as both a ``dir_setup`` and a ``dir_hold`` interval of 0). Steps up to the tick where
-  DIR's level becomes known, or with no DIR mapped, also have direction 0 ("unknown").
+  report it as both a ``dir_setup`` and a ``dir_hold`` interval of 0). Steps inside an unknown
+  stretch of DIR (``x`` at the start of a VCD up to the tick its level becomes known, or a later
+  ``x``/``z`` up to the tick a known value comes back), or of STEP itself (the edge ending such a
+  stretch may be a hidden one), or with no DIR mapped, also have direction 0 ("unknown").
 - Type 1 (up/down): one forward step per active UP edge, one reverse step per active DOWN edge.
   Active edges of UP and DOWN at the same tick are ambiguous.
 - Types 2–15 (state tables of :mod:`wavecheck.linuxcnc.steptypes`): the phase outputs form a state at every
@@ -17,14 +19,15 @@ the drive's input (after ``--invert``).
   previous one a reverse step. Any other move (a non-neighbour, or a state not in the table) is a
   ``state_sequence`` error, listed in :attr:`StepEvents.sequence_errors`, not a crash. Moving
   from a state not in the table back into it re-synchronises without a step or a second error.
-  While a phase is not known yet (``x`` at the start of a VCD), the state is not known: state
-  changes up to its ``known_from`` tick are not decoded.
+  While a phase is not known (``x``/``z``, up to and including the tick a known value comes
+  back), the state is not known: state changes inside a phase's unknown stretch are not decoded.
 
 Everything is vectorised over the whole edge arrays (numpy ``searchsorted`` / ``diff``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,8 +43,11 @@ __all__ = [
     "StepEvents",
     "active_edges",
     "decode",
+    "in_stretches",
     "level_before",
     "phase_states",
+    "touches_stretches",
+    "unknown_stretches",
 ]
 
 _EMPTY = np.zeros(0, dtype=np.int64)
@@ -137,6 +143,42 @@ def level_before(
     return level, same
 
 
+def unknown_stretches(iface: StepInterface, roles: Iterable[str]) -> tuple[EdgeArray, EdgeArray]:
+    """The union of the unknown stretches of the mapped ``roles``: disjoint closed tick ranges
+    ``[starts[i], ends[i]]`` in time order (:meth:`wavecheck.capture.model.Channel.unknown_stretches`)."""
+    parts = [s.unknown for s in (iface.get(r) for r in roles) if s is not None]
+    starts = np.concatenate([p[0] for p in parts]) if parts else _empty()
+    ends = np.concatenate([p[1] for p in parts]) if parts else _empty()
+    if len(starts) <= 1:
+        return starts.astype(np.int64), ends.astype(np.int64)
+    order = np.argsort(starts, kind="stable")
+    starts, ends = starts[order], ends[order]
+    reach = np.maximum.accumulate(ends)
+    new = np.ones(len(starts), dtype=np.bool_)
+    new[1:] = starts[1:] > reach[:-1]
+    first = np.flatnonzero(new)
+    last = np.concatenate([first[1:], [len(starts)]]) - 1
+    return starts[first], reach[last]
+
+
+def in_stretches(ticks: EdgeArray, starts: EdgeArray, ends: EdgeArray) -> npt.NDArray[np.bool_]:
+    """Whether each tick lies in one of the disjoint closed ranges ``[starts[i], ends[i]]``."""
+    return touches_stretches(ticks, ticks, starts, ends)
+
+
+def touches_stretches(
+    a: EdgeArray, b: EdgeArray, starts: EdgeArray, ends: EdgeArray
+) -> npt.NDArray[np.bool_]:
+    """Whether each closed interval ``[a[j], b[j]]`` overlaps one of the disjoint closed ranges
+    ``[starts[i], ends[i]]`` (in time order)."""
+    if len(starts) == 0:
+        return np.zeros(len(a), dtype=np.bool_)
+    k = np.searchsorted(ends, a, side="left")  # the first range not ending before a
+    hit = k < len(ends)
+    hit[hit] = starts[k[hit]] <= b[hit]
+    return hit
+
+
 def _positions(direction: npt.NDArray[np.int8]) -> EdgeArray:
     return np.cumsum(direction, dtype=np.int64)
 
@@ -150,8 +192,7 @@ def _decode_step_dir(iface: StepInterface, edge: ActiveEdge, forward_level: int)
         return StepEvents(ticks, direction, _positions(direction))
     level, same = level_before(dir_sig, ticks)
     direction = np.where(level == forward_level, 1, -1).astype(np.int8)
-    dir_unknown = iface.unknown_until(("dir",))
-    unknown = same if dir_unknown is None else same | (ticks <= dir_unknown)
+    unknown = same | in_stretches(ticks, *unknown_stretches(iface, ("step", "dir")))
     direction[unknown] = 0
     return StepEvents(ticks, direction, _positions(direction), ambiguous=ticks[same])
 
@@ -197,9 +238,9 @@ def phase_states(
 def _decode_table(iface: StepInterface, st: StepType) -> StepEvents:
     ticks, states, initial = phase_states(iface, st.outputs)
     prev_states = np.concatenate([[initial], states[:-1]]).astype(np.int64)
-    unknown_until = iface.unknown_until(st.outputs)
-    if unknown_until is not None:  # the state is known only after every phase is
-        known = ticks > unknown_until
+    unknown = unknown_stretches(iface, st.outputs)
+    if len(unknown[0]):  # the state is known only where every phase is
+        known = ~in_stretches(ticks, *unknown)
         ticks, states, prev_states = ticks[known], states[known], prev_states[known]
     cycle = st.cycle
     lookup = np.full(32, -1, dtype=np.int64)

@@ -6,8 +6,11 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+import numpy as np
 
 from wavecheck.capture.model import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
@@ -115,10 +118,14 @@ def _hierarchical(channels: list[Channel], ref: str) -> list[Channel]:
     return hits
 
 
+_BIT = re.compile(r"^(.+?)\s*\[\s*(\d+)\s*\]$")
+
+
 def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> Channel:
     """The channel ``ref`` names: its exact name, else its index (``"3"``), else another name
     the file gives it, else the unique channel whose hierarchical name ends with ``ref``
-    (``s2.step`` for ``tb.s2.step``; any case if no exact-case one).
+    (``s2.step`` for ``tb.s2.step``; any case if no exact-case one), else bit ``i`` of a
+    vector for ``name[i]`` (:meth:`Capture.bit`: ``stout[3]``, ``tb.dut.stout[3]``).
 
     Raises:
         UsageError: no such channel (the channels are listed); a name two channels share
@@ -138,6 +145,9 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
     known = stripped.isdigit() or ref in capture.aliases or stripped in capture.aliases
     if stripped and not known and ref not in capture.skipped and stripped not in capture.skipped:
         cands = _hierarchical(capture.channels, stripped)
+        if not cands:  # another name of a channel (a port of a submodule) may end with it
+            tails = {t for a, t in capture.aliases.items() if a.endswith("." + stripped)}
+            cands = [c for c in capture.channels if c.name in tails]
         if len(cands) == 1:
             return cands[0]
         if len(cands) > 1:
@@ -148,12 +158,19 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
                 f"{capture.path}: {what} is ambiguous: candidates {names}{more}; "
                 "map by the full name or by index"
             )
+    bit = _BIT.match(stripped)
+    if bit and capture.vectors:
+        return capture.bit(bit.group(1), int(bit.group(2)))
     return capture.channel(ref)
 
 
 def mapped_channel_names(capture: Capture, mapping: Mapping[str, str]) -> set[str]:
     """The names of the channels ``mapping`` (role → channel name or index) resolves to."""
     return {find_channel(capture, ref, role).name for role, ref in mapping.items()}
+
+
+def _no_stretches() -> tuple[EdgeArray, EdgeArray]:
+    return np.zeros(0, np.int64), np.zeros(0, np.int64)
 
 
 @dataclass
@@ -166,6 +183,8 @@ class RoleSignal:
     edges: EdgeArray
     known_from: int
     inverted: bool
+    unknown: tuple[EdgeArray, EdgeArray] = field(default_factory=_no_stretches)
+    """Closed tick ranges where the level is not known (:meth:`Channel.unknown_stretches`)."""
 
 
 @dataclass
@@ -214,7 +233,8 @@ def build_interface(
     Raises:
         UsageError: unknown role or channel, an ambiguous channel name (see
             :func:`find_channel`), one channel mapped to two roles, an inverted role that is
-            not mapped, or a mapped channel that goes ``x``/``z`` in the middle of the capture.
+            not mapped. A channel that goes ``x``/``z`` is mapped: its unknown stretches
+            (:attr:`RoleSignal.unknown`) are left out of the checks.
     """
     inverted = {role_name(r) for r in invert}
     for role in inverted:
@@ -232,13 +252,6 @@ def build_interface(
                 f"{roles_of[ch.index]} and {role}; one channel can have one role"
             )
         roles_of[ch.index] = role
-        if len(ch.xz_times):
-            t = capture.timebase.seconds(int(ch.xz_times[0]))
-            raise UsageError(
-                f"{capture.path}: channel {ch.name!r} (mapped as {role}) is x/z at "
-                f"{float(t):.9g} s (and {len(ch.xz_times) - 1} more times); an unknown level "
-                "cannot be checked"
-            )
         flip = role in inverted
         signals[role] = RoleSignal(
             role=role,
@@ -247,5 +260,6 @@ def build_interface(
             edges=ch.edges,
             known_from=ch.known_from,
             inverted=flip,
+            unknown=ch.unknown_stretches(capture.start),
         )
     return StepInterface(capture=capture, signals=signals)

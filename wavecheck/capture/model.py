@@ -16,9 +16,11 @@ import numpy.typing as npt
 from wavecheck.errors import UsageError
 from wavecheck.timebase import Timebase
 
-__all__ = ["Capture", "Channel", "EdgeArray"]
+__all__ = ["NEVER", "Capture", "Channel", "EdgeArray", "Vector"]
 
 EdgeArray = npt.NDArray[np.int64]
+#: The end of an unknown stretch that lasts to the end of the capture (the largest int64).
+NEVER = int(np.iinfo(np.int64).max)
 
 
 @dataclass
@@ -33,7 +35,11 @@ class Channel:
         known_from: first tick at which the level is known (later than the capture start when a
             VCD begins with ``x``).
         xz_times: ticks at which the value became ``x`` or ``z`` after :attr:`known_from`
-            (empty for logic-analyzer captures); a channel with any cannot be checked.
+            (empty for logic-analyzer captures).
+        xz_ends: for each of :attr:`xz_times`, the tick at which a known value came back
+            (:data:`NEVER` when it stays unknown to the end). An edge at that tick may be one
+            hidden in the stretch, so :meth:`unknown_stretches` include it.
+        never_known: the level is never known (``x`` all along); :attr:`initial` means nothing.
     """
 
     name: str
@@ -42,6 +48,23 @@ class Channel:
     edges: EdgeArray
     known_from: int = 0
     xz_times: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    xz_ends: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    never_known: bool = False
+
+    def unknown_stretches(self, start: int) -> tuple[EdgeArray, EdgeArray]:
+        """Where the level is not known, as closed tick ranges ``[starts[i], ends[i]]`` in time
+        order, for a capture starting at tick ``start``: ``[start, known_from]`` when the
+        level is known only later, then each ``x``/``z`` stretch up to the tick a known value
+        came back (:data:`NEVER` for one that lasts to the end)."""
+        starts, ends = self.xz_times, self.xz_ends
+        if len(ends) != len(starts):  # a reader that lists only where x/z began
+            ends = np.full(len(starts), NEVER, dtype=np.int64)
+        if self.never_known:
+            return np.array([start], np.int64), np.array([NEVER], np.int64)
+        if self.known_from > start:
+            starts = np.concatenate([[start], starts]).astype(np.int64)
+            ends = np.concatenate([[self.known_from], ends]).astype(np.int64)
+        return starts, ends
 
     @property
     def rising(self) -> int:
@@ -57,6 +80,34 @@ class Channel:
     def level_after(self, i: int) -> int:
         """Level after edge ``i`` (``-1`` means before the first edge)."""
         return self.initial ^ ((i + 1) & 1)
+
+
+@dataclass(frozen=True)
+class Vector:
+    """A multi-bit signal of the file whose bits can be mapped as channels.
+
+    Attributes:
+        width: number of bits.
+        msb: the declared index of the leftmost bit (``3`` for ``[3:0]``).
+        lsb: the declared index of the rightmost bit.
+        key: the name the file's reader knows it by (for reading its changes again).
+    """
+
+    width: int
+    msb: int
+    lsb: int
+    key: str
+
+    @property
+    def range_text(self) -> str:
+        """The declared range, ``"[3:0]"``."""
+        return f"[{self.msb}:{self.lsb}]"
+
+    def position(self, bit: int) -> int | None:
+        """Position of declared index ``bit`` counted from the rightmost bit (0), or None when
+        it is outside the range."""
+        p = bit - self.lsb if self.msb >= self.lsb else self.lsb - bit
+        return p if 0 <= p < self.width else None
 
 
 @dataclass
@@ -81,6 +132,10 @@ class Capture:
         time_known: False when the file states no sample rate and none was given (read for
             ``wavecheck info`` only): ticks are samples of unknown length, the timebase is a
             placeholder, and only counts (edges, samples) mean anything.
+        vectors: the file's bit vectors by full name (``tb.dut.stout``), whose bits
+            :meth:`bit` turns into channels when they are mapped.
+        bit_source: the file :meth:`bit` reads vector changes from (None: it cannot, e.g. a
+            capture read from standard input).
     """
 
     path: str
@@ -95,6 +150,49 @@ class Capture:
     skipped: dict[str, str] = field(default_factory=dict)
     aliases: dict[str, str] = field(default_factory=dict)
     time_known: bool = True
+    vectors: dict[str, Vector] = field(default_factory=dict)
+    bit_source: str | None = None
+
+    def bit(self, ref: str, bit: int) -> Channel:
+        """Bit ``bit`` (an index of the declared range, ``stout[3]``) of the vector ``ref`` as a
+        channel, its edges extracted from the vector's value changes on first use and then kept
+        in :attr:`channels`. ``ref`` is the vector's full name or any unique dotted tail of it
+        (``stout``, ``dut.stout``; any case when no exact-case one).
+
+        Raises:
+            UsageError: no such vector, several match, the bit is outside the range, or the
+                file cannot be read again (standard input).
+        """
+        from wavecheck.capture.wellen import load_bit
+
+        name = f"{ref}[{bit}]"
+        for ch in self.channels:
+            if ch.name == name:
+                return ch
+        hits = [k for k in self.vectors if k == ref]
+        if not hits:
+            hits = [k for k in self.vectors if k.endswith("." + ref)]
+        if not hits:
+            low = "." + ref.lower()
+            hits = [k for k in self.vectors if ("." + k.lower()).endswith(low)]
+        if not hits:
+            known = ", ".join(f"{k}{v.range_text}" for k, v in list(self.vectors.items())[:8])
+            raise UsageError(
+                f"{self.path}: no vector {ref!r} to take bit {bit} of (vectors: {known or 'none'})"
+            )
+        if len(hits) > 1:
+            raise UsageError(
+                f"{self.path}: {name!r} is ambiguous: vectors {', '.join(hits[:8])}; "
+                "give more of the hierarchical name"
+            )
+        vec = self.vectors[hits[0]]
+        full = f"{hits[0]}[{bit}]"
+        for ch in self.channels:
+            if ch.name == full:
+                return ch
+        ch = load_bit(self, hits[0], vec, bit)
+        self.channels.append(ch)
+        return ch
 
     @property
     def duration_s(self) -> Fraction:

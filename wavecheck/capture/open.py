@@ -1,6 +1,6 @@
 """Open any capture: pick the reader from ``--input-format``, the file's content, or its extension.
 
-``.sr`` and VCD are read natively; every other format sigrok-cli knows (csv, binary,
+``.sr``, VCD, FST and GHW are read natively (:mod:`wavecheck.capture.wellen`); every other format sigrok-cli knows (csv, binary,
 chronovu-la8, logicport, …) is converted by sigrok-cli to a temporary ``.sr`` first.
 """
 
@@ -17,26 +17,33 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from wavecheck.capture.model import Capture
+from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
 from wavecheck.errors import CaptureError, UsageError
 
 __all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
 
-_ALIASES = {"srzip": "sr", "sigrok": "sr"}
+_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv"}
 _BY_EXTENSION = {
     ".sr": "sr",
     ".vcd": "vcd",
     ".csv": "csv",
     ".kdt": "chronovu-la8",
     ".lpf": "logicport",
+    ".fst": "fst",
+    ".ghw": "ghw",
 }
 _ZIP_MAGIC = b"PK\x03\x04"
+_GHW_MAGIC = b"GHDLwave\n"
+#: An FST file starts with its header block: type 0 and the block's length, 329, big-endian.
+_FST_MAGIC = b"\x00" + (329).to_bytes(8, "big")
 _SNIFF_BYTES = 4096
 #: The capture path that means standard input.
 STDIN = "-"
 
 
 def detect_format(path: str | os.PathLike[str]) -> str:
-    """The input format of ``path``: ``"sr"``, ``"vcd"`` or a sigrok-cli input format name.
+    """The input format of ``path``: ``"sr"``, ``"vcd"``, ``"fst"``, ``"ghw"`` or a sigrok-cli
+    input format name.
 
     Raises:
         CaptureError: missing file, a folder, an empty file, or a format that cannot be told.
@@ -64,6 +71,12 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(path, None, "the file is empty")
     if head.startswith(_ZIP_MAGIC):
         return "sr"
+    if head.removeprefix(b"\xef\xbb\xbf").startswith(SALEAE_CSV_HEADER):
+        return "saleae-csv"
+    if head.startswith(_GHW_MAGIC):
+        return "ghw"
+    if head.startswith(_FST_MAGIC):
+        return "fst"
     if head.lstrip().startswith(b"$"):
         return "vcd"
     if ext in ("", ".sr", ".vcd") or ext not in _BY_EXTENSION:
@@ -72,8 +85,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(
             path,
             None,
-            f"{what} (give --input-format: sr, vcd, or a sigrok-cli format such as csv, "
-            "binary, chronovu-la8, logicport)",
+            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, or a sigrok-cli format such "
+            "as csv, binary, chronovu-la8, logicport)",
         )
     return _BY_EXTENSION[ext]
 
@@ -173,6 +186,7 @@ def _open_stream(
             except CaptureError as err:
                 raise CaptureError(name, err.where, err.msg) from None
         cap.path = name
+        cap.bit_source = None  # the spooled copy is gone
         return cap
     finally:
         if f is not sys.stdin.buffer:
@@ -195,7 +209,7 @@ def open_capture(
         samplerate: sample rate in Hz, for files that lack one (a ``.sr`` without it, raw
             binary, csv) or to state a VCD's sampling; overrides the file's value with a note.
         resolution_s: the resolution (sample period) in seconds, overriding the derived one.
-        input_format: ``"sr"``, ``"vcd"`` or a sigrok-cli input format (may carry options,
+        input_format: ``"sr"``, ``"vcd"``, ``"fst"``, ``"ghw"`` or a sigrok-cli input format (may carry options,
             ``"binary:numchannels=4"``); default: detected from content and extension. A VCD
             with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
         require_time: with False, a file that states no sample rate is read anyway, untimed
@@ -229,6 +243,18 @@ def open_capture(
         return read_sr(
             path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
         )
+    if name == "saleae-csv":
+        from wavecheck.capture.saleae import read_saleae_csv
+
+        return read_saleae_csv(path, samplerate=samplerate, resolution_s=resolution_s)
+    if name in ("fst", "ghw"):
+        if options:
+            raise UsageError(f"--input-format {fmt!r}: {name} takes no options")
+        from wavecheck.capture.wellen import read_fst, read_wellen
+
+        if name == "fst":
+            return read_fst(path, samplerate=samplerate, resolution_s=resolution_s)
+        return read_wellen(path, kind="ghw", samplerate=samplerate, resolution_s=resolution_s)
     if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 

@@ -16,8 +16,10 @@ This module turns the table's events (``pulse``, ``active``, ``step``, ``dir``, 
   active-low input) → the first step while it stays active.
 
 A DIR change at the same tick as an active edge is a 0 interval of both ``dir_setup`` and
-``dir_hold``. An interval that starts while one of the signals it involves is not known yet
-(``x`` at the start of a VCD, up to its ``known_from``) is partial and not measured.
+``dir_hold``. An interval that touches an unknown stretch of a signal it involves (``x`` at the
+start of a VCD up to its ``known_from``, or a later ``x``/``z`` up to the tick a known value
+comes back) is not judged: an event may be hidden there. It is counted as unknown
+(:attr:`RuleResult.unknown_ticks`).
 """
 
 from __future__ import annotations
@@ -30,7 +32,13 @@ import numpy as np
 from wavecheck.capture.model import EdgeArray
 from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
 from wavecheck.checks.result import RuleResult, evaluate, sequence_result
-from wavecheck.decode import StepEvents, active_edges, phase_states
+from wavecheck.decode import (
+    StepEvents,
+    active_edges,
+    phase_states,
+    touches_stretches,
+    unknown_stretches,
+)
 from wavecheck.drives.model import ActiveEdge, Drive, Figure
 from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
@@ -161,14 +169,29 @@ def _intervals(
     raise ValueError(f"rule {r.id!r}: no measurement for check {r.check!r}")
 
 
-def _known(intervals: Intervals, iface: StepInterface, st: StepType, r: Rule) -> Intervals:
-    """Drop the intervals that start while a signal the rule involves is not known yet (``x`` at
-    the start of a VCD): an event of that signal may be hidden there, so they are partial."""
-    until = iface.unknown_until(r.roles_for(st))
-    if until is None or len(intervals) == 0:
-        return intervals
-    keep = intervals.start > until
-    return Intervals(intervals.start[keep], intervals.end[keep])
+def _known(
+    intervals: Intervals, iface: StepInterface, st: StepType, r: Rule
+) -> tuple[Intervals, EdgeArray]:
+    """Split off the intervals that touch an unknown stretch of a signal the rule involves (an
+    event of that signal may be hidden there): the rest, and where the unknown ones are — the
+    start tick of each interval left out, and the start of each stretch no measured interval
+    touches (an interval hidden wholly inside it, such as a DIR change there before a step)."""
+    starts, ends = unknown_stretches(iface, r.roles_for(st))
+    if len(starts) == 0:
+        return intervals, np.zeros(0, dtype=np.int64)
+    lo = np.minimum(intervals.start, intervals.end)
+    hi = np.maximum(intervals.start, intervals.end)
+    out = touches_stretches(lo, hi, starts, ends)
+    keep = ~out
+    # stretches that an interval left out overlaps (by the running max of their ends)
+    order = np.argsort(lo[out], kind="stable")
+    olo, ohi = lo[out][order], np.maximum.accumulate(hi[out][order])
+    last = np.searchsorted(olo, ends, side="right") - 1
+    covered = np.zeros(len(starts), dtype=np.bool_)
+    has = last >= 0
+    covered[has] = ohi[last[has]] >= starts[has]
+    where = np.sort(np.concatenate([intervals.start[out], starts[~covered]]))
+    return Intervals(intervals.start[keep], intervals.end[keep]), where
 
 
 @dataclass(frozen=True)
@@ -215,16 +238,10 @@ def run_rules(
         fig = _figure(drive, r)
         assert fig is not None
         limit, figure = fig
-        results.append(
-            evaluate(
-                r.id,
-                _known(_intervals(r, iface, st, steps, active_edge, pulse_level), iface, st, r),
-                limit,
-                tb,
-                resolution_ns,
-                figure,
-            )
+        known, unknown = _known(
+            _intervals(r, iface, st, steps, active_edge, pulse_level), iface, st, r
         )
+        results.append(evaluate(r.id, known, limit, tb, resolution_ns, figure, unknown))
     stated = set(drive.limits) | ({"step_period"} if drive.max_rate is not None else set())
     used = applicable_rules(st)
     not_applicable = tuple(r for r in RULE_IDS if r in stated and r not in used)

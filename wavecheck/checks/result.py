@@ -86,6 +86,8 @@ class RuleResult:
         resolution_ns: T used for the verdicts, exact ns.
         checked: how many intervals (or state changes) were examined.
         details: per-interval text, only for ``state_sequence``.
+        unknown_ticks: start tick of every interval left out because it touches an unknown
+            (``x``/``z``) stretch of a signal the rule involves, in time order.
     """
 
     rule: str
@@ -97,12 +99,18 @@ class RuleResult:
     resolution_ns: Fraction
     checked: int
     details: list[str] = field(default_factory=list)
+    unknown_ticks: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     # -- counts and verdict -------------------------------------------------------------------
     @property
     def violations(self) -> int:
         """Number of failed intervals."""
         return int(np.count_nonzero(self.outcome == FAIL))
+
+    @property
+    def unknown(self) -> int:
+        """Number of intervals not judged because they touch an unknown stretch."""
+        return int(len(self.unknown_ticks))
 
     @property
     def indeterminate(self) -> int:
@@ -248,8 +256,10 @@ def evaluate(
     timebase: Timebase,
     resolution_ns: Fraction,
     figure: Figure | None = None,
+    unknown_ticks: EdgeArray | None = None,
 ) -> RuleResult:
-    """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact ns)."""
+    """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact ns);
+    ``unknown_ticks`` are the starts of the intervals left out as unknown (not judged)."""
     tick = timebase.tick_ns
     pass_min = _clamp(math.ceil((limit_ns + resolution_ns) / tick))
     fail_max = _clamp(math.floor((limit_ns - resolution_ns) / tick))
@@ -266,6 +276,7 @@ def evaluate(
         timebase=timebase,
         resolution_ns=resolution_ns,
         checked=len(intervals),
+        unknown_ticks=np.zeros(0, np.int64) if unknown_ticks is None else unknown_ticks,
     )
 
 

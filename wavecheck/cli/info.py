@@ -56,7 +56,7 @@ def info_dict(cap: Capture) -> dict[str, Any]:
             {
                 "name": ch.name,
                 "index": ch.index,
-                "initial": ch.initial,
+                "initial": None if ch.never_known else ch.initial,
                 "edges": int(len(ch.edges)),
                 "rising": ch.rising,
                 "falling": ch.falling,
@@ -98,12 +98,15 @@ def info_text(cap: Capture) -> str:
     )
     for ch in cap.channels:
         extra = ""
-        if ch.known_from > cap.start:
+        if ch.never_known:
+            extra += "  unknown (x/z) throughout"
+        elif ch.known_from > cap.start:
             extra += f"  known from {format_time(cap.timebase.seconds(ch.known_from))}"
         if len(ch.xz_times):
             extra += f"  x/z {len(ch.xz_times)} times"
         lines.append(
-            f"{ch.index:>5}  {ch.name:<{width}}  {ch.initial:>7}  {len(ch.edges):>9}  "
+            f"{ch.index:>5}  {ch.name:<{width}}  {'x' if ch.never_known else ch.initial:>7}  "
+            f"{len(ch.edges):>9}  "
             f"{ch.rising:>9}  {ch.falling:>9}{extra}"
         )
     if not cap.channels:

@@ -37,6 +37,8 @@ def _rule(r: RuleResult) -> dict[str, Any]:
         "checked": r.checked,
         "violations": r.violations,
         "indeterminate": r.indeterminate,
+        "unknown": r.unknown,  # intervals touching an x/z stretch, not judged
+        "unknown_at_s": [json_number(r.timebase.seconds(int(t))) for t in r.unknown_ticks[:100]],
         "min_margin_ns": json_number(r.min_margin_ns),
         "min_margin_at_s": json_number(r.min_margin_at_s),
         "min_measured_ns": json_number(r.min_measured_ns),

@@ -188,6 +188,12 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
             out.append(
                 f"{r.rule}: {r.indeterminate} interval(s) indeterminate at this resolution; {how}"
             )
+    out += [  # intervals touching an x/z stretch of a signal they use (checks/compile.py)
+        f"{r.rule}: {r.unknown} interval(s) not judged: they touch an unknown (x/z) stretch, "
+        f"the first at {format_time(r.timebase.seconds(int(r.unknown_ticks[0])))}"
+        for r in report.rules
+        if r.unknown
+    ]
     if report.total_violations:
         out += _violation_lines(report, max_violations)
     rates, *configured = rate_lines(report)

@@ -17,7 +17,7 @@ from typing import BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.model import Capture, Channel, Vector
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
 from wavecheck.units import parse_frequency
@@ -67,6 +67,7 @@ ANALYZER_WRITERS: tuple[tuple[str, str], ...] = (
 _ANALYZER_RES = [(re.compile(rf"\b(?:{p})", re.IGNORECASE), name) for p, name in ANALYZER_WRITERS]
 _END_RE = re.compile(rb"\$end(\s|$)")
 _NON_SIGNAL_TYPES = {"real", "realtime", "shortreal", "event", "string"}
+_NOT_VECTORS = {"integer", "parameter"}
 #: Scalar value character → 0, 1, 2 (unknown: x u w -) or 3 (z).
 SCALAR_VALUES = {
     "0": 0, "1": 1, "l": 0, "h": 1, "x": 2, "u": 2, "w": 2, "-": 2, "z": 3,
@@ -475,6 +476,25 @@ def header_timebase(header: VcdHeader, notes: list[str]) -> Timebase:
     return header.timescale
 
 
+_RANGE = re.compile(r"^(.*?)\s*\[\s*(-?\d+)\s*:\s*(-?\d+)\s*\]$")
+
+
+def vectors_of(header: VcdHeader) -> dict[str, Vector]:
+    """The header's bit vectors (wires and regs wider than 1 bit) by full name without the
+    range (``tb.stout`` for ``stout [3:0]``), with their declared ranges."""
+    out: dict[str, Vector] = {}
+    for d in header.vars:
+        if d.size <= 1 or d.type in _NON_SIGNAL_TYPES or d.type in _NOT_VECTORS:
+            continue
+        m = _RANGE.match(d.full_name)
+        if m and abs(int(m.group(2)) - int(m.group(3))) + 1 == d.size:
+            base, msb, lsb = m.group(1), int(m.group(2)), int(m.group(3))
+        else:
+            base, msb, lsb = d.full_name, d.size - 1, 0
+        out.setdefault(base, Vector(d.size, msb, lsb, base))
+    return out
+
+
 @dataclass
 class SignalEdges:
     """What a reader found for one 1-bit channel; times in ticks of the timescale."""
@@ -483,6 +503,7 @@ class SignalEdges:
     known_from: int | None  # tick of the first known value; None: never known
     edges: npt.NDArray[np.int64]  # ticks where the known level changes
     xz_times: npt.NDArray[np.int64]  # ticks where a known level turns x/z
+    xz_ends: npt.NDArray[np.int64]  # for each, the tick a known value comes back (or NEVER)
 
 
 def build_capture(
@@ -525,6 +546,8 @@ def build_capture(
             edges=sig.edges,
             known_from=sig.known_from if sig.known_from is not None else end,
             xz_times=sig.xz_times,
+            xz_ends=sig.xz_ends,
+            never_known=sig.known_from is None,
         )
         for i, (name, sig) in enumerate(zip(layout.names, signals, strict=True))
     ]

@@ -17,8 +17,8 @@ deliberately simple path):
 * several changes of one signal at one timestamp: the last one wins (no zero-width glitch);
 * a change to the current level is not an edge;
 * ``x``/``z`` (also ``u w -``) are unknown: the level before the first known value is not
-  invented (:attr:`Channel.known_from`), a later switch to unknown is listed in
-  :attr:`Channel.xz_times`, and edges compare known levels only; ``l``/``h`` read as 0/1;
+  invented (:attr:`Channel.known_from`), a later unknown stretch is listed in
+  :attr:`Channel.xz_times` / :attr:`Channel.xz_ends`, and edges compare known levels only; ``l``/``h`` read as 0/1;
 * vectors, integers and reals are skipped (listed in :attr:`Capture.skipped` and a note), except
   a ``b`` change of a 1-bit signal, which is read as a scalar.
 """
@@ -34,7 +34,7 @@ from typing import BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.model import NEVER, Capture
 from wavecheck.capture.vcd.header import (
     SignalEdges,
     build_capture,
@@ -42,6 +42,7 @@ from wavecheck.capture.vcd.header import (
     layout_of,
     open_vcd,
     read_header,
+    vectors_of,
 )
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
@@ -91,6 +92,7 @@ class _EdgeBuilder:
         self.initial = np.zeros(nsig, dtype=np.int8)
         self.edges: list[list[npt.NDArray[np.int64]]] = [[] for _ in range(nsig)]
         self.xz: list[list[npt.NDArray[np.int64]]] = [[] for _ in range(nsig)]
+        self.xz_end: list[list[npt.NDArray[np.int64]]] = [[] for _ in range(nsig)]
         self.count = 0
 
     def add(
@@ -114,9 +116,10 @@ class _EdgeBuilder:
         gfirst[1:] = s[1:] != s[:-1]
         glast = np.ones(n, dtype=bool)
         glast[:-1] = gfirst[1:]
-        # x/z transitions, counted only once the signal has had a known level
+        # x/z stretches (where they begin and where a known value comes back), counted only
+        # once the signal has had a known level
         unknown = v >= 2
-        if unknown.any():
+        if unknown.any() or (self.last_raw[s[gfirst]] >= 2).any():
             known = ~unknown
             prevraw = np.empty(n, dtype=np.int8)
             prevraw[1:] = v[:-1]
@@ -129,6 +132,9 @@ class _EdgeBuilder:
             evt = unknown & had_known & (prevraw >= 0) & (prevraw < 2)
             if evt.any():
                 self._split(self.xz, s[evt], t[evt])
+            back = known & had_known & (prevraw >= 2)
+            if back.any():
+                self._split(self.xz_end, s[back], t[back])
         self.last_raw[s[glast]] = v[glast]
         k = np.flatnonzero(v < 2)
         if len(k) == 0:
@@ -179,9 +185,15 @@ class _EdgeBuilder:
                     known_from=int(self.known_from[i]) if known else None,
                     edges=edges,
                     xz_times=_concat(self.xz[i]),
+                    xz_ends=_ends(_concat(self.xz[i]), _concat(self.xz_end[i])),
                 )
             )
         return out
+
+
+#: The change-to-edge builder, shared with the other simulator-dump readers
+#: (:mod:`wavecheck.capture.wellen`) so every format has the VCD reader's semantics.
+EdgeBuilder = _EdgeBuilder
 
 
 def _concat(parts: list[npt.NDArray[np.int64]]) -> npt.NDArray[np.int64]:
@@ -190,6 +202,14 @@ def _concat(parts: list[npt.NDArray[np.int64]]) -> npt.NDArray[np.int64]:
     if len(parts) == 1:
         return parts[0]
     return np.concatenate(parts)
+
+
+def _ends(starts: npt.NDArray[np.int64], back: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """One end per x/z stretch: where a known value came back, :data:`NEVER` for the last
+    stretch when none did."""
+    if len(back) == len(starts):
+        return back
+    return np.concatenate([back, np.full(len(starts) - len(back), NEVER, dtype=np.int64)])
 
 
 class _IdMap:
@@ -537,7 +557,7 @@ def read_vcd(
                 )
             # nothing consumed: a token or $comment longer than a chunk, read more (up to the cap)
             want = chunk_bytes if n else min(max(2 * want, len(buf) + 1), max_token_bytes + 1)
-    return build_capture(
+    cap = build_capture(
         path,
         header,
         lay,
@@ -550,6 +570,9 @@ def read_vcd(
         samplerate,
         resolution_s,
     )
+    cap.vectors = vectors_of(header)
+    cap.bit_source = None if source is not None else os.fspath(path)
+    return cap
 
 
 def _clip(token: bytes, keep: int = 30) -> str:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.model import NEVER, Capture
 from wavecheck.capture.vcd.header import (
     SCALAR_VALUES,
     SignalEdges,
@@ -23,6 +23,7 @@ from wavecheck.capture.vcd.header import (
     layout_of,
     open_vcd,
     parse_header,
+    vectors_of,
 )
 from wavecheck.errors import CaptureError
 
@@ -89,12 +90,17 @@ def read_vcd_reference(
         initial, known_from = 0, None
         edges: list[int] = []
         xz: list[int] = []
+        xz_end: list[int] = []
         # last change at a timestamp wins
         dedup = [c for j, c in enumerate(ch) if j + 1 == len(ch) or ch[j + 1][0] != c[0]]
         for t, v in dedup:
             if v >= 2:
                 if last_known >= 0 and 0 <= last_raw < 2:
                     xz.append(t)
+            elif last_known >= 0 and last_raw >= 2:  # a known value back after x/z
+                xz_end.append(t)
+            if v >= 2:
+                pass
             elif last_known < 0:
                 initial, known_from = v, t
                 last_known = v
@@ -102,11 +108,19 @@ def read_vcd_reference(
                 edges.append(t)
                 last_known = v
             last_raw = v
+        xz_end += [NEVER] * (len(xz) - len(xz_end))
         signals.append(
             SignalEdges(
-                initial, known_from, np.array(edges, dtype=np.int64), np.array(xz, dtype=np.int64)
+                initial,
+                known_from,
+                np.array(edges, dtype=np.int64),
+                np.array(xz, dtype=np.int64),
+                np.array(xz_end, dtype=np.int64),
             )
         )
-    return build_capture(
+    cap = build_capture(
         path, header, lay, tb, signals, first, time, pre, notes, samplerate, resolution_s
     )
+    cap.vectors = vectors_of(header)
+    cap.bit_source = os.fspath(path)
+    return cap
