@@ -21,6 +21,10 @@ How P is found (all times integer ticks of the capture):
    slope, so a period of a whole number of ticks comes out as that integer, and one that is not
    (25 µs sampled at 3.3 MHz = 165/2 samples) as the exact Fraction. The phase is then the
    earliest edge's lattice point: lateness 0 is the earliest edge, all others are later.
+4. The thread, not its pattern: a stepgen at its maximum rate uses every second (third…)
+   invocation, and those edges fit a lattice at 2P (3P…) more tightly than one at P. A thread
+   writes a pin once per run, so a lattice on which a pin changes twice in one invocation is
+   replaced by its submultiple with the fewest such double writes (:func:`_finer`).
 
 "Not a lattice" is a statistical statement: under the hypothesis that edges are timed by
 something else (a hardware timer, grbl's and Smoothieware's step interrupts, a step generator
@@ -470,16 +474,22 @@ def fit_lattice(times: Ints, period: float | Fraction, res_ticks: int, given: bo
             _, _, env = _envelope(k, times)
     else:
         lo, hi, env = _envelope(k, times)
-        k, _ = _assign(times, float(env), int(times[0]), res_ticks)
-        lo, hi, env = _envelope(k, times)
+        for _ in range(8):  # reassign with the envelope's period until it no longer moves
+            k, _ = _assign(times, float(env), int(times[0]), res_ticks)
+            lo, hi, moved = _envelope(k, times)
+            if moved == env:
+                break
+            env = moved
         span = max(int(k[-1] - k[0]), 1)
-        # how far the lowest edges of eight stretches lie above the envelope: their spread
+        # how far the lowest edges of eight stretches lie above the envelope: their spread.
+        # The true line lies below every edge too, but its own lowest lateness per stretch is
+        # unknown (of the same order): it may tilt by that spread about either end, hence 2×
         line = (times - k * env.numerator / env.denominator).astype(np.float64)
         low = 0.0
         for part in np.array_split(np.arange(len(times)), 8):
             if len(part):
                 low = max(low, float(line[part].min() - line.min()))
-        half = (Fraction(res_ticks) + Fraction(low).limit_denominator(10**6)) / span
+        half = 2 * (Fraction(res_ticks) + Fraction(low).limit_denominator(10**6)) / span
         half = max(half, (hi - lo) / 2)
         bmax = max(1, (1 << 60) // max(int(np.abs(times).max()), 1) // 4)
         p_exact = simplest_between(max(env - half, Fraction(1, 10**9)), env + half)
@@ -569,6 +579,43 @@ def _choose(times: Ints, fits: list[LatticeFit], res_ticks: int) -> LatticeFit:
     return chosen
 
 
+def _finer(
+    times: Ints, mask: Ints, n_channels: int, fit: LatticeFit, res_ticks: int, min_p: float
+) -> LatticeFit:
+    """``fit``, or the lattice at one of its submultiples P/m (m ≤ 8) when ``fit`` is only the
+    pattern of the invocations a thread at P/m used.
+
+    A thread writes a pin once per run, so a lattice on which a pin changes twice within one
+    invocation cannot be the thread's. Concentration alone cannot tell: a stepgen at its
+    maximum rate makes edges on every other invocation, and those edges sit on a lattice at
+    2P with the same lateness spread over twice the period (so a smaller arc fraction); only
+    the few edges off that pattern (while the rate ramps, or a pulse that ends on the next
+    invocation) show the thread at P, and on the 2P lattice they make a pin change twice in
+    one invocation. So: while ``fit`` has such double writes, take the submultiple that fits
+    (arc within :data:`MAX_ARC_FRACTION`) with the fewest of them, the largest among equals
+    (a lattice at 3P is not split into halves that cut P's invocations). A true thread at P has none
+    unless a run is a whole period late, which P/m then explains as well."""
+    for _ in range(8):  # each step divides the period by at least 2
+        twice = _twice(_lateness(times, fit)[0], mask, n_channels)
+        best: tuple[int, LatticeFit] | None = None
+        for m in range(2, 9):
+            if not twice or float(fit.period) / m < min_p:
+                break
+            try:
+                sub = fit_lattice(times, fit.period / m, res_ticks, False)
+            except UsageError:
+                continue
+            if sub.arc_fraction > MAX_ARC_FRACTION or abs(sub.period * m / fit.period - 1) > 1e-3:
+                continue
+            n = _twice(_lateness(times, sub)[0], mask, n_channels)
+            if n < twice and (best is None or n < best[0]):
+                best = (n, sub)
+        if best is None:
+            return fit
+        fit = best[1]
+    return fit
+
+
 def _merge(capture: Capture, names: list[str]) -> tuple[Ints, Ints, dict[str, int]]:
     """Unique edge times of the named channels and a bitmask of channels at each."""
     arrays = [capture.channel(n).edges for n in names]
@@ -629,7 +676,7 @@ def analyse_times(
         if not fits:
             report.reason = _not_lattice("no period fits the edges' spacing")
             return report
-        fit = _choose(times, fits, res_ticks)
+        fit = _finer(times, mask, len(channels), _choose(times, fits, res_ticks), res_ticks, min_p)
     if given:
         try:
             fit = fit_lattice(times, period, res_ticks, given)

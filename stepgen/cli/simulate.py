@@ -26,6 +26,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from stepgen.cli.servo import add_servo_loop_arguments, run_servo_loop
 from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
@@ -34,7 +36,7 @@ from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
 from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.output import output_file
+from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
 from wavecheck.units import BASE_PERIOD, Plausible, option_ns, shorten
 
@@ -137,6 +139,14 @@ def register(sub: Any) -> None:
     )
     o.add_argument(
         "--max-samples", type=int, default=DEFAULT_MAX_SAMPLES, help=".sr size limit in samples"
+    )
+    o.add_argument(  # read by wavecheck follow --command
+        "--command-out",
+        type=output_file,
+        metavar="FILE.csv",
+        help="also write the commanded trajectory: time_s,position (units; velocity mode: the "
+        "integral of velocity-cmd) and steps (× position-scale; --plant servo: counts × "
+        "--encoder-counts) at each servo update",
     )
     o.add_argument(
         "--engine",
@@ -287,6 +297,8 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("give --duration (e.g. 1s) or --periods N")
         n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
     if args.pid:  # the closed loop: pid between the position command and the plant
+        if args.command_out:
+            _write_command(args, cfg, motion, n)
         return run_servo_loop(args, cfg, motion, n)
     catchup_given = not isinstance(args.catchup, _DefaultText)
     catchup_ns = _ns(args.catchup, "--catchup", allow_zero=False)
@@ -303,6 +315,8 @@ def run(args: argparse.Namespace) -> int:
         )
     for line in warnings + [t for t in trace.notes if t.startswith("warning:")]:
         print(f"stepgen: {line}", file=sys.stderr)
+    if args.command_out:
+        _write_command(args, cfg, motion, n)
     t0 = time.perf_counter()
     with activate(f"writing {out}", quiet=args.quiet, unit="changes"):
         if suffix == ".vcd":
@@ -323,3 +337,23 @@ def run(args: argparse.Namespace) -> int:
             if not note.startswith("warning:"):
                 print(f"stepgen: note: {note}", file=sys.stderr)
     return 0
+
+
+def _write_command(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion, n: int) -> None:
+    """``--command-out``: the command at each servo update u (u·servo period), and a last row at
+    the end of the run (n·base period) holding the last position."""
+    n_servo = -(-n // cfg.servo_multiple)
+    mode = "position" if args.pid else cfg.mode
+    values = motion.commands(n_servo, cfg.servo_ns, mode)
+    if mode == "velocity":  # held from one update to the next: the position is its integral
+        pos = np.concatenate([[0.0], np.cumsum(values) * (cfg.servo_ns * 1e-9)])
+    else:
+        pos = np.concatenate([values, values[-1:]])
+    ns = [u * cfg.servo_ns for u in range(n_servo)] + [max(n * cfg.base_period_ns, n_servo * cfg.servo_ns)]
+    servo = args.pid and args.plant == "servo"
+    scale = float(args.encoder_counts) if servo else cfg.position_scale
+    name = "counts" if servo else "steps"
+    rows = [f"time_s,position{',' + name if scale else ''}\n"]
+    for t, x in zip(ns, pos, strict=True):
+        rows.append(f"{t // 10**9}.{t % 10**9:09d},{float(x)!r}" + (f",{float(x) * scale!r}\n" if scale else "\n"))
+    atomic_write(args.command_out, "".join(rows))

@@ -16,6 +16,7 @@ COMMANDS = (
     "wavecheck.cli.crosscheck",
     "wavecheck.cli.config",
     "wavecheck.cli.latency",
+    "wavecheck.cli.follow",
 )
 
 
