@@ -85,9 +85,9 @@ def _no_whitespace(path: Path) -> None:
 def _time_19_digits(path: Path) -> None:
     path.write_text(vcd_text().replace("#3000", "#9000000000000000000"))
 
+
 # (name, suffix, builder, timeout s, expected: "error" or "ok", text the result must contain);
 # the 200,000 $var file takes ~9 s on a quiet machine and took ~7 min before the fix
-# (name, suffix, builder, timeout s, expected: "error" or "ok", text the result must contain)
 SHAPES: list[tuple[str, str, Callable[[Path], None], float, str, str]] = [
     ("sr-chunk-number-1e11", ".sr", _far_chunk, 20, "error", "logic-1-2: is missing"),
     ("sr-1000-entries-one-stream", ".sr", _overlap, 20, "error", "overlap"),

@@ -162,7 +162,7 @@ def test_servo_encoder_feedback_matches_the_loops_ferror(
     assert m
     loop_max, loop_at = float(m.group(1)), float(m.group(2))
     code, doc = _follow(
-        capsys, str(vcd), "--command", str(cmd), "--map", "phase-A=A,phase-B=B",
+        capsys, str(vcd), "--command", str(cmd), "--map", "phase-A=phase-A,phase-B=phase-B",
         "--scale", "2000", "--delay", "1ms",
     )  # fmt: skip
     assert code == 0 and "encoder" in doc["feedback"]
@@ -191,11 +191,11 @@ def test_step_dir_command_with_an_encoder(
     )
     edges, init = quadrature_edges(t, counts)
     wires = [VcdWire(c.name, c.initial, c.edges) for c in cap.channels]
-    wires += [VcdWire(p, init[p], edges[p]) for p in ("A", "B")]
+    wires += [VcdWire(p, init[p], edges[p]) for p in ("phase-A", "phase-B")]
     out = tmp_path / "both.vcd"
     write_vcd(out, wires, timescale="1 ns", end=int(cap.end) + 3_000_000, scope="drive")
     code, doc = _follow(
-        capsys, str(out), "--map", "step=step,dir=dir,phase-A=A,phase-B=B",
+        capsys, str(out), "--map", "step=step,dir=dir,phase-A=phase-A,phase-B=phase-B",
         "--command-scale", "1000", "--scale", "2000",
     )  # fmt: skip
     assert code == 0 and "step=step, dir=dir" in doc["command"]

@@ -204,6 +204,19 @@ class Capture:
         """The sample period T in exact nanoseconds (0 for an exact VCD)."""
         return self.timebase.ns(self.resolution_ticks)
 
+    def _by_name(self) -> dict[str, list[Channel]]:
+        """Channels by exact name (built once per list of channels: lookups stay O(1) on
+        captures with hundreds of thousands of signals)."""
+        key = (id(self.channels), len(self.channels))
+        cached = self.__dict__.get("_name_index")
+        if cached is None or cached[0] != key:
+            index: dict[str, list[Channel]] = {}
+            for ch in self.channels:
+                index.setdefault(ch.name, []).append(ch)
+            cached = (key, index)
+            self.__dict__["_name_index"] = cached
+        return cached[1]
+
     def channel(self, ref: str | int) -> Channel:
         """Find a channel by exact name, else by index (``"3"`` or ``3``).
 
@@ -211,7 +224,7 @@ class Capture:
             UsageError: no such channel; the message lists the channels there are.
         """
         if isinstance(ref, str):
-            same = [ch for ch in self.channels if ch.name == ref]
+            same = self._by_name().get(ref, [])
             if len(same) > 1:  # never the first of several silently (wavecheck.interface)
                 raise UsageError(
                     f"{self.path}: channel {ref!r} is ambiguous: indices "
