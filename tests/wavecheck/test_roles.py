@@ -11,13 +11,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from wavecheck.capture.model import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.interface import build_interface, parse_map
 from wavecheck.roles import Proposal, propose
+from wavecheck.roles.dirs import DirFit, assign
 from wavecheck.roles.names import name_hint
 
 from .waves import capture, pulses
@@ -196,6 +197,46 @@ def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
     assert p.unambiguous, p.text()
     assert _roles(p) == {"a": {"step": "0", "dir": "3"}, "b": {"step": "1", "dir": "2"}}
     assert "2 of 2 at reversals of its rate" in p.axis("a").role("dir").evidence
+
+
+def test_a_change_where_two_steps_pause_is_ambiguous_however_near_to_one() -> None:
+    # both lines pause from 1.2 ms to 3 ms; the single change of "d" at 1.21 ms is 5 µs after a
+    # pulse of "s" and 1.8 ms before one of "t": nearness is no proof, so it is refused
+    s = pulses([100 * US * k for k in range(1, 13)] + [3000 * US + 100 * US * k for k in range(12)],
+               5 * US)
+    t = pulses([50 * US + 100 * US * k for k in range(1, 12)]
+               + [3000 * US + 50 * US + 100 * US * k for k in range(12)], 5 * US)
+    p = propose(capture({"s": (0, s), "t": (0, t), "d": (0, [1205 * US])}))
+    assert not p.unambiguous
+    assert "fits as the DIR of several STEP lines" in p.ambiguous[0].question
+    assert all(a.role("dir") is None for a in p.axes)
+    # when "t" runs steadily through the change, the change proves "d" is not its DIR
+    t2 = pulses([50 * US + 100 * US * k for k in range(1, 45)], 5 * US)
+    p2 = propose(capture({"s": (0, s), "t": (0, t2), "d": (0, [1205 * US])}))
+    assert p2.unambiguous, p2.text()
+    assert _roles(p2) == {"a": {"step": "s", "dir": "d"}, "b": {"step": "t"}}
+    assert "'t' runs steadily through 1 of its changes" in p2.axis("a").role("dir").evidence
+
+
+def _fit(d: int, s: int) -> DirFit:
+    return DirFit(Channel(f"d{d}", d, 0, np.array([1])), Channel(f"s{s}", s, 0, np.array([1])),
+                  1, 1, 0, (1, 1))
+
+
+def test_dirs_are_given_only_where_every_matching_agrees() -> None:
+    # d1 fits only s1, so d2 (s1 or s2) is s2's
+    got = assign({1: [_fit(1, 11)], 2: [_fit(2, 11), _fit(2, 12)]})
+    assert {s: f.d.index for s, f in got.chosen.items()} == {11: 1, 12: 2}
+    assert not got.undecided and not got.crowded
+    # d1 and d2 share s1/s2 in either order, so d3 must be s3's; d1 and d2 stay undecided
+    got = assign({1: [_fit(1, 11), _fit(1, 12)], 2: [_fit(2, 11), _fit(2, 12)],
+                  3: [_fit(3, 11), _fit(3, 12), _fit(3, 13)]})
+    assert {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
+    assert {d: [f.s.index for f in fs] for d, fs in got.undecided.items()} == {
+        1: [11, 12], 2: [11, 12]}
+    # two lines that can only be s1's: neither is decided; a separate pair still is
+    got = assign({1: [_fit(1, 11)], 2: [_fit(2, 11)], 3: [_fit(3, 13)]})
+    assert got.crowded == [(1, 2)] and {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
 
 
 def test_up_down_pair_refused_when_unchanging_lines_could_be_dirs() -> None:
@@ -401,6 +442,16 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
 
 
 @settings(max_examples=300)
+# machines once mapped wrongly: a single DIR change where two or more STEP lines pause, given to
+# the one whose pulse happened to be nearest (the first: D1, DIR of D2, given to D3)
+@example(seed=12741033, n_axes=3, with_enable=False, unused=0, style="D")
+@example(seed=1070918334, n_axes=3, with_enable=False, unused=0, style="D")
+@example(seed=1924251976, n_axes=4, with_enable=True, unused=1, style="ch")
+@example(seed=2802705500, n_axes=5, with_enable=True, unused=1, style="D")
+@example(seed=1943958032, n_axes=5, with_enable=False, unused=2, style="num")
+@example(seed=3055679293, n_axes=4, with_enable=False, unused=1, style="D")
+@example(seed=845507753, n_axes=3, with_enable=False, unused=2, style="num")
+@example(seed=4117852037, n_axes=4, with_enable=True, unused=0, style="num")
 @given(
     seed=st.integers(0, 2**32 - 1),
     n_axes=st.integers(2, 5),
@@ -436,7 +487,9 @@ def test_generated_machines_are_mostly_decided() -> None:
         cap, where = _generated_capture(m, rng, "D")
         verdicts.append(_judge(m, where, propose(cap), cap))
     assert not [v for v in verdicts if v.startswith("wrong")]
-    # about 70% (step/dir-only machines 95%); the rest are single-toggle DIRs that fit two
-    # STEP lines as well, and up/down lines that take turns with more than one other line
-    assert verdicts.count("right") >= 0.6 * len(verdicts), verdicts
-
+    # 62 of 120 (2 axes 27 of 30, 3 axes 17, 4 axes 12, 5 axes 6): the rest are DIRs whose
+    # changes all fall where two or more STEP lines pause (so they fit each), up/down lines that
+    # take turns with more than one other line, and up/down pairs beside two unchanging lines.
+    # Giving such a DIR to the STEP whose pulse is nearest decided 79 of 120, and mapped about
+    # one generated machine in 6,000 wrongly.
+    assert verdicts.count("right") >= 0.5 * len(verdicts), verdicts

@@ -9,15 +9,16 @@ lines, channels left unassigned with why, and the conflicts the waveforms cannot
 - **serial lines** (UART TX/RX, an SWO trace) are never STEP: their intervals are whole multiples of
   one bit time with runs of several bits at both levels, and they idle at one level
   (:mod:`wavecheck.roles.features`).
-- **DIR** of a STEP line: changes only between its pulses (never inside one; at the tick a pulse
-  starts is allowed: DIR setup 0), with at least one pulse after each change before the next, and
-  pulses at both of its levels. A STEP has one DIR, so a line that fits a single STEP line not yet
-  given a DIR takes it, and that STEP drops out of the other lines' candidates. Among several it
-  fits, the one whose rate reverses at every change (the period across the change is 1.25× the
-  periods beside it: slow-down, gap, speed-up; or the change is before the first / after the last
-  pulse) when no other does as well; else a name with the same axis; else the STEP that is 20×
-  nearer at every change (DIR setup/hold is short); a tie-break never gives a DIR to a line that
-  takes turns with another (it may be an up/down line). Otherwise it is ambiguous, and so is every
+- **DIR** of a STEP line (:mod:`wavecheck.roles.dirs`): changes only between its pulses (never
+  inside one; at the tick a pulse starts is allowed: DIR setup 0), with at least one pulse after
+  each change before the next, and pulses at both of its levels. Among several STEP lines it fits,
+  only those are candidates at whose reversals it changes (the period across each change is 1.25×
+  the periods beside it: slow-down, gap, speed-up; or the change is before the first / after the
+  last pulse): a change in a STEP's steady running proves it is not that STEP's DIR, and that is
+  all a change proves. A name with the same axis narrows the candidates. A STEP has one DIR, so
+  the DIRs are a matching of changing lines to distinct STEP lines; a line is given a STEP only
+  when every such matching gives it that STEP. A change that falls where several candidates all
+  pause fits each of them: however near it is to one of them, it is ambiguous, and so is every
   pulse line it fits and every line those take turns with. Two DIRs for one STEP are ambiguous
   unless exactly one is named DIR.
 - **UP/DOWN**: two pulse lines without a DIR that never pulse together and take turns: at each

@@ -1,7 +1,10 @@
 """Propose channel roles from the waveforms: the relations between channels, and the proposal.
 
-See :mod:`wavecheck.roles` for the rules. Each relation below is a few ``numpy`` passes over edge
-arrays (``searchsorted``, ``bincount``); nothing loops over edges in Python.
+See :mod:`wavecheck.roles` for the rules. The stages: phase groups, pulse lines, DIRs
+(:mod:`wavecheck.roles.dirs` fits and assigns them), up/down pairs (:mod:`wavecheck.roles.updown`
+fits them; which to propose is decided here), DIRs that never change, ENABLEs; then the proposal.
+Each relation is a few ``numpy`` passes over edge arrays (``searchsorted``, ``bincount``); nothing
+loops over edges in Python.
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
+from wavecheck.roles.dirs import DirFit, assign, dir_fit
+from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
 from wavecheck.roles.model import (
     AxisProposal,
@@ -24,13 +29,10 @@ from wavecheck.roles.model import (
 )
 from wavecheck.roles.names import NameHint, name_hint
 from wavecheck.roles.phases import PhaseGroup, find_phase_groups
+from wavecheck.roles.updown import UpDownFit, up_down
 
 __all__ = ["propose"]
 
-_REVERSAL_GAP = 1.25  # a reversal's period is this much longer than the periods beside it
-_NEARER = 20  # a tied DIR goes to the STEP this many times nearer to each of its changes
-_SWITCH_GAP = 0.9
-_SAME_WIDTH = 1.2  # up/down: median pulse widths of the two lines within this factor  # up/down: the period across a switch is at least this times its neighbours'
 _AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
 
 I64 = npt.NDArray[np.int64]
@@ -42,119 +44,9 @@ def _level_at(ch: Channel, times: I64) -> I64:
     return (ch.initial ^ (n & 1)).astype(np.int64)
 
 
-def _plural(n: int, word: str) -> str:
-    return f"{n:,} {word}{'' if n == 1 else 's'}"
-
-
-@dataclass(frozen=True)
-class DirFit:
-    """How a toggling channel ``d`` fits as the DIR of pulse channel ``s``."""
-
-    d: Channel
-    s: Channel
-    toggles: int
-    at_reversal: int  # toggles whose period is longer than the periods beside it
-    outside: int  # toggles before the first or after the last pulse
-    per_level: tuple[int, int]  # pulses of s while d is low, high
-    near: npt.NDArray[np.float64]  # per change: ticks to the nearest pulse of s (setup or hold)
-
-    @property
-    def score(self) -> int:
-        """Toggles that sit where a DIR change belongs (a reversal, or outside the motion)."""
-        return self.at_reversal + self.outside
-
-    def evidence(self) -> str:
-        where = f"{self.at_reversal:,} of {self.toggles:,} at reversals of its rate"
-        if self.outside:
-            where += f", {self.outside:,} before its first or after its last pulse"
-        lo, hi = self.per_level
-        return (
-            f"toggles {_plural(self.toggles, 'time')}, only between pulses of {self.s.name!r} "
-            f"(never inside one, and with a pulse after each change), {where}; its pulses "
-            f"happen at both levels ({lo:,} low, {hi:,} high)"
-        )
-
-
-def _dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
-    """The fit of ``d`` as DIR of ``s`` (pulses ``p``), or None when a hard rule fails: an edge of
-    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, or pulses of
-    ``s`` at only one level of ``d``."""
-    t = d.edges
-    n = len(t)
-    if n == 0 or p.count == 0:
-        return None
-    i = np.searchsorted(s.edges, t, side="left")
-    j = np.searchsorted(s.edges, t, side="right")
-    if np.any((i == j) & ((s.initial ^ (i & 1)) == p.level)):
-        return None  # a change inside a pulse
-    # pulses per level interval of d (0 = before its first change); a pulse starting at the
-    # tick of a change belongs after it (DIR setup 0)
-    k = np.searchsorted(t, p.starts, side="right")
-    counts = np.bincount(k, minlength=n + 1)
-    if n >= 2 and np.any(counts[1:n] == 0):
-        return None  # changed twice with no step between: not a direction
-    levels = d.initial ^ (np.arange(n + 1) & 1)
-    lo, hi = int(counts[levels == 0].sum()), int(counts[levels == 1].sum())
-    if lo == 0 or hi == 0:
-        return None
-    # where each change sits in s's pulse train: between pulse a-1 and pulse a
-    a = np.searchsorted(p.starts, t, side="left")
-    outside = int(np.count_nonzero((a == 0) | (a == p.count)))
-    inner = a[(a > 0) & (a < p.count)]
-    st = p.starts
-    period = (st[inner] - st[inner - 1]).astype(np.float64)
-    before = np.where(inner >= 2, st[inner - 1] - st[np.maximum(inner - 2, 0)], 0)
-    after = np.where(inner + 1 < p.count, st[np.minimum(inner + 1, p.count - 1)] - st[inner], 0)
-    beside = np.maximum(before, after).astype(np.float64)
-    at_rev = int(np.count_nonzero(period >= _REVERSAL_GAP * beside))
-    hold = np.where(a > 0, t - p.ends[np.maximum(a - 1, 0)], np.inf)
-    setup = np.where(a < p.count, st[np.minimum(a, p.count - 1)] - t, np.inf)
-    return DirFit(d, s, n, at_rev, outside, (lo, hi), np.minimum(hold, setup))
-
-
 def _pulses_inside(d: Channel, dp: Pulses, s_starts: I64) -> int:
     """Number of ``s_starts`` that fall while ``d`` is at its pulse level."""
     return int(np.count_nonzero(_level_at(d, s_starts) == dp.level))
-
-
-@dataclass(frozen=True)
-class UpDownFit:
-    """Two pulse lines that never pulse together and take turns."""
-
-    switches: int
-
-    def evidence(self, other: Channel) -> str:
-        return (
-            f"takes turns with {other.name!r}: never pulses while it runs "
-            f"(switches {self.switches:,} times, always after a pause no shorter than the "
-            "periods beside it), and no DIR line"
-        )
-
-
-def _up_down(p: Pulses, q: Pulses, resolution: int) -> UpDownFit | None:
-    """The fit of two pulse trains as an up/down pair, or None when they run at the same time."""
-    if p.count == 0 or q.count == 0 or p.level != q.level:
-        return None
-    wp, wq = float(np.median(p.widths)), float(np.median(q.widths))
-    if max(wp, wq) > _SAME_WIDTH * min(wp, wq) + 2 * resolution:
-        return None  # one step generator drives both lines: same pulse level and width
-    s = np.concatenate([p.starts, q.starts])
-    e = np.concatenate([p.ends, q.ends])
-    lab = np.concatenate([np.zeros(p.count, np.int8), np.ones(q.count, np.int8)])
-    o = np.argsort(s, kind="stable")
-    s, e, lab = s[o], e[o], lab[o]
-    sw = np.flatnonzero(lab[1:] != lab[:-1])
-    if np.any(e[sw] > s[sw + 1]):
-        return None  # pulses overlap
-    per = (s[sw + 1] - s[sw]).astype(np.float64)
-    m = len(s)
-    prev_ok = (sw >= 1) & (lab[np.maximum(sw - 1, 0)] == lab[sw])
-    prev = np.where(prev_ok, s[sw] - s[np.maximum(sw - 1, 0)], 0)
-    nxt_ok = (sw + 2 < m) & (lab[np.minimum(sw + 2, m - 1)] == lab[sw + 1])
-    nxt = np.where(nxt_ok, s[np.minimum(sw + 2, m - 1)] - s[sw + 1], 0)
-    if np.any(per < _SWITCH_GAP * np.maximum(prev, nxt)):
-        return None  # one line pulses within the other's run: they run together
-    return UpDownFit(len(sw))
 
 
 @dataclass(eq=False)
@@ -258,7 +150,7 @@ class _Inference:
                 assert sp is not None
                 if s is d or sp.count <= dp.count:
                     continue
-                if _pulses_inside(d, dp, sp.starts) >= dp.count and _dir_fit(d, s, sp):
+                if _pulses_inside(d, dp, sp.starts) >= dp.count and dir_fit(d, s, sp):
                     demote = True
                     break
             if not demote:
@@ -266,104 +158,104 @@ class _Inference:
         return keep
 
     def _dirs(self, pulse: list[Channel], others: list[Channel]) -> dict[int, DirFit]:
-        """DIR fits, STEP channel index → fit; conflicts recorded.
+        """DIR fits, STEP channel index → fit; conflicts recorded (see :mod:`wavecheck.roles.dirs`).
 
-        A STEP has one DIR: a line that fits a single STEP line not yet given a DIR takes it,
-        and that STEP drops out of the other lines' candidates; repeated until nothing changes.
+        A line's candidates are the STEP lines it fits consistently (every change at a reversal of
+        their rate or outside their motion); a line that fits a single STEP line keeps it even
+        when not consistent (it is that line's DIR or no DIR at all). A name with an axis narrows
+        the candidates to the one with the same axis.
         """
+        fits_of: dict[int, list[DirFit]] = {}
         cands: dict[int, list[DirFit]] = {}
         for d in others:
             fits = []
             for s in pulse:
                 sp = self.looks[s.index].pulses
                 assert sp is not None
-                f = _dir_fit(d, s, sp)
+                f = dir_fit(d, s, sp)
                 if f is not None:
                     fits.append(f)
-            if fits:
-                cands[d.index] = fits
-        claimed: dict[int, DirFit] = {}  # STEP index -> fit, by elimination
-        while True:
-            owners = {f.d.index for f in claimed.values()}
-            picks: dict[int, list[DirFit]] = {}
-            for di, fits in cands.items():
-                live = [f for f in fits if f.s.index not in claimed]
-                if di not in owners and len(live) == 1:
-                    picks.setdefault(live[0].s.index, []).append(live[0])
-            if not picks:  # nothing forced: let evidence pick, then eliminate again
-                for di, fits in cands.items():
-                    live = [f for f in fits if f.s.index not in claimed]
-                    best = self._pick_dir(fits[0].d, live) if di not in owners and live else None
-                    if best is not None:
-                        picks.setdefault(best.s.index, []).append(best)
-            new = {si: fs[0] for si, fs in picks.items() if len(fs) == 1}
-            if not new:
-                break
-            claimed.update(new)
-        owners = {f.d.index for f in claimed.values()}
-        def other(g: DirFit) -> str:
-            has = claimed.get(g.s.index)
-            if has is not None:
-                return f"{self.name_of(g.s)} has DIR {self.name_of(has.d)}"
-            return f"{self.name_of(g.s)} fits it less well"
-
-        self.dir_notes = {
-            f.d.index: " (it also fits other STEP lines: "
-            + "; ".join(other(g) for g in cands[f.d.index] if g.s.index != f.s.index)
-            + ")"
-            for f in claimed.values()
-            if len(cands[f.d.index]) > 1
-        }
-        chosen: dict[int, list[DirFit]] = {si: [f] for si, f in claimed.items()}
-        for di, fits in cands.items():
-            if di in owners:
+            if not fits:
                 continue
-            d = fits[0].d
-            live = [f for f in fits if f.s.index not in claimed]
-            if not live:
-                self.why[di] = "fits as DIR only of STEP lines that have another DIR"
-                self.taken.add(di)
-                continue
-            best = self._pick_dir(d, live)
-            if best is None:
-                self.conflicts.append(
-                    Conflict(
-                        f"{self.name_of(d)} fits as the DIR of several STEP lines",
-                        tuple(f"DIR of {self.name_of(f.s)}: {f.evidence()}" for f in live),
-                    )
+            fits_of[d.index] = fits
+            good = [f for f in fits if f.consistent] if len(fits) > 1 else fits
+            axis = self.hints[d.index].axis
+            same = [f for f in good if axis is not None and self.hints[f.s.index].axis == axis]
+            if len(same) == 1:
+                good = same
+            if not good:
+                self._dir_conflict(
+                    f"{self.name_of(d)} fits as the DIR of several STEP lines, and changes while "
+                    "each of them runs steadily", [d.index], fits,
                 )
-                self.why[d.index] = "ambiguous DIR (see below)"
-                self.taken.add(d.index)
-                self.unsure_steps |= {f.s.index for f in live}
                 continue
-            chosen.setdefault(best.s.index, []).append(best)
-        out: dict[int, DirFit] = {}
-        for s_index, fits in chosen.items():
+            cands[d.index] = good
+        # two lines whose only candidate is one STEP: a DIR-named one takes it
+        only: dict[int, list[DirFit]] = {}
+        for fits in cands.values():
             if len(fits) == 1:
-                out[s_index] = fits[0]
-                continue
+                only.setdefault(fits[0].s.index, []).append(fits[0])
+        for fits in only.values():
             named = [f for f in fits if self.hints[f.d.index].fits("dir")]
-            if len(named) == 1:
-                out[s_index] = named[0]
+            if len(fits) > 1 and len(named) == 1:
                 for f in fits:
                     if f is not named[0]:
+                        del cands[f.d.index]
                         self.why[f.d.index] = (
                             f"also fits as DIR of {self.name_of(f.s)}, whose DIR is "
                             f"{self.name_of(named[0].d)} by name"
                         )
-                continue
-            s = fits[0].s
-            self.conflicts.append(
-                Conflict(
-                    f"{_plural(len(fits), 'channel')} fit as the DIR of {self.name_of(s)}",
-                    tuple(f"DIR {self.name_of(f.d)}: {f.evidence()}" for f in fits),
+        got = assign(cands)
+        for lines in got.crowded:
+            fits = [f for d in lines for f in cands[d]]
+            steps = {f.s.index for f in fits}
+            if len(steps) == 1:
+                q = f"{_plural(len(lines), 'channel')} fit as the DIR of {self.name_of(fits[0].s)}"
+            else:
+                q = (
+                    f"{_plural(len(lines), 'channel')} fit as DIRs of only "
+                    f"{_plural(len(steps), 'STEP line')}: which is whose DIR?"
                 )
+            self._dir_conflict(q, list(lines), fits)
+        for di, fits in got.undecided.items():
+            self._dir_conflict(
+                f"{self.name_of(fits[0].d)} fits as the DIR of several STEP lines", [di], fits
             )
-            self.unsure_steps.add(s.index)
-            for f in fits:
-                self.why[f.d.index] = "ambiguous DIR (see below)"
-                self.taken.add(f.d.index)
-        return out
+        for f in got.chosen.values():
+            notes = []
+            for g in fits_of[f.d.index]:
+                if g.s.index == f.s.index:
+                    continue
+                has = got.chosen.get(g.s.index)
+                if has is not None:
+                    notes.append(f"{self.name_of(g.s)} has DIR {self.name_of(has.d)}")
+                elif not g.consistent:
+                    notes.append(
+                        f"{self.name_of(g.s)} runs steadily through "
+                        f"{g.toggles - g.at_reversal - g.outside:,} of its changes"
+                    )
+                else:
+                    notes.append(
+                        f"{self.name_of(g.s)} cannot take it: another changing line would be "
+                        "left without a STEP line it fits"
+                    )
+            if notes:
+                self.dir_notes[f.d.index] = f" (it also fits other STEP lines: {'; '.join(notes)})"
+        return got.chosen
+
+    def _dir_conflict(self, question: str, lines: list[int], fits: list[DirFit]) -> None:
+        """Refuse ``lines`` as DIRs: a conflict listing ``fits``; their STEPs become unsure."""
+        self.conflicts.append(
+            Conflict(
+                question,
+                tuple(f"{self.name_of(f.d)} as DIR of {self.name_of(f.s)}: {f.evidence()}"
+                      for f in fits),
+            )
+        )
+        for d in lines:
+            self.why[d] = "ambiguous DIR (see below)"
+            self.taken.add(d)
+        self.unsure_steps |= {f.s.index for f in fits}
 
     def _takes_turns(self, pulse: list[Channel]) -> dict[int, set[int]]:
         """Pulse line → the lines it takes turns with (up/down candidates, before any DIR)."""
@@ -372,37 +264,10 @@ class _Inference:
             for q in pulse[i + 1 :]:
                 pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
                 assert pp is not None and qp is not None
-                if _up_down(pp, qp, self.cap.resolution_ticks) is not None:
+                if up_down(pp, qp, self.cap.resolution_ticks) is not None:
                     out[p.index].add(q.index)
                     out[q.index].add(p.index)
         return out
-
-    def _pick_dir(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
-        best = self._pick_dir_by_evidence(d, fits)
-        if best is not None and len(fits) > 1 and self.turns.get(best.s.index):
-            return None  # an up/down line has no DIR: do not let a tie-break give it one
-        return best
-
-    def _pick_dir_by_evidence(self, d: Channel, fits: list[DirFit]) -> DirFit | None:
-        if len(fits) == 1:
-            return fits[0]
-        axis = self.hints[d.index].axis
-        if axis is not None:
-            same = [f for f in fits if self.hints[f.s.index].axis == axis]
-            if len(same) == 1:
-                return same[0]
-        fits = sorted(fits, key=lambda f: -f.score)
-        top = [f for f in fits if f.score == fits[0].score]
-        if fits[0].score < fits[0].toggles:
-            return None
-        if len(top) == 1:
-            return top[0]
-        # tied: a DIR changes within setup/hold of its own STEP's pulses; take the STEP that is
-        # far nearer (_NEARER) at every change than every other tied one
-        for f in top:
-            if all(bool(np.all(_NEARER * f.near <= g.near)) for g in top if g is not f):
-                return f
-        return None
 
     def _pulse_axes(self, pulse: list[Channel], dirs: dict[int, DirFit]) -> None:
         # a line named in a DIR conflict may be a STEP (with that DIR) or an up/down line; so
@@ -467,7 +332,7 @@ class _Inference:
                     continue  # named STEP: an axis of its own
                 pp, qp = self.looks[p.index].pulses, self.looks[q.index].pulses
                 assert pp is not None and qp is not None
-                fit = _up_down(pp, qp, self.cap.resolution_ticks)
+                fit = up_down(pp, qp, self.cap.resolution_ticks)
                 if fit is not None:
                     partners[p.index].append((q, fit))
                     partners[q.index].append((p, fit))
