@@ -658,21 +658,31 @@ class WavecheckChecker:
         self.root = root
         self.max_violations = max_violations
 
+    def _path(self, capture: str | os.PathLike[str]) -> Path:
+        path = Path(capture)
+        return path if path.is_absolute() else self.root / path
+
     def __call__(self, capture: str | os.PathLike[str], drive: str, **kwargs: Any) -> Report:
         """Check ``capture`` against ``drive`` (keyword arguments as :func:`wavecheck.check`)."""
         from wavecheck.api import check
 
-        path = Path(capture)
-        if not path.is_absolute():
-            path = self.root / path
-        return check(path, drive, **kwargs)
+        return check(self._path(capture), drive, **kwargs)
 
-    def expect(self, report: Report, verdict: str = "pass") -> None:
-        """Fail the test, showing the rules that are not pass, unless the verdict is ``verdict``."""
+    def axes(
+        self, capture: str | os.PathLike[str], axes: Any, drive: str | None = None, **kwargs: Any
+    ) -> MachineReport:
+        """Check every axis of ``capture`` (arguments as :func:`wavecheck.check_axes`)."""
+        from wavecheck.api import check_axes
+
+        return check_axes(self._path(capture), axes, drive, **kwargs)
+
+    def expect(self, report: Checked, verdict: str = "pass") -> None:
+        """Fail the test, showing the rules (of each axis) that are not pass, unless the verdict
+        is ``verdict``."""
         __tracebackhide__ = True
         if report.verdict != verdict:
             pytest.fail(
-                f"expected {verdict.upper()}, got {_describe_report(report, self.max_violations)}",
+                f"expected {verdict.upper()}, got {_describe(report, self.max_violations)}",
                 pytrace=False,
             )
 
