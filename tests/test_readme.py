@@ -82,6 +82,17 @@ def test_pytest_blocks(pytester: pytest.Pytester) -> None:
     result.assert_outcomes(passed=7)  # verdict + 5 rules + the fixture test
 
 
+def test_pytest_axes_block(pytester: pytest.Pytester) -> None:
+    """The two-axis wavecheck.toml: x fails dir_hold as expected, y passes (issue 13)."""
+    shutil.copytree(REPO / "captures" / "examples", pytester.path / "captures" / "examples")
+    (pytester.path / "wavecheck.toml").write_text(_block("toml-axes"))
+    result = pytester.runpytest("-v", "-p", "no:cacheprovider")
+    out = result.stdout.str()
+    for item in ("machine::verdict", "machine::x::dir_hold", "machine::y::dir_hold", "machine::y::verdict"):
+        assert f"wavecheck.toml::{item} PASSED" in out, item
+    result.assert_outcomes(passed=13)  # the capture + 2 axes × (verdict + 5 rules)
+
+
 def test_latency_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The latency section's commands run as written (issue 17)."""
     from stepgen.cli import main as stepgen_main

@@ -1,6 +1,6 @@
 """wavecheck: check every edge of a STEP/DIR capture against a stepper drive's datasheet."""
 
-from wavecheck.api import check
+from wavecheck.api import Axis, check, check_axes
 from wavecheck.engine import run_check
 from wavecheck.errors import (
     CaptureError,
@@ -10,12 +10,15 @@ from wavecheck.errors import (
     UsageError,
     WavecheckError,
 )
+from wavecheck.report.machine import MachineReport
 from wavecheck.report.model import Report
 from wavecheck.timebase import Timebase
 
 __all__ = [
+    "Axis",
     "CaptureError",
     "ConfigError",
+    "MachineReport",
     "Report",
     "RuleError",
     "Timebase",
@@ -24,6 +27,7 @@ __all__ = [
     "WavecheckError",
     "__version__",
     "check",
+    "check_axes",
     "run_check",
 ]
 

@@ -1,22 +1,101 @@
-"""The typed Python API: ``wavecheck.check(capture, drive, ...) -> Report``.
+"""The typed Python API: ``wavecheck.check(capture, drive, ...) -> Report`` for one axis and
+``wavecheck.check_axes(capture, axes, ...) -> MachineReport`` for several.
 
 >>> report = wavecheck.check("run.sr", "gecko-g202", map={"step": "5", "dir": "6"})  # doctest: +SKIP
 >>> report.verdict, report.rule("dir_hold").min_margin_ns                              # doctest: +SKIP
+>>> machine = wavecheck.check_axes("run.sr", {"x": {"step": "5", "dir": "6"},          # doctest: +SKIP
+...                                           "y": Axis({"step": "3", "dir": "4"}, drive="leadshine-dm542")},
+...                                drive="gecko-g202")
+>>> machine.verdict, machine.axis("y").rule("dir_hold").verdict                       # doctest: +SKIP
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 
+from wavecheck.axes import axes_from_tables
 from wavecheck.capture.model import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine import run_check
+from wavecheck.engine import check_machine, run_check
+from wavecheck.errors import UsageError
+from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.report.machine import MachineReport
 from wavecheck.report.model import Report
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 
-__all__ = ["check"]
+__all__ = ["Axis", "check", "check_axes"]
+
+PathOrText = str | os.PathLike[str]
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One axis of :func:`check_axes`: its roles, and what it does not share with the run.
+
+    Attributes:
+        map: role → channel name or index (``{"step": "5", "dir": "6"}``).
+        drive: its drive (id, rule file or :class:`Drive`); None: the run's ``drive``.
+        invert: roles to invert; None: the run's ``invert``.
+        step_type: LinuxCNC step type; None: the run's, else the drive's.
+        forward_level: DIR level meaning forward (0 or 1); None: the run's.
+    """
+
+    map: Mapping[str, str]
+    drive: PathOrText | Drive | None = None
+    invert: Iterable[str] | None = None
+    step_type: int | None = None
+    forward_level: int | None = None
+
+
+def _open(
+    capture: PathOrText | Capture, samplerate: str | Fraction | None, input_format: str | None
+) -> Capture:
+    """``capture`` itself, or the file read (``samplerate`` text needs its unit)."""
+    if isinstance(capture, Capture):
+        return capture
+    from wavecheck.capture.open import open_capture
+
+    rate = None
+    if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
+        rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
+    elif samplerate is not None:
+        rate = parse_frequency(samplerate, default_unit="Hz")
+    return open_capture(capture, samplerate=rate, input_format=input_format)
+
+
+def _drive(drive: PathOrText | Drive) -> Drive:
+    if isinstance(drive, Drive):
+        return drive
+    from wavecheck.drives.library import load_drive
+
+    return load_drive(drive)
+
+
+def _stepgen(
+    ini: PathOrText | None, hal: PathOrText | Sequence[PathOrText] | None, channel: int
+) -> LinuxCNCConfig | None:
+    if ini is None and hal is None:
+        return None
+    from wavecheck.linuxcnc.config import read_config
+
+    hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
+    return read_config(ini, hals, channel)
+
+
+def _latency_ns(latency: str | Fraction | None) -> Fraction | None:
+    if latency is None:
+        return None
+    seconds = parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
+    return seconds * 10**9
+
+
+def _resolution(resolution: str | Fraction | None) -> str | Fraction | None:
+    if isinstance(resolution, str):
+        return parse_option(resolution, "resolution", "time")
+    return resolution
 
 
 def check(
@@ -63,44 +142,94 @@ def check(
     Raises:
         WavecheckError: unreadable capture or rule file, unknown channel, bad option.
     """
-    if not isinstance(capture, Capture):
-        from wavecheck.capture.open import open_capture
-
-        rate = None
-        if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
-            rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
-        elif samplerate is not None:
-            rate = parse_frequency(samplerate, default_unit="Hz")
-        capture = open_capture(capture, samplerate=rate, input_format=input_format)
-    if not isinstance(drive, Drive):
-        from wavecheck.drives.library import load_drive
-
-        drive = load_drive(drive)
-    stepgen = None
-    if ini is not None or hal is not None:
-        from wavecheck.linuxcnc.config import read_config
-
-        hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
-        stepgen = read_config(ini, hals, channel)
-    j = None
-    if latency is not None:
-        j = (
-            parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
-        ) * 10**9
-    res: str | Fraction | None = resolution
-    if isinstance(resolution, str):
-        res = parse_option(resolution, "resolution", "time")
+    if map and any("." in role for role in map):
+        raise UsageError(
+            f"map {dict(map)}: roles named after an axis (x.step) are several axes: "
+            "use wavecheck.check_axes(capture, {'x': {'step': ...}, ...})"
+        )
     return run_check(
-        capture,
-        drive,
+        _open(capture, samplerate, input_format),
+        _drive(drive),
         map,
         invert,
         step_type,
-        res,
+        _resolution(resolution),
         forward_level=forward_level,
         pulse_level=pulse_level,
         active_edge=active_edge,
         user_table=user_table,
-        stepgen=stepgen,
-        latency_ns=j,
+        stepgen=_stepgen(ini, hal, channel),
+        latency_ns=_latency_ns(latency),
+    )
+
+
+def check_axes(
+    capture: PathOrText | Capture,
+    axes: Mapping[str, Axis | Mapping[str, str]],
+    drive: PathOrText | Drive | None = None,
+    *,
+    map: Mapping[str, str] | None = None,  # noqa: A002 - mirrors the CLI's --map
+    invert: Iterable[str] = (),
+    step_type: int | None = None,
+    resolution: str | Fraction | None = None,
+    samplerate: str | Fraction | None = None,
+    input_format: str | None = None,
+    forward_level: int = 0,
+    pulse_level: int = 1,
+    active_edge: ActiveEdge | None = None,
+    user_table: tuple[int, ...] | None = None,
+    ini: PathOrText | None = None,
+    hal: PathOrText | Sequence[PathOrText] | None = None,
+    channel: int = 0,
+    latency: str | Fraction | None = None,
+) -> MachineReport:
+    """Check every axis of a capture, read once, each against its drive (``wavecheck check
+    --map x.step=5,x.dir=6 --map y.step=3,y.dir=4``); the report has one
+    :class:`~wavecheck.report.Report` per axis (``.axis("x")``) and the worst verdict.
+
+    Args:
+        capture: a file path or a :class:`~wavecheck.capture.model.Capture`.
+        axes: axis name → its roles (``{"step": "5", "dir": "6"}``) or an :class:`Axis` with its
+            own drive and options.
+        drive: the drive of every axis that does not name its own.
+        map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
+        invert, step_type, forward_level: for every axis that does not give its own.
+        resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
+            channel, latency: as :func:`check`, for every axis.
+
+    Raises:
+        WavecheckError: an axis without a drive, a bad axis name or mapping (a channel in two
+            axes, a shared role other than enable), and what :func:`check` raises.
+    """
+    given = {name: a if isinstance(a, Axis) else Axis(a) for name, a in axes.items()}
+    maps = axes_from_tables({n: a.map for n, a in given.items()}, map)
+    loaded: dict[str, Drive] = {}
+    drives: dict[str | None, Drive] = {}
+    for name, a in given.items():
+        ref = a.drive if a.drive is not None else drive
+        if ref is None:
+            raise UsageError(f"axis {name} has no drive (give drive= or Axis(..., drive=...))")
+        if isinstance(ref, Drive):
+            drives[name] = ref
+            continue
+        key = os.fspath(ref)
+        if key not in loaded:
+            loaded[key] = _drive(ref)
+        drives[name] = loaded[key]
+    types = {n: a.step_type if a.step_type is not None else step_type for n, a in given.items()}
+    return check_machine(
+        _open(capture, samplerate, input_format),
+        maps,
+        drives,
+        _resolution(resolution),
+        step_types={n: t for n, t in types.items() if t is not None},
+        forward_levels={
+            n: forward_level if a.forward_level is None else a.forward_level for n, a in given.items()
+        },
+        invert={n: list(invert if a.invert is None else a.invert) for n, a in given.items()},
+        active_edge=active_edge,
+        user_table=user_table,
+        stepgen=_stepgen(ini, hal, channel),
+        latency_ns=_latency_ns(latency),
+        pulse_level=pulse_level,
     )

@@ -11,13 +11,13 @@ Axis names are letters, digits, ``_`` and ``-`` (``x``, ``2``, ``left-z``).
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map, role_name
 
-__all__ = ["AxisMap", "parse_axes", "per_axis", "split_invert"]
+__all__ = ["AxisMap", "axes_from_tables", "parse_axes", "per_axis", "split_invert"]
 
 _AXIS = re.compile(r"^[A-Za-z0-9_-]+$")
 #: Roles one line may serve for several axes.
@@ -77,16 +77,35 @@ def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
     if not per_axis:
         return [AxisMap(None, parse_map(items, option))]
     common = parse_map([",".join(shared)], option) if shared else {}
+    named = {name: parse_map([",".join(pairs)], f"{option} (axis {name})") for name, pairs in per_axis.items()}
+    return _assemble(
+        named, common, option, lambda role, ch: f"(e.g. {option} x.{role}={ch})"
+    )
+
+
+def _assemble(
+    named: Mapping[str, dict[str, str]],
+    common: Mapping[str, str],
+    option: str,
+    example: Callable[[str, str], str],
+) -> list[AxisMap]:
+    """Named axes' roles (each already checked on its own) plus the shared roles → the axes.
+
+    ``example(role, channel)`` words the fix for a shared role that must name its axis.
+
+    Raises:
+        UsageError: a shared role other than enable, one channel in two axes.
+    """
     for role in common:
         if role not in SHAREABLE:
             raise UsageError(
                 f"{option} {role}={common[role]}: with several axes every role but enable names "
-                f"its axis (e.g. {option} x.{role}={common[role]})"
+                f"its axis {example(role, common[role])}"
             )
     axes = []
     owner: dict[str, str] = {}  # channel as written -> "axis.role"
-    for name, pairs in per_axis.items():
-        roles = parse_map([",".join(pairs)], f"{option} (axis {name})")
+    for name, given in named.items():
+        roles = dict(given)
         for role, ch in roles.items():
             key = ch.strip()
             if key in owner and role not in SHAREABLE:
@@ -99,6 +118,48 @@ def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
             roles.setdefault(role, ch)
         axes.append(AxisMap(name, roles))
     return axes
+
+
+def axes_from_tables(
+    axes: Mapping[str, Mapping[str, str]], shared: Mapping[str, str] | None = None, where: str = "map"
+) -> list[AxisMap]:
+    """Axes given as tables (axis → role → channel, e.g. from a ``wavecheck.toml`` or the Python
+    API), with ``shared`` roles for every axis (only enable), checked as :func:`parse_axes` checks
+    ``--map``; roles are spelt as there (``STEP``, ``phase_a``, ``a``).
+
+    Raises:
+        UsageError: a bad axis name, an unknown role, a role twice or a channel in two roles of
+            one axis, a channel in two axes, a shared role other than enable, no axis.
+    """
+    if not axes:
+        raise UsageError(f"{where}: no axis given")
+    named: dict[str, dict[str, str]] = {}
+    for name, table in axes.items():
+        if not _AXIS.match(str(name)):
+            raise UsageError(f"{where}: axis name {name!r} may use letters, digits, _ and -")
+        named[str(name)] = _table_roles(table, f"{where} (axis {name})")
+    common = _table_roles(shared or {}, where)
+    return _assemble(named, common, where, lambda role, ch: f"(give {role} in each axis)")
+
+
+def _table_roles(table: Mapping[str, str], where: str) -> dict[str, str]:
+    """role → channel of one table, roles normalised; a role or a channel once."""
+    roles: dict[str, str] = {}
+    for key, ch in table.items():
+        role = role_name(str(key))
+        channel = str(ch)
+        if not channel.strip():
+            raise UsageError(f"{where}: {key} names no channel")
+        if role in roles:
+            raise UsageError(f"{where}: role {role} is mapped twice")
+        for other, seen in roles.items():
+            if seen.strip() == channel.strip():
+                raise UsageError(
+                    f"{where}: channel {channel.strip()!r} is mapped as both {other} and {role}; "
+                    "one channel can have one role"
+                )
+        roles[role] = channel
+    return roles
 
 
 def per_axis(values: Sequence[str] | str | None, option: str, axes: Sequence[str | None]) -> dict[str | None, str]:

@@ -18,26 +18,40 @@ too. :meth:`Comparison.failures` names each line that failed. Without DIR on eit
 captures often have none) the final positions are unknown on both and are not compared: count,
 times and rules still are; unknown on one side only is a difference.
 
+Several axes (:func:`compare_axes`, ``--map x.step=… --map y.step=…``): each axis of the capture
+is compared with the same-named axis of the golden (both read once); a
+:class:`MachineComparison` holds one :class:`Comparison` per axis and the worst verdict.
+
 Time differences are computed in float64 ns (±0.001 ns at 10⁶ s); the largest is recomputed
 exactly.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Literal
 
 import numpy as np
 
+from wavecheck.axes import AxisMap
 from wavecheck.capture.model import Capture
 from wavecheck.drives.model import Drive
-from wavecheck.engine import run_check
+from wavecheck.engine import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.report.model import Report
+from wavecheck.verdict import overall_verdict
 
-__all__ = ["Align", "Comparison", "RuleDiff", "compare", "compare_reports"]
+__all__ = [
+    "Align",
+    "Comparison",
+    "MachineComparison",
+    "RuleDiff",
+    "compare",
+    "compare_axes",
+    "compare_reports",
+]
 
 Align = Literal["first-step", "none"]
 _RANK = {"pass": 0, "unchecked": 0, "indeterminate": 1, "fail": 2}
@@ -237,6 +251,90 @@ def compare_reports(
     )
 
 
+@dataclass(frozen=True)
+class MachineComparison:
+    """Every axis of a capture compared with the same-named axis of a golden."""
+
+    axes: list[Comparison]
+
+    @property
+    def several(self) -> bool:
+        """Named axes (``--map x.step=…``), not the one unnamed axis of a plain comparison."""
+        return len(self.axes) != 1 or self.axes[0].capture.axis is not None
+
+    @property
+    def verdict(self) -> str:
+        """The worst verdict of the axes."""
+        return overall_verdict(c.verdict for c in self.axes)
+
+    def failures(self) -> list[str]:
+        """Each failing line, prefixed ``axis NAME:`` when there are named axes."""
+        if not self.several:
+            return self.axes[0].failures()
+        return [f"axis {c.capture.axis}: {f}" for c in self.axes for f in c.failures()]
+
+    def axis(self, name: str) -> Comparison:
+        """The comparison of axis ``name`` (KeyError when there is none)."""
+        for c in self.axes:
+            if c.capture.axis == name:
+                return c
+        raise KeyError(name)
+
+
+def _axis_names(names: Sequence[str | None]) -> str:
+    return "one unnamed axis" if list(names) == [None] else ", ".join(map(str, names))
+
+
+def compare_axes(
+    capture: Capture,
+    golden: Capture,
+    axes: Sequence[AxisMap],
+    golden_axes: Sequence[AxisMap],
+    drives: Mapping[str | None, Drive],
+    tolerance_ns: Fraction,
+    align: Align = "first-step",
+    *,
+    capture_invert: Mapping[str | None, Iterable[str]] | None = None,
+    golden_invert: Mapping[str | None, Iterable[str]] | None = None,
+    step_type: int | None = None,
+    forward_level: int = 0,
+) -> MachineComparison:
+    """Check every axis of ``capture`` and of ``golden`` (:func:`wavecheck.engine.check_machine`,
+    each file read once; an axis against its drive in ``drives``, the same in both files) and
+    compare each capture axis with the golden axis of the same name.
+
+    Raises:
+        UsageError: the two files' axes differ by name, an axis has no drive; what
+            :func:`wavecheck.engine.run_check` raises (prefixed ``golden`` for the golden).
+    """
+    names = [a.name for a in axes]
+    golden_names = [a.name for a in golden_axes]
+    if sorted(map(str, names)) != sorted(map(str, golden_names)):
+        raise UsageError(
+            f"the capture's axes ({_axis_names(names)}) and the golden's "
+            f"({_axis_names(golden_names)}) differ: each capture axis is compared with the golden "
+            "axis of the same name (--map x.step=… for the capture, --golden-map x.step=… for "
+            "the golden)"
+        )
+    types: dict[str | None, int] = {} if step_type is None else dict.fromkeys(names, step_type)
+    forward: dict[str | None, int] = dict.fromkeys(names, forward_level)
+    checked = check_machine(
+        capture, axes, drives, step_types=types, forward_levels=forward, invert=capture_invert,
+        cross_axis=False,
+    )
+    try:
+        reference = check_machine(
+            golden, golden_axes, drives, step_types=types, forward_levels=forward,
+            invert=golden_invert, cross_axis=False,
+        )
+    except UsageError as err:
+        raise UsageError(f"golden {err} (the golden's channels are mapped with --golden-map)") from None
+    by_name = {r.axis: r for r in reference.axes}
+    return MachineComparison(
+        [compare_reports(r, by_name[r.axis], tolerance_ns, align) for r in checked.axes]
+    )
+
+
 def compare(
     capture: Capture,
     golden: Capture,
@@ -252,14 +350,18 @@ def compare(
     forward_level: int = 0,
 ) -> Comparison:
     """Check ``capture`` and ``golden`` against the same ``drive`` (each with its own role mapping
-    and inverted roles; the same step type and forward DIR level) and compare the two reports."""
-    checked = run_check(
-        capture, drive, capture_map, capture_invert, step_type, forward_level=forward_level
-    )
-    try:
-        reference = run_check(
-            golden, drive, golden_map, golden_invert, step_type, forward_level=forward_level
-        )
-    except UsageError as err:
-        raise UsageError(f"golden {err} (the golden's channels are mapped with --golden-map)") from None
-    return compare_reports(checked, reference, tolerance_ns, align)
+    and inverted roles; the same step type and forward DIR level) and compare the two reports
+    (one axis: :func:`compare_axes` for several)."""
+    return compare_axes(
+        capture,
+        golden,
+        [AxisMap(None, dict(capture_map or {}))],
+        [AxisMap(None, dict(golden_map or {}))],
+        {None: drive},
+        tolerance_ns,
+        align,
+        capture_invert={None: list(capture_invert)},
+        golden_invert={None: list(golden_invert)},
+        step_type=step_type,
+        forward_level=forward_level,
+    ).axes[0]

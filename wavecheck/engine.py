@@ -1,15 +1,18 @@
 """Check one capture against one drive: map → decode → measure every rule → report.
 
 :func:`run_check` is the library entry point the CLI (and later the HTML/JUnit/plot outputs,
-several captures, INI/HAL configurations) build on; it does no I/O.
+several captures, INI/HAL configurations) build on; it does no I/O. :func:`check_machine` checks
+every axis of one capture (each against its own drive) from the same edge arrays; ``check``,
+``compare``, :func:`wavecheck.check_axes` and the pytest plugin all go through it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 from fractions import Fraction
 
+from wavecheck.axes import AxisMap
 from wavecheck.capture.model import Capture
 from wavecheck.checks.compile import run_rules
 from wavecheck.checks.rates import max_step_rates
@@ -20,10 +23,11 @@ from wavecheck.errors import UsageError
 from wavecheck.interface import build_interface, mapped_channel_names
 from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
+from wavecheck.report.machine import MachineReport, common_timer
 from wavecheck.report.model import Report
 from wavecheck.units import format_time, parse_time
 
-__all__ = ["auto_map", "default_step_type", "resolve_resolution_ns", "run_check"]
+__all__ = ["auto_map", "check_machine", "default_step_type", "resolve_resolution_ns", "run_check"]
 
 def _leaf(name: str) -> str:
     """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
@@ -211,3 +215,67 @@ def run_check(
         notes=notes,
         axis=axis,
     )
+
+
+def check_machine(
+    capture: Capture,
+    axes: Sequence[AxisMap],
+    drives: Mapping[str | None, Drive],
+    resolution: str | Fraction | None = None,
+    *,
+    step_types: Mapping[str | None, int] | None = None,
+    forward_levels: Mapping[str | None, int] | None = None,
+    invert: Mapping[str | None, Iterable[str]] | None = None,
+    active_edge: ActiveEdge | None = None,
+    user_table: tuple[int, ...] | None = None,
+    stepgen: LinuxCNCConfig | None = None,
+    latency_ns: Fraction | None = None,
+    pulse_level: int = 1,
+    cross_axis: bool = True,
+) -> MachineReport:
+    """Check every axis of ``capture`` with :func:`run_check`, from the same edge arrays.
+
+    Args:
+        capture: the capture, read once.
+        axes: the axes (:func:`wavecheck.axes.parse_axes`, :func:`wavecheck.axes.axes_from_tables`;
+            one unnamed axis for a single-axis run).
+        drives: axis name → its drive (every axis needs one).
+        resolution: T for every axis (as :func:`run_check`).
+        step_types: axis → LinuxCNC step type; an axis not listed takes the type found with its
+            roles (:attr:`AxisMap.step_type`), else its drive's.
+        forward_levels: axis → DIR level meaning forward (default 0).
+        invert: axis → roles to invert, on top of the roles found inverted with its mapping.
+        active_edge, user_table, stepgen, latency_ns, pulse_level: as :func:`run_check`, for
+            every axis.
+        cross_axis: add the common-timer note (:func:`wavecheck.report.machine.common_timer`)
+            when there are several axes.
+
+    Raises:
+        WavecheckError: an axis without a drive, or what :func:`run_check` raises.
+    """
+    types = step_types or {}
+    forward = forward_levels or {}
+    inverts = invert or {}
+    reports = []
+    for axis in axes:
+        if axis.name not in drives:
+            raise UsageError(f"axis {axis.name} has no drive")
+        reports.append(
+            run_check(
+                capture,
+                drives[axis.name],
+                axis.roles,
+                [*inverts.get(axis.name, ()), *axis.invert],
+                types.get(axis.name, axis.step_type),
+                resolution,
+                forward_level=forward.get(axis.name, 0),
+                active_edge=active_edge,
+                user_table=user_table,
+                stepgen=stepgen,
+                pulse_level=pulse_level,
+                latency_ns=latency_ns,
+                axis=axis.name,
+            )
+        )
+    several = bool(reports) and (len(reports) > 1 or reports[0].axis is not None)
+    return MachineReport(capture, reports, [common_timer(reports)] if cross_axis and several else [])

@@ -24,6 +24,22 @@ The file (paths relative to it)::
     expect = "pass"                    # pass | fail | indeterminate (default pass)
     expect_rules = { dir_hold = "fail" }
 
+Several axes of one capture (read once; ``wavecheck check --map x.step=…``)::
+
+    [[capture]]
+    name = "machine"
+    path = "captures/machine.vcd"
+    drive = "gecko-g202"               # default of every axis (as are invert, type, dir_forward,
+    map = { enable = "EN" }            #   expect and expect_rules); map: roles shared (enable)
+    axes.x = { step = "x_step", dir = "x_dir", expect = "fail", expect_rules = { dir_hold = "fail" } }
+    axes.y = { step = "y_step", dir = "y_dir", drive = "leadshine-dm542", invert = ["step"] }
+
+An axis table holds its roles (``step``, ``dir``, ``up``, ``down``, ``phase-A`` …; or
+``map = "step=5,dir=6"``) and its own ``drive``, ``type``, ``invert``, ``dir_forward``,
+``expect``, ``expect_rules`` (merged over the entry's). Items: ``machine::verdict`` (the whole
+capture: the entry's ``expect``, else the worst of the axes'), and per axis
+``machine::x::verdict`` and ``machine::x::dir_hold`` …
+
 What an item expects: a rule listed in ``expect_rules`` must have that verdict. Otherwise, with
 ``expect = "pass"`` every rule must pass; with ``expect = "fail"`` (or indeterminate) a rule may
 pass or have the expected verdict — the ``verdict`` item checks the capture as a whole. A rule
@@ -51,9 +67,14 @@ import pytest
 
 if TYPE_CHECKING:
     from wavecheck.checks.result import RuleResult
+    from wavecheck.report.machine import MachineReport
     from wavecheck.report.model import Report
 
+    Checked = Report | MachineReport
+
 __all__ = [
+    "AxisCollector",
+    "AxisSpec",
     "CaptureSpec",
     "WavecheckChecker",
     "describe_rule",
@@ -81,7 +102,10 @@ _KEYS = {
     "hal",
     "channel",
     "latency",
+    "axes",
 }
+#: Keys of an axis table besides its roles.
+_AXIS_KEYS = {"map", "drive", "type", "invert", "dir_forward", "expect", "expect_rules"}
 
 
 class WavecheckConfigError(Exception):
@@ -92,13 +116,45 @@ class WavecheckFailure(AssertionError):
     """An item's verdict is not the expected one (its text is the failure report)."""
 
 
+def _expected(rule: str, expect: str, expect_rules: dict[str, str]) -> tuple[str, ...]:
+    """The verdicts a rule item accepts."""
+    if rule in expect_rules:
+        return (expect_rules[rule],)
+    if expect == "pass":
+        return ("pass",)
+    return ("pass", expect)
+
+
+@dataclass(frozen=True)
+class AxisSpec:
+    """One axis of a ``[[capture]]`` entry with ``axes``: the entry's defaults applied."""
+
+    name: str
+    drive: str
+    map: dict[str, str]
+    invert: tuple[str, ...] = ()
+    type: int | None = None
+    dir_forward: str = "low"
+    expect: str = "pass"
+    expect_rules: dict[str, str] = field(default_factory=dict)
+
+    def expected(self, rule: str) -> tuple[str, ...]:
+        """The verdicts a rule item of this axis accepts."""
+        return _expected(rule, self.expect, self.expect_rules)
+
+
 @dataclass(frozen=True)
 class CaptureSpec:
-    """One ``[[capture]]`` entry, paths resolved against the config file's folder."""
+    """One ``[[capture]]`` entry, paths resolved against the config file's folder.
+
+    With ``axes`` the capture is checked as a machine (one report per axis); ``drive`` is then
+    only the axes' default (None when each axis names its own) and ``expect`` the whole
+    capture's verdict.
+    """
 
     name: str
     path: Path
-    drive: str
+    drive: str | None
     map: dict[str, str] = field(default_factory=dict)
     invert: tuple[str, ...] = ()
     type: int | None = None
@@ -112,14 +168,109 @@ class CaptureSpec:
     hal: tuple[Path, ...] = ()
     channel: int = 0
     latency: str | None = None
+    axes: tuple[AxisSpec, ...] = ()
 
     def expected(self, rule: str) -> tuple[str, ...]:
         """The verdicts a rule item accepts."""
-        if rule in self.expect_rules:
-            return (self.expect_rules[rule],)
-        if self.expect == "pass":
-            return ("pass",)
-        return ("pass", self.expect)
+        return _expected(rule, self.expect, self.expect_rules)
+
+
+def _map_of(raw: Any, where: str) -> dict[str, str]:
+    """A ``map`` value: a table or ``"role=CH,..."`` text."""
+    if isinstance(raw, str):
+        from wavecheck.interface import parse_map
+
+        return parse_map([raw])
+    if isinstance(raw, dict):
+        return {str(k): str(v) for k, v in raw.items()}
+    raise WavecheckConfigError(f"{where}: 'map' must be a table or 'role=CH,...' text")
+
+
+def _expectations(entry: dict[str, Any], where: str) -> tuple[str | None, dict[str, str]]:
+    """``expect`` (None when not given) and ``expect_rules`` of a table, checked."""
+    expect = entry.get("expect")
+    rules = entry.get("expect_rules", {})
+    if (expect is not None and expect not in VERDICTS) or not isinstance(rules, dict):
+        raise WavecheckConfigError(f"{where}: 'expect' must be one of {', '.join(VERDICTS)}")
+    for rule, verdict in rules.items():
+        if verdict not in VERDICTS:
+            raise WavecheckConfigError(
+                f"{where}: expect_rules.{rule} = {verdict!r} (use {', '.join(VERDICTS)})"
+            )
+    return expect, {str(k): str(v) for k, v in rules.items()}
+
+
+def _strings(value: Any) -> tuple[str, ...]:
+    return (value,) if isinstance(value, str) else tuple(str(v) for v in value)
+
+
+def _drive_ref(drive: str, folder: Path) -> str:
+    """A rule file beside the config is found from there; an id stays as it is."""
+    drive_path = folder / drive
+    if drive.endswith(".toml") and drive_path.exists():
+        return str(drive_path)
+    return drive
+
+
+def _axes(
+    entry: dict[str, Any], where: str, folder: Path, defaults: AxisSpec, shared: dict[str, str]
+) -> tuple[AxisSpec, ...]:
+    """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
+    from wavecheck.axes import axes_from_tables
+    from wavecheck.errors import WavecheckError
+    from wavecheck.interface import role_name
+
+    raw = entry["axes"]
+    if not isinstance(raw, dict) or not raw or not all(isinstance(v, dict) for v in raw.values()):
+        raise WavecheckConfigError(
+            f"{where}: 'axes' must be a table of axis tables "
+            '(axes.x = { step = "5", dir = "6" })'
+        )
+    tables: dict[str, dict[str, str]] = {}
+    for name, table in raw.items():
+        at = f"{where}: axes.{name}"
+        if name == "verdict":
+            raise WavecheckConfigError(f"{at}: 'verdict' names the capture's own item; rename the axis")
+        roles = _map_of(table.get("map", {}), at)
+        for key, value in table.items():
+            if key in _AXIS_KEYS:
+                continue
+            try:
+                role_name(key)
+            except WavecheckError:
+                known = ", ".join(sorted(_AXIS_KEYS))
+                raise WavecheckConfigError(
+                    f"{at}: unknown key {key} (an axis takes its roles, e.g. step, dir, enable, "
+                    f"and {known})"
+                ) from None
+            if key in roles:
+                raise WavecheckConfigError(f"{at}: {key} is given twice (as a key and in map)")
+            roles[key] = str(value)
+        tables[str(name)] = roles
+    try:
+        maps = {a.name: a.roles for a in axes_from_tables(tables, shared, f"{where}: axes")}
+    except WavecheckError as err:
+        raise WavecheckConfigError(str(err)) from None
+    out = []
+    for name, table in raw.items():
+        at = f"{where}: axes.{name}"
+        expect, rules = _expectations(table, at)
+        drive = table.get("drive", defaults.drive)
+        if not isinstance(drive, str) or not drive:
+            raise WavecheckConfigError(f"{at}: no drive (give drive here or for the capture)")
+        out.append(
+            AxisSpec(
+                name=str(name),
+                drive=_drive_ref(drive, folder),
+                map=dict(maps[str(name)]),
+                invert=_strings(table["invert"]) if "invert" in table else defaults.invert,
+                type=table.get("type", defaults.type),
+                dir_forward=str(table.get("dir_forward", defaults.dir_forward)),
+                expect=expect or defaults.expect,
+                expect_rules={**defaults.expect_rules, **rules},
+            )
+        )
+    return tuple(out)
 
 
 def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
@@ -130,34 +281,25 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
         raise WavecheckConfigError(
             f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(sorted(_KEYS))})"
         )
-    for key in ("path", "drive"):
+    several = "axes" in entry
+    for key in ("path",) if several else ("path", "drive"):
         if not isinstance(entry.get(key), str):
             raise WavecheckConfigError(f"{where}: {key!r} is required (a string)")
-    raw_map = entry.get("map", {})
-    if isinstance(raw_map, str):
-        from wavecheck.interface import parse_map
+    if several and not isinstance(entry.get("drive", ""), str):
+        raise WavecheckConfigError(f"{where}: 'drive' must be a string")
+    mapping = _map_of(entry.get("map", {}), where)
+    expect, rules = _expectations(entry, where)
+    invert = _strings(entry.get("invert", []))
+    drive = entry.get("drive")
+    dir_forward = str(entry.get("dir_forward", "low"))
+    axes: tuple[AxisSpec, ...] = ()
+    if several:
+        from wavecheck.verdict import overall_verdict
 
-        mapping = parse_map([raw_map])
-    elif isinstance(raw_map, dict):
-        mapping = {str(k): str(v) for k, v in raw_map.items()}
-    else:
-        raise WavecheckConfigError(f"{where}: 'map' must be a table or 'role=CH,...' text")
-    expect = entry.get("expect", "pass")
-    rules = entry.get("expect_rules", {})
-    if expect not in VERDICTS or not isinstance(rules, dict):
-        raise WavecheckConfigError(f"{where}: 'expect' must be one of {', '.join(VERDICTS)}")
-    for rule, verdict in rules.items():
-        if verdict not in VERDICTS:
-            raise WavecheckConfigError(
-                f"{where}: expect_rules.{rule} = {verdict!r} (use {', '.join(VERDICTS)})"
-            )
-    invert = entry.get("invert", [])
-    if isinstance(invert, str):
-        invert = [invert]
-    drive = entry["drive"]
-    drive_path = folder / drive
-    if drive.endswith(".toml") and drive_path.exists():
-        drive = str(drive_path)
+        defaults = AxisSpec("", drive or "", {}, invert, entry.get("type"), dir_forward, expect or "pass", rules)
+        axes = _axes(entry, where, folder, defaults, mapping)
+        if expect is None:  # the whole capture: the worst of its axes
+            expect = overall_verdict(a.expect for a in axes)
     path = Path(entry["path"])
     hal = entry.get("hal", [])
     hal = [hal] if isinstance(hal, str) else hal
@@ -165,20 +307,21 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
     return CaptureSpec(
         name=str(entry.get("name") or path.stem),
         path=path if path.is_absolute() else folder / path,
-        drive=drive,
+        drive=None if drive is None else _drive_ref(drive, folder),
         map=mapping,
-        invert=tuple(invert),
+        invert=invert,
         type=entry.get("type"),
         resolution=entry.get("resolution"),
         samplerate=entry.get("samplerate"),
         input_format=entry.get("input_format"),
-        dir_forward=str(entry.get("dir_forward", "low")),
-        expect=expect,
-        expect_rules={str(k): str(v) for k, v in rules.items()},
+        dir_forward=dir_forward,
+        expect=expect or "pass",
+        expect_rules=rules,
         ini=None if ini is None else folder / str(ini),
         hal=tuple(folder / str(h) for h in hal),
         channel=int(entry.get("channel", 0)),
         latency=None if entry.get("latency") is None else str(entry["latency"]),
+        axes=axes,
     )
 
 
@@ -212,9 +355,31 @@ def load_specs(path: Path) -> list[CaptureSpec]:
 _REPORTS: dict[tuple[str, str], Any] = {}
 
 
-def _run(spec: CaptureSpec) -> Report:
-    from wavecheck.api import check
+def _run(spec: CaptureSpec) -> Checked:
+    from wavecheck.api import Axis, check, check_axes
 
+    if spec.axes:  # every axis from one reading of the capture
+        return check_axes(
+            spec.path,
+            {
+                a.name: Axis(
+                    a.map,
+                    drive=a.drive,
+                    invert=a.invert,
+                    step_type=a.type,
+                    forward_level=1 if a.dir_forward == "high" else 0,
+                )
+                for a in spec.axes
+            },
+            resolution=spec.resolution,
+            samplerate=spec.samplerate,
+            input_format=spec.input_format,
+            ini=spec.ini,
+            hal=spec.hal or None,
+            channel=spec.channel,
+            latency=spec.latency,
+        )
+    assert spec.drive is not None  # load_specs requires it without axes
     return check(
         spec.path,
         spec.drive,
@@ -232,8 +397,9 @@ def _run(spec: CaptureSpec) -> Report:
     )
 
 
-def _report(config_path: Path, spec: CaptureSpec) -> Report:
-    """The capture's report, checked once per process (an error is kept and re-raised)."""
+def _report(config_path: Path, spec: CaptureSpec) -> Checked:
+    """The capture's report (one per axis with ``axes``), checked once per process (an error is
+    kept and re-raised)."""
     from wavecheck.errors import WavecheckError
 
     key = (str(config_path), spec.name)
@@ -275,8 +441,9 @@ def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str
         from wavecheck.units import format_frequency
 
         lines.append(f"  sampling faster than {format_frequency(r.decide_samplerate_hz)} would decide it")
+    axis = "" if report.axis is None else f" axis {report.axis}"
     lines.append(
-        f"  capture {report.capture.path} vs drive {report.drive.id} "
+        f"  capture {report.capture.path}{axis} vs drive {report.drive.id} "
         f"(step type {report.step_type.number}, {report.steps.count} steps)"
     )
     return "\n".join(lines)
@@ -288,6 +455,19 @@ def _describe_report(report: Report, max_violations: int) -> str:
     lines = [f"verdict {report.verdict.upper()} ({report.total_violations} violation(s))"]
     lines += [describe_rule(report, r, max_violations) for r in report.rules if r.verdict != "pass"]
     lines += rate_lines(report)
+    return "\n".join(lines)
+
+
+def _describe(checked: Checked, max_violations: int) -> str:
+    """A report's account, or a machine's: its verdict, then each axis that does not pass."""
+    from wavecheck.report.machine import MachineReport
+
+    if not isinstance(checked, MachineReport):
+        return _describe_report(checked, max_violations)
+    lines = [f"verdict {checked.verdict.upper()} ({checked.total_violations} violation(s))"]
+    for r in checked.axes:
+        if r.verdict != "pass":
+            lines.append(f"axis {r.axis}: {_describe_report(r, max_violations)}")
     return "\n".join(lines)
 
 
@@ -338,16 +518,22 @@ class WavecheckFile(pytest.File):
 
 
 class CaptureCollector(pytest.Collector):
-    """One capture: a ``verdict`` item and one item per rule the drive states."""
+    """One capture: a ``verdict`` item and one item per rule the drive states; with ``axes`` an
+    :class:`AxisCollector` per axis after the capture's ``verdict``."""
 
     def __init__(self, *, spec: CaptureSpec, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.spec = spec
 
-    def collect(self) -> Iterator[pytest.Item]:
-        yield RuleItem.from_parent(self, name="verdict", rule=None)
-        for rule in _rules_of(self.spec):
-            yield RuleItem.from_parent(self, name=rule, rule=rule)
+    def collect(self) -> Iterator[pytest.Item | pytest.Collector]:
+        yield RuleItem.from_parent(self, name="verdict", rule=None, spec=self.spec, axis=None)
+        if self.spec.axes:
+            for axis in self.spec.axes:
+                yield AxisCollector.from_parent(self, name=axis.name, spec=self.spec, axis=axis)
+            return
+        assert self.spec.drive is not None  # load_specs requires it without axes
+        for rule in _rules_of(self.spec.drive, self.spec.type):
+            yield RuleItem.from_parent(self, name=rule, rule=rule, spec=self.spec, axis=None)
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException]) -> Any:  # type: ignore[override]
         from wavecheck.errors import WavecheckError
@@ -357,70 +543,98 @@ class CaptureCollector(pytest.Collector):
         return super().repr_failure(excinfo)
 
 
-def _rules_of(spec: CaptureSpec) -> list[str]:
-    """The rules a check of ``spec`` will evaluate, known without reading the capture."""
+class AxisCollector(CaptureCollector):
+    """One axis of a capture: its ``verdict`` item and one item per rule its drive states."""
+
+    def __init__(self, *, axis: AxisSpec, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.axis = axis
+
+    def collect(self) -> Iterator[pytest.Item | pytest.Collector]:
+        yield RuleItem.from_parent(self, name="verdict", rule=None, spec=self.spec, axis=self.axis)
+        for rule in _rules_of(self.axis.drive, self.axis.type):
+            yield RuleItem.from_parent(self, name=rule, rule=rule, spec=self.spec, axis=self.axis)
+
+
+def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
+    """The rules a check against ``drive_ref`` will evaluate, known without reading the capture."""
     from wavecheck.checks.compile import planned_rules
     from wavecheck.drives.library import load_drive
     from wavecheck.engine import default_step_type
     from wavecheck.linuxcnc.steptypes import step_type
 
-    drive = load_drive(spec.drive)
-    st = step_type(default_step_type(drive) if spec.type is None else spec.type)
+    drive = load_drive(drive_ref)
+    st = step_type(default_step_type(drive) if type_number is None else type_number)
     return [r.id for r in planned_rules(drive, st)[0]]
 
 
 class RuleItem(pytest.Item):
-    """One rule of one capture (or, with ``rule=None``, the capture's overall verdict)."""
+    """One rule of one capture or axis (or, with ``rule=None``, its overall verdict)."""
 
-    def __init__(self, *, rule: str | None, **kwargs: Any) -> None:
+    def __init__(
+        self, *, rule: str | None, spec: CaptureSpec, axis: AxisSpec | None, **kwargs: Any
+    ) -> None:
         super().__init__(**kwargs)
         self.rule = rule
-        parent = self.parent
-        assert isinstance(parent, CaptureCollector)
-        self.spec = parent.spec
-        self.config_path = parent.path
+        self.spec = spec
+        self.axis = axis
+        self.config_path = self.path
+
+    @property
+    def _where(self) -> str:
+        return self.spec.name if self.axis is None else f"{self.spec.name}::{self.axis.name}"
 
     def runtest(self) -> None:
-        report = _report(self.config_path, self.spec)
-        if self.rule is None:
+        from wavecheck.report.machine import MachineReport
+
+        checked = _report(self.config_path, self.spec)
+        report: Checked = checked
+        if self.axis is not None and isinstance(checked, MachineReport):
+            report = checked.axis(self.axis.name)
+        if self.rule is None and not isinstance(report, MachineReport):
             self.user_properties += _rate_properties(report)
         max_v = int(self.config.getoption("wavecheck_max_violations"))
         try:
             self._judge(report, max_v)
         except WavecheckFailure:
-            self._write_html(report)
+            self._write_html(checked)
             raise
 
-    def _judge(self, report: Report, max_v: int) -> None:
+    def _judge(self, report: Checked, max_v: int) -> None:
+        expect = self.spec.expect if self.axis is None else self.axis.expect
         if self.rule is None:
-            if report.verdict != self.spec.expect:
+            if report.verdict != expect:
                 raise WavecheckFailure(
-                    f"{self.spec.name}: expected {self.spec.expect.upper()}, got "
-                    f"{_describe_report(report, max_v)}"
+                    f"{self._where}: expected {expect.upper()}, got {_describe(report, max_v)}"
                 )
             return
+        from wavecheck.report.machine import MachineReport
+
+        assert not isinstance(report, MachineReport)  # rule items belong to one report
         r = report.rule(self.rule)
         if r is None:
-            raise WavecheckFailure(f"{self.spec.name}: rule {self.rule} was not evaluated")
+            raise WavecheckFailure(f"{self._where}: rule {self.rule} was not evaluated")
         if r.verdict == "unchecked":
             pytest.skip(f"no {self.rule} interval in {self.spec.path.name}")
-        expected = self.spec.expected(self.rule)
+        expected = (self.spec if self.axis is None else self.axis).expected(self.rule)
         if r.verdict not in expected:
             want = " or ".join(v.upper() for v in expected)
             raise WavecheckFailure(
-                f"{self.spec.name}: expected {want}, got {describe_rule(report, r, max_v)}"
+                f"{self._where}: expected {want}, got {describe_rule(report, r, max_v)}"
             )
 
-    def _write_html(self, report: Report) -> None:
+    def _write_html(self, checked: Checked) -> None:
         folder = self.config.getoption("wavecheck_report_dir")
         if not folder:
             return
         from wavecheck.report.html import write_html
+        from wavecheck.report.machine import MachineReport
 
         os.makedirs(folder, exist_ok=True)
         target = Path(folder) / f"{self.spec.name}.html"
+        reports = checked.axes if isinstance(checked, MachineReport) else [checked]
         if not target.exists():
-            write_html([report], target, title=f"wavecheck: {self.spec.name}")
+            write_html(reports, target, title=f"wavecheck: {self.spec.name}")
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException]) -> Any:  # type: ignore[override]
         if isinstance(excinfo.value, WavecheckFailure):
@@ -428,7 +642,7 @@ class RuleItem(pytest.Item):
         return super().repr_failure(excinfo)
 
     def reportinfo(self) -> tuple[Path, int | None, str]:
-        return self.path, None, f"{self.spec.name}::{self.name}"
+        return self.path, None, f"{self._where}::{self.name}"
 
 
 def _rate_properties(report: Report) -> list[tuple[str, object]]:
@@ -444,21 +658,31 @@ class WavecheckChecker:
         self.root = root
         self.max_violations = max_violations
 
+    def _path(self, capture: str | os.PathLike[str]) -> Path:
+        path = Path(capture)
+        return path if path.is_absolute() else self.root / path
+
     def __call__(self, capture: str | os.PathLike[str], drive: str, **kwargs: Any) -> Report:
         """Check ``capture`` against ``drive`` (keyword arguments as :func:`wavecheck.check`)."""
         from wavecheck.api import check
 
-        path = Path(capture)
-        if not path.is_absolute():
-            path = self.root / path
-        return check(path, drive, **kwargs)
+        return check(self._path(capture), drive, **kwargs)
 
-    def expect(self, report: Report, verdict: str = "pass") -> None:
-        """Fail the test, showing the rules that are not pass, unless the verdict is ``verdict``."""
+    def axes(
+        self, capture: str | os.PathLike[str], axes: Any, drive: str | None = None, **kwargs: Any
+    ) -> MachineReport:
+        """Check every axis of ``capture`` (arguments as :func:`wavecheck.check_axes`)."""
+        from wavecheck.api import check_axes
+
+        return check_axes(self._path(capture), axes, drive, **kwargs)
+
+    def expect(self, report: Checked, verdict: str = "pass") -> None:
+        """Fail the test, showing the rules (of each axis) that are not pass, unless the verdict
+        is ``verdict``."""
         __tracebackhide__ = True
         if report.verdict != verdict:
             pytest.fail(
-                f"expected {verdict.upper()}, got {_describe_report(report, self.max_violations)}",
+                f"expected {verdict.upper()}, got {_describe(report, self.max_violations)}",
                 pytrace=False,
             )
 

@@ -37,11 +37,10 @@ from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, c
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive
 from wavecheck.drives.tune import tune_drive
-from wavecheck.engine import run_check
+from wavecheck.engine import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
-from wavecheck.report.machine import MachineReport, common_timer
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
@@ -216,35 +215,33 @@ def build_report(args: argparse.Namespace, path: str) -> Checked:
     forward = per_axis(args.dir_forward, "--dir-forward", names)
     inverts = split_invert(args.invert, names)
     loaded: dict[str, Drive] = {}
-    reports = []
     for axis in axes:
         if axis.name not in drives:
             raise UsageError(f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)")
         ref = drives[axis.name]
         if ref not in loaded:
             loaded[ref] = tune_drive(load_drive(ref), args.limit, args.margin)
-        report = run_check(
-            capture,
-            loaded[ref],
-            axis.roles,
-            [*inverts[axis.name], *axis.invert],
-            _int_option(types[axis.name], "--type") if axis.name in types else axis.step_type,
-            resolution_from_args(args),  # exact, a fraction of a tick included
-            forward_level=_forward(forward.get(axis.name, "low")),
-            active_edge=args.active_edge,
-            user_table=_user_table(args.user_step_type),
-            stepgen=stepgen_config(args),
-            pulse_level=1 if args.pulse_level == "high" else 0,
-            latency_ns=latency_ns(args),
-            axis=axis.name,
-        )
+    machine = check_machine(
+        capture,
+        axes,
+        {a.name: loaded[drives[a.name]] for a in axes},
+        resolution_from_args(args),  # exact, a fraction of a tick included
+        step_types={a: _int_option(t, "--type") for a, t in types.items()},
+        forward_levels={a: _forward(f) for a, f in forward.items()},
+        invert=inverts,
+        active_edge=args.active_edge,
+        user_table=_user_table(args.user_step_type),
+        stepgen=stepgen_config(args),
+        pulse_level=1 if args.pulse_level == "high" else 0,
+        latency_ns=latency_ns(args),
+    )
+    for report in machine.axes:
         if args.firmware:  # the capture against its own firmware configuration
             report.firmware = check_firmware(args, report)
         report.notes[:0] = found
-        reports.append(report)
-    if len(reports) == 1 and reports[0].axis is None:
-        return reports[0]
-    return MachineReport(capture, reports, [common_timer(reports)])
+    if len(machine.axes) == 1 and machine.axes[0].axis is None:
+        return machine.axes[0]
+    return machine
 
 
 def write_outputs(args: argparse.Namespace, report: Checked) -> None:

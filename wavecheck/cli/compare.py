@@ -15,6 +15,13 @@ tolerance) or a rule is worse than in the golden (fails where the golden does no
 that itself fails a rule (a golden of a bad configuration) is matched by a capture failing it
 too. Exit codes as for ``check``: 0 pass, 1 fail, 3 indeterminate, 2 unusable input.
 
+Several axes: ``--map x.step=5,x.dir=6 --map y.step=3,y.dir=4`` for the capture and
+``--golden-map x.step=…`` for the golden (default: the capture's axes, channel for channel);
+each capture axis is compared with the golden axis of the same name, ``--drive x=ID`` gives one
+axis its own drive and ``--invert x.step`` inverts one axis's role, as in ``check``. The text has
+a section per axis; the JSON is ``{"capture", "golden", "axes": [{"name", …one comparison…}],
+"failures", "verdict"}``. One unnamed axis keeps the output above exactly.
+
 Time differences are computed in float64 ns (±0.001 ns at 10⁶ s); the largest is recomputed
 exactly.
 """
@@ -27,12 +34,13 @@ import sys
 from fractions import Fraction
 from typing import Any
 
+from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.capture.open import open_capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.compare import Comparison, compare
+from wavecheck.compare import Comparison, MachineComparison, compare_axes
 from wavecheck.drives.library import load_drive
+from wavecheck.drives.model import Drive
 from wavecheck.errors import UsageError
-from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import format_ns, format_time, json_number, parse_time
 from wavecheck.verdict import exit_code
@@ -45,8 +53,21 @@ def _pos(v: int | None) -> str:
     return "unknown" if v is None else f"{v:+d}"
 
 
-def render_compare_text(c: Comparison) -> str:
-    """The human comparison."""
+def render_compare_text(c: Comparison | MachineComparison) -> str:
+    """The human comparison (a section per axis when there are named axes)."""
+    if isinstance(c, MachineComparison):
+        if not c.several:
+            return render_compare_text(c.axes[0])
+        first = c.axes[0]
+        out = [
+            f"verdict: {c.verdict.upper()} ({len(c.axes)} axes)"
+            + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
+            f"capture: {first.capture.capture.path}",
+            f"golden:  {first.golden.capture.path}",
+        ]
+        for a in c.axes:
+            out += ["", f"== axis {a.capture.axis} ==", render_compare_text(a).rstrip("\n")]
+        return "\n".join(out) + "\n"
     cs, gs = c.capture.steps, c.golden.steps
     out = [
         f"verdict: {c.verdict.upper()}"
@@ -91,9 +112,26 @@ def render_compare_text(c: Comparison) -> str:
     return "\n".join(out) + "\n"
 
 
-def render_compare_json(c: Comparison) -> str:
-    """The comparison as JSON (keys: capture, golden, drive, steps, timing, rules, verdict)."""
-    data: dict[str, Any] = {
+def render_compare_json(c: Comparison | MachineComparison) -> str:
+    """The comparison as JSON (keys: capture, golden, drive, steps, timing, rules, failures,
+    verdict; named axes: capture, golden, axes, failures, verdict)."""
+    if isinstance(c, MachineComparison) and c.several:
+        first = c.axes[0]
+        data: dict[str, Any] = {
+            "capture": first.capture.capture.path,
+            "golden": first.golden.capture.path,
+            "axes": [{"name": a.capture.axis, **_compare_dict(a)} for a in c.axes],
+            "failures": c.failures(),
+            "verdict": c.verdict,
+        }
+    else:
+        data = _compare_dict(c.axes[0] if isinstance(c, MachineComparison) else c)
+    return json.dumps(data, indent=2, ensure_ascii=False) + "\n"
+
+
+def _compare_dict(c: Comparison) -> dict[str, Any]:
+    """One comparison's JSON data."""
+    return {
         "capture": c.capture.capture.path,
         "golden": c.golden.capture.path,
         "drive": c.capture.drive.id,
@@ -137,7 +175,6 @@ def render_compare_json(c: Comparison) -> str:
         "failures": c.failures(),
         "verdict": c.verdict,
     }
-    return json.dumps(data, indent=2, ensure_ascii=False) + "\n"
 
 
 def register(sub: Any) -> None:
@@ -151,20 +188,41 @@ def register(sub: Any) -> None:
     )
     p.add_argument("capture", metavar="CAPTURE")
     p.add_argument("golden", metavar="GOLDEN")
-    p.add_argument("--drive", required=True, metavar="ID|FILE", help="drive id or rule file")
-    p.add_argument("--map", action="append", default=[], metavar="ROLE=CH", help="capture mapping")
+    p.add_argument(
+        "--drive",
+        action="append",
+        required=True,
+        metavar="ID|FILE|AXIS=ID",
+        help="drive id or rule file; AXIS=ID gives one axis its own drive (repeatable)",
+    )
+    p.add_argument(
+        "--map",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE=CH",
+        help="capture mapping; several axes: --map x.step=5,x.dir=6 --map y.step=3,y.dir=4",
+    )
     p.add_argument(
         "--golden-map",
         action="append",
         default=[],
-        metavar="ROLE=CH",
-        help="golden mapping (default: by name, e.g. stepgen's step/dir)",
+        metavar="[AXIS.]ROLE=CH",
+        help="golden mapping (default: by name, e.g. stepgen's step/dir; with several axes the "
+        "capture's --map)",
     )
     p.add_argument(
-        "--invert", action="append", default=[], metavar="ROLE", help="capture role to invert"
+        "--invert",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE",
+        help="capture role to invert (x.step: one axis)",
     )
     p.add_argument(
-        "--golden-invert", action="append", default=[], metavar="ROLE", help="golden role to invert"
+        "--golden-invert",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE",
+        help="golden role to invert (x.step: one axis)",
     )
     p.add_argument("--type", type=int, default=None, metavar="N", help="LinuxCNC step type")
     p.add_argument(
@@ -192,17 +250,32 @@ def run(args: argparse.Namespace) -> int:
     tol = parse_time(args.tolerance, default_unit="ns") * 10**9
     if tol < 0:
         raise UsageError(f"--tolerance must not be negative, got {args.tolerance}")
-    drive = load_drive(args.drive)
-    result = compare(
+    axes = parse_axes(args.map)
+    names = [a.name for a in axes]
+    if args.golden_map:
+        golden_axes = parse_axes(args.golden_map, "--golden-map")
+    elif names == [None]:
+        golden_axes = [AxisMap(None, {})]  # by name, as stepgen writes step/dir
+    else:
+        golden_axes = [AxisMap(a.name, dict(a.roles)) for a in axes]
+    drives = per_axis(args.drive, "--drive", names)
+    loaded: dict[str, Drive] = {}
+    for name in names:
+        if name not in drives:
+            raise UsageError(f"--drive: axis {name} has no drive (add --drive {name}=ID)")
+        if drives[name] not in loaded:
+            loaded[drives[name]] = load_drive(drives[name])
+    golden_names = [a.name for a in golden_axes]
+    result = compare_axes(
         capture_from_args(args, args.capture),
         open_capture(args.golden),
-        drive,
+        axes,
+        golden_axes,
+        {name: loaded[drives[name]] for name in names},
         tol,
         args.align,
-        capture_map=parse_map(args.map),
-        capture_invert=args.invert,
-        golden_map=parse_map(args.golden_map),
-        golden_invert=args.golden_invert,
+        capture_invert=split_invert(args.invert, names),
+        golden_invert=split_invert(args.golden_invert, golden_names),
         step_type=args.type,
         forward_level=1 if args.dir_forward == "high" else 0,
     )
