@@ -180,7 +180,11 @@ class _Inference:
             fits_of[d.index] = fits
             good = [f for f in fits if f.consistent] if len(fits) > 1 else fits
             axis = self.hints[d.index].axis
-            same = [f for f in good if axis is not None and self.hints[f.s.index].axis == axis]
+            # a DIR named with an axis (y_dir, "DIR (Y axis)") goes to the one STEP of that axis
+            # when the waveform cannot tell its candidates apart
+            named = self.hints[d.index].fits("dir") and axis is not None
+            pool = good if good or not named else fits
+            same = [f for f in pool if axis is not None and self.hints[f.s.index].axis == axis]
             if len(same) == 1:
                 good = same
             if not good:
