@@ -152,11 +152,14 @@ class _EdgeBuilder:
         k = np.flatnonzero(v < 2)
         if len(k) == 0:
             return
-        ks, kt, kv = s[k], t[k], v[k]
-        kfirst = np.ones(len(ks), dtype=bool)
-        kfirst[1:] = ks[1:] != ks[:-1]
-        klast = np.ones(len(ks), dtype=bool)
-        klast[:-1] = kfirst[1:]
+        if len(k) == n:  # no x/z in the batch: the same arrays
+            ks, kt, kv, kfirst, klast = s, t, v, gfirst, glast
+        else:
+            ks, kt, kv = s[k], t[k], v[k]
+            kfirst = np.ones(len(ks), dtype=bool)
+            kfirst[1:] = ks[1:] != ks[:-1]
+            klast = np.ones(len(ks), dtype=bool)
+            klast[:-1] = kfirst[1:]
         prev = np.empty(len(kv), dtype=np.int8)
         prev[1:] = kv[:-1]
         prev[kfirst] = self.last_known[ks[kfirst]]
@@ -236,6 +239,8 @@ class _IdMap:
     ) -> npt.NDArray[np.int32]:
         """Channel numbers of the ids at ``a[start : start + length]``."""
         if self.maxlen == 1:
+            if len(length) and int(length.min()) == int(length.max()) == 1:
+                return self.lut[a[start]]
             one = length == 1
             out = np.full(len(start), -1, dtype=np.int32)
             out[one] = self.lut[a[start[one]]]
@@ -305,63 +310,65 @@ class _Body:
         starts, ends = _token_bounds(a)
         kind = _KIND[a[starts]]
         consumed = len(a)
-        # 1. $comment ... $end in the body is skipped whole (rare: a Python loop is fine)
-        kw = np.flatnonzero((kind == _K_KEYWORD) & (ends - starts == 8))
-        after = 0
-        for i in (int(x) for x in kw):
-            if i < after or buf[starts[i] : ends[i]] != b"$comment":
-                continue
-            close = i + 1
-            while close < len(kind) and buf[starts[close] : ends[close]] != b"$end":
-                close += 1
-            if close == len(kind):
-                if final:
-                    raise self.error(
-                        buf, int(starts[i]), "$comment without $end (the file is cut off)"
-                    )
-                consumed = int(starts[i])
-                kind, starts, ends = kind[:i], starts[:i], ends[:i]
-                break
-            kind[i : close + 1] = _K_SKIP
-            after = close + 1
-        # 2. vector/real values take the next token as their id: resolve runs of b/r by parity
-        isvec = kind == _K_VEC
         vid: npt.NDArray[np.bool_] | None = None
-        if isvec.any():
-            idx = np.arange(len(kind))
-            run_start = isvec.copy()
-            run_start[1:] &= ~isvec[:-1]
-            first = np.maximum.accumulate(np.where(run_start, idx, 0))
-            vstart = isvec & ((idx - first) % 2 == 0)
-            if vstart[-1]:
-                last = len(kind) - 1
-                if final:
-                    raise self.error(
-                        buf,
-                        int(starts[last]),
-                        "vector value without an id code (the file is cut off)",
-                    )
-                consumed = min(consumed, int(starts[last]))
-                kind, starts, ends, vstart = kind[:last], starts[:last], ends[:last], vstart[:last]
-            vid = np.zeros(len(kind), dtype=bool)
-            vid[1:] = vstart[:-1]
-            kind[vid] = _K_VECID
-            kind[vstart] = _K_SKIP
-        # 3. the other keywords only mark sections of dumped values
-        for i in (int(x) for x in np.flatnonzero(kind == _K_KEYWORD)):
-            if buf[starts[i] : ends[i]] not in _BODY_KEYWORDS:
-                word = buf[starts[i] : min(ends[i], starts[i] + 30)].decode("latin-1")
-                raise self.error(buf, int(starts[i]), f"unexpected {word!r} in the value changes")
-        bad = np.flatnonzero(kind == _K_BAD)
-        if len(bad):
-            i = int(bad[0])
-            tok = buf[starts[i] : min(ends[i], starts[i] + 30)]
-            hint = " (NUL bytes: the file was cut off or padded)" if tok[:1] == b"\0" else ""
-            raise self.error(
-                buf,
-                int(starts[i]),
-                f"unexpected {tok.decode('latin-1')!r} in the value changes{hint}",
-            )
+        # only timestamps and scalar changes (the usual chunk): no keyword, vector or bad token
+        if len(kind) and (int(kind.min()) < _K_TIME or int(kind.max()) > _K_SCALAR):
+            # 1. $comment ... $end in the body is skipped whole (rare: a Python loop is fine)
+            kw = np.flatnonzero((kind == _K_KEYWORD) & (ends - starts == 8))
+            after = 0
+            for i in (int(x) for x in kw):
+                if i < after or buf[starts[i] : ends[i]] != b"$comment":
+                    continue
+                close = i + 1
+                while close < len(kind) and buf[starts[close] : ends[close]] != b"$end":
+                    close += 1
+                if close == len(kind):
+                    if final:
+                        raise self.error(
+                            buf, int(starts[i]), "$comment without $end (the file is cut off)"
+                        )
+                    consumed = int(starts[i])
+                    kind, starts, ends = kind[:i], starts[:i], ends[:i]
+                    break
+                kind[i : close + 1] = _K_SKIP
+                after = close + 1
+            # 2. vector/real values take the next token as their id: resolve runs of b/r by parity
+            isvec = kind == _K_VEC
+            if isvec.any():
+                idx = np.arange(len(kind))
+                run_start = isvec.copy()
+                run_start[1:] &= ~isvec[:-1]
+                first = np.maximum.accumulate(np.where(run_start, idx, 0))
+                vstart = isvec & ((idx - first) % 2 == 0)
+                if vstart[-1]:
+                    last = len(kind) - 1
+                    if final:
+                        raise self.error(
+                            buf,
+                            int(starts[last]),
+                            "vector value without an id code (the file is cut off)",
+                        )
+                    consumed = min(consumed, int(starts[last]))
+                    kind, starts, ends, vstart = kind[:last], starts[:last], ends[:last], vstart[:last]
+                vid = np.zeros(len(kind), dtype=bool)
+                vid[1:] = vstart[:-1]
+                kind[vid] = _K_VECID
+                kind[vstart] = _K_SKIP
+            # 3. the other keywords only mark sections of dumped values
+            for i in (int(x) for x in np.flatnonzero(kind == _K_KEYWORD)):
+                if buf[starts[i] : ends[i]] not in _BODY_KEYWORDS:
+                    word = buf[starts[i] : min(ends[i], starts[i] + 30)].decode("latin-1")
+                    raise self.error(buf, int(starts[i]), f"unexpected {word!r} in the value changes")
+            bad = np.flatnonzero(kind == _K_BAD)
+            if len(bad):
+                i = int(bad[0])
+                tok = buf[starts[i] : min(ends[i], starts[i] + 30)]
+                hint = " (NUL bytes: the file was cut off or padded)" if tok[:1] == b"\0" else ""
+                raise self.error(
+                    buf,
+                    int(starts[i]),
+                    f"unexpected {tok.decode('latin-1')!r} in the value changes{hint}",
+                )
         # timestamps
         ts = np.flatnonzero(kind == _K_TIME)
         tvals = self._timestamps(buf, a, starts[ts], ends[ts])
