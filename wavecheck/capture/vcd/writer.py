@@ -289,27 +289,22 @@ def _format_changes(
     stamp_rows = np.flatnonzero(newt)
     stamps = t[stamp_rows]
     ndig = _decimal_digits(stamps)
-    # length of each change's value piece, by variable
+    # each variable's rows; the length of each change's value piece
+    by_var = [
+        np.flatnonzero(v == j) if len(idents) > 1 else np.arange(n) for j in range(len(idents))
+    ]
+    wire_rows = [(j, r) for j, r in enumerate(by_var) if len(r) and sizes[j] == 0]
+    vec_rows = [(j, r) for j, r in enumerate(by_var) if len(r) and sizes[j] > 0]
     width = np.empty(n, dtype=np.int64)
-    vec_rows: list[tuple[int, npt.NDArray[np.int64]]] = []
-    nbits = np.zeros(0, dtype=np.int64)
-    for j, ident in enumerate(idents):
-        rows = np.flatnonzero(v == j) if len(idents) > 1 else np.arange(n)
-        if not len(rows):
-            continue
-        if sizes[j] == 0:
-            width[rows] = 1 + len(ident) + 1  # "1!\n"
-        else:
-            vec_rows.append((j, rows))
-    bit_rows: list[npt.NDArray[np.int64]] = []
-    if vec_rows:
-        rows_all = np.concatenate([r for _, r in vec_rows])
-        size_all = np.concatenate([np.full(len(r), sizes[j]) for j, r in vec_rows])
-        unsigned = np.where(x[rows_all] < 0, x[rows_all] + (np.int64(1) << size_all), x[rows_all])
+    for j, rows in wire_rows:
+        width[rows] = 1 + len(idents[j]) + 1  # "1!\n"
+    if vec_rows:  # all vectors at once: their rows one vector after the other
+        vrows = np.concatenate([r for _, r in vec_rows])
+        size = np.concatenate([np.full(len(r), sizes[j]) for j, r in vec_rows])
+        unsigned = np.where(x[vrows] < 0, x[vrows] + (np.int64(1) << size), x[vrows])
         nbits = _bit_length(unsigned)
         ident_len = np.concatenate([np.full(len(r), len(idents[j])) for j, r in vec_rows])
-        width[rows_all] = 1 + nbits + 1 + ident_len + 1  # "b101 #\n"
-        bit_rows = [rows_all, unsigned]  # type: ignore[list-item]
+        width[vrows] = 1 + nbits + 1 + ident_len + 1  # "b101 #\n"
     length = width.copy()
     length[stamp_rows] += ndig + 2  # "#123\n"
     start = np.zeros(n + 1, dtype=np.int64)
@@ -322,35 +317,28 @@ def _format_changes(
     out[at + 1 + ndig] = ord("\n")
     piece = start[:-1].copy()
     piece[stamp_rows] += ndig + 2
-    for j, ident in enumerate(idents):
-        rows = np.flatnonzero(v == j) if len(idents) > 1 else np.arange(n)
-        if not len(rows):
-            continue
+    for j, rows in wire_rows:  # "1!\n"
         p = piece[rows]
-        if sizes[j] == 0:
-            out[p] = (x[rows] + ord("0")).astype(np.uint8)
-            p = p + 1
-        else:
-            out[p] = ord("b")
-            continue  # the bits, space and id are written below for all vectors at once
-        for k, byte in enumerate(ident):
-            out[p + k] = byte
-        out[p + len(ident)] = ord("\n")
-    if bit_rows:
-        rows_all, unsigned = bit_rows
-        p = piece[rows_all] + 1
-        _put_bits(out, p, unsigned, nbits)
-        p = p + nbits
+        out[p] = (x[rows] + ord("0")).astype(np.uint8)
+        _put_ident(out, p + 1, idents[j])
+    if vec_rows:  # "b101 #\n"
+        p = piece[vrows]
+        out[p] = ord("b")
+        _put_bits(out, p + 1, unsigned, nbits)
+        p = p + 1 + nbits
         out[p] = ord(" ")
-        p = p + 1
-        offset = 0  # rows_all holds each vector's rows in turn
+        offset = 0
         for j, rows in vec_rows:
-            pj = p[offset : offset + len(rows)]
-            for k, byte in enumerate(idents[j]):
-                out[pj + k] = byte
-            out[pj + len(idents[j])] = ord("\n")
+            _put_ident(out, p[offset : offset + len(rows)] + 1, idents[j])
             offset += len(rows)
     return out.data, int(stamps[-1]) if len(stamps) else last_ts
+
+
+def _put_ident(out: npt.NDArray[np.uint8], at: npt.NDArray[np.int64], ident: bytes) -> None:
+    """Write ``ident`` and a newline at each ``out[at:]``."""
+    for k, byte in enumerate(ident):
+        out[at + k] = byte
+    out[at + len(ident)] = ord("\n")
 
 
 def _decimal_digits(values: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
