@@ -11,6 +11,7 @@ $(VENV_STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv .venv
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e '.[test]'
+	$(PY) -m compileall -q wavecheck stepgen tools  # an editable install compiles nothing: 0.5 s -> 0.2 s start-up (bench/README.md)
 	@touch $@
 
 # Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks),

@@ -68,7 +68,7 @@ def main() -> None:
             w = time.perf_counter() - t0
             size = (Path(d) / "bench.vcd").stat().st_size
         print(
-            f"VCD writer (pyvcd): {changes} changes in {w:.2f} s = {changes / w / 1e6:.2f} M changes/s, {size / 1e6:.0f} MB"
+            f"VCD writer: {changes} changes in {w:.2f} s = {changes / w / 1e6:.2f} M changes/s, {size / 1e6:.0f} MB"
         )
 
 

@@ -1,20 +1,30 @@
 """``make bench``: wavecheck against what a user would otherwise run, in one run, as ratios.
 
-Prints each figure, its ratio and PASS/MISS against the targets of issue 7, the machine, the
-versions and every exact command; writes the same as JSON to ``bench/results/`` (git-ignored).
-Inputs are generated deterministically into ``bench/data/`` by ``bench/gen.py`` when missing.
+Prints each figure with its goal, PASS/MISS, the peer's figure from the same run and the machine
+load (``os.getloadavg``, 1 minute) when it was taken; the machine, the versions and every exact
+command; ends with a table of all figures (pasted into ``bench/README.md``) and writes the same
+as JSON to ``bench/results/`` (git-ignored). Inputs are generated deterministically into
+``bench/data/`` by ``bench/gen.py`` when missing. The 2 CPUs are shared: a figure taken at a
+load above the CPU count is marked ``loaded`` in the table; re-run it (``--only``).
 
-Sections (targets in brackets):
+Sections (goals of issues 18 and 7 in brackets):
 
 1. ``.sr`` end to end: ``wavecheck check`` (read, decode, every rule, text report) against
    ``sigrok-cli -i FILE -P stepper_motor:step=..:dir=..`` (decode only) on the real grbl capture
-   (96.7 M samples) and a generated 1 G-sample one [≥ 3× faster; max RSS < 150 MB].
-2. VCD read of a 10 M-change, 6-signal file into arrays: wavecheck against pywellen and vcdvcd
-   [≥ 1.5× / ≥ 5× faster; peak RSS ≤ 2 × edge arrays + a fixed buffer: RSS − interpreter
-   baseline − 2 × edge arrays must not grow with the file, i.e. stay within what the same reader
-   needs on the 1 M-change file (+25 % + 8 MiB for noise)].
+   (96.7 M samples) [≥ 8× faster, issue 18] and a generated 1 G-sample one [≥ 3×, issue 7];
+   max RSS < 150 MB. Then the edge scan alone (``bench/sr_scan.py``) against the scan it
+   replaced, on grbl's samples [≥ 1.5× faster, identical edges].
+2. VCD read of a 10 M-change, 6-signal file into arrays (simulator and sigrok layouts):
+   wavecheck against pywellen and vcdvcd [≥ 3× pywellen's CPU time, issue 18; ≥ 5× vcdvcd;
+   peak RSS ≤ 2 × edge arrays + a fixed buffer: RSS − interpreter baseline − 2 × edge arrays
+   must not grow with the file, i.e. stay within what the same reader needs on the 1 M-change
+   file (+25 % + 8 MiB for noise)].
 3. Check engine alone over 10 M edges [< 1 s of CPU on one core].
-4. stepgen real-time factor at a 25 µs base period, from ``bench/bench_stepgen.py`` [≥ 100×].
+4. ``stepgen simulate`` with a VCD out, end to end in one process (``bench/stepgen_vcd.py``: 20 s
+   at a 25 µs base period, simulate + write) [≥ 100× real time]; the peer is the same with pyvcd
+   writing the same trace.
+5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
+   of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
 
 Every command runs in its own process under ``/usr/bin/time -v`` (wall, CPU, max RSS); the
 competitors are interleaved run by run so that load from other users of the machine hits both
@@ -98,6 +108,38 @@ def mark(ok: bool) -> str:
     return "PASS" if ok else "MISS"
 
 
+def load1() -> float:
+    """The 1-minute load average now."""
+    return os.getloadavg()[0]
+
+
+#: Every figure of the run: (figure, value, goal, ok, peer, load) — the final table.
+FIGURES: list[dict[str, Any]] = []
+
+
+def figure(name: str, value: str, goal: str, ok: bool, peer: str, load: float) -> bool:
+    """Print one figure with its goal, PASS/MISS, the peer's figure and the load; keep it."""
+    busy = load > (os.cpu_count() or 1)
+    FIGURES.append({"figure": name, "value": value, "goal": goal, "ok": ok, "peer": peer,
+                    "load": round(load, 2), "loaded": busy})  # fmt: skip
+    print(f"  => {name}: {value}  [goal {goal}]  {mark(ok)}   peer: {peer}   "
+          f"load {load:.1f}{' (loaded: re-run)' if busy else ''}")  # fmt: skip
+    return ok
+
+
+def table() -> str:
+    """The figures as a Markdown table."""
+    rows = [
+        "| figure | value | goal | | peer, same run | load (1 min) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for f in FIGURES:
+        load = f"{f['load']:.1f}" + (" loaded" if f["loaded"] else "")
+        rows.append(f"| {f['figure']} | {f['value']} | {f['goal']} | {mark(f['ok'])} | "
+                    f"{f['peer']} | {load} |")  # fmt: skip
+    return "\n".join(rows)
+
+
 def version(cmd: list[str]) -> str:
     try:
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=30).stdout
@@ -131,7 +173,14 @@ def machine() -> dict[str, Any]:
 
 
 def bench_sr(
-    label: str, path: Path, step: str, dirc: str, drive: str, runs: int, truth_steps: int | None
+    label: str,
+    path: Path,
+    step: str,
+    dirc: str,
+    drive: str,
+    runs: int,
+    truth_steps: int | None,
+    goal: float = 3.0,
 ) -> dict[str, Any]:
     wc = [WAVECHECK, "check", str(path), "--drive", drive, "--map", f"step={step},dir={dirc}"]
     sg = ["sigrok-cli", "-i", str(path), "-P", f"stepper_motor:step={step}:dir={dirc}"]
@@ -140,7 +189,9 @@ def bench_sr(
     sruns: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory() as tmp:
         wout, sout = f"{tmp}/wc.txt", f"{tmp}/sg.txt"
+        loads = []
         for _ in range(runs):
+            loads.append(load1())
             wruns.append(timed(wc, wout))
             sruns.append(timed(sg, sout))
         wtext = Path(wout).read_text()
@@ -172,7 +223,7 @@ def bench_sr(
         "truth_steps": truth_steps,
         "wavecheck_rc": [r["rc"] for r in wruns],
         "sigrok_errors": bad[:1],
-        "target_speed": ratio >= 3,
+        "target_speed": ratio >= goal,
         "target_rss": rss < 150,
     }
     print(
@@ -190,11 +241,32 @@ def bench_sr(
     wcpu = med(wruns, "user_s") + med(wruns, "sys_s")
     scpu = med(sruns, "user_s") + med(sruns, "sys_s")
     res["cpu_ratio"] = scpu / wcpu if wcpu else None
-    print(
-        f"  => {ratio:5.2f}x faster than sigrok-cli (cpu time {scpu / wcpu:.2f}x)  "
-        f"[target >= 3x]  {mark(ratio >= 3)}"
-    )
-    print(f"  => max RSS {rss:.0f} MB                  [target < 150 MB] {mark(rss < 150)}")
+    load = max(loads)
+    res["load"] = load
+    figure(f"`check` {label}.sr vs sigrok-cli", f"{ratio:.2f}× ({wt:.2f} s; cpu {scpu / wcpu:.2f}×)",
+           f"≥ {goal:g}×", ratio >= goal, f"sigrok-cli {st:.2f} s", load)  # fmt: skip
+    figure(f"`check` {label}.sr max RSS", f"{rss:.0f} MB", "< 150 MB", rss < 150,
+           f"sigrok-cli {res['sigrok_max_rss_mb']:.0f} MB", load)  # fmt: skip
+    return res
+
+
+def bench_sr_scan(path: Path, runs: int) -> dict[str, Any]:
+    cmd = [PY, str(HERE / "sr_scan.py"), str(path), "--repeat", str(max(3, runs))]
+    print(f"  $ {sh(cmd)}")
+    load = load1()
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode:
+        print(f"  !! {p.stderr.strip()[-300:]}")
+        return {"error": p.stderr[-2000:], "target": False}
+    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+    res["load"] = load
+    ok = res["speedup"] >= 1.5 and res["same_edges"]
+    print(f"  {res['samples'] / 1e6:.1f} M samples, {res['edges']} edges: new scan "
+          f"{res['new_cpu_s'] * 1e3:.1f} ms, old scan {res['old_cpu_s'] * 1e3:.1f} ms of CPU "
+          f"(best of {max(3, runs)}); same edges: {res['same_edges']}")  # fmt: skip
+    figure(".sr edge scan (grbl) vs the old scan", f"{res['speedup']:.2f}× ({res['new_cpu_s'] * 1e3:.1f} ms)",
+           "≥ 1.5×, same edges", ok, f"old scan {res['old_cpu_s'] * 1e3:.1f} ms", load)  # fmt: skip
+    res["target"] = ok
     return res
 
 
@@ -210,8 +282,10 @@ def bench_vcd(label: str, path: Path, runs: int, slow_runs: int) -> dict[str, An
     base = [timed(base_cmd) for _ in range(2)]
     small = ensure("vcd_sim_1m", quiet=True)
     calib: list[dict[str, Any]] = []
+    loads = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(runs):
+            loads.append(load1())
             for r, c in cmds.items():
                 if r != "wavecheck" and i >= (slow_runs if r == "vcdvcd" else runs):
                     continue
@@ -238,19 +312,16 @@ def bench_vcd(label: str, path: Path, runs: int, slow_runs: int) -> dict[str, An
             f"{v[0]['items'] / secs[r] / 1e6:5.2f} M/s; "
             f"max RSS {max(x['max_rss_mb'] for x in v):5.0f} MB; arrays {v[0]['array_bytes'] / MIB:.0f} MiB)"
         )
-    print(
-        f"  => {r_pw:5.2f}x faster than pywellen (cpu {cpu['pywellen'] / cpu['wavecheck']:.2f}x)  "
-        f"[target >= 1.5x] {mark(r_pw >= 1.5)}"
-    )
-    print(
-        f"  => {r_vv:5.2f}x faster than vcdvcd (cpu {cpu['vcdvcd'] / cpu['wavecheck']:.2f}x)  "
-        f"[target >= 5x]   {mark(r_vv >= 5)}"
-    )
-    print(
-        f"  => peak RSS {wrss:.0f} MB = interpreter {base_rss:.0f} + 2 x edge arrays {2 * edge_mb:.0f} "
-        f"+ buffer {fixed:.0f}; the buffer on the 1 M-change file is {fixed_small:.0f} "
-        f"(limit {allowed:.0f} MB)  {mark(wrss <= allowed)}"
-    )
+    load = max(loads)
+    c_pw = cpu["pywellen"] / cpu["wavecheck"]
+    figure(f"VCD read {label} vs pywellen (CPU)", f"{c_pw:.2f}× ({cpu['wavecheck']:.2f} s cpu; wall {r_pw:.2f}×)",
+           "≥ 3× (CPU)", c_pw >= 3, f"pywellen {cpu['pywellen']:.2f} s cpu", load)  # fmt: skip
+    figure(f"VCD read {label} vs vcdvcd", f"{r_vv:.1f}× ({secs['wavecheck']:.2f} s)", "≥ 5×", r_vv >= 5,
+           f"vcdvcd {secs['vcdvcd']:.2f} s", load)  # fmt: skip
+    figure(f"VCD read {label} peak RSS", f"{wrss:.0f} MB (interpreter {base_rss:.0f} + 2 × edges "
+           f"{2 * edge_mb:.0f} + buffer {fixed:.0f}; 1 M-change buffer {fixed_small:.0f})",
+           f"≤ {allowed:.0f} MB", wrss <= allowed,
+           f"pywellen {max(x['max_rss_mb'] for x in out['pywellen']):.0f} MB", load)  # fmt: skip
     return {
         "label": label,
         "file": str(path),
@@ -267,7 +338,9 @@ def bench_vcd(label: str, path: Path, runs: int, slow_runs: int) -> dict[str, An
         "wavecheck_max_rss_mb": wrss,
         "edge_arrays_mib": edge_mb,
         "rss_allowed_mb": allowed,
-        "target_pywellen": r_pw >= 1.5,
+        "cpu_ratio_pywellen": c_pw,
+        "load": load,
+        "target_pywellen": c_pw >= 3,
         "target_vcdvcd": r_vv >= 5,
         "target_rss": wrss <= allowed,
     }
@@ -276,6 +349,7 @@ def bench_vcd(label: str, path: Path, runs: int, slow_runs: int) -> dict[str, An
 def bench_checks(path: Path, runs: int) -> dict[str, Any]:
     cmd = [PY, str(HERE / "check_bench.py"), str(path), "--repeat", str(max(3, runs))]
     print(f"  $ {sh(cmd)}")
+    load = load1()
     with tempfile.TemporaryDirectory() as tmp:
         t = timed(cmd, f"{tmp}/o.json")
         res = json.loads(Path(f"{tmp}/o.json").read_text())
@@ -291,50 +365,64 @@ def bench_checks(path: Path, runs: int) -> dict[str, Any]:
         f"{min(res['sys']):.3f}–{max(res['sys']):.3f} s; first run is cold memory); "
         f"{res['edges_per_s_cpu'] / 1e6:.1f} M edges/s; JSON report {res['render_json_s']:.3f} s"
     )
-    print(f"  => {cpu:.3f} s of work on one core  [target < 1 s]  {mark(cpu < 1)}")
+    name = f"check engine, {res['edges'] / 1e6:.0f} M edges"
+    figure(name, f"{cpu:.3f} s cpu", "< 1 s (10 M edges)", cpu < 1, "—", load)
     res["target"] = cpu < 1
+    res["load"] = load
     return res
 
 
-def bench_stepgen(quick: bool) -> dict[str, Any]:
-    script = HERE / "bench_stepgen.py"
-    if not script.exists():
-        print("  bench/bench_stepgen.py is not there yet (the stepgen engineer writes it): skipped")
-        return {"skipped": True}
-    cmd = [PY, str(script)] + (["--quick"] if quick else [])
+def bench_stepgen(quick: bool, runs: int) -> dict[str, Any]:
+    cmd = [PY, str(HERE / "stepgen_vcd.py"), "--repeat", str(max(3, runs))]
+    cmd += ["--seconds", "2"] if quick else []
     print(f"  $ {sh(cmd)}")
+    load = load1()
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode != 0 and quick:  # the script may not know --quick
-        cmd = cmd[:2]
-        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    for line in p.stdout.strip().splitlines():
-        print(f"  | {line}")
-    factor = None
-    for line in reversed(p.stdout.splitlines()):
-        try:
-            obj = json.loads(line)
-        except ValueError:
-            obj = None
-        if isinstance(obj, dict):
-            for k, v in obj.items():
-                if "real" in k.lower() and isinstance(v, (int, float)):
-                    factor = float(v)
-            if factor is not None:
-                break
-    if factor is None:
-        m = re.findall(r"(\d[\d,.]*)\s*[x×]\s*real[- ]time", p.stdout, re.I) or re.findall(
-            r"real[- ]time(?: factor)?\D{0,20}(\d[\d,.]*)", p.stdout, re.I
-        )
-        if m:  # the first figure is the fast engine's (later lines are slower paths)
-            factor = float(m[0].replace(",", ""))
     if p.returncode:
         print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
-    if factor is not None:
-        print(f"  => {factor:.0f}x real time  [target >= 100x]  {mark(factor >= 100)}")
-    else:
-        print("  => real-time factor not found in its output")
-    return {"command": sh(cmd), "stdout": p.stdout, "rc": p.returncode, "factor": factor,
-            "target": factor is not None and factor >= 100}  # fmt: skip
+        return {"command": sh(cmd), "rc": p.returncode, "target": False}
+    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+    res.update(command=sh(cmd), load=load)
+    print(f"  {res['simulated_s']:g} s simulated ({res['periods']} periods), {res['changes']} value "
+          f"changes, {res['vcd_bytes'] / 1e6:.1f} MB: simulate {res['simulate_cpu_s']:.3f} s, write "
+          f"{res['write_cpu_s']:.3f} s (pyvcd {res['pyvcd_write_cpu_s']:.3f} s) of CPU, best of "
+          f"{max(3, runs)}; byte-identical to pyvcd: {res['byte_identical']}")  # fmt: skip
+    ok = res["end_to_end_realtime"] >= 100 and res["byte_identical"]
+    figure("stepgen simulate + VCD, 25 µs", f"{res['end_to_end_realtime']:.0f}× real time",
+           "≥ 100×", ok, f"with pyvcd {res['pyvcd_end_to_end_realtime']:.0f}×", load)  # fmt: skip
+    res["target"] = ok
+    return res
+
+
+TINY_VCD = ROOT / "captures/golden/g202-p16-dirhold2-worst.vcd"
+
+
+def bench_startup(runs: int) -> dict[str, Any]:
+    """CPU (user + sys) of short commands, best of ``max(5, runs)``, interleaved."""
+    cmds = {
+        "wavecheck --help": [WAVECHECK, "--help"],
+        "wavecheck drives": [WAVECHECK, "drives"],
+        "wavecheck check tiny.vcd": [WAVECHECK, "check", str(TINY_VCD), "--drive", "gecko-g202"],
+        "python -c 'import numpy'": [PY, "-c", "import numpy"],
+        "sigrok-cli --version": ["sigrok-cli", "--version"],
+    }
+    for c in cmds.values():
+        print(f"  $ {sh(c)}")
+    times: dict[str, list[float]] = {k: [] for k in cmds}
+    loads = []
+    for _ in range(max(5, runs)):
+        loads.append(load1())
+        for k, c in cmds.items():
+            t = timed(c)
+            times[k].append(t["user_s"] + t["sys_s"])
+    best = {k: min(v) for k, v in times.items()}
+    load = max(loads)
+    floor, sigrok = best["python -c 'import numpy'"], best["sigrok-cli --version"]
+    peer = f"numpy import {floor:.2f} s; sigrok-cli --version {sigrok:.2f} s"
+    for k in list(cmds)[:3]:
+        figure(f"start-up: {k}", f"{best[k]:.2f} s cpu", "≤ 0.25 s", best[k] <= 0.25, peer, load)
+    return {"cpu_s": best, "runs": times, "load": load,
+            "target": all(best[k] <= 0.25 for k in list(cmds)[:3])}  # fmt: skip
 
 
 def main() -> int:
@@ -345,13 +433,15 @@ def main() -> int:
     ap.add_argument(
         "--runs", type=int, default=None, help="runs per figure (default 3; 1 with --quick)"
     )
-    ap.add_argument("--only", default="sr,vcd,checks,stepgen", help="sections to run (comma list)")
+    ap.add_argument(
+        "--only", default="sr,vcd,checks,stepgen,startup", help="sections to run (comma list)"
+    )
     args = ap.parse_args()
     runs = args.runs or (1 if args.quick else 3)
     only = set(args.only.split(","))
     started = _dt.datetime.now(_dt.UTC)
     mach = machine()
-    print("wavecheck benchmarks (issue 7)", started.strftime("%Y-%m-%d %H:%M UTC"))
+    print("wavecheck benchmarks (issues 7 and 18)", started.strftime("%Y-%m-%d %H:%M UTC"))
     print(
         f"machine: {mach['nproc']} CPUs ({mach['cpu']}), {mach['ram_gib']} GiB RAM, kernel {mach['kernel']}; "
         f"load average at start {' '.join(mach['loadavg_start'])}"
@@ -375,8 +465,10 @@ def main() -> int:
             "\n- grbl_cnc_1.sr (real: 2 MHz, 96.7 M samples, STEP on 'STEP (Y axis)'; no DIR was captured, EN stands in)"
         )
         results["sr"].append(
-            bench_sr("grbl", GRBL, "STEP (Y axis)", "EN", "leadshine-dm542", runs, None)
+            bench_sr("grbl", GRBL, "STEP (Y axis)", "EN", "leadshine-dm542", runs, None, goal=8.0)
         )
+        print("\n- the edge scan alone, on grbl_cnc_1.sr's samples")
+        results["sr_scan"] = bench_sr_scan(GRBL, runs)
         key = "sr100m" if args.quick else "sr1g"
         path = ensure(key)
         truth = json.loads(path.with_suffix(".truth.json").read_text())
@@ -402,28 +494,22 @@ def main() -> int:
         results["checks"] = bench_checks(ensure("edges_1m" if args.quick else "edges"), runs)
 
     if "stepgen" in only:
-        print("\n== 4. stepgen ==")
-        results["stepgen"] = bench_stepgen(args.quick)
+        print("\n== 4. stepgen simulate with a VCD out, end to end ==")
+        results["stepgen"] = bench_stepgen(args.quick, runs)
+
+    if "startup" in only:
+        print("\n== 5. start-up ==")
+        results["startup"] = bench_startup(runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end
     print(
         f"\nload average at end {' '.join(load_end)} (2 CPUs shared with other users: see the run spreads)"
     )
-    targets: list[tuple[str, bool]] = []
-    for s in results.get("sr", []):
-        targets += [
-            (f"sr {s['label']} >= 3x sigrok-cli", s["target_speed"]),
-            (f"sr {s['label']} RSS < 150 MB", s["target_rss"]),
-        ]
-    for v in results.get("vcd", []):
-        targets += [(f"{v['label']} >= 1.5x pywellen", v["target_pywellen"]), (f"{v['label']} >= 5x vcdvcd", v["target_vcdvcd"]),
-                    (f"{v['label']} RSS <= 2x edges + buffer", v["target_rss"])]  # fmt: skip
-    if "checks" in results:
-        targets.append(("checks 10M edges < 1 s cpu", results["checks"]["target"]))
-    if results.get("stepgen", {}).get("factor") is not None:
-        targets.append(("stepgen >= 100x real time", results["stepgen"]["target"]))
-    print("summary: " + "; ".join(f"{name} {mark(ok)}" for name, ok in targets))
+    print("\nall figures (goal, PASS/MISS, the peer in the same run, load when taken):\n")
+    print(table())
+    targets = [(f["figure"], f["ok"]) for f in FIGURES]
+    results["figures"] = FIGURES
     results["targets"] = dict(targets)
     RESULTS.mkdir(exist_ok=True)
     out = (

@@ -1,4 +1,5 @@
-"""Write a :class:`~stepgen.simulate.Trace` as VCD (pyvcd) or sigrok ``.sr`` — atomically.
+"""Write a :class:`~stepgen.simulate.Trace` as VCD (the project's writer: numpy, byte-identical to
+pyvcd) or sigrok ``.sr`` — atomically.
 
 VCD: timescale 1 ns (every latency is a whole number of ns, so every edge is exact), scope
 ``stepgen``, one 1-bit wire per output pin named as LinuxCNC names it (``step``, ``dir``,

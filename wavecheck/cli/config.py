@@ -18,20 +18,21 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive
 from wavecheck.drives.tune import tune_drive
 from wavecheck.errors import UsageError
 from wavecheck.firmware import FIRMWARES, read_firmware
-from wavecheck.firmware.capture import FirmwareCheck, firmware_check
-from wavecheck.firmware.evaluate import PairResult, evaluate_pair
 from wavecheck.firmware.model import FirmwareConfig
-from wavecheck.firmware.render import config_dict, config_text
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import parse_frequency, time_ns
 from wavecheck.verdict import exit_code, overall_verdict
+
+if TYPE_CHECKING:  # imported where used: only with a firmware configuration
+    from wavecheck.firmware.capture import FirmwareCheck
+    from wavecheck.firmware.evaluate import PairResult
 
 __all__ = [
     "add_firmware_arguments",
@@ -83,6 +84,8 @@ def _read(args: argparse.Namespace, path: str) -> FirmwareConfig:
 
 def check_firmware(args: argparse.Namespace, report: Any) -> FirmwareCheck:
     """``check --firmware``: the report's capture against the configured axis."""
+    from wavecheck.firmware.capture import firmware_check
+
     cached = getattr(args, "_firmware_config", None)
     cfg: FirmwareConfig = cached if cached is not None else _read(args, args.firmware)
     args._firmware_config = cfg
@@ -138,6 +141,9 @@ def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Dr
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck config``; returns the exit code."""
+    from wavecheck.firmware.evaluate import evaluate_pair
+    from wavecheck.firmware.render import config_dict, config_text
+
     cfg = _read(args, args.file)
     results: list[PairResult] = [evaluate_pair(cfg, cfg.axis(a), d) for a, d in _drives(args, cfg)]
     if not results:

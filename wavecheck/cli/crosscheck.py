@@ -8,14 +8,16 @@ from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.cli._main import EXIT_FAIL, EXIT_PASS
-from wavecheck.crosscheck import CrosscheckResult, crosscheck
 from wavecheck.errors import UsageError
 from wavecheck.interface import parse_map
 from wavecheck.output import atomic_write, output_file
+
+if TYPE_CHECKING:  # imported by run(): the sigrok-cli layer only when used
+    from wavecheck.crosscheck import CrosscheckResult
 
 __all__ = ["register", "run"]
 
@@ -92,6 +94,8 @@ def _json(r: CrosscheckResult) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from wavecheck.crosscheck import crosscheck
+
     if args.downsample is not None and args.downsample < 1:
         raise UsageError(f"--downsample must be >= 1, got {args.downsample}")
     mapping = parse_map(args.map)

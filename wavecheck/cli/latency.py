@@ -14,18 +14,20 @@ import io
 import json
 import sys
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.model import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.engine import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.interface import parse_map
-from wavecheck.latency import LatencyReport, analyse
 from wavecheck.linuxcnc.steptypes import step_type
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import format_ns, json_number, time_ns
 from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
+
+if TYPE_CHECKING:  # imported where used: only `wavecheck latency` needs it
+    from wavecheck.latency import LatencyReport
 
 __all__ = ["capture_latency", "register", "render_json", "render_text", "run"]
 
@@ -102,6 +104,8 @@ def _period_ns(args: argparse.Namespace) -> tuple[Fraction | None, str]:
 
 def capture_latency(args: argparse.Namespace, path: str) -> LatencyReport:
     """Open ``path`` and analyse it with the options in ``args``."""
+    from wavecheck.latency import analyse
+
     capture = capture_from_args(args, path)
     period, _ = _period_ns(args)
     return analyse(capture, _channels(capture, args), period)

@@ -14,21 +14,11 @@ from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smoothie
 from wavecheck.firmware._text import read_text
 from wavecheck.firmware.model import FIRMWARES, FirmwareConfig, GeneratorGuarantee, Guaranteed
 
 __all__ = ["FIRMWARES", "FirmwareConfig", "GeneratorGuarantee", "Guaranteed", "detect", "read_firmware"]
 
-_DETECT = (
-    ("grbl", grbl.looks_like),
-    ("marlin", marlin.looks_like),
-    ("klipper", klipper.looks_like),
-    ("reprapfirmware", rrf.looks_like),
-    ("smoothieware", smoothie.looks_like),
-    ("hm2", hm2.looks_like),
-    ("linuxcnc", linuxcnc.looks_like),
-)
 
 
 def detect(path: str | os.PathLike[str]) -> str:
@@ -37,6 +27,18 @@ def detect(path: str | os.PathLike[str]) -> str:
     Raises:
         ConfigError: no format recognised (the hint names ``--firmware-format``).
     """
+    # the readers are imported when a configuration is read, not at start-up
+    from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smoothie
+
+    detectors = (
+        ("grbl", grbl.looks_like),
+        ("marlin", marlin.looks_like),
+        ("klipper", klipper.looks_like),
+        ("reprapfirmware", rrf.looks_like),
+        ("smoothieware", smoothie.looks_like),
+        ("hm2", hm2.looks_like),
+        ("linuxcnc", linuxcnc.looks_like),
+    )
     p = Path(path)
     if p.is_dir():
         if (p / "Configuration.h").is_file():
@@ -45,7 +47,7 @@ def detect(path: str | os.PathLike[str]) -> str:
     text = read_text(p)
     if p.suffix.lower() == ".ini" and hm2.looks_like(text):
         return "hm2" if "[HOSTMOT2]" in text else "linuxcnc"
-    for name, looks in _DETECT:
+    for name, looks in detectors:
         if looks(text):
             if name == "hm2" and p.suffix.lower() == ".ini" and "[HOSTMOT2]" not in text:
                 continue
@@ -65,6 +67,8 @@ def read_firmware(
 ) -> FirmwareConfig:
     """Read ``path`` as ``fmt`` (default: detected). ``latency_ns`` is LinuxCNC's J,
     ``clock_hz`` the hm2 stepgen clock."""
+    from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smoothie
+
     name = fmt or detect(path)
     if name not in FIRMWARES:
         raise ConfigError(f"unknown firmware format {name!r} (one of {', '.join(FIRMWARES)})")

@@ -1,7 +1,8 @@
 """The .sr reader's fast paths give the same edges as the simple path (unpackbits over all samples).
 
 The fast paths are: members inflated straight from the file (zlib-ng or zlib, stored or
-deflated), and changed samples found 8 bytes at a time. Edges are put exactly on, and one sample
+deflated), and changed samples found by comparing 8-byte words with the same bytes one sample
+earlier (``_changed_bytes``). Edges are put exactly on, and one sample
 either side of, word boundaries (every 8 samples), read boundaries (``chunk_bytes``) and member
 boundaries, so a carry or an off-by-one at any of them shows up.
 """
@@ -14,10 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.wavecheck.capture.srutil import edges_by_unpacking, write_sr
 from wavecheck.capture import sr
-from wavecheck.capture.sr import _nonzero_bytes, read_sr
+from wavecheck.capture.sr import _changed_bytes, _EdgeFinder, read_sr
 
 
 def _toggles_at(n: int, positions: list[int], unitsize: int, bit: int) -> bytes:
@@ -75,9 +78,53 @@ def test_stored_members_and_sparse_words(tmp_path: Path) -> None:
             assert (ch.initial, ch.edges.tolist()) == edges_by_unpacking(raw.tobytes(), 1, ch.index)
 
 
-@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 15, 16, 17, 1000])
-def test_nonzero_bytes_equals_flatnonzero(n: int) -> None:
-    rng = np.random.default_rng(n)
+def _simple_changes(block: np.ndarray, step: int) -> tuple[list[int], list[int]]:
+    """Byte indexes into ``block[step:]`` that differ from ``step`` bytes earlier, and the XOR."""
+    d = block[step:] ^ block[: len(block) - step] if len(block) > step else block[:0]
+    at = np.flatnonzero(d)
+    return at.tolist(), d[at].tolist()
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 7, 8, 9, 15, 16, 17, 24, 25, 1000])
+@pytest.mark.parametrize("step", [1, 2, 3, 8, 9])
+def test_changed_bytes_equals_xor_and_flatnonzero(n: int, step: int) -> None:
+    rng = np.random.default_rng(n * 10 + step)
     for density in (0.0, 0.01, 0.5, 1.0):
-        d = np.where(rng.random(n) < density, rng.integers(1, 256, n), 0).astype(np.uint8)
-        assert _nonzero_bytes(d).tolist() == np.flatnonzero(d).tolist()
+        level = np.where(rng.random(n) < density, rng.integers(1, 256, n), 0).astype(np.uint8)
+        block = np.bitwise_xor.accumulate(level) if n else level  # changes where level != 0
+        for scratch in (None, np.zeros(2, dtype=bool), np.ones(n // 8 + 1, dtype=bool)):
+            at, xor = _changed_bytes(block, step, scratch)
+            assert (at.tolist(), xor.tolist()) == _simple_changes(block, step)
+
+
+@settings(max_examples=300)
+@given(
+    unitsize=st.integers(1, 5),
+    data=st.data(),
+)
+def test_edge_finder_equals_unpackbits(unitsize: int, data: st.DataObject) -> None:
+    """Any samples, any enabled bits, any split into blocks (whole samples): the same edges as
+    unpackbits over all samples, including changes exactly at block and word boundaries."""
+    n = data.draw(st.integers(1, 80), label="samples")
+    flips = data.draw(
+        st.lists(st.tuples(st.integers(0, n - 1), st.integers(0, 8 * unitsize - 1)), max_size=60),
+        label="flips",
+    )
+    first = data.draw(st.binary(min_size=unitsize, max_size=unitsize), label="first sample")
+    u8 = np.tile(np.frombuffer(first, np.uint8), (n, 1))
+    for at, bit in flips:  # the bit toggles from sample ``at`` on
+        u8[at:, bit // 8] ^= np.uint8(1 << (bit % 8))
+    raw = u8.tobytes()
+    bits = sorted(
+        data.draw(st.sets(st.integers(0, 8 * unitsize - 1), min_size=1), label="enabled bits")
+    )
+    cuts = (
+        sorted(data.draw(st.sets(st.integers(1, n - 1), max_size=6), label="cuts")) if n > 1 else []
+    )
+    finder = _EdgeFinder(unitsize, bits)
+    for a, b in zip([0, *cuts], [*cuts, n], strict=True):
+        finder.add(np.frombuffer(raw, np.uint8)[a * unitsize : b * unitsize])
+    assert finder.nsamples == n
+    for slot, bit in enumerate(bits):
+        initial, edges = edges_by_unpacking(raw, unitsize, bit)
+        assert (finder.initial[slot], finder.edges(slot).tolist()) == (initial, edges)

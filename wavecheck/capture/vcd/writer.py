@@ -10,6 +10,17 @@ order given (id codes ``!``, ``"``, … in that order), ``#0 $dumpvars`` with th
 (changes at time 0 replace them), then the changes in time order, at one time in variable order,
 and a final ``#end``. A wire's edges each toggle its level; several edges at one time are all
 written (the last one wins for a reader).
+
+Two paths, byte for byte the same file (tests/wavecheck/capture/vcd/test_writer.py compares them
+on hypothesis inputs): pyvcd writes the header, the ``$dumpvars`` section and the changes at
+time 0; the changes after time 0 are then formatted all at once with numpy (timestamps 8 digits
+per ``uint32`` division, vector values from ``unpackbits``, each piece scattered to its offset),
+~20× faster than one ``VCDWriter.change`` call per change. pyvcd writes everything itself
+(:func:`_write_pyvcd`, the reference) when the fast path does not cover the input: more than
+``_FAST_MAX_VARS`` variables, a wire whose initial level is not 0/1, a vector of 1 bit (pyvcd
+writes it as a scalar) or wider than 62 bits
+or of a type pyvcd does not write as bits, or a value that does not fit its vector (pyvcd then
+raises its ``ValueError``).
 """
 
 from __future__ import annotations
@@ -17,6 +28,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, TextIO
 
 import numpy as np
 import numpy.typing as npt
@@ -27,6 +39,17 @@ from wavecheck.progress import current
 __all__ = ["VcdVector", "VcdWire", "write_vcd"]
 
 _REPORT_EVERY = 1 << 16  # value changes between two progress reports
+_FAST_MAX_VARS = 256  # more variables: pyvcd (the fast path loops over the variables)
+_FAST_MAX_BITS = 62  # wider vectors: pyvcd
+_FAST_BLOCK = _REPORT_EVERY  # changes formatted at a time (memory stays bounded)
+# _BYTE_CHARS[b]: the 8 characters "0"/"1" of byte b, most significant first, as the
+# little-endian uint64 that puts them in that order in memory
+_BYTE_CHARS = np.array(
+    [sum((48 + ((b >> (7 - i)) & 1)) << (8 * i) for i in range(8)) for b in range(256)],
+    dtype=np.uint64,
+)
+_POW10 = np.array([10**k for k in range(19)], dtype=np.int64)
+_VECTOR_TYPES = {"integer", "reg", "wire", "tri", "wor", "wand", "supply0", "supply1", "time"}
 
 
 @dataclass(frozen=True)
@@ -109,27 +132,294 @@ def write_vcd(
         ValueError: a time goes backwards (within a signal, or ``end`` before a change), a
             negative time, or a value that does not fit its variable.
     """
-    from vcd import VCDWriter
-
     t, v, x = _changes(wires, vectors)
     if len(t) and (int(t[0]) < 0 or int(t[-1]) > end):
         raise ValueError(f"changes at {int(t[0])} … {int(t[-1])} fall outside 0 … end {end}")
+    fast = _fast_covers(wires, vectors, v, x)
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-        writer = VCDWriter(fh, timescale=timescale, date="", comment=comment, version=version)
-        variables = [
-            writer.register_var(scope, w.name, "wire", size=1, init=int(w.initial)) for w in wires
-        ]
-        variables += [
-            writer.register_var(scope, vec.name, vec.var_type, size=vec.size, init=vec.initial)
-            for vec in vectors
-        ]
-        change = writer.change
-        report = current()
-        n = len(t)
-        for a in range(0, n, _REPORT_EVERY):
-            b = min(a + _REPORT_EVERY, n)
-            for ti, vi, xi in zip(t[a:b].tolist(), v[a:b].tolist(), x[a:b].tolist(), strict=True):
-                change(variables[vi], ti, xi)
-            report(b, n)
-        writer.close(end)
-    return n
+        args = (fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
+        if fast:
+            _write_fast(*args)
+        else:
+            _write_pyvcd(*args)
+    return len(t)
+
+
+def _register(
+    fh: TextIO,
+    wires: Sequence[VcdWire],
+    vectors: Sequence[VcdVector],
+    timescale: str,
+    scope: str,
+    comment: str,
+    version: str,
+) -> tuple[Any, list[Any]]:
+    """A pyvcd ``VCDWriter`` on ``fh`` with the wires then the vectors registered."""
+    from vcd import VCDWriter
+
+    writer = VCDWriter(fh, timescale=timescale, date="", comment=comment, version=version)
+    variables = [
+        writer.register_var(scope, w.name, "wire", size=1, init=int(w.initial)) for w in wires
+    ]
+    variables += [
+        writer.register_var(scope, vec.name, vec.var_type, size=vec.size, init=vec.initial)
+        for vec in vectors
+    ]
+    return writer, variables
+
+
+def _write_pyvcd(
+    fh: TextIO,
+    wires: Sequence[VcdWire],
+    vectors: Sequence[VcdVector],
+    t: npt.NDArray[np.int64],
+    v: npt.NDArray[np.int64],
+    x: npt.NDArray[np.int64],
+    timescale: str,
+    end: int,
+    scope: str,
+    comment: str,
+    version: str,
+    upto: int | None = None,
+) -> Any:
+    """The reference: one ``VCDWriter.change`` per change, then ``close(end)``. With ``upto``,
+    only the first ``upto`` changes, and the writer is returned open instead of closed."""
+    writer, variables = _register(fh, wires, vectors, timescale, scope, comment, version)
+    change = writer.change
+    report = current()
+    n = len(t) if upto is None else upto
+    for a in range(0, n, _REPORT_EVERY):
+        b = min(a + _REPORT_EVERY, n)
+        for ti, vi, xi in zip(t[a:b].tolist(), v[a:b].tolist(), x[a:b].tolist(), strict=True):
+            change(variables[vi], ti, xi)
+        report(b, len(t))
+    if upto is not None:
+        return writer, variables
+    writer.close(end)
+    return None
+
+
+def _fast_covers(
+    wires: Sequence[VcdWire],
+    vectors: Sequence[VcdVector],
+    v: npt.NDArray[np.int64],
+    x: npt.NDArray[np.int64],
+) -> bool:
+    """Whether :func:`_write_fast` writes exactly what pyvcd would for this input."""
+    if not 0 < len(wires) + len(vectors) <= _FAST_MAX_VARS:
+        return False
+    if any(int(w.initial) not in (0, 1) for w in wires):
+        return False
+    for j, vec in enumerate(vectors, start=len(wires)):
+        if vec.var_type not in _VECTOR_TYPES or not 2 <= vec.size <= _FAST_MAX_BITS:
+            return False
+        vals = x[v == j]
+        lo, hi = -(1 << (vec.size - 1)), 1 << vec.size  # what pyvcd accepts
+        if len(vals) and (int(vals.min()) < lo or int(vals.max()) >= hi):
+            return False
+        if not lo <= int(vec.initial) < hi:
+            return False
+    return True
+
+
+def _write_fast(
+    fh: TextIO,
+    wires: Sequence[VcdWire],
+    vectors: Sequence[VcdVector],
+    t: npt.NDArray[np.int64],
+    v: npt.NDArray[np.int64],
+    x: npt.NDArray[np.int64],
+    timescale: str,
+    end: int,
+    scope: str,
+    comment: str,
+    version: str,
+) -> None:
+    """pyvcd up to time 0 (header, ``$dumpvars``), numpy for the changes after it."""
+    n0 = int(np.searchsorted(t, 0, side="right"))
+    if n0 == len(t):  # nothing after time 0: all pyvcd
+        _write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
+        return
+    writer, variables = _write_pyvcd(
+        fh, wires, vectors, t, v, x, timescale, end, scope, comment, version, upto=n0
+    )
+    writer.flush()  # the header and "#0 $dumpvars … $end", as the first later change would
+    fh.flush()
+    idents = [var.ident.encode("ascii") for var in variables]
+    sizes = [0] * len(wires) + [vec.size for vec in vectors]
+    current_value = [int(var.value) for var in variables]  # after the changes at time 0
+    t, v, x = t[n0:], v[n0:], x[n0:]
+    # pyvcd writes a change only when the value differs from the variable's last one: always
+    # for a wire's edges (each toggles), not for a vector value repeated
+    keep = np.ones(len(t), dtype=bool)
+    for j in range(len(wires), len(variables)):
+        rows = np.flatnonzero(v == j)
+        if len(rows):
+            vals = x[rows]
+            prev = np.concatenate(([current_value[j]], vals[:-1]))
+            keep[rows[vals == prev]] = False
+    if not keep.all():
+        t, v, x = t[keep], v[keep], x[keep]
+    last_ts = 0  # the "#0" before $dumpvars
+    report = current()
+    for a in range(0, len(t), _FAST_BLOCK):
+        b = min(a + _FAST_BLOCK, len(t))
+        text, last_ts = _format_changes(t[a:b], v[a:b], x[a:b], idents, sizes, last_ts)
+        fh.buffer.write(text)
+        report(n0 + b, n0 + len(t))
+    if end != last_ts:
+        fh.buffer.write(b"#%d\n" % end)
+
+
+def _format_changes(
+    t: npt.NDArray[np.int64],
+    v: npt.NDArray[np.int64],
+    x: npt.NDArray[np.int64],
+    idents: list[bytes],
+    sizes: list[int],
+    last_ts: int,
+) -> tuple[memoryview, int]:
+    """The VCD text of changes (all written, times > 0, non-decreasing) as pyvcd writes them:
+    ``#t`` on its own line before the first change at each new time, then ``0!``/``1!`` for a
+    wire, ``b101 #`` for a vector. Returns the text and the last timestamp written."""
+    n = len(t)
+    newt = np.empty(n, dtype=bool)
+    newt[0] = int(t[0]) != last_ts
+    np.not_equal(t[1:], t[:-1], out=newt[1:])
+    stamp_rows = np.flatnonzero(newt)
+    stamps = t[stamp_rows]
+    ndig = _decimal_digits(stamps)
+    # each variable's rows; the length of each change's value piece
+    by_var = [
+        np.flatnonzero(v == j) if len(idents) > 1 else np.arange(n) for j in range(len(idents))
+    ]
+    wire_rows = [(j, r) for j, r in enumerate(by_var) if len(r) and sizes[j] == 0]
+    vec_rows = [(j, r) for j, r in enumerate(by_var) if len(r) and sizes[j] > 0]
+    width = np.empty(n, dtype=np.int64)
+    for j, rows in wire_rows:
+        width[rows] = 1 + len(idents[j]) + 1  # "1!\n"
+    if vec_rows:  # all vectors at once: their rows one vector after the other
+        vrows = np.concatenate([r for _, r in vec_rows])
+        size = np.concatenate([np.full(len(r), sizes[j]) for j, r in vec_rows])
+        unsigned = np.where(x[vrows] < 0, x[vrows] + (np.int64(1) << size), x[vrows])
+        nbits = _bit_length(unsigned)
+        ident_len = np.concatenate([np.full(len(r), len(idents[j])) for j, r in vec_rows])
+        width[vrows] = 1 + nbits + 1 + ident_len + 1  # "b101 #\n"
+    length = width.copy()
+    length[stamp_rows] += ndig + 2  # "#123\n"
+    start = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(length, out=start[1:])
+    out = np.empty(int(start[-1]), dtype=np.uint8)
+    # timestamps: "#", the digits, "\n"; the change follows
+    at = start[stamp_rows]
+    out[at] = ord("#")
+    _put_digits(out, at + 1, stamps, ndig)
+    out[at + 1 + ndig] = ord("\n")
+    piece = start[:-1].copy()
+    piece[stamp_rows] += ndig + 2
+    for j, rows in wire_rows:  # "1!\n"
+        p = piece[rows]
+        out[p] = (x[rows] + ord("0")).astype(np.uint8)
+        _put_ident(out, p + 1, idents[j])
+    if vec_rows:  # "b101 #\n"
+        p = piece[vrows]
+        out[p] = ord("b")
+        _put_bits(out, p + 1, unsigned, nbits)
+        p = p + 1 + nbits
+        out[p] = ord(" ")
+        offset = 0
+        for j, rows in vec_rows:
+            _put_ident(out, p[offset : offset + len(rows)] + 1, idents[j])
+            offset += len(rows)
+    return out.data, int(stamps[-1]) if len(stamps) else last_ts
+
+
+def _put_ident(out: npt.NDArray[np.uint8], at: npt.NDArray[np.int64], ident: bytes) -> None:
+    """Write ``ident`` and a newline at each ``out[at:]``."""
+    for k, byte in enumerate(ident):
+        out[at + k] = byte
+    out[at + len(ident)] = ord("\n")
+
+
+def _decimal_digits(values: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """Number of decimal digits of each value (non-decreasing values ≥ 0; 0 has one digit)."""
+    bounds = np.searchsorted(values, _POW10[1:])  # first value with k + 1 digits or more
+    counts = np.diff(np.concatenate(([0], bounds, [len(values)])))
+    return np.repeat(np.arange(1, len(_POW10) + 1, dtype=np.int64), counts)
+
+
+def _put_digits(
+    out: npt.NDArray[np.uint8],
+    at: npt.NDArray[np.int64],
+    values: npt.NDArray[np.int64],
+    ndig: npt.NDArray[np.int64],
+) -> None:
+    """Write each value's ``ndig`` decimal digits at ``out[at : at + ndig]`` (values
+    non-decreasing, so the ones with more than ``c`` digits are a tail).
+
+    The value is split into 8-digit parts (int64 divisions by 10^8), whose digits come from
+    ``uint32`` divisions by 10 (numpy divides by a constant with SIMD, ~50× faster than int64
+    ``divmod``); digit ``c`` from the right goes to ``at + ndig − 1 − c``.
+    """
+    if not len(values):
+        return
+    end = at + ndig - 1
+    parts = [values]
+    if int(values[-1]) >= 10**8:
+        high = values // 10**8
+        parts = [values - high * 10**8, high]
+        if int(high[-1]) >= 10**8:
+            top = high // 10**8
+            parts = [parts[0], high - top * 10**8, top]
+    col = 0
+    for part in parts:
+        q = part.astype(np.uint32)
+        for _ in range(8):
+            first = int(np.searchsorted(ndig, col, side="right"))  # rows with > col digits
+            if first == len(values):
+                return
+            nq = q // np.uint32(10)
+            digit = (q - nq * np.uint32(10)).astype(np.uint8)
+            digit += np.uint8(ord("0"))
+            out[end[first:] - col] = digit[first:]
+            q = nq
+            col += 1
+
+
+def _bit_length(values: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """Binary digits of each value (0 … 2^62; 0 has one, as ``format(0, "b")``): the exponent
+    from ``frexp``, corrected by one where the float rounded the value up to a power of two."""
+    u = values.astype(np.uint64)
+    n = np.frexp(values.astype(np.float64))[1].astype(np.int64)
+    n = np.maximum(n, 1)
+    n -= (u >> (n - 1).astype(np.uint64)) == 0  # rounded up: one digit fewer (or 0 → 0)
+    return np.maximum(n, 1)
+
+
+def _put_bits(
+    out: npt.NDArray[np.uint8],
+    at: npt.NDArray[np.int64],
+    values: npt.NDArray[np.int64],
+    nbits: npt.NDArray[np.int64],
+) -> None:
+    """Write each value's ``nbits`` binary digits (most significant first) at ``out[at:]``.
+
+    Whole bytes of the value (from the right) are written as 8 characters at once from a
+    256-entry table, through a ``uint64`` view of ``out`` with a 1-byte stride; the 0 … 7 digits
+    of the leading partial byte one column at a time.
+    """
+    u = values.astype(np.uint64)
+    end = at + nbits  # one past the last digit
+    whole = nbits // 8
+    nwhole = int(whole.max()) if len(whole) else 0
+    if nwhole:  # then out holds at least 8 bytes
+        words = np.ndarray((len(out) - 7,), dtype=np.uint64, buffer=out, strides=(1,))
+    for j in range(nwhole):
+        rows = np.flatnonzero(whole > j) if int(whole.min()) <= j else slice(None)
+        byte = (u[rows] >> np.uint64(8 * j)) & np.uint64(0xFF)
+        words[end[rows] - 8 * (j + 1)] = _BYTE_CHARS[byte.astype(np.intp)]
+    lead = nbits - 8 * whole
+    for c in range(int(lead.max()) if len(lead) else 0):
+        rows = np.flatnonzero(lead > c)
+        bit = (u[rows] >> (8 * whole[rows] + c).astype(np.uint64)) & np.uint64(1)
+        out[end[rows] - 8 * whole[rows] - 1 - c] = bit.astype(np.uint8) + np.uint8(ord("0"))

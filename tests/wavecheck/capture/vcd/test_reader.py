@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from tests.conftest import shared_capture, write_vcd
 from wavecheck.capture.model import Capture
 from wavecheck.capture.vcd import read_vcd, read_vcd_reference
+from wavecheck.capture.vcd.reader import _timestamps_swar, _token_bounds
 from wavecheck.errors import CaptureError, UsageError
 
 CORPUS = [
@@ -346,7 +347,7 @@ def test_aliased_id_is_found_by_every_name(tmp_path: Path) -> None:
 @pytest.mark.parametrize("end", [9_000_000_000_000_000_000, (1 << 63) - 1, 10**18])
 def test_19_digit_timestamps_are_read(tmp_path: Path, end: int) -> None:
     """A valid timestamp below 2^63 is a time like any other (it was "bad timestamp")."""
-    path = write(tmp_path, HEAD + f"#0\n0!\n1\"\n#5\n1!\n#{end}\n")
+    path = write(tmp_path, HEAD + f'#0\n0!\n1"\n#5\n1!\n#{end}\n')
     for chunk in (1 << 20, 7):
         cap = read_vcd(path, chunk_bytes=chunk)
         assert cap.end == end and cap.channel("a").edges.tolist() == [5]
@@ -473,3 +474,96 @@ def test_analyzer_vcds_get_a_resolution(
     else:
         assert any(says in n for n in cap.notes), cap.notes
     assert_same(cap, read_vcd_reference(path))
+
+
+# The fast reader's own shortcuts, each against the simple way of doing the same thing:
+# whitespace tokens (two comparisons per byte), timestamps decoded 8 digits at a time in a uint64
+# (SWAR), change times counted instead of searched when a chunk holds only timestamps and
+# changes, and line numbers counted only when an error is raised.
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    data=st.binary(max_size=200)
+    | st.text(" \t\n\r\x0b\x0c\x00\x1f#01!ab", max_size=60).map(str.encode)
+)
+def test_token_bounds_equal_bytes_split(data: bytes) -> None:
+    starts, ends = _token_bounds(np.frombuffer(data, dtype=np.uint8))
+    assert [data[a:b] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)] == data.split()
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    numbers=st.lists(
+        st.text("0123456789", min_size=1, max_size=16)
+        | st.text("0123456789#x/:\x00\xff", min_size=1, max_size=16),
+        min_size=1,
+        max_size=20,
+    ),
+    lead=st.integers(0, 20),
+)
+def test_swar_timestamps_equal_int(numbers: list[str], lead: int) -> None:
+    """Digits anywhere in a buffer (also its first bytes) read as int() reads them; any other
+    character makes the whole batch fall back (None) to the column-by-column path."""
+    text = ("x" * lead + " " if lead else "") + " ".join("#" + n for n in numbers)
+    a = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    starts, ends = _token_bounds(a)
+    starts, ends = starts[-len(numbers) :], ends[-len(numbers) :]
+    got = _timestamps_swar(a, ends, ends - starts - 1)
+    if all(n.isdigit() for n in numbers):
+        assert got is not None and got.tolist() == [int(n) for n in numbers]
+    else:
+        assert got is None
+
+
+@st.composite
+def _stamped_vcd(draw: st.DrawFn) -> tuple[str, int]:
+    """Timestamps of 1 … 19 digits (leading zeros too), the simulator's or sigrok's layout, now
+    and then a $dumpvars block or a vector change (the chunk then takes the searching path)."""
+    t = draw(st.integers(0, 9))
+    lines = ["#0", "0!", '1"']
+    level = 0
+    for _ in range(draw(st.integers(0, 40))):
+        t += draw(st.sampled_from([0, 1, 7, 99_999_999, 12_345_678_901, 10**15, 10**17]))
+        if t >= 1 << 63:
+            break
+        stamp = "#" + "0" * draw(st.integers(0, 2)) + str(t) if len(str(t)) < 17 else f"#{t}"
+        level ^= 1
+        extra = draw(st.sampled_from(["", "", '0"', "$dumpvars 1! $end", "b101 v"]))
+        change = [f"{level}!", *([extra] if extra else [])]
+        if draw(st.booleans()):
+            lines.append(" ".join([stamp[:20], *change]))
+        else:
+            lines += [stamp[:20], *change]
+    head = HEAD.replace("$upscope", "$var wire 3 v vec $end\n$upscope")
+    return head + "\n".join(lines) + "\n", draw(st.sampled_from([3, 16, 61, 1 << 20]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(case=_stamped_vcd())
+def test_timestamps_of_every_length_fast_equals_simple(
+    tmp_path_factory: pytest.TempPathFactory, case: tuple[str, int]
+) -> None:
+    text, chunk = case
+    path = tmp_path_factory.mktemp("v") / "t.vcd"
+    path.write_text(text)
+    assert_same(read_vcd(path, chunk_bytes=chunk), read_vcd_reference(path))
+
+
+@pytest.mark.parametrize("chunk", [5, 64, 4096, 1 << 20])
+@pytest.mark.parametrize("piped", [False, True])
+@pytest.mark.parametrize(("bad", "what"), [("#12x", "bad timestamp"), ("0?", "unknown id code")])
+def test_error_line_counted_when_raised(
+    tmp_path: Path, chunk: int, piped: bool, bad: str, what: str
+) -> None:
+    """The line of an error far into the body is exact whether the newlines before it are
+    counted when it is raised (a file) or as the chunks go by (a stream)."""
+    body = "".join(f"#{t}\n{t & 1}!\n" for t in range(1, 700))
+    path = write(tmp_path, HEAD + '#0 0! 0"\n' + body + bad + "\n")
+    line = HEAD.count("\n") + 2 + 2 * 699
+    with pytest.raises(CaptureError, match=rf"line {line} .*{what}"):
+        if piped:
+            with path.open("rb") as fh:
+                read_vcd(path, chunk_bytes=chunk, source=fh)
+        else:
+            read_vcd(path, chunk_bytes=chunk)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from collections import Counter
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wavecheck.capture.vcd import read_vcd, read_vcd_reference
+from wavecheck.capture.vcd import read_vcd, read_vcd_reference, writer
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire, write_vcd
 from wavecheck.progress import _ACTIVE
 
@@ -129,3 +130,97 @@ def test_progress_counts_value_changes(tmp_path: Path) -> None:
     assert n == 200_000
     assert seen[-1] == (n, n) and len(seen) == 4
     assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+
+
+# The numpy path (``_write_fast``) against pyvcd (``_write_pyvcd``, the reference): the same
+# bytes for the same changes.
+
+
+def _both_paths(
+    wires: list[VcdWire], vectors: list[VcdVector], timescale: str, end: int, comment: str = ""
+) -> tuple[bytes, bytes]:
+    outs = []
+    for write in (writer._write_pyvcd, writer._write_fast):
+        t, v, x = writer._changes(wires, vectors)
+        fh = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", newline="\n")
+        write(fh, wires, vectors, t, v, x, timescale, end, "stepgen", comment, "")
+        fh.flush()
+        outs.append(fh.buffer.getvalue())  # type: ignore[attr-defined]
+    return outs[0], outs[1]
+
+
+_TIMES = (
+    st.integers(0, 40) | st.integers(0, 10**12) | st.sampled_from([10**8 - 1, 10**8, 10**16, 2**62])
+)
+
+
+@st.composite
+def _signals(draw: st.DrawFn) -> tuple[list[VcdWire], list[VcdVector], str, int, int]:
+    """Random edge sets (several edges at one time, edges at 0, times of any length) and
+    vectors like stepgen's ``counts`` (repeats, negatives, the extremes of their size)."""
+    wires = [
+        VcdWire(f"w{i}", draw(st.integers(0, 1)), np.sort(np.array(draw(st.lists(_TIMES, max_size=30)), dtype=np.int64)))
+        for i in range(draw(st.integers(0, 4)))
+    ]  # fmt: skip
+    vectors = []
+    for i in range(draw(st.integers(0 if wires else 1, 2))):
+        size = draw(st.sampled_from([2, 3, 8, 32, 62]))
+        lo, hi = -(1 << (size - 1)), (1 << size) - 1
+        values = st.integers(lo, hi) | st.sampled_from([0, 1, lo, hi])
+        times = np.sort(np.array(draw(st.lists(_TIMES, max_size=30)), dtype=np.int64))
+        vals = np.array([draw(values) for _ in times], dtype=np.int64)
+        vectors.append(VcdVector(f"v{i}", times, vals, size=size, initial=draw(values)))
+    last = max([0] + [int(w.edges[-1]) for w in wires if len(w.edges)]
+               + [int(vec.times[-1]) for vec in vectors if len(vec.times)])  # fmt: skip
+    end = last + draw(st.sampled_from([0, 0, 1, 10**9]))
+    return (
+        wires,
+        vectors,
+        draw(st.sampled_from(["1 ns", "10 us", "100 ps", "1 s"])),
+        end,
+        draw(st.integers(1, 7)),
+    )
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=_signals())
+def test_fast_path_writes_the_bytes_pyvcd_writes(
+    case: tuple[list[VcdWire], list[VcdVector], str, int, int],
+) -> None:
+    wires, vectors, timescale, end, block = case
+    t, v, x = writer._changes(wires, vectors)
+    assert writer._fast_covers(wires, vectors, v, x)
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(writer, "_FAST_BLOCK", block)  # block boundaries inside one timestamp too
+        ref, fast = _both_paths(wires, vectors, timescale, end, comment="c")
+    assert fast == ref
+
+
+def test_fast_path_on_a_stepgen_like_trace() -> None:
+    """Thousands of changes, 11-digit timestamps, a 32-bit counter going up and down."""
+    rng = np.random.default_rng(7)
+    step = np.cumsum(rng.integers(1, 50_000, 4000)).astype(np.int64) + 10**10
+    dirs = np.sort(rng.choice(step, 40, replace=False)) - 3
+    counts_t = np.sort(np.concatenate([step, step[::7]]))
+    counts = np.cumsum(rng.choice([-1, 1], len(counts_t))).astype(np.int64)
+    wires = [VcdWire("step", 0, step), VcdWire("dir", 0, dirs)]
+    vectors = [VcdVector("counts", counts_t, counts, size=32)]
+    ref, fast = _both_paths(wires, vectors, "1 ns", int(step[-1]) + 1)
+    assert fast == ref and len(ref) > 50_000
+
+
+@pytest.mark.parametrize(
+    ("wires", "vectors"),
+    [
+        ([VcdWire("a", 2, _a(1))], []),  # a level that is not 0/1
+        ([], [VcdVector("c", _a(1), _a(1), size=64)]),  # wider than 62 bits
+        ([], [VcdVector("c", _a(1), _a(1), size=1)]),  # pyvcd writes it as a scalar
+        ([], [VcdVector("c", _a(1), _a(300), size=8)]),  # does not fit: pyvcd raises
+        ([], [VcdVector("r", _a(1), _a(1), size=64, var_type="real")]),
+        ([VcdWire(f"w{i}", 0, _a(1)) for i in range(300)], []),  # many variables
+        ([], []),
+    ],
+)
+def test_fast_path_leaves_the_rest_to_pyvcd(wires: list[VcdWire], vectors: list[VcdVector]) -> None:
+    _, v, x = writer._changes(wires, vectors)
+    assert not writer._fast_covers(wires, vectors, v, x)
