@@ -25,12 +25,19 @@ from wavecheck.cli._reports import (
     Checked,
     add_report_arguments,
     axis_reports,
+    expand_captures,
     latency_ns,
     render_json_report,
     render_junit_report,
     render_text_report,
     run_checks,
     stepgen_config,
+)
+from wavecheck.cli._steps_args import (
+    add_steps_arguments,
+    check_steps_arguments,
+    steps_csv_path,
+    write_steps,
 )
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
 from wavecheck.drives.library import load_drive
@@ -41,6 +48,7 @@ from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.machine import MachineReport, common_timer
+from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
@@ -94,6 +102,7 @@ def register(sub: Any) -> None:
         f"JSON default {DEFAULT_VIOLATION_CAP}); the total is always given",
     )
     add_report_arguments(p)
+    add_steps_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -149,4 +158,20 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
-    return run_checks(args, build_report, write_outputs)
+    check_steps_arguments(args)
+    if not args.steps_csv:
+        return run_checks(args, build_report, write_outputs)
+    patterns = args.capture if isinstance(args.capture, list) else [args.capture]
+    several = len(expand_captures(patterns)) > 1
+    used: set[str] = set()
+
+    def build_and_export(a: argparse.Namespace, path: str) -> Checked:
+        """:func:`build_report`, then the capture's steps to ``--steps-csv``."""
+        checked = build_report(a, path)
+        target = steps_csv_path(a.steps_csv, path, used) if several else a.steps_csv
+        reports = axis_reports(checked)
+        axes = [AxisSteps(r.axis, r.steps) for r in reports]
+        write_steps(a, target, axes, reports[0].capture.timebase)
+        return checked
+
+    return run_checks(args, build_and_export, write_outputs)
