@@ -13,10 +13,11 @@ Columns::
   axis); ``direction``: 1 forward, -1 reverse, 0 unknown or ambiguous; ``position``: the running
   position in steps after the step (unknown steps count 0, so the last row of an axis is its
   final position and the directions sum to it).
-- ``rate_hz``: the instantaneous step rate, 1 / the time since the axis's previous step (empty
-  on an axis's first step or after a step at the same tick).
+- ``rate_hz``: the instantaneous step rate, 1 / the time since the axis's previous step, in
+  3 decimals (empty on an axis's first step or after a step at the same tick).
 - With steps per unit given for an axis: ``position_units`` (position / steps per unit) and
-  ``velocity_units_per_s`` (direction × rate / steps per unit); empty for other axes.
+  ``velocity_units_per_s`` (direction × rate / steps per unit), in 6 decimals; empty for other
+  axes (and the velocity of a step of unknown direction).
 
 Rows are in time order over all axes (an axis's order first at equal times), written in chunks
 formatted by numpy, through :func:`wavecheck.output.atomic_path` (whole or not at all).
@@ -29,6 +30,7 @@ import os
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -52,6 +54,9 @@ __all__ = [
 #: Rows formatted at a time.
 CHUNK = 1 << 16
 _LIMIT = 1 << 62
+#: Decimals of ``rate_hz`` (mHz) and of the machine-unit columns (1e-6 units: nm for mm).
+RATE_PLACES = 3
+UNIT_PLACES = 6
 HEADER = ("time_s", "tick", "axis", "direction", "position", "rate_hz")
 UNIT_HEADER = ("position_units", "velocity_units_per_s")
 
@@ -85,9 +90,11 @@ def decimal_digits(tick_s: Fraction) -> tuple[int, bool]:
     return places, False
 
 
-def format_times(ticks: EdgeArray, tick_s: Fraction) -> npt.NDArray[np.str_]:
-    """``ticks`` × ``tick_s`` as decimal strings in seconds, from integers only (see
-    :func:`decimal_digits`; rounded half up where the decimal does not end)."""
+def _time_parts(
+    ticks: EdgeArray, tick_s: Fraction
+) -> tuple[npt.NDArray[np.bool_], npt.NDArray[Any], npt.NDArray[Any], int]:
+    """``ticks`` × ``tick_s`` as (negative, whole seconds, fraction digits, places): integers
+    only (see :func:`decimal_digits`; rounded half up where the decimal does not end)."""
     places, _ = decimal_digits(tick_s)
     num, den = tick_s.numerator, tick_s.denominator
     scale = 10**places
@@ -99,19 +106,69 @@ def format_times(ticks: EdgeArray, tick_s: Fraction) -> npt.NDArray[np.str_]:
     scaled = mag * num
     whole, rest = scaled // den, scaled % den
     frac = (rest * scale + den // 2) // den
-    whole = whole + frac // scale
-    frac = frac % scale
-    out = whole.astype(str)
-    if places:
-        out = np.char.add(np.char.add(out, "."), np.char.zfill(frac.astype(str), places))
-    if negative.any():
-        out = np.where(negative, np.char.add("-", out), out)
-    return np.asarray(out, dtype=np.str_)
+    return negative, whole + frac // scale, frac % scale, places
 
 
-def _floats(values: npt.NDArray[np.float64], valid: npt.NDArray[np.bool_]) -> npt.NDArray[np.str_]:
-    text = np.char.mod("%.10g", values)
-    return np.where(valid, text, "")
+@dataclass(frozen=True)
+class _Field:
+    """One CSV column: its printf format, one argument list per placeholder, and where it is
+    written (None: every row; elsewhere the field is empty)."""
+
+    fmt: str
+    args: list[list[Any]]
+    shown: npt.NDArray[np.bool_] | None = None
+
+
+def _decimal_field(
+    negative: npt.NDArray[np.bool_],
+    whole: npt.NDArray[Any],
+    frac: npt.NDArray[Any],
+    places: int,
+    shown: npt.NDArray[np.bool_] | None = None,
+) -> _Field:
+    fmt = f"%s%d.%0{places}d" if places else "%s%d%.0s"
+    sign = np.where(negative, "-", "").tolist()
+    return _Field(fmt, [sign, whole.tolist(), frac.tolist()], shown)
+
+
+def _fixed_field(
+    values: npt.NDArray[np.float64], shown: npt.NDArray[np.bool_], places: int
+) -> _Field:
+    """Floats in ``places`` decimals, from integers (a float formatter per value costs several
+    times more on millions of rows)."""
+    scale = 10**places
+    v = np.where(shown, values, 0.0)
+    scaled = np.rint(np.abs(v) * scale).astype(np.int64)
+    return _decimal_field((v < 0) & (scaled > 0), scaled // scale, scaled % scale, places, shown)
+
+
+def _rows(fields: Sequence[_Field]) -> str:
+    """The rows of ``fields`` as text: one printf format per row, chosen by numpy from the few
+    combinations of shown fields (a hidden one consumes its arguments with ``%.0s``), applied
+    by ``str.__mod__`` in C; no Python code runs per row."""
+    optional = [f for f in fields if f.shown is not None]
+    n = len(fields[0].args[0])
+    code = np.zeros(n, dtype=np.int64)
+    for bit, f in enumerate(optional):
+        assert f.shown is not None
+        code |= f.shown.astype(np.int64) << bit
+    table = []
+    for c in range(1 << len(optional)):
+        parts = []
+        for f in fields:
+            hidden = f.shown is not None and not (c >> optional.index(f)) & 1
+            parts.append("%.0s" * len(f.args) if hidden else f.fmt)
+        table.append(",".join(parts))
+    fmts = np.array(table, dtype=object)[code].tolist()
+    args = zip(*(a for f in fields for a in f.args), strict=True)
+    return "\n".join(map(str.__mod__, fmts, args))
+
+
+def format_times(ticks: EdgeArray, tick_s: Fraction) -> list[str]:
+    """``ticks`` × ``tick_s`` as decimal strings in seconds (see :func:`decimal_digits`)."""
+    if len(ticks) == 0:
+        return []
+    return _rows([_decimal_field(*_time_parts(ticks, tick_s))]).split("\n")
 
 
 def parse_steps_per_unit(text: str, option: str = "--steps-per-unit") -> Fraction:
@@ -157,25 +214,22 @@ def steps_csv_chunks(
         t, k, d = ticks[idx], which[idx], direction[idx]
         valid = ~first[idx]
         rate = np.divide(hz, gaps[idx], out=np.zeros(len(idx)), where=valid)
-        cols = [
-            format_times(t, timebase.tick_s),
-            t.astype(str),
-            names[k],
-            d.astype(str),
-            position[idx].astype(str),
-            _floats(rate, valid),
+        fields = [
+            _decimal_field(*_time_parts(t, timebase.tick_s)),
+            _Field("%d", [t.tolist()]),
+            _Field("%s", [names[k].tolist()]),
+            _Field("%d", [d.tolist()]),
+            _Field("%d", [position[idx].tolist()]),
+            _fixed_field(rate, valid, RATE_PLACES),
         ]
         if units:
             spu = per_unit[k]
             has = ~np.isnan(spu)
-            cols += [
-                _floats(position[idx] / np.where(has, spu, 1.0), has),
-                _floats(d * rate / np.where(has, spu, 1.0), has & valid & (d != 0)),
+            fields += [
+                _fixed_field(position[idx] / np.where(has, spu, 1.0), has, UNIT_PLACES),
+                _fixed_field(d * rate / np.where(has, spu, 1.0), has & valid & (d != 0), UNIT_PLACES),
             ]
-        line = cols[0]
-        for c in cols[1:]:
-            line = np.char.add(np.char.add(line, ","), c)
-        yield "\n".join(line.tolist()) + "\n"
+        yield _rows(fields) + "\n"
 
 
 def _csv_field(text: str) -> str:
