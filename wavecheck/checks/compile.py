@@ -44,7 +44,7 @@ from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.rules import RULE_IDS, Rule, applicable
 
-__all__ = ["RuleSet", "applicable_rules", "planned_rules", "run_rules"]
+__all__ = ["RuleSet", "applicable_rules", "measure_intervals", "planned_rules", "run_rules"]
 
 
 def applicable_rules(st: StepType) -> tuple[str, ...]:
@@ -192,6 +192,23 @@ def _known(
     covered[has] = ohi[last[has]] >= starts[has]
     where = np.sort(np.concatenate([intervals.start[out], starts[~covered]]))
     return Intervals(intervals.start[keep], intervals.end[keep]), where
+
+
+def measure_intervals(
+    rule: Rule,
+    iface: StepInterface,
+    st: StepType,
+    steps: StepEvents,
+    active_edge: ActiveEdge,
+    pulse_level: int = 1,
+) -> Intervals:
+    """Every complete, known interval of ``rule`` (a rule with intervals: not ``sequence``), in
+    ticks, with no limit and no verdict: what :func:`run_rules` judges and ``wavecheck measure``
+    summarises. An interval whose role is not mapped (no DIR, no ENABLE) is simply absent.
+
+    ``pulse_level`` is the level of the generator's pulses at the drive's input (only
+    ``dir_delay`` depends on it; see :func:`_dir_delay`)."""
+    return _known(_intervals(rule, iface, st, steps, active_edge, pulse_level), iface, st, rule)[0]
 
 
 @dataclass(frozen=True)

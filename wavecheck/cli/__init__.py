@@ -1,4 +1,4 @@
-"""The ``wavecheck`` command: info, check, drives, compare, crosscheck, latency."""
+"""The ``wavecheck`` command: info, check, measure, drives, compare, crosscheck, latency."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ __all__ = ["main"]
 COMMANDS = (
     "wavecheck.cli.info",
     "wavecheck.cli.check",
+    "wavecheck.cli.measure",
     "wavecheck.cli.drives",
     "wavecheck.cli.compare",
     "wavecheck.cli.crosscheck",

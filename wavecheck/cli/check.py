@@ -15,8 +15,8 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
-from wavecheck.capture.model import Capture
+from wavecheck.axes import AxisMap
+from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
 from wavecheck.cli._capture_args import (
     add_capture_arguments,
     capture_from_args,
@@ -26,12 +26,19 @@ from wavecheck.cli._reports import (
     Checked,
     add_report_arguments,
     axis_reports,
+    expand_captures,
     latency_ns,
     render_json_report,
     render_junit_report,
     render_text_report,
     run_checks,
     stepgen_config,
+)
+from wavecheck.cli._steps_args import (
+    add_steps_arguments,
+    check_steps_arguments,
+    steps_csv_path,
+    write_steps,
 )
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
 from wavecheck.drives.library import load_drive
@@ -41,6 +48,7 @@ from wavecheck.engine import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
+from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
@@ -77,57 +85,7 @@ def register(sub: Any) -> None:
         help="drive id from rules/ or a TOML file; AXIS=ID gives one axis its own drive "
         "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542)",
     )
-    p.add_argument(
-        "--map",
-        action="append",
-        default=[],
-        metavar="[AXIS.]ROLE=CH",
-        help="map roles to channels by name, index or the end of a hierarchical name "
-        "(step=STEP,dir=3, step=s2.step; repeatable); each role and each channel once; several "
-        "axes: --map x.step=5,x.dir=6 --map y.step=3,y.dir=4 (a role without an axis, e.g. "
-        "enable=EN, is shared). Without --map, channels are mapped from their waveforms when "
-        "that is unambiguous (see wavecheck info)",
-    )
-    p.add_argument(
-        "--invert",
-        action="append",
-        default=[],
-        metavar="[AXIS.]ROLE",
-        help="invert a role (repeatable; x.step for one axis)",
-    )
-    p.add_argument(
-        "--type",
-        action="append",
-        default=None,
-        metavar="N|AXIS=N",
-        help="LinuxCNC step type 0..15 (default: the drive's; 0 step/dir); AXIS=N for one axis",
-    )
-    p.add_argument(
-        "--user-step-type",
-        metavar="V,V,...",
-        help="state table for --type 15 (LinuxCNC user_step_type=, phase A = bit 0)",
-    )
-    p.add_argument(
-        "--dir-forward",
-        action="append",
-        default=None,
-        metavar="low|high|AXIS=low|high",
-        help="DIR level that means forward (default low: LinuxCNC and grbl drive DIR high for "
-        "negative moves); AXIS=high for one axis",
-    )
-    p.add_argument(
-        "--pulse-level",
-        choices=("high", "low"),
-        default="high",
-        help="level of the generator's step pulses at its output (default high, as LinuxCNC, "
-        "grbl, Marlin, Klipper and Smoothieware make them; --invert step says the drive sees "
-        "the other level)",
-    )
-    p.add_argument(
-        "--active-edge",
-        choices=("rising", "falling", "both"),
-        help="override the drive's active STEP edge",
-    )
+    add_axis_arguments(p)
     add_tuning_arguments(p)
     add_firmware_arguments(p)
     add_capture_arguments(p)
@@ -144,63 +102,8 @@ def register(sub: Any) -> None:
         f"JSON default {DEFAULT_VIOLATION_CAP}); the total is always given",
     )
     add_report_arguments(p)
+    add_steps_arguments(p)
     p.set_defaults(func=run)
-
-
-def _user_table(text: str | None) -> tuple[int, ...] | None:
-    if not text:
-        return None
-    try:
-        return tuple(int(v, 0) for v in text.replace(" ", "").split(",") if v)
-    except ValueError:
-        raise UsageError(
-            f"--user-step-type {text!r} is not a list of integers (e.g. --user-step-type 1,3,2,0)"
-        ) from None
-
-
-def _int_option(text: str, option: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise UsageError(f"{option} {text!r} is not a whole number (e.g. {option} 2)") from None
-
-
-def _forward(text: str) -> int:
-    if text not in ("low", "high"):
-        raise UsageError(f"--dir-forward {text!r}: give low or high")
-    return 1 if text == "high" else 0
-
-
-def _axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
-    """The axes of the run and a note on how they were found.
-
-    ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
-    ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
-    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
-    lists the candidates and the ``--map`` line to copy.
-    """
-    if args.map:
-        return parse_axes(args.map), []
-    if any(c.name.rsplit(".", 1)[-1].strip().lower() in ("step", "up", "phase-a") for c in capture.channels):
-        return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
-    from wavecheck.roles import propose
-
-    proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = "; ".join(
-            f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous
-        ) or "no STEP, UP/DOWN or phase channel found"
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
-        raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
-        )
-    single = len(proposal.axes) == 1
-    axes = [
-        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
-        for a in proposal.axes
-    ]
-    return axes, [f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}".rstrip()]
 
 
 def build_report(args: argparse.Namespace, path: str) -> Checked:
@@ -208,31 +111,25 @@ def build_report(args: argparse.Namespace, path: str) -> Checked:
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
     capture = capture_from_args(args, path, resolution=False)
-    axes, found = _axes_of(args, capture)
-    names = [a.name for a in axes]
-    drives = per_axis(args.drive, "--drive", names)
-    types = per_axis(args.type, "--type", names)
-    forward = per_axis(args.dir_forward, "--dir-forward", names)
-    inverts = split_invert(args.invert, names)
+    runs, found = axis_runs(args, capture)
     loaded: dict[str, Drive] = {}
-    for axis in axes:
-        if axis.name not in drives:
-            raise UsageError(f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)")
-        ref = drives[axis.name]
-        if ref not in loaded:
-            loaded[ref] = tune_drive(load_drive(ref), args.limit, args.margin)
+    for axis in runs:
+        if axis.drive is None:  # check's --drive is required; axis_runs gives every axis one
+            raise UsageError(f"--drive: axis {axis.name} has no drive")
+        if axis.drive not in loaded:
+            loaded[axis.drive] = tune_drive(load_drive(axis.drive), args.limit, args.margin)
     machine = check_machine(
         capture,
-        axes,
-        {a.name: loaded[drives[a.name]] for a in axes},
+        [AxisMap(a.name, a.roles) for a in runs],
+        {a.name: loaded[a.drive] for a in runs if a.drive is not None},
         resolution_from_args(args),  # exact, a fraction of a tick included
-        step_types={a: _int_option(t, "--type") for a, t in types.items()},
-        forward_levels={a: _forward(f) for a, f in forward.items()},
-        invert=inverts,
+        step_types={a.name: a.step_type for a in runs if a.step_type is not None},
+        forward_levels={a.name: a.forward_level for a in runs},
+        invert={a.name: a.invert for a in runs},
         active_edge=args.active_edge,
-        user_table=_user_table(args.user_step_type),
+        user_table=user_table(args),
         stepgen=stepgen_config(args),
-        pulse_level=1 if args.pulse_level == "high" else 0,
+        pulse_level=pulse_level(args),
         latency_ns=latency_ns(args),
     )
     for report in machine.axes:
@@ -260,4 +157,20 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
-    return run_checks(args, build_report, write_outputs)
+    check_steps_arguments(args)
+    if not args.steps_csv:
+        return run_checks(args, build_report, write_outputs)
+    patterns = args.capture if isinstance(args.capture, list) else [args.capture]
+    several = len(expand_captures(patterns)) > 1
+    used: set[str] = set()
+
+    def build_and_export(a: argparse.Namespace, path: str) -> Checked:
+        """:func:`build_report`, then the capture's steps to ``--steps-csv``."""
+        checked = build_report(a, path)
+        target = steps_csv_path(a.steps_csv, path, used) if several else a.steps_csv
+        reports = axis_reports(checked)
+        axes = [AxisSteps(r.axis, r.steps) for r in reports]
+        write_steps(a, target, axes, reports[0].capture.timebase)
+        return checked
+
+    return run_checks(args, build_and_export, write_outputs)

@@ -1,12 +1,14 @@
 """PNG plots of a report: timing diagrams at the worst places and histograms of every rule.
 
-The figure has two parts:
+The figure has three parts:
 
 - up to :data:`MAX_PLACES` timing diagrams, one per place: the mapped signals (STEP/DIR, UP/DOWN
   or the phases, at the drive's input, i.e. after any inversion) around a violation — the worst
   violation of each failing rule first, then the next worst — or, when nothing fails, around the
   smallest margin of each rule. The measured interval is drawn as an arrow and labelled, the
   rule's limit as a shaded span from the same start, so "too short" is visible at a glance;
+- position and step rate against time, reversals marked
+  (:func:`wavecheck.report.measure_plot.draw_motion`, as ``wavecheck measure`` draws them);
 - one histogram per rule of every measured interval, with the limit as a vertical line, so the
   whole capture's distance from the datasheet shows.
 
@@ -350,7 +352,8 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
     hist_rows = math.ceil(len(hist_rules) / hist_cols)
-    heights = [diag_h] * len(places) + [2.6] * hist_rows
+    motion = report.steps.count > 1  # position and step rate against time, reversals marked
+    heights = [diag_h] * len(places) + [2.4] * motion + [2.6] * hist_rows
     if not heights:
         heights = [1.0]
     fig = Figure(figsize=(11, sum(heights) + 1.0), dpi=dpi, layout="constrained")
@@ -367,10 +370,16 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
     for k, place in enumerate(places):
         ax = fig.add_subplot(grid[k, :])
         _draw_place(ax, report, place, k + 1)
+    if motion:
+        from wavecheck.report.measure_plot import draw_motion
+
+        pair = grid[len(places), :].subgridspec(1, 2)
+        ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
+        draw_motion(ax_pos, ax_rate, report.steps, report.capture.timebase, "steps")
     for k, r in enumerate(hist_rules):
         row, col = divmod(k, hist_cols)
         span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col
-        ax = fig.add_subplot(grid[len(places) + row, span])
+        ax = fig.add_subplot(grid[len(places) + motion + row, span])
         _draw_histogram(ax, r)
     if not places and not hist_rules:
         ax = fig.add_subplot(grid[0, :])

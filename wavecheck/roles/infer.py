@@ -182,8 +182,8 @@ class _Inference:
             axis = self.hints[d.index].axis
             # a DIR named with an axis (y_dir, "DIR (Y axis)") goes to the one STEP of that axis
             # when the waveform cannot tell its candidates apart
-            named = self.hints[d.index].fits("dir") and axis is not None
-            pool = good if good or not named else fits
+            by_name = self.hints[d.index].fits("dir") and axis is not None
+            pool = good if good or not by_name else fits
             same = [f for f in pool if axis is not None and self.hints[f.s.index].axis == axis]
             if len(same) == 1:
                 good = same

@@ -1,0 +1,214 @@
+"""The axes of a run, shared by ``check`` and ``measure``: mapping options → per-axis parameters.
+
+Options added by :func:`add_axis_arguments`: ``--map`` (``[AXIS.]ROLE=CH``), ``--invert``,
+``--type``, ``--user-step-type``, ``--dir-forward``, ``--pulse-level``, ``--active-edge``.
+:func:`axis_runs` turns them and an opened capture into one :class:`AxisRun` per axis (the
+syntax is :mod:`wavecheck.axes`); without ``--map`` the roles come from channel names or are
+inferred from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from typing import Any
+
+from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
+from wavecheck.capture.model import Capture
+from wavecheck.errors import UsageError
+
+__all__ = [
+    "AxisRun",
+    "add_axis_arguments",
+    "axes_of",
+    "axis_runs",
+    "pulse_level",
+    "user_table",
+]
+
+
+@dataclass(frozen=True)
+class AxisRun:
+    """What one axis of a run is checked or measured with.
+
+    Attributes:
+        name: the axis name (None: the unnamed single axis).
+        roles: role → channel as written (``--map``, or inferred); roles left out are mapped by
+            channel name (:func:`wavecheck.engine.auto_map`).
+        invert: roles to invert (``--invert`` for this axis, then those found with the roles).
+        step_type: LinuxCNC step type 0–15, None: the drive's (check) or the default (measure).
+        forward_level: the DIR level that means forward (0 low, 1 high).
+        drive: this axis's ``--drive`` value (None when the command takes no drive).
+    """
+
+    name: str | None
+    roles: dict[str, str]
+    invert: list[str]
+    step_type: int | None
+    forward_level: int
+    drive: str | None = None
+
+
+def add_axis_arguments(p: Any, *, drive: bool = True) -> None:
+    """Add the mapping options to ``p``; ``drive=False`` words ``--active-edge`` for a command
+    without a drive (``measure``: default rising)."""
+    p.add_argument(
+        "--map",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE=CH",
+        help="map roles to channels by name, index or the end of a hierarchical name "
+        "(step=STEP,dir=3, step=s2.step; repeatable); each role and each channel once; several "
+        "axes: --map x.step=5,x.dir=6 --map y.step=3,y.dir=4 (a role without an axis, e.g. "
+        "enable=EN, is shared). Without --map, channels are mapped from their waveforms when "
+        "that is unambiguous (see wavecheck info)",
+    )
+    p.add_argument(
+        "--invert",
+        action="append",
+        default=[],
+        metavar="[AXIS.]ROLE",
+        help="invert a role (repeatable; x.step for one axis)",
+    )
+    p.add_argument(
+        "--type",
+        action="append",
+        default=None,
+        metavar="N|AXIS=N",
+        help="LinuxCNC step type 0..15 (default: "
+        + ("the drive's" if drive else "found with the channels, else 0 step/dir or 1 up/down")
+        + "; 0 step/dir); AXIS=N for one axis",
+    )
+    p.add_argument(
+        "--user-step-type",
+        metavar="V,V,...",
+        help="state table for --type 15 (LinuxCNC user_step_type=, phase A = bit 0)",
+    )
+    p.add_argument(
+        "--dir-forward",
+        action="append",
+        default=None,
+        metavar="low|high|AXIS=low|high",
+        help="DIR level that means forward (default low: LinuxCNC and grbl drive DIR high for "
+        "negative moves); AXIS=high for one axis",
+    )
+    p.add_argument(
+        "--pulse-level",
+        choices=("high", "low"),
+        default="high",
+        help="level of the generator's step pulses at its output (default high, as LinuxCNC, "
+        "grbl, Marlin, Klipper and Smoothieware make them; --invert step says the drive sees "
+        "the other level)",
+    )
+    p.add_argument(
+        "--active-edge",
+        choices=("rising", "falling", "both"),
+        default=None if drive else "rising",
+        help="override the drive's active STEP edge"
+        if drive
+        else "the STEP edge that counts a step and starts DIR setup/hold (default rising; "
+        "falling for a drive that steps on it, e.g. the Gecko G202)",
+    )
+
+
+def user_table(args: argparse.Namespace) -> tuple[int, ...] | None:
+    """``--user-step-type`` as state values (None when not given)."""
+    text: str | None = args.user_step_type
+    if not text:
+        return None
+    try:
+        return tuple(int(v, 0) for v in text.replace(" ", "").split(",") if v)
+    except ValueError:
+        raise UsageError(
+            f"--user-step-type {text!r} is not a list of integers (e.g. --user-step-type 1,3,2,0)"
+        ) from None
+
+
+def pulse_level(args: argparse.Namespace) -> int:
+    """``--pulse-level``: 1 high, 0 low."""
+    return 1 if args.pulse_level == "high" else 0
+
+
+def _int_option(text: str, option: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise UsageError(f"{option} {text!r} is not a whole number (e.g. {option} 2)") from None
+
+
+def _forward(text: str) -> int:
+    if text not in ("low", "high"):
+        raise UsageError(f"--dir-forward {text!r}: give low or high")
+    return 1 if text == "high" else 0
+
+
+def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
+    """The axes of the run and a note on how they were found.
+
+    ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
+    ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
+    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
+    lists the candidates and the ``--map`` line to copy.
+    """
+    if args.map:
+        return parse_axes(args.map), []
+    if any(
+        c.name.rsplit(".", 1)[-1].strip().lower() in ("step", "up", "phase-a")
+        for c in capture.channels
+    ):
+        return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
+    from wavecheck.roles import propose
+
+    proposal = propose(capture)
+    if not proposal.unambiguous:
+        conflicts = (
+            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
+            or "no STEP, UP/DOWN or phase channel found"
+        )
+        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
+            f"give --map{hint}"
+        )
+    single = len(proposal.axes) == 1
+    axes = [
+        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
+        for a in proposal.axes
+    ]
+    found = f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}"
+    return axes, [found.rstrip()]
+
+
+def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun], list[str]]:
+    """Every axis of ``args`` on ``capture`` with its parameters, and the notes on how the axes
+    were found (see :func:`axes_of`). ``args.drive`` (when the command has one) must give every
+    axis a drive.
+
+    Raises:
+        UsageError: a malformed or unmatched per-axis option, an axis without a drive, a bad
+            ``--type`` or ``--dir-forward`` value, roles that cannot be inferred.
+    """
+    axes, found = axes_of(args, capture)
+    names = [a.name for a in axes]
+    has_drive = getattr(args, "drive", None) is not None
+    drives = per_axis(args.drive, "--drive", names) if has_drive else {}
+    types = per_axis(args.type, "--type", names)
+    forward = per_axis(args.dir_forward, "--dir-forward", names)
+    inverts = split_invert(args.invert, names)
+    runs = []
+    for axis in axes:
+        if has_drive and axis.name not in drives:
+            raise UsageError(f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)")
+        runs.append(
+            AxisRun(
+                name=axis.name,
+                roles=axis.roles,
+                invert=[*inverts[axis.name], *axis.invert],
+                step_type=_int_option(types[axis.name], "--type")
+                if axis.name in types
+                else axis.step_type,
+                forward_level=_forward(forward.get(axis.name, "low")),
+                drive=drives.get(axis.name),
+            )
+        )
+    return runs, found

@@ -1,0 +1,119 @@
+"""``wavecheck measure CAPTURE [--map …]``: the timing a scope user reads off, without a drive.
+
+Per axis: steps, reversals, and for every interval kind of the step type the count, min, max,
+mean, percentiles and where the extremes are, plus the step-rate range
+(:mod:`wavecheck.measure`; the intervals are ``check``'s). Text or ``--format json``
+(:mod:`wavecheck.report.measure`), ``--plot``/``--html`` with position, step rate and histograms,
+``--steps-csv`` with every step. Exit 0, or 2 for unusable input (nothing is judged).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
+from wavecheck.cli._capture_args import (
+    add_capture_arguments,
+    capture_from_args,
+    resolution_from_args,
+)
+from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, write_steps
+from wavecheck.measure import AxisSpec, Measurement, measure
+from wavecheck.output import atomic_write, output_file
+from wavecheck.progress import activate
+from wavecheck.report.measure import measurement_dict, render_measure_text
+from wavecheck.report.steps_csv import AxisSteps
+from wavecheck.verdict import EXIT_PASS
+
+__all__ = ["build_measurement", "register", "run"]
+
+
+def register(sub: Any) -> None:
+    """Add the ``measure`` subcommand."""
+    p = sub.add_parser(
+        "measure",
+        help="measure every interval and the steps of a capture, without a drive",
+        description="Measure CAPTURE per axis: steps, reversals, and for every interval kind "
+        "(high, low, period, DIR setup/hold, …) min, max, mean, percentiles and where the "
+        "extremes are, plus the step-rate range. No drive, no limits, no verdict. Exit 0, or 2 "
+        "for unusable input.",
+    )
+    p.add_argument("capture", metavar="CAPTURE", help="the capture (.sr, .vcd, or a sigrok-cli format)")
+    add_axis_arguments(p, drive=False)
+    add_capture_arguments(p)
+    p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    p.add_argument(  # output_file: checked before any work (wavecheck.output)
+        "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
+    )
+    out = p.add_argument_group("figures")
+    out.add_argument(
+        "--plot",
+        type=output_file,
+        metavar="FILE.png",
+        help="position and step rate against time per axis (reversals marked), and a histogram "
+        "of every interval kind (PNG)",
+    )
+    out.add_argument(
+        "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
+    )
+    add_steps_arguments(p)
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def build_measurement(args: argparse.Namespace) -> Measurement:
+    """Read the capture once and measure every axis of ``args`` (no output)."""
+    capture = capture_from_args(args, args.capture, resolution=False)
+    runs, found = axis_runs(args, capture)
+    m = measure(
+        capture,
+        [AxisSpec(r.name, r.roles, r.invert, r.step_type, r.forward_level) for r in runs],
+        resolution_from_args(args),
+        active_edge=args.active_edge,
+        user_table=user_table(args),
+        pulse_level=pulse_level(args),
+    )
+    m.notes[:0] = found
+    return m
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``wavecheck measure``; returns the exit code."""
+    check_steps_arguments(args)
+    with activate(f"reading {args.capture}", quiet=args.quiet, unit="bytes"):
+        m = build_measurement(args)
+    if args.format == "json":
+        text = json.dumps(measurement_dict(m), indent=2, ensure_ascii=False) + "\n"
+    else:
+        text = render_measure_text(m)
+    if args.output:
+        atomic_write(args.output, text)
+        steps = ", ".join(
+            f"{'' if a.name is None else a.name + ' '}{a.steps.count}" for a in m.axes
+        )
+        print(f"measured {len(m.axes)} axis/axes ({steps} steps); report written to {args.output}")
+    else:
+        sys.stdout.write(text)
+    if args.steps_csv:
+        write_steps(
+            args,
+            args.steps_csv,
+            [AxisSteps(a.name, a.steps) for a in m.axes],
+            m.capture.timebase,
+        )
+    png = None
+    if args.plot or args.html:
+        from wavecheck.report.measure_plot import render_measure_png
+
+        png = render_measure_png(m)
+    if args.plot:
+        assert png is not None
+        atomic_write(args.plot, png)
+    if args.html:
+        from wavecheck.report.measure import write_measure_html
+
+        write_measure_html(m, args.html, png)
+    return EXIT_PASS
