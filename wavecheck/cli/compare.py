@@ -1,19 +1,7 @@
 """``wavecheck compare CAPTURE GOLDEN``: a capture against a golden trace (e.g. made by stepgen).
 
-Both files are checked against the same drive; then compared are
-
-- the step count, the final position and every step's direction;
-- every step's time: step *i* of the capture against step *i* of the golden, after aligning both
-  on their first step (``--align first-step``, the default: a logic analyzer starts at an
-  arbitrary moment) or on their own time 0 (``--align none``); a step further than
-  ``--tolerance`` (default 2 µs) from its golden time is a difference;
-- the two rule tables: each rule's verdict, violations and smallest margin, and the change.
-
-Verdict: **fail** when the steps differ (count, final position, a direction, a time beyond the
-tolerance) or a rule is worse than in the golden (fails where the golden does not); else
-**indeterminate** when a rule is indeterminate where the golden passes; else **pass**. A golden
-that itself fails a rule (a golden of a bad configuration) is matched by a capture failing it
-too. Exit codes as for ``check``: 0 pass, 1 fail, 3 indeterminate, 2 unusable input.
+What is compared and how the verdict is reached: :mod:`wavecheck.compare`. Exit codes as for
+``check``: 0 pass, 1 fail, 3 indeterminate, 2 unusable input.
 
 Several axes: ``--map x.step=5,x.dir=6 --map y.step=3,y.dir=4`` for the capture and
 ``--golden-map x.step=…`` for the golden (default: the capture's axes, channel for channel);
