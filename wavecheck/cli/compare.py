@@ -30,7 +30,7 @@ from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
-from wavecheck.units import format_ns, format_time, json_number, parse_time
+from wavecheck.units import format_ns, format_time, json_number, option_ns
 from wavecheck.verdict import exit_code
 
 __all__ = ["register", "render_compare_json", "render_compare_text", "run"]
@@ -235,7 +235,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck compare``; returns the exit code."""
-    tol = parse_time(args.tolerance, default_unit="ns") * 10**9
+    tol = option_ns(args.tolerance, "--tolerance")
     if tol < 0:
         raise UsageError(f"--tolerance must not be negative, got {args.tolerance}")
     axes = parse_axes(args.map)

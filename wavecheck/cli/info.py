@@ -18,10 +18,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from fractions import Fraction
 from typing import Any
 
 from wavecheck.capture.model import Capture
-from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._capture_args import (
+    add_capture_arguments,
+    capture_from_args,
+    resolution_from_args,
+)
+from wavecheck.engine import resolve_resolution_ns
 from wavecheck.units import format_frequency, format_time, json_number
 
 __all__ = ["info_dict", "info_text", "register", "run"]
@@ -40,15 +46,17 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def info_dict(cap: Capture) -> dict[str, Any]:
-    """The JSON form of ``wavecheck info``."""
+def info_dict(cap: Capture, resolution_ns: Fraction | None = None) -> dict[str, Any]:
+    """The JSON form of ``wavecheck info`` (``resolution_ns``: the ``--resolution`` check would
+    use, exact; default the capture's own)."""
     timed = cap.time_known
+    res_ns = cap.resolution_ns if resolution_ns is None else resolution_ns
     return {
         "path": cap.path,
         "format": cap.format,
         "samplerate_hz": None if cap.samplerate_hz is None else json_number(cap.samplerate_hz),
         "tick_ns": json_number(cap.timebase.tick_ns) if timed else None,
-        "resolution_ns": json_number(cap.resolution_ns) if timed else None,
+        "resolution_ns": json_number(res_ns) if timed else None,
         "duration_s": float(cap.duration_s) if timed else None,
         "samples": cap.end - cap.start,
         "time_known": timed,
@@ -67,10 +75,11 @@ def info_dict(cap: Capture) -> dict[str, Any]:
     }
 
 
-def info_text(cap: Capture) -> str:
-    """The text form of ``wavecheck info``."""
+def info_text(cap: Capture, resolution_ns: Fraction | None = None) -> str:
+    """The text form of ``wavecheck info`` (``resolution_ns`` as for :func:`info_dict`)."""
     rate = "none stated" if cap.samplerate_hz is None else format_frequency(cap.samplerate_hz)
-    res = "exact (0)" if cap.resolution_ticks == 0 else format_time(cap.resolution_ns / 10**9)
+    res_ns = cap.resolution_ns if resolution_ns is None else resolution_ns
+    res = "exact (0)" if res_ns == 0 else format_time(res_ns / 10**9)
     if cap.time_known:
         timing = [
             f"tick        {format_time(cap.timebase.tick_s)}"
@@ -121,16 +130,18 @@ def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck info``: the capture, then the roles its waveforms suggest."""
     from wavecheck.roles import propose
 
-    cap = capture_from_args(args, args.capture, require_time=False)
+    cap = capture_from_args(args, args.capture, require_time=False, resolution=False)
+    seconds = resolution_from_args(args)  # kept exact, as check keeps it
+    res_ns = None if seconds is None else resolve_resolution_ns(cap, seconds)[0]
     proposal = propose(cap) if cap.time_known else None
     if args.format == "json":
-        data = info_dict(cap)
+        data = info_dict(cap, res_ns)
         if proposal is not None:
             data["roles"] = {**proposal.as_dict(), "map_args": proposal.map_args()}
         json.dump(data, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        print(info_text(cap))
+        print(info_text(cap, res_ns))
         if proposal is not None:
             print()
             print("proposed roles (from the waveforms; names only help):")

@@ -128,3 +128,12 @@ def test_golden_mapping_error_hints_golden_map(golden: Path, tmp_path: Path, cap
                  "--golden-map", "step=NOPE"])
     err = capsys.readouterr().err
     assert code == 2 and "--golden-map" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("tolerance", ["2000", "2 kHz"])
+def test_tolerance_needs_a_time_with_its_unit(golden: Path, capsys, tolerance: str) -> None:
+    """Issue 12's units policy: a bare number is refused with the fix spelled out."""
+    assert main(["compare", str(golden), str(golden), "--drive", "gecko-g202",
+                 "--tolerance", tolerance]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--tolerance" in err[0]

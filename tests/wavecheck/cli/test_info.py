@@ -172,3 +172,16 @@ def test_info_proposes_roles_with_evidence(grbl_sr, smoothie_sr, capsys) -> None
     assert main(["info", str(smoothie_sr), "--format", "json"]) == 0
     roles = json.loads(capsys.readouterr().out)["roles"]
     assert roles["map_args"] == "--map a.step=3,a.dir=4 --map b.step=5,b.dir=6"
+
+
+def test_info_shows_the_exact_resolution_check_uses(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """Issue 12: --resolution 100ns on a 1 us timescale stays 100 ns (info showed it rounded up
+    to one tick, 1 us, while check used 100 ns)."""
+    import json
+
+    from tests.conftest import write_vcd
+    from wavecheck.cli import main
+
+    vcd = write_vcd(tmp_path / "t.vcd", {"step": (0, [10, 12])}, timescale="1 us", end=20)
+    assert main(["info", str(vcd), "--resolution", "100ns", "--format", "json"]) == 0
+    assert json.loads(capsys.readouterr().out)["resolution_ns"] == 100
