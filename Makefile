@@ -62,6 +62,9 @@ demo: setup
 	  .venv/bin/wavecheck check $(GRBL) --drive leadshine-dm542 --map 'step=STEP (Y axis)'; \
 	fi
 	@echo
+	@echo "== 6. a whole machine in one run: two axes, roles told from the channels, each axis checked =="
+	.venv/bin/wavecheck check captures/examples/two-axis.vcd --drive gecko-g202 || test $$? -eq 1
+	@echo
 	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
 test: setup
