@@ -25,7 +25,7 @@ from wavecheck.errors import CaptureError, UsageError
 
 __all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
 
-_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv"}
+_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
 _BY_EXTENSION = {
     ".sr": "sr",
     ".vcd": "vcd",
@@ -37,6 +37,8 @@ _BY_EXTENSION = {
 }
 _ZIP_MAGIC = b"PK\x03\x04"
 _GHW_MAGIC = b"GHDLwave\n"
+#: Saleae Logic 2's binary export (wavecheck.capture.saleae_binary.MAGIC; not imported: numpy).
+_SALEAE_MAGIC = b"<SALEAE>"
 #: An FST file starts with its header block: type 0 and the block's length, 329, big-endian.
 _FST_MAGIC = b"\x00" + (329).to_bytes(8, "big")
 _SNIFF_BYTES = 4096
@@ -55,6 +57,10 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     if not p.exists():
         raise CaptureError(path, None, "no such file")
     if p.is_dir():
+        from wavecheck.capture.saleae_binary import holds_export
+
+        if holds_export(p):
+            return "saleae-bin"
         raise CaptureError(path, None, "is a folder, not a capture file")
     try:
         with open(p, "rb") as f:
@@ -76,6 +82,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         return "sr"
     if head.removeprefix(b"\xef\xbb\xbf").startswith(SALEAE_CSV_HEADER):
         return "saleae-csv"
+    if head.startswith(_SALEAE_MAGIC):
+        return "saleae-bin"
     if head.startswith(_GHW_MAGIC):
         return "ghw"
     if head.startswith(_FST_MAGIC):
@@ -88,8 +96,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(
             path,
             None,
-            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, or a sigrok-cli format such "
-            "as csv, binary, chronovu-la8, logicport)",
+            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, saleae-bin, "
+            "binary:numchannels=N, or a sigrok-cli format such as csv, chronovu-la8, logicport)",
         )
     return _BY_EXTENSION[ext]
 
@@ -253,7 +261,7 @@ def open_capture(
         )
     fmt = input_format.strip() if input_format else detect_format(path)
     name = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
-    if input_format:
+    if input_format and not (name == "saleae-bin" and Path(path).is_dir()):
         detect_path_exists(path)
     options = ":" in fmt
     if name == "sr" and options:
@@ -275,6 +283,10 @@ def open_capture(
             channel_names=channel_names,
             require_time=require_time,
         )
+    if name == "saleae-bin":
+        from wavecheck.capture.saleae_binary import read_saleae_binary
+
+        return read_saleae_binary(path, samplerate=samplerate, resolution_s=resolution_s)
     if name == "saleae-csv":
         from wavecheck.capture.saleae import read_saleae_csv
 
