@@ -1,7 +1,9 @@
 """Open any capture: pick the reader from ``--input-format``, the file's content, or its extension.
 
-``.sr``, VCD, FST and GHW are read natively (:mod:`wavecheck.capture.wellen`); every other format sigrok-cli knows (csv, binary,
-chronovu-la8, logicport, …) is converted by sigrok-cli to a temporary ``.sr`` first.
+``.sr``, VCD, FST and GHW (:mod:`wavecheck.capture.wellen`), raw binary samples
+(:mod:`wavecheck.capture.binary`, sigrok-cli's ``-O binary``) and Saleae Logic 2 exports are read
+natively; every other format sigrok-cli knows (csv, chronovu-la8, logicport, …) is converted by
+sigrok-cli to a temporary ``.sr`` first.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import shutil
 import stat
 import sys
 import tempfile
+from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -22,7 +25,7 @@ from wavecheck.errors import CaptureError, UsageError
 
 __all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
 
-_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv"}
+_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
 _BY_EXTENSION = {
     ".sr": "sr",
     ".vcd": "vcd",
@@ -34,6 +37,8 @@ _BY_EXTENSION = {
 }
 _ZIP_MAGIC = b"PK\x03\x04"
 _GHW_MAGIC = b"GHDLwave\n"
+#: Saleae Logic 2's binary export (wavecheck.capture.saleae_binary.MAGIC; not imported: numpy).
+_SALEAE_MAGIC = b"<SALEAE>"
 #: An FST file starts with its header block: type 0 and the block's length, 329, big-endian.
 _FST_MAGIC = b"\x00" + (329).to_bytes(8, "big")
 _SNIFF_BYTES = 4096
@@ -52,6 +57,10 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     if not p.exists():
         raise CaptureError(path, None, "no such file")
     if p.is_dir():
+        from wavecheck.capture.saleae_binary import holds_export
+
+        if holds_export(p):
+            return "saleae-bin"
         raise CaptureError(path, None, "is a folder, not a capture file")
     try:
         with open(p, "rb") as f:
@@ -73,6 +82,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         return "sr"
     if head.removeprefix(b"\xef\xbb\xbf").startswith(SALEAE_CSV_HEADER):
         return "saleae-csv"
+    if head.startswith(_SALEAE_MAGIC):
+        return "saleae-bin"
     if head.startswith(_GHW_MAGIC):
         return "ghw"
     if head.startswith(_FST_MAGIC):
@@ -85,8 +96,8 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
         raise CaptureError(
             path,
             None,
-            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, or a sigrok-cli format such "
-            "as csv, binary, chronovu-la8, logicport)",
+            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, saleae-bin, "
+            "binary:numchannels=N, or a sigrok-cli format such as csv, chronovu-la8, logicport)",
         )
     return _BY_EXTENSION[ext]
 
@@ -143,11 +154,13 @@ def _open_stream(
     resolution_s: Fraction | None,
     input_format: str | None,
     require_time: bool,
+    channel_names: Sequence[str] | None,
 ) -> Capture:
     """Read a capture from standard input or a pipe without losing what format detection read.
 
-    The first bytes are sniffed and then handed on: a VCD is read from the stream itself (held
-    whole only as far as the VCD reader holds any file); a ``.sr`` (a zip, which needs seeking)
+    The first bytes are sniffed and then handed on: a VCD and raw binary samples are read from
+    the stream itself (a VCD held whole only as far as the VCD reader holds any file; raw
+    samples one chunk at a time); a ``.sr`` (a zip, which needs seeking)
     or a sigrok-cli format is copied to a temporary file first. Messages name ``path`` (``-``
     is named ``<stdin>``).
     """
@@ -170,6 +183,18 @@ def _open_stream(
             from wavecheck.capture.vcd import read_vcd
 
             return read_vcd(name, samplerate=samplerate, resolution_s=resolution_s, source=stream)
+        if kind == "binary":
+            from wavecheck.capture.binary import read_binary
+
+            return read_binary(
+                stream,
+                fmt,
+                name=name,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                channel_names=channel_names,
+                require_time=require_time,
+            )
         suffix = ".sr" if kind == "sr" else f".{kind}"
         with tempfile.TemporaryDirectory(prefix="wavecheck-stdin-") as tmp:
             spool = Path(tmp) / f"input{suffix}"
@@ -200,6 +225,7 @@ def open_capture(
     resolution_s: Fraction | None = None,
     input_format: str | None = None,
     require_time: bool = True,
+    channel_names: Sequence[str] | None = None,
 ) -> Capture:
     """Read a capture file into a :class:`Capture`; ``-`` (or a pipe such as ``/dev/stdin``)
     is read from standard input, its format detected without losing the bytes sniffed.
@@ -214,6 +240,8 @@ def open_capture(
             with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
         require_time: with False, a file that states no sample rate is read anyway, untimed
             (:attr:`Capture.time_known` False: counts in samples; for ``wavecheck info``).
+        channel_names: names for raw binary samples' channels 0, 1, … (default sigrok-cli's
+            ``0``, ``1``, …); other formats name their own channels.
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
@@ -229,10 +257,11 @@ def open_capture(
             resolution_s=resolution_s,
             input_format=input_format,
             require_time=require_time,
+            channel_names=channel_names,
         )
     fmt = input_format.strip() if input_format else detect_format(path)
     name = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
-    if input_format:
+    if input_format and not (name == "saleae-bin" and Path(path).is_dir()):
         detect_path_exists(path)
     options = ":" in fmt
     if name == "sr" and options:
@@ -243,6 +272,21 @@ def open_capture(
         return read_sr(
             path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
         )
+    if name == "binary":
+        from wavecheck.capture.binary import read_binary
+
+        return read_binary(
+            path,
+            fmt,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            channel_names=channel_names,
+            require_time=require_time,
+        )
+    if name == "saleae-bin":
+        from wavecheck.capture.saleae_binary import read_saleae_binary
+
+        return read_saleae_binary(path, samplerate=samplerate, resolution_s=resolution_s)
     if name == "saleae-csv":
         from wavecheck.capture.saleae import read_saleae_csv
 

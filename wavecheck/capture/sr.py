@@ -403,6 +403,9 @@ class _EdgeFinder:
         return np.concatenate(parts).astype(np.int64, copy=False)
 
 
+EdgeFinder = _EdgeFinder  # public: capture/binary.py scans raw samples with it
+
+
 def _grow(buf: npt.NDArray[np.bool_], size: int) -> npt.NDArray[np.bool_]:
     """``buf`` if it holds ``size`` items, else a larger one (reused from block to block)."""
     return buf if len(buf) >= size else np.empty(size, dtype=bool)

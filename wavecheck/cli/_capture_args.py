@@ -40,6 +40,12 @@ def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
         help="sr, vcd, or a sigrok-cli input format with options (csv, binary:numchannels=4, "
         "chronovu-la8, logicport, ...); default: detected",
     )
+    group.add_argument(
+        "--channels",
+        metavar="NAMES",
+        help="names of raw binary samples' channels, bit 0 first, comma-separated "
+        "(e.g. EN,STEP,DIR); default sigrok-cli's 0, 1, ...",
+    )
 
 
 def resolution_from_args(args: argparse.Namespace) -> Fraction | None:
@@ -82,4 +88,15 @@ def capture_from_args(
         resolution_s=resolution_s if resolution else None,
         input_format=getattr(args, "input_format", None),
         require_time=require_time,
+        channel_names=_channel_names(getattr(args, "channels", None)),
     )
+
+
+def _channel_names(text: str | None) -> list[str] | None:
+    """``--channels "EN,STEP (Y axis)"`` → the names, stripped (None when not given)."""
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",")]
+    if any(not n for n in names):
+        raise UsageError(f"--channels {text!r}: an empty name (give NAME,NAME,...)")
+    return names

@@ -5,9 +5,13 @@ Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--
 ``--hal FILE`` (repeatable), ``--channel N``, ``--latency J`` for the ``config`` and
 ``latency_safe`` max step rates.
 
-Several captures (``wavecheck check a.sr b.vcd 'runs/*.sr'``): each is checked on its own; a
-capture that cannot be read is reported (one line on stderr) and the others go on. stdout gets
-each text report and then one summary line per capture; the exit code is the worst one
+Several captures (``wavecheck check a.sr b.vcd 'runs/*.sr' -j N``): each is checked on its own,
+spread over N worker processes (default: the usable cores); a capture that cannot be read is
+reported (one line on stderr) and the others go on. Each summary line prints as its capture
+finishes (stdout with ``-o``, else stderr when it is a terminal); only what the outputs need is
+kept per capture (its summary and its piece of the document, never the report), and the
+document lists the captures in input order: stdout gets each text report and then one summary
+line per capture; the exit code is the worst one
 (2 unusable > 1 fail > 3 indeterminate > 0 pass). JSON becomes ``{"reports": [...], "errors":
 [...], "verdict", "exit_code"}``; JUnit has one ``testsuite`` per capture; the HTML page a section
 per capture; ``--plot``/``--gtkw`` write one file per capture, named ``FILE-<capture stem>.png``.
@@ -21,7 +25,8 @@ import glob
 import json
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -65,6 +70,16 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         metavar="FILE.gtkw",
         help="GTKWave save file with markers at the worst violations (a non-VCD capture is "
         "written as FILE.vcd beside it)",
+    )
+    out.add_argument(
+        "-j",
+        "--jobs",
+        type=int,
+        metavar="N",
+        help="several captures: check them in N processes (default: the cores; 1: in this "
+        "process). Each summary line prints as its capture finishes (to stdout with -o, else to "
+        "stderr on a terminal), so their order may vary; the report (text, JSON, JUnit) lists "
+        "the captures in input order. --plot, --gtkw, --html and --steps-csv run in one process",
     )
     out.add_argument(
         "-q", "--quiet", action="store_true", help="no progress bar (it is off anyway when "
@@ -273,6 +288,124 @@ def _side_outputs(
         )
 
 
+def _jobs(args: argparse.Namespace, count: int) -> int:
+    """Worker processes for ``count`` captures: ``-j N``, default the usable cores; 1 (in this
+    process) when per-capture files are asked for (their names follow the input order) or the
+    HTML page needs every report."""
+    jobs = getattr(args, "jobs", None)
+    if jobs is not None and jobs < 1:
+        raise UsageError(f"-j/--jobs must be 1 or more, got {jobs}")
+    if jobs is None:
+        try:
+            jobs = len(os.sched_getaffinity(0))
+        except AttributeError:  # pragma: no cover - not Linux
+            jobs = os.cpu_count() or 1
+    if args.plot or args.gtkw or args.html or getattr(args, "steps_csv", None):
+        return 1
+    return max(1, min(jobs, count))
+
+
+@dataclass
+class _Outcome:
+    """What the outputs need of one capture of several (never the report itself, so memory
+    does not grow with the number of captures): its summary line, exit code and verdict, and
+    the piece of the ``--format`` document (text report, JSON dict, or JUnit XML)."""
+
+    index: int
+    path: str
+    summary: str
+    code: int
+    verdict: str | None = None
+    piece: Any = None
+    error: str | None = None
+    report: Checked | None = None  # only for the side outputs (in-process runs)
+
+
+_WORKER: tuple[argparse.Namespace, Callable[[argparse.Namespace, str], Checked], bool] | None = None
+
+
+def _init_worker(
+    args: argparse.Namespace,
+    build_report: Callable[[argparse.Namespace, str], Checked],
+    keep: bool,
+) -> None:
+    global _WORKER
+    _WORKER = (args, build_report, keep)
+
+
+def _piece(args: argparse.Namespace, checked: Checked) -> Any:
+    if args.format == "json":  # rendered here (in the worker), nested in "reports": [ … ]
+        text = json.dumps(_dict(checked, args), indent=2, ensure_ascii=False)
+        return text.replace("\n", "\n" + _NESTED)
+    if args.format == "junit":
+        from wavecheck.report.junit import render_junit
+
+        return render_junit(axis_reports(checked))
+    return render_text_report(checked, args)
+
+
+def _check_one(index: int, path: str) -> _Outcome:
+    """Check one capture of several (in a worker process, or in this one)."""
+    assert _WORKER is not None
+    args, build_report, keep = _WORKER
+    try:
+        with activate(f"reading {path}", quiet=args.quiet or not keep, unit="bytes"):
+            checked = build_report(args, path)
+    except WavecheckError as err:
+        text = str(err)
+        line = f"{'ERROR':<13} {text if text.startswith(path) else f'{path}: {text}'}"
+        return _Outcome(index, path, line, err.exit_code, error=text)
+    return _Outcome(
+        index,
+        path,
+        summary_line(checked),
+        checked.exit_code,
+        checked.verdict,
+        _piece(args, checked),
+        report=checked if keep else None,
+    )
+
+
+def _outcomes(
+    args: argparse.Namespace,
+    build_report: Callable[[argparse.Namespace, str], Checked],
+    paths: list[str],
+    jobs: int,
+) -> Iterator[_Outcome]:
+    """Every capture's outcome, as each finishes (in input order with one job)."""
+    if jobs == 1:
+        _init_worker(args, build_report, True)
+        for k, path in enumerate(paths):
+            yield _check_one(k, path)
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else None)
+    # a few captures per task: one task per capture costs more in messages than a small
+    # capture's check; several tasks per worker keep the load even
+    size = max(1, min(_MAX_BATCH, len(paths) // (jobs * 4)))
+    batches = [list(range(k, min(k + size, len(paths)))) for k in range(0, len(paths), size)]
+    with ProcessPoolExecutor(
+        jobs, mp_context=context, initializer=_init_worker, initargs=(args, build_report, False)
+    ) as pool:
+        futures = [pool.submit(_check_batch, [(k, paths[k]) for k in b]) for b in batches]
+        for future in as_completed(futures):
+            yield from future.result()
+
+
+#: A report's indentation inside ``{"reports": [ … ]}`` (json.dumps with indent=2).
+_NESTED = " " * 4
+
+#: The most captures a worker checks per task (their summary lines print when the task ends).
+_MAX_BATCH = 16
+
+
+def _check_batch(batch: list[tuple[int, str]]) -> list[_Outcome]:
+    return [_check_one(k, path) for k, path in batch]
+
+
 def run_checks(
     args: argparse.Namespace,
     build_report: Callable[[argparse.Namespace, str], Checked],
@@ -281,7 +414,9 @@ def run_checks(
     """Check every capture of ``args.capture`` and write every requested output.
 
     One capture: ``write_outputs`` (the single-report behaviour) and the side outputs; an
-    unusable input raises (exit 2). Several: see the module docstring.
+    unusable input raises (exit 2). Several: see the module docstring; spread over ``-j``
+    worker processes, each summary line printed as its capture finishes (to stdout with ``-o``,
+    else to a terminal's stderr), the documents in input order at the end.
     """
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]
     paths = expand_captures(patterns)
@@ -293,59 +428,71 @@ def run_checks(
         write_outputs(args, report)
         _side_outputs(args, [report], [])
         return report.exit_code
-    reports: list[Checked] = []
-    errors: list[tuple[str, str]] = []
-    codes: list[int] = []
-    for path in paths:
-        try:
-            with activate(f"reading {path}", quiet=args.quiet, unit="bytes"):
-                reports.append(build_report(args, path))
-            codes.append(reports[-1].exit_code)
-        except WavecheckError as err:
-            print(f"wavecheck: error: {err}", file=sys.stderr)
-            errors.append((path, str(err)))
-            codes.append(err.exit_code)
-    code = worst_exit_code(codes)
-    _write_many(args, reports, errors, code)
-    _side_outputs(args, reports, errors)
+    jobs = _jobs(args, len(paths))
+    stream = sys.stdout if args.output else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+    done: list[_Outcome | None] = [None] * len(paths)
+    for outcome in _outcomes(args, build_report, paths, jobs):
+        if outcome.error is not None:
+            print(f"wavecheck: error: {outcome.error}", file=sys.stderr, flush=True)
+        if stream is not None:
+            print(outcome.summary, file=stream, flush=True)
+        done[outcome.index] = outcome
+    outcomes = [o for o in done if o is not None]
+    code = worst_exit_code([o.code for o in outcomes])
+    _write_many(args, outcomes, code)
+    if args.plot or args.gtkw or args.html:
+        reports = [o.report for o in outcomes if o.report is not None]
+        errors = [(o.path, o.error) for o in outcomes if o.error is not None]
+        _side_outputs(args, reports, errors)
     return code
 
 
-def _write_many(
-    args: argparse.Namespace, reports: list[Checked], errors: list[tuple[str, str]], code: int
-) -> None:
-    summary = [summary_line(r) for r in reports] + [
-        f"{'ERROR':<13} {e if e.startswith(p) else f'{p}: {e}'}" for p, e in errors
-    ]
+def _write_many(args: argparse.Namespace, outcomes: list[_Outcome], code: int) -> None:
+    """The ``--format`` document of several captures, in input order: to ``-o`` (the summary
+    lines were printed as the captures finished) or stdout."""
+    ok = [o for o in outcomes if o.error is None]
+    errors = [(o.path, o.error) for o in outcomes if o.error is not None]
     if args.format == "json":
-        verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
+        verdict: str = overall_verdict([str(o.verdict) for o in ok]) if ok else "unchecked"  # type: ignore[arg-type]
         if errors:
             verdict = "error"
-        text = (
-            json.dumps(
-                {
-                    "reports": [_dict(r, args) for r in reports],
-                    "errors": [{"path": p, "error": e} for p, e in errors],
-                    "verdict": verdict,
-                    "exit_code": code,
-                },
-                indent=2,
-                ensure_ascii=False,
-            )
-            + "\n"
-        )
+        doc = {
+            "reports": [],
+            "errors": [{"path": p, "error": e} for p, e in errors],
+            "verdict": verdict,
+            "exit_code": code,
+        }
+        text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
+        if ok:  # each report was rendered by its worker: json.dumps's own layout, spliced in
+            joined = f",\n{_NESTED}".join(o.piece for o in ok)
+            text = text.replace('"reports": []', f'"reports": [\n{_NESTED}{joined}\n  ]', 1)
     elif args.format == "junit":
-        from wavecheck.report.junit import Unreadable, render_junit
-
-        text = render_junit(
-            [r for c in reports for r in axis_reports(c)], [Unreadable(p, e) for p, e in errors]
-        )
+        text = _join_junit([o.piece for o in ok], errors)
     else:
-        parts = [f"== {r.capture.path} ==\n{render_text_report(r, args)}" for r in reports]
+        summary = [o.summary for o in ok] + [o.summary for o in outcomes if o.error is not None]
+        parts = [f"== {o.path} ==\n{o.piece}" for o in ok]
         text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
     if args.output:
         atomic_write(args.output, text)
-        print("\n".join(summary))
         print(f"report written to {args.output}")
     else:
         sys.stdout.write(text)
+
+
+def _join_junit(documents: list[str], errors: list[tuple[str, str]]) -> str:
+    """One JUnit document of every capture's suites (input order), then the unreadable ones."""
+    import xml.etree.ElementTree as ET
+
+    from wavecheck.report.junit import Unreadable, render_junit
+
+    root = ET.fromstring(render_junit([], [Unreadable(p, e) for p, e in errors]))
+    unreadable = list(root)
+    for suite in unreadable:
+        root.remove(suite)
+    for doc in documents:
+        root.extend(ET.fromstring(doc).findall("testsuite"))
+    root.extend(unreadable)
+    for key in ("tests", "failures", "errors", "skipped"):
+        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -5,6 +5,11 @@ mean, percentiles and where the extremes are, plus the step-rate range
 (:mod:`wavecheck.measure`; the intervals are ``check``'s). Text or ``--format json``
 (:mod:`wavecheck.report.measure`), ``--plot``/``--html`` with position, step rate and histograms,
 ``--steps-csv`` with every step. Exit 0, or 2 for unusable input (nothing is judged).
+
+``--firmware FILE`` (issue 15) compares each axis's measured minima with the configuration that
+made the capture, as ``check --firmware`` does (:func:`wavecheck.firmware.capture.firmware_check`):
+shortest pulse vs the configured pulse, DIR setup vs the configured delay, highest rate vs the
+configured maximum; a capture that violates its own configuration exits 1.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
 from wavecheck.cli._capture_args import (
@@ -21,12 +26,16 @@ from wavecheck.cli._capture_args import (
     resolution_from_args,
 )
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, write_steps
+from wavecheck.cli.config import add_firmware_arguments, check_firmware
 from wavecheck.measure import AxisSpec, Measurement, measure
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
 from wavecheck.report.measure import measurement_dict, render_measure_text
 from wavecheck.report.steps_csv import AxisSteps
-from wavecheck.verdict import EXIT_PASS
+from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
+
+if TYPE_CHECKING:
+    from wavecheck.firmware.capture import FirmwareCheck
 
 __all__ = ["build_measurement", "register", "run"]
 
@@ -43,6 +52,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument("capture", metavar="CAPTURE", help="the capture (.sr, .vcd, or a sigrok-cli format)")
     add_axis_arguments(p, drive=False)
+    add_firmware_arguments(p)
     add_capture_arguments(p)
     p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
@@ -80,15 +90,38 @@ def build_measurement(args: argparse.Namespace) -> Measurement:
     return m
 
 
+def firmware_checks(args: argparse.Namespace, m: Measurement) -> list[FirmwareCheck]:
+    """``--firmware``: every measured axis against the configured axis (``--axis``, default the
+    first), compared as ``check --firmware`` compares a report (empty without ``--firmware``)."""
+    if not args.firmware:
+        return []
+    from wavecheck.firmware.capture import observed_in_measurement
+
+    return [check_firmware(args, observed_in_measurement(a, m.resolution_ns)) for a in m.axes]
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck measure``; returns the exit code."""
     check_steps_arguments(args)
     with activate(f"reading {args.capture}", quiet=args.quiet, unit="bytes"):
         m = build_measurement(args)
+    own = firmware_checks(args, m)
     if args.format == "json":
-        text = json.dumps(measurement_dict(m), indent=2, ensure_ascii=False) + "\n"
+        doc = measurement_dict(m)
+        if own:
+            from wavecheck.firmware.render import firmware_check_dict
+
+            for axis, fc in zip(doc["axes"], own, strict=True):
+                axis["firmware"] = firmware_check_dict(fc)
+        text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
     else:
         text = render_measure_text(m)
+        if own:
+            from wavecheck.firmware.render import firmware_check_lines
+
+            for a, fc in zip(m.axes, own, strict=True):
+                head = [] if a.name is None else [f"axis {a.name}:"]
+                text += "\n" + "\n".join([*head, *firmware_check_lines(fc)]) + "\n"
     if args.output:
         atomic_write(args.output, text)
         steps = ", ".join(
@@ -116,4 +149,4 @@ def run(args: argparse.Namespace) -> int:
         from wavecheck.report.measure import write_measure_html
 
         write_measure_html(m, args.html, png)
-    return EXIT_PASS
+    return EXIT_FAIL if any(fc.verdict == "fail" for fc in own) else EXIT_PASS

@@ -72,14 +72,39 @@ def search_path() -> list[Path]:
     return [*extra, rules_dir()]
 
 
+#: Per process: each drive file parsed once while its bytes are unchanged (``check`` of many
+#: captures loads the same drive for every one; a file's mtime can stay the same across a quick
+#: rewrite, so the bytes are compared), and each search path listed once while no folder of it
+#: changes (mtime). A :class:`Drive` is immutable. A user file with ``extends`` is not cached
+#: (its base may change apart from it).
+_DRIVES: dict[tuple[str, bool], tuple[bytes, Drive]] = {}
+_LISTINGS: dict[tuple[tuple[str, int], ...], dict[str, Path]] = {}
+
+
+def _mtime(path: Path) -> int:
+    """``path``'s modification time in ns (-1 when it cannot be stat'ed)."""
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return -1
+
+
 def _rule_files() -> dict[str, Path]:
-    """id → file over the search path (first directory wins)."""
+    """id → file over the search path (first directory wins); listed again only when a folder
+    of the search path changes (a file added, removed or renamed changes its mtime)."""
+    folders = search_path()
+    key = tuple((str(f), _mtime(f)) for f in folders)
+    cached = _LISTINGS.get(key)
+    if cached is not None:
+        return dict(cached)
     found: dict[str, Path] = {}
-    for folder in search_path():
+    for folder in folders:
         if folder.is_dir():
             for path in sorted(folder.glob("*.toml")):
                 found.setdefault(path.stem, path)
-    return found
+    _LISTINGS.clear()
+    _LISTINGS[key] = found
+    return dict(found)
 
 
 def list_drives() -> list[Drive]:
@@ -143,6 +168,22 @@ def _read_toml(path: Path) -> dict[str, Any]:
 
 
 def _load_file(path: Path, user: bool = False) -> Drive:
+    """The drive of ``path``, parsed once per process while the file's bytes are unchanged."""
+    try:
+        raw = path.read_bytes()
+    except OSError:
+        return _parse_file(path, user)  # its error, as without the cache
+    key = (os.path.abspath(path), user)
+    hit = _DRIVES.get(key)
+    if hit is not None and hit[0] == raw:
+        return hit[1]
+    drive = _parse_file(path, user)
+    if not (user and b"extends" in raw):
+        _DRIVES[key] = (raw, drive)
+    return drive
+
+
+def _parse_file(path: Path, user: bool) -> Drive:
     data = _read_toml(path)
     if user:
         data = _resolve_extends(path, data, ())

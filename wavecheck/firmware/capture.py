@@ -1,29 +1,96 @@
-"""Did the configured timing take effect? A checked capture against its own firmware's guarantee.
+"""Did the configured timing take effect? A capture against its own firmware's guarantee.
 
-:func:`firmware_check` compares a :class:`~wavecheck.report.model.Report` with an axis's
+:func:`firmware_check` compares what a capture shows of one axis (:class:`Observed`: from
+``check``'s :class:`~wavecheck.report.model.Report`, or from ``measure``'s
+:class:`~wavecheck.measure.AxisMeasurement` without a drive) with an axis's
 :class:`~wavecheck.firmware.model.GeneratorGuarantee`: the shortest measured pulse vs the configured
 pulse, the shortest DIR setup seen vs the configured delay (to the drive's active edge: plus the
 pulse when that edge ends the pulse), in both-edge mode the shortest space too, and the highest
 step rate vs the configured maximum. A capture shorter than its own configuration (by more than
-the capture's resolution) is a finding of its own, apart from the drive's rules. Only intervals
-the drive's rules measured are compared (a rule the drive states no figure for is not measured).
+the capture's resolution) is a finding of its own, apart from the drive's rules. From a Report,
+only intervals the drive's rules measured are compared (a rule the drive states no figure for is
+not measured); ``measure`` measures every interval kind of the step type.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from wavecheck.checks.rates import pulse_level
+from wavecheck.drives.model import ActiveEdge
 from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.interface import StepInterface
+from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict
 
 if TYPE_CHECKING:
+    from wavecheck.measure import AxisMeasurement
     from wavecheck.report.model import Report
 
-__all__ = ["Comparison", "FirmwareCheck", "firmware_check"]
+__all__ = [
+    "Comparison",
+    "FirmwareCheck",
+    "Observed",
+    "firmware_check",
+    "observed_in_measurement",
+    "observed_in_report",
+]
+
+
+@dataclass(frozen=True)
+class Observed:
+    """What a capture shows of one axis, as the comparison needs it.
+
+    Attributes:
+        interface: the mapped signals (levels after ``--invert``).
+        step_type: the step type decoded.
+        active_edge: the STEP edge that counts a step.
+        resolution_ns: T, exact ns (a shorter figure counts only when shorter by more than T).
+        shortest: rule id → (the shortest interval in exact ns, where it starts in exact s).
+        rate_hz: the highest instantaneous step rate, exact Hz (None: fewer than two steps).
+        rate_at_s: where that rate's step interval starts, exact s.
+        unmeasured: why a rule has no figure, in words (``"the drive states no {rule}"``).
+    """
+
+    interface: StepInterface
+    step_type: StepType
+    active_edge: ActiveEdge
+    resolution_ns: Fraction
+    shortest: Mapping[str, tuple[Fraction, Fraction | None]]
+    rate_hz: Fraction | None
+    rate_at_s: Fraction | None
+    unmeasured: str = "the drive states no {rule}"
+
+
+def observed_in_report(report: Report) -> Observed:
+    """``check``'s report of one axis as an :class:`Observed` (the rules the drive measured)."""
+    shortest = {
+        r.rule: (r.min_measured_ns, r.min_margin_at_s)
+        for r in report.rules
+        if r.min_measured_ns is not None
+    }
+    return Observed(report.interface, report.step_type, report.active_edge, report.resolution_ns,
+                    shortest, report.rates.observed, report.rates.observed_at_s)  # fmt: skip
+
+
+def observed_in_measurement(axis: AxisMeasurement, resolution_ns: Fraction) -> Observed:
+    """``measure``'s figures of one axis as an :class:`Observed` (every interval kind of its
+    step type; the first shortest of each)."""
+    shortest: dict[str, tuple[Fraction, Fraction | None]] = {}
+    for s in axis.stats:
+        ns = s.min_ns
+        if ns is not None:
+            shortest[s.rule] = (ns, None if s.min_at is None else s.timebase.seconds(s.min_at))
+    period = next((s for s in axis.stats if s.rule == "step_period"), None)
+    at = None
+    if period is not None and period.min_at is not None:
+        at = period.timebase.seconds(period.min_at)
+    return Observed(axis.interface, axis.step_type, axis.active_edge, resolution_ns,
+                    shortest, axis.rate_max_hz, at, "it was not measured (no such interval in the capture)")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -66,20 +133,18 @@ class FirmwareCheck:
 
 
 def _time(
-    report: Report, what: str, rule: str, fig: Guaranteed, offset: Fraction, label: str
+    seen: Observed, what: str, rule: str, fig: Guaranteed, offset: Fraction, label: str
 ) -> Comparison:
     configured = None if fig.value is None else fig.value + offset
     where = fig.where
-    rr = report.rule(rule)
-    measured = rr.min_measured_ns if rr is not None else None
-    at = rr.min_margin_at_s if rr is not None else None
+    measured, at = seen.shortest.get(rule, (None, None))
     if configured is None:
         return Comparison(what, rule, None, measured, "ns", at, fig.setting, where, "unchecked",
                           f"the configuration guarantees no {label}")
     if measured is None:
         return Comparison(what, rule, configured, None, "ns", None, fig.setting, where, "unchecked",
-                          f"configured {format_ns(configured)} {label}; not measured (the drive states no {rule})")
-    t = report.resolution_ns
+                          f"configured {format_ns(configured)} {label}; not measured ({seen.unmeasured.format(rule=rule)})")
+    t = seen.resolution_ns
     exact = "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
     place = f" at {format_time(at)}" if at is not None else ""
     if measured + t < configured:
@@ -90,28 +155,32 @@ def _time(
                       f"configured {format_ns(configured)} {label}; shortest measured {format_ns(measured)}")
 
 
-def firmware_check(report: Report, config: FirmwareConfig, axis: GeneratorGuarantee) -> FirmwareCheck:
-    """Compare ``report``'s capture with ``axis``'s configured figures (see the module doc)."""
-    level = pulse_level(report.interface, report.step_type, axis.pulse_level)
+def firmware_check(
+    subject: Report | Observed, config: FirmwareConfig, axis: GeneratorGuarantee
+) -> FirmwareCheck:
+    """Compare a capture (``check``'s report, or an :class:`Observed`) with ``axis``'s
+    configured figures (see the module doc)."""
+    seen = subject if isinstance(subject, Observed) else observed_in_report(subject)
+    level = pulse_level(seen.interface, seen.step_type, axis.pulse_level)
     pulse_rule, space_rule = ("step_high", "step_low") if level else ("step_low", "step_high")
     leading = "rising" if level else "falling"
-    out = [_time(report, "pulse", pulse_rule, axis.pulse, Fraction(0), "pulses")]
+    out = [_time(seen, "pulse", pulse_rule, axis.pulse, Fraction(0), "pulses")]
     if axis.both_edges:
-        out.append(_time(report, "space", space_rule, axis.idle, Fraction(0), "space between edges"))
-    trailing = report.active_edge not in (leading, "both") and axis.pulse.value is not None
+        out.append(_time(seen, "space", space_rule, axis.idle, Fraction(0), "space between edges"))
+    trailing = seen.active_edge not in (leading, "both") and axis.pulse.value is not None
     offset = axis.pulse.value if trailing and axis.pulse.value is not None else Fraction(0)
-    out.append(_time(report, "dir_setup", "dir_setup", axis.dir_setup, offset, "DIR setup"))
-    cfg_rate, seen = axis.max_rate.value, report.rates.observed
-    if cfg_rate is None or seen is None:
-        out.append(Comparison("rate", "", cfg_rate, seen, "Hz", None, axis.max_rate.setting,
+    out.append(_time(seen, "dir_setup", "dir_setup", axis.dir_setup, offset, "DIR setup"))
+    cfg_rate, rate = axis.max_rate.value, seen.rate_hz
+    if cfg_rate is None or rate is None:
+        out.append(Comparison("rate", "", cfg_rate, rate, "Hz", None, axis.max_rate.setting,
                               axis.max_rate.where, "unchecked", "no configured maximum or no steps"))
     else:
-        at = report.rates.observed_at_s
-        ok = seen <= cfg_rate
+        at = seen.rate_at_s
+        ok = rate <= cfg_rate
         out.append(Comparison(
-            "rate", "", cfg_rate, seen, "Hz", at, axis.max_rate.setting, axis.max_rate.where,
+            "rate", "", cfg_rate, rate, "Hz", at, axis.max_rate.setting, axis.max_rate.where,
             "pass" if ok else "fail",
             f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
-            f"{format_rate(seen)}" + ("" if ok or at is None else f" at {format_time(at)}"),
+            f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
         ))
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out))

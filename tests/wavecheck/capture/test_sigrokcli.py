@@ -53,7 +53,7 @@ def test_binary_input(tmp_path: Path) -> None:
     raw = (bits[:, 0] | (bits[:, 1] << 1)).astype(np.uint8)
     path = tmp_path / "x.bin"
     path.write_bytes(raw.tobytes())
-    cap = open_capture(path, input_format="binary:numchannels=2", samplerate=Fraction(10**6))
+    cap = read_with_sigrok(path, "binary:numchannels=2", samplerate=Fraction(10**6))
     assert cap.format == "sigrok:binary" and cap.samplerate_hz == 10**6 and cap.path == str(path)
     for i, ch in enumerate(cap.channels):
         assert ch.initial == bits[0, i]
@@ -76,7 +76,7 @@ def test_vcd_through_sigrok_matches_native(tmp_path: Path) -> None:
     [
         ("csv", b"garbage\n", "x.dat: sigrok-cli: "),
         ("nosuchformat", b"\0\1", "x.dat: sigrok-cli: failed: .*nosuchformat"),
-        ("binary:bogus=1", b"\0\1", "x.dat: sigrok-cli: failed"),
+        ("csv:bogus=1", b"a\n1\n", "x.dat: sigrok-cli: failed"),
     ],
 )
 def test_failures_become_capture_errors(

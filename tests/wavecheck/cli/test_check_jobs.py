@@ -1,0 +1,140 @@
+"""``wavecheck check 'runs/*.vcd' -j N`` (issues 14 and 18): captures spread over N processes,
+each summary line printed as it finishes, the documents in input order and identical whatever
+N, only what the outputs need kept per capture, and each drive file parsed once per process."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import write_vcd
+from wavecheck.cli import _reports, main
+from wavecheck.drives import library
+
+US = 1000
+
+
+def _runs(folder: Path, count: int = 7) -> list[Path]:
+    """``count`` small VCDs; every third has a 200 ns DIR setup (fails gecko-g202's 1 µs)."""
+    paths = []
+    for k in range(count):
+        rising = [10 * US + 40 * US * i for i in range(20)]
+        step = sorted(rising + [t + 5 * US for t in rising])
+        flip = rising[10] + (5 * US - 200 if k % 3 == 0 else -12 * US)  # G202 steps on the fall
+        paths.append(write_vcd(folder / f"r{k}.vcd", {"STEP": (0, step), "DIR": (0, [flip])}))
+    return paths
+
+
+ARGS = ["--drive", "gecko-g202", "--map", "step=STEP,dir=DIR"]
+
+
+@pytest.mark.parametrize("fmt", ["text", "json", "junit"])
+def test_documents_identical_for_any_number_of_jobs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], fmt: str
+) -> None:
+    _runs(tmp_path)
+    (tmp_path / "r9.vcd").write_text("")  # unreadable: an error entry, the others go on
+    docs = []
+    for jobs in ("1", "2", "3"):
+        code = main(["check", str(tmp_path / "*.vcd"), *ARGS, "--format", fmt, "-j", jobs])
+        out, err = capsys.readouterr()
+        assert code == 2 and "r9.vcd: the file is empty" in err
+        docs.append(out)
+    assert docs[0] == docs[1] == docs[2]
+    names = [str(tmp_path / f"r{k}.vcd") for k in range(7)]
+    if fmt == "json":
+        data = json.loads(docs[0])
+        assert [r["capture"]["path"] for r in data["reports"]] == names  # input order
+        assert [e["path"] for e in data["errors"]] == [str(tmp_path / "r9.vcd")]
+        assert [r["verdict"] for r in data["reports"]] == ["fail", "pass", "pass"] * 2 + ["fail"]
+    elif fmt == "junit":
+        root = ET.fromstring(docs[0])
+        assert [s.get("name") for s in root.findall("testsuite")] == [*names, names[0][:-6] + "r9.vcd"]
+        assert root.get("errors") == "1"
+    else:
+        summary = docs[0].split("== summary ==\n", 1)[1].splitlines()
+        assert [line.split()[1].rstrip(":") for line in summary] == [*names, str(tmp_path / "r9.vcd")]
+
+
+def test_each_report_equals_the_single_capture_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    paths = _runs(tmp_path, 4)
+    main(["check", str(tmp_path / "*.vcd"), *ARGS, "--format", "json", "-j", "2"])
+    several = json.loads(capsys.readouterr().out)["reports"]
+    for path, report in zip(paths, several, strict=True):
+        main(["check", str(path), *ARGS, "--format", "json"])
+        assert json.loads(capsys.readouterr().out) == report
+
+
+def test_summary_lines_stream_to_stdout_with_o(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """With ``-o`` every capture's summary line is printed (in the order they finish), then
+    where the report went; the file lists the captures in input order."""
+    _runs(tmp_path, 5)
+    out_file = tmp_path / "r.json"
+    code = main(["check", str(tmp_path / "*.vcd"), *ARGS, "--format", "json", "-o", str(out_file),
+                 "-j", "2"])  # fmt: skip
+    out = capsys.readouterr().out.splitlines()
+    assert code == 1 and out[-1] == f"report written to {out_file}"
+    assert sorted(out[:-1]) == sorted(
+        line for line in out[:-1] if line.startswith(("PASS ", "FAIL "))
+    ) and len(out) == 6
+    data = json.loads(out_file.read_text())
+    assert [r["capture"]["path"] for r in data["reports"]] == [
+        str(tmp_path / f"r{k}.vcd") for k in range(5)
+    ]
+
+
+def test_workers_send_back_no_reports(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """What comes back from a worker is the summary and the document's piece, not the Report
+    (whose capture holds every edge): memory does not grow with the number of captures."""
+    from wavecheck.cli.check import build_report
+
+    paths = [str(p) for p in _runs(tmp_path, 4)]
+    args = _parse(["check", *paths, *ARGS, "--format", "json"])
+    outcomes = list(_reports._outcomes(args, build_report, paths, 2))
+    assert sorted(o.index for o in outcomes) == [0, 1, 2, 3]
+    assert all(o.report is None and isinstance(o.piece, str) for o in outcomes)
+
+
+def _parse(argv: list[str]) -> argparse.Namespace:
+    from wavecheck.cli import check
+
+    parser = argparse.ArgumentParser()
+    check.register(parser.add_subparsers())
+    return parser.parse_args(argv)
+
+
+def test_jobs_must_be_positive(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    _runs(tmp_path, 2)
+    assert main(["check", str(tmp_path / "*.vcd"), *ARGS, "-j", "0"]) == 2
+    assert "-j/--jobs must be 1 or more" in capsys.readouterr().err
+
+
+def test_drive_file_parsed_once_while_unchanged(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls: list[Path] = []
+    parse = library._parse_file
+
+    def counting(path: Path, user: bool) -> library.Drive:
+        calls.append(path)
+        return parse(path, user)
+
+    monkeypatch.setattr(library, "_parse_file", counting)
+    monkeypatch.setattr(library, "_DRIVES", {})
+    _runs(tmp_path, 5)
+    main(["check", str(tmp_path / "*.vcd"), *ARGS, "-j", "1"])
+    capsys.readouterr()
+    assert len(calls) == 1  # five captures, one parse
+    user = tmp_path / "mine.toml"
+    text = library.rules_dir().joinpath("gecko-g202.toml").read_text()
+    user.write_text(text)
+    first = library.load_drive(str(user))
+    assert library.load_drive(str(user)) is first and len(calls) == 2
+    user.write_text(text.replace("Gecko G202", "Gecko G203"))  # same size, maybe same mtime
+    assert library.load_drive(str(user)) is not first and len(calls) == 3

@@ -1,0 +1,223 @@
+"""Raw logic samples, as sigrok-cli's ``-O binary`` writes them and its ``-I binary`` reads them.
+
+Layout (``../shared/reference/sigrok.md`` §3b; checked against sigrok-cli 0.7.2): no header, one
+sample after another, each ``unitsize = ceil(numchannels / 8)`` bytes, little-endian, bit n =
+channel n (bits at and above ``numchannels`` are ignored). The bytes equal a ``.sr`` file's
+``logic-1-*`` chunks, so the edges come from the same scan as the ``.sr`` reader's
+(:class:`wavecheck.capture.sr.EdgeFinder`); tick n is sample n. Channels are named as sigrok-cli
+names them (``0``, ``1``, …) unless names are given.
+
+The input is read ``chunk_bytes`` at a time from a file or a stream (standard input, a pipe):
+memory is one chunk plus the edges, whatever the length. A partial sample at the end (a stream
+cut short) is refused, where sigrok-cli silently drops it.
+
+The sample rate comes from ``--samplerate``, else the format's ``samplerate=`` option in Hz
+(sigrok-cli's spelling, ``binary:numchannels=8:samplerate=24000000``); without either the data
+has no time base.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from fractions import Fraction
+from typing import BinaryIO
+
+import numpy as np
+
+from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, EdgeFinder
+from wavecheck.capture.vcd.header import resolution_of
+from wavecheck.errors import CaptureError, UsageError
+from wavecheck.progress import current
+from wavecheck.timebase import Timebase
+from wavecheck.units import format_frequency
+
+__all__ = ["MAX_CHANNELS", "BinaryFormat", "parse_binary_format", "read_binary"]
+
+#: The most channels a raw sample can carry here (64 bytes per sample, like the ``.sr`` reader).
+MAX_CHANNELS = 512
+
+
+class BinaryFormat:
+    """The options of ``--input-format binary[:numchannels=N][:samplerate=HZ]``.
+
+    Attributes:
+        numchannels: channels per sample (sigrok-cli's default 8).
+        samplerate: the ``samplerate=`` option in Hz (None: not given).
+    """
+
+    def __init__(self, numchannels: int = 8, samplerate: Fraction | None = None) -> None:
+        self.numchannels = numchannels
+        self.samplerate = samplerate
+
+    @property
+    def unitsize(self) -> int:
+        """Bytes per sample."""
+        return (self.numchannels + 7) // 8
+
+
+def parse_binary_format(spec: str) -> BinaryFormat:
+    """``"binary:numchannels=4:samplerate=1000000"`` → its options.
+
+    Raises:
+        UsageError: an unknown option, or a value that is not a positive whole number.
+    """
+    fmt = BinaryFormat()
+    for part in spec.split(":")[1:]:
+        key, sep, value = (s.strip() for s in part.partition("="))
+        if key not in ("numchannels", "samplerate") or not sep:
+            raise UsageError(
+                f"--input-format {spec!r}: binary takes numchannels=N and samplerate=HZ, "
+                f"not {part!r}"
+            )
+        if not value.isdigit() or int(value) == 0:
+            raise UsageError(f"--input-format {spec!r}: {key}={value!r} must be a whole number ≥ 1")
+        if key == "numchannels":
+            if int(value) > MAX_CHANNELS:
+                raise UsageError(
+                    f"--input-format {spec!r}: numchannels={value} is more than {MAX_CHANNELS}"
+                )
+            fmt.numchannels = int(value)
+        else:
+            fmt.samplerate = Fraction(int(value))
+    return fmt
+
+
+def _read_full(f: BinaryIO, size: int) -> bytes:
+    """Up to ``size`` bytes: fewer only at the end of the input (a pipe gives short reads)."""
+    first = f.read(size)
+    if len(first) == size or not first:
+        return first
+    parts = [first]
+    got = len(first)
+    while got < size and (more := f.read(size - got)):
+        parts.append(more)
+        got += len(more)
+    return b"".join(parts)
+
+
+def read_binary(
+    source: str | os.PathLike[str] | BinaryIO,
+    spec: str = "binary",
+    *,
+    name: str | None = None,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+    channel_names: Sequence[str] | None = None,
+    chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+    require_time: bool = True,
+) -> Capture:
+    """Read raw samples from a file or a binary stream into edge arrays (tick = one sample).
+
+    Args:
+        source: a path, or an open binary stream (read to its end, not closed).
+        spec: the ``--input-format`` value (``binary:numchannels=8``).
+        name: what messages and the capture call the input (default: the path).
+        samplerate: sample rate in Hz; overrides the format's ``samplerate=``.
+        resolution_s: the resolution in seconds, if coarser than one sample.
+        channel_names: names of channels 0, 1, … (fewer than numchannels: the rest keep
+            sigrok-cli's names).
+        chunk_bytes: bytes read and scanned at a time (tests use tiny values).
+        require_time: with False, data without a sample rate is read untimed (counts only).
+
+    Raises:
+        CaptureError: empty input, a partial last sample, no sample rate.
+        UsageError: bad format options or too many channel names.
+    """
+    label = name if name is not None else str(source)
+    try:
+        fmt = parse_binary_format(spec)
+    except UsageError as err:
+        raise UsageError(f"{label}: {err}") from None
+    if chunk_bytes < 1:
+        raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
+    names = list(channel_names or [])
+    if len(names) > fmt.numchannels:
+        raise UsageError(
+            f"{len(names)} channel names given for {fmt.numchannels} channels "
+            f"(give --input-format binary:numchannels={len(names)})"
+        )
+    notes: list[str] = []
+    rate = samplerate if samplerate is not None else fmt.samplerate
+    if samplerate is not None and fmt.samplerate is not None and samplerate != fmt.samplerate:
+        notes.append(
+            f"sample rate {format_frequency(samplerate)} given by --samplerate overrides the "
+            f"format's samplerate={fmt.samplerate}"
+        )
+    if rate is None and require_time:
+        raise CaptureError(
+            label, None, "raw binary data states no sample rate (give it, e.g. --samplerate 24MHz)"
+        )
+    if rate is None:
+        notes.append(
+            "raw binary data states no sample rate: edges and durations are in samples; "
+            "times need --samplerate (e.g. --samplerate 24MHz)"
+        )
+    us = fmt.unitsize
+    bits = list(range(fmt.numchannels))
+    finder = EdgeFinder(us, bits)
+    step = max(us, chunk_bytes - chunk_bytes % us)
+    total: int | None = None
+    report = current()
+    opened: BinaryIO | None = None
+    if isinstance(source, (str, os.PathLike)):
+        try:
+            opened = open(source, "rb")  # noqa: SIM115 - closed below
+            total = os.fstat(opened.fileno()).st_size
+        except OSError as err:
+            raise CaptureError(label, None, f"cannot open: {err.strerror or err}") from None
+    f = opened if opened is not None else source
+    assert not isinstance(f, (str, os.PathLike))
+    done = 0
+    carry = b""
+    try:
+        while data := _read_full(f, step):
+            done += len(data)
+            if carry:
+                data, carry = carry + data, b""
+            whole = len(data) - len(data) % us
+            if whole < len(data):
+                carry = data[whole:]
+            finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+            report(done, total)
+    except OSError as err:
+        raise CaptureError(label, f"byte {done}", f"cannot be read: {err.strerror or err}") from None
+    finally:
+        if opened is not None:
+            opened.close()
+    if carry:
+        raise CaptureError(
+            label,
+            f"byte {done - len(carry)}",
+            f"the data ends in a partial sample ({len(carry)} of {us} bytes): not a whole number "
+            f"of {us}-byte samples for numchannels={fmt.numchannels} (cut short, or another "
+            "numchannels?)",
+        )
+    if finder.nsamples == 0:
+        raise CaptureError(label, None, "holds no samples (the input is empty)")
+    tb = Timebase.from_samplerate(rate if rate is not None else 1)
+    res = 1
+    if resolution_s is not None and rate is not None:
+        res, _ = resolution_of(label, tb, [], rate, resolution_s, notes)
+    channels = [
+        Channel(
+            name=names[bit] if bit < len(names) else str(bit),
+            index=bit,
+            initial=finder.initial[slot],
+            edges=finder.edges(slot),
+        )
+        for slot, bit in enumerate(bits)
+    ]
+    return Capture(
+        path=label,
+        format="binary",
+        timebase=tb,
+        resolution_ticks=res,
+        samplerate_hz=rate,
+        start=0,
+        end=finder.nsamples,
+        channels=channels,
+        notes=notes,
+        time_known=rate is not None,
+    )
