@@ -14,13 +14,8 @@ from typing import Any
 from stepgen.cli.tune import GAIN_OPTIONS
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.config import (
-    TIMING_PARAMS,
-    LinuxCNCConfig,
-    PidConfig,
-    read_config,
-    read_pid_config,
-)
+from wavecheck.linuxcnc.config import TIMING_PARAMS, LinuxCNCConfig, read_config
+from wavecheck.linuxcnc.pid import PidConfig, read_pid_config
 
 __all__ = ["add_simulate_arguments", "apply_to_simulate_args"]
 

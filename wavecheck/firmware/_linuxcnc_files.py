@@ -7,7 +7,7 @@ import os
 import re
 from pathlib import Path
 
-from wavecheck.linuxcnc.config import IniFile, read_ini
+from wavecheck.linuxcnc.files import IniFile, read_ini
 
 __all__ = ["expand_refs", "files_of", "is_ini"]
 

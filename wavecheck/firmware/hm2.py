@@ -20,7 +20,7 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._linuxcnc_files import expand_refs, files_of
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
-from wavecheck.linuxcnc.config import _hal_words, _resolve
+from wavecheck.linuxcnc.files import hal_words, resolve_ref
 
 __all__ = ["looks_like", "read"]
 
@@ -43,12 +43,12 @@ def read(path: str | os.PathLike[str], clock_hz: Fraction | None = None) -> Firm
         lines = read_text(hal).replace("\\\n", " ").splitlines()
         for no, raw in enumerate(lines, 1):
             line = expand_refs(raw.split("#", 1)[0].strip(), ini)
-            words = _hal_words(line) if line else []
+            words = hal_words(line) if line else []
             if len(words) >= 3 and words[0] == "setp":
                 m = _SETP.match(words[1])
                 if m and m.group(2) in _PARAMS:
                     at = where(hal, no)
-                    value = _resolve(words[2], ini, at)
+                    value = resolve_ref(words[2], ini, at)
                     gens.setdefault(m.group(1), {})[m.group(2)] = (number(value, at, words[1]), at)
     if not gens:
         raise ConfigError(f"{path}: no `setp hm2_….stepgen.NN.*` line in {', '.join(map(str, hals)) or 'it'}")

@@ -2,5 +2,7 @@
 
 - :mod:`~wavecheck.linuxcnc.steptypes`: step types 0–15 and their state tables;
 - :mod:`~wavecheck.linuxcnc.timing`: stepgen's n·P − J interval arithmetic;
-- :mod:`~wavecheck.linuxcnc.config`: INI/HAL files and the ``config``/``latency_safe`` rates.
+- :mod:`~wavecheck.linuxcnc.files`: INI files, HAL words, halcmd's ``[SECTION]KEY`` references;
+- :mod:`~wavecheck.linuxcnc.config`: stepgen's settings from INI/HAL, the config/latency_safe rates;
+- :mod:`~wavecheck.linuxcnc.pid`: ``pid``'s settings from INI/HAL.
 """

@@ -19,12 +19,8 @@ What a file says that a model of one stepgen channel cannot honour (a ``net`` dr
 command or ``enable`` pin, an unknown ``stepgen.N.*`` name) is listed in
 :attr:`LinuxCNCConfig.ignored`, one line each naming the file and line.
 
-The joint's ``pid`` (a loop closed around a velocity-mode stepgen, pid reference §3):
-:func:`read_pid_config` reads ``setp pid.N.Pgain …`` (values may be ``[JOINT_n]P``-style INI
-references, as pncconf writes them), ``loadrt pid num_chan=``/``names=``, the ``net`` lines
-wiring the instance to ``stepgen.N.velocity-cmd`` and ``joint.N.motor-pos-cmd``, and the INI's
-``[JOINT_n] P, I, D, FF0, FF1, FF2, BIAS, DEADBAND, MAX_OUTPUT`` and motion's ``FERROR,
-MIN_FERROR, MAX_VELOCITY, MAX_ACCELERATION`` into a :class:`PidConfig`.
+The joint's ``pid`` settings: :mod:`wavecheck.linuxcnc.pid`; INI and HAL syntax:
+:mod:`wavecheck.linuxcnc.files`.
 
 One parser serves ``wavecheck check`` (the ``config`` and ``latency_safe`` max step rates) and
 ``stepgen simulate`` (:meth:`LinuxCNCConfig.stepgen_kwargs`). Every value remembers the file
@@ -46,92 +42,29 @@ from __future__ import annotations
 
 import math
 import os
-import re
-import shlex
 from dataclasses import dataclass, field
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 from wavecheck.drives.model import Drive
 from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.files import (
+    IniFile,
+    hal_words,
+    int_ns,
+    loadrt_args,
+    read_ini,
+    read_text,
+    resolve_ref,
+)
 from wavecheck.linuxcnc.steptypes import kind_of
 from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
 
-__all__ = [
-    "TIMING_PARAMS",
-    "ConfigRates",
-    "IniFile",
-    "JOINT_PID_KEYS",
-    "PID_PINS",
-    "LinuxCNCConfig",
-    "PidConfig",
-    "config_rates",
-    "read_config",
-    "read_ini",
-    "read_pid_config",
-]
+__all__ = ["TIMING_PARAMS", "ConfigRates", "LinuxCNCConfig", "config_rates", "read_config"]
 
 #: stepgen's timing parameters (ns, u32), in LinuxCNC's order.
 TIMING_PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay")
 _FLOAT_PARAMS = ("position-scale", "maxvel", "maxaccel")
-#: halcmd's INI substitutions: ``[SECTION]KEY`` and ``[SECTION](KEY)`` (the form that can sit
-#: inside a longer word).
-_INI_REF = re.compile(r"^\[([^\]]+)\](?:\(([^()\s]+)\)|([^()\s]+))$")
-
-
-@dataclass
-class IniFile:
-    """A LinuxCNC INI file: section → key → every (value, line) in file order.
-
-    LinuxCNC allows a key more than once (``HALFILE``); :meth:`get` returns the first, as
-    LinuxCNC's ``ini.find`` does.
-    """
-
-    path: str
-    sections: dict[str, dict[str, list[tuple[str, int]]]] = field(default_factory=dict)
-
-    def get(self, section: str, key: str) -> tuple[str, int] | None:
-        """The first value of ``[section] key`` and its line, or None."""
-        values = self.sections.get(section, {}).get(key)
-        return values[0] if values else None
-
-
-def read_ini(path: str | os.PathLike[str]) -> IniFile:
-    """Read a LinuxCNC INI file (``#``/``;`` comment lines, ``KEY = VALUE`` lines).
-
-    Raises:
-        ConfigError: the file cannot be read or a line is neither a section nor ``KEY = VALUE``.
-    """
-    text = _read(path)
-    ini = IniFile(str(path))
-    section: str | None = None
-    for no, raw in enumerate(text.splitlines(), 1):
-        line = raw.strip()
-        if not line or line[0] in "#;":
-            continue
-        if line.startswith("["):
-            if not line.endswith("]"):
-                raise ConfigError(f"{path}: line {no}: bad section header {line!r} (expected [NAME])")
-            section = line[1:-1].strip()
-            ini.sections.setdefault(section, {})
-            continue
-        if "=" not in line:
-            raise ConfigError(f"{path}: line {no}: {line!r} is not KEY = VALUE")
-        if section is None:
-            raise ConfigError(f"{path}: line {no}: {line!r} comes before any [SECTION]")
-        key, value = (s.strip() for s in line.split("=", 1))
-        ini.sections[section].setdefault(key, []).append((value, no))
-    return ini
-
-
-def _read(path: str | os.PathLike[str]) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8", errors="replace")
-    except OSError as err:
-        raise ConfigError(f"{path}: cannot read: {err.strerror or err}") from None
-
-
 @dataclass
 class LinuxCNCConfig:
     """The stepgen settings of one channel, with where each came from.
@@ -225,28 +158,6 @@ class LinuxCNCConfig:
         return kw
 
 
-def _int_ns(value: str, where: str, what: str) -> int:
-    try:
-        number = Fraction(value)
-    except (ValueError, ZeroDivisionError):
-        raise ConfigError(f"{where}: {what} {value!r} is not a number of ns") from None
-    if number.denominator != 1 or number < 0 or number > 2**32 - 1:
-        raise ConfigError(f"{where}: {what} {value!r} is not a whole u32 number of ns")
-    return int(number)
-
-
-def _resolve(value: str, ini: IniFile | None, where: str) -> str:
-    m = _INI_REF.match(value)
-    if not m:
-        return value
-    if ini is None:
-        raise ConfigError(f"{where}: {value} refers to the INI file (give --ini FILE)")
-    found = ini.get(m.group(1), m.group(2) or m.group(3))
-    if found is None:
-        raise ConfigError(f"{where}: {value} is not in {ini.path}")
-    return found[0]
-
-
 def _list_entry(text: str, channel: int, where: str, what: str) -> str:
     items = [s.strip() for s in text.split(",")]
     if channel >= len(items):
@@ -263,25 +174,8 @@ PULSES, UPDATE = "stepgen.make-pulses", "stepgen.update-freq"
 _THREADS_MAX = 3
 
 
-def _hal_words(line: str) -> list[str]:
-    """A HAL command's words (``"quoted words"`` kept together)."""
-    try:
-        return shlex.split(line, posix=True)
-    except ValueError:
-        return line.split()
-
-
-def _loadrt_args(words: list[str], ini: IniFile | None, where: str) -> dict[str, str]:
-    out: dict[str, str] = {}
-    for arg in words:
-        if "=" in arg:
-            key, value = arg.split("=", 1)
-            out[key] = _resolve(value, ini, where)
-    return out
-
-
 def _thread_period(value: str, where: str, what: str) -> int:
-    ns = _int_ns(value, where, what)
+    ns = int_ns(value, where, what)
     if ns == 0:
         raise ConfigError(f"{where}: {what} must be > 0 ns")
     return ns
@@ -330,7 +224,7 @@ def _parse_loadrt_motmod(args: dict[str, str], cfg: LinuxCNCConfig, where: str) 
         value = args.get(key)
         if value is None:
             continue
-        ns = _int_ns(value, where, key)
+        ns = int_ns(value, where, key)
         if ns > 0:
             cfg.threads[name] = ns
             cfg.sources[f"thread {name}"] = where
@@ -376,7 +270,7 @@ def _parse_net(words: list[str], cfg: LinuxCNCConfig, where: str, prefix: str) -
 def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: str) -> None:
     param = name[len(prefix) :]
     if param in TIMING_PARAMS:
-        cfg.params[param] = _int_ns(value, where, name)
+        cfg.params[param] = int_ns(value, where, name)
         cfg.sources[param] = where
     elif param in _FLOAT_PARAMS:
         try:
@@ -403,7 +297,7 @@ def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: 
 
 
 def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
-    text = _read(path)
+    text = read_text(path)
     lines = text.replace("\\\n", " ").splitlines()
     prefix = f"stepgen.{cfg.channel}."
     for no, raw in enumerate(lines, 1):
@@ -411,11 +305,11 @@ def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile |
         if not line:
             continue
         where = f"{path}:{no}"
-        words = _hal_words(line)
+        words = hal_words(line)
         if not words:
             continue
         if words[0] == "loadrt" and len(words) > 1:
-            args = _loadrt_args(words[2:], ini, where)
+            args = loadrt_args(words[2:], ini, where)
             if words[1] == "stepgen":
                 _parse_loadrt_stepgen(args, cfg, where)
             elif words[1] == "threads":
@@ -436,7 +330,7 @@ def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile |
         else:
             continue
         if name.startswith(prefix):
-            _parse_setp(name, _resolve(value, ini, where), cfg, where, prefix)
+            _parse_setp(name, resolve_ref(value, ini, where), cfg, where, prefix)
 
 
 def _thread_of(cfg: LinuxCNCConfig, funct: str) -> str | None:
@@ -501,7 +395,7 @@ def read_config(
             if found is None:
                 continue
             where = f"{ini}:{found[1]}"
-            ns = _int_ns(found[0].split()[0], where, f"[EMCMOT]{key}")
+            ns = int_ns(found[0].split()[0], where, f"[EMCMOT]{key}")
             if ns == 0:
                 raise ConfigError(f"{where}: [EMCMOT]{key} must be > 0 ns")
             setattr(cfg, attr, ns)
@@ -597,311 +491,3 @@ def config_rates(
         f"{n['steplen'] + n['stepspace']}) at J = {float(latency_ns):g} ns"
     )
     return _rates(config, min(safe, config), (note,))
-
-
-# --- pid (reference pid-linuxcnc.md §1, §3, §4.4) -------------------------------------------
-
-#: pid's tunable float input pins (pid reference §1), in its table's order.
-PID_PINS = (
-    "Pgain",
-    "Igain",
-    "Dgain",
-    "bias",
-    "FF0",
-    "FF1",
-    "FF2",
-    "FF3",
-    "deadband",
-    "maxerror",
-    "maxerrorI",
-    "maxerrorD",
-    "maxcmdD",
-    "maxcmdDD",
-    "maxcmdDDD",
-    "maxoutput",
-)
-#: pid's bit input that a configuration sets (pncconf writes it, pid reference §3).
-_PID_BIT = "error-previous-target"
-#: pid pins whose signal the model makes itself (the loop's wiring).
-_PID_WIRING = ("command", "feedback", "output", "enable", "index-enable")
-#: ``[JOINT_n]`` key → the pid pin pncconf's ``setp pid.N.<pin> [JOINT_n]<KEY>`` sets from it.
-JOINT_PID_KEYS = {
-    "P": "Pgain",
-    "I": "Igain",
-    "D": "Dgain",
-    "BIAS": "bias",
-    "FF0": "FF0",
-    "FF1": "FF1",
-    "FF2": "FF2",
-    "DEADBAND": "deadband",
-    "MAX_OUTPUT": "maxoutput",
-}
-#: ``[JOINT_n]`` keys motion reads itself (its following-error check, pid reference §4.4, and
-#: the joint's limits the trajectory planner keeps to).
-_JOINT_MOTION_KEYS = {
-    "FERROR": "ferror",
-    "MIN_FERROR": "min_ferror",
-    "MAX_VELOCITY": "max_velocity",
-    "MAX_ACCELERATION": "max_acceleration",
-}
-#: ``loadrt pid`` makes three instances unless ``num_chan=``/``names=`` say otherwise.
-_PID_DEFAULT_CHANNELS = 3
-#: at most 16 instances (pid reference §1).
-_PID_MAX_CHANNELS = 16
-
-
-@dataclass
-class PidConfig:
-    """The pid of one joint and motion's following-error limits, with where each came from.
-
-    Attributes:
-        joint: the joint (``[JOINT_n]``, ``joint.N.*``).
-        name: the pid instance (``pid.0``, ``pid.x``), None when the HAL files load none for
-            this joint (then ``pins`` are the INI's ``[JOINT_n]`` gains, read as pncconf's
-            ``setp`` lines read them).
-        pins: pid pin → value (``Pgain``, ``FF1``, ``maxerror`` …, only those set).
-        error_previous_target: ``setp <name>.error-previous-target`` (None: not set).
-        ferror, min_ferror, max_velocity, max_acceleration: ``[JOINT_n] FERROR``,
-            ``MIN_FERROR``, ``MAX_VELOCITY``, ``MAX_ACCELERATION`` (None: not in the INI).
-        drives: the stepgen pin the instance's ``output`` is netted to
-            (``stepgen.0.velocity-cmd``), None if none.
-        chosen: why this instance is the joint's (``"its output drives stepgen.0.velocity-cmd"``).
-        sources: pin or key → ``"file:line"``.
-        ignored: what the files say about this pid that the model does not honour.
-    """
-
-    joint: int = 0
-    name: str | None = None
-    pins: dict[str, float] = field(default_factory=dict)
-    error_previous_target: bool | None = None
-    ferror: float | None = None
-    min_ferror: float | None = None
-    max_velocity: float | None = None
-    max_acceleration: float | None = None
-    drives: str | None = None
-    chosen: str = ""
-    sources: dict[str, str] = field(default_factory=dict)
-    ignored: list[str] = field(default_factory=list)
-
-
-@dataclass
-class _PidHal:
-    """What the HAL files say about every pid instance (before one is chosen)."""
-
-    instances: list[str] = field(default_factory=list)
-    loaded: bool = False
-    # instance → pin → (value as written, where); INI references are resolved only for the
-    # chosen instance (another component's reference is not this model's business)
-    setp: dict[str, dict[str, tuple[str, str]]] = field(default_factory=dict)
-    # signal → [(pin, where)]
-    nets: dict[str, list[tuple[str, str]]] = field(default_factory=dict)
-
-
-def _float_value(value: str, where: str, what: str) -> float:
-    try:
-        number = float(value.split()[0]) if value.split() else float("nan")
-    except ValueError:
-        raise ConfigError(f"{where}: {what} {value!r} is not a number") from None
-    if not math.isfinite(number):
-        raise ConfigError(f"{where}: {what} {value!r} is not a finite number")
-    return number
-
-
-def _pid_loadrt(args: dict[str, str], hal: _PidHal, where: str) -> None:
-    if "names" in args and "num_chan" in args:
-        raise ConfigError(f"{where}: loadrt pid takes num_chan= or names=, not both")
-    if "names" in args:
-        names = [n.strip() for n in args["names"].split(",") if n.strip()]
-    else:
-        text = args.get("num_chan", str(_PID_DEFAULT_CHANNELS))
-        try:
-            count = int(text)
-        except ValueError:
-            raise ConfigError(f"{where}: loadrt pid num_chan={text} is not a number") from None
-        names = [f"pid.{i}" for i in range(count)]
-    if not 1 <= len(names) <= _PID_MAX_CHANNELS:
-        raise ConfigError(f"{where}: loadrt pid makes {len(names)} instances (1..{_PID_MAX_CHANNELS})")
-    hal.loaded = True
-    hal.instances += [n for n in names if n not in hal.instances]
-
-
-def _pid_pin(name: str) -> tuple[str, str] | None:
-    """``pid.x.Pgain`` → (``pid.x``, ``Pgain``) when the last part is a pid pin."""
-    inst, _, pin = name.rpartition(".")
-    if inst and (pin in PID_PINS or pin == _PID_BIT or pin in _PID_WIRING or pin.endswith("-deriv")):
-        return inst, pin
-    return None
-
-
-def _parse_pid_hal(path: str | os.PathLike[str], hal: _PidHal, ini: IniFile | None) -> None:
-    text = _read(path)
-    for no, raw in enumerate(text.replace("\\\n", " ").splitlines(), 1):
-        line = raw.split("#", 1)[0].strip()
-        words = _hal_words(line) if line else []
-        if not words:
-            continue
-        where = f"{path}:{no}"
-        if words[0] == "loadrt" and len(words) > 1 and words[1] == "pid":
-            _pid_loadrt(_loadrt_args(words[2:], ini, where), hal, where)
-        elif words[0] == "net" and len(words) > 2:
-            pins = [w for w in words[2:] if w not in ("<=", "=>", "<=>")]
-            hal.nets.setdefault(words[1], []).extend((pin, where) for pin in pins)
-        elif (words[0] == "setp" and len(words) >= 3) or (len(words) >= 3 and words[1] == "="):
-            name, value = (words[1], words[2]) if words[0] == "setp" else (words[0], words[2])
-            found = _pid_pin(name)
-            if found is None or found[1] in _PID_WIRING:
-                continue
-            inst, pin = found
-            hal.setp.setdefault(inst, {})[pin] = (value, where)
-
-
-def _net_peers(hal: _PidHal, pin: str) -> list[tuple[str, str]]:
-    """The pins sharing a signal with ``pin`` (and where each was netted)."""
-    out: list[tuple[str, str]] = []
-    for members in hal.nets.values():
-        if any(p == pin for p, _ in members):
-            out += [(p, w) for p, w in members if p != pin]
-    return out
-
-
-def _joint_refs(hal: _PidHal, inst: str) -> set[int]:
-    """The ``n`` of every ``[JOINT_n]`` reference among ``inst``'s setp values."""
-    out: set[int] = set()
-    for raw, _ in hal.setp.get(inst, {}).values():
-        m = re.match(r"^\[JOINT_(\d+)\]", raw)
-        if m:
-            out.add(int(m.group(1)))
-    return out
-
-
-def _motor_joint(hal: _PidHal, inst: str) -> int | None:
-    """The joint whose ``motor-pos-cmd`` is netted to ``inst.command``."""
-    for pin, _ in _net_peers(hal, f"{inst}.command"):
-        m = re.match(r"^joint\.(\d+)\.motor-pos-cmd$", pin)
-        if m:
-            return int(m.group(1))
-    return None
-
-
-def _choose_pid(
-    hal: _PidHal, name: str | None, joint: int | None, channel: int
-) -> tuple[str | None, str]:
-    """(the instance, why) — see :func:`read_pid_config`."""
-    known = hal.instances if hal.loaded else sorted(i for i in hal.setp if i.startswith("pid."))
-    if name is not None:
-        if name not in known:
-            listed = ", ".join(known) or "none"
-            raise ConfigError(f"pid {name!r} is not in the HAL files (pid instances: {listed})")
-        return name, "given"
-    target = f"stepgen.{channel}.velocity-cmd"
-    for inst in known:
-        if any(p == target for p, _ in _net_peers(hal, f"{inst}.output")):
-            return inst, f"its output drives {target}"
-    if joint is not None:
-        for inst in known:
-            if _motor_joint(hal, inst) == joint or _joint_refs(hal, inst) == {joint}:
-                return inst, f"it is joint {joint}'s"
-        if f"pid.{joint}" in known and f"pid.{joint}" in hal.setp:
-            return f"pid.{joint}", f"joint {joint}"
-    return None, ""
-
-
-def read_pid_config(
-    ini: str | os.PathLike[str] | None = None,
-    hal: str | os.PathLike[str] | list[str | os.PathLike[str]] | None = None,
-    *,
-    channel: int = 0,
-    joint: int | None = None,
-    name: str | None = None,
-) -> PidConfig:
-    """Read the pid driving stepgen ``channel`` (or of ``joint``) and ``[JOINT_n]``'s limits.
-
-    The instance: ``name`` if given; else the one whose ``output`` is netted to
-    ``stepgen.<channel>.velocity-cmd`` (pid reference §3's wiring); else, with ``joint``, the
-    one netted to ``joint.<joint>.motor-pos-cmd`` or whose setp values all read
-    ``[JOINT_<joint>]`` (pncconf's ``setp pid.x.Pgain [JOINT_0]P``), else ``pid.<joint>``. The
-    joint: ``joint``, else the instance's ``motor-pos-cmd`` net, else the one ``[JOINT_n]``
-    its setp values read, else ``channel``. With an instance, its ``setp`` values are its pins
-    (LinuxCNC's pid only knows what HAL sets; an INI gain no setp reads is listed in
-    ``ignored``); without one the INI's ``[JOINT_n]`` gains are the pins.
-
-    Raises:
-        ConfigError: unreadable files, a value that is not a finite number, FERROR,
-            MAX_VELOCITY or MAX_ACCELERATION not > 0, MIN_FERROR < 0, a ``name`` the files do not load.
-    """
-    ini_file = read_ini(ini) if ini is not None else None
-    hals = [] if hal is None else ([hal] if isinstance(hal, (str, os.PathLike)) else list(hal))
-    ph = _PidHal()
-    for h in hals:
-        _parse_pid_hal(h, ph, ini_file)
-    inst, why = _choose_pid(ph, name, joint, channel)
-    if joint is None and inst is not None:
-        refs = _joint_refs(ph, inst)
-        joint = _motor_joint(ph, inst)
-        if joint is None and len(refs) == 1:
-            joint = next(iter(refs))
-    cfg = PidConfig(joint=channel if joint is None else joint, name=inst, chosen=why)
-    section = f"JOINT_{cfg.joint}"
-    if inst is not None:
-        read_keys = set()
-        for pin, (raw, where) in ph.setp.get(inst, {}).items():
-            value = _resolve(raw, ini_file, where)
-            if pin == _PID_BIT:
-                v = value.strip().lower()
-                if v not in ("0", "1", "true", "false"):
-                    raise ConfigError(f"{where}: {inst}.{pin} {value!r} is not 0, 1, true or false")
-                cfg.error_previous_target = v in ("1", "true")
-            elif pin in PID_PINS:
-                cfg.pins[pin] = _float_value(value, where, f"{inst}.{pin}")
-            else:
-                cfg.ignored.append(f"ignored: setp {inst}.{pin} ({where}) (the model uses pid's own estimates)")
-                continue
-            cfg.sources[pin] = where
-            m = _INI_REF.match(raw)
-            if m and m.group(1) == section:
-                read_keys.add(m.group(2) or m.group(3))
-        for pin in ("command-deriv", "feedback-deriv", *PID_PINS):
-            for signal, members in ph.nets.items():
-                at = next((w for p, w in members if p == f"{inst}.{pin}"), None)
-                if at is None:
-                    continue
-                if pin.endswith("-deriv"):
-                    what = "pid's own derivative estimate"
-                else:
-                    what = f"the setp value ({cfg.pins[pin]:g})" if pin in cfg.pins else "pid's default"
-                cfg.ignored.append(
-                    f"ignored: net {signal} {inst}.{pin} ({at}) (its value is not known to the "
-                    f"model, which uses {what})"
-                )
-        for peer, where in _net_peers(ph, f"{inst}.output"):
-            if peer == f"stepgen.{channel}.velocity-cmd":
-                cfg.drives = peer
-                cfg.sources["drives"] = where
-        if ini_file is not None:
-            for key, pin in JOINT_PID_KEYS.items():
-                found = ini_file.get(section, key)
-                if found is not None and key not in read_keys and pin not in cfg.pins:
-                    cfg.ignored.append(
-                        f"ignored: [{section}]{key} = {found[0]} ({ini}:{found[1]}): no setp "
-                        f"{inst}.{pin} reads it (LinuxCNC's pid keeps its own value)"
-                    )
-    elif ini_file is not None:
-        for key, pin in JOINT_PID_KEYS.items():
-            found = ini_file.get(section, key)
-            if found is not None:
-                where = f"{ini}:{found[1]}"
-                cfg.pins[pin] = _float_value(found[0], where, f"[{section}]{key}")
-                cfg.sources[pin] = where
-    if ini_file is not None:
-        for key, attr in _JOINT_MOTION_KEYS.items():
-            found = ini_file.get(section, key)
-            if found is None:
-                continue
-            where = f"{ini}:{found[1]}"
-            limit = _float_value(found[0], where, f"[{section}]{key}")
-            if limit < 0 or (limit == 0 and key != "MIN_FERROR"):
-                need = ">= 0" if key == "MIN_FERROR" else "> 0"
-                raise ConfigError(f"{where}: [{section}]{key} {found[0]} must be {need}")
-            setattr(cfg, attr, limit)
-            cfg.sources[key] = where
-    return cfg
