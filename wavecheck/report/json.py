@@ -89,7 +89,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
                 {
                     "index": c.index,
                     "name": c.name,
-                    "edges": int(len(c.edges)),
+                    "edges": c.edge_count,
                     "role": mapped.get(c.name),
                 }
                 for c in cap.channels
@@ -120,7 +120,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             "forward": steps.forward,
             "reverse": steps.reverse,
             "unknown_direction": steps.unknown,
-            "ambiguous": int(len(steps.ambiguous)),
+            "ambiguous": steps.ambiguous_count,
             "final_position": steps.final_position,
         },
         "rules": [_rule(r) for r in report.rules],
