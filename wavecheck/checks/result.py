@@ -205,7 +205,10 @@ class RuleResult:
         ))
 
     def histogram(self) -> Histogram:
-        """The measured intervals in the fixed bins of :class:`Histogram` (mergeable)."""
+        """The measured intervals in the fixed bins of :class:`Histogram` (mergeable; empty for
+        ``state_sequence``, which measures nothing)."""
+        if self.limit_ns is None:
+            return Histogram(())
         return Histogram.of(self.intervals.measured)
 
     # -- violations -------------------------------------------------------------------------

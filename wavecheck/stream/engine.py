@@ -12,12 +12,15 @@ pulse likewise by their tick.
 The context ``c0`` of the next window is the earliest tick an interval not yet complete may start
 from, per rule (kept in one place: :func:`_context`):
 
-- ``step_high``/``step_low``, ``state_hold``: the last edge of each channel;
-- ``step_period``, the observed step rate, ``dir_hold``: the last step (active edge);
-- ``dir_setup``: the last active edge (DIR changes after it wait for the next one), or every DIR
-  change so far when no step came yet;
-- ``dir_delay``: the last pulse on either line and any pulse not yet ended;
-- ``enable_setup``: the last ENABLE rise while no step followed it and ENABLE is still active.
+- the last edge of each channel (``step_high``/``step_low``, ``state_hold``, the phase state; and
+  so an up/down pulse not yet ended, and an ENABLE rise still active, for ``dir_delay`` and
+  ``enable_setup``);
+- the last step (``step_period``, the observed step rate; ``dir_hold`` and ``dir_setup``: the
+  last active edge, DIR changes after it wait for the next one; ``dir_delay``: the last pulse
+  on either line, whose end starts the next switch);
+- every DIR change so far while no step came yet (``dir_setup``).
+
+Each is needed: dropping one makes a case of tests/wavecheck/stream fail.
 
 Everything before ``c0`` is dropped, so memory follows the window, not the capture. The
 differential tests (tests/wavecheck/stream) check the figures against the whole-capture path at
@@ -212,7 +215,7 @@ class AxisStream:
             else:
                 self._rule(r, iface, steps, t0, summary)
         self._rates(iface, steps, t0)
-        self._trim(_context(iface, st, steps, self.edge, self.level, self.rules))
+        self._trim(_context(iface, steps, self.edge, self.rules))
 
     def _rule(
         self, r: Rule, iface: StepInterface, steps: StepEvents, t0: int, s: RuleSummary
@@ -342,19 +345,13 @@ def _median(counts: Mapping[int, int]) -> tuple[int, int] | None:
 
 
 def _context(
-    iface: StepInterface,
-    st: object,
-    steps: StepEvents,
-    edge: ActiveEdge,
-    level: int,
-    rules: Sequence[Rule],
+    iface: StepInterface, steps: StepEvents, edge: ActiveEdge, rules: Sequence[Rule]
 ) -> int:
     """The earliest tick the next window needs (see the module docstring), from this window's
     sub-capture."""
     anchors = [int(s.edges[-1]) for s in iface.signals.values() if len(s.edges)]
     if len(steps.ticks):
         anchors.append(int(steps.ticks[-1]))
-    checks = {r.check for r in rules}
     ids = {r.id for r in rules}
     step_sig = iface.get("step")
     if "dir_setup" in ids and step_sig is not None and iface.get("dir") is not None:
@@ -362,28 +359,6 @@ def _context(
         d = iface.signals["dir"].edges
         if len(act) == 0 and len(d):
             anchors.append(int(d[0]))  # no step yet: every DIR change waits for one
-    if "switch" in checks and iface.get("up") is not None and iface.get("down") is not None:
-        from wavecheck.checks.compile import _pulse_ends
-
-        ends_used = edge == "both" or level == (edge == "rising")  # else the active edge ends it
-        last = []
-        for role in ("up", "down"):
-            t, ends = _pulse_ends(iface.signals[role], edge)
-            if len(t):
-                last.append(int(t[-1]))
-                if ends_used and ends[-1] < 0:
-                    anchors.append(int(t[-1]))  # a pulse not yet ended: its switch is pending
-        if last:
-            anchors.append(max(last))  # the last pulse: the next switch starts from its end
-    en = iface.get("enable")
-    if "enable_setup" in ids and en is not None:
-        act_en = active_edges(en, "rising")
-        if len(act_en):
-            rise = int(act_en[-1])
-            fell = bool(len(en.edges)) and int(en.edges[-1]) > rise
-            stepped = bool(len(steps.ticks)) and int(steps.ticks[-1]) >= rise
-            if not fell and not stepped:
-                anchors.append(rise)
     return min(anchors) if anchors else NEVER
 
 
