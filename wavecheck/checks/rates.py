@@ -175,7 +175,13 @@ def max_step_rates(
             longest = _diff_extreme(pulses.start, pulses.end, smallest=False)[0]
             pulse = (longest, _median(pulses.start, pulses.end))
     return rates_from(
-        drive, st, active_edge, timebase, level=level, pulse_verdict=pulse_verdict, gap=gap,
+        drive,
+        st,
+        active_edge,
+        timebase,
+        level=level,
+        pulse_verdict=pulse_verdict,
+        gap=gap,
         pulse=pulse,
     )
 

@@ -200,9 +200,13 @@ class RuleResult:
         indeterminate or the closest one measured exactly the limit (no rate decides it)."""
         if self.limit_ns is None or not self.indeterminate:
             return None
-        return decide_rate(self.limit_ns, self.timebase, *decide_parts(
-            self.limit_ns, self.timebase, self.intervals.measured[self.outcome == INDETERMINATE]
-        ))
+        return decide_rate(
+            self.limit_ns,
+            self.timebase,
+            *decide_parts(
+                self.limit_ns, self.timebase, self.intervals.measured[self.outcome == INDETERMINATE]
+            ),
+        )
 
     def histogram(self) -> Histogram:
         """The measured intervals in the fixed bins of :class:`Histogram` (mergeable; empty for
@@ -344,6 +348,7 @@ class RuleOutcome(Protocol):
     @property
     def unknown_ticks(self) -> EdgeArray:
         """The first (up to 100 on the streamed path) unknown places, in time order."""
+
     @property
     def verdict(self) -> Verdict: ...
     @property

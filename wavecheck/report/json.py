@@ -18,7 +18,7 @@ import json
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.checks.result import RuleOutcome, Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.model import Report
@@ -29,7 +29,7 @@ __all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
 DEFAULT_VIOLATION_CAP = 1000
 
 
-def _rule(r: RuleResult) -> dict[str, Any]:
+def _rule(r: RuleOutcome) -> dict[str, Any]:
     fig = r.figure
     return {
         "id": r.rule,
@@ -52,7 +52,7 @@ def _rule(r: RuleResult) -> dict[str, Any]:
     }
 
 
-def _datasheet_ns(r: RuleResult) -> Fraction | None:
+def _datasheet_ns(r: RuleOutcome) -> Fraction | None:
     fig = r.figure
     if fig is None or fig.datasheet is None:
         return None

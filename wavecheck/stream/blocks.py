@@ -10,15 +10,23 @@ already in memory (the tests' way to get blocks of any size, down to one edge).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
+from fractions import Fraction
 from typing import Protocol
 
 import numpy as np
 
 from wavecheck.capture.model import NEVER, Capture, Channel, EdgeArray
 
-__all__ = ["BlockSource", "EdgeBlock", "MemorySource", "capture_blocks", "skeleton_of"]
+__all__ = [
+    "BlockSource",
+    "EdgeBlock",
+    "MemorySource",
+    "capture_blocks",
+    "open_stream",
+    "skeleton_of",
+]
 
 
 @dataclass
@@ -57,6 +65,9 @@ class BlockSource(Protocol):
         """After :meth:`blocks`: the whole capture without edges (start, end, notes,
         :attr:`Channel.counted` edge counts, levels and unknown stretches)."""
 
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` (indices) only; the others are only counted."""
+
 
 def skeleton_of(capture: Capture) -> Capture:
     """``capture`` without its edges and x/z stretches (each channel's edge count kept)."""
@@ -84,15 +95,19 @@ class MemorySource:
     def capture(self) -> Capture:
         return self.skeleton
 
+    def want(self, channels: Iterable[int]) -> None:
+        pass  # the capture is in memory already
 
-def _events(ch: Channel, start: int) -> EdgeArray:
-    return np.concatenate([ch.edges, ch.xz_times, ch.xz_ends[ch.xz_ends != NEVER], [ch.known_from]])
+
+def _events(ch: Channel) -> EdgeArray:
+    ends = ch.xz_ends[ch.xz_ends != NEVER]
+    return np.concatenate([ch.edges, ch.xz_times, ends, np.array([ch.known_from], np.int64)])
 
 
 def capture_blocks(capture: Capture, block_edges: int) -> Iterator[EdgeBlock]:
     """Cut ``capture`` into blocks of about ``block_edges`` events (edges, x/z starts and ends)."""
     chans = capture.channels
-    ticks = np.unique(np.concatenate([_events(c, capture.start) for c in chans] or [[0]]))
+    ticks = np.unique(np.concatenate([_events(c) for c in chans] or [np.zeros(1, np.int64)]))
     ticks = ticks.astype(np.int64)
     cuts = ticks[:: max(1, block_edges)][1:]  # each block ends before a cut
     bounds = [*cuts.tolist(), NEVER]
@@ -113,3 +128,33 @@ def capture_blocks(capture: Capture, block_edges: int) -> Iterator[EdgeBlock]:
                     getattr(block, name)[c.index] = arr[sel]
         lo = hi
         yield block
+
+
+def open_stream(
+    path: str,
+    *,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+    input_format: str | None = None,
+    chunk_bytes: int | None = None,
+) -> BlockSource | None:
+    """A block reader for ``path`` (a ``.sr`` or VCD file, told as
+    :func:`wavecheck.capture.open.open_capture` tells them), or None when there is none (standard
+    input, a pipe, FST/GHW, formats read through sigrok-cli, a VCD with options): read whole."""
+    from wavecheck.capture.open import detect_format, is_stream
+
+    if is_stream(path):
+        return None
+    fmt = (input_format.strip() if input_format else detect_format(path)).lower()
+    if fmt in ("sr", "srzip", "sigrok"):
+        from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
+
+        size = chunk_bytes or DEFAULT_CHUNK_BYTES
+        return SrBlocks(path, samplerate=samplerate, resolution_s=resolution_s, chunk_bytes=size)
+    if fmt == "vcd":
+        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
+        from wavecheck.capture.vcd.reader import VcdBlocks
+
+        size = chunk_bytes or VCD_CHUNK
+        return VcdBlocks(path, samplerate=samplerate, resolution_s=resolution_s, chunk_bytes=size)
+    return None

@@ -30,7 +30,7 @@ every block size from one edge up.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import numpy as np
@@ -90,6 +90,7 @@ class _Role:
     known_from: int | None = None
     xz_starts: list[int] | None = None
     xz_ends: list[int] | None = None
+    parts: list[EdgeArray] = field(default_factory=list)  # edges come since the last window
 
 
 class AxisStream:
@@ -160,7 +161,7 @@ class AxisStream:
                 r.known_from, r.level = block.known[r.index]  # raw level (before inversion)
             e = block.edges.get(r.index)
             if e is not None and len(e):
-                r.edges = np.concatenate([r.edges, e]) if len(r.edges) else e
+                r.parts.append(e)
                 self.pending += len(e)
             for name in ("xz_starts", "xz_ends"):
                 got = getattr(block, name).get(r.index)
@@ -197,6 +198,10 @@ class AxisStream:
 
     def _window(self, t1: int) -> None:
         t0, self.t0, self.pending = self.t0, t1, 0
+        for r in self.roles.values():
+            if r.parts:
+                r.edges = np.concatenate([r.edges, *r.parts])
+                r.parts = []
         iface = self._iface()
         st = self.st
         steps = decode(
@@ -459,6 +464,7 @@ def check_stream(
         block_edges=block_edges,
         keep_violations=keep_violations,
     )
+    source.want({r.index for a in m.axes for r in a.roles.values()})
     for block in source.blocks():
         m.feed(block)
     return m.finish(source.capture())
