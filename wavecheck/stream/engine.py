@@ -198,10 +198,10 @@ class AxisStream:
 
     def _window(self, t1: int) -> None:
         t0, self.t0, self.pending = self.t0, t1, 0
-        for r in self.roles.values():
-            if r.parts:
-                r.edges = np.concatenate([r.edges, *r.parts])
-                r.parts = []
+        for held in self.roles.values():
+            if held.parts:
+                held.edges = np.concatenate([held.edges, *held.parts])
+                held.parts = []
         iface = self._iface()
         st = self.st
         steps = decode(
