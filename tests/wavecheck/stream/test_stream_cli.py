@@ -42,3 +42,22 @@ def test_block_edges_must_be_positive() -> None:
         capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
     assert p.returncode == 2 and "--block-edges must be 1 or more" in p.stderr
+
+
+@pytest.mark.skipif(not GRBL.exists(), reason="shared captures not present")
+def test_the_samples_are_read_once_for_every_axis(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    from wavecheck.capture.sr import SrBlocks
+    from wavecheck.cli import _capture_args, main
+
+    passes = []
+    real = SrBlocks.blocks
+
+    def counting(self: SrBlocks):  # type: ignore[no-untyped-def]
+        passes.append(self.wanted)
+        return real(self)
+
+    monkeypatch.setattr(SrBlocks, "blocks", counting)
+    monkeypatch.setattr(_capture_args, "open_capture", None)  # the whole path is not taken
+    main(["check", str(GRBL), "--drive", "gecko-g202", "--map", "x.step=0,x.dir=1", "--map", "y.step=2,y.dir=3"])
+    assert passes == [{0, 1, 2, 3}]  # one pass; only the mapped channels' edges extracted
+    capsys.readouterr()
