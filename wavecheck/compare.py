@@ -165,13 +165,13 @@ def _pos(v: int | None) -> str:
 
 
 def _times_ns(report: Report, align: Align) -> np.ndarray:
-    ticks = report.steps.ticks
+    ticks = report.events().ticks
     origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
     return (ticks - origin).astype(np.float64) * float(report.capture.timebase.tick_ns)
 
 
 def _exact_ns(report: Report, i: int, align: Align) -> Fraction:
-    ticks = report.steps.ticks
+    ticks = report.events().ticks
     origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
     return report.capture.timebase.ns(int(ticks[i]) - origin)
 
@@ -205,7 +205,7 @@ def _step_times(
 
 def _direction_mismatches(capture: Report, golden: Report, n: int) -> int:
     """Steps among the first ``n`` whose directions are both known and differ."""
-    dc, dg = capture.steps.direction[:n], golden.steps.direction[:n]
+    dc, dg = capture.events().direction[:n], golden.events().direction[:n]
     return int(np.count_nonzero((dc != 0) & (dg != 0) & (dc != dg)))
 
 

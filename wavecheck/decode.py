@@ -88,6 +88,11 @@ class StepEvents:
         return int(len(self.ticks))
 
     @property
+    def ambiguous_count(self) -> int:
+        """Number of steps of ambiguous direction."""
+        return int(len(self.ambiguous))
+
+    @property
     def forward(self) -> int:
         """Number of forward steps."""
         return int(np.count_nonzero(self.direction > 0))

@@ -13,7 +13,7 @@ from dataclasses import replace
 from fractions import Fraction
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture
+from wavecheck.capture.model import Capture, EdgeArray
 from wavecheck.checks.compile import run_rules
 from wavecheck.checks.rates import max_step_rates
 from wavecheck.checks.rates import pulse_level as generator_pulse_level
@@ -25,9 +25,18 @@ from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.report.machine import MachineReport, common_timer
 from wavecheck.report.model import Report
+from wavecheck.timebase import Timebase
 from wavecheck.units import format_time, parse_time
 
-__all__ = ["auto_map", "check_machine", "default_step_type", "resolve_resolution_ns", "run_check"]
+__all__ = [
+    "ambiguous_note",
+    "auto_map",
+    "check_machine",
+    "default_step_type",
+    "resolve_resolution_ns",
+    "run_check",
+]
+
 
 def _leaf(name: str) -> str:
     """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
@@ -105,6 +114,18 @@ def resolve_resolution_ns(
     return ns, None
 
 
+def ambiguous_note(count: int, first: EdgeArray, timebase: Timebase) -> str | None:
+    """The report's note on ``count`` steps of ambiguous direction, ``first[0]`` the first one's
+    tick (None when there is none); shared with the streamed engine (:mod:`wavecheck.stream`)."""
+    if not count:
+        return None
+    at = format_time(timebase.seconds(int(first[0])))
+    return (
+        f"{count} step(s) of ambiguous direction (DIR changed at the same "
+        f"sample as the active edge; first at {at}); counted as neither forward nor reverse"
+    )
+
+
 def run_check(
     capture: Capture,
     drive: Drive,
@@ -168,7 +189,9 @@ def run_check(
         raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {pulse_level!r}")
     level = generator_pulse_level(iface, st, pulse_level)
     ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge, level)
-    own = next((r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None)
+    own = next(
+        (r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None
+    )
     rates = max_step_rates(
         iface,
         st,
@@ -191,12 +214,9 @@ def run_check(
     notes = list(capture.notes)
     if st.kind == "step-dir" and iface.get("dir") is None:
         notes.append("no DIR channel mapped: step directions are unknown, DIR rules unchecked")
-    if len(steps.ambiguous):
-        first = format_time(capture.timebase.seconds(int(steps.ambiguous[0])))
-        notes.append(
-            f"{len(steps.ambiguous)} step(s) of ambiguous direction (DIR changed at the same "
-            f"sample as the active edge; first at {first}); counted as neither forward nor reverse"
-        )
+    amb = ambiguous_note(steps.ambiguous_count, steps.ambiguous, capture.timebase)
+    if amb:
+        notes.append(amb)
     if resolution_note:
         notes.append(resolution_note)
     return Report(
@@ -278,4 +298,6 @@ def check_machine(
             )
         )
     several = bool(reports) and (len(reports) > 1 or reports[0].axis is not None)
-    return MachineReport(capture, reports, [common_timer(reports)] if cross_axis and several else [])
+    return MachineReport(
+        capture, reports, [common_timer(reports)] if cross_axis and several else []
+    )

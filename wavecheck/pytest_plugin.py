@@ -66,7 +66,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from wavecheck.checks.result import RuleResult
+    from wavecheck.checks.result import RuleOutcome
     from wavecheck.report.machine import MachineReport
     from wavecheck.report.model import Report
 
@@ -420,7 +420,7 @@ def _ns(v: Any) -> str:
     return format_ns(v, signed=True)
 
 
-def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str:
+def describe_rule(report: Report, r: RuleOutcome, max_violations: int = 3) -> str:
     """A readable account of one rule: verdict, counts, limit, margin and the worst violations."""
     limit = "-" if r.limit_ns is None else _ns(r.limit_ns).lstrip("+")
     lines = [

@@ -50,6 +50,14 @@ class Channel:
     xz_times: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     xz_ends: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     never_known: bool = False
+    counted: int | None = None
+    """The number of edges when :attr:`edges` is not kept (a streamed capture: the edges went
+    by block by block; :mod:`wavecheck.stream`), else None."""
+
+    @property
+    def edge_count(self) -> int:
+        """Number of edges (:attr:`counted` for a streamed capture)."""
+        return int(len(self.edges)) if self.counted is None else self.counted
 
     def unknown_stretches(self, start: int) -> tuple[EdgeArray, EdgeArray]:
         """Where the level is not known, as closed tick ranges ``[starts[i], ends[i]]`` in time

@@ -27,9 +27,9 @@ import re
 import struct
 import zipfile
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from fractions import Fraction
-from typing import Any, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 import numpy.typing as npt
@@ -40,6 +40,9 @@ from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency, parse_frequency
+
+if TYPE_CHECKING:
+    from wavecheck.stream.blocks import EdgeBlock
 
 
 def _load_zlib() -> Any:
@@ -57,6 +60,7 @@ __all__ = [
     "DEFAULT_CHUNK_BYTES",
     "MAX_MEMBER_BYTES",
     "MAX_TOTAL_BYTES",
+    "SrBlocks",
     "SrMetadata",
     "read_sr",
     "read_sr_metadata",
@@ -502,6 +506,146 @@ def _member_blocks(
         raise zipfile.BadZipFile(f"Bad CRC-32 for file {info.filename!r}")
 
 
+def _rate_notes(
+    path: str | os.PathLike[str], meta: SrMetadata, samplerate: Fraction | None, require_rate: bool
+) -> tuple[Fraction | None, list[str]]:
+    """The sample rate to use and the notes on where it comes from."""
+    notes: list[str] = []
+    rate = meta.samplerate
+    if samplerate is not None:
+        if samplerate <= 0:
+            raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
+        if rate is not None and rate != samplerate:
+            notes.append(
+                f"sample rate {format_frequency(samplerate)} given by the user overrides "
+                f"the file's {meta.samplerate_text}"
+            )
+        elif rate is None:
+            notes.append(
+                f"the file states no sample rate; using {format_frequency(samplerate)} "
+                "given by the user"
+            )
+        rate = samplerate
+    if rate is None and require_rate:
+        raise CaptureError(
+            path,
+            "metadata",
+            "states no samplerate, so its time base is unknown (give it, e.g. --samplerate 12MHz)",
+        )
+    if rate is None:
+        notes.append(
+            "the file states no sample rate: edges and durations are in samples; "
+            "times need --samplerate (e.g. --samplerate 12MHz)"
+        )
+    return rate, notes
+
+
+def _scan(
+    path: str | os.PathLike[str],
+    zf: zipfile.ZipFile,
+    raw: BinaryIO,
+    meta: SrMetadata,
+    finder: _EdgeFinder,
+    chunk_bytes: int,
+) -> Iterator[None]:
+    """Inflate every chunk member into ``finder``, yielding after each block of samples."""
+    step = max(meta.unitsize, chunk_bytes - chunk_bytes % meta.unitsize)
+    report = current()
+    total = sum(info.file_size for info in meta.members)
+    done = 0
+    for info in meta.members:
+        got = 0
+        try:
+            carry = b""
+            room = meta.data_end.get(info.header_offset)
+            for data in _member_blocks(zf, raw, info, step, room):
+                got += len(data)
+                if carry:
+                    data, carry = carry + data, b""
+                whole = len(data) - len(data) % meta.unitsize
+                if whole < len(data):
+                    carry = data[whole:]
+                finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+                report(done + got, total)
+                yield
+        except _READ_ERRORS as err:
+            raise CaptureError(
+                path,
+                f"member {info.filename}",
+                f"is corrupt after {got} bytes: {err} (the file is damaged)",
+            ) from None
+        if got != info.file_size:
+            raise CaptureError(
+                path,
+                f"member {info.filename}",
+                f"gave {got} bytes, not the {info.file_size} it declares (the file is damaged)",
+            )
+        done += got
+
+
+def _assemble(
+    path: str | os.PathLike[str],
+    meta: SrMetadata,
+    rate: Fraction | None,
+    notes: list[str],
+    resolution_s: Fraction | None,
+    channels: list[Channel],
+    nsamples: int,
+    end_notes: bool = True,
+) -> Capture:
+    """The capture of ``channels`` with the reader's notes, time base and resolution
+    (``end_notes=False``: leave out the notes known only after the samples, for a skeleton)."""
+    notes = list(notes)
+    if end_notes and meta.ignored:
+        listed = ", ".join(meta.ignored[:5]) + (" …" if len(meta.ignored) > 5 else "")
+        notes.append(
+            f"ignored {len(meta.ignored)} member(s) named like chunks that libsigrok never "
+            f"reads (it opens {meta.members[0].filename.rsplit('-', 1)[0]}-1, -2, … by exact "
+            f"name): {listed}"
+        )
+    if end_notes and meta.total_analog:
+        notes.append(f"skipped {meta.total_analog} analog channel(s)")
+    disabled = meta.total_probes - len(meta.probes)
+    if end_notes and disabled:
+        notes.append(f"{disabled} of {meta.total_probes} logic channels were disabled")
+    # untimed (no rate): a placeholder of 1 s per sample, flagged by time_known=False
+    tb = Timebase.from_samplerate(rate if rate is not None else 1)
+    res = 1
+    if meta.exact_source is not None and resolution_s is None:
+        res = 0
+        notes.append(
+            f"the file states its edges are exact (simulated by {meta.exact_source}, each "
+            "edge on its sample): resolution 0"
+        )
+    elif meta.exact_source is not None and resolution_s is not None:
+        ticks = resolution_s / tb.tick_s
+        res = -((-ticks.numerator) // ticks.denominator)
+        notes.append(f"resolution set to {res} samples by the user (the file says exact)")
+    elif resolution_s is not None:
+        ticks = resolution_s / tb.tick_s
+        res = -((-ticks.numerator) // ticks.denominator)
+        if ticks < 1:
+            notes.append(
+                f"resolution {float(resolution_s * 10**9):g} ns is finer than the sample "
+                "period; using one sample"
+            )
+            res = 1
+        elif res != 1:
+            notes.append(f"resolution set to {res} samples by the user")
+    return Capture(
+        path=str(path),
+        format="sr",
+        timebase=tb,
+        resolution_ticks=res,
+        samplerate_hz=rate,
+        start=0,
+        end=nsamples,
+        channels=channels,
+        notes=notes,
+        time_known=rate is not None,
+    )
+
+
 def read_sr(
     path: str | os.PathLike[str],
     *,
@@ -533,116 +677,81 @@ def read_sr(
         meta = read_sr_metadata(
             path, zf, max_member_bytes=max_member_bytes, max_total_bytes=max_total_bytes
         )
-        notes: list[str] = []
-        rate = meta.samplerate
-        if samplerate is not None:
-            if samplerate <= 0:
-                raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
-            if rate is not None and rate != samplerate:
-                notes.append(
-                    f"sample rate {format_frequency(samplerate)} given by the user overrides "
-                    f"the file's {meta.samplerate_text}"
-                )
-            elif rate is None:
-                notes.append(
-                    f"the file states no sample rate; using {format_frequency(samplerate)} "
-                    "given by the user"
-                )
-            rate = samplerate
-        if rate is None and require_rate:
-            raise CaptureError(
-                path,
-                "metadata",
-                "states no samplerate, so its time base is unknown (give it, e.g. --samplerate 12MHz)",
-            )
-        if rate is None:
-            notes.append(
-                "the file states no sample rate: edges and durations are in samples; "
-                "times need --samplerate (e.g. --samplerate 12MHz)"
-            )
+        rate, notes = _rate_notes(path, meta, samplerate, require_rate)
         bits = sorted(meta.probes)
         finder = _EdgeFinder(meta.unitsize, bits)
-        step = max(meta.unitsize, chunk_bytes - chunk_bytes % meta.unitsize)
-        report = current()
-        total = sum(info.file_size for info in meta.members)
-        done = 0
-        for info in meta.members:
-            got = 0
-            try:
-                carry = b""
-                room = meta.data_end.get(info.header_offset)
-                for data in _member_blocks(zf, raw, info, step, room):
-                    got += len(data)
-                    if carry:
-                        data, carry = carry + data, b""
-                    whole = len(data) - len(data) % meta.unitsize
-                    if whole < len(data):
-                        carry = data[whole:]
-                    finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
-                    report(done + got, total)
-            except _READ_ERRORS as err:
-                raise CaptureError(
-                    path,
-                    f"member {info.filename}",
-                    f"is corrupt after {got} bytes: {err} (the file is damaged)",
-                ) from None
-            if got != info.file_size:
-                raise CaptureError(
-                    path,
-                    f"member {info.filename}",
-                    f"gave {got} bytes, not the {info.file_size} it declares (the file is damaged)",
-                )
-            done += got
-        if meta.ignored:
-            listed = ", ".join(meta.ignored[:5]) + (" …" if len(meta.ignored) > 5 else "")
-            notes.append(
-                f"ignored {len(meta.ignored)} member(s) named like chunks that libsigrok never "
-                f"reads (it opens {meta.members[0].filename.rsplit('-', 1)[0]}-1, -2, … by exact "
-                f"name): {listed}"
-            )
-        if meta.total_analog:
-            notes.append(f"skipped {meta.total_analog} analog channel(s)")
-        disabled = meta.total_probes - len(bits)
-        if disabled:
-            notes.append(f"{disabled} of {meta.total_probes} logic channels were disabled")
-        # untimed (no rate): a placeholder of 1 s per sample, flagged by time_known=False
-        tb = Timebase.from_samplerate(rate if rate is not None else 1)
-        res = 1
-        if meta.exact_source is not None and resolution_s is None:
-            res = 0
-            notes.append(
-                f"the file states its edges are exact (simulated by {meta.exact_source}, each "
-                "edge on its sample): resolution 0"
-            )
-        elif meta.exact_source is not None and resolution_s is not None:
-            ticks = resolution_s / tb.tick_s
-            res = -((-ticks.numerator) // ticks.denominator)
-            notes.append(f"resolution set to {res} samples by the user (the file says exact)")
-        elif resolution_s is not None:
-            ticks = resolution_s / tb.tick_s
-            res = -((-ticks.numerator) // ticks.denominator)
-            if ticks < 1:
-                notes.append(
-                    f"resolution {float(resolution_s * 10**9):g} ns is finer than the sample "
-                    "period; using one sample"
-                )
-                res = 1
-            elif res != 1:
-                notes.append(f"resolution set to {res} samples by the user")
+        for _ in _scan(path, zf, raw, meta, finder, chunk_bytes):
+            pass
         channels = [
             Channel(name=meta.probes[bit], index=bit, initial=finder.initial[slot],
                     edges=finder.edges(slot))
             for slot, bit in enumerate(bits)
         ]  # fmt: skip
-    return Capture(
-        path=str(path),
-        format="sr",
-        timebase=tb,
-        resolution_ticks=res,
-        samplerate_hz=rate,
-        start=0,
-        end=finder.nsamples,
-        channels=channels,
-        notes=notes,
-        time_known=rate is not None,
-    )
+    return _assemble(path, meta, rate, notes, resolution_s, channels, finder.nsamples)
+
+
+class SrBlocks:
+    """A ``.sr`` read block by block (:class:`wavecheck.stream.blocks.BlockSource`): the
+    edges of ``channels`` (indices; None: every channel) after each inflated block, the other
+    channels only counted. Same scan as :func:`read_sr` (same arguments)."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        samplerate: Fraction | None = None,
+        resolution_s: Fraction | None = None,
+        chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+        channels: Iterable[int] | None = None,
+    ) -> None:
+        self.path = path
+        self.resolution_s = resolution_s
+        self.chunk_bytes = max(1, chunk_bytes)
+        with _open_zip(path) as zf:
+            self.meta = read_sr_metadata(path, zf)
+        self.rate, self.notes = _rate_notes(path, self.meta, samplerate, True)
+        self.bits = sorted(self.meta.probes)
+        self.wanted = set(self.bits if channels is None else channels)
+        self.counts = dict.fromkeys(self.bits, 0)
+        self.initial = dict.fromkeys(self.bits, 0)
+        self.nsamples = 0
+        self.skeleton = _assemble(path, self.meta, self.rate, self.notes, resolution_s,
+                                  self._channels(), 0, end_notes=False)  # fmt: skip
+
+    def _channels(self) -> list[Channel]:
+        return [
+            Channel(self.meta.probes[b], b, self.initial[b], np.zeros(0, np.int64),
+                    counted=self.counts[b])
+            for b in self.bits
+        ]  # fmt: skip
+
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` only (before :meth:`blocks`)."""
+        self.wanted = set(channels)
+
+    def blocks(self) -> Iterator[EdgeBlock]:
+        """The edges after each inflated block of samples."""
+        from wavecheck.stream.blocks import EdgeBlock
+
+        with _open_zip(self.path) as zf, open(self.path, "rb") as raw:
+            finder = _EdgeFinder(self.meta.unitsize, self.bits)
+            first = True
+            for _ in _scan(self.path, zf, raw, self.meta, finder, self.chunk_bytes):
+                block = EdgeBlock(end=finder.nsamples, start=0 if first else None)
+                if first:
+                    for slot, b in enumerate(self.bits):
+                        self.initial[b] = finder.initial[slot]
+                        block.known[b] = (0, finder.initial[slot])
+                    first = False
+                for slot, b in enumerate(self.bits):
+                    e = finder.edges(slot)
+                    self.counts[b] += len(e)
+                    if b in self.wanted and len(e):
+                        block.edges[b] = e
+                yield block
+            self.nsamples = finder.nsamples
+
+    def capture(self) -> Capture:
+        """The whole capture without edges (after :meth:`blocks`)."""
+        return _assemble(self.path, self.meta, self.rate, self.notes, self.resolution_s,
+                         self._channels(), self.nsamples)  # fmt: skip

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
+import numpy.typing as npt
 
 from wavecheck.capture.model import EdgeArray
 from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
@@ -44,7 +45,16 @@ from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.rules import RULE_IDS, Rule, applicable
 
-__all__ = ["RuleSet", "applicable_rules", "measure_intervals", "planned_rules", "run_rules"]
+__all__ = [
+    "RuleSet",
+    "applicable_rules",
+    "figure_of",
+    "measure_intervals",
+    "planned_rules",
+    "rule_intervals",
+    "run_rules",
+    "split_unknown",
+]
 
 
 def applicable_rules(st: StepType) -> tuple[str, ...]:
@@ -169,6 +179,25 @@ def _intervals(
     raise ValueError(f"rule {r.id!r}: no measurement for check {r.check!r}")
 
 
+def split_unknown(
+    intervals: Intervals, starts: EdgeArray, ends: EdgeArray
+) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """Which ``intervals`` touch none of the disjoint unknown stretches ``[starts[i], ends[i]]``
+    (kept), and which stretches an interval left out overlaps (the others may hide a whole
+    interval: they count as unknown places of their own)."""
+    lo = np.minimum(intervals.start, intervals.end)
+    hi = np.maximum(intervals.start, intervals.end)
+    out = touches_stretches(lo, hi, starts, ends)
+    # stretches that an interval left out overlaps (by the running max of their ends)
+    order = np.argsort(lo[out], kind="stable")
+    olo, ohi = lo[out][order], np.maximum.accumulate(hi[out][order])
+    last = np.searchsorted(olo, ends, side="right") - 1
+    covered = np.zeros(len(starts), dtype=np.bool_)
+    has = last >= 0
+    covered[has] = ohi[last[has]] >= starts[has]
+    return ~out, covered
+
+
 def _known(
     intervals: Intervals, iface: StepInterface, st: StepType, r: Rule
 ) -> tuple[Intervals, EdgeArray]:
@@ -179,18 +208,8 @@ def _known(
     starts, ends = unknown_stretches(iface, r.roles_for(st))
     if len(starts) == 0:
         return intervals, np.zeros(0, dtype=np.int64)
-    lo = np.minimum(intervals.start, intervals.end)
-    hi = np.maximum(intervals.start, intervals.end)
-    out = touches_stretches(lo, hi, starts, ends)
-    keep = ~out
-    # stretches that an interval left out overlaps (by the running max of their ends)
-    order = np.argsort(lo[out], kind="stable")
-    olo, ohi = lo[out][order], np.maximum.accumulate(hi[out][order])
-    last = np.searchsorted(olo, ends, side="right") - 1
-    covered = np.zeros(len(starts), dtype=np.bool_)
-    has = last >= 0
-    covered[has] = ohi[last[has]] >= starts[has]
-    where = np.sort(np.concatenate([intervals.start[out], starts[~covered]]))
+    keep, covered = split_unknown(intervals, starts, ends)
+    where = np.sort(np.concatenate([intervals.start[~keep], starts[~covered]]))
     return Intervals(intervals.start[keep], intervals.end[keep]), where
 
 
@@ -209,6 +228,12 @@ def measure_intervals(
     ``pulse_level`` is the level of the generator's pulses at the drive's input (only
     ``dir_delay`` depends on it; see :func:`_dir_delay`)."""
     return _known(_intervals(rule, iface, st, steps, active_edge, pulse_level), iface, st, rule)[0]
+
+
+#: The limit (exact ns) and figure of a rule for a drive (None: the drive states none).
+figure_of = _figure
+#: Every interval of a rule (unknown stretches not yet split off): the streamed engine's input.
+rule_intervals = _intervals
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.timebase import Timebase
 
-__all__ = ["MaxStepRates", "max_step_rates"]
+__all__ = ["MaxStepRates", "max_step_rates", "rates_from"]
 
 _GIGA = Fraction(10**9)
 _BLOCK = 1 << 20
@@ -163,23 +163,57 @@ def max_step_rates(
         pulse_verdict: the verdict of the pulse level's own rule (step_high for high pulses);
             a fail means no rate would pass.
     """
+    gap = None
+    if steps.count > 1:
+        g, i = _diff_extreme(steps.ticks[:-1], steps.ticks[1:], smallest=True)
+        gap = (g, int(steps.ticks[i]))
+    pulse = None
+    if st.kind != "phases" and active_edge != "both":
+        sigs = [s for s in (iface.get(r) for r in st.pulse_roles) if s is not None]
+        pulses = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
+        if len(pulses):
+            longest = _diff_extreme(pulses.start, pulses.end, smallest=False)[0]
+            pulse = (longest, _median(pulses.start, pulses.end))
+    return rates_from(
+        drive,
+        st,
+        active_edge,
+        timebase,
+        level=level,
+        pulse_verdict=pulse_verdict,
+        gap=gap,
+        pulse=pulse,
+    )
+
+
+def rates_from(
+    drive: Drive,
+    st: StepType,
+    active_edge: ActiveEdge,
+    timebase: Timebase,
+    *,
+    level: int,
+    pulse_verdict: str | None,
+    gap: tuple[int, int] | None,
+    pulse: tuple[int, int] | None,
+) -> MaxStepRates:
+    """:func:`max_step_rates` from the capture's figures: ``gap`` the shortest interval between
+    successive steps and the tick of the first such step (None: fewer than two steps), ``pulse``
+    the longest and the (lower) median complete pulse at ``level`` in ticks (None: no complete
+    pulse). Both are mergeable block by block (:mod:`wavecheck.stream`)."""
     cap, limited_by = drive_rate(drive)
     observed = observed_at = None
-    if steps.count > 1:
-        gap, i = _diff_extreme(steps.ticks[:-1], steps.ticks[1:], smallest=True)
-        if gap > 0:
-            observed = _GIGA / timebase.ns(gap)
-            observed_at = timebase.seconds(int(steps.ticks[i]))
+    if gap is not None and gap[0] > 0:
+        observed = _GIGA / timebase.ns(gap[0])
+        observed_at = timebase.seconds(gap[1])
     out = MaxStepRates(cap, limited_by, observed, observed_at, None, None, None, level)
     if st.kind == "phases" or active_edge == "both":
         why = "phase outputs" if st.kind == "phases" else "a drive that steps on both edges"
         return replace(out, pulse_level=None, headroom_note=f"not defined for {why}")
-    sigs = [s for s in (iface.get(r) for r in st.pulse_roles) if s is not None]
-    pulses = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
-    if not len(pulses):
+    if pulse is None:
         return replace(out, headroom_note="no complete pulse in the capture")
-    longest = timebase.ns(_diff_extreme(pulses.start, pulses.end, smallest=False)[0])
-    typical = timebase.ns(_median(pulses.start, pulses.end))
+    longest = timebase.ns(pulse[0])
+    typical = timebase.ns(pulse[1])
     own, other = ("step_high", "step_low") if level == 1 else ("step_low", "step_high")
     idle_min = drive.limit_ns(other)
     out = replace(out, longest_pulse_ns=longest, typical_pulse_ns=typical, idle_min_ns=idle_min)

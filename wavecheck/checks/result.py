@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -31,9 +32,13 @@ __all__ = [
     "FAIL",
     "INDETERMINATE",
     "PASS",
+    "Histogram",
+    "RuleOutcome",
     "RuleResult",
     "Verdict",
     "Violation",
+    "decide_parts",
+    "decide_rate",
     "evaluate",
     "sequence_result",
 ]
@@ -195,19 +200,20 @@ class RuleResult:
         indeterminate or the closest one measured exactly the limit (no rate decides it)."""
         if self.limit_ns is None or not self.indeterminate:
             return None
-        w = self.intervals.measured[self.outcome == INDETERMINATE]
-        tick = self.timebase.tick_ns
-        gaps = []
-        lim_ticks = self.limit_ns / tick
-        below = w[w <= _clamp(math.ceil(lim_ticks) - 1)]
-        above = w[w >= _clamp(math.floor(lim_ticks) + 1)]
-        if len(below):
-            gaps.append(self.limit_ns - int(below.max()) * tick)
-        if len(above):
-            gaps.append(int(above.min()) * tick - self.limit_ns)
-        if not gaps or len(below) + len(above) < len(w):
-            return None
-        return Fraction(2 * 10**9) / min(gaps)
+        return decide_rate(
+            self.limit_ns,
+            self.timebase,
+            *decide_parts(
+                self.limit_ns, self.timebase, self.intervals.measured[self.outcome == INDETERMINATE]
+            ),
+        )
+
+    def histogram(self) -> Histogram:
+        """The measured intervals in the fixed bins of :class:`Histogram` (mergeable; empty for
+        ``state_sequence``, which measures nothing)."""
+        if self.limit_ns is None:
+            return Histogram(())
+        return Histogram.of(self.intervals.measured)
 
     # -- violations -------------------------------------------------------------------------
     def violation(self, i: int) -> Violation:
@@ -247,6 +253,118 @@ class RuleResult:
                 idx, m = idx[keep], m[keep]
             idx = idx[np.lexsort((idx, m))]
         return [self.violation(int(i)) for i in idx[:n]]
+
+
+def decide_parts(
+    limit_ns: Fraction, timebase: Timebase, w: EdgeArray
+) -> tuple[int | None, int | None, int]:
+    """Of the indeterminate lengths ``w`` (ticks): the longest below the limit, the shortest above
+    it (None when there is none) and how many are neither (exactly the limit): the three
+    mergeable figures :attr:`RuleResult.decide_samplerate_hz` needs."""
+    lim_ticks = limit_ns / timebase.tick_ns
+    below = w[w <= _clamp(math.ceil(lim_ticks) - 1)]
+    above = w[w >= _clamp(math.floor(lim_ticks) + 1)]
+    return (
+        int(below.max()) if len(below) else None,
+        int(above.min()) if len(above) else None,
+        int(len(w) - len(below) - len(above)),
+    )
+
+
+def decide_rate(
+    limit_ns: Fraction, timebase: Timebase, below: int | None, above: int | None, exact: int
+) -> Fraction | None:
+    """The sample rate that decides the nearest-to-decided indeterminate interval (see
+    :attr:`RuleResult.decide_samplerate_hz`), from :func:`decide_parts`' figures."""
+    tick = timebase.tick_ns
+    gaps = []
+    if below is not None:
+        gaps.append(limit_ns - below * tick)
+    if above is not None:
+        gaps.append(above * tick - limit_ns)
+    if not gaps or exact:
+        return None
+    return Fraction(2 * 10**9) / min(gaps)
+
+
+@dataclass(frozen=True)
+class Histogram:
+    """Measured lengths counted in fixed bins: mergeable by adding counts.
+
+    Bin 0 holds lengths ≤ 0 ticks; a length w ≥ 1 tick goes to bin ``4·(e − 1) + q + 1`` where
+    ``2^(e−1) ≤ w < 2^e`` and ``q`` (0–3) is the quarter of that octave it lies in — four bins
+    per octave, exact integer arithmetic (lengths below 2^53 ticks)."""
+
+    counts: tuple[tuple[int, int], ...]
+    """(bin, count) pairs for the bins that hold anything, in bin order."""
+
+    @staticmethod
+    def bins(w: EdgeArray) -> npt.NDArray[np.int64]:
+        """The bin of each length ``w`` (ticks)."""
+        m, e = np.frexp(np.maximum(w, 1).astype(np.float64))
+        q = np.floor((m * 2 - 1) * 4).astype(np.int64)
+        out = 4 * (e.astype(np.int64) - 1) + q + 1
+        out[w <= 0] = 0
+        return out
+
+    @classmethod
+    def of(cls, w: EdgeArray) -> Histogram:
+        """The histogram of the lengths ``w`` (ticks)."""
+        b, c = np.unique(cls.bins(w), return_counts=True)
+        return cls(tuple(zip(b.tolist(), c.tolist(), strict=True)))
+
+    def __add__(self, other: Histogram) -> Histogram:
+        total: dict[int, int] = dict(self.counts)
+        for b, c in other.counts:
+            total[b] = total.get(b, 0) + c
+        return Histogram(tuple(sorted(total.items())))
+
+    @staticmethod
+    def lower_edge(bin_: int) -> Fraction:
+        """The smallest length (ticks, exact) of bin ``bin_`` ≥ 1."""
+        e, q = divmod(bin_ - 1, 4)
+        return Fraction(2**e) * (1 + Fraction(q, 4))
+
+
+class RuleOutcome(Protocol):
+    """What every report renderer reads of one rule's result: satisfied by :class:`RuleResult`
+    (every interval kept: the whole-capture path) and by
+    :class:`wavecheck.stream.summary.RuleSummary` (counts, extremes, the worst violations and a
+    histogram, merged block by block: the streamed path)."""
+
+    rule: str
+    limit_ns: Fraction | None
+    figure: Figure | None
+    timebase: Timebase
+    resolution_ns: Fraction
+    checked: int
+
+    @property
+    def violations(self) -> int: ...
+    @property
+    def indeterminate(self) -> int: ...
+    @property
+    def unknown(self) -> int: ...
+    @property
+    def unknown_ticks(self) -> EdgeArray:
+        """The first (up to 100 on the streamed path) unknown places, in time order."""
+
+    @property
+    def verdict(self) -> Verdict: ...
+    @property
+    def min_measured_ns(self) -> Fraction | None: ...
+    @property
+    def max_measured_ns(self) -> Fraction | None: ...
+    @property
+    def min_margin_ns(self) -> Fraction | None: ...
+    @property
+    def min_margin_at_tick(self) -> int | None: ...
+    @property
+    def min_margin_at_s(self) -> Fraction | None: ...
+    @property
+    def decide_samplerate_hz(self) -> Fraction | None: ...
+    def worst_violations(self, n: int) -> list[Violation]: ...
+    def histogram(self) -> Histogram: ...
 
 
 def evaluate(

@@ -16,7 +16,12 @@ from wavecheck.capture.open import open_capture
 from wavecheck.errors import UsageError
 from wavecheck.units import SAMPLE_RATE, parse_option
 
-__all__ = ["add_capture_arguments", "capture_from_args", "resolution_from_args"]
+__all__ = [
+    "add_capture_arguments",
+    "capture_from_args",
+    "resolution_from_args",
+    "samplerate_from_args",
+]
 
 
 def add_capture_arguments(parser: argparse.ArgumentParser) -> None:
@@ -63,6 +68,21 @@ def resolution_from_args(args: argparse.Namespace) -> Fraction | None:
     return seconds
 
 
+def samplerate_from_args(args: argparse.Namespace) -> Fraction | None:
+    """``--samplerate`` in exact Hz (None when not given).
+
+    Raises:
+        UnitError: no unit, not a frequency, below 1 kHz, or not positive.
+    """
+    rate = getattr(args, "samplerate", None)
+    if rate is None:
+        return None
+    samplerate = parse_option(rate, "--samplerate", "frequency", SAMPLE_RATE)
+    if samplerate <= 0:
+        raise UsageError(f"--samplerate {rate}: must be positive")
+    return samplerate
+
+
 def capture_from_args(
     args: argparse.Namespace, path: str | os.PathLike[str], *, resolution: bool = True, require_time: bool = True
 ) -> Capture:
@@ -75,12 +95,7 @@ def capture_from_args(
         UnitError: a bad ``--samplerate``/``--resolution`` value.
         CaptureError: the file cannot be read.
     """
-    rate = getattr(args, "samplerate", None)
-    samplerate = None
-    if rate is not None:
-        samplerate = parse_option(rate, "--samplerate", "frequency", SAMPLE_RATE)
-        if samplerate <= 0:
-            raise UsageError(f"--samplerate {rate}: must be positive")
+    samplerate = samplerate_from_args(args)
     resolution_s = resolution_from_args(args)
     return open_capture(
         path,

@@ -50,6 +50,8 @@ from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
+from wavecheck.stream.blocks import BlockSource, open_stream
+from wavecheck.stream.engine import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
 
 __all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
 
@@ -103,14 +105,53 @@ def register(sub: Any) -> None:
     )
     add_report_arguments(p)
     add_steps_arguments(p)
+    p.add_argument(
+        "--block-edges",
+        type=int,
+        default=None,
+        metavar="N",
+        help="check a .sr or VCD block by block, about N edges at a time (memory follows N, "
+        "not the capture's length; default 262144)",
+    )
+    p.add_argument(
+        "--no-stream",
+        action="store_true",
+        help="read the whole capture into memory first (the reference path; --plot, --gtkw, "
+        "--html, --steps-csv and --firmware always do)",
+    )
     p.set_defaults(func=run)
+
+
+def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
+    """A block reader for ``path`` when this check can be streamed (module
+    :mod:`wavecheck.stream`), else None: read whole."""
+    whole_only = ("plot", "gtkw", "html", "steps_csv", "firmware", "no_stream")
+    if any(getattr(args, k, None) for k in whole_only):
+        return None
+    if args.block_edges is not None and args.block_edges < 1:
+        raise UsageError(f"--block-edges must be 1 or more, got {args.block_edges}")
+    from wavecheck.cli._capture_args import samplerate_from_args
+
+    source = open_stream(
+        path,
+        samplerate=samplerate_from_args(args),
+        input_format=getattr(args, "input_format", None),
+    )
+    if source is None or args.map:
+        return source
+    named = ("step", "up", "phase-a")  # else the roles come from the waveforms: read whole
+    leaf = (c.name.rsplit(".", 1)[-1].strip().lower() for c in source.skeleton.channels)
+    return source if any(n in named for n in leaf) else None
 
 
 def build_report(args: argparse.Namespace, path: str) -> Checked:
     """Read ``path`` once and check every axis of ``args`` against its drive (no output)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    capture = capture_from_args(args, path, resolution=False)
+    source = _stream_source(args, path)
+    capture = (
+        source.skeleton if source is not None else capture_from_args(args, path, resolution=False)
+    )
     runs, found = axis_runs(args, capture)
     loaded: dict[str, Drive] = {}
     for axis in runs:
@@ -118,20 +159,33 @@ def build_report(args: argparse.Namespace, path: str) -> Checked:
             raise UsageError(f"--drive: axis {axis.name} has no drive")
         if axis.drive not in loaded:
             loaded[axis.drive] = tune_drive(load_drive(axis.drive), args.limit, args.margin)
-    machine = check_machine(
-        capture,
-        [AxisMap(a.name, a.roles) for a in runs],
-        {a.name: loaded[a.drive] for a in runs if a.drive is not None},
-        resolution_from_args(args),  # exact, a fraction of a tick included
-        step_types={a.name: a.step_type for a in runs if a.step_type is not None},
-        forward_levels={a.name: a.forward_level for a in runs},
-        invert={a.name: a.invert for a in runs},
-        active_edge=args.active_edge,
-        user_table=user_table(args),
-        stepgen=stepgen_config(args),
-        pulse_level=pulse_level(args),
-        latency_ns=latency_ns(args),
-    )
+    axes = [AxisMap(a.name, a.roles) for a in runs]
+    drives = {a.name: loaded[a.drive] for a in runs if a.drive is not None}
+    options: dict[str, Any] = {
+        "step_types": {a.name: a.step_type for a in runs if a.step_type is not None},
+        "forward_levels": {a.name: a.forward_level for a in runs},
+        "invert": {a.name: a.invert for a in runs},
+        "active_edge": args.active_edge,
+        "user_table": user_table(args),
+        "stepgen": stepgen_config(args),
+        "pulse_level": pulse_level(args),
+        "latency_ns": latency_ns(args),
+    }
+    resolution = resolution_from_args(args)  # exact, a fraction of a tick included
+    machine = None
+    if source is not None:
+        keep = max(DEFAULT_VIOLATION_CAP, DEFAULT_TEXT_VIOLATIONS, args.max_violations or 0)
+        try:
+            machine = check_stream(
+                source, axes, drives, resolution, keep_violations=keep,
+                block_edges=args.block_edges or DEFAULT_BLOCK_EDGES, **options,
+            )  # fmt: skip
+        except NotStreamable:
+            machine = None
+    if machine is None:
+        if source is not None:
+            capture = capture_from_args(args, path, resolution=False)
+        machine = check_machine(capture, axes, drives, resolution, **options)
     for report in machine.axes:
         if args.firmware:  # the capture against its own firmware configuration
             report.firmware = check_firmware(args, report)
@@ -169,7 +223,7 @@ def run(args: argparse.Namespace) -> int:
         checked = build_report(a, path)
         target = steps_csv_path(a.steps_csv, path, used) if several else a.steps_csv
         reports = axis_reports(checked)
-        axes = [AxisSteps(r.axis, r.steps) for r in reports]
+        axes = [AxisSteps(r.axis, r.events()) for r in reports]
         write_steps(a, target, axes, reports[0].capture.timebase)
         return checked
 

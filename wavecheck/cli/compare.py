@@ -71,7 +71,7 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
     ]
     align = "the first step" if c.align == "first-step" else "time 0 of each file"
     if c.max_abs_diff_ns is not None and c.max_at_step is not None:
-        t = c.golden.capture.timebase.seconds(int(c.golden.steps.ticks[c.max_at_step]))
+        t = c.golden.capture.timebase.seconds(int(c.golden.events().ticks[c.max_at_step]))
         out.append(
             f"step times:     aligned on {align}; max |Δt| {format_ns(c.max_abs_diff_ns)} at step "
             f"{c.max_at_step} (golden t = {float(t):.9f} s); mean Δt "

@@ -18,7 +18,7 @@ import json
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.checks.result import RuleOutcome, Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.model import Report
@@ -29,7 +29,7 @@ __all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
 DEFAULT_VIOLATION_CAP = 1000
 
 
-def _rule(r: RuleResult) -> dict[str, Any]:
+def _rule(r: RuleOutcome) -> dict[str, Any]:
     fig = r.figure
     return {
         "id": r.rule,
@@ -52,7 +52,7 @@ def _rule(r: RuleResult) -> dict[str, Any]:
     }
 
 
-def _datasheet_ns(r: RuleResult) -> Fraction | None:
+def _datasheet_ns(r: RuleOutcome) -> Fraction | None:
     fig = r.figure
     if fig is None or fig.datasheet is None:
         return None
@@ -89,7 +89,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
                 {
                     "index": c.index,
                     "name": c.name,
-                    "edges": int(len(c.edges)),
+                    "edges": c.edge_count,
                     "role": mapped.get(c.name),
                 }
                 for c in cap.channels
@@ -120,7 +120,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             "forward": steps.forward,
             "reverse": steps.reverse,
             "unknown_direction": steps.unknown,
-            "ambiguous": int(len(steps.ambiguous)),
+            "ambiguous": steps.ambiguous_count,
             "final_position": steps.final_position,
         },
         "rules": [_rule(r) for r in report.rules],

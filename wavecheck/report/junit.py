@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
 
-from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.checks.result import RuleOutcome, Violation
 from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_ns
 
@@ -62,7 +62,7 @@ def _describe(v: Violation) -> str:
     )
 
 
-def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
+def _testcase(suite: ET.Element, report: Report, r: RuleOutcome) -> str:
     case = ET.SubElement(
         suite, "testcase", classname=_classname(report), name=r.rule, time="0"
     )

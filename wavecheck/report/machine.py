@@ -60,7 +60,7 @@ def common_timer(reports: list[Report]) -> str:
     from wavecheck.latency import analyse_times
 
     cap = reports[0].capture
-    ticks = [r.steps.ticks for r in reports if r.steps.count]
+    ticks = [r.events().ticks for r in reports if r.steps.count]
     if len(ticks) < 2:
         return "fewer than two axes step: no common timer to look for"
     times = np.unique(np.concatenate(ticks))

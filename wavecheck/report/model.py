@@ -9,21 +9,24 @@ maximum step rates. Times are exact (ticks, :class:`~fractions.Fraction` ns / s 
 from __future__ import annotations
 
 import heapq
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from wavecheck.capture.model import Capture
 from wavecheck.checks.rates import MaxStepRates
-from wavecheck.checks.result import RuleResult, Violation
+from wavecheck.checks.result import RuleOutcome, RuleResult, Violation
 from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.errors import UsageError
 from wavecheck.interface import StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
+    from wavecheck.stream.summary import StepSummary
 
 __all__ = ["Report", "overall_verdict"]
 
@@ -40,8 +43,10 @@ class Report:
         active_edge: the edge the drive steps on.
         forward_level: the DIR level taken as forward (type 0).
         resolution_ns: T used for the verdicts, exact ns (0 = exact).
-        steps: the decoded steps.
-        rules: one result per evaluated rule, in report order.
+        steps: the decoded steps (their counts only on the streamed path:
+            :class:`wavecheck.stream.summary.StepSummary`).
+        rules: one result per evaluated rule, in report order (every interval on the
+            whole-capture path; summaries on the streamed path: :class:`RuleOutcome`).
         not_stated: rules of this step type the drive gives no limit for (not evaluated).
         not_applicable: rules the drive states that this step type has no use for.
         rates: the maximum step rates.
@@ -55,8 +60,8 @@ class Report:
     active_edge: ActiveEdge
     forward_level: int
     resolution_ns: Fraction
-    steps: StepEvents
-    rules: list[RuleResult]
+    steps: StepEvents | StepSummary
+    rules: Sequence[RuleOutcome]
     not_stated: tuple[str, ...]
     not_applicable: tuple[str, ...]
     rates: MaxStepRates
@@ -78,12 +83,39 @@ class Report:
         """0 pass, 1 a rule failed, 3 only indeterminate results (or nothing could be checked)."""
         return exit_code(self.verdict)
 
-    def rule(self, rule_id: str) -> RuleResult | None:
+    def rule(self, rule_id: str) -> RuleOutcome | None:
         """The result of ``rule_id``, or None when it was not evaluated."""
         for r in self.rules:
             if r.rule == rule_id:
                 return r
         return None
+
+    def events(self) -> StepEvents:
+        """Every decoded step (the whole-capture path); a streamed report keeps only counts.
+
+        Raises:
+            UsageError: a streamed report (read the capture whole: ``--no-stream``).
+        """
+        if isinstance(self.steps, StepEvents):
+            return self.steps
+        raise UsageError(
+            f"{self.capture.path}: this output needs every step; the check was streamed "
+            "(give --no-stream)"
+        )
+
+    def results(self) -> list[RuleResult]:
+        """Every rule's full result with every interval (the whole-capture path).
+
+        Raises:
+            UsageError: a streamed report, whose rules are summaries (``--no-stream``).
+        """
+        out = [r for r in self.rules if isinstance(r, RuleResult)]
+        if len(out) != len(self.rules):
+            raise UsageError(
+                f"{self.capture.path}: this output needs every interval; the check was "
+                "streamed (give --no-stream)"
+            )
+        return out
 
     @property
     def mapping(self) -> dict[str, str]:

@@ -123,7 +123,7 @@ def choose_places(report: Report, n: int = MAX_PLACES) -> list[Place]:
             add(p)
         return places
     margins: list[tuple[Fraction, Place]] = []
-    for r in report.rules:
+    for r in report.results():
         i = _argmin(r)
         if i is None or r.limit_ns is None:
             continue
@@ -347,7 +347,7 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
     from matplotlib.figure import Figure
 
     places = choose_places(report, max_places)
-    hist_rules = [r for r in report.rules if r.limit_ns is not None and len(r.intervals)]
+    hist_rules = [r for r in report.results() if r.limit_ns is not None and len(r.intervals)]
     n_roles = max(len(report.interface.signals), 1)
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
@@ -375,7 +375,7 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
 
         pair = grid[len(places), :].subgridspec(1, 2)
         ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
-        draw_motion(ax_pos, ax_rate, report.steps, report.capture.timebase, "steps")
+        draw_motion(ax_pos, ax_rate, report.events(), report.capture.timebase, "steps")
     for k, r in enumerate(hist_rules):
         row, col = divmod(k, hist_cols)
         span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from wavecheck.checks.result import RuleResult
+from wavecheck.checks.result import RuleOutcome
 from wavecheck.drives.model import MARK_LEGEND
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import ViolationGroup, group_violations
@@ -54,12 +54,12 @@ def rate_lines(report: Report) -> list[str]:
     return out
 
 
-def _at(r: RuleResult) -> str:
+def _at(r: RuleOutcome) -> str:
     t = r.min_margin_at_s
     return "-" if t is None else f"{float(t):.9f} s"
 
 
-def _mark(r: RuleResult) -> str:
+def _mark(r: RuleOutcome) -> str:
     return r.figure.mark if r.figure is not None else ""
 
 

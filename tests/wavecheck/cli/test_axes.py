@@ -89,8 +89,8 @@ def test_the_capture_is_read_once(smoothie_sr: Path, monkeypatch: pytest.MonkeyP
         return real(*a, **k)
 
     monkeypatch.setattr(_capture_args, "open_capture", counting)
-    main(["check", str(smoothie_sr), "--drive", "gecko-g202", *SMOOTHIE])
-    assert len(calls) == 1
+    main(["check", str(smoothie_sr), "--drive", "gecko-g202", *SMOOTHIE, "--no-stream"])
+    assert len(calls) == 1  # the streamed path: tests/wavecheck/stream/test_stream_cli.py
 
 
 def test_each_axis_its_own_drive(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -36,8 +36,9 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+from collections.abc import Iterable, Iterator
 from fractions import Fraction
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 import numpy.typing as npt
@@ -55,7 +56,10 @@ from wavecheck.capture.vcd.header import (
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
 
-__all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "read_vcd"]
+if TYPE_CHECKING:
+    from wavecheck.stream.blocks import EdgeBlock
+
+__all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "VcdBlocks", "read_vcd"]
 
 DEFAULT_CHUNK_BYTES = 192 << 10  # see the note on chunk size in the module docstring
 #: Longest token (or body ``$comment``) held whole: a 16-Mbit vector value. Longer is refused, so
@@ -369,7 +373,12 @@ class _Body:
                             "vector value without an id code (the file is cut off)",
                         )
                     consumed = min(consumed, int(starts[last]))
-                    kind, starts, ends, vstart = kind[:last], starts[:last], ends[:last], vstart[:last]
+                    kind, starts, ends, vstart = (
+                        kind[:last],
+                        starts[:last],
+                        ends[:last],
+                        vstart[:last],
+                    )
                 vid = np.zeros(len(kind), dtype=bool)
                 vid[1:] = vstart[:-1]
                 kind[vid] = _K_VECID
@@ -378,7 +387,9 @@ class _Body:
             for i in (int(x) for x in np.flatnonzero(kind == _K_KEYWORD)):
                 if buf[starts[i] : ends[i]] not in _BODY_KEYWORDS:
                     word = buf[starts[i] : min(ends[i], starts[i] + 30)].decode("latin-1")
-                    raise self.error(buf, int(starts[i]), f"unexpected {word!r} in the value changes")
+                    raise self.error(
+                        buf, int(starts[i]), f"unexpected {word!r} in the value changes"
+                    )
             bad = np.flatnonzero(kind == _K_BAD)
             if len(bad):
                 i = int(bad[0])
@@ -587,35 +598,8 @@ def read_vcd(
             header.body_offset,
             f if source is None and f.seekable() else None,
         )
-        buf = rest
-        eof = False
-        want = chunk_bytes
-        report = current()
-        size = _file_size(f)
-        while True:
-            while not eof and len(buf) < want:
-                block = f.read(want - len(buf))
-                if not block:
-                    eof = True
-                buf += block
-            if eof and len(buf) <= want:
-                body.feed(buf, final=True)
-                break
-            cut = _last_ws(buf, want)
-            n = body.feed(buf, final=False, size=cut + 1) if cut >= 0 else 0
-            body.advance(buf, n)
-            report(body.offset0, size)
-            buf = buf[n:]
-            if not n and len(buf) > max_token_bytes:
-                lead = _LEADING_WS.match(buf).end()  # type: ignore[union-attr]  # always matches
-                raise body.error(
-                    buf,
-                    lead,
-                    f"a token (or $comment) longer than {max_token_bytes} bytes starts here: "
-                    "not VCD text (binary data, NUL padding?)",
-                )
-            # nothing consumed: a token or $comment longer than a chunk, read more (up to the cap)
-            want = chunk_bytes if n else min(max(2 * want, len(buf) + 1), max_token_bytes + 1)
+        for _ in _read_body(f, body, rest, chunk_bytes, max_token_bytes):
+            pass
     cap = build_capture(
         path,
         header,
@@ -632,6 +616,156 @@ def read_vcd(
     cap.vectors = vectors_of(header)
     cap.bit_source = None if source is not None else os.fspath(path)
     return cap
+
+
+def _read_body(
+    f: BinaryIO, body: _Body, rest: bytes, chunk_bytes: int, max_token_bytes: int
+) -> Iterator[bool]:
+    """Feed the VCD body after the header (``rest``, then ``f``) to ``body`` chunk by chunk,
+    yielding after each chunk whether it was the last (every change then given)."""
+    buf = rest
+    eof = False
+    want = chunk_bytes
+    report = current()
+    size = _file_size(f)
+    while True:
+        while not eof and len(buf) < want:
+            block = f.read(want - len(buf))
+            if not block:
+                eof = True
+            buf += block
+        if eof and len(buf) <= want:
+            body.feed(buf, final=True)
+            yield True
+            break
+        cut = _last_ws(buf, want)
+        n = body.feed(buf, final=False, size=cut + 1) if cut >= 0 else 0
+        body.advance(buf, n)
+        report(body.offset0, size)
+        buf = buf[n:]
+        if not n and len(buf) > max_token_bytes:
+            lead = _LEADING_WS.match(buf).end()  # type: ignore[union-attr]  # always matches
+            raise body.error(
+                buf,
+                lead,
+                f"a token (or $comment) longer than {max_token_bytes} bytes starts here: "
+                "not VCD text (binary data, NUL padding?)",
+            )
+        # nothing consumed: a token or $comment longer than a chunk, read more (up to the cap)
+        want = chunk_bytes if n else min(max(2 * want, len(buf) + 1), max_token_bytes + 1)
+        yield False
+
+
+class VcdBlocks:
+    """A VCD read block by block (:class:`wavecheck.stream.blocks.BlockSource`): after each
+    chunk of text, the edges of ``channels`` (indices; None: every one) and every channel's
+    levels becoming known and x/z stretches; the other channels are only counted. The same
+    tokenizer and edge builder as :func:`read_vcd` (same arguments)."""
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        samplerate: Fraction | None = None,
+        resolution_s: Fraction | None = None,
+        chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+        max_token_bytes: int = MAX_TOKEN_BYTES,
+        channels: Iterable[int] | None = None,
+    ) -> None:
+        self.path = path
+        self.samplerate, self.resolution_s = samplerate, resolution_s
+        self.chunk_bytes, self.max_token_bytes = max(1, chunk_bytes), max_token_bytes
+        with open_vcd(path) as f:
+            self.header, _ = read_header(path, f)
+        self.notes: list[str] = []
+        self.tb = header_timebase(self.header, self.notes)
+        self.lay = layout_of(self.header)
+        self.notes += self.lay.notes
+        n = len(self.lay.ids)
+        self.wanted = set(range(n) if channels is None else channels)
+        self.counts = [0] * n
+        self.first_time: int | None = None
+        self.last_time: int | None = None
+        self.pre_time = False
+        self.builder = _EdgeBuilder(n)
+        self.skeleton = self._assemble(0, 0, end=False)
+
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` only (before :meth:`blocks`)."""
+        self.wanted = set(channels)
+
+    def _assemble(self, first: int | None, last: int | None, end: bool = True) -> Capture:
+        b = self.builder
+        sigs = [
+            SignalEdges(
+                initial=int(b.initial[i]) if b.last_known[i] >= 0 else 0,
+                known_from=int(b.known_from[i]) if b.last_known[i] >= 0 else None,
+                edges=np.zeros(0, np.int64),
+                xz_times=np.zeros(0, np.int64),
+                xz_ends=np.zeros(0, np.int64),
+            )
+            if end
+            else SignalEdges(
+                0, 0, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
+            )
+            for i in range(b.nsig)
+        ]
+        cap = build_capture(
+            self.path, self.header, self.lay, self.tb, sigs, first, last, self.pre_time,
+            list(self.notes), self.samplerate, self.resolution_s,
+        )  # fmt: skip
+        for ch, k in zip(cap.channels, self.counts, strict=True):
+            ch.counted = k
+        return cap
+
+    def blocks(self) -> Iterator[EdgeBlock]:
+        """The edges after each chunk of text (the changes of its last timestamp held back)."""
+        from wavecheck.stream.blocks import EdgeBlock
+
+        b = self.builder
+        with open_vcd(self.path) as f:
+            _, rest = read_header(self.path, f)
+            body = _Body(
+                self.path, _IdMap(self.lay.ids, self.lay.vector_ids), b,
+                self.header.body_line, self.header.body_offset, f if f.seekable() else None,
+            )  # fmt: skip
+            known = np.zeros(b.nsig, dtype=bool)
+            started = False
+            for final in _read_body(f, body, rest, self.chunk_bytes, self.max_token_bytes):
+                if body.time is None and not final:
+                    continue
+                end = NEVER
+                if not final and body.time is not None:
+                    pend = body.pend
+                    end = body.time if pend is None else min(body.time, int(pend[1][0]))
+                block = EdgeBlock(end=end)
+                if not started:
+                    block.start = 0 if body.pre_time_changes else (body.first_time or 0)
+                    started = True
+                now = b.last_known >= 0
+                for i in np.flatnonzero(now & ~known).tolist():
+                    block.known[i] = (int(b.known_from[i]), int(b.initial[i]))
+                known = now
+                for i in range(b.nsig):
+                    if b.edges[i]:
+                        e = _concat(b.edges[i])
+                        b.edges[i] = []
+                        self.counts[i] += len(e)
+                        if i in self.wanted:
+                            block.edges[i] = e
+                    if b.xz[i]:
+                        block.xz_starts[i] = _concat(b.xz[i])
+                        b.xz[i] = []
+                    if b.xz_end[i]:
+                        block.xz_ends[i] = _concat(b.xz_end[i])
+                        b.xz_end[i] = []
+                yield block
+            self.first_time, self.last_time = body.first_time, body.time
+            self.pre_time = body.pre_time_changes
+
+    def capture(self) -> Capture:
+        """The whole capture without edges (after :meth:`blocks`)."""
+        return self._assemble(self.first_time, self.last_time)
 
 
 def _clip(token: bytes, keep: int = 30) -> str:
@@ -739,7 +873,11 @@ def _digits8(
     mask = _KEEP[keep]
     x = (word & mask) ^ (_U64(0x3030_3030_3030_3030) & mask)
     bad = (((x + _U64(0x7676_7676_7676_7676)) | x) & _U64(0x8080_8080_8080_8080)) != 0
-    x = (x & _U64(0x00FF_00FF_00FF_00FF)) * _U64(10) + ((x >> _U64(8)) & _U64(0x00FF_00FF_00FF_00FF))
-    x = (x & _U64(0x0000_FFFF_0000_FFFF)) * _U64(100) + ((x >> _U64(16)) & _U64(0x0000_FFFF_0000_FFFF))
+    x = (x & _U64(0x00FF_00FF_00FF_00FF)) * _U64(10) + (
+        (x >> _U64(8)) & _U64(0x00FF_00FF_00FF_00FF)
+    )
+    x = (x & _U64(0x0000_FFFF_0000_FFFF)) * _U64(100) + (
+        (x >> _U64(16)) & _U64(0x0000_FFFF_0000_FFFF)
+    )
     x = (x & _U64(0xFFFF_FFFF)) * _U64(10_000) + (x >> _U64(32))
     return x, bad

@@ -1,0 +1,275 @@
+"""Mergeable results of the streamed engine: one rule's figures and the step counts, in bounded
+memory, merged window by window to exactly the whole-capture figures.
+
+:class:`RuleSummary` satisfies :class:`wavecheck.checks.result.RuleOutcome` (what every renderer
+reads): counts (checked, violations, indeterminate, unknown), the shortest and longest interval
+and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
+the figures that decide ``decide_samplerate_hz``, and a fixed-bin
+:class:`~wavecheck.checks.result.Histogram`. What it does not keep: every interval (the
+whole-capture :class:`~wavecheck.checks.result.RuleResult` does), so renderers that draw every
+interval or the signals (``--plot``, ``--gtkw``) take the whole-capture path.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+from wavecheck.capture.model import EdgeArray
+from wavecheck.checks.result import (
+    FAIL,
+    INDETERMINATE,
+    Histogram,
+    RuleResult,
+    Violation,
+    decide_parts,
+    decide_rate,
+)
+from wavecheck.drives.model import Figure
+from wavecheck.timebase import Timebase
+from wavecheck.verdict import Verdict
+
+__all__ = ["UNKNOWN_KEPT", "RuleSummary", "StepSummary"]
+
+#: Unknown places and ambiguous steps listed (the first ones; the counts are exact).
+UNKNOWN_KEPT = 100
+
+_Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the whole path's order
+
+
+@dataclass
+class RuleSummary:
+    """One rule's results merged window by window (see the module docstring).
+
+    ``order_by_end``: the whole-capture path lists this rule's intervals by their end event
+    (``dir_hold``: by DIR change; ``dir_delay``: by the pulse after the switch), not by start;
+    ties (same length) are broken in that order, as :meth:`RuleResult.worst_violations` does.
+    """
+
+    rule: str
+    limit_ns: Fraction | None
+    figure: Figure | None
+    timebase: Timebase
+    resolution_ns: Fraction
+    keep: int = 1000
+    order_by_end: bool = False
+    checked: int = 0
+    fails: int = 0
+    indet: int = 0
+    left_out: int = 0
+    uncovered: int = 0
+    _unknown_first: list[int] = field(default_factory=list)  # max-heap (negated), bounded
+    _best: _Key | None = None
+    _longest: int | None = None
+    _below: int | None = None
+    _above: int | None = None
+    _exact: int = 0
+    _worst: list[tuple[_Key, int, int, str]] = field(default_factory=list)  # sorted, bounded
+    _hist: Histogram = field(default_factory=lambda: Histogram(()))
+    covered: set[int] = field(default_factory=set)
+    """Start ticks of the unknown stretches an interval left out has touched (so far)."""
+
+    # -- merging -----------------------------------------------------------------------------
+    def _key(self, start: EdgeArray, end: EdgeArray) -> tuple[EdgeArray, EdgeArray]:
+        return (end, start) if self.order_by_end else (start, end)
+
+    def add(self, part: RuleResult, left_out: EdgeArray) -> None:
+        """Merge one window's judged intervals (``part``) and the starts of the intervals it left
+        out as unknown (touching an x/z stretch)."""
+        self.checked += part.checked
+        self.fails += part.violations
+        self.indet += part.indeterminate
+        self._add_unknown(left_out)
+        self.left_out += len(left_out)
+        iv = part.intervals
+        if self.limit_ns is None:  # state_sequence: errors in time order, no length
+            if len(self._worst) < self.keep:
+                for i in range(min(len(iv), self.keep - len(self._worst))):
+                    t = int(iv.start[i])
+                    self._worst.append(((0, t, t), t, t, part.details[i]))
+            return
+        if not len(iv):
+            return
+        w = iv.measured
+        a, b = self._key(iv.start, iv.end)
+        i = int(np.lexsort((b, a, w))[0])
+        best = (int(w[i]), int(a[i]), int(b[i]))
+        if self._best is None or best < self._best:
+            self._best = best
+        top = int(w.max())
+        self._longest = top if self._longest is None else max(self._longest, top)
+        self._hist = self._hist + Histogram.of(w)
+        ind = part.outcome == INDETERMINATE
+        if ind.any():
+            below, above, exact = decide_parts(self.limit_ns, self.timebase, w[ind])
+            if below is not None:
+                self._below = below if self._below is None else max(self._below, below)
+            if above is not None:
+                self._above = above if self._above is None else min(self._above, above)
+            self._exact += exact
+        f = np.flatnonzero(part.outcome == FAIL)
+        if len(f):
+            fw, fa, fb = w[f], a[f], b[f]
+            order = np.lexsort((fb, fa, fw))[: self.keep]
+            new = [
+                ((int(fw[j]), int(fa[j]), int(fb[j])), int(iv.start[f[j]]), int(iv.end[f[j]]), "")
+                for j in order.tolist()
+            ]
+            self._worst = heapq.nsmallest(self.keep, [*self._worst, *new])
+
+    def _add_unknown(self, ticks: EdgeArray) -> None:
+        heap = self._unknown_first
+        for t in ticks.tolist():
+            if len(heap) < UNKNOWN_KEPT:
+                heapq.heappush(heap, -t)
+            elif -t > heap[0]:
+                heapq.heapreplace(heap, -t)
+
+    def add_sequence(self, transitions: int) -> None:
+        """Count ``transitions`` state changes examined (``state_sequence``)."""
+        self.checked += transitions
+
+    def close_stretches(self, starts: EdgeArray) -> None:
+        """At the end: ``starts`` are every unknown stretch of the rule's signals; those no left-out
+        interval touched count as unknown places of their own."""
+        lone = np.array([s for s in starts.tolist() if s not in self.covered], dtype=np.int64)
+        self.uncovered += len(lone)
+        self._add_unknown(lone)
+
+    # -- RuleOutcome ---------------------------------------------------------------------------
+    @property
+    def violations(self) -> int:
+        """Number of failed intervals."""
+        return self.fails
+
+    @property
+    def indeterminate(self) -> int:
+        """Number of intervals this resolution cannot decide."""
+        return self.indet
+
+    @property
+    def unknown(self) -> int:
+        """Intervals left out as unknown plus stretches that no interval touched."""
+        return self.left_out + self.uncovered
+
+    @property
+    def unknown_ticks(self) -> EdgeArray:
+        """The first :data:`UNKNOWN_KEPT` unknown places, in time order (the count is
+        :attr:`unknown`)."""
+        return np.array(sorted(-t for t in self._unknown_first), dtype=np.int64)
+
+    @property
+    def verdict(self) -> Verdict:
+        """As :attr:`RuleResult.verdict`."""
+        if self.checked == 0:
+            return "unchecked"
+        if self.fails:
+            return "fail"
+        if self.indet:
+            return "indeterminate"
+        return "pass"
+
+    @property
+    def min_measured_ns(self) -> Fraction | None:
+        """The shortest measured interval, exact ns."""
+        if self._best is None or self.limit_ns is None:
+            return None
+        return self.timebase.ns(self._best[0])
+
+    @property
+    def max_measured_ns(self) -> Fraction | None:
+        """The longest measured interval, exact ns."""
+        if self._longest is None or self.limit_ns is None:
+            return None
+        return self.timebase.ns(self._longest)
+
+    @property
+    def min_margin_ns(self) -> Fraction | None:
+        """min(measured − limit), exact ns."""
+        m = self.min_measured_ns
+        return None if m is None or self.limit_ns is None else m - self.limit_ns
+
+    @property
+    def min_margin_at_tick(self) -> int | None:
+        """Start tick of the (first) interval with the smallest margin."""
+        if self._best is None or self.limit_ns is None:
+            return None
+        _, a, b = self._best
+        return b if self.order_by_end else a
+
+    @property
+    def min_margin_at_s(self) -> Fraction | None:
+        """:attr:`min_margin_at_tick` in exact seconds."""
+        t = self.min_margin_at_tick
+        return None if t is None else self.timebase.seconds(t)
+
+    @property
+    def decide_samplerate_hz(self) -> Fraction | None:
+        """As :attr:`RuleResult.decide_samplerate_hz`, from the merged figures."""
+        if self.limit_ns is None or not self.indet:
+            return None
+        return decide_rate(self.limit_ns, self.timebase, self._below, self._above, self._exact)
+
+    def worst_violations(self, n: int) -> list[Violation]:
+        """Up to ``n`` (at most :attr:`keep`) failed intervals, shortest first, ties in the whole
+        path's order."""
+        out = []
+        for _, start, end, detail in self._worst[: max(n, 0)]:
+            if self.limit_ns is None:
+                measured = margin = None
+            else:
+                measured = self.timebase.ns(end - start)
+                margin = measured - self.limit_ns
+            out.append(
+                Violation(
+                    self.rule,
+                    start,
+                    end,
+                    self.timebase.seconds(start),
+                    measured,
+                    self.limit_ns,
+                    margin,
+                    detail,
+                )
+            )
+        return out
+
+    def histogram(self) -> Histogram:
+        """The measured intervals in fixed bins."""
+        return self._hist
+
+
+@dataclass
+class StepSummary:
+    """Step counts merged window by window: what the reports read of
+    :class:`wavecheck.decode.StepEvents` (which keeps every step)."""
+
+    count: int = 0
+    forward: int = 0
+    reverse: int = 0
+    ambiguous_count: int = 0
+    ambiguous: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """The first :data:`UNKNOWN_KEPT` steps of ambiguous direction (ticks)."""
+
+    @property
+    def unknown(self) -> int:
+        """Steps of unknown or ambiguous direction."""
+        return self.count - self.forward - self.reverse
+
+    @property
+    def final_position(self) -> int | None:
+        """forward − reverse, or None when any step's direction is unknown."""
+        return None if self.unknown else self.forward - self.reverse
+
+    def add(self, direction: np.ndarray, ambiguous: EdgeArray) -> None:
+        """Merge one window's steps (their directions) and its ambiguous steps' ticks."""
+        self.count += len(direction)
+        self.forward += int(np.count_nonzero(direction > 0))
+        self.reverse += int(np.count_nonzero(direction < 0))
+        self.ambiguous_count += len(ambiguous)
+        room = UNKNOWN_KEPT - len(self.ambiguous)
+        if room > 0 and len(ambiguous):
+            self.ambiguous = np.concatenate([self.ambiguous, ambiguous[:room]])
