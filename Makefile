@@ -69,11 +69,13 @@ demo: setup
 
 test: setup
 	.venv/bin/ruff check wavecheck stepgen tools tests bench
+	.venv/bin/ruff format --check wavecheck stepgen tools tests bench
 	.venv/bin/mypy
 	.venv/bin/pytest -n 2 -q
 
 lint:
 	.venv/bin/ruff check wavecheck stepgen tools tests bench
+	.venv/bin/ruff format --check wavecheck stepgen tools tests bench
 
 bench: setup
 	$(PY) -m pip install -q -e '.[bench]'

@@ -97,7 +97,9 @@ def _ns(text: str, what: str, model: str, plausible: Plausible | None = LATENCY)
     """One time of a latency model in whole ns; a unit is required (:func:`parse_option`), and
     a latency below 100 ns is warned about."""
     try:
-        value = option_ns(text.strip(), f"latency model {shorten(model)!r}: {what}", plausible, _warn)
+        value = option_ns(
+            text.strip(), f"latency model {shorten(model)!r}: {what}", plausible, _warn
+        )
     except UnitError as err:
         raise ConfigError(str(err)) from None
     if value < 0 or value.denominator != 1:

@@ -211,7 +211,12 @@ class StepMetrics:
 
 
 def step_metrics(
-    t_s: np.ndarray, y: np.ndarray, start: float, target: float, t_step: float = 0.0, band: float = 0.02
+    t_s: np.ndarray,
+    y: np.ndarray,
+    start: float,
+    target: float,
+    t_step: float = 0.0,
+    band: float = 0.02,
 ) -> StepMetrics:
     """Rise time (10 → 90 %), overshoot, settling into ±band·|step|, and the steady-state error
     (target − mean of the last 10 % of the samples) of ``y`` stepping from ``start`` to ``target``.
@@ -256,7 +261,11 @@ class Oscillation:
 
 
 def oscillation(
-    e: np.ndarray, servo_ns: int, min_amplitude: float, threshold: float = 0.95, diverged: bool = False
+    e: np.ndarray,
+    servo_ns: int,
+    min_amplitude: float,
+    threshold: float = 0.95,
+    diverged: bool = False,
 ) -> Oscillation:
     """Detect sustained oscillation of ``e`` (units) sampled every servo period.
 

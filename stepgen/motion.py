@@ -309,7 +309,6 @@ class _Run:
                     return dir_at == want_dir and k == want_step and trial.last_dir == -sign
         return False
 
-
     def aim(self, cmd_for: Callable[[int], float], flip: float, sign: int) -> float | None:
         """A slow command for this servo period that puts a step in its last L+H periods, so
         that reversing at the next update is the earliest reversal (checked on copies); None if
@@ -436,4 +435,6 @@ def worst_motion(
             "the intervals across them are longer than their minimum"
         )
     notes += [f"worst-case motion: {m}" for m in misses]
-    return Motion(kind="worst", updates=np.array(cmds, dtype=float), servo_ns=cfg.servo_ns, notes=notes)
+    return Motion(
+        kind="worst", updates=np.array(cmds, dtype=float), servo_ns=cfg.servo_ns, notes=notes
+    )

@@ -363,9 +363,7 @@ def _choose_periods(
     return periods, reasons
 
 
-def _warnings(
-    drive: Drive, period: int, min_p: Fraction, latency_warning: str | None
-) -> list[str]:
+def _warnings(drive: Drive, period: int, min_p: Fraction, latency_warning: str | None) -> list[str]:
     """What the user should know about a plan at base period ``period`` (ns)."""
     warnings: list[str] = [] if latency_warning is None else [latency_warning]
     if period < SHORT_PERIOD_NS:

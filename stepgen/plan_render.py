@@ -12,6 +12,7 @@ from wavecheck.units import exact_ns, format_time, json_number
 
 __all__ = ["plan_to_dict", "render_hal", "render_ini", "render_json", "render_text"]
 
+
 def _rate(hz: Fraction) -> int:
     """A step rate rounded down to a whole step/s (Stepper Tuning's 16,129 and 38,461)."""
     return math.floor(hz)

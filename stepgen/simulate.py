@@ -95,7 +95,9 @@ def trace_from_run(
     ``catchup_ns``): the edges and ``counts`` changes in ns, the end of the span, the run's
     warnings as notes. The one place a per-period run becomes edge times."""
     n = run.n_periods if n_periods is None else n_periods
-    times = invocation_times(latency, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns)
+    times = invocation_times(
+        latency, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns
+    )
     base = run.config.base_period_ns
 
     def at(idx: np.ndarray) -> np.ndarray:

@@ -118,7 +118,9 @@ def find_ultimate_gain(
         nonlocal tries
         tries += 1
         r = step_response(make_plant, replace(g0, Pgain=p), step, window_s)
-        return oscillation(r.ferror, r.servo_ns, MIN_AMPLITUDE * abs(step), SUSTAINED_RATIO, diverged=r.diverged)
+        return oscillation(
+            r.ferror, r.servo_ns, MIN_AMPLITUDE * abs(step), SUSTAINED_RATIO, diverged=r.diverged
+        )
 
     lo, hi = p_start, p_start
     if osc(p_start).sustained:
@@ -175,7 +177,9 @@ def tune(
     if not (step != 0 and math.isfinite(step)):
         raise ConfigError(f"--step {step!r} must be a nonzero number of position units")
     if not (0 < settle_s < window_s):
-        raise ConfigError(f"--settle {settle_s:g} s must be > 0 and shorter than --window {window_s:g} s")
+        raise ConfigError(
+            f"--settle {settle_s:g} s must be > 0 and shorter than --window {window_s:g} s"
+        )
     if not (0 < band < 1):
         raise ConfigError(f"--band {band!r} must be between 0 and 1 (a fraction of the step)")
     servo_s = make_plant().servo_ns * 1e-9
@@ -198,7 +202,11 @@ def tune(
         stages.append(s)
         return s
 
-    run("1 oscillation", replace(g0, Pgain=ku), f"P = Ku = {ku:.6g} sustains oscillation, period Pu = {pu:.6g} s")
+    run(
+        "1 oscillation",
+        replace(g0, Pgain=ku),
+        f"P = Ku = {ku:.6g} sustains oscillation, period Pu = {pu:.6g} s",
+    )
     p = ku / 2
     s_p = run("2 P = Ku/2", replace(g0, Pgain=p), "half the oscillating P")
     notes: list[str] = []
@@ -262,7 +270,11 @@ class FeedForward:
 
 
 def feedforward_comparison(
-    make_plant: Callable[[], Plant], tuned: PidGains, velocity: float, servo_ns: int, run_s: float = 0.5
+    make_plant: Callable[[], Plant],
+    tuned: PidGains,
+    velocity: float,
+    servo_ns: int,
+    run_s: float = 0.5,
 ) -> FeedForward:
     """Run a ramp at ``velocity`` with the tuned gains and with pncconf's (P = 1/T, FF1 = 1);
     the figures are the largest |ferror| over the last half of the run (cruise)."""

@@ -45,21 +45,28 @@ def test_cli_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
         assert argv[0] == "wavecheck"
         if "*" in line:  # what the shell would expand
             argv = [a for arg in argv for a in (sorted(map(str, workdir.glob(arg))) or [arg])]
-            argv = [str(Path(a).relative_to(workdir)) if a.startswith(str(workdir)) else a for a in argv]
+            argv = [
+                str(Path(a).relative_to(workdir)) if a.startswith(str(workdir)) else a for a in argv
+            ]
         codes.append(main(argv[1:]))
     out = capsys.readouterr().out
     assert codes == [1, 1] and "dir_hold     20 us   1        1" in out  # both: a rule failed
     for name in ("g202.png", "g202.html", "g202.gtkw"):
         assert (workdir / name).stat().st_size > 0
     root = ET.parse(workdir / "junit.xml").getroot()
-    assert len(root.findall("testsuite")) == len(list((workdir / "captures/golden").glob("g202-*.vcd")))
+    assert len(root.findall("testsuite")) == len(
+        list((workdir / "captures/golden").glob("g202-*.vcd"))
+    )
     assert root.get("errors") == "0"
 
 
 def test_axes_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Two axes, x failing dir_hold (the 20 us story trace) and y passing (the 16 us plan)."""
     shutil.copytree(REPO / "captures" / "examples", workdir / "captures" / "examples")
-    codes = [main(shlex.split(line)[1:]) for line in _block("axes").replace("\\\n", " ").strip().splitlines()]
+    codes = [
+        main(shlex.split(line)[1:])
+        for line in _block("axes").replace("\\\n", " ").strip().splitlines()
+    ]
     out = capsys.readouterr().out
     assert codes == [1, 1] and "== axis x ==" in out and "== axis y ==" in out
     data = json.loads((workdir / "machine.json").read_text())
@@ -88,7 +95,12 @@ def test_pytest_axes_block(pytester: pytest.Pytester) -> None:
     (pytester.path / "wavecheck.toml").write_text(_block("toml-axes"))
     result = pytester.runpytest("-v", "-p", "no:cacheprovider")
     out = result.stdout.str()
-    for item in ("machine::verdict", "machine::x::dir_hold", "machine::y::dir_hold", "machine::y::verdict"):
+    for item in (
+        "machine::verdict",
+        "machine::x::dir_hold",
+        "machine::y::dir_hold",
+        "machine::y::verdict",
+    ):
         assert f"wavecheck.toml::{item} PASSED" in out, item
     result.assert_outcomes(passed=13)  # the capture + 2 axes × (verdict + 5 rules)
 

@@ -17,7 +17,9 @@ from wavecheck.cli import main
 REPO = Path(__file__).resolve().parent.parent
 
 
-def test_measure_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+def test_measure_block(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     shutil.copytree(REPO / "captures" / "examples", tmp_path / "captures" / "examples")
     monkeypatch.chdir(tmp_path)
     lines = _block("measure").replace("\\\n", " ").strip().splitlines()

@@ -114,7 +114,16 @@ def test_every_user_visible_output_speaks_no_internal_words(
         for fmt in ("text", "json", "hal", "ini"):
             argv = ["plan", "--drive", "gecko-g202", "--latency", latency, "--format", fmt]
             seen[" ".join(argv)] = _run(stepgen_main, argv, capsys)
-    argv = ["plan", "--drive", "xylotex", "--latency", "11us", "--base-period", "16us", "--invert-step"]
+    argv = [
+        "plan",
+        "--drive",
+        "xylotex",
+        "--latency",
+        "11us",
+        "--base-period",
+        "16us",
+        "--invert-step",
+    ]
     seen[" ".join(argv)] = _run(stepgen_main, argv, capsys)
     for vcd in sorted(GOLDEN.glob("*.vcd")):
         want = tomllib.loads(vcd.with_suffix(".toml").read_text()).get("wavecheck")
@@ -124,8 +133,18 @@ def test_every_user_visible_output_speaks_no_internal_words(
             argv = ["check", str(vcd), "--drive", want["drive"], "--format", fmt]
             seen[" ".join(argv)] = _run(wavecheck_main, argv, capsys)
     html = tmp_path / "all.html"
-    _run(wavecheck_main, ["check", *map(str, sorted(GOLDEN.glob("g202*.vcd"))),
-                          "--drive", "gecko-g202", "--html", str(html)], capsys)
+    _run(
+        wavecheck_main,
+        [
+            "check",
+            *map(str, sorted(GOLDEN.glob("g202*.vcd"))),
+            "--drive",
+            "gecko-g202",
+            "--html",
+            str(html),
+        ],
+        capsys,
+    )
     seen["--html"] = html.read_text()
     assert len(seen) > 100
     found = {what: _internal(text) for what, text in seen.items() if _internal(text)}
@@ -133,8 +152,14 @@ def test_every_user_visible_output_speaks_no_internal_words(
 
 
 def test_the_internal_word_filter_catches_what_it_must() -> None:
-    for bad in ("(seed: below 15 us)", "the seed's G202", "reference §2.3", "[TWK]",
-                "text copy (index id 291557402)", "find_string id 19045341668"):
+    for bad in (
+        "(seed: below 15 us)",
+        "the seed's G202",
+        "reference §2.3",
+        "[TWK]",
+        "text copy (index id 291557402)",
+        "find_string id 19045341668",
+    ):
         assert _internal(bad), bad
     for fine in ("--seed 3", "seed of the random latency models", "latency uniform:3us seed 0"):
         assert not _internal(fine), fine
@@ -189,15 +214,23 @@ def test_assumptions_are_stated_enable_and_dir() -> None:
     assert "note: ENABLE: active high" in text and "--invert enable" in text
     assert "note: DIR: low = forward" in text
     assert "note: Levels are judged as captured (no --invert)" in text
-    low = run_check(capture({**sig, "E": (1, [1000])}), d, {"step": "S", "dir": "D", "enable": "E"},
-                    invert=["enable"], forward_level=1)
+    low = run_check(
+        capture({**sig, "E": (1, [1000])}),
+        d,
+        {"step": "S", "dir": "D", "enable": "E"},
+        invert=["enable"],
+        forward_level=1,
+    )
     text = render_text(low)
     assert "note: ENABLE: active low at the capture (--invert enable)." in text
     assert "note: DIR: high = forward" in text
     assert "enable inverted from the capture" in text
     data = json.loads(render_json(low))
     assert any(a.startswith("ENABLE: active low") for a in data["capture"]["assumptions"])
-    assert any("ENABLE: active low" in li for li in re.findall(r"<li>(.*?)</li>", render_html([low], plots=False)))
+    assert any(
+        "ENABLE: active low" in li
+        for li in re.findall(r"<li>(.*?)</li>", render_html([low], plots=False))
+    )
 
 
 def test_an_uncertain_active_edge_is_stated() -> None:
@@ -206,7 +239,9 @@ def test_an_uncertain_active_edge_is_stated() -> None:
     text = render_text(report)
     assert "steps on the rising? edge" in text
     assert "note: STEP: the rising active edge is uncertain [D7]" in text
-    overridden = run_check(cap, load_drive("leadshine-hbs86h"), {"step": "S"}, active_edge="falling")
+    overridden = run_check(
+        cap, load_drive("leadshine-hbs86h"), {"step": "S"}, active_edge="falling"
+    )
     text = render_text(overridden)
     assert "steps on the falling edge" in text and "(--active-edge)" in text
 
@@ -258,7 +293,9 @@ def test_identical_violations_are_grouped_in_html_and_kept_one_by_one_in_json() 
     report = _repeated_report()
     page = render_html([report], plots=False, max_violations=20)
     assert "12 violation(s), worst first. The 12 worst are shown as 2 groups" in page
-    rows = re.findall(r'<tr><td class="num">\d+</td><td>step_high</td><td class="num">(\d+)</td>', page)
+    rows = re.findall(
+        r'<tr><td class="num">\d+</td><td>step_high</td><td class="num">(\d+)</td>', page
+    )
     assert rows == ["8", "4"]
     data = json.loads(render_json(report))
     assert len(data["violations"]) == 12 == data["violations_total"]

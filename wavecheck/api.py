@@ -88,7 +88,9 @@ def _stepgen(
 def _latency_ns(latency: str | Fraction | None) -> Fraction | None:
     if latency is None:
         return None
-    seconds = parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
+    seconds = (
+        parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
+    )
     return seconds * 10**9
 
 
@@ -224,7 +226,8 @@ def check_axes(
         _resolution(resolution),
         step_types={n: t for n, t in types.items() if t is not None},
         forward_levels={
-            n: forward_level if a.forward_level is None else a.forward_level for n, a in given.items()
+            n: forward_level if a.forward_level is None else a.forward_level
+            for n, a in given.items()
         },
         invert={n: list(invert if a.invert is None else a.invert) for n, a in given.items()},
         active_edge=active_edge,

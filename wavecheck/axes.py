@@ -77,10 +77,11 @@ def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
     if not per_axis:
         return [AxisMap(None, parse_map(items, option))]
     common = parse_map([",".join(shared)], option) if shared else {}
-    named = {name: parse_map([",".join(pairs)], f"{option} (axis {name})") for name, pairs in per_axis.items()}
-    return _assemble(
-        named, common, option, lambda role, ch: f"(e.g. {option} x.{role}={ch})"
-    )
+    named = {
+        name: parse_map([",".join(pairs)], f"{option} (axis {name})")
+        for name, pairs in per_axis.items()
+    }
+    return _assemble(named, common, option, lambda role, ch: f"(e.g. {option} x.{role}={ch})")
 
 
 def _assemble(
@@ -121,7 +122,9 @@ def _assemble(
 
 
 def axes_from_tables(
-    axes: Mapping[str, Mapping[str, str]], shared: Mapping[str, str] | None = None, where: str = "map"
+    axes: Mapping[str, Mapping[str, str]],
+    shared: Mapping[str, str] | None = None,
+    where: str = "map",
 ) -> list[AxisMap]:
     """Axes given as tables (axis → role → channel, e.g. from a ``wavecheck.toml`` or the Python
     API), with ``shared`` roles for every axis (only enable), checked as :func:`parse_axes` checks
@@ -162,7 +165,9 @@ def _table_roles(table: Mapping[str, str], where: str) -> dict[str, str]:
     return roles
 
 
-def per_axis(values: Sequence[str] | str | None, option: str, axes: Sequence[str | None]) -> dict[str | None, str]:
+def per_axis(
+    values: Sequence[str] | str | None, option: str, axes: Sequence[str | None]
+) -> dict[str | None, str]:
     """``--drive ID`` / ``--drive x=ID`` values → axis → value (a bare value serves every axis
     not named; the last bare value wins over an earlier one, as argparse's usual repeat).
 

@@ -319,16 +319,28 @@ def compare_axes(
     types: dict[str | None, int] = {} if step_type is None else dict.fromkeys(names, step_type)
     forward: dict[str | None, int] = dict.fromkeys(names, forward_level)
     checked = check_machine(
-        capture, axes, drives, step_types=types, forward_levels=forward, invert=capture_invert,
+        capture,
+        axes,
+        drives,
+        step_types=types,
+        forward_levels=forward,
+        invert=capture_invert,
         cross_axis=False,
     )
     try:
         reference = check_machine(
-            golden, golden_axes, drives, step_types=types, forward_levels=forward,
-            invert=golden_invert, cross_axis=False,
+            golden,
+            golden_axes,
+            drives,
+            step_types=types,
+            forward_levels=forward,
+            invert=golden_invert,
+            cross_axis=False,
         )
     except UsageError as err:
-        raise UsageError(f"golden {err} (the golden's channels are mapped with --golden-map)") from None
+        raise UsageError(
+            f"golden {err} (the golden's channels are mapped with --golden-map)"
+        ) from None
     by_name = {r.axis: r for r in reference.axes}
     return MachineComparison(
         [compare_reports(r, by_name[r.axis], tolerance_ns, align) for r in checked.axes]

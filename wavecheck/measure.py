@@ -96,7 +96,9 @@ class IntervalStats:
     @property
     def mean_ns(self) -> Fraction | None:
         """The mean interval, exact ns."""
-        return None if not self.count else Fraction(self.sum_ticks, self.count) * self.timebase.tick_ns
+        return (
+            None if not self.count else Fraction(self.sum_ticks, self.count) * self.timebase.tick_ns
+        )
 
     def percentile_ns(self, p: int) -> Fraction | None:
         """Percentile ``p`` (one of :data:`PERCENTILES`), exact ns."""
@@ -303,7 +305,11 @@ def measure_axis(
     if pulse_level not in (0, 1):
         raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {pulse_level!r}")
     steps = decode(
-        iface, st.number, active_edge=active_edge, forward_level=forward_level, user_table=user_table
+        iface,
+        st.number,
+        active_edge=active_edge,
+        forward_level=forward_level,
+        user_table=user_table,
     )
     level = generator_pulse_level(iface, st, pulse_level)
     tb = capture.timebase

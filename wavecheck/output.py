@@ -96,7 +96,9 @@ def _follow(text: str) -> tuple[Path, int | None]:
 def _refuse_input(st: os.stat_result) -> None:
     for what, path, dev, ino in _protected:
         if (st.st_dev, st.st_ino) == (dev, ino):
-            raise _Refused(f"is the {what} file {path}, an input of this run (refusing to overwrite it)")
+            raise _Refused(
+                f"is the {what} file {path}, an input of this run (refusing to overwrite it)"
+            )
 
 
 def _target(target: str | os.PathLike[str]) -> OutputTarget:
@@ -181,7 +183,9 @@ def check_outputs(
                     _check_folder(t.path.parent, probe=True)
                     key = os.path.realpath(t.path)
                     if key in seen:
-                        raise _Refused(f"is also given to {seen[key]} (give each output its own file)")
+                        raise _Refused(
+                            f"is also given to {seen[key]} (give each output its own file)"
+                        )
                     seen[key] = option
             except _Refused as why:
                 raise UsageError(f"{option} {text}: {why}") from None

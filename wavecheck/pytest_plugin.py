@@ -230,7 +230,9 @@ def _axes(
     for name, table in raw.items():
         at = f"{where}: axes.{name}"
         if name == "verdict":
-            raise WavecheckConfigError(f"{at}: 'verdict' names the capture's own item; rename the axis")
+            raise WavecheckConfigError(
+                f"{at}: 'verdict' names the capture's own item; rename the axis"
+            )
         roles = _map_of(table.get("map", {}), at)
         for key, value in table.items():
             if key in _AXIS_KEYS:
@@ -296,7 +298,9 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
     if several:
         from wavecheck.verdict import overall_verdict
 
-        defaults = AxisSpec("", drive or "", {}, invert, entry.get("type"), dir_forward, expect or "pass", rules)
+        defaults = AxisSpec(
+            "", drive or "", {}, invert, entry.get("type"), dir_forward, expect or "pass", rules
+        )
         axes = _axes(entry, where, folder, defaults, mapping)
         if expect is None:  # the whole capture: the worst of its axes
             expect = overall_verdict(a.expect for a in axes)
@@ -440,7 +444,9 @@ def describe_rule(report: Report, r: RuleOutcome, max_violations: int = 3) -> st
     if r.verdict == "indeterminate" and r.decide_samplerate_hz is not None:
         from wavecheck.units import format_frequency
 
-        lines.append(f"  sampling faster than {format_frequency(r.decide_samplerate_hz)} would decide it")
+        lines.append(
+            f"  sampling faster than {format_frequency(r.decide_samplerate_hz)} would decide it"
+        )
     axis = "" if report.axis is None else f" axis {report.axis}"
     lines.append(
         f"  capture {report.capture.path}{axis} vs drive {report.drive.id} "

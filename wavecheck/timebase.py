@@ -47,7 +47,9 @@ class Timebase:
     def from_timescale(cls, magnitude: int, unit: str) -> Timebase:
         """Tick = a VCD ``$timescale`` such as ``(10, "ns")``."""
         if unit not in _TIMESCALE_UNITS:
-            raise UsageError(f"unknown timescale unit {unit!r} (known: {', '.join(_TIMESCALE_UNITS)})")
+            raise UsageError(
+                f"unknown timescale unit {unit!r} (known: {', '.join(_TIMESCALE_UNITS)})"
+            )
         return cls(Fraction(magnitude) * Fraction(10) ** _TIMESCALE_UNITS[unit])
 
     @property

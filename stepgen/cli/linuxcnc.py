@@ -60,7 +60,9 @@ def add_simulate_arguments(parser: Any) -> None:
         "velocity-cmd, else joint n's)",
     )
     defaults = {
-        a.dest: a.default for a in parser._actions if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
+        a.dest: a.default
+        for a in parser._actions
+        if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
     }
     parser.set_defaults(_linuxcnc_defaults=defaults)
 

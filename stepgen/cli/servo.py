@@ -49,7 +49,9 @@ __all__ = ["add_servo_loop_arguments", "run_servo_loop"]
 
 def add_servo_loop_arguments(parser: Any) -> None:
     """The ``--pid`` option group of ``stepgen simulate``."""
-    g = parser.add_argument_group("closed loop (--pid: LinuxCNC's pid between the command and the plant)")
+    g = parser.add_argument_group(
+        "closed loop (--pid: LinuxCNC's pid between the command and the plant)"
+    )
     g.add_argument("--pid", action="store_true", help="close the loop with pid (see stepgen tune)")
     g.add_argument(
         "--plant",
@@ -61,7 +63,9 @@ def add_servo_loop_arguments(parser: Any) -> None:
     add_pid_arguments(g)
     g.add_argument("--ferror", type=float, help="[JOINT_n]FERROR (default 1.0)")
     g.add_argument("--min-ferror", type=float, help="[JOINT_n]MIN_FERROR (default FERROR)")
-    g.add_argument("--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)")
+    g.add_argument(
+        "--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
+    )
     g.add_argument("--plot", type=output_file, help="PNG: command, feedback, following error")
     add_servo_arguments(parser.add_argument_group("servo plant (--pid --plant servo)"))
 
@@ -72,7 +76,11 @@ def _trace(cfg: StepgenConfig, plant: StepgenPlant, n: int, args: argparse.Names
     model = parse_latency(args.latency)
     catchup, _ = catchup_for(model, cfg.base_period_ns, None)
     return trace_from_run(
-        plant.invocation_run(n), model, seed=args.seed, active_edge=args.active_edge, catchup_ns=catchup
+        plant.invocation_run(n),
+        model,
+        seed=args.seed,
+        active_edge=args.active_edge,
+        catchup_ns=catchup,
     )
 
 
@@ -93,9 +101,7 @@ def _limits(args: argparse.Namespace) -> tuple[float, float | None, float | None
     return ferror, args.min_ferror, args.joint_max_velocity
 
 
-def _write_encoder(
-    out: str, plant: ServoPlant, end_ns: int, max_samples: int
-) -> None:
+def _write_encoder(out: str, plant: ServoPlant, end_ns: int, max_samples: int) -> None:
     """The encoder's A/B quadrature (and its count in a VCD) as ``out`` (.vcd or .sr)."""
     t, counts = plant.count_changes()
     edges, init = quadrature_edges(t, counts)
@@ -211,7 +217,9 @@ def report(
         pc = getattr(args, "_pid_config", None)
         origin = ""
         if pc is not None and pc.name is not None:
-            origin = f" ({pc.name}, joint {pc.joint}: {pc.chosen})" if pc.chosen else f" ({pc.name})"
+            origin = (
+                f" ({pc.name}, joint {pc.joint}: {pc.chosen})" if pc.chosen else f" ({pc.name})"
+            )
         elif getattr(args, "_pid_from_files", False):
             origin = f" ([JOINT_{pc.joint}] of the INI)" if pc is not None else ""
         print(f"pid: {gains_text(gains)}{origin}")
@@ -222,7 +230,11 @@ def report(
             f"following-error check {verdict}: limit max(FERROR {check.ferror_limit:g}·|v|/"
             f"{check.max_velocity:g}, MIN_FERROR {check.min_ferror:g}); worst |ferror|/limit "
             f"{check.worst_ratio:.3g} at {check.worst_t_s:.6g} s"
-            + ("" if check.first_fail_t_s is None else f"; trips first at {check.first_fail_t_s:.6g} s")
+            + (
+                ""
+                if check.first_fail_t_s is None
+                else f"; trips first at {check.first_fail_t_s:.6g} s"
+            )
         )
         for note in check.notes:
             print(f"stepgen: note: {note}", file=sys.stderr)

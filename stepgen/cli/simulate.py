@@ -169,9 +169,7 @@ class _DefaultText(str):
 _CATCHUP_DEFAULT = _DefaultText(f"{DEFAULT_CATCHUP_NS}ns")
 
 
-def _ns(
-    text: str, option: str, allow_zero: bool = True, plausible: Plausible | None = None
-) -> int:
+def _ns(text: str, option: str, allow_zero: bool = True, plausible: Plausible | None = None) -> int:
     """An option's time in whole ns; its unit is required (:func:`parse_option`)."""
     try:
         value = option_ns(str(text), option, plausible)
@@ -291,7 +289,9 @@ def run(args: argparse.Namespace) -> int:
     updates = None  # the worst-case motion is designed for the run's servo updates
     if worst and n is not None and n <= MAX_PERIODS:  # (simulate refuses longer runs)
         updates = len(update_schedule(cfg, n))
-    motion = build_motion(args, replace(cfg, mode="position") if args.pid else cfg, n_updates=updates)
+    motion = build_motion(
+        args, replace(cfg, mode="position") if args.pid else cfg, n_updates=updates
+    )
     if n is None:
         if motion.natural_duration_s is None:
             raise ConfigError("give --duration (e.g. 1s) or --periods N")
@@ -349,11 +349,16 @@ def _write_command(args: argparse.Namespace, cfg: StepgenConfig, motion: Motion,
         pos = np.concatenate([[0.0], np.cumsum(values) * (cfg.servo_ns * 1e-9)])
     else:
         pos = np.concatenate([values, values[-1:]])
-    ns = [u * cfg.servo_ns for u in range(n_servo)] + [max(n * cfg.base_period_ns, n_servo * cfg.servo_ns)]
+    ns = [u * cfg.servo_ns for u in range(n_servo)] + [
+        max(n * cfg.base_period_ns, n_servo * cfg.servo_ns)
+    ]
     servo = args.pid and args.plant == "servo"
     scale = float(args.encoder_counts) if servo else cfg.position_scale
     name = "counts" if servo else "steps"
     rows = [f"time_s,position{',' + name if scale else ''}\n"]
     for t, x in zip(ns, pos, strict=True):
-        rows.append(f"{t // 10**9}.{t % 10**9:09d},{float(x)!r}" + (f",{float(x) * scale!r}\n" if scale else "\n"))
+        rows.append(
+            f"{t // 10**9}.{t % 10**9:09d},{float(x)!r}"
+            + (f",{float(x) * scale!r}\n" if scale else "\n")
+        )
     atomic_write(args.command_out, "".join(rows))

@@ -195,7 +195,9 @@ def _check_method(args: argparse.Namespace) -> None:
             raise ConfigError(f"--{dest.replace('_', '-')} {value!r} is not finite")
 
 
-def _plant_factory(args: argparse.Namespace) -> tuple[Callable[[], Plant], int, StepgenConfig | None]:
+def _plant_factory(
+    args: argparse.Namespace,
+) -> tuple[Callable[[], Plant], int, StepgenConfig | None]:
     _check_method(args)
     servo = round(time_s(args.servo_period, "--servo-period") * 1e9)
     if servo < 1000:
@@ -222,7 +224,9 @@ def _fmt(x: float | None, unit: str = "s") -> str:
 
 def report_text(res: TuneResult, args: argparse.Namespace, ff_lines: list[str]) -> str:
     """The human-readable report."""
-    lines = [f"ultimate gain Ku = {res.ku:.6g}, oscillation period Pu = {res.pu:.6g} s ({res.tries} responses)"]
+    lines = [
+        f"ultimate gain Ku = {res.ku:.6g}, oscillation period Pu = {res.pu:.6g} s ({res.tries} responses)"
+    ]
     for s in res.stages:
         m = s.metrics
         lines.append(
@@ -249,7 +253,12 @@ def write_plot(res: TuneResult, path: str) -> None:
     fig, ax = plt.subplots(figsize=(9, 5))
     for s in res.stages:
         r = s.result
-        ax.plot(r.t_s * 1e3, r.feedback, lw=1.0, label=f"{s.name}: P {s.gains.Pgain:.4g} I {s.gains.Igain:.4g} D {s.gains.Dgain:.4g}")
+        ax.plot(
+            r.t_s * 1e3,
+            r.feedback,
+            lw=1.0,
+            label=f"{s.name}: P {s.gains.Pgain:.4g} I {s.gains.Igain:.4g} D {s.gains.Dgain:.4g}",
+        )
     ax.set_xlabel("time (ms)")
     ax.set_ylabel("position (units)")
     ax.set_title(f"step responses (Ku = {res.ku:.4g}, Pu = {res.pu * 1e3:.4g} ms)")

@@ -215,7 +215,6 @@ def sr_cases() -> Iterator[Case]:
         "samplerate-junk": {"samplerate": "fast"},
         "samplerate-huge": {"samplerate": "99999999999999999999999 EHz"},
         "samplerate-nan": {"samplerate": "nan Hz"},
-
         "unitsize-0": {"unitsize": 0},
         "unitsize-missing": {"unitsize": None},
         "unitsize-negative": {"unitsize": -1},
@@ -231,7 +230,12 @@ def sr_cases() -> Iterator[Case]:
         meta = sr_metadata(**kw)  # type: ignore[arg-type]
         yield Case(f"meta-{label}", sr_bytes(raw, metadata=meta), ".sr")
     # no rate: `info` lists it in samples, `check` refuses (info_then_check allows that pair)
-    yield Case("meta-samplerate-missing", sr_bytes(raw, metadata=sr_metadata(samplerate=None)), ".sr", "either")
+    yield Case(
+        "meta-samplerate-missing",
+        sr_bytes(raw, metadata=sr_metadata(samplerate=None)),
+        ".sr",
+        "either",
+    )
     # 65 probes that do fit (unitsize 9): a valid, if odd, file
     names65 = [f"D{i}" for i in range(65)]
     raw65 = samples_from_edges(100, [(0, [10, 20])] + [(0, [])] * 64, unitsize=9).tobytes()

@@ -206,7 +206,9 @@ def run_random(
                 for cut in range(len(s)):
                     tally.run(reader, path, s[:cut])
         # splice material: the small fixed cases (the big hostile shapes run once, above)
-        others = [c.data for c in FIXED[name]() if len(c.data) < 1 << 16] if name in FIXED else seeds
+        others = (
+            [c.data for c in FIXED[name]() if len(c.data) < 1 << 16] if name in FIXED else seeds
+        )
         for _ in range(n):
             tally.run(reader, path, mutate(rng, rng.choice(seeds), others + seeds))
     return tally

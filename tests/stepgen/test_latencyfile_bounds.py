@@ -50,8 +50,19 @@ def test_plan_refuses_dev_zero_without_reading_it() -> None:
 @pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
 def test_histogram_model_says_what_dev_zero_is(tmp_path: Path) -> None:
     line = _one_line(
-        _stepgen("simulate", "--latency", "histogram:/dev/zero", "--mode", "velocity",
-                 "--velocity", "1", "--duration", "1ms", "-o", str(tmp_path / "x.vcd"))
+        _stepgen(
+            "simulate",
+            "--latency",
+            "histogram:/dev/zero",
+            "--mode",
+            "velocity",
+            "--velocity",
+            "1",
+            "--duration",
+            "1ms",
+            "-o",
+            str(tmp_path / "x.vcd"),
+        )
     )
     assert "/dev/zero: is a character device" in line and "not found" not in line
 
@@ -68,10 +79,13 @@ def test_an_endless_pipe_is_read_only_up_to_the_cap(tmp_path: Path) -> None:
     fifo = tmp_path / "latency.fifo"
     os.mkfifo(fifo)
     writer = subprocess.Popen(  # noqa: S603 - a fixed command
-        [sys.executable, "-c",
-         "import sys\nb = b'T: 0 ( 1) P:80 I:1000 C: 1 Min: 1 Act: 2 Avg: 2 Max: 9\\n' * 4096\n"
-         "o = open(sys.argv[1], 'wb')\ntry:\n    while True: o.write(b)\nexcept BrokenPipeError:\n    pass",
-         str(fifo)],
+        [
+            sys.executable,
+            "-c",
+            "import sys\nb = b'T: 0 ( 1) P:80 I:1000 C: 1 Min: 1 Act: 2 Avg: 2 Max: 9\\n' * 4096\n"
+            "o = open(sys.argv[1], 'wb')\ntry:\n    while True: o.write(b)\nexcept BrokenPipeError:\n    pass",
+            str(fifo),
+        ],
         stderr=subprocess.DEVNULL,
     )
     try:

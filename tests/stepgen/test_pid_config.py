@@ -117,7 +117,12 @@ def test_nets_to_tunable_pins_are_listed(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "ini_text,hal_text,kwargs,match",
     [
-        ("", "setp pid.0.Pgain fast\n", {"joint": 0}, r"x\.hal:1: pid\.0\.Pgain 'fast' is not a number"),
+        (
+            "",
+            "setp pid.0.Pgain fast\n",
+            {"joint": 0},
+            r"x\.hal:1: pid\.0\.Pgain 'fast' is not a number",
+        ),
         ("", "setp pid.0.Pgain nan\n", {"joint": 0}, r"x\.hal:1: .*not a finite number"),
         ("", "setp pid.0.Pgain [JOINT_0]P\n", {"joint": 0}, r"x\.hal:1: \[JOINT_0\]P is not in"),
         ("", "setp pid.0.error-previous-target maybe\n", {"joint": 0}, r"not 0, 1, true or false"),
@@ -126,7 +131,12 @@ def test_nets_to_tunable_pins_are_listed(tmp_path: Path) -> None:
         ("[JOINT_0]\nP = 1e999\n", "", {}, r"m\.ini:2: \[JOINT_0\]P '1e999' is not a finite"),
         ("", "loadrt pid num_chan=40\n", {}, r"x\.hal:1: loadrt pid makes 40 instances"),
         ("", "loadrt pid num_chan=2 names=a\n", {}, r"num_chan= or names=, not both"),
-        ("", "loadrt pid names=pid.x\n", {"name": "pid.z"}, r"'pid\.z' is not in the HAL files \(pid instances: pid\.x\)"),
+        (
+            "",
+            "loadrt pid names=pid.x\n",
+            {"name": "pid.z"},
+            r"'pid\.z' is not in the HAL files \(pid instances: pid\.x\)",
+        ),
     ],
 )
 def test_bad_values_name_file_and_line(tmp_path: Path, ini_text, hal_text, kwargs, match) -> None:
@@ -182,22 +192,53 @@ def test_simulate_takes_gains_and_limits_from_the_files(tmp_path: Path, capsys) 
 def test_simulate_command_line_wins(tmp_path: Path, capsys) -> None:
     ini, hal = write_pair(tmp_path)
     code, out, _ = _simulate(
-        capsys, "--ini", str(ini), "--hal", str(hal), "--channel", "1", "--pgain", "500",
-        "--ferror", "3", "--no-error-previous-target", "--move", "10", "-o", str(tmp_path / "b.vcd"),
+        capsys,
+        "--ini",
+        str(ini),
+        "--hal",
+        str(hal),
+        "--channel",
+        "1",
+        "--pgain",
+        "500",
+        "--ferror",
+        "3",
+        "--no-error-previous-target",
+        "--move",
+        "10",
+        "-o",
+        str(tmp_path / "b.vcd"),
     )
     assert code == 0
-    assert "pid: Pgain 500, FF1 1, maxerror 0.0127, error-previous-target false (pid.y, joint 1" in out
+    assert (
+        "pid: Pgain 500, FF1 1, maxerror 0.0127, error-previous-target false (pid.y, joint 1" in out
+    )
     assert "FERROR 3·|v|/20, MIN_FERROR 1" in out
 
 
-def test_files_set_only_some_pins_the_rest_are_the_component_defaults(tmp_path: Path, capsys) -> None:
+def test_files_set_only_some_pins_the_rest_are_the_component_defaults(
+    tmp_path: Path, capsys
+) -> None:
     """As in LinuxCNC: pid's pins the files do not set keep pid's own defaults (FF1 = 0), not
     pncconf's P = 1/T, FF1 = 1 that a run without files assumes."""
     ini = tmp_path / "m.ini"
     ini.write_text("[EMCMOT]\nBASE_PERIOD = 25000\nSERVO_PERIOD = 1000000\n[JOINT_0]\nP = 300\n")
     code, out, _ = _simulate(
-        capsys, "--ini", str(ini), "--position-scale", "200", "--maxvel", "25", "--move", "1",
-        "--move-vel", "10", "--move-accel", "100", "-o", str(tmp_path / "c.vcd"),
+        capsys,
+        "--ini",
+        str(ini),
+        "--position-scale",
+        "200",
+        "--maxvel",
+        "25",
+        "--move",
+        "1",
+        "--move-vel",
+        "10",
+        "--move-accel",
+        "100",
+        "-o",
+        str(tmp_path / "c.vcd"),
     )
     assert code == 0 and "pid: Pgain 300 ([JOINT_0] of the INI)" in out
 
@@ -205,7 +246,19 @@ def test_files_set_only_some_pins_the_rest_are_the_component_defaults(tmp_path: 
 def test_open_loop_run_notes_the_pid(tmp_path: Path, capsys) -> None:
     ini, hal = write_pair(tmp_path)
     code = main(
-        ["simulate", "--ini", str(ini), "--hal", str(hal), "--velocity", "5", "--duration", "5ms",
-         "-q", "-o", str(tmp_path / "d.vcd")]
+        [
+            "simulate",
+            "--ini",
+            str(ini),
+            "--hal",
+            str(hal),
+            "--velocity",
+            "5",
+            "--duration",
+            "5ms",
+            "-q",
+            "-o",
+            str(tmp_path / "d.vcd"),
+        ]
     )
     assert code == 0 and "pid.x.output drives stepgen.0.velocity-cmd" in capsys.readouterr().err

@@ -196,7 +196,11 @@ def test_inverted_reading_formula() -> None:
 def test_assumptions_state_the_reading() -> None:
     seed = plan(G202, 11 * US, 16 * US)
     text = " ".join(seed.assumptions)
-    assert "not inverted" in text and "END" in text and "G202 example of LinuxCNC's Stepper Tuning chapter" in text
+    assert (
+        "not inverted" in text
+        and "END" in text
+        and "G202 example of LinuxCNC's Stepper Tuning chapter" in text
+    )
     assert "hold = dirhold·P − J" in text
     rising = plan(XYLOTEX, 11 * US)
     assert "START" in " ".join(rising.assumptions)

@@ -61,7 +61,11 @@ def test_stepgen_pid_follows_a_trapezoid_with_linuxcnc_s_usual_gains() -> None:
     loop lags by v/P = 0.02 units at cruise. All far below MIN_FERROR (0.5): the check passes."""
     a, v, amax = 200.0, 20.0, 250.0
     cfg = StepgenConfig(
-        base_period_ns=25_000, mode="velocity", position_scale=200, maxvel=25, maxaccel=amax,
+        base_period_ns=25_000,
+        mode="velocity",
+        position_scale=200,
+        maxvel=25,
+        maxaccel=amax,
         thread_order="pulses-first",
     )
     motion = Motion("moves", segments=parse_moves("10", v, a))
@@ -165,7 +169,9 @@ def test_stepgen_ultimate_gain_is_2_over_t_without_accel_limit() -> None:
 
 def test_quadrature_round_trip() -> None:
     """The encoder's A/B follows stepgen type 2's table: decoding the edges gives the counts."""
-    plant = ServoPlant(ServoParams(counts_per_unit=1000, inertia=1e-3, viscous=0.05), T_NS, record=True)
+    plant = ServoPlant(
+        ServoParams(counts_per_unit=1000, inertia=1e-3, viscous=0.05), T_NS, record=True
+    )
     for u in [0.5] * 50 + [-0.5] * 100:
         plant.advance(u)
     t, counts = plant.count_changes()

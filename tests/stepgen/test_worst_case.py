@@ -55,8 +55,17 @@ def test_worst_case_run_reaches_n_P_minus_J_for_every_rule(
     periods = PERIODS[which]
     out = tmp_path / "w.vcd"
     code = main(
-        ["simulate", *_cli_args(periods), "--latency", f"worst:{J}ns:{rule}",
-         "--active-edge", edge, "-q", "-o", str(out)]
+        [
+            "simulate",
+            *_cli_args(periods),
+            "--latency",
+            f"worst:{J}ns:{rule}",
+            "--active-edge",
+            edge,
+            "-q",
+            "-o",
+            str(out),
+        ]
     )
     assert code == 0
     d = drive(edge, max_rate_hz=10**7, step_high=1, step_low=1, dir_setup=1, dir_hold=1)
@@ -71,12 +80,17 @@ def test_worst_motion_makes_every_interval_at_its_fewest_periods() -> None:
     next step dirsetup periods later — on both directions, every time."""
     per = PERIODS["A"]
     cfg = StepgenConfig(
-        base_period_ns=P, servo_period_ns=1_000_000, mode="velocity", thread_order="pulses-first",
+        base_period_ns=P,
+        servo_period_ns=1_000_000,
+        mode="velocity",
+        thread_order="pulses-first",
         **{k: v * P for k, v in per.items()},
     )
     motion = worst_motion(cfg)
     n = int(round(motion.natural_duration_s * 1e9)) // P
-    run = run_reference(cfg, motion.commands(len(update_schedule(cfg, n)), cfg.servo_ns, "velocity"), n)
+    run = run_reference(
+        cfg, motion.commands(len(update_schedule(cfg, n)), cfg.servo_ns, "velocity"), n
+    )
     rises, dirs = run.toggles["step"][0::2], run.toggles["dir"]
     assert len(dirs) == 4  # WORST_REVERSALS, both ways
     assert np.diff(rises).min() == per["steplen"] + per["stepspace"]
@@ -89,8 +103,12 @@ def test_worst_motion_makes_every_interval_at_its_fewest_periods() -> None:
 def test_default_catchup_does_not_hide_the_bound() -> None:
     """§9: J = 24.5 µs at P = 25 µs, steplen one period: the shortest pulse is P − J = 500 ns.
     With a 1 µs run time the on-time invocation after a late one would start 500 ns late."""
-    cfg = StepgenConfig(base_period_ns=25_000, servo_period_ns=1_000_000, mode="velocity",
-                        thread_order="pulses-first")
+    cfg = StepgenConfig(
+        base_period_ns=25_000,
+        servo_period_ns=1_000_000,
+        mode="velocity",
+        thread_order="pulses-first",
+    )
     motion = worst_motion(cfg)
     n = int(round(motion.natural_duration_s * 1e9)) // 25_000
     trace = simulate(cfg, motion, "worst:24500ns:step_high", n_periods=n)
@@ -105,8 +123,20 @@ def test_explicit_catchup_that_prevents_the_bound_is_a_one_line_warning(
     """§9: an explicit --catchup 2us > P − J = 500 ns is kept; the one-line warning says the
     pulses are (n − 1)·P + G = 2 µs instead of n·P − J."""
     out = tmp_path / "c.vcd"
-    code = main(["simulate", "--mode", "velocity", "--latency", "worst:24.5us:step_high",
-                 "--catchup", "2us", "-q", "-o", str(out)])
+    code = main(
+        [
+            "simulate",
+            "--mode",
+            "velocity",
+            "--latency",
+            "worst:24.5us:step_high",
+            "--catchup",
+            "2us",
+            "-q",
+            "-o",
+            str(out),
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 0
     assert len(err) == 1 and "warning" in err[0] and "(n − 1)·P + 2000 ns" in err[0]
@@ -119,7 +149,17 @@ def test_worst_motion_switches_a_position_channel_to_velocity(
 ) -> None:
     """The worst-case motion drives velocity-cmd; a position-mode channel is run in velocity mode
     and says so (make-pulses, §2, does not depend on ctrl_type)."""
-    code = main(["simulate", "--latency", "worst:11us:dir_hold", "--base-period", "20us",
-                 "-q", "-o", str(tmp_path / "p.vcd")])
+    code = main(
+        [
+            "simulate",
+            "--latency",
+            "worst:11us:dir_hold",
+            "--base-period",
+            "20us",
+            "-q",
+            "-o",
+            str(tmp_path / "p.vcd"),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 0 and "velocity mode" in err

@@ -52,7 +52,10 @@ def test_the_capture_is_read_once(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_an_axis_takes_its_own_drive_and_options(smoothie_sr: Path) -> None:
     m = check_axes(
         smoothie_sr,
-        {"x": {"step": "5", "dir": "6"}, "y": Axis({"step": "3", "dir": "4"}, drive="leadshine-dm542")},
+        {
+            "x": {"step": "5", "dir": "6"},
+            "y": Axis({"step": "3", "dir": "4"}, drive="leadshine-dm542"),
+        },
         "gecko-g202",
     )
     assert {r.axis: r.drive.id for r in m.axes} == {"x": "gecko-g202", "y": "leadshine-dm542"}

@@ -80,7 +80,11 @@ def test_figures_of_a_known_wave(tmp_path: Path) -> None:
     """Pulses of 1, 2, 3 and 4 us every 10 us, DIR up 500 ns before the third: every figure is
     known by construction."""
     us = 1000
-    step = [t for k, w in enumerate((1, 2, 3, 4)) for t in (10 * us * (k + 1), 10 * us * (k + 1) + w * us)]
+    step = [
+        t
+        for k, w in enumerate((1, 2, 3, 4))
+        for t in (10 * us * (k + 1), 10 * us * (k + 1) + w * us)
+    ]
     vcd = write_vcd(tmp_path / "w.vcd", {"step": (0, step), "dir": (0, [29 * us + 500])})
     m = measure(open_capture(vcd))
     a = m.axes[0]
@@ -89,7 +93,9 @@ def test_figures_of_a_known_wave(tmp_path: Path) -> None:
     assert high.min_at == 10 * us and high.max_at == 40 * us
     assert high.percentiles == {1: 1000, 5: 1000, 50: 2000, 95: 4000, 99: 4000}
     assert a.stat("step_period").count == 3 and a.rate_max_hz == a.rate_min_hz == 100_000
-    assert a.stat("dir_setup").min_ns == 500 and a.stat("dir_hold").min_ns == 9500  # 20 us → 29.5 us
+    assert (
+        a.stat("dir_setup").min_ns == 500 and a.stat("dir_hold").min_ns == 9500
+    )  # 20 us → 29.5 us
     assert a.steps.forward == 2 and a.steps.reverse == 2
     assert a.reversals.tolist() == [30 * us] and a.stat("enable_setup").count == 0
     assert m.resolution_ns == 0

@@ -156,7 +156,12 @@ def test_inputs_are_protected_by_any_name(tmp_path: Path) -> None:
     os.link(capture, tmp_path / "hard.vcd")
     (tmp_path / "soft.vcd").symlink_to(capture)
     (tmp_path / "sub").mkdir()
-    names = [capture, tmp_path / "hard.vcd", tmp_path / "soft.vcd", tmp_path / "sub" / ".." / "cap.vcd"]
+    names = [
+        capture,
+        tmp_path / "hard.vcd",
+        tmp_path / "soft.vcd",
+        tmp_path / "sub" / ".." / "cap.vcd",
+    ]
     with protect_inputs({"capture": [str(capture)]}):
         for name in names:
             with pytest.raises(UsageError, match="is the capture file .* an input of this run"):

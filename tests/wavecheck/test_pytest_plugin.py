@@ -91,8 +91,12 @@ def test_with_xdist(project: pytest.Pytester) -> None:
 
 def test_report_dir(project: pytest.Pytester) -> None:
     result = project.runpytest(
-        "-p", "no:cacheprovider", "--wavecheck-report-dir", "reports",
-        "wavecheck.toml::g202-p20-j11::dir_hold", "wavecheck.toml::g202-p25::dir_hold",
+        "-p",
+        "no:cacheprovider",
+        "--wavecheck-report-dir",
+        "reports",
+        "wavecheck.toml::g202-p20-j11::dir_hold",
+        "wavecheck.toml::g202-p25::dir_hold",
     )
     result.assert_outcomes(passed=1, failed=1)
     assert (project.path / "reports" / "g202-p20-j11.html").exists()
@@ -119,6 +123,8 @@ def test_pyproject_table_and_bad_config(pytester: pytest.Pytester) -> None:
 
 def test_load_specs_rejects_duplicates(tmp_path: Path) -> None:
     p = tmp_path / "wavecheck.toml"
-    p.write_text('[[capture]]\npath = "a.vcd"\ndrive = "x"\n[[capture]]\npath = "b/a.vcd"\ndrive = "x"\n')
+    p.write_text(
+        '[[capture]]\npath = "a.vcd"\ndrive = "x"\n[[capture]]\npath = "b/a.vcd"\ndrive = "x"\n'
+    )
     with pytest.raises(WavecheckConfigError, match="two captures are named 'a'"):
         load_specs(p)

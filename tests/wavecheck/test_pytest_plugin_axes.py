@@ -82,8 +82,13 @@ def test_items_per_axis_and_outcomes(project: pytest.Pytester) -> None:
                 assert f"wavecheck.toml::{name}::{axis}::{rule}" in lines, (name, axis, rule)
     assert "wavecheck.toml::single::dir_hold" in lines  # the single-axis form, unchanged
     # machine: x is expected to fail dir_hold and does; y passes; the capture fails (worst)
-    for item in ("machine::verdict", "machine::x::verdict", "machine::x::dir_hold",
-                 "machine::y::verdict", "machine::y::dir_hold"):
+    for item in (
+        "machine::verdict",
+        "machine::x::verdict",
+        "machine::x::dir_hold",
+        "machine::y::verdict",
+        "machine::y::dir_hold",
+    ):
         assert "PASSED" in lines[f"wavecheck.toml::{item}"], item
     # hoped: every axis expected to pass; x does not
     for item in ("hoped::verdict", "hoped::x::verdict", "hoped::x::dir_hold"):
@@ -110,7 +115,11 @@ def test_one_axis_item_alone(project: pytest.Pytester) -> None:
 
 def test_report_dir_has_every_axis(project: pytest.Pytester) -> None:
     result = project.runpytest(
-        "-p", "no:cacheprovider", "--wavecheck-report-dir", "reports", "wavecheck.toml::hoped::x::dir_hold"
+        "-p",
+        "no:cacheprovider",
+        "--wavecheck-report-dir",
+        "reports",
+        "wavecheck.toml::hoped::x::dir_hold",
     )
     result.assert_outcomes(failed=1)
     html = (project.path / "reports" / "hoped.html").read_text()
@@ -134,7 +143,10 @@ def test_fixture_checks_axes(pytester: pytest.Pytester) -> None:
     )
     result = pytester.runpytest("-p", "no:cacheprovider")
     result.assert_outcomes(passed=1, failed=1)
-    assert "expected PASS, got verdict FAIL (1 violation(s))\naxis x: verdict FAIL" in result.stdout.str()
+    assert (
+        "expected PASS, got verdict FAIL (1 violation(s))\naxis x: verdict FAIL"
+        in result.stdout.str()
+    )
 
 
 def test_smoothieware_each_axis_its_drive(pytester: pytest.Pytester, smoothie_sr: Path) -> None:
@@ -184,11 +196,23 @@ axes.y = { STEP = "YS", drive = "leadshine-dm542", invert = [], dir_forward = "l
         )
     )[0]
     x, y = spec.axes
-    assert (x.name, x.drive, x.invert, x.type, x.dir_forward) == ("x", "gecko-g202", ("step",), 0, "high")
+    assert (x.name, x.drive, x.invert, x.type, x.dir_forward) == (
+        "x",
+        "gecko-g202",
+        ("step",),
+        0,
+        "high",
+    )
     assert x.map == {"step": "XS", "dir": "XD", "enable": "EN"}  # enable shared
     assert x.expect_rules == {"step_high": "indeterminate", "dir_hold": "fail"}  # merged
     assert x.expected("dir_hold") == ("fail",) and x.expected("step_low") == ("pass", "fail")
-    assert (y.drive, y.invert, y.type, y.dir_forward, y.expect) == ("leadshine-dm542", (), 1, "low", "pass")
+    assert (y.drive, y.invert, y.type, y.dir_forward, y.expect) == (
+        "leadshine-dm542",
+        (),
+        1,
+        "low",
+        "pass",
+    )
     assert y.map == {"step": "YS", "enable": "EN"}
     assert spec.expect == "fail"  # the capture: the worst of its axes
 
@@ -197,7 +221,10 @@ axes.y = { STEP = "YS", drive = "leadshine-dm542", invert = [], dir_forward = "l
     ("entry", "message"),
     [
         ('map = { step = "S" }\naxes.x = { dir = "D" }', "every role but enable names its axis"),
-        ('axes.x = { step = "S" }\naxes.y = { step = "S" }', "channel 'S' is mapped as x.step and y.step"),
+        (
+            'axes.x = { step = "S" }\naxes.y = { step = "S" }',
+            "channel 'S' is mapped as x.step and y.step",
+        ),
         ('axes.x = { step = "S", speed = 3 }', "axes.x: unknown key speed"),
         ('axes.x = { step = "S", map = "step=T" }', "step is given twice"),
         ('axes."x y" = { step = "S" }', "axis name 'x y'"),
@@ -208,7 +235,9 @@ axes.y = { STEP = "YS", drive = "leadshine-dm542", invert = [], dir_forward = "l
 )
 def test_bad_axes_are_collection_errors(tmp_path: Path, entry: str, message: str) -> None:
     with pytest.raises(WavecheckConfigError, match="capture 1") as err:
-        load_specs(_write(tmp_path, f'[[capture]]\npath = "m.vcd"\ndrive = "gecko-g202"\n{entry}\n'))
+        load_specs(
+            _write(tmp_path, f'[[capture]]\npath = "m.vcd"\ndrive = "gecko-g202"\n{entry}\n')
+        )
     assert message in str(err.value)
 
 
@@ -216,5 +245,7 @@ def test_an_axis_needs_a_drive(tmp_path: Path) -> None:
     text = '[[capture]]\npath = "m.vcd"\naxes.x = { step = "S", drive = "gecko-g202" }\naxes.y = { step = "T" }\n'
     with pytest.raises(WavecheckConfigError, match="axes.y: no drive"):
         load_specs(_write(tmp_path, text))
-    with pytest.raises(WavecheckConfigError, match="'drive' is required"):  # without axes: as before
+    with pytest.raises(
+        WavecheckConfigError, match="'drive' is required"
+    ):  # without axes: as before
         load_specs(_write(tmp_path, '[[capture]]\npath = "m.vcd"\n'))

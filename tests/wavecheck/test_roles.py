@@ -86,8 +86,12 @@ def test_smoothieware_two_axes_3_4_and_5_6(smoothie_sr: Path) -> None:
         ("updown-uniform", "up-down", 1, {"up": "up", "down": "down"}),
         ("stepgen1-quadrature", "phases", 2, {"phase-A": "phase-A", "phase-B": "phase-B"}),
         # type 15 with the user table 1,3,2,6,4,5: LinuxCNC's type 4 table
-        ("user-type15-velocity", "phases", 4,
-         {"phase-A": "phase-A", "phase-B": "phase-B", "phase-C": "phase-C"}),
+        (
+            "user-type15-velocity",
+            "phases",
+            4,
+            {"phase-A": "phase-A", "phase-B": "phase-B", "phase-C": "phase-C"},
+        ),
     ],
 )
 def test_golden_traces(trace: str, kind: str, step_type: int, mapping: dict[str, str]) -> None:
@@ -110,13 +114,27 @@ def _renamed(cap: Capture, names: list[str]) -> Capture:
         Channel(name=n, index=c.index, initial=c.initial, edges=c.edges)
         for n, c in zip(names, cap.channels, strict=True)
     ]
-    return Capture(cap.path, cap.format, cap.timebase, cap.resolution_ticks, cap.samplerate_hz,
-                   cap.start, cap.end, chans)
+    return Capture(
+        cap.path,
+        cap.format,
+        cap.timebase,
+        cap.resolution_ticks,
+        cap.samplerate_hz,
+        cap.start,
+        cap.end,
+        chans,
+    )
 
 
 @pytest.mark.parametrize(
-    "trace", ["g202-p20-worst-dirhold", "xylotex-dirsetup-zero", "updown-uniform",
-              "stepgen1-quadrature", "user-type15-velocity"],
+    "trace",
+    [
+        "g202-p20-worst-dirhold",
+        "xylotex-dirsetup-zero",
+        "updown-uniform",
+        "stepgen1-quadrature",
+        "user-type15-velocity",
+    ],
 )
 def test_golden_traces_with_neutral_names(trace: str) -> None:
     cap = open_capture(GOLDEN / f"{trace}.vcd")
@@ -170,7 +188,9 @@ def test_waveform_beats_the_name() -> None:
     assert s is not None and s.channel == "DIR" and "the waveform decides" in s.evidence
 
 
-def _reversing_axis(t0: int, reversals: list[int], period: int = 100 * US) -> tuple[list[int], list[int]]:
+def _reversing_axis(
+    t0: int, reversals: list[int], period: int = 100 * US
+) -> tuple[list[int], list[int]]:
     """Starts of pulses and DIR toggles of an axis that reverses after the given pulse counts:
     each reversal slows down (3 periods), pauses, and DIR changes 10 µs before the next pulse."""
     starts: list[int] = []
@@ -189,10 +209,14 @@ def _reversing_axis(t0: int, reversals: list[int], period: int = 100 * US) -> tu
 def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
     xs, xd = _reversing_axis(0, [10, 12, 9])
     ys, yd = _reversing_axis(37 * US, [7, 8, 15])
-    cap = capture({
-        "0": (0, pulses(xs, 5 * US)), "1": (0, pulses(ys, 4 * US)),
-        "2": (0, yd), "3": (0, xd),
-    })
+    cap = capture(
+        {
+            "0": (0, pulses(xs, 5 * US)),
+            "1": (0, pulses(ys, 4 * US)),
+            "2": (0, yd),
+            "3": (0, xd),
+        }
+    )
     p = propose(cap)
     assert p.unambiguous, p.text()
     assert _roles(p) == {"a": {"step": "0", "dir": "3"}, "b": {"step": "1", "dir": "2"}}
@@ -202,10 +226,14 @@ def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
 def test_a_change_where_two_steps_pause_is_ambiguous_however_near_to_one() -> None:
     # both lines pause from 1.2 ms to 3 ms; the single change of "d" at 1.21 ms is 5 µs after a
     # pulse of "s" and 1.8 ms before one of "t": nearness is no proof, so it is refused
-    s = pulses([100 * US * k for k in range(1, 13)] + [3000 * US + 100 * US * k for k in range(12)],
-               5 * US)
-    t = pulses([50 * US + 100 * US * k for k in range(1, 12)]
-               + [3000 * US + 50 * US + 100 * US * k for k in range(12)], 5 * US)
+    s = pulses(
+        [100 * US * k for k in range(1, 13)] + [3000 * US + 100 * US * k for k in range(12)], 5 * US
+    )
+    t = pulses(
+        [50 * US + 100 * US * k for k in range(1, 12)]
+        + [3000 * US + 50 * US + 100 * US * k for k in range(12)],
+        5 * US,
+    )
     p = propose(capture({"s": (0, s), "t": (0, t), "d": (0, [1205 * US])}))
     assert not p.unambiguous
     assert "fits as the DIR of several STEP lines" in p.ambiguous[0].question
@@ -219,8 +247,14 @@ def test_a_change_where_two_steps_pause_is_ambiguous_however_near_to_one() -> No
 
 
 def _fit(d: int, s: int) -> DirFit:
-    return DirFit(Channel(f"d{d}", d, 0, np.array([1])), Channel(f"s{s}", s, 0, np.array([1])),
-                  1, 1, 0, (1, 1))
+    return DirFit(
+        Channel(f"d{d}", d, 0, np.array([1])),
+        Channel(f"s{s}", s, 0, np.array([1])),
+        1,
+        1,
+        0,
+        (1, 1),
+    )
 
 
 def test_dirs_are_given_only_where_every_matching_agrees() -> None:
@@ -229,11 +263,18 @@ def test_dirs_are_given_only_where_every_matching_agrees() -> None:
     assert {s: f.d.index for s, f in got.chosen.items()} == {11: 1, 12: 2}
     assert not got.undecided and not got.crowded
     # d1 and d2 share s1/s2 in either order, so d3 must be s3's; d1 and d2 stay undecided
-    got = assign({1: [_fit(1, 11), _fit(1, 12)], 2: [_fit(2, 11), _fit(2, 12)],
-                  3: [_fit(3, 11), _fit(3, 12), _fit(3, 13)]})
+    got = assign(
+        {
+            1: [_fit(1, 11), _fit(1, 12)],
+            2: [_fit(2, 11), _fit(2, 12)],
+            3: [_fit(3, 11), _fit(3, 12), _fit(3, 13)],
+        }
+    )
     assert {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
     assert {d: [f.s.index for f in fs] for d, fs in got.undecided.items()} == {
-        1: [11, 12], 2: [11, 12]}
+        1: [11, 12],
+        2: [11, 12],
+    }
     # two lines that can only be s1's: neither is decided; a separate pair still is
     got = assign({1: [_fit(1, 11)], 2: [_fit(2, 11)], 3: [_fit(3, 13)]})
     assert got.crowded == [(1, 2)] and {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
@@ -258,8 +299,15 @@ def test_shared_enable_and_active_low() -> None:
     xs, xd = _reversing_axis(1000 * US, [10, 12])
     ys, yd = _reversing_axis(1037 * US, [7, 8])
     last = max(xs[-1], ys[-1]) + 500 * US
-    cap = capture({"x": (0, pulses(xs, 5 * US)), "xd": (0, xd), "y": (0, pulses(ys, 5 * US)),
-                   "yd": (1, yd), "en": (1, [500 * US, last])})
+    cap = capture(
+        {
+            "x": (0, pulses(xs, 5 * US)),
+            "xd": (0, xd),
+            "y": (0, pulses(ys, 5 * US)),
+            "yd": (1, yd),
+            "en": (1, [500 * US, last]),
+        }
+    )
     p = propose(cap)
     assert p.unambiguous, p.text()
     assert [s.channel for s in p.shared] == ["en"] and p.shared[0].axes == ("a", "b")
@@ -333,9 +381,7 @@ def _motion(
     return moves
 
 
-def _machine(
-    rng: np.random.Generator, n_axes: int, with_enable: bool, unused: int = 0
-) -> Machine:
+def _machine(rng: np.random.Generator, n_axes: int, with_enable: bool, unused: int = 0) -> Machine:
     m = Machine()
     for _ in range(unused):  # probes on nothing
         m.add(int(rng.integers(0, 2)), [])
@@ -375,7 +421,9 @@ def _machine(
     return m
 
 
-def _generated_capture(m: Machine, rng: np.random.Generator, style: str) -> tuple[Capture, list[int]]:
+def _generated_capture(
+    m: Machine, rng: np.random.Generator, style: str
+) -> tuple[Capture, list[int]]:
     """The machine's lines in a shuffled order with neutral names; returns the capture and, per
     generated line, its channel index."""
     order = rng.permutation(len(m.lines))

@@ -19,10 +19,15 @@ def test_samplerate_tick_is_exact() -> None:
         tb.ns_to_ticks(4501, "exact")
 
 
-@pytest.mark.parametrize(("mag", "unit", "tick"), [(1, "ns", Fraction(1, 10**9)),
-                                                    (10, "ps", Fraction(1, 10**11)),
-                                                    (100, "s", Fraction(100)),
-                                                    (1, "fs", Fraction(1, 10**15))])
+@pytest.mark.parametrize(
+    ("mag", "unit", "tick"),
+    [
+        (1, "ns", Fraction(1, 10**9)),
+        (10, "ps", Fraction(1, 10**11)),
+        (100, "s", Fraction(100)),
+        (1, "fs", Fraction(1, 10**15)),
+    ],
+)
 def test_timescale(mag: int, unit: str, tick: Fraction) -> None:
     assert Timebase.from_timescale(mag, unit).tick_s == tick
 

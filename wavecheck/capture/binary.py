@@ -182,7 +182,9 @@ def read_binary(
             finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
             report(done, total)
     except OSError as err:
-        raise CaptureError(label, f"byte {done}", f"cannot be read: {err.strerror or err}") from None
+        raise CaptureError(
+            label, f"byte {done}", f"cannot be read: {err.strerror or err}"
+        ) from None
     finally:
         if opened is not None:
             opened.close()

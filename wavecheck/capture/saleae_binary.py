@@ -54,7 +54,12 @@ class _Chunk:
     """One continuous stretch of one channel: its level at ``begin``, rate and times."""
 
     def __init__(
-        self, initial: int, rate: float | None, begin: float, end: float, times: npt.NDArray[np.float64]
+        self,
+        initial: int,
+        rate: float | None,
+        begin: float,
+        end: float,
+        times: npt.NDArray[np.float64],
     ) -> None:
         self.initial = initial
         self.rate = rate
@@ -101,14 +106,22 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
     with f:
         head = f.read(16)
         if len(head) < 16 or head[:8] != MAGIC:
-            raise CaptureError(label, None, "not a Saleae Logic 2 binary export (no <SALEAE> header)")
+            raise CaptureError(
+                label, None, "not a Saleae Logic 2 binary export (no <SALEAE> header)"
+            )
         version, kind = struct.unpack("<ii", head[8:16])
         if kind == 1:
-            raise CaptureError(label, None, "is an analog export (type 1); export the digital channels")
+            raise CaptureError(
+                label, None, "is an analog export (type 1); export the digital channels"
+            )
         if kind != 0:
-            raise CaptureError(label, "byte 12", f"data type {kind} is neither digital (0) nor analog (1)")
+            raise CaptureError(
+                label, "byte 12", f"data type {kind} is neither digital (0) nor analog (1)"
+            )
         if version not in (0, 1):
-            raise CaptureError(label, "byte 8", f"export version {version} is not known (0 and 1 are)")
+            raise CaptureError(
+                label, "byte 8", f"export version {version} is not known (0 and 1 are)"
+            )
         offset = 16
         count = 1
         if version == 1:
@@ -117,7 +130,9 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
         chunks: list[_Chunk] = []
         for k in range(count):
             if version == 0:
-                initial, begin, end, n = struct.unpack("<IddQ", _read(f, 28, label, "the header", offset))
+                initial, begin, end, n = struct.unpack(
+                    "<IddQ", _read(f, 28, label, "the header", offset)
+                )
                 rate: float | None = None
                 offset += 28
             else:
@@ -126,7 +141,9 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
                 )
                 offset += 36
             if initial not in (0, 1):
-                raise CaptureError(label, f"byte {offset}", f"initial state {initial} is not 0 or 1")
+                raise CaptureError(
+                    label, f"byte {offset}", f"initial state {initial} is not 0 or 1"
+                )
             if n * 8 > size - offset:
                 raise CaptureError(
                     label, f"byte {offset}",
@@ -143,7 +160,9 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
             times = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float64)
             chunks.append(_Chunk(initial, rate, begin, end, times))
             if k + 1 < count and offset >= size:
-                raise CaptureError(label, f"byte {offset}", f"the file ends after chunk {k} of {count}")
+                raise CaptureError(
+                    label, f"byte {offset}", f"the file ends after chunk {k} of {count}"
+                )
         if offset != size:
             raise CaptureError(label, f"byte {offset}", f"{size - offset} bytes follow the data")
     if not chunks:
@@ -182,7 +201,9 @@ def read_saleae_binary(
         if analog:
             notes.append(f"skipped {len(analog)} analog file(s) ({', '.join(sorted(analog)[:4])})")
         if not found:
-            raise CaptureError(path, None, "holds no digital_N.bin files of a Saleae Logic 2 binary export")
+            raise CaptureError(
+                path, None, "holds no digital_N.bin files of a Saleae Logic 2 binary export"
+            )
     else:
         m = _DIGITAL.fullmatch(p.name)
         found = [(int(m.group(1)) if m else 0, p)]
@@ -190,7 +211,9 @@ def read_saleae_binary(
     stated = {c.rate for _, _, _, chunks in files for c in chunks if c.rate is not None}
     if len(stated) > 1:
         listed = ", ".join(f"{r:g} Hz" for r in sorted(stated))
-        raise CaptureError(path, None, f"its chunks were sampled at different rates ({listed}); not supported")
+        raise CaptureError(
+            path, None, f"its chunks were sampled at different rates ({listed}); not supported"
+        )
     rate: Fraction
     if samplerate is not None:
         rate = samplerate
@@ -244,9 +267,13 @@ def read_saleae_binary(
                 )  # fmt: skip
             t = ticks.astype(np.int64)
             if len(t) and (np.any(np.diff(t) <= 0) or t[0] < begin or t[-1] > end):
-                raise CaptureError(label, None, "transition times do not increase within their chunk")
+                raise CaptureError(
+                    label, None, "transition times do not increase within their chunk"
+                )
             if len(t) and edges and len(edges[-1]) and t[0] <= edges[-1][-1]:
-                raise CaptureError(label, None, "two transitions fall on one sample where chunks meet")
+                raise CaptureError(
+                    label, None, "two transitions fall on one sample where chunks meet"
+                )
             edges.append(t)
             level_before = c.initial ^ (len(t) & 1)
             last_end = end
@@ -293,6 +320,8 @@ def _tick(label: str, t: float, t0: float, rate: float) -> int:
     k = round(x)
     if abs(x - k) > _GRID_SLACK:
         raise CaptureError(
-            label, None, f"time {t:.12g} s is not on the grid of {rate:g} Hz samples (give --samplerate)"
+            label,
+            None,
+            f"time {t:.12g} s is not on the grid of {rate:g} Hz samples (give --samplerate)",
         )
     return int(k)

@@ -84,7 +84,11 @@ def samplerate_from_args(args: argparse.Namespace) -> Fraction | None:
 
 
 def capture_from_args(
-    args: argparse.Namespace, path: str | os.PathLike[str], *, resolution: bool = True, require_time: bool = True
+    args: argparse.Namespace,
+    path: str | os.PathLike[str],
+    *,
+    resolution: bool = True,
+    require_time: bool = True,
 ) -> Capture:
     """Open ``path`` with the options added by :func:`add_capture_arguments`.
 

@@ -55,6 +55,7 @@ __all__ = [
     "summary_line",
 ]
 
+
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
     out = p.add_argument_group("reports")  # output_file: checked before any work (wavecheck.output)
@@ -82,8 +83,10 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "the captures in input order. --plot, --gtkw, --html and --steps-csv run in one process",
     )
     out.add_argument(
-        "-q", "--quiet", action="store_true", help="no progress bar (it is off anyway when "
-        "stderr is not a terminal)"
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress bar (it is off anyway when stderr is not a terminal)",
     )
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)
@@ -429,7 +432,11 @@ def run_checks(
         _side_outputs(args, [report], [])
         return report.exit_code
     jobs = _jobs(args, len(paths))
-    stream = sys.stdout if args.output else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+    stream = (
+        sys.stdout
+        if args.output
+        else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+    )
     done: list[_Outcome | None] = [None] * len(paths)
     for outcome in _outcomes(args, build_report, paths, jobs):
         if outcome.error is not None:

@@ -36,7 +36,6 @@ from wavecheck.verdict import exit_code
 __all__ = ["register", "render_compare_json", "render_compare_text", "run"]
 
 
-
 def _pos(v: int | None) -> str:
     return "unknown" if v is None else f"{v:+d}"
 
@@ -58,15 +57,14 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
         return "\n".join(out) + "\n"
     cs, gs = c.capture.steps, c.golden.steps
     out = [
-        f"verdict: {c.verdict.upper()}"
-        + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
+        f"verdict: {c.verdict.upper()}" + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
         f"capture: {c.capture.capture.path} ({cs.count} steps, final position {_pos(cs.final_position)})",
         f"golden:  {c.golden.capture.path} ({gs.count} steps, final position {_pos(gs.final_position)})",
         f"drive:   {c.capture.drive.id}",
         "",
         f"step count:     {cs.count} vs {gs.count} ({'same' if c.same_count else 'DIFFERENT'})",
         f"final position: {_pos(cs.final_position)} vs {_pos(gs.final_position)} "
-        f"({ {'same': 'same', 'different': 'DIFFERENT', 'unknown': 'no DIR on either: not compared'}[c.position]})",
+        f"({ {'same': 'same', 'different': 'DIFFERENT', 'unknown': 'no DIR on either: not compared'}[c.position] })",
         f"directions:     {c.direction_mismatches} mismatch(es) in {c.compared} step(s)",
     ]
     align = "the first step" if c.align == "first-step" else "time 0 of each file"

@@ -46,12 +46,16 @@ __all__ = [
 def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
     """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``."""
     p.add_argument(
-        "--limit", action="append", default=[], metavar="RULE=VALUE",
+        "--limit",
+        action="append",
+        default=[],
+        metavar="RULE=VALUE",
         help="override one drive figure (step_high=5us, max_rate=100kHz; repeatable); the "
         "report shows the datasheet figure beside it",
     )
     p.add_argument(
-        "--margin", metavar="2x|+500ns",
+        "--margin",
+        metavar="2x|+500ns",
         help="tighten every datasheet figure: a factor (2x, as StepConf advises for 3.3 V "
         "parallel ports) or an added time (+500ns); --limit figures are taken as given",
     )
@@ -62,13 +66,24 @@ def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = Fal
     ``--hm2-clock``; LinuxCNC's ``--latency`` comes from the stepgen options where present."""
     if not positional:
         p.add_argument(
-            "--firmware", metavar="FILE",
+            "--firmware",
+            metavar="FILE",
             help="the firmware configuration that made the capture: a capture violating its "
             "own configuration is reported apart from the drive rules",
         )
-        p.add_argument("--axis", metavar="NAME", help="the axis of --firmware FILE captured (default: the first)")
-    p.add_argument("--firmware-format", choices=FIRMWARES, help="the firmware (default: detected from the content)")
-    p.add_argument("--hm2-clock", metavar="F", help="Mesa stepgen clock (e.g. 33MHz) for exact rounding")
+        p.add_argument(
+            "--axis",
+            metavar="NAME",
+            help="the axis of --firmware FILE captured (default: the first)",
+        )
+    p.add_argument(
+        "--firmware-format",
+        choices=FIRMWARES,
+        help="the firmware (default: detected from the content)",
+    )
+    p.add_argument(
+        "--hm2-clock", metavar="F", help="Mesa stepgen clock (e.g. 33MHz) for exact rounding"
+    )
 
 
 def _read(args: argparse.Namespace, path: str) -> FirmwareConfig:
@@ -105,14 +120,19 @@ def register(sub: Any) -> None:
     )
     p.add_argument("file", metavar="FILE", help="the firmware configuration file")
     p.add_argument(
-        "--drive", action="append", required=True, metavar="ID|FILE|AXIS=ID",
+        "--drive",
+        action="append",
+        required=True,
+        metavar="ID|FILE|AXIS=ID",
         help="the drive of every axis, or AXIS=ID for one axis (repeatable)",
     )
     add_tuning_arguments(p)
     add_firmware_arguments(p, positional=True)
     p.add_argument("--latency", metavar="J", help="LinuxCNC: worst base-thread latency (e.g. 11us)")
     p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
-    p.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE")
+    p.add_argument(
+        "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
+    )
     p.set_defaults(func=run)
 
 
@@ -125,7 +145,9 @@ def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Dr
         drive = tune_drive(load_drive(ident if sep else text), args.limit, args.margin)
         if sep:
             if axis.lower() not in names:
-                raise UsageError(f"--drive {text}: no axis {axis!r} in {cfg.path} (axes: {', '.join(cfg.axis_names)})")
+                raise UsageError(
+                    f"--drive {text}: no axis {axis!r} in {cfg.path} (axes: {', '.join(cfg.axis_names)})"
+                )
             per_axis[names[axis.lower()]] = drive
         elif default is None:
             default = drive
@@ -151,7 +173,10 @@ def run(args: argparse.Namespace) -> int:
     verdict = overall_verdict(r.verdict for r in results)
     code = exit_code(verdict)
     if args.format == "json":
-        text = json.dumps(config_dict(cfg, results, verdict, code), indent=2, ensure_ascii=False) + "\n"
+        text = (
+            json.dumps(config_dict(cfg, results, verdict, code), indent=2, ensure_ascii=False)
+            + "\n"
+        )
     else:
         text = config_text(cfg, results, verdict)
     if args.output:
@@ -160,6 +185,3 @@ def run(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(text)
     return code
-
-
-

@@ -50,7 +50,9 @@ def register(sub: Any) -> None:
         "extremes are, plus the step-rate range. No drive, no limits, no verdict. Exit 0, or 2 "
         "for unusable input.",
     )
-    p.add_argument("capture", metavar="CAPTURE", help="the capture (.sr, .vcd, or a sigrok-cli format)")
+    p.add_argument(
+        "capture", metavar="CAPTURE", help="the capture (.sr, .vcd, or a sigrok-cli format)"
+    )
     add_axis_arguments(p, drive=False)
     add_firmware_arguments(p)
     add_capture_arguments(p)

@@ -297,9 +297,7 @@ def _figure(
         if value <= 0:
             raise RuleError(path, f"{where}.value", f"{raw!r} must be positive")
         if value > _MAX_RATE_HZ:
-            raise RuleError(
-                path, f"{where}.value", f"{raw!r} is implausibly high (at most 1 THz)"
-            )
+            raise RuleError(path, f"{where}.value", f"{raw!r} is implausibly high (at most 1 THz)")
     else:
         if dim != "time":
             raise RuleError(
@@ -310,9 +308,7 @@ def _figure(
                 path, f"{where}.value", f"{raw!r} is negative (limits are minimum times >= 0)"
             )
         if value > _MAX_LIMIT_S:
-            raise RuleError(
-                path, f"{where}.value", f"{raw!r} is implausibly long (at most 1000 s)"
-            )
+            raise RuleError(path, f"{where}.value", f"{raw!r} is implausibly long (at most 1000 s)")
         value = value * 10**9
     status = _choice(path, f"{where}.status", table["status"], STATUSES)
     note = table.get("note", "")
@@ -373,7 +369,9 @@ def _parse(path: Path, data: dict[str, Any], user: bool = False) -> Drive:
         errors.run(_string, path, f"sources.{key}", text)
 
     kind = errors.run(_choice, path, "kind", data["kind"], KINDS, default="user")
-    interface = errors.run(_choice, path, "interface", data["interface"], INTERFACES, default="step-dir")
+    interface = errors.run(
+        _choice, path, "interface", data["interface"], INTERFACES, default="step-dir"
+    )
 
     edge_raw = data["active_edge"]
     edge_source, edge_status, edge_note = "", None, ""
@@ -381,12 +379,20 @@ def _parse(path: Path, data: dict[str, Any], user: bool = False) -> Drive:
     if isinstance(edge_raw, dict):
         errors.run(_check_keys, path, "active_edge.", edge_raw, _EDGE_REQUIRED, _FIGURE_OPTIONAL)
         if all(k in edge_raw for k in _EDGE_REQUIRED):
-            edge = errors.run(_choice, path, "active_edge.value", edge_raw["value"], EDGES, default="rising")
-            edge_source = errors.run(_source, path, "active_edge.source", edge_raw["source"], sources, default="")
-            edge_status = errors.run(_choice, path, "active_edge.status", edge_raw["status"], STATUSES)
+            edge = errors.run(
+                _choice, path, "active_edge.value", edge_raw["value"], EDGES, default="rising"
+            )
+            edge_source = errors.run(
+                _source, path, "active_edge.source", edge_raw["source"], sources, default=""
+            )
+            edge_status = errors.run(
+                _choice, path, "active_edge.status", edge_raw["status"], STATUSES
+            )
         edge_note = edge_raw.get("note", "")
         if not isinstance(edge_note, str):
-            errors.found.append(RuleError(path, "active_edge.note", f"expected a string, got {edge_note!r}"))
+            errors.found.append(
+                RuleError(path, "active_edge.note", f"expected a string, got {edge_note!r}")
+            )
             edge_note = ""
     else:
         edge = errors.run(_choice, path, "active_edge", edge_raw, EDGES, default="rising")
@@ -418,9 +424,9 @@ def _parse(path: Path, data: dict[str, Any], user: bool = False) -> Drive:
     if step_type is not None and (
         not isinstance(step_type, int) or isinstance(step_type, bool) or not 0 <= step_type <= 15
     ):
-        errors.found.append(RuleError(
-            path, "step_type", f"expected a LinuxCNC step type 0..15, got {step_type!r}"
-        ))
+        errors.found.append(
+            RuleError(path, "step_type", f"expected a LinuxCNC step type 0..15, got {step_type!r}")
+        )
     opto = data.get("opto")
     if opto is not None and not isinstance(opto, bool):
         errors.found.append(RuleError(path, "opto", f"expected true or false, got {opto!r}"))

@@ -64,7 +64,9 @@ def parse_limit(text: str) -> tuple[str, Fraction]:
     rule = rule.strip()
     allowed = (*TIME_RULES, "max_rate")
     if not sep or rule not in allowed:
-        raise UsageError(f"--limit {text!r}: write RULE=VALUE with RULE one of {', '.join(allowed)}")
+        raise UsageError(
+            f"--limit {text!r}: write RULE=VALUE with RULE one of {', '.join(allowed)}"
+        )
     if rule == "max_rate":
         hz = parse_frequency(value)
         if hz <= 0:
@@ -85,16 +87,24 @@ def tune_drive(drive: Drive, limits: Sequence[str] = (), margin: str | None = No
     rate = drive.max_rate
     if m is not None:
         for rule, fig in figures.items():
-            figures[rule] = replace(fig, value=m.time(fig.value), datasheet=fig.value,
-                                    applied=f"--margin {m.text}")
+            figures[rule] = replace(
+                fig, value=m.time(fig.value), datasheet=fig.value, applied=f"--margin {m.text}"
+            )
         if rate is not None:
-            rate = replace(rate, value=m.rate(rate.value), datasheet=rate.value,
-                           applied=f"--margin {m.text}")
+            rate = replace(
+                rate, value=m.rate(rate.value), datasheet=rate.value, applied=f"--margin {m.text}"
+            )
     for text in limits:
         rule, value = parse_limit(text)
         old = rate if rule == "max_rate" else drive.limits.get(rule)
-        fig = Figure(value, "command line", "user", f"--limit {text}",
-                     datasheet=old.value if old else None, applied=f"--limit {text.strip()}")
+        fig = Figure(
+            value,
+            "command line",
+            "user",
+            f"--limit {text}",
+            datasheet=old.value if old else None,
+            applied=f"--limit {text.strip()}",
+        )
         if rule == "max_rate":
             rate = fig
         else:

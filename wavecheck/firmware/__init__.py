@@ -17,8 +17,14 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import read_text
 from wavecheck.firmware.model import FIRMWARES, FirmwareConfig, GeneratorGuarantee, Guaranteed
 
-__all__ = ["FIRMWARES", "FirmwareConfig", "GeneratorGuarantee", "Guaranteed", "detect", "read_firmware"]
-
+__all__ = [
+    "FIRMWARES",
+    "FirmwareConfig",
+    "GeneratorGuarantee",
+    "Guaranteed",
+    "detect",
+    "read_firmware",
+]
 
 
 def detect(path: str | os.PathLike[str]) -> str:

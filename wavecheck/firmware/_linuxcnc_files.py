@@ -21,7 +21,9 @@ def is_ini(text: str) -> bool:
     )
 
 
-def files_of(path: str | os.PathLike[str], text: str) -> tuple[IniFile | None, list[Path], list[str]]:
+def files_of(
+    path: str | os.PathLike[str], text: str
+) -> tuple[IniFile | None, list[Path], list[str]]:
     """(INI or None, HAL files, notes) for ``path`` (an INI or a HAL file)."""
     if not is_ini(text):
         return None, [Path(path)], []

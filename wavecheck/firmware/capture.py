@@ -139,20 +139,62 @@ def _time(
     where = fig.where
     measured, at = seen.shortest.get(rule, (None, None))
     if configured is None:
-        return Comparison(what, rule, None, measured, "ns", at, fig.setting, where, "unchecked",
-                          f"the configuration guarantees no {label}")
+        return Comparison(
+            what,
+            rule,
+            None,
+            measured,
+            "ns",
+            at,
+            fig.setting,
+            where,
+            "unchecked",
+            f"the configuration guarantees no {label}",
+        )
     if measured is None:
-        return Comparison(what, rule, configured, None, "ns", None, fig.setting, where, "unchecked",
-                          f"configured {format_ns(configured)} {label}; not measured ({seen.unmeasured.format(rule=rule)})")
+        return Comparison(
+            what,
+            rule,
+            configured,
+            None,
+            "ns",
+            None,
+            fig.setting,
+            where,
+            "unchecked",
+            f"configured {format_ns(configured)} {label}; not measured ({seen.unmeasured.format(rule=rule)})",
+        )
     t = seen.resolution_ns
-    exact = "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
+    exact = (
+        "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
+    )
     place = f" at {format_time(at)}" if at is not None else ""
     if measured + t < configured:
-        return Comparison(what, rule, configured, measured, "ns", at, fig.setting, where, "fail",
-                          f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
-                          f"measured {format_ns(measured)}{place}{exact}")
-    return Comparison(what, rule, configured, measured, "ns", at, fig.setting, where, "pass",
-                      f"configured {format_ns(configured)} {label}; shortest measured {format_ns(measured)}")
+        return Comparison(
+            what,
+            rule,
+            configured,
+            measured,
+            "ns",
+            at,
+            fig.setting,
+            where,
+            "fail",
+            f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
+            f"measured {format_ns(measured)}{place}{exact}",
+        )
+    return Comparison(
+        what,
+        rule,
+        configured,
+        measured,
+        "ns",
+        at,
+        fig.setting,
+        where,
+        "pass",
+        f"configured {format_ns(configured)} {label}; shortest measured {format_ns(measured)}",
+    )
 
 
 def firmware_check(
@@ -172,15 +214,36 @@ def firmware_check(
     out.append(_time(seen, "dir_setup", "dir_setup", axis.dir_setup, offset, "DIR setup"))
     cfg_rate, rate = axis.max_rate.value, seen.rate_hz
     if cfg_rate is None or rate is None:
-        out.append(Comparison("rate", "", cfg_rate, rate, "Hz", None, axis.max_rate.setting,
-                              axis.max_rate.where, "unchecked", "no configured maximum or no steps"))
+        out.append(
+            Comparison(
+                "rate",
+                "",
+                cfg_rate,
+                rate,
+                "Hz",
+                None,
+                axis.max_rate.setting,
+                axis.max_rate.where,
+                "unchecked",
+                "no configured maximum or no steps",
+            )
+        )
     else:
         at = seen.rate_at_s
         ok = rate <= cfg_rate
-        out.append(Comparison(
-            "rate", "", cfg_rate, rate, "Hz", at, axis.max_rate.setting, axis.max_rate.where,
-            "pass" if ok else "fail",
-            f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
-            f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
-        ))
+        out.append(
+            Comparison(
+                "rate",
+                "",
+                cfg_rate,
+                rate,
+                "Hz",
+                at,
+                axis.max_rate.setting,
+                axis.max_rate.where,
+                "pass" if ok else "fail",
+                f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
+                f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
+            )
+        )
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out))

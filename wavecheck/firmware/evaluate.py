@@ -59,7 +59,9 @@ class PairResult:
         return overall_verdict(r.verdict for r in self.rows)
 
 
-def _mapping(g: GeneratorGuarantee, drive: Drive, rule: str) -> tuple[Role | None, Guaranteed | None, Fraction, str]:
+def _mapping(
+    g: GeneratorGuarantee, drive: Drive, rule: str
+) -> tuple[Role | None, Guaranteed | None, Fraction, str]:
     """(role, figure, offset added, note) for ``rule``."""
     edge = "both" if g.both_edges else drive.active_edge
     trailing = edge != g.leading_edge and not g.both_edges
@@ -71,11 +73,21 @@ def _mapping(g: GeneratorGuarantee, drive: Drive, rule: str) -> tuple[Role | Non
         return role, g.figure(role), Fraction(0), ""
     if rule == "dir_setup":
         if trailing and edge != "both" and g.pulse.value is not None:
-            return "dir_setup", g.dir_setup, g.pulse.value, "the drive's active edge ends the pulse: setup + pulse"
+            return (
+                "dir_setup",
+                g.dir_setup,
+                g.pulse.value,
+                "the drive's active edge ends the pulse: setup + pulse",
+            )
         return "dir_setup", g.dir_setup, Fraction(0), ""
     if rule == "dir_hold":
         if trailing:
-            return "dir_hold", g.dir_hold_trailing, Fraction(0), "the drive's active edge ends the pulse: hold from the trailing edge"
+            return (
+                "dir_hold",
+                g.dir_hold_trailing,
+                Fraction(0),
+                "the drive's active edge ends the pulse: hold from the trailing edge",
+            )
         return "dir_hold", g.dir_hold, Fraction(0), ""
     if rule == "step_period":
         return "max_rate", g.max_rate, Fraction(0), ""
@@ -98,22 +110,58 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
             limit = limit_fig.value if limit_fig else None
             value = fig.value + offset if fig is not None and fig.value is not None else None
         if role is None:
-            rows.append(PairRow(r.id, None, None, None, limit, limit_fig, None, "unchecked", note=note))
+            rows.append(
+                PairRow(r.id, None, None, None, limit, limit_fig, None, "unchecked", note=note)
+            )
             continue
         if limit is None:
-            rows.append(PairRow(r.id, role, value, fig, None, None, None, "unchecked", note="the drive states no limit"))
+            rows.append(
+                PairRow(
+                    r.id,
+                    role,
+                    value,
+                    fig,
+                    None,
+                    None,
+                    None,
+                    "unchecked",
+                    note="the drive states no limit",
+                )
+            )
             continue
         if value is None:
-            why = fig.note if fig is not None and fig.note else note or "no bound in the configuration"
-            rows.append(PairRow(r.id, role, None, fig, limit, limit_fig, None, "indeterminate", note=f"{why}; measure it"))
+            why = (
+                fig.note
+                if fig is not None and fig.note
+                else note or "no bound in the configuration"
+            )
+            rows.append(
+                PairRow(
+                    r.id,
+                    role,
+                    None,
+                    fig,
+                    limit,
+                    limit_fig,
+                    None,
+                    "indeterminate",
+                    note=f"{why}; measure it",
+                )
+            )
             continue
         margin = value - limit
         verdict: Verdict = "pass" if margin >= 0 else "fail"
         fix = ""
         if verdict == "fail" and role is not None:
-            need = (drive.max_rate.value if drive.max_rate else Fraction(0)) if role == "max_rate" else limit - offset
+            need = (
+                (drive.max_rate.value if drive.max_rate else Fraction(0))
+                if role == "max_rate"
+                else limit - offset
+            )
             if r.id == "dir_hold" and note and g.pulse.value is not None:
-                need = limit + g.pulse.value  # a hold from the trailing edge, as a hold from the leading one
+                need = (
+                    limit + g.pulse.value
+                )  # a hold from the trailing edge, as a hold from the leading one
                 note += " (inverting STEP would make it the leading edge)"
             fix = config.fix(g, role, need)
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
@@ -133,6 +181,8 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
     else:
         width = max(v for v in (pulse, pulse_lim, Fraction(0)) if v is not None)
         total = width + (idle_lim or Fraction(0))
-        timing = _GIGA / total if total > 0 and (idle_lim is not None or pulse is not None) else None
+        timing = (
+            _GIGA / total if total > 0 and (idle_lim is not None or pulse is not None) else None
+        )
     rates = [v for v in (timing, drive.max_rate.value if drive.max_rate else None) if v is not None]
     return min(rates) if rates else None

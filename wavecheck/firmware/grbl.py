@@ -68,20 +68,32 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
 
     step_mask, dir_mask = mask(2), mask(3)
     pulse = Guaranteed(
-        us0 * 1000, "$0", at0, "us", "uncertain",
+        us0 * 1000,
+        "$0",
+        at0,
+        "us",
+        "uncertain",
         "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on a "
-        "scope, not enforced)" if not hal else
-        "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
+        "scope, not enforced)"
+        if not hal
+        else "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
     )
     if hal and settings.get(29, (Fraction(0),))[0] > 0:
         us29, _, line29 = settings[29]
         setup = Guaranteed(
-            us29 * 1000, "$29", where(path, line29), "us", "uncertain",
+            us29 * 1000,
+            "$29",
+            where(path, line29),
+            "us",
+            "uncertain",
             "grblHAL applies $29 only when DIR changes, less the driver's latency allowance",
         )
     else:
         setup = Guaranteed(
-            Fraction(0), "$29" if hal else "STEP_PULSE_DELAY", "firmware default", "us",
+            Fraction(0),
+            "$29" if hal else "STEP_PULSE_DELAY",
+            "firmware default",
+            "us",
             "default",
             "DIR is written a few CPU cycles before STEP in the same interrupt: no setup time is "
             "guaranteed" + ("" if hal else " (STEP_PULSE_DELAY is compile-time, not in $$)"),
@@ -96,8 +108,12 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             info["max rate"] = f"{rate[1]} mm/min (${110 + bit}, {where(path, rate[2])})"
             hz = spm[0] * rate[0] / 60
             max_rate = Guaranteed(
-                hz, f"${100 + bit} x ${110 + bit} / 60", where(path, rate[2]), "mm/min",
-                "derived", "grbl claims up to 30 kHz but does not enforce it",
+                hz,
+                f"${100 + bit} x ${110 + bit} / 60",
+                where(path, rate[2]),
+                "mm/min",
+                "derived",
+                "grbl claims up to 30 kHz but does not enforce it",
             )
             idle_value = Fraction(10**9) / hz - pulse.value if hz > 0 and pulse.value else None
         else:
@@ -105,7 +121,10 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             idle_value = None
         idle = Guaranteed(
             idle_value if idle_value is None or idle_value > 0 else Fraction(0),
-            f"${110 + bit}", max_rate.where, "mm/min", "uncertain" if idle_value else "unknown",
+            f"${110 + bit}",
+            max_rate.where,
+            "mm/min",
+            "uncertain" if idle_value else "unknown",
             "1 / (max step rate) - pulse: the step interrupt spaces steps (Bresenham, AMASS)",
         )
         axes.append(
@@ -115,13 +134,21 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 idle=idle,
                 dir_setup=setup,
                 dir_hold=Guaranteed(
-                    pulse.value, "$0", at0, "us", "uncertain",
+                    pulse.value,
+                    "$0",
+                    at0,
+                    "us",
+                    "uncertain",
                     "DIR changes at the next step tick, at least one pulse after the leading edge",
                 ),
                 max_rate=max_rate,
                 pulse_level=0 if step_mask >> bit & 1 else 1,
                 dir_hold_trailing=Guaranteed(
-                    Fraction(0), "$0", at0, "us", "uncertain",
+                    Fraction(0),
+                    "$0",
+                    at0,
+                    "us",
+                    "uncertain",
                     "the next tick may follow the end of the pulse at once",
                 ),
                 dir_inverted=bool(dir_mask >> bit & 1),

@@ -31,7 +31,9 @@ _REG_MAX = 0x3FFF
 
 def looks_like(text: str) -> bool:
     """A HAL file with hm2 stepgen parameters, or an INI with a ``[HOSTMOT2]`` section."""
-    return bool(re.search(r"\bhm2_\S*\.stepgen\.\d+\.", text) or re.search(r"^\s*\[HOSTMOT2\]", text, re.M))
+    return bool(
+        re.search(r"\bhm2_\S*\.stepgen\.\d+\.", text) or re.search(r"^\s*\[HOSTMOT2\]", text, re.M)
+    )
 
 
 def read(path: str | os.PathLike[str], clock_hz: Fraction | None = None) -> FirmwareConfig:
@@ -51,40 +53,78 @@ def read(path: str | os.PathLike[str], clock_hz: Fraction | None = None) -> Firm
                     value = resolve_ref(words[2], ini, at)
                     gens.setdefault(m.group(1), {})[m.group(2)] = (number(value, at, words[1]), at)
     if not gens:
-        raise ConfigError(f"{path}: no `setp hm2_….stepgen.NN.*` line in {', '.join(map(str, hals)) or 'it'}")
+        raise ConfigError(
+            f"{path}: no `setp hm2_….stepgen.NN.*` line in {', '.join(map(str, hals)) or 'it'}"
+        )
     f = clock_hz
     axes = []
     for nn, params in sorted(gens.items()):
         axes.append(_axis(nn, params, f))
     clock = "unknown (give it for the exact rounding)" if f is None else f"{float(f):g} Hz"
     return FirmwareConfig(
-        firmware="hm2", path=str(path), axes=tuple(axes), files=(str(path), *map(str, hals)),
+        firmware="hm2",
+        path=str(path),
+        axes=tuple(axes),
+        files=(str(path), *map(str, hals)),
         notes=(f"stepgen clock {clock}; registers are truncated to whole clocks", *notes),
         fixer=_fix,
     )
 
 
-def _axis(nn: str, params: dict[str, tuple[Fraction, str]], f: Fraction | None) -> GeneratorGuarantee:
+def _axis(
+    nn: str, params: dict[str, tuple[Fraction, str]], f: Fraction | None
+) -> GeneratorGuarantee:
     def fig(name: str, extra_clock: int, status: str, note: str = "") -> Guaranteed:
         if name not in params:
             if f is None:
-                return Guaranteed(None, name, "", "ns", "unknown", "not set: 0x3FFF clocks at load (clock unknown)")
-            return Guaranteed(Fraction(_REG_MAX + extra_clock) / f * 10**9, name, "driver default", "ns", "default")
+                return Guaranteed(
+                    None,
+                    name,
+                    "",
+                    "ns",
+                    "unknown",
+                    "not set: 0x3FFF clocks at load (clock unknown)",
+                )
+            return Guaranteed(
+                Fraction(_REG_MAX + extra_clock) / f * 10**9,
+                name,
+                "driver default",
+                "ns",
+                "default",
+            )
         ns, at = params[name]
         if f is None:
             return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
         reg = min(int(ns * f / 10**9), _REG_MAX)
-        return Guaranteed(Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns", "derived" if extra_clock else "uncertain",
-                          f"{reg} clocks{' + 1' if extra_clock else ''} at {float(f):g} Hz" + (f"; {note}" if note else ""))
+        return Guaranteed(
+            Fraction(reg + extra_clock) * 10**9 / f,
+            name,
+            at,
+            "ns",
+            "derived" if extra_clock else "uncertain",
+            f"{reg} clocks{' + 1' if extra_clock else ''} at {float(f):g} Hz"
+            + (f"; {note}" if note else ""),
+        )
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
     setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
-    hold = fig("dirhold", 0, "uncertain", "counted from the pulse's start (VHDL) or its end (man page): disputed")
+    hold = fig(
+        "dirhold",
+        0,
+        "uncertain",
+        "counted from the pulse's start (VHDL) or its end (man page): disputed",
+    )
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
-        rate = Guaranteed(Fraction(10**9) / (pulse.value + idle.value), "1e9 / (steplen + stepspace)", pulse.where, "ns", "derived")
+        rate = Guaranteed(
+            Fraction(10**9) / (pulse.value + idle.value),
+            "1e9 / (steplen + stepspace)",
+            pulse.where,
+            "ns",
+            "derived",
+        )
     mv, scale = params.get("maxvel"), params.get("position-scale")
     if scale:
         info["position-scale"] = f"{float(scale[0]):g} steps/unit ({scale[1]})"
@@ -95,13 +135,28 @@ def _axis(nn: str, params: dict[str, tuple[Fraction, str]], f: Fraction | None) 
             rate = Guaranteed(hz, "maxvel x position-scale", mv[1], "units/s", "derived")
     notes: tuple[str, ...] = ()
     if "step_type" in params and params["step_type"][0] != 0:
-        notes = (f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir (0) is modelled",)
-    return GeneratorGuarantee(axis=f"stepgen.{nn}", pulse=pulse, idle=idle, dir_setup=setup, dir_hold=hold,
-                              max_rate=rate, info=info, notes=notes)
+        notes = (
+            f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir (0) is modelled",
+        )
+    return GeneratorGuarantee(
+        axis=f"stepgen.{nn}",
+        pulse=pulse,
+        idle=idle,
+        dir_setup=setup,
+        dir_hold=hold,
+        max_rate=rate,
+        info=info,
+        notes=notes,
+    )
 
 
 def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    name = {"pulse": "steplen", "idle": "stepspace", "dir_setup": "dirsetup", "dir_hold": "dirhold"}.get(role)
+    name = {
+        "pulse": "steplen",
+        "idle": "stepspace",
+        "dir_setup": "dirsetup",
+        "dir_hold": "dirhold",
+    }.get(role)
     if name is None:
         return f"lower hm2_….{axis.axis}.maxvel so that it steps at most {float(need):.6g} steps/s"
     return f"set hm2_….{axis.axis}.{name} (the INI's {name.upper()}) to at least {int(-(-need // 1))} ns"

@@ -90,12 +90,19 @@ def _steps_per_mm(path: str, sec: _Section) -> tuple[Fraction | None, str]:
             place = where(path, keys["gear_ratio"][1])
             ratio *= number(a, place, "gear_ratio") / number(b or "1", place, "gear_ratio")
     if dist <= 0:
-        raise ConfigError(f"{where(path, keys['rotation_distance'][1])}: rotation_distance must be > 0")
+        raise ConfigError(
+            f"{where(path, keys['rotation_distance'][1])}: rotation_distance must be > 0"
+        )
     spm = full * micro * ratio / dist
-    return spm, f"{float(spm):g} (full_steps_per_rotation x microsteps x gear_ratio / rotation_distance, {where(path, keys['rotation_distance'][1])})"
+    return (
+        spm,
+        f"{float(spm):g} (full_steps_per_rotation x microsteps x gear_ratio / rotation_distance, {where(path, keys['rotation_distance'][1])})",
+    )
 
 
-def _kv(path: str, keys: dict[str, tuple[str, int]], key: str, default: str | None = None) -> tuple[str, str]:
+def _kv(
+    path: str, keys: dict[str, tuple[str, int]], key: str, default: str | None = None
+) -> tuple[str, str]:
     if key in keys:
         return keys[key][0], where(path, keys[key][1])
     assert default is not None
@@ -153,7 +160,12 @@ def _axis(
         src = ("step_pulse_duration", where(path, line), "s", "set")
     elif tmc is not None:
         ns = _TMC_NS
-        src = ("step_pulse_duration", f"firmware default ([{tmc[0]} {sec.name}] at {where(path, tmc[1])})", "s", "default")
+        src = (
+            "step_pulse_duration",
+            f"firmware default ([{tmc[0]} {sec.name}] at {where(path, tmc[1])})",
+            "s",
+            "default",
+        )
     else:
         ns = _DEFAULT_NS
         src = ("step_pulse_duration", "firmware default", "s", "default")
@@ -168,32 +180,61 @@ def _axis(
         return Guaranteed(ns, src[0], src[1], src[2], status or src[3], note)  # type: ignore[arg-type]
 
     if both:
-        pulse = fig("uncertain", "both-edge fast path: toggles follow the host schedule; the MCU enforces no minimum")
+        pulse = fig(
+            "uncertain",
+            "both-edge fast path: toggles follow the host schedule; the MCU enforces no minimum",
+        )
         idle, setup, hold = pulse, pulse, pulse
         trailing = pulse
-        notes.append(f"both-edge stepping ({tmc[0] if tmc else ''} dedge): every STEP edge is a step")
+        notes.append(
+            f"both-edge stepping ({tmc[0] if tmc else ''} dedge): every STEP edge is a step"
+        )
     elif avr and ns <= _AVR_FAST_NS:
-        pulse = unknown("step_pulse_duration", "AVR fast path: both STEP writes in one event, the pulse is instruction time", src[1])
+        pulse = unknown(
+            "step_pulse_duration",
+            "AVR fast path: both STEP writes in one event, the pulse is instruction time",
+            src[1],
+        )
         idle = fig("uncertain", "the next step is scheduled at least this long after the last one")
         setup = fig("uncertain")
-        hold = unknown("step_pulse_duration", "AVR fast path: DIR may toggle between the two STEP edges", src[1])
+        hold = unknown(
+            "step_pulse_duration",
+            "AVR fast path: DIR may toggle between the two STEP edges",
+            src[1],
+        )
         trailing = None
     else:
         pulse, idle, setup, hold = fig(), fig(), fig(), fig()
-        trailing = Guaranteed(Fraction(0), src[0], src[1], src[2], "derived", "DIR toggles right after the trailing edge")
+        trailing = Guaranteed(
+            Fraction(0),
+            src[0],
+            src[1],
+            src[2],
+            "derived",
+            "DIR toggles right after the trailing edge",
+        )
     info: dict[str, str] = {}
     spm, spm_text = _steps_per_mm(path, sec)
     if spm_text:
         info["steps/mm"] = spm_text
     speed_key = "max_z_velocity" if sec.name == "stepper_z" else "max_velocity"
-    max_rate = Guaranteed(None, "max_velocity", "", "mm/s", "unknown", "Klipper has no step-rate setting")
+    max_rate = Guaranteed(
+        None, "max_velocity", "", "mm/s", "unknown", "Klipper has no step-rate setting"
+    )
     if printer is not None and not sec.name.startswith("extruder"):
         found = printer.keys.get(speed_key) or printer.keys.get("max_velocity")
         name = speed_key if speed_key in printer.keys else "max_velocity"
         if found and spm is not None:
             v = number(found[0], where(path, found[1]), name)
             info["max speed"] = f"{found[0]} mm/s ([printer] {name}, {where(path, found[1])})"
-            max_rate = Guaranteed(v * spm, f"{name} x steps/mm", where(path, found[1]), "mm/s", "derived", "cartesian kinematics assumed (corexy/delta steppers may run faster)")
+            max_rate = Guaranteed(
+                v * spm,
+                f"{name} x steps/mm",
+                where(path, found[1]),
+                "mm/s",
+                "derived",
+                "cartesian kinematics assumed (corexy/delta steppers may run faster)",
+            )
     return GeneratorGuarantee(
         axis=sec.name,
         pulse=pulse,
@@ -211,8 +252,19 @@ def _axis(
 
 
 def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    if role == "max_rate" or role == "idle" and axis.both_edges is False and axis.max_rate.known and axis.pulse.value is not None and axis.pulse.value >= need:
+    if (
+        role == "max_rate"
+        or role == "idle"
+        and axis.both_edges is False
+        and axis.max_rate.known
+        and axis.pulse.value is not None
+        and axis.pulse.value >= need
+    ):
         return f"lower max_velocity in [printer] so that {axis.axis} steps at most {float(need if role == 'max_rate' else Fraction(10**9) / (axis.pulse.value + need)):.6g} steps/s"  # type: ignore[operator]
     s = float(need / 10**9)
-    extra = " (over 0.0000005 this turns both-edge stepping off)" if axis.both_edges and need > _BOTH_EDGE_MAX_NS else ""
+    extra = (
+        " (over 0.0000005 this turns both-edge stepping off)"
+        if axis.both_edges and need > _BOTH_EDGE_MAX_NS
+        else ""
+    )
     return f"set `step_pulse_duration: {s:.9g}` in [{axis.axis}]{extra}"

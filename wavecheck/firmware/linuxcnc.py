@@ -28,7 +28,10 @@ _MAX_CHANNELS = 16
 
 def looks_like(text: str) -> bool:
     """A LinuxCNC INI (``[EMCMOT]``) or a HAL file with software stepgen."""
-    return bool(re.search(r"^\s*\[EMCMOT\]", text, re.M) or re.search(r"^\s*loadrt\s+stepgen\b|\bstepgen\.\d+\.", text, re.M))
+    return bool(
+        re.search(r"^\s*\[EMCMOT\]", text, re.M)
+        or re.search(r"^\s*loadrt\s+stepgen\b|\bstepgen\.\d+\.", text, re.M)
+    )
 
 
 def read(path: str | os.PathLike[str], latency_ns: Fraction | None = None) -> FirmwareConfig:
@@ -49,12 +52,20 @@ def read(path: str | os.PathLike[str], latency_ns: Fraction | None = None) -> Fi
             break
     j = Fraction(latency_ns) if latency_ns is not None else Fraction(0)
     axes = tuple(_axis(cfg, j) for cfg in configs)
-    jnote = (f"every interval is n x BASE_PERIOD - J with J = {float(j):g} ns" if latency_ns is not None
-             else "J = 0 assumed (give --latency for the latency-aware figures, as stepgen plan does)")
+    jnote = (
+        f"every interval is n x BASE_PERIOD - J with J = {float(j):g} ns"
+        if latency_ns is not None
+        else "J = 0 assumed (give --latency for the latency-aware figures, as stepgen plan does)"
+    )
     ignored = tuple(i for cfg in configs for i in cfg.ignored)
     return FirmwareConfig(
-        firmware="linuxcnc", path=str(path), axes=axes, files=(str(path), *map(str, hals)),
-        unsupported=tuple(dict.fromkeys(ignored)), notes=(jnote, *notes), fixer=_fixer(j),
+        firmware="linuxcnc",
+        path=str(path),
+        axes=axes,
+        files=(str(path), *map(str, hals)),
+        unsupported=tuple(dict.fromkeys(ignored)),
+        notes=(jnote, *notes),
+        fixer=_fixer(j),
     )
 
 
@@ -67,14 +78,26 @@ def _axis(cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
         periods = sum(n[x] for x in names)
         value = max(periods * p - j, Fraction(0))
         at = src.get(names[-1], "stepgen default (1 ns = one period)")
-        return Guaranteed(value, setting, at, "ns", "derived",
-                          f"{periods} x {p} ns - J" + (f"; {note}" if note else ""))
+        return Guaranteed(
+            value,
+            setting,
+            at,
+            "ns",
+            "derived",
+            f"{periods} x {p} ns - J" + (f"; {note}" if note else ""),
+        )
 
     same = n["stepspace"]
     reversal = n["dirhold"] + n["dirsetup"]
-    idle = fig(("stepspace",), "stepspace") if same <= reversal else fig(("dirhold", "dirsetup"), "dirhold + dirsetup", "across a reversal")
-    info = {"base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
-            **{k: f"{v} base periods" for k, v in n.items()}}
+    idle = (
+        fig(("stepspace",), "stepspace")
+        if same <= reversal
+        else fig(("dirhold", "dirsetup"), "dirhold + dirsetup", "across a reversal")
+    )
+    info = {
+        "base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
+        **{k: f"{v} base periods" for k, v in n.items()},
+    }
     notes: tuple[str, ...] = ()
     if cfg.step_type not in (None, 0):
         notes = (f"step_type {cfg.step_type}: only step/dir (0) is modelled here",)
@@ -83,9 +106,17 @@ def _axis(cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
         pulse=fig(("steplen",), "steplen"),
         idle=idle,
         dir_setup=fig(("dirsetup",), "dirsetup"),
-        dir_hold=fig(("steplen", "dirhold"), "steplen + dirhold", "dirhold counts from the end of the pulse"),
-        max_rate=Guaranteed(step_rate_hz(p, n["steplen"] + n["stepspace"]), "1 / ((steplen + stepspace) x P)",
-                            src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived", "stepgen's own clamp"),
+        dir_hold=fig(
+            ("steplen", "dirhold"), "steplen + dirhold", "dirhold counts from the end of the pulse"
+        ),
+        max_rate=Guaranteed(
+            step_rate_hz(p, n["steplen"] + n["stepspace"]),
+            "1 / ((steplen + stepspace) x P)",
+            src.get("stepspace", src.get("BASE_PERIOD", "")),
+            "ns",
+            "derived",
+            "stepgen's own clamp",
+        ),
         dir_hold_trailing=fig(("dirhold",), "dirhold"),
         info=info,
         notes=notes,
@@ -95,7 +126,12 @@ def _axis(cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
 def _fixer(j: Fraction):  # type: ignore[no-untyped-def]
     def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
         p = int(axis.info.get("base period", "0 ns").split(" ")[0])
-        name = {"pulse": "steplen", "idle": "stepspace", "dir_setup": "dirsetup", "dir_hold": "dirhold"}.get(role)
+        name = {
+            "pulse": "steplen",
+            "idle": "stepspace",
+            "dir_setup": "dirsetup",
+            "dir_hold": "dirhold",
+        }.get(role)
         if name is None or p <= 0:
             return f"lower the joint's MAX_VELOCITY so that {axis.axis} steps at most {float(need):.6g} steps/s"
         if role == "dir_hold":

@@ -59,7 +59,9 @@ _DEFINE = re.compile(r"^\s*#define\s+([A-Z0-9_]+)\b(.*)$")
 def looks_like(text: str) -> bool:
     """A Marlin configuration header."""
     return bool(
-        re.search(r"#define\s+(CONFIGURATION(_ADV)?_H_VERSION|X_DRIVER_TYPE|MINIMUM_STEPPER_PULSE)", text)
+        re.search(
+            r"#define\s+(CONFIGURATION(_ADV)?_H_VERSION|X_DRIVER_TYPE|MINIMUM_STEPPER_PULSE)", text
+        )
     )
 
 
@@ -99,11 +101,15 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     drivers = {a: d[f"{a}_DRIVER_TYPE"] for a in _AXES if f"{a}_DRIVER_TYPE" in d}
     if not drivers:
         raise ConfigError(f"{path}: no X_DRIVER_TYPE … defines: not a Marlin Configuration.h")
-    notes = ["Marlin's timing is global: one pulse, DIR delay and rate for every axis",
-             "preprocessor conditions are not evaluated: the first active #define of a name is read",
-             "EEPROM, M92 and M203 may override steps/unit and feed rates at run time"]
+    notes = [
+        "Marlin's timing is global: one pulse, DIR delay and rate for every axis",
+        "preprocessor conditions are not evaluated: the first active #define of a name is read",
+        "EEPROM, M92 and M203 may override steps/unit and feed rates at run time",
+    ]
     rows = [r for r in DEFAULTS if any(t.startswith(r.prefix) for t, _ in drivers.values())]
-    unknown_types = sorted({t for t, _ in drivers.values() if not any(t.startswith(r.prefix) for r in DEFAULTS)})
+    unknown_types = sorted(
+        {t for t, _ in drivers.values() if not any(t.startswith(r.prefix) for r in DEFAULTS)}
+    )
     unsupported = [f"driver type {t}: no Marlin default timing is modelled" for t in unknown_types]
     types = ", ".join(sorted({t for t, _ in drivers.values()}))
 
@@ -116,23 +122,54 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     old = "MINIMUM_STEPPER_PULSE_NS" not in d and "MINIMUM_STEPPER_PULSE" in d
     if "MINIMUM_STEPPER_PULSE_NS" in d:
         v, w = d["MINIMUM_STEPPER_PULSE_NS"]
-        pulse = Guaranteed(number(v, w, "MINIMUM_STEPPER_PULSE_NS"), "MINIMUM_STEPPER_PULSE_NS", w, "ns", "uncertain")
+        pulse = Guaranteed(
+            number(v, w, "MINIMUM_STEPPER_PULSE_NS"),
+            "MINIMUM_STEPPER_PULSE_NS",
+            w,
+            "ns",
+            "uncertain",
+        )
     elif old:
         v, w = d["MINIMUM_STEPPER_PULSE"]
-        pulse = Guaranteed(number(v, w, "MINIMUM_STEPPER_PULSE") * 1000, "MINIMUM_STEPPER_PULSE", w, "us", "uncertain")
+        pulse = Guaranteed(
+            number(v, w, "MINIMUM_STEPPER_PULSE") * 1000,
+            "MINIMUM_STEPPER_PULSE",
+            w,
+            "us",
+            "uncertain",
+        )
     else:
         dv = default("pulse_ns", max)
-        pulse = Guaranteed(dv[0] if dv else None, "MINIMUM_STEPPER_PULSE_NS", dv[1] if dv else "", "ns", "default" if dv else "unknown")
-    pulse = Guaranteed(pulse.value, pulse.setting, pulse.where, pulse.unit,
-                       "uncertain" if pulse.value is not None else "unknown",
-                       "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 tick short"
-                       + ("" if pulse.status != "default" else " (Marlin's default)"))
+        pulse = Guaranteed(
+            dv[0] if dv else None,
+            "MINIMUM_STEPPER_PULSE_NS",
+            dv[1] if dv else "",
+            "ns",
+            "default" if dv else "unknown",
+        )
+    pulse = Guaranteed(
+        pulse.value,
+        pulse.setting,
+        pulse.where,
+        pulse.unit,
+        "uncertain" if pulse.value is not None else "unknown",
+        "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 tick short"
+        + ("" if pulse.status != "default" else " (Marlin's default)"),
+    )
     if "MAXIMUM_STEPPER_RATE" in d:
         v, w = d["MAXIMUM_STEPPER_RATE"]
-        rate = Guaranteed(number(v, w, "MAXIMUM_STEPPER_RATE"), "MAXIMUM_STEPPER_RATE", w, "Hz", "set")
+        rate = Guaranteed(
+            number(v, w, "MAXIMUM_STEPPER_RATE"), "MAXIMUM_STEPPER_RATE", w, "Hz", "set"
+        )
     else:
         dv = default("max_rate_hz", min)
-        rate = Guaranteed(dv[0] if dv else None, "MAXIMUM_STEPPER_RATE", dv[1] if dv else "", "Hz", "default" if dv else "unknown")
+        rate = Guaranteed(
+            dv[0] if dv else None,
+            "MAXIMUM_STEPPER_RATE",
+            dv[1] if dv else "",
+            "Hz",
+            "default" if dv else "unknown",
+        )
     idle = _low(pulse, rate)
     delays: dict[str, Guaranteed] = {}
     for key in ("POST", "PRE"):
@@ -146,23 +183,48 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             delays[key] = Guaranteed(number(v, w, legacy), legacy, w, "ns", "set")
     if "PRE" not in delays and "POST" in delays:
         post = delays["POST"]
-        delays["PRE"] = Guaranteed(post.value, "MINIMUM_STEPPER_PRE_DIR_DELAY", post.where, "ns", "default", "PRE defaults to the POST value")
+        delays["PRE"] = Guaranteed(
+            post.value,
+            "MINIMUM_STEPPER_PRE_DIR_DELAY",
+            post.where,
+            "ns",
+            "default",
+            "PRE defaults to the POST value",
+        )
     for key in ("POST", "PRE"):
         if key not in delays:
             dv = default("dir_delay_ns", max)
-            delays[key] = Guaranteed(dv[0] if dv else Fraction(0), f"MINIMUM_STEPPER_{key}_DIR_DELAY",
-                                     dv[1] if dv else "firmware default", "ns", "default",
-                                     "" if dv else "no default for these drivers: 0 (\"expect at least 10 us, one stepper ISR\")")
+            delays[key] = Guaranteed(
+                dv[0] if dv else Fraction(0),
+                f"MINIMUM_STEPPER_{key}_DIR_DELAY",
+                dv[1] if dv else "firmware default",
+                "ns",
+                "default",
+                ""
+                if dv
+                else 'no default for these drivers: 0 ("expect at least 10 us, one stepper ISR")',
+            )
     setup = delays["POST"]
     pre = delays["PRE"]
     hold = Guaranteed(
         None if pulse.value is None or pre.value is None else pulse.value + pre.value,
-        "MINIMUM_STEPPER_PULSE_NS + MINIMUM_STEPPER_PRE_DIR_DELAY", pre.where, "ns", "derived",
+        "MINIMUM_STEPPER_PULSE_NS + MINIMUM_STEPPER_PRE_DIR_DELAY",
+        pre.where,
+        "ns",
+        "derived",
         "PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge = pulse + PRE",
     )
     edge = next((k for k in ("EDGE_STEPPING", "SQUARE_WAVE_STEPPING") if k in d), None)
-    spu = _list(*d["DEFAULT_AXIS_STEPS_PER_UNIT"], "DEFAULT_AXIS_STEPS_PER_UNIT") if "DEFAULT_AXIS_STEPS_PER_UNIT" in d else []
-    feed = _list(*d["DEFAULT_MAX_FEEDRATE"], "DEFAULT_MAX_FEEDRATE") if "DEFAULT_MAX_FEEDRATE" in d else []
+    spu = (
+        _list(*d["DEFAULT_AXIS_STEPS_PER_UNIT"], "DEFAULT_AXIS_STEPS_PER_UNIT")
+        if "DEFAULT_AXIS_STEPS_PER_UNIT" in d
+        else []
+    )
+    feed = (
+        _list(*d["DEFAULT_MAX_FEEDRATE"], "DEFAULT_MAX_FEEDRATE")
+        if "DEFAULT_MAX_FEEDRATE" in d
+        else []
+    )
     axes = []
     for i, (axis, (dtype, dwhere)) in enumerate(drivers.items()):
         letter = "E" if axis.startswith("E") else axis
@@ -176,36 +238,80 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         axis_rate = rate
         if spu and feed:
             s, fr = spu[min(i, len(spu) - 1)], feed[min(i, len(feed) - 1)]
-            info["steps/unit"] = f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {d['DEFAULT_AXIS_STEPS_PER_UNIT'][1]})"
-            info["max feedrate"] = f"{float(fr):g} mm/s (DEFAULT_MAX_FEEDRATE, {d['DEFAULT_MAX_FEEDRATE'][1]})"
+            info["steps/unit"] = (
+                f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {d['DEFAULT_AXIS_STEPS_PER_UNIT'][1]})"
+            )
+            info["max feedrate"] = (
+                f"{float(fr):g} mm/s (DEFAULT_MAX_FEEDRATE, {d['DEFAULT_MAX_FEEDRATE'][1]})"
+            )
             hz = s * fr
             if rate.value is None or hz < rate.value:
-                axis_rate = Guaranteed(hz, "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE",
-                                       d["DEFAULT_MAX_FEEDRATE"][1], "mm/s", "derived",
-                                       f"{float(s):g} steps/unit x {float(fr):g} mm/s")
-        axes.append(GeneratorGuarantee(
-            axis=axis, pulse=pulse, idle=idle, dir_setup=setup, dir_hold=hold, max_rate=axis_rate,
-            pulse_level=level, both_edges=both,
-            dir_hold_trailing=pre, dir_inverted=inv, info=info,
-            notes=(f"{edge} with a {dtype} driver: every STEP edge is a step",) if both else (),
-        ))
+                axis_rate = Guaranteed(
+                    hz,
+                    "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE",
+                    d["DEFAULT_MAX_FEEDRATE"][1],
+                    "mm/s",
+                    "derived",
+                    f"{float(s):g} steps/unit x {float(fr):g} mm/s",
+                )
+        axes.append(
+            GeneratorGuarantee(
+                axis=axis,
+                pulse=pulse,
+                idle=idle,
+                dir_setup=setup,
+                dir_hold=hold,
+                max_rate=axis_rate,
+                pulse_level=level,
+                both_edges=both,
+                dir_hold_trailing=pre,
+                dir_inverted=inv,
+                info=info,
+                notes=(f"{edge} with a {dtype} driver: every STEP edge is a step",) if both else (),
+            )
+        )
     return FirmwareConfig(
-        firmware="marlin", path=str(path), axes=tuple(axes), files=tuple(str(f) for f in files),
-        unsupported=tuple(unsupported), notes=tuple(notes), fixer=_fixer(old),
+        firmware="marlin",
+        path=str(path),
+        axes=tuple(axes),
+        files=tuple(str(f) for f in files),
+        unsupported=tuple(unsupported),
+        notes=tuple(notes),
+        fixer=_fixer(old),
     )
 
 
 def _low(pulse: Guaranteed, rate: Guaranteed) -> Guaranteed:
     p, r = pulse.value, rate.value
     if p is None and r is None:
-        return Guaranteed(None, "MAXIMUM_STEPPER_RATE", "", "Hz", "unknown", "neither pulse nor rate known")
+        return Guaranteed(
+            None, "MAXIMUM_STEPPER_RATE", "", "Hz", "unknown", "neither pulse nor rate known"
+        )
     if r is None or r <= 0:
         assert p is not None
-        return Guaranteed(p, pulse.setting, pulse.where, pulse.unit, "derived", "only the pulse is set: low = pulse")
+        return Guaranteed(
+            p,
+            pulse.setting,
+            pulse.where,
+            pulse.unit,
+            "derived",
+            "only the pulse is set: low = pulse",
+        )
     if p is None or p == 0:
-        return Guaranteed(Fraction(5 * 10**8) / r, "MAXIMUM_STEPPER_RATE", rate.where, "Hz", "derived", "only the rate is set: low = 5e8 / rate")
+        return Guaranteed(
+            Fraction(5 * 10**8) / r,
+            "MAXIMUM_STEPPER_RATE",
+            rate.where,
+            "Hz",
+            "derived",
+            "only the rate is set: low = 5e8 / rate",
+        )
     return Guaranteed(
-        max(Fraction(10**9) / r - p, p), "MAXIMUM_STEPPER_RATE", rate.where, "Hz", "derived",
+        max(Fraction(10**9) / r - p, p),
+        "MAXIMUM_STEPPER_RATE",
+        rate.where,
+        "Hz",
+        "derived",
         "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), enforced between pulses of one interrupt",
     )
 
@@ -229,7 +335,9 @@ def _fixer(old: bool):  # type: ignore[no-untyped-def]
         if role == "dir_hold":
             p = axis.pulse.value or Fraction(0)
             return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(max(need - p, Fraction(0)))}"
-        return (f"Marlin: lower DEFAULT_MAX_FEEDRATE for {axis.axis} so that it steps at most "
-                f"{float(need):.6g} steps/s, or define MAXIMUM_STEPPER_RATE {int(need)}")
+        return (
+            f"Marlin: lower DEFAULT_MAX_FEEDRATE for {axis.axis} so that it steps at most "
+            f"{float(need):.6g} steps/s, or define MAXIMUM_STEPPER_RATE {int(need)}"
+        )
 
     return fix

@@ -12,7 +12,13 @@ from wavecheck.firmware.evaluate import PairResult
 from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
 from wavecheck.units import format_ns, format_rate, json_number
 
-__all__ = ["config_dict", "config_text", "firmware_check_dict", "firmware_check_lines", "guaranteed_dict"]
+__all__ = [
+    "config_dict",
+    "config_text",
+    "firmware_check_dict",
+    "firmware_check_lines",
+    "guaranteed_dict",
+]
 
 _MARK = {"uncertain": "?", "default": "*", "unknown": ""}
 
@@ -52,14 +58,37 @@ def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) ->
         rows = [["rule", "generator", "limit", "margin", "verdict", "from"]]
         for r in res.rows:
             rate = r.rule == "step_period"
-            gen = "-" if r.source is None else (_g(r.source, rate=True) if rate else
-                                                 (format_ns(r.guaranteed_ns) + _MARK.get(r.source.status, "")
-                                                  if r.guaranteed_ns is not None else "unknown"))
-            lim = (format_rate(r.limit.value) + r.limit.mark if r.limit else "-") if rate else _limit(r.limit, r.limit_ns)
-            where = f"{r.source.setting} ({r.source.where})" if r.source is not None and r.source.where else (r.source.setting if r.source else "")
-            rows.append([r.rule, gen, lim, format_ns(r.margin_ns, signed=True), r.verdict.upper(), where])
+            gen = (
+                "-"
+                if r.source is None
+                else (
+                    _g(r.source, rate=True)
+                    if rate
+                    else (
+                        format_ns(r.guaranteed_ns) + _MARK.get(r.source.status, "")
+                        if r.guaranteed_ns is not None
+                        else "unknown"
+                    )
+                )
+            )
+            lim = (
+                (format_rate(r.limit.value) + r.limit.mark if r.limit else "-")
+                if rate
+                else _limit(r.limit, r.limit_ns)
+            )
+            where = (
+                f"{r.source.setting} ({r.source.where})"
+                if r.source is not None and r.source.where
+                else (r.source.setting if r.source else "")
+            )
+            rows.append(
+                [r.rule, gen, lim, format_ns(r.margin_ns, signed=True), r.verdict.upper(), where]
+            )
         widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-        out += ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+        out += [
+            "  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
+            for row in rows
+        ]
         out.append(f"  max step rate this pair allows: {format_rate(res.max_rate_hz)}")
         for r in res.rows:
             if r.fix:
@@ -67,8 +96,11 @@ def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) ->
             if r.verdict == "indeterminate" or (r.note and r.verdict != "unchecked"):
                 out.append(f"  {r.rule}: {r.note}")
         out += [f"  note: {n}" for n in res.notes]
-    out += ["", "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
-            f"verdict: {verdict.upper()}"]
+    out += [
+        "",
+        "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
+        f"verdict: {verdict.upper()}",
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -76,8 +108,14 @@ def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
     """A guaranteed figure as JSON."""
     if fig is None:
         return None
-    return {"value": json_number(fig.value), "setting": fig.setting, "where": fig.where,
-            "unit": fig.unit, "status": fig.status, "note": fig.note}
+    return {
+        "value": json_number(fig.value),
+        "setting": fig.setting,
+        "where": fig.where,
+        "unit": fig.unit,
+        "status": fig.status,
+        "note": fig.note,
+    }
 
 
 def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
@@ -100,7 +138,9 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
     }
 
 
-def config_dict(cfg: FirmwareConfig, results: list[PairResult], verdict: str, code: int) -> dict[str, Any]:
+def config_dict(
+    cfg: FirmwareConfig, results: list[PairResult], verdict: str, code: int
+) -> dict[str, Any]:
     """The JSON report of ``wavecheck config``."""
     return {
         "firmware": cfg.firmware,
@@ -124,8 +164,14 @@ def config_dict(cfg: FirmwareConfig, results: list[PairResult], verdict: str, co
                         "limit_ns": json_number(r.limit_ns),
                         "limit_status": r.limit.status if r.limit else None,
                         "limit_datasheet_ns": json_number(
-                            (Fraction(10**9) / r.limit.datasheet if r.rule == "step_period" else r.limit.datasheet)
-                            if r.limit is not None and r.limit.datasheet is not None else None),
+                            (
+                                Fraction(10**9) / r.limit.datasheet
+                                if r.rule == "step_period"
+                                else r.limit.datasheet
+                            )
+                            if r.limit is not None and r.limit.datasheet is not None
+                            else None
+                        ),
                         "margin_ns": json_number(r.margin_ns),
                         "verdict": r.verdict,
                         "fix": r.fix,
@@ -143,7 +189,9 @@ def config_dict(cfg: FirmwareConfig, results: list[PairResult], verdict: str, co
 
 def firmware_check_lines(fc: FirmwareCheck) -> list[str]:
     """The ``firmware`` section of the text report of ``check --firmware``."""
-    out = [f"firmware: {fc.firmware} {fc.path}, axis {fc.axis.axis} (apart from the drive rules): {fc.verdict.upper()}"]
+    out = [
+        f"firmware: {fc.firmware} {fc.path}, axis {fc.axis.axis} (apart from the drive rules): {fc.verdict.upper()}"
+    ]
     for c in fc.comparisons:
         out.append(f"  {c.what:<10} {c.verdict.upper():<13} {c.message}")
     return out
@@ -158,9 +206,18 @@ def firmware_check_dict(fc: FirmwareCheck) -> dict[str, Any]:
         "verdict": fc.verdict,
         "findings": sum(c.verdict == "fail" for c in fc.comparisons),
         "comparisons": [
-            {"what": c.what, "rule": c.rule, "configured": json_number(c.configured),
-             "measured": json_number(c.measured), "unit": c.unit, "at_s": json_number(c.at_s),
-             "setting": c.setting, "where": c.where, "verdict": c.verdict, "message": c.message}
+            {
+                "what": c.what,
+                "rule": c.rule,
+                "configured": json_number(c.configured),
+                "measured": json_number(c.measured),
+                "unit": c.unit,
+                "at_s": json_number(c.at_s),
+                "setting": c.setting,
+                "where": c.where,
+                "verdict": c.verdict,
+                "message": c.message,
+            }
             for c in fc.comparisons
         ],
     }

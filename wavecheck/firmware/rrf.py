@@ -60,7 +60,9 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             if len(fields) == 1:
                 fields *= 4
             if len(fields) != 4:
-                unsupported.append(f"{at}: M569 T{rest['T']}: RepRapFirmware refuses 2 or 3 values (bad timing parameter); ignored")
+                unsupported.append(
+                    f"{at}: M569 T{rest['T']}: RepRapFirmware refuses 2 or 3 values (bad timing parameter); ignored"
+                )
                 continue
             timing[rest["P"]] = (fields, at)
         elif cmd[1] in ("92", "203"):
@@ -68,15 +70,26 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 unsupported.append(f"{at}: M92 S (microstepping rescale) is not modelled")
             for axis, v in rest.items():
                 if axis in "XYZUVWABC" and v and ":" not in v:
-                    (spm if cmd[1] == "92" else speed)[axis] = (number(v, at, f"M{cmd[1]} {axis}"), at)
+                    (spm if cmd[1] == "92" else speed)[axis] = (
+                        number(v, at, f"M{cmd[1]} {axis}"),
+                        at,
+                    )
     slow = {d: t for d, t in timing.items() if any(f > _FAST_NS for f in t[0])}
     worst: list[Guaranteed] = []
     for i, _role in enumerate(_FIELDS):
         if not slow:
             break
         drv, (fields, at) = max(slow.items(), key=lambda kv: kv[1][0][i])
-        worst.append(Guaranteed(fields[i], f"M569 P{drv} T (field {i + 1})", at, "us", "set",
-                                "largest over all slow drivers; rounded up to step clocks"))
+        worst.append(
+            Guaranteed(
+                fields[i],
+                f"M569 P{drv} T (field {i + 1})",
+                at,
+                "us",
+                "set",
+                "largest over all slow drivers; rounded up to step clocks",
+            )
+        )
     axes = []
     for axis, drivers in axis_drivers.items():
         if axis not in spm and axis not in speed and not any(d in timing for d in drivers):
@@ -84,9 +97,14 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         is_slow = any(d in slow for d in drivers)
         if is_slow:
             pulse, idle, setup, hold_t = worst
-            hold = Guaranteed(pulse.value + hold_t.value,  # type: ignore[operator]
-                              "M569 T fields 1 + 4", hold_t.where, "us", "derived",
-                              "hold counts from the falling edge: from the rising edge add the high time")
+            hold = Guaranteed(
+                pulse.value + hold_t.value,  # type: ignore[operator]
+                "M569 T fields 1 + 4",
+                hold_t.where,
+                "us",
+                "derived",
+                "hold counts from the falling edge: from the rising edge add the high time",
+            )
         else:
             note = "no T: a fast driver; the firmware assumes >= 0.2 us high and low"
             pulse = Guaranteed(_FAST_NS, "M569 T", "firmware default", "us", "uncertain", note)
@@ -101,15 +119,35 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         if axis in speed:
             info["max speed"] = f"{float(speed[axis][0]):g} mm/min (M203, {speed[axis][1]})"
         if axis in spm and axis in speed:
-            rate = Guaranteed(spm[axis][0] * speed[axis][0] / 60, "M92 x M203 / 60", speed[axis][1], "mm/min", "derived")
-        axes.append(GeneratorGuarantee(
-            axis=axis, pulse=pulse, idle=idle, dir_setup=setup, dir_hold=hold, max_rate=rate,
-            dir_hold_trailing=hold_t, info=info,
-        ))
+            rate = Guaranteed(
+                spm[axis][0] * speed[axis][0] / 60,
+                "M92 x M203 / 60",
+                speed[axis][1],
+                "mm/min",
+                "derived",
+            )
+        axes.append(
+            GeneratorGuarantee(
+                axis=axis,
+                pulse=pulse,
+                idle=idle,
+                dir_setup=setup,
+                dir_hold=hold,
+                max_rate=rate,
+                dir_hold_trailing=hold_t,
+                info=info,
+            )
+        )
     return FirmwareConfig(
-        firmware="reprapfirmware", path=p, axes=tuple(axes), files=(p,), unsupported=tuple(unsupported),
-        notes=("M569 T timing is global over all slow drivers (the largest of each field)",
-               "step clock 750 kHz on Duet 3 (1.333 us), core/128 on Duet 2: figures are rounded up"),
+        firmware="reprapfirmware",
+        path=p,
+        axes=tuple(axes),
+        files=(p,),
+        unsupported=tuple(unsupported),
+        notes=(
+            "M569 T timing is global over all slow drivers (the largest of each field)",
+            "step clock 750 kHz on Duet 3 (1.333 us), core/128 on Duet 2: figures are rounded up",
+        ),
         fixer=_fix,
     )
 

@@ -47,12 +47,30 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     us, us_at, us_st = get("microseconds_per_step_pulse", "1", "us")
     f, f_at, f_st = get("base_stepping_frequency", "100000", "Hz")
     tick = Fraction(10**9) / f
-    pulse = Guaranteed(us * 1000, "microseconds_per_step_pulse", us_at, "us", us_st,  # type: ignore[arg-type]
-                       "the pulse is this plus interrupt time (about 3 us at 1 us set)")
-    idle = Guaranteed(tick - us * 1000, "base_stepping_frequency", f_at, "Hz", "derived",
-                      "one base tick minus the set pulse (a longer real pulse shortens it)")
-    setup = Guaranteed(tick, "base_stepping_frequency", f_at, "Hz", "uncertain",
-                       "DIR is written when a block starts, about one tick before its first pulse")
+    pulse = Guaranteed(
+        us * 1000,
+        "microseconds_per_step_pulse",
+        us_at,
+        "us",
+        us_st,  # type: ignore[arg-type]
+        "the pulse is this plus interrupt time (about 3 us at 1 us set)",
+    )
+    idle = Guaranteed(
+        tick - us * 1000,
+        "base_stepping_frequency",
+        f_at,
+        "Hz",
+        "derived",
+        "one base tick minus the set pulse (a longer real pulse shortens it)",
+    )
+    setup = Guaranteed(
+        tick,
+        "base_stepping_frequency",
+        f_at,
+        "Hz",
+        "uncertain",
+        "DIR is written when a block starts, about one tick before its first pulse",
+    )
     axes = []
     for motor in _MOTORS:
         if f"{motor}_step_pin" not in keys and f"{motor}_steps_per_mm" not in keys:
@@ -60,7 +78,9 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         step_pin = keys.get(f"{motor}_step_pin", ("", ""))[0]
         dir_pin = keys.get(f"{motor}_dir_pin", ("", ""))[0]
         info: dict[str, str] = {}
-        rate = Guaranteed(f, "base_stepping_frequency", f_at, "Hz", "derived", "one step per base tick at most")
+        rate = Guaranteed(
+            f, "base_stepping_frequency", f_at, "Hz", "derived", "one step per base tick at most"
+        )
         if f"{motor}_steps_per_mm" in keys:
             spm, at = get(f"{motor}_steps_per_mm", "0", "")[:2]
             info["steps/mm"] = f"{float(spm):g} ({motor}_steps_per_mm, {at})"
@@ -68,16 +88,33 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             info["max rate"] = f"{float(mr):g} mm/min ({motor}_max_rate, {mr_at})"
             hz = spm * mr / 60
             if hz < f:
-                rate = Guaranteed(hz, f"{motor}_steps_per_mm x {motor}_max_rate / 60", mr_at, "mm/min", "derived")
-        axes.append(GeneratorGuarantee(
-            axis=motor, pulse=pulse, idle=idle, dir_setup=setup,
-            dir_hold=unknown(f"{motor}_dir_pin", "DIR may change while STEP is still high: measure it"),
-            max_rate=rate, pulse_level=0 if "!" in step_pin else 1, dir_inverted="!" in dir_pin, info=info,
-        ))
+                rate = Guaranteed(
+                    hz, f"{motor}_steps_per_mm x {motor}_max_rate / 60", mr_at, "mm/min", "derived"
+                )
+        axes.append(
+            GeneratorGuarantee(
+                axis=motor,
+                pulse=pulse,
+                idle=idle,
+                dir_setup=setup,
+                dir_hold=unknown(
+                    f"{motor}_dir_pin", "DIR may change while STEP is still high: measure it"
+                ),
+                max_rate=rate,
+                pulse_level=0 if "!" in step_pin else 1,
+                dir_inverted="!" in dir_pin,
+                info=info,
+            )
+        )
     return FirmwareConfig(
-        firmware="smoothieware", path=p, axes=tuple(axes), files=(p,),
-        notes=("microseconds_per_step_pulse and base_stepping_frequency apply to every motor",
-               "the pulse timer counts in 4 / core clock steps (40 ns at 100 MHz)"),
+        firmware="smoothieware",
+        path=p,
+        axes=tuple(axes),
+        files=(p,),
+        notes=(
+            "microseconds_per_step_pulse and base_stepping_frequency apply to every motor",
+            "the pulse timer counts in 4 / core clock steps (40 ns at 100 MHz)",
+        ),
         fixer=_fix,
     )
 

@@ -65,6 +65,8 @@ __all__ = ["TIMING_PARAMS", "ConfigRates", "LinuxCNCConfig", "config_rates", "re
 #: stepgen's timing parameters (ns, u32), in LinuxCNC's order.
 TIMING_PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay")
 _FLOAT_PARAMS = ("position-scale", "maxvel", "maxaccel")
+
+
 @dataclass
 class LinuxCNCConfig:
     """The stepgen settings of one channel, with where each came from.
@@ -201,7 +203,9 @@ def _parse_loadrt_stepgen(args: dict[str, str], cfg: LinuxCNCConfig, where: str)
             try:
                 cfg.user_step_type = tuple(int(v, 0) for v in value.split(",") if v)
             except ValueError:
-                raise ConfigError(f"{where}: user_step_type={value} is not a list of numbers") from None
+                raise ConfigError(
+                    f"{where}: user_step_type={value} is not a list of numbers"
+                ) from None
             cfg.sources["user_step_type"] = where
 
 
@@ -211,7 +215,9 @@ def _parse_loadrt_threads(args: dict[str, str], cfg: LinuxCNCConfig, where: str)
         period = args.get(f"period{i}")
         if period is None:
             if name is not None:
-                cfg.ignored.append(f"ignored: thread {name} ({where}) has no period{i}= (its period is not known)")
+                cfg.ignored.append(
+                    f"ignored: thread {name} ({where}) has no period{i}= (its period is not known)"
+                )
             continue
         name = name or f"thread{i}"
         cfg.threads[name] = _thread_period(period, where, f"period{i}")
@@ -293,7 +299,9 @@ def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: 
         cfg.enable = value.strip().lower() in ("1", "true")
         cfg.sources["enable"] = where
     else:
-        cfg.ignored.append(f"ignored: setp {name} {value} ({where}) (not a stepgen setting the model has)")
+        cfg.ignored.append(
+            f"ignored: setp {name} {value} ({where}) (not a stepgen setting the model has)"
+        )
 
 
 def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
@@ -450,7 +458,9 @@ def config_rates(
     p = cfg.require_base_period()
     j = None if latency_ns is None else Fraction(latency_ns)
 
-    def _rates(config: Fraction | None, safe: Fraction | None, notes: tuple[str, ...]) -> ConfigRates:
+    def _rates(
+        config: Fraction | None, safe: Fraction | None, notes: tuple[str, ...]
+    ) -> ConfigRates:
         return ConfigRates(config, safe, notes, cfg.channel, p, j)
 
     n = cfg.periods()

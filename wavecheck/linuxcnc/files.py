@@ -28,7 +28,6 @@ __all__ = [
 INI_REF = re.compile(r"^\[([^\]]+)\](?:\(([^()\s]+)\)|([^()\s]+))$")
 
 
-
 @dataclass
 class IniFile:
     """A LinuxCNC INI file: section → key → every (value, line) in file order.
@@ -61,7 +60,9 @@ def read_ini(path: str | os.PathLike[str]) -> IniFile:
             continue
         if line.startswith("["):
             if not line.endswith("]"):
-                raise ConfigError(f"{path}: line {no}: bad section header {line!r} (expected [NAME])")
+                raise ConfigError(
+                    f"{path}: line {no}: bad section header {line!r} (expected [NAME])"
+                )
             section = line[1:-1].strip()
             ini.sections.setdefault(section, {})
             continue
@@ -121,5 +122,3 @@ def loadrt_args(words: list[str], ini: IniFile | None, where: str) -> dict[str, 
             key, value = arg.split("=", 1)
             out[key] = resolve_ref(value, ini, where)
     return out
-
-

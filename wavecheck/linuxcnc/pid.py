@@ -145,7 +145,9 @@ def _pid_loadrt(args: dict[str, str], hal: _PidHal, where: str) -> None:
             raise ConfigError(f"{where}: loadrt pid num_chan={text} is not a number") from None
         names = [f"pid.{i}" for i in range(count)]
     if not 1 <= len(names) <= _PID_MAX_CHANNELS:
-        raise ConfigError(f"{where}: loadrt pid makes {len(names)} instances (1..{_PID_MAX_CHANNELS})")
+        raise ConfigError(
+            f"{where}: loadrt pid makes {len(names)} instances (1..{_PID_MAX_CHANNELS})"
+        )
     hal.loaded = True
     hal.instances += [n for n in names if n not in hal.instances]
 
@@ -153,7 +155,9 @@ def _pid_loadrt(args: dict[str, str], hal: _PidHal, where: str) -> None:
 def _pid_pin(name: str) -> tuple[str, str] | None:
     """``pid.x.Pgain`` → (``pid.x``, ``Pgain``) when the last part is a pid pin."""
     inst, _, pin = name.rpartition(".")
-    if inst and (pin in PID_PINS or pin == _PID_BIT or pin in _PID_WIRING or pin.endswith("-deriv")):
+    if inst and (
+        pin in PID_PINS or pin == _PID_BIT or pin in _PID_WIRING or pin.endswith("-deriv")
+    ):
         return inst, pin
     return None
 
@@ -279,7 +283,9 @@ def read_pid_config(
             elif pin in PID_PINS:
                 cfg.pins[pin] = _float_value(value, where, f"{inst}.{pin}")
             else:
-                cfg.ignored.append(f"ignored: setp {inst}.{pin} ({where}) (the model uses pid's own estimates)")
+                cfg.ignored.append(
+                    f"ignored: setp {inst}.{pin} ({where}) (the model uses pid's own estimates)"
+                )
                 continue
             cfg.sources[pin] = where
             m = INI_REF.match(raw)
@@ -293,7 +299,11 @@ def read_pid_config(
                 if pin.endswith("-deriv"):
                     what = "pid's own derivative estimate"
                 else:
-                    what = f"the setp value ({cfg.pins[pin]:g})" if pin in cfg.pins else "pid's default"
+                    what = (
+                        f"the setp value ({cfg.pins[pin]:g})"
+                        if pin in cfg.pins
+                        else "pid's default"
+                    )
                 cfg.ignored.append(
                     f"ignored: net {signal} {inst}.{pin} ({at}) (its value is not known to the "
                     f"model, which uses {what})"

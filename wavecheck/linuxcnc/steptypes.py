@@ -92,7 +92,9 @@ def step_type(number: int, user_table: Sequence[int] | None = None) -> StepType:
                 f"user step table has {len(table)} states; LinuxCNC accepts at most {MAX_USER_CYCLE}"
             )
         if any(v < 0 or v >= 32 for v in table):
-            raise ConfigError(f"user step table {list(table)} uses a bit above phase-E (values 0..31)")
+            raise ConfigError(
+                f"user step table {list(table)} uses a bit above phase-E (values 0..31)"
+            )
         phases = max(max(table).bit_length(), 1)
         return StepType(15, "user-defined", PHASE_NAMES[:phases], table)
     raise ConfigError(f"step type {number} does not exist (LinuxCNC accepts 0..15)")

@@ -96,7 +96,7 @@ def _rules_table(report: Report, index: int) -> str:
             f'<td class="num">{_ns(r.min_measured_ns)}</td>'
             f'<td class="num">{_ns(r.min_margin_ns, signed=True)}</td>'
             f'<td class="num">{"–" if at is None else f"{float(at):.9f}"}</td>'
-            f"<td>{_badge(r.verdict)}</td><td class=\"note\">{src}</td></tr>"
+            f'<td>{_badge(r.verdict)}</td><td class="note">{src}</td></tr>'
         )
     legend = ""
     if any(r.figure is not None and r.figure.mark for r in report.rules):
@@ -131,7 +131,7 @@ def _violations_table(report: Report, limit: int) -> str:
             f'<tr><td class="num">{k}</td><td>{_e(v.rule)}</td><td class="num">{g.count:,}</td>'
             f'<td class="num">{float(v.time_s):.9f}</td><td class="num">{last}</td>{cells}</tr>'
         )
-    more = f"<p class=\"note\">… and {total - len(shown):,} more.</p>" if total > len(shown) else ""
+    more = f'<p class="note">… and {total - len(shown):,} more.</p>' if total > len(shown) else ""
     grouped = (
         f" The {len(shown):,} worst are shown as {len(groups):,} "
         f"group{'' if len(groups) == 1 else 's'} of identical violations (count, first and last "
@@ -160,7 +160,11 @@ def _sources(report: Report, index: int) -> str:
 def _rates_table(report: Report) -> str:
     rates = report.rates
     rows = [
-        ("drive", rates.drive, f"datasheet ({rates.drive_limited_by})" if rates.drive_limited_by else "datasheet"),
+        (
+            "drive",
+            rates.drive,
+            f"datasheet ({rates.drive_limited_by})" if rates.drive_limited_by else "datasheet",
+        ),
         ("observed", rates.observed, "highest instantaneous rate in the capture"),
         (
             "headroom",
@@ -177,7 +181,9 @@ def _rates_table(report: Report) -> str:
         if cfg.latency_ns is not None:
             assumed += f", J = {_ns(cfg.latency_ns)}"
         rows.append(("config", cfg.config, f"stepgen's own clamp ({assumed})"))
-        rows.append(("latency_safe", cfg.latency_safe, f"meets the drive under worst latency ({assumed})"))
+        rows.append(
+            ("latency_safe", cfg.latency_safe, f"meets the drive under worst latency ({assumed})")
+        )
     body = "".join(
         f'<tr><td>{_e(k)}</td><td class="num">{_hz(v)}</td><td class="note">{_e(what)}</td></tr>'
         for k, v, what in rows
@@ -274,7 +280,7 @@ def render_html(
         figures.append(png if plots else None)
     summary_rows = "".join(
         f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td><td>{_e(r.drive.id)}</td>'
-        f"<td>{_badge(r.verdict)}</td><td class=\"num\">{r.total_violations:,}</td>"
+        f'<td>{_badge(r.verdict)}</td><td class="num">{r.total_violations:,}</td>'
         f'<td class="num">{r.steps.count:,}</td></tr>'
         for k, r in enumerate(reports, 1)
     )
@@ -295,7 +301,9 @@ def render_html(
             f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
         )
     if errors:
-        body.append(f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>')
+        body.append(
+            f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>'
+        )
     for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
         body.append(_section(r, k, png, max_violations))
     body.append(
@@ -305,8 +313,6 @@ def render_html(
     return "\n".join(body) + "\n"
 
 
-def write_html(
-    reports: Sequence[Report], path: str | os.PathLike[str], **kwargs: object
-) -> None:
+def write_html(reports: Sequence[Report], path: str | os.PathLike[str], **kwargs: object) -> None:
     """Render :func:`render_html` and write it to ``path`` atomically."""
     atomic_write(path, render_html(reports, **kwargs))  # type: ignore[arg-type]

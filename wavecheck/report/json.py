@@ -115,7 +115,9 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
         "steps": {
             "step_type": report.step_type.number,
             "step_type_name": report.step_type.name,
-            "forward_dir_level": report.forward_level if report.step_type.kind == "step-dir" else None,
+            "forward_dir_level": report.forward_level
+            if report.step_type.kind == "step-dir"
+            else None,
             "count": steps.count,
             "forward": steps.forward,
             "reverse": steps.reverse,

@@ -63,9 +63,7 @@ def _describe(v: Violation) -> str:
 
 
 def _testcase(suite: ET.Element, report: Report, r: RuleOutcome) -> str:
-    case = ET.SubElement(
-        suite, "testcase", classname=_classname(report), name=r.rule, time="0"
-    )
+    case = ET.SubElement(suite, "testcase", classname=_classname(report), name=r.rule, time="0")
     if r.verdict == "fail":
         worst = r.worst_violations(_LISTED)
         el = ET.SubElement(
@@ -118,9 +116,7 @@ def _suite(root: ET.Element, report: Report) -> None:
     for r in report.rules:
         counts[_testcase(suite, report, r)] += 1
     for rule in report.not_stated:
-        case = ET.SubElement(
-            suite, "testcase", classname=_classname(report), name=rule, time="0"
-        )
+        case = ET.SubElement(suite, "testcase", classname=_classname(report), name=rule, time="0")
         ET.SubElement(case, "skipped", message=f"drive {report.drive.id} states no {rule} limit")
         counts["skipped"] += 1
     if report.verdict == "unchecked":

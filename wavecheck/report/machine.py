@@ -87,7 +87,9 @@ def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
     capture: dict[str, Any] = {}
     for r in m.axes:
         d = report_dict(r, violation_cap)
-        capture = capture or {k: v for k, v in d["capture"].items() if k not in ("mapping", "inverted")}
+        capture = capture or {
+            k: v for k, v in d["capture"].items() if k not in ("mapping", "inverted")
+        }
         axes.append(
             {
                 "name": r.axis,
@@ -104,7 +106,12 @@ def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
         )
     for c in capture.get("channels", []):
         c["role"] = next(
-            (f"{r.axis}.{role}" for r in m.axes for role, ch in r.mapping.items() if ch == c["name"]),
+            (
+                f"{r.axis}.{role}"
+                for r in m.axes
+                for role, ch in r.mapping.items()
+                if ch == c["name"]
+            ),
             None,
         )
     return {

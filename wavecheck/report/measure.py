@@ -76,8 +76,12 @@ def _axis_head(a: AxisMeasurement) -> list[str]:
     first = f" (first at {_at(tb.seconds(int(a.reversals[0])))})" if rev else ""
     lines = [
         f"{label}: {mapping}{inv}; step type {st.number} ({st.kind}); active edge "
-        f"{a.active_edge}" + (f"; DIR {'high' if a.forward_level else 'low'} = forward"
-                              if st.kind == "step-dir" else ""),
+        f"{a.active_edge}"
+        + (
+            f"; DIR {'high' if a.forward_level else 'low'} = forward"
+            if st.kind == "step-dir"
+            else ""
+        ),
         f"  steps:     {steps.count} (forward {steps.forward}, reverse {steps.reverse}, unknown "
         f"{steps.unknown}); final position {'unknown' if pos is None else f'{pos:+d}'}; "
         f"{rev} reversal(s){first}",
@@ -95,7 +99,9 @@ def _axis_head(a: AxisMeasurement) -> list[str]:
 
 def _table(rows: list[list[str]]) -> list[str]:
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    return ["  " + "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    return [
+        "  " + "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows
+    ]
 
 
 def _interval_rows(a: AxisMeasurement) -> list[list[str]]:
@@ -139,7 +145,9 @@ def render_measure_text(m: Measurement) -> str:
         out += ["", *_axis_head(a), "", *_table(_interval_rows(a))]
         empty = [s.rule for s in a.stats if s.count == 0]
         if empty:
-            out.append(f"  not measured (no complete interval, or its signal not mapped): {', '.join(empty)}")
+            out.append(
+                f"  not measured (no complete interval, or its signal not mapped): {', '.join(empty)}"
+            )
     if m.notes:
         out.append("")
         out += [f"note: {n}" for n in m.notes]
@@ -246,20 +254,34 @@ def render_measure_html(m: Measurement, png: bytes | None = None) -> str:
         body.append(f'<section class="axis" id="axis-{k}"><h2>{_e(head[0])}</h2>')
         body += [f"<p>{_e(line.strip())}</p>" for line in head[1:]]
         rows = _interval_rows(a)
-        body.append('<table class="intervals"><tr>' + "".join(f"<th>{_e(c)}</th>" for c in rows[0]) + "</tr>")
+        body.append(
+            '<table class="intervals"><tr>'
+            + "".join(f"<th>{_e(c)}</th>" for c in rows[0])
+            + "</tr>"
+        )
         for r in rows[1:]:
             cells = [f"<td>{_e(r[0])}</td>"] + [f'<td class="num">{_e(c)}</td>' for c in r[1:]]
             body.append("<tr>" + "".join(cells) + "</tr>")
         body.append("</table></section>")
     if m.notes:
-        body.append("<ul class=\"notes\">" + "".join(f'<li class="note">{_e(n)}</li>' for n in m.notes) + "</ul>")
+        body.append(
+            '<ul class="notes">'
+            + "".join(f'<li class="note">{_e(n)}</li>' for n in m.notes)
+            + "</ul>"
+        )
     if png is not None:
         data = base64.b64encode(png).decode("ascii")
-        body.append(f'<h2>Figures</h2><img alt="position, step rate and histograms" src="data:image/png;base64,{data}">')
-    body.append('<p class="note">Made by wavecheck measure: no drive, no limits, no verdicts.</p></body></html>')
+        body.append(
+            f'<h2>Figures</h2><img alt="position, step rate and histograms" src="data:image/png;base64,{data}">'
+        )
+    body.append(
+        '<p class="note">Made by wavecheck measure: no drive, no limits, no verdicts.</p></body></html>'
+    )
     return "\n".join(body) + "\n"
 
 
-def write_measure_html(m: Measurement, path: str | os.PathLike[str], png: bytes | None = None) -> None:
+def write_measure_html(
+    m: Measurement, path: str | os.PathLike[str], png: bytes | None = None
+) -> None:
     """Write :func:`render_measure_html` to ``path`` atomically."""
     atomic_write(path, render_measure_html(m, png))

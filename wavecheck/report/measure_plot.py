@@ -49,7 +49,9 @@ def draw_motion(
     gaps = np.diff(steps.ticks)
     ok = gaps > 0
     rate = float(timebase.samplerate_hz) / gaps[ok]
-    ax_rate.plot(t[1:][ok][::stride], rate[::stride], ".", ms=2 if len(rate) > 1000 else 5, color=_LINE)
+    ax_rate.plot(
+        t[1:][ok][::stride], rate[::stride], ".", ms=2 if len(rate) > 1000 else 5, color=_LINE
+    )
     if len(rate) and rate.max() / max(rate.min(), 1e-12) > 100:
         ax_rate.set_yscale("log")
     known = steps.direction != 0

@@ -227,7 +227,9 @@ def steps_csv_chunks(
             has = ~np.isnan(spu)
             fields += [
                 _fixed_field(position[idx] / np.where(has, spu, 1.0), has, UNIT_PLACES),
-                _fixed_field(d * rate / np.where(has, spu, 1.0), has & valid & (d != 0), UNIT_PLACES),
+                _fixed_field(
+                    d * rate / np.where(has, spu, 1.0), has & valid & (d != 0), UNIT_PLACES
+                ),
             ]
         yield _rows(fields) + "\n"
 

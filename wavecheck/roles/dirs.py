@@ -182,8 +182,7 @@ def assign(cands: Mapping[int, Sequence[DirFit]]) -> Assignment:
             continue
         for d in lines:
             possible = [
-                s for s in graph[d]
-                if len(_matching(graph, lines, fixed=(d, s))) == len(lines)
+                s for s in graph[d] if len(_matching(graph, lines, fixed=(d, s))) == len(lines)
             ]
             if len(possible) == 1:
                 out.chosen[possible[0]] = fit_of[(d, possible[0])]

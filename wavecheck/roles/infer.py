@@ -89,7 +89,11 @@ class _Inference:
         return refs
 
     def choice(
-        self, role: str, ch: Channel, evidence: str, basis: Basis = "waveform",
+        self,
+        role: str,
+        ch: Channel,
+        evidence: str,
+        basis: Basis = "waveform",
         active: int | None = None,
     ) -> RoleChoice:
         hint = self.hints[ch.index]
@@ -111,7 +115,8 @@ class _Inference:
         for g in find_phase_groups([c for c in chans if len(c.edges)]):
             self._phase_axis(g)
         movers = [
-            c for c in chans
+            c
+            for c in chans
             if self.looks[c.index].kind in ("pulses", "other") and c.index not in self.taken
         ]
         pulse = [c for c in movers if self.looks[c.index].is_step_like]
@@ -190,7 +195,9 @@ class _Inference:
             if not good:
                 self._dir_conflict(
                     f"{self.name_of(d)} fits as the DIR of several STEP lines, and changes while "
-                    "each of them runs steadily", [d.index], fits,
+                    "each of them runs steadily",
+                    [d.index],
+                    fits,
                 )
                 continue
             cands[d.index] = good
@@ -252,8 +259,10 @@ class _Inference:
         self.conflicts.append(
             Conflict(
                 question,
-                tuple(f"{self.name_of(f.d)} as DIR of {self.name_of(f.s)}: {f.evidence()}"
-                      for f in fits),
+                tuple(
+                    f"{self.name_of(f.d)} as DIR of {self.name_of(f.s)}: {f.evidence()}"
+                    for f in fits
+                ),
             )
         )
         for d in lines:
@@ -302,10 +311,12 @@ class _Inference:
             upl, downl = self.looks[up.index], self.looks[down.index]
             assert upl.pulses is not None and downl.pulses is not None
             roles = [
-                self.choice("up", up, f"{upl.evidence}; {ud.evidence(down)}",
-                            active=upl.pulses.level),
-                self.choice("down", down, f"{downl.evidence}; {ud.evidence(up)}",
-                            active=downl.pulses.level),
+                self.choice(
+                    "up", up, f"{upl.evidence}; {ud.evidence(down)}", active=upl.pulses.level
+                ),
+                self.choice(
+                    "down", down, f"{downl.evidence}; {ud.evidence(up)}", active=downl.pulses.level
+                ),
             ]
             notes = []
             if not (self.hints[up.index].fits("up") and self.hints[down.index].fits("down")):
@@ -341,7 +352,8 @@ class _Inference:
                     partners[p.index].append((q, fit))
                     partners[q.index].append((p, fit))
         spare = [
-            c for c in self.cap.channels
+            c
+            for c in self.cap.channels
             if self.looks[c.index].kind == "constant"
             and (self.hints[c.index].neutral or self.hints[c.index].fits("dir"))
         ]
@@ -384,14 +396,17 @@ class _Inference:
                             f"an up/down pair: up={self.name_of(p)}, down={self.name_of(q)}",
                             "two step/dir axes moving one after the other, whose DIR never "
                             "changed (unchanging channels: "
-                            + ", ".join(self.name_of(c) for c in spare) + ")",
+                            + ", ".join(self.name_of(c) for c in spare)
+                            + ")",
                         ),
                     )
                 )
                 continue
-            up, down = (q, p) if self.hints[q.index].fits("up") or self.hints[p.index].fits(
-                "down"
-            ) else (p, q)
+            up, down = (
+                (q, p)
+                if self.hints[q.index].fits("up") or self.hints[p.index].fits("down")
+                else (p, q)
+            )
             pairs.append((up, down, fit))
         return pairs
 
@@ -404,29 +419,46 @@ class _Inference:
         for a in list(missing):
             axis = self.hints[a.channels[0].index].axis
             named = [
-                c for c in free
+                c
+                for c in free
                 if self.hints[c.index].fits("dir")
                 and (self.hints[c.index].axis == axis or (axis is None and len(missing) == 1))
             ]
             if len(named) == 1:
                 c = named[0]
-                a.roles.append(self.choice(
-                    "dir", c, f"{self.looks[c.index].evidence}: no waveform evidence; named like "
-                    "the DIR of this axis", "name"))
+                a.roles.append(
+                    self.choice(
+                        "dir",
+                        c,
+                        f"{self.looks[c.index].evidence}: no waveform evidence; named like "
+                        "the DIR of this axis",
+                        "name",
+                    )
+                )
                 free = [f for f in free if f.index != c.index]
                 missing.remove(a)
         by_index = {c.index: c for c in free}
         nexts = [by_index.get(a.channels[0].index + 1) for a in missing]
         unsure = any("DIR" in c.question for c in self.conflicts)  # a changing DIR is unplaced
-        if missing and not unsure and all(c is not None and self.hints[c.index].neutral for c in nexts):
+        if (
+            missing
+            and not unsure
+            and all(c is not None and self.hints[c.index].neutral for c in nexts)
+        ):
             for a, nxt in zip(missing, nexts, strict=True):
                 assert nxt is not None
                 step = a.channels[0]
-                a.roles.append(self.choice(
-                    "dir", nxt, f"{self.looks[nxt.index].evidence}: no waveform evidence; taken as "
-                    f"the DIR of {self.name_of(step)} because it is the next channel, as every "
-                    "STEP without a changing DIR is followed by an unchanging one (check the "
-                    "wiring)", "layout"))
+                a.roles.append(
+                    self.choice(
+                        "dir",
+                        nxt,
+                        f"{self.looks[nxt.index].evidence}: no waveform evidence; taken as "
+                        f"the DIR of {self.name_of(step)} because it is the next channel, as every "
+                        "STEP without a changing DIR is followed by an unchanging one (check the "
+                        "wiring)",
+                        "layout",
+                    )
+                )
                 a.notes.append(
                     "its DIR never changes: direction and final position rest on a guess"
                 )
@@ -468,7 +500,9 @@ class _Inference:
                         (f"ENABLE {self.name_of(e)}: {ev}",)
                         + tuple(
                             f"ENABLE {r.index}={r.channel!r}: {r.evidence}"
-                            for a in existing for r in a.roles if r.role == "enable"
+                            for a in existing
+                            for r in a.roles
+                            if r.role == "enable"
                         ),
                     )
                 )
@@ -507,7 +541,10 @@ class _Inference:
         axes = tuple(
             AxisProposal(
                 name,
-                "step-dir" if a.kind == "step-dir" else "up-down" if a.kind == "up-down"
+                "step-dir"
+                if a.kind == "step-dir"
+                else "up-down"
+                if a.kind == "up-down"
                 else "phases",
                 a.step_type,
                 tuple(a.roles),
@@ -539,4 +576,3 @@ def propose(capture: Capture) -> Proposal:
     asking; otherwise :attr:`~wavecheck.roles.model.Proposal.ambiguous` lists the conflicts.
     """
     return _Inference(capture).run()
-

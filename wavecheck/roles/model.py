@@ -15,7 +15,15 @@ from typing import Any, Literal
 
 from wavecheck.linuxcnc.steptypes import StepKind
 
-__all__ = ["AxisProposal", "Basis", "Conflict", "Proposal", "RoleChoice", "SharedLine", "Unassigned"]
+__all__ = [
+    "AxisProposal",
+    "Basis",
+    "Conflict",
+    "Proposal",
+    "RoleChoice",
+    "SharedLine",
+    "Unassigned",
+]
 
 Basis = Literal["waveform", "name", "layout"]
 """What decided a role: the waveform; the name (the waveform could not, e.g. a DIR that never
@@ -189,8 +197,13 @@ class Proposal:
                 for a in self.axes
             ],
             "shared": [
-                {"role": s.role, "channel": s.channel, "index": s.index, "axes": list(s.axes),
-                 "evidence": s.evidence}
+                {
+                    "role": s.role,
+                    "channel": s.channel,
+                    "index": s.index,
+                    "axes": list(s.axes),
+                    "evidence": s.evidence,
+                }
                 for s in self.shared
             ],
             "unassigned": [
@@ -221,7 +234,9 @@ class Proposal:
             lines.append(f"ambiguous: {c.question}")
             lines += [f"  - {cand}" for cand in c.candidates]
         if self.axes:
-            lines.append(f"map: {self.map_args()}" + (f" {self.type_args()}" if self.type_args() else ""))
+            lines.append(
+                f"map: {self.map_args()}" + (f" {self.type_args()}" if self.type_args() else "")
+            )
         if not lines:
             lines.append("no step signal found")
         return "\n".join(lines)

@@ -174,7 +174,9 @@ def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
             # a look at the first _PREFIX changes first: most groups fail there, cheaply
             cut = min(int(c.edges[min(len(c.edges), _PREFIX) - 1]) for c in group)
             head = [
-                Channel(c.name, c.index, c.initial, c.edges[: np.searchsorted(c.edges, cut, "right")])
+                Channel(
+                    c.name, c.index, c.initial, c.edges[: np.searchsorted(c.edges, cut, "right")]
+                )
                 for c in group
             ]
             h_times, h_states, h_initial = _states(head)
@@ -201,8 +203,7 @@ def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
                         rev,
                         times,
                         named=all(
-                            PHASE_NAMES[k] in name_hint(c.name).roles
-                            for k, c in enumerate(ordered)
+                            PHASE_NAMES[k] in name_hint(c.name).roles for k, c in enumerate(ordered)
                         ),
                     )
                 )

@@ -29,7 +29,9 @@ COMMANDS: list[tuple[str, list[str], str, LooksRight]] = [
 def _applies(command: str, case_id: str) -> bool:
     # simulate picks its format from the name: /dev/null and /dev/stdout have none (the
     # link-to-dev-null case gives /dev/null a .vcd/.sr name)
-    return not (command.startswith("simulate") and case_id in ("dev-null", "dev-stdout", "link-to-stdout"))
+    return not (
+        command.startswith("simulate") and case_id in ("dev-null", "dev-stdout", "link-to-stdout")
+    )
 
 
 @pytest.mark.parametrize(
@@ -53,7 +55,13 @@ def test_output_paths(
 def _command_csv(tmp: Path) -> tuple[list[str], Path]:
     # a motion file whose name a careless -o repeats (it has the extension simulate writes)
     (tmp / "motion.vcd").write_text("time_s,position\n0,0\n0.001,2\n")
-    return ["simulate", "--command", str(tmp / "motion.vcd"), "--duration", "5ms"], tmp / "motion.vcd"
+    return [
+        "simulate",
+        "--command",
+        str(tmp / "motion.vcd"),
+        "--duration",
+        "5ms",
+    ], tmp / "motion.vcd"
 
 
 def _ini(tmp: Path) -> tuple[list[str], Path]:
@@ -111,4 +119,7 @@ def test_output_checked_before_any_work(argv: list[str], tmp_path: Path, capfd) 
     (tmp_path / "out.vcd").mkdir()
     code = main([*argv, "-o", str(tmp_path / "out.vcd")])
     _, err = capfd.readouterr()
-    assert code == 2 and err == f"stepgen: error: -o {tmp_path / 'out.vcd'}: is a directory (give a file name)\n"
+    assert (
+        code == 2
+        and err == f"stepgen: error: -o {tmp_path / 'out.vcd'}: is a directory (give a file name)\n"
+    )

@@ -40,8 +40,21 @@ def test_servo_quadrature_decodes_back_to_the_encoder_counts(tmp_path: Path) -> 
     and back to 0.3)."""
     out = tmp_path / "q.vcd"
     code = main(
-        ["simulate", *SERVO, "--encoder-counts", "1000", "--move", "1, 0.3", "--move-vel", "2",
-         "--move-accel", "40", "-q", "-o", str(out)]
+        [
+            "simulate",
+            *SERVO,
+            "--encoder-counts",
+            "1000",
+            "--move",
+            "1, 0.3",
+            "--move-vel",
+            "2",
+            "--move-accel",
+            "40",
+            "-q",
+            "-o",
+            str(out),
+        ]
     )
     assert code == 0
     t_counts, v_counts = _vcd_vector(out, "counts")
@@ -49,7 +62,9 @@ def test_servo_quadrature_decodes_back_to_the_encoder_counts(tmp_path: Path) -> 
     steps = report.steps
     assert steps.forward > 900 and steps.reverse > 600 and steps.unknown == 0
     assert len(steps.sequence_errors) == 0
-    assert steps.ticks.tolist() == t_counts[1:].tolist()  # one step per count change (t = 0 is the start)
+    assert (
+        steps.ticks.tolist() == t_counts[1:].tolist()
+    )  # one step per count change (t = 0 is the start)
     assert steps.position.tolist() == v_counts[1:].tolist()
     assert steps.final_position == v_counts[-1]
     assert abs(v_counts[-1] - 300) < 10  # near 0.3 units at 1000 counts/unit, still settling
@@ -58,8 +73,18 @@ def test_servo_quadrature_decodes_back_to_the_encoder_counts(tmp_path: Path) -> 
 def test_servo_sr_decodes_to_the_same_counts(tmp_path: Path) -> None:
     """The .sr of a slow move: the edges lie on the sub-step grid (125 µs here, 8 kHz), exact."""
     vcd, sr = tmp_path / "q.vcd", tmp_path / "q.sr"
-    args = [*SERVO, "--encoder-counts", "100", "--move", "1, 0.3", "--move-vel", "0.5",
-            "--move-accel", "10", "-q"]
+    args = [
+        *SERVO,
+        "--encoder-counts",
+        "100",
+        "--move",
+        "1, 0.3",
+        "--move-vel",
+        "0.5",
+        "--move-accel",
+        "10",
+        "-q",
+    ]
     assert main(["simulate", *args, "-o", str(vcd)]) == 0
     assert main(["simulate", *args, "-o", str(sr)]) == 0
     a = wavecheck.check(vcd, "gecko-g202", step_type=2).steps
@@ -74,8 +99,22 @@ def test_servo_sr_decodes_to_the_same_counts(tmp_path: Path) -> None:
 def test_stepgen_loop_writes_sr(tmp_path: Path) -> None:
     """pid + stepgen written as .sr: the STEP edges of the closed loop, read back by wavecheck."""
     vcd, sr = tmp_path / "l.vcd", tmp_path / "l.sr"
-    args = ["--pid", "--move", "1", "--move-vel", "5", "--move-accel", "100", "--position-scale",
-            "200", "--maxvel", "10", "--maxaccel", "200", "-q"]
+    args = [
+        "--pid",
+        "--move",
+        "1",
+        "--move-vel",
+        "5",
+        "--move-accel",
+        "100",
+        "--position-scale",
+        "200",
+        "--maxvel",
+        "10",
+        "--maxaccel",
+        "200",
+        "-q",
+    ]
     assert main(["simulate", *args, "-o", str(vcd)]) == 0
     assert main(["simulate", *args, "-o", str(sr)]) == 0
     steps = [wavecheck.check(p, "gecko-g202").steps for p in (vcd, sr)]
@@ -86,8 +125,24 @@ def test_diverged_loop_fails_and_says_so(tmp_path: Path, capsys) -> None:
     """Absurd but finite gains are a simulation, not a usage error: the loop stops when it
     diverges, the check fails (exit 1) and the VCD is still written."""
     out = tmp_path / "d.vcd"
-    code = main(["simulate", "--pid", "--plant", "servo", "--encoder-counts", "1000", "--pgain",
-                 "1e9", "--position", "1", "--duration", "200ms", "-o", str(out)])
+    code = main(
+        [
+            "simulate",
+            "--pid",
+            "--plant",
+            "servo",
+            "--encoder-counts",
+            "1000",
+            "--pgain",
+            "1e9",
+            "--position",
+            "1",
+            "--duration",
+            "200ms",
+            "-o",
+            str(out),
+        ]
+    )
     text = capsys.readouterr()
     assert code == 1 and "the loop diverged: stopped after" in text.out
     assert "following-error check FAIL" in text.out and out.exists()
@@ -97,8 +152,21 @@ def test_tune_html_is_self_contained(tmp_path: Path) -> None:
     """--html: one page, every stage a row and an inline PNG of its response, the final gains as
     INI/HAL lines; no request of its own (no http, no src other than data:)."""
     page = tmp_path / "t.html"
-    code = main(["tune", "--inertia", "2e-4", "--viscous", "0.02", "--load", "0.05", "--settle",
-                 "300ms", "--html", str(page)])
+    code = main(
+        [
+            "tune",
+            "--inertia",
+            "2e-4",
+            "--viscous",
+            "0.02",
+            "--load",
+            "0.05",
+            "--settle",
+            "300ms",
+            "--html",
+            str(page),
+        ]
+    )
     assert code == 0
     text = page.read_text()
     rows = re.findall(r'<tr><td><a href="#stage-(\d+)">', text)
@@ -130,7 +198,10 @@ TUNE = ["tune", "--window", "200ms", "--settle", "100ms"]
         ([*SIM, "--servo-period", "1"], r"--servo-period 1: give a unit"),
         ([*SIM, "--servo-period", "0s"], r"--servo-period 0s: must be > 0"),
         ([*SIM, "--plant", "servo", "--inertia", "0"], r"--inertia 0\.0 is out of range"),
-        ([*SIM, "--plant", "servo", "--encoder-counts", "-5"], r"--encoder-counts -5\.0 is out of range"),
+        (
+            [*SIM, "--plant", "servo", "--encoder-counts", "-5"],
+            r"--encoder-counts -5\.0 is out of range",
+        ),
         ([*SIM, "--plant", "servo", "--viscous", "inf"], r"--viscous inf is out of range"),
         ([*TUNE, "--servo-period", "1"], r"--servo-period '1': .*unit"),
         ([*TUNE, "--servo-period", "10ns"], r"--servo-period 10ns: below 1 us"),
@@ -143,13 +214,22 @@ TUNE = ["tune", "--window", "200ms", "--settle", "100ms"]
         ([*TUNE, "--p-start", "0"], r"--p-start 0\.0 must be a number > 0"),
         ([*TUNE, "--p-start=-inf"], r"--p-start -inf must be a number > 0"),
         ([*TUNE, "--joint", "-1"], r"--joint -1 must be 0 or more"),
-        ([*TUNE, "--ff-velocity", "0", "--plant", "stepgen"], r"--ff-velocity 0\.0 must be a speed > 0"),
+        (
+            [*TUNE, "--ff-velocity", "0", "--plant", "stepgen"],
+            r"--ff-velocity 0\.0 must be a speed > 0",
+        ),
         ([*TUNE, "--inertia", "-1"], r"--inertia -1\.0 is out of range"),
-        ([*TUNE, "--plant", "stepgen", "--position-scale", "nan"], r"--position-scale nan is not finite"),
+        (
+            [*TUNE, "--plant", "stepgen", "--position-scale", "nan"],
+            r"--position-scale nan is not finite",
+        ),
     ],
 )
 def test_errors_exit_2_in_one_line(tmp_path: Path, capsys, argv: list[str], message: str) -> None:
-    outputs = {"simulate": ["-o", str(tmp_path / "o.vcd")], "tune": ["--html", str(tmp_path / "o.html")]}
+    outputs = {
+        "simulate": ["-o", str(tmp_path / "o.vcd")],
+        "tune": ["--html", str(tmp_path / "o.html")],
+    }
     try:
         code = main([*argv, *outputs[argv[0]]])
     except SystemExit as exc:  # argparse's own refusals (a value that is not a number)

@@ -10,7 +10,9 @@ from wavecheck.capture.open import open_capture
 
 def _files(tmp_path: Path) -> tuple[Path, Path]:
     ini = tmp_path / "m.ini"
-    ini.write_text("[EMCMOT]\nBASE_PERIOD = 20000\nSERVO_PERIOD = 1000000\n[JOINT_1]\nSTEPLEN = 40000\n")
+    ini.write_text(
+        "[EMCMOT]\nBASE_PERIOD = 20000\nSERVO_PERIOD = 1000000\n[JOINT_1]\nSTEPLEN = 40000\n"
+    )
     hal = tmp_path / "m.hal"
     hal.write_text(
         "loadrt stepgen step_type=0,0 ctrl_type=p,v\n"
@@ -31,8 +33,22 @@ def test_files_set_period_type_and_params(tmp_path: Path) -> None:
     ini, hal = _files(tmp_path)
     out = tmp_path / "a.vcd"
     code = main(
-        ["simulate", "--ini", str(ini), "--hal", str(hal), "--channel", "1", "--velocity", "1000",
-         "--duration", "20ms", "-q", "-o", str(out)]
+        [
+            "simulate",
+            "--ini",
+            str(ini),
+            "--hal",
+            str(hal),
+            "--channel",
+            "1",
+            "--velocity",
+            "1000",
+            "--duration",
+            "20ms",
+            "-q",
+            "-o",
+            str(out),
+        ]
     )
     assert code == 0
     assert "base 20000 ns" in out.read_text().splitlines()[0]
@@ -43,8 +59,24 @@ def test_command_line_wins(tmp_path: Path) -> None:
     ini, hal = _files(tmp_path)
     out = tmp_path / "b.vcd"
     code = main(
-        ["simulate", "--ini", str(ini), "--hal", str(hal), "--channel", "1", "--steplen", "20us",
-         "--velocity", "1000", "--duration", "20ms", "-q", "-o", str(out)]
+        [
+            "simulate",
+            "--ini",
+            str(ini),
+            "--hal",
+            str(hal),
+            "--channel",
+            "1",
+            "--steplen",
+            "20us",
+            "--velocity",
+            "1000",
+            "--duration",
+            "20ms",
+            "-q",
+            "-o",
+            str(out),
+        ]
     )
     assert code == 0 and _high_times(out) == {20_000}
 
@@ -52,7 +84,9 @@ def test_command_line_wins(tmp_path: Path) -> None:
 def test_bad_file_is_one_line_exit_2(tmp_path: Path, capsys) -> None:
     ini = tmp_path / "m.ini"
     ini.write_text("[EMCMOT]\nBASE_PERIOD = soon\n")
-    code = main(["simulate", "--ini", str(ini), "--velocity", "1", "-q", "-o", str(tmp_path / "c.vcd")])
+    code = main(
+        ["simulate", "--ini", str(ini), "--velocity", "1", "-q", "-o", str(tmp_path / "c.vcd")]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "m.ini:2" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "c.vcd").exists()
@@ -130,11 +164,28 @@ def test_what_the_model_cannot_honour_is_named(tmp_path: Path, capsys) -> None:
         "setp stepgen.0.frobnicate 1\n"
     )
     out = tmp_path / "m.vcd"
-    code = main(["simulate", "--hal", str(hal), "--move", "1", "--move-vel", "100",
-                 "--move-accel", "1000", "-q", "-o", str(out)])
+    code = main(
+        [
+            "simulate",
+            "--hal",
+            str(hal),
+            "--move",
+            "1",
+            "--move-vel",
+            "100",
+            "--move-accel",
+            "1000",
+            "-q",
+            "-o",
+            str(out),
+        ]
+    )
     err = capsys.readouterr().err.splitlines()
     assert code == 0
-    assert f"stepgen: ignored: net xpos joint.0.motor-pos-cmd => stepgen.0.position-cmd ({hal}:5) (the model drives position-cmd itself" in "\n".join(err)
+    assert (
+        f"stepgen: ignored: net xpos joint.0.motor-pos-cmd => stepgen.0.position-cmd ({hal}:5) (the model drives position-cmd itself"
+        in "\n".join(err)
+    )
     assert any(f"({hal}:6) (the model keeps enable on)" in e for e in err)
     assert any(f"stepgen.0.position-cmd 2 ({hal}:7): --move drives the command" in e for e in err)
     assert any(f"frobnicate 1 ({hal}:8)" in e for e in err)

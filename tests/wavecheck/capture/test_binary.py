@@ -101,8 +101,14 @@ def test_format_options(spec: str, numchannels: int, rate: Fraction | None) -> N
 
 
 @pytest.mark.parametrize(
-    "spec", ["binary:bogus=1", "binary:numchannels=0", "binary:numchannels=x", "binary:samplerate",
-             "binary:numchannels=513"]  # fmt: skip
+    "spec",
+    [
+        "binary:bogus=1",
+        "binary:numchannels=0",
+        "binary:numchannels=x",
+        "binary:samplerate",
+        "binary:numchannels=513",
+    ],  # fmt: skip
 )
 def test_bad_format_options_are_usage_errors(spec: str) -> None:
     with pytest.raises(UsageError, match="--input-format"):
@@ -267,6 +273,8 @@ def test_readme_pipe_block(grbl_sr: Path, tmp_path: Path) -> None:
     assert piped.returncode == direct.returncode, piped.stderr
 
     def table(out: str) -> list[str]:
-        return [ln for ln in out.splitlines() if ln.startswith(("verdict:", "step_", "dir_", "steps:"))]
+        return [
+            ln for ln in out.splitlines() if ln.startswith(("verdict:", "step_", "dir_", "steps:"))
+        ]
 
     assert table(piped.stdout) == table(direct.stdout) and table(piped.stdout)

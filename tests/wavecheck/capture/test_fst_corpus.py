@@ -17,7 +17,9 @@ from wavecheck.capture.open import open_capture
 pytestmark = pytest.mark.skipif(shutil.which("vcd2fst") is None, reason="needs GTKWave's vcd2fst")
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(w=waveforms())
 def test_fst_reads_as_its_vcd(tmp_path: Path, w: dict) -> None:
     vcd = _vcd(tmp_path / "w.vcd", {"STEP": w["step"], "DIR": w["dir"]}, w["end"])

@@ -49,8 +49,12 @@ DIR = [700]
 
 def _export(folder: Path) -> Path:
     folder.mkdir()
-    (folder / "digital_0.bin").write_bytes(file_v1([chunk_v1(0, RATE, -0.25, -0.25 + 1200 / RATE, _seconds(STEP))]))
-    (folder / "digital_1.bin").write_bytes(file_v1([chunk_v1(1, RATE, -0.25, -0.25 + 1200 / RATE, _seconds(DIR))]))
+    (folder / "digital_0.bin").write_bytes(
+        file_v1([chunk_v1(0, RATE, -0.25, -0.25 + 1200 / RATE, _seconds(STEP))])
+    )
+    (folder / "digital_1.bin").write_bytes(
+        file_v1([chunk_v1(1, RATE, -0.25, -0.25 + 1200 / RATE, _seconds(DIR))])
+    )
     (folder / "analog_2.bin").write_bytes(b"<SALEAE>" + struct.pack("<ii", 1, 1))
     return folder
 
@@ -74,7 +78,9 @@ def test_detected_by_content(tmp_path: Path) -> None:
     assert open_capture(other).channels[0].edges.tolist() == STEP  # one file: one channel
 
 
-def test_check_of_the_export_equals_the_same_vcd(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_check_of_the_export_equals_the_same_vcd(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """The same edges written as a VCD at the sample period give the same rule figures."""
     folder = _export(tmp_path / "export")
     vcd = write_vcd(tmp_path / "same.vcd", {"S": (0, STEP), "D": (1, DIR)}, "100 ns", end=1200)

@@ -112,7 +112,11 @@ def test_csv_written_by_sigrok_cli_gives_rate_and_names(smoothie_sr: Path, tmp_p
 
 @pytest.mark.parametrize(
     "body",
-    [b"1,0\n0,1\n1,\x001\n0,0\n1,0\n", b"1,0\n0,1\n\x001,1\n0,0\n1,0\n", b"1,0\n0,1\n1,1\n\x00\n0,0\n"],
+    [
+        b"1,0\n0,1\n1,\x001\n0,0\n1,0\n",
+        b"1,0\n0,1\n\x001,1\n0,0\n1,0\n",
+        b"1,0\n0,1\n1,1\n\x00\n0,0\n",
+    ],
     ids=["mid-line", "line-start", "own-line"],
 )
 def test_csv_with_nul_byte_is_refused(tmp_path: Path, body: bytes) -> None:

@@ -228,7 +228,11 @@ def _repoint(path: Path, member: str, to: str) -> Path:
         (nlen,) = struct.unpack_from("<H", data, pos + 28)
         if data[pos + 46 : pos + 46 + nlen] == member.encode():
             struct.pack_into("<I", data, pos + 42, target.header_offset)
-            for off, value in ((16, target.CRC), (20, target.compress_size), (24, target.file_size)):
+            for off, value in (
+                (16, target.CRC),
+                (20, target.compress_size),
+                (24, target.file_size),
+            ):
                 struct.pack_into("<I", data, pos + off, value)
         pos += 4
     out = path.with_name("overlap.sr")

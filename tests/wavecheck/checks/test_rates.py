@@ -57,7 +57,9 @@ def test_headroom_low_pulses_at_the_drive(
     initial: int, edges: list[int], invert: list[str], level: int
 ) -> None:
     # low pulses 1, 2, 2 µs: median 2 µs; the gaps must keep step_high 4.5 µs → 1/(2 + 4.5 µs)
-    r = run_check(capture({"S": (initial, edges)}), g202(), {"step": "S"}, invert, pulse_level=level)
+    r = run_check(
+        capture({"S": (initial, edges)}), g202(), {"step": "S"}, invert, pulse_level=level
+    )
     assert r.rates.pulse_level == 0 and r.rates.typical_pulse_ns == 2 * US
     assert r.rates.headroom == Fraction(10**9, 6500)
 
@@ -86,7 +88,10 @@ def test_no_headroom_when_the_pulses_fail_their_own_minimum() -> None:
     step = pulses([10 * US, 110 * US, 210 * US], 3 * US)
     r = run_check(capture({"S": (0, step)}), g202(), {"step": "S"})
     assert r.rule("step_high").verdict == "fail"
-    assert r.rates.headroom is None and r.rates.headroom_note == "the pulses fail step_high at any rate"
+    assert (
+        r.rates.headroom is None
+        and r.rates.headroom_note == "the pulses fail step_high at any rate"
+    )
 
 
 def test_one_latency_stretched_pulse_does_not_decide_the_headroom() -> None:

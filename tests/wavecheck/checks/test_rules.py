@@ -244,7 +244,9 @@ def test_dir_hold_not_measured_from_an_active_edge_before_dir_is_known() -> None
 def test_dir_setup_not_measured_to_an_active_edge_after_step_becomes_known() -> None:
     # DIR changes at 1 µs; STEP is x until 2.5 µs and rises at 3 µs: an active edge could hide in
     # 1..2.5 µs, so 1 µs → 3 µs is not a measured setup.
-    cap = capture({"S": (0, [3 * US, 4 * US, 6 * US, 7 * US]), "D": (0, [1 * US, 5 * US])}, end=8 * US)
+    cap = capture(
+        {"S": (0, [3 * US, 4 * US, 6 * US, 7 * US]), "D": (0, [1 * US, 5 * US])}, end=8 * US
+    )
     cap.channels[0].known_from = 2500
     report = run_check(cap, drive(dir_hold=200, dir_setup=200), {"step": "S", "dir": "D"})
     setup, hold = report.rule("dir_setup"), report.rule("dir_hold")

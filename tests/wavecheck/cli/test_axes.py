@@ -62,10 +62,15 @@ def test_per_axis_options() -> None:
     }
     with pytest.raises(UsageError, match="no axis 'z'"):
         per_axis(["z=a4988"], "--drive", ["x", "y"])
-    assert split_invert(["x.step", "enable"], ["x", "y"]) == {"x": ["step", "enable"], "y": ["enable"]}
+    assert split_invert(["x.step", "enable"], ["x", "y"]) == {
+        "x": ["step", "enable"],
+        "y": ["enable"],
+    }
 
 
-def test_two_axes_equal_two_single_runs(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_two_axes_equal_two_single_runs(
+    smoothie_sr: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, both = _json(capsys, str(smoothie_sr), "--drive", "gecko-g202", *SMOOTHIE)
     assert code == 1 and set(both) == {"capture", "axes", "cross_axis", "verdict"}
     assert [a["name"] for a in both["axes"]] == ["x", "y"]
@@ -78,7 +83,9 @@ def test_two_axes_equal_two_single_runs(smoothie_sr: Path, capsys: pytest.Captur
     assert "common periodic lattice" in both["cross_axis"]["notes"][0]
 
 
-def test_the_capture_is_read_once(smoothie_sr: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+def test_the_capture_is_read_once(
+    smoothie_sr: Path, monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
     from wavecheck.cli import _capture_args
 
     calls = []
@@ -95,7 +102,13 @@ def test_the_capture_is_read_once(smoothie_sr: Path, monkeypatch: pytest.MonkeyP
 
 def test_each_axis_its_own_drive(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:
     code, d = _json(
-        capsys, str(smoothie_sr), "--drive", "x=gecko-g202", "--drive", "y=leadshine-dm542", *SMOOTHIE
+        capsys,
+        str(smoothie_sr),
+        "--drive",
+        "x=gecko-g202",
+        "--drive",
+        "y=leadshine-dm542",
+        *SMOOTHIE,
     )
     drives = {a["name"]: a["drive"]["id"] for a in d["axes"]}
     assert drives == {"x": "gecko-g202", "y": "leadshine-dm542"}
@@ -112,8 +125,19 @@ def test_an_axis_without_a_drive_is_a_usage_error(smoothie_sr: Path, capsys) -> 
 def test_junit_html_and_plots_cover_every_axis(smoothie_sr: Path, tmp_path: Path, capsys) -> None:
     out = tmp_path / "r.xml"
     argv = ["check", str(smoothie_sr), "--drive", "leadshine-dm542", *SMOOTHIE]
-    main([*argv, "--format", "junit", "-o", str(out), "--html", str(tmp_path / "r.html"),
-          "--plot", str(tmp_path / "r.png")])
+    main(
+        [
+            *argv,
+            "--format",
+            "junit",
+            "-o",
+            str(out),
+            "--html",
+            str(tmp_path / "r.html"),
+            "--plot",
+            str(tmp_path / "r.png"),
+        ]
+    )
     suites = ET.parse(out).getroot().findall("testsuite")
     assert len(suites) == 2
     html = (tmp_path / "r.html").read_text()

@@ -37,10 +37,14 @@ def test_config_rates_from_options(
 ) -> None:
     rates = _rates(capsys, *argv)
     assert rates["config"] == pytest.approx(config)
-    assert rates.get("latency_safe") == (None if latency_safe is None else pytest.approx(latency_safe))
+    assert rates.get("latency_safe") == (
+        None if latency_safe is None else pytest.approx(latency_safe)
+    )
 
 
-@pytest.mark.parametrize("bad", [["--base-period", "0"], ["--steplen", "1.5ns"], ["--dirhold", "5 kHz"]])
+@pytest.mark.parametrize(
+    "bad", [["--base-period", "0"], ["--steplen", "1.5ns"], ["--dirhold", "5 kHz"]]
+)
 def test_bad_config_options_exit_2(capsys: pytest.CaptureFixture[str], bad: list[str]) -> None:
     assert main(["check", GOOD, "--drive", "gecko-g202", "--base-period", "16us", *bad]) == 2
     err = capsys.readouterr().err.strip().splitlines()

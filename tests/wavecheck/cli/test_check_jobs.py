@@ -53,11 +53,17 @@ def test_documents_identical_for_any_number_of_jobs(
         assert [r["verdict"] for r in data["reports"]] == ["fail", "pass", "pass"] * 2 + ["fail"]
     elif fmt == "junit":
         root = ET.fromstring(docs[0])
-        assert [s.get("name") for s in root.findall("testsuite")] == [*names, names[0][:-6] + "r9.vcd"]
+        assert [s.get("name") for s in root.findall("testsuite")] == [
+            *names,
+            names[0][:-6] + "r9.vcd",
+        ]
         assert root.get("errors") == "1"
     else:
         summary = docs[0].split("== summary ==\n", 1)[1].splitlines()
-        assert [line.split()[1].rstrip(":") for line in summary] == [*names, str(tmp_path / "r9.vcd")]
+        assert [line.split()[1].rstrip(":") for line in summary] == [
+            *names,
+            str(tmp_path / "r9.vcd"),
+        ]
 
 
 def test_each_report_equals_the_single_capture_report(
@@ -71,7 +77,9 @@ def test_each_report_equals_the_single_capture_report(
         assert json.loads(capsys.readouterr().out) == report
 
 
-def test_summary_lines_stream_to_stdout_with_o(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_summary_lines_stream_to_stdout_with_o(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """With ``-o`` every capture's summary line is printed (in the order they finish), then
     where the report went; the file lists the captures in input order."""
     _runs(tmp_path, 5)
@@ -80,9 +88,10 @@ def test_summary_lines_stream_to_stdout_with_o(tmp_path: Path, capsys: pytest.Ca
                  "-j", "2"])  # fmt: skip
     out = capsys.readouterr().out.splitlines()
     assert code == 1 and out[-1] == f"report written to {out_file}"
-    assert sorted(out[:-1]) == sorted(
-        line for line in out[:-1] if line.startswith(("PASS ", "FAIL "))
-    ) and len(out) == 6
+    assert (
+        sorted(out[:-1]) == sorted(line for line in out[:-1] if line.startswith(("PASS ", "FAIL ")))
+        and len(out) == 6
+    )
     data = json.loads(out_file.read_text())
     assert [r["capture"]["path"] for r in data["reports"]] == [
         str(tmp_path / f"r{k}.vcd") for k in range(5)

@@ -51,8 +51,15 @@ def test_glob_and_unreadable_capture(runs: Path, capsys) -> None:
 def test_json_and_junit_for_several(runs: Path, capsys, tmp_path: Path) -> None:
     out_json = tmp_path / "r.json"
     code, out, _ = _run(
-        capsys, "check", str(runs / "*.vcd"), "--drive", "gecko-g202", "--format", "json",
-        "-o", str(out_json),
+        capsys,
+        "check",
+        str(runs / "*.vcd"),
+        "--drive",
+        "gecko-g202",
+        "--format",
+        "json",
+        "-o",
+        str(out_json),
     )
     assert code == 1 and "report written to" in out
     data = json.loads(out_json.read_text())
@@ -74,8 +81,9 @@ def test_single_capture_keeps_its_shapes(runs: Path, capsys) -> None:
         capsys, "check", str(runs / "fail.vcd"), "--drive", "gecko-g202", "--format", "json"
     )
     assert code == 1 and json.loads(out)["verdict"] == "fail"  # one report object, not a list
-    code, out, _ = _run(capsys, "check", str(runs / "fail.vcd"), "--drive", "gecko-g202",
-                        "--format", "junit")
+    code, out, _ = _run(
+        capsys, "check", str(runs / "fail.vcd"), "--drive", "gecko-g202", "--format", "junit"
+    )
     assert ET.fromstring(out).find("testsuite/testcase[@name='dir_hold']/failure") is not None
 
 
@@ -83,8 +91,17 @@ def test_report_files(runs: Path, capsys, tmp_path: Path) -> None:
     out = tmp_path / "out"
     out.mkdir()
     code, _, _ = _run(
-        capsys, "check", str(runs / "fail.vcd"), "--drive", "gecko-g202",
-        "--plot", str(out / "p.png"), "--html", str(out / "r.html"), "--gtkw", str(out / "g.gtkw"),
+        capsys,
+        "check",
+        str(runs / "fail.vcd"),
+        "--drive",
+        "gecko-g202",
+        "--plot",
+        str(out / "p.png"),
+        "--html",
+        str(out / "r.html"),
+        "--gtkw",
+        str(out / "g.gtkw"),
     )
     assert code == 1
     assert (out / "p.png").read_bytes()[:4] == b"\x89PNG"
@@ -94,8 +111,13 @@ def test_report_files(runs: Path, capsys, tmp_path: Path) -> None:
 
 def test_missing_report_folder_fails_before_reading(runs: Path, capsys, tmp_path: Path) -> None:
     code, out, err = _run(
-        capsys, "check", str(runs / "fail.vcd"), "--drive", "gecko-g202",
-        "--plot", str(tmp_path / "no" / "p.png"),
+        capsys,
+        "check",
+        str(runs / "fail.vcd"),
+        "--drive",
+        "gecko-g202",
+        "--plot",
+        str(tmp_path / "no" / "p.png"),
     )
     assert code == 2 and out == "" and "--plot" in err and "does not exist" in err
 
@@ -106,14 +128,34 @@ def test_ini_hal_rates(runs: Path, capsys, tmp_path: Path) -> None:
     hal = tmp_path / "m.hal"
     hal.write_text("loadrt stepgen step_type=0\nsetp stepgen.0.dirhold 32000\n")
     code, out, _ = _run(
-        capsys, "check", str(runs / "pass.vcd"), "--drive", "gecko-g202", "--ini", str(ini),
-        "--hal", str(hal), "--latency", "11us", "--format", "json",
+        capsys,
+        "check",
+        str(runs / "pass.vcd"),
+        "--drive",
+        "gecko-g202",
+        "--ini",
+        str(ini),
+        "--hal",
+        str(hal),
+        "--latency",
+        "11us",
+        "--format",
+        "json",
     )
     rates = json.loads(out)["max_step_rate_hz"]
     assert rates["config"] == 31250 and rates["latency_safe"] == 31250
     code, out, _ = _run(
-        capsys, "check", str(runs / "pass.vcd"), "--drive", "gecko-g202", "--ini", str(ini),
-        "--hal", str(hal), "--latency", "11us",
+        capsys,
+        "check",
+        str(runs / "pass.vcd"),
+        "--drive",
+        "gecko-g202",
+        "--ini",
+        str(ini),
+        "--hal",
+        str(hal),
+        "--latency",
+        "11us",
     )
     assert "config 31.25 kHz, latency_safe (J = 11 us) 31.25 kHz" in out
 

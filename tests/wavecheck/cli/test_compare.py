@@ -18,15 +18,32 @@ def golden(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """40 steps at 2 kHz, P = 25 µs, no latency: a stepgen golden trace."""
     out = tmp_path_factory.mktemp("golden") / "golden.vcd"
     code = stepgen_main(
-        ["simulate", "--base-period", "25us", "--mode", "velocity", "--velocity", "2000",
-         "--duration", "20ms", "-q", "-o", str(out)]
+        [
+            "simulate",
+            "--base-period",
+            "25us",
+            "--mode",
+            "velocity",
+            "--velocity",
+            "2000",
+            "--duration",
+            "20ms",
+            "-q",
+            "-o",
+            str(out),
+        ]
     )
     assert code == 0
     return out
 
 
-def _as_capture(golden: Path, path: Path, shift: int, nudge: dict[int, int] | None = None,
-                drop_last: bool = False) -> Path:
+def _as_capture(
+    golden: Path,
+    path: Path,
+    shift: int,
+    nudge: dict[int, int] | None = None,
+    drop_last: bool = False,
+) -> Path:
     """The golden's STEP/DIR as a 'logic analyzer' capture: shifted by ``shift`` ns, falling
     edge ``k`` moved by ``nudge[k]`` ns, optionally without the last pulse."""
     cap = open_capture(golden)
@@ -36,7 +53,10 @@ def _as_capture(golden: Path, path: Path, shift: int, nudge: dict[int, int] | No
         edges[2 * k + 1] += dt  # the k-th falling (active) edge
     if drop_last:
         edges = edges[:-2]
-    signals = {"STEP": (step.initial, edges), "DIR": (dirs.initial, [int(t) + shift for t in dirs.edges])}
+    signals = {
+        "STEP": (step.initial, edges),
+        "DIR": (dirs.initial, [int(t) + shift for t in dirs.edges]),
+    }
     return write_vcd(path, signals)
 
 
@@ -97,7 +117,9 @@ def test_rule_regression_against_the_seed_goldens(capsys) -> None:
 
 
 def test_bad_tolerance_is_exit_2(golden: Path, capsys) -> None:
-    code = main(["compare", str(golden), str(golden), "--drive", "gecko-g202", "--tolerance", "2 parsecs"])
+    code = main(
+        ["compare", str(golden), str(golden), "--drive", "gecko-g202", "--tolerance", "2 parsecs"]
+    )
     _, err = capsys.readouterr()
     assert code == 2 and len(err.strip().splitlines()) == 1
 
@@ -107,7 +129,9 @@ def test_identical_captures_without_dir_pass(golden: Path, tmp_path: Path, capsy
     unknown (DIFFERENT)' and failed, so no grbl capture could ever pass."""
     cap = open_capture(golden)
     step = cap.channel("step")
-    only_step = write_vcd(tmp_path / "s.vcd", {"STEP": (step.initial, [int(t) for t in step.edges])})
+    only_step = write_vcd(
+        tmp_path / "s.vcd", {"STEP": (step.initial, [int(t) for t in step.edges])}
+    )
     code, data = _compare(capsys, str(only_step), str(only_step))
     assert code == 0 and data["verdict"] == "pass" and data["failures"] == []
     assert main(["compare", str(only_step), str(only_step), "--drive", "gecko-g202"]) == 0
@@ -124,8 +148,9 @@ def test_a_fail_says_which_line_failed(golden: Path, tmp_path: Path, capsys) -> 
 
 def test_golden_mapping_error_hints_golden_map(golden: Path, tmp_path: Path, capsys) -> None:
     cap = _as_capture(golden, tmp_path / "c.vcd", shift=0)
-    code = main(["compare", str(cap), str(golden), "--drive", "gecko-g202",
-                 "--golden-map", "step=NOPE"])
+    code = main(
+        ["compare", str(cap), str(golden), "--drive", "gecko-g202", "--golden-map", "step=NOPE"]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "--golden-map" in err and len(err.strip().splitlines()) == 1
 
@@ -133,7 +158,11 @@ def test_golden_mapping_error_hints_golden_map(golden: Path, tmp_path: Path, cap
 @pytest.mark.parametrize("tolerance", ["2000", "2 kHz"])
 def test_tolerance_needs_a_time_with_its_unit(golden: Path, capsys, tolerance: str) -> None:
     """Issue 12's units policy: a bare number is refused with the fix spelled out."""
-    assert main(["compare", str(golden), str(golden), "--drive", "gecko-g202",
-                 "--tolerance", tolerance]) == 2
+    assert (
+        main(
+            ["compare", str(golden), str(golden), "--drive", "gecko-g202", "--tolerance", tolerance]
+        )
+        == 2
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--tolerance" in err[0]

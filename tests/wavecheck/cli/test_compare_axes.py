@@ -43,9 +43,13 @@ def test_the_example_against_itself_passes(capsys: pytest.CaptureFixture[str]) -
     assert "dir_hold     fail (1)  fail (1)" in x
 
 
-def test_one_axis_short_of_a_step_fails_naming_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_one_axis_short_of_a_step_fails_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     cap = _without_last_step("y", tmp_path / "c.vcd")
-    code, out = _run(capsys, str(cap), str(TWO_AXIS), "--drive", "gecko-g202", *MAPS, "--format", "json")
+    code, out = _run(
+        capsys, str(cap), str(TWO_AXIS), "--drive", "gecko-g202", *MAPS, "--format", "json"
+    )
     data = json.loads(out)
     assert code == 1 and data["verdict"] == "fail"
     assert set(data) == {"capture", "golden", "axes", "failures", "verdict"}
@@ -68,28 +72,47 @@ def test_golden_map_and_per_axis_drive(tmp_path: Path, capsys: pytest.CaptureFix
     )
     index = {ch.name: ch.index for ch in cap.channels}
     gmap = [
-        "--golden-map", f"x.step=G{index['x_step']},x.dir=G{index['x_dir']}",
-        "--golden-map", f"y.step=G{index['y_step']},y.dir=G{index['y_dir']}",
+        "--golden-map",
+        f"x.step=G{index['x_step']},x.dir=G{index['x_dir']}",
+        "--golden-map",
+        f"y.step=G{index['y_step']},y.dir=G{index['y_dir']}",
     ]
     code, out = _run(
-        capsys, str(TWO_AXIS), str(renamed), "--drive", "gecko-g202", "--drive", "y=leadshine-dm542",
-        *MAPS, *gmap, "--format", "json",
+        capsys,
+        str(TWO_AXIS),
+        str(renamed),
+        "--drive",
+        "gecko-g202",
+        "--drive",
+        "y=leadshine-dm542",
+        *MAPS,
+        *gmap,
+        "--format",
+        "json",
     )
     data = json.loads(out)
     assert code == 0, data["failures"]
-    assert {a["name"]: a["drive"] for a in data["axes"]} == {"x": "gecko-g202", "y": "leadshine-dm542"}
+    assert {a["name"]: a["drive"] for a in data["axes"]} == {
+        "x": "gecko-g202",
+        "y": "leadshine-dm542",
+    }
 
 
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (["--golden-map", "x.step=x_step,x.dir=x_dir"], "the capture's axes (x, y) and the golden's (x) differ"),
+        (
+            ["--golden-map", "x.step=x_step,x.dir=x_dir"],
+            "the capture's axes (x, y) and the golden's (x) differ",
+        ),
         (["--drive", "z=leadshine-dm542"], "no axis 'z' is mapped"),
         (["--invert", "z.step"], "no axis 'z' is mapped"),
         (["--golden-map", "x.step=x_step,x.dir=x_dir", "--golden-map", "y.step=nope"], "golden"),
     ],
 )
-def test_mismatched_axes_are_usage_errors(capsys: pytest.CaptureFixture[str], extra: list[str], message: str) -> None:
+def test_mismatched_axes_are_usage_errors(
+    capsys: pytest.CaptureFixture[str], extra: list[str], message: str
+) -> None:
     code = main(["compare", str(TWO_AXIS), str(TWO_AXIS), "--drive", "gecko-g202", *MAPS, *extra])
     assert code == 2 and message in capsys.readouterr().err
 
@@ -101,11 +124,26 @@ def test_an_axis_without_a_drive(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_one_axis_keeps_todays_output(capsys: pytest.CaptureFixture[str]) -> None:
     """An unnamed axis: the plain comparison (no sections, no 'axes' key)."""
-    argv = [str(TWO_AXIS), str(TWO_AXIS), "--drive", "gecko-g202", "--map", "step=y_step,dir=y_dir",
-            "--golden-map", "step=y_step,dir=y_dir"]
+    argv = [
+        str(TWO_AXIS),
+        str(TWO_AXIS),
+        "--drive",
+        "gecko-g202",
+        "--map",
+        "step=y_step,dir=y_dir",
+        "--golden-map",
+        "step=y_step,dir=y_dir",
+    ]
     code, out = _run(capsys, *argv)
     assert code == 0 and out.startswith("verdict: PASS\ncapture: ") and "== axis" not in out
     code, out = _run(capsys, *argv, "--format", "json")
     assert set(json.loads(out)) == {
-        "capture", "golden", "drive", "steps", "timing", "rules", "failures", "verdict"
+        "capture",
+        "golden",
+        "drive",
+        "steps",
+        "timing",
+        "rules",
+        "failures",
+        "verdict",
     }

@@ -53,11 +53,21 @@ def test_shortest_intervals_are_checks(name: str, capsys: pytest.CaptureFixture[
     assert measured["resolution_ns"] == 0 and "every figure is exact" in measured["resolution"]
 
 
-def test_two_axes_of_the_smoothieware_capture(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_two_axes_of_the_smoothieware_capture(
+    smoothie_sr: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, m = _json(capsys, "measure", str(smoothie_sr), *SMOOTHIE)
     assert code == 0
-    _, c = _json(capsys, "check", str(smoothie_sr), *SMOOTHIE, "--drive", "gecko-g202",
-                 "--active-edge", "rising")
+    _, c = _json(
+        capsys,
+        "check",
+        str(smoothie_sr),
+        *SMOOTHIE,
+        "--drive",
+        "gecko-g202",
+        "--active-edge",
+        "rising",
+    )
     assert [a["name"] for a in m["axes"]] == ["x", "y"]
     assert [a["map"] for a in m["axes"]] == [{"step": "5", "dir": "6"}, {"step": "3", "dir": "4"}]
     for a, ca in zip(m["axes"], c["axes"], strict=True):
@@ -69,13 +79,20 @@ def test_two_axes_of_the_smoothieware_capture(smoothie_sr: Path, capsys: pytest.
         assert rate["min"] <= rate["median"] <= rate["max"]
         assert rate["max"] == pytest.approx(1e9 / a["intervals"]["step_period"]["min_ns"])
         assert set(a["intervals"]) == {
-            "step_high", "step_low", "step_period", "dir_setup", "dir_hold", "enable_setup"
+            "step_high",
+            "step_low",
+            "step_period",
+            "dir_setup",
+            "dir_hold",
+            "enable_setup",
         }
     assert m["resolution_ns"] == pytest.approx(83.333333, rel=1e-6)
     assert m["capture"]["tick_s"] == "1/12000000" and m["capture"]["samplerate_hz"] == 12_000_000
 
 
-def test_text_says_what_bounds_the_figures(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_text_says_what_bounds_the_figures(
+    smoothie_sr: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["measure", str(smoothie_sr), *SMOOTHIE]) == 0
     out = capsys.readouterr().out
     assert "resolution: T = 83.33 ns (one sample period at 12 MHz)" in out
@@ -100,9 +117,13 @@ def test_other_step_types(name: str, capsys: pytest.CaptureFixture[str]) -> None
     assert axis["steps"]["sequence_errors"] == 0
 
 
-def test_plot_and_html(tmp_path: Path, smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_plot_and_html(
+    tmp_path: Path, smoothie_sr: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     png, page = tmp_path / "m.png", tmp_path / "m.html"
-    code = main(["measure", str(smoothie_sr), *SMOOTHIE, "--plot", str(png), "--html", str(page), "-q"])
+    code = main(
+        ["measure", str(smoothie_sr), *SMOOTHIE, "--plot", str(png), "--html", str(page), "-q"]
+    )
     capsys.readouterr()
     assert code == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -111,7 +132,9 @@ def test_plot_and_html(tmp_path: Path, smoothie_sr: Path, capsys: pytest.Capture
     assert "http" not in text.replace("http-equiv", "")  # self-contained
 
 
-def test_output_never_overwrites_the_capture(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_output_never_overwrites_the_capture(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     vcd = tmp_path / "g.vcd"
     vcd.write_bytes((GOLDEN / "stepgen0.vcd").read_bytes())
     before = vcd.read_bytes()

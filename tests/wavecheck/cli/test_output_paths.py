@@ -135,7 +135,14 @@ def test_output_checked_before_the_capture_is_read(tmp_path: Path, capfd) -> Non
     (tmp_path / "bad.vcd").write_text("not a VCD at all\n")
     (tmp_path / "out.html").mkdir()
     code = main(
-        ["check", str(tmp_path / "bad.vcd"), "--drive", "a4988", "--html", str(tmp_path / "out.html")]
+        [
+            "check",
+            str(tmp_path / "bad.vcd"),
+            "--drive",
+            "a4988",
+            "--html",
+            str(tmp_path / "out.html"),
+        ]
     )
     _, err = capfd.readouterr()
     assert code == 2 and err.startswith(f"wavecheck: error: --html {tmp_path / 'out.html'}: ")
@@ -150,9 +157,7 @@ def test_two_outputs_naming_one_file_are_refused(tmp_path: Path, capfd) -> None:
     assert not (tmp_path / "r.html").exists()
 
 
-def test_per_capture_outputs_are_written_through_the_same_mechanism(
-    tmp_path: Path, capfd
-) -> None:
+def test_per_capture_outputs_are_written_through_the_same_mechanism(tmp_path: Path, capfd) -> None:
     """Several captures: ``--plot p.png`` writes ``p-<stem>.png``; a symlink there is followed."""
     a = _capture(tmp_path)
     b = write_vcd(tmp_path / "v.vcd", {"STEP": (0, pulses([10 * US], 1 * US))})
@@ -169,13 +174,38 @@ def test_gtkw_companion_vcd_does_not_overwrite_an_input(tmp_path: Path, capfd) -
     """A ``.sr`` capture's ``--gtkw view.gtkw`` writes ``view.vcd`` beside it: never over an input."""
     from stepgen.cli import main as stepgen
 
-    assert stepgen(["simulate", "--mode", "velocity", "--velocity", "100", "--periods", "1000",
-                    "-q", "-o", str(tmp_path / "cap.sr")]) == 0
+    assert (
+        stepgen(
+            [
+                "simulate",
+                "--mode",
+                "velocity",
+                "--velocity",
+                "100",
+                "--periods",
+                "1000",
+                "-q",
+                "-o",
+                str(tmp_path / "cap.sr"),
+            ]
+        )
+        == 0
+    )
     ini = tmp_path / "view.vcd"  # an INI file whose name the companion VCD would take
     ini.write_text("[EMCMOT]\nBASE_PERIOD = 25000\nSERVO_PERIOD = 1000000\n")
     before = ini.read_bytes()
-    code = main(["check", str(tmp_path / "cap.sr"), "--drive", "a4988", "--ini", str(ini),
-                 "--gtkw", str(tmp_path / "view.gtkw")])
+    code = main(
+        [
+            "check",
+            str(tmp_path / "cap.sr"),
+            "--drive",
+            "a4988",
+            "--ini",
+            str(ini),
+            "--gtkw",
+            str(tmp_path / "view.gtkw"),
+        ]
+    )
     _, err = capfd.readouterr()
     assert code == 2 and f"{ini}: is the --ini file" in err
     assert ini.read_bytes() == before

@@ -21,8 +21,20 @@ def _capture(tmp_path: Path, width_ns: int) -> Path:
 
 
 def _check(capsys: pytest.CaptureFixture[str], vcd: Path, *extra: str) -> tuple[int, dict]:  # type: ignore[type-arg]
-    code = main(["check", str(vcd), "--drive", "leadshine-dm542", "--firmware", str(GRBL),
-                 "--format", "json", "-q", *extra])
+    code = main(
+        [
+            "check",
+            str(vcd),
+            "--drive",
+            "leadshine-dm542",
+            "--firmware",
+            str(GRBL),
+            "--format",
+            "json",
+            "-q",
+            *extra,
+        ]
+    )
     return code, json.loads(capsys.readouterr().out)
 
 
@@ -33,13 +45,28 @@ def test_pulses_shorter_than_configured(tmp_path: Path, capsys: pytest.CaptureFi
     assert fw["verdict"] == "fail" and fw["findings"] == 1  # ... the configuration does not
     pulse = next(c for c in fw["comparisons"] if c["what"] == "pulse")
     assert (pulse["configured"], pulse["measured"]) == (10000, 2500)
-    assert "configured 10 us pulses" in pulse["message"] and "shortest measured 2.5 us" in pulse["message"]
+    assert (
+        "configured 10 us pulses" in pulse["message"]
+        and "shortest measured 2.5 us" in pulse["message"]
+    )
     assert code == 1
-    main(["check", str(tmp_path / "run.vcd"), "--drive", "leadshine-dm542", "--firmware", str(GRBL), "-q"])
+    main(
+        [
+            "check",
+            str(tmp_path / "run.vcd"),
+            "--drive",
+            "leadshine-dm542",
+            "--firmware",
+            str(GRBL),
+            "-q",
+        ]
+    )
     assert "firmware: grbl" in capsys.readouterr().out
 
 
-def test_matching_capture_has_no_finding(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_matching_capture_has_no_finding(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code, doc = _check(capsys, _capture(tmp_path, 10_000))
     assert doc["firmware"]["findings"] == 0 and doc["firmware"]["verdict"] == "pass"
     assert code == 0
@@ -47,17 +74,39 @@ def test_matching_capture_has_no_finding(tmp_path: Path, capsys: pytest.CaptureF
 
 def test_rate_above_configured(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     starts = [1000 + k * 100_000 for k in range(5)]  # 10 kHz > the configured 2083 Hz
-    vcd = write_vcd(tmp_path / "fast.vcd", {"STEP": (0, [t for s in starts for t in (s, s + 10_000)]),
-                                             "DIR": (0, [])}, end=600_000)
+    vcd = write_vcd(
+        tmp_path / "fast.vcd",
+        {"STEP": (0, [t for s in starts for t in (s, s + 10_000)]), "DIR": (0, [])},
+        end=600_000,
+    )
     _, doc = _check(capsys, vcd)
     rate = next(c for c in doc["firmware"]["comparisons"] if c["what"] == "rate")
     assert rate["verdict"] == "fail"
 
 
-def test_limit_and_margin_show_datasheet(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_limit_and_margin_show_datasheet(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     vcd = _capture(tmp_path, 10_000)
-    main(["check", str(vcd), "--drive", "leadshine-dm542", "--margin", "2x", "--limit",
-          "dir_setup=1us", "--format", "json", "-q"])
+    main(
+        [
+            "check",
+            str(vcd),
+            "--drive",
+            "leadshine-dm542",
+            "--margin",
+            "2x",
+            "--limit",
+            "dir_setup=1us",
+            "--format",
+            "json",
+            "-q",
+        ]
+    )
     doc = json.loads(capsys.readouterr().out)
     high = next(r for r in doc["rules"] if r["id"] == "step_high")
-    assert (high["limit_ns"], high["limit_datasheet_ns"], high["limit_applied"]) == (5000, 2500, "--margin 2x")
+    assert (high["limit_ns"], high["limit_datasheet_ns"], high["limit_applied"]) == (
+        5000,
+        2500,
+        "--margin 2x",
+    )

@@ -45,7 +45,13 @@ PAIRS = [
     # Klipper 6XD 2 us default vs DM542 2.5 us -> fail
     (FW / "klipper/generic-duet3-6xd.cfg", "leadshine-dm542", "stepper_x", "step_high", "fail"),
     # Klipper Mellow 4 us vs DM542 2.5 us -> pass
-    (FW / "klipper/generic-mellow-fly-e3-v2.cfg", "leadshine-dm542", "stepper_x", "step_high", "pass"),
+    (
+        FW / "klipper/generic-mellow-fly-e3-v2.cfg",
+        "leadshine-dm542",
+        "stepper_x",
+        "step_high",
+        "pass",
+    ),
     # Marlin VORON DRV8825 default 2000 ns vs DRV8825 1.9 us -> pass
     (FW / "marlin/VORONDesign", "drv8825", "X", "step_high", "pass"),
     # hm2 5i20 40 us / 40 us vs Gecko G202 4.5 us high -> pass; 12 kHz <= 200 kHz
@@ -80,8 +86,14 @@ def test_margin_doubles_and_fix_names_the_setting(capsys: pytest.CaptureFixture[
     _, doc = _run(capsys, str(CNC_ONE), "--drive", "leadshine-dm542", "--margin", "2x")
     r = _rule(doc, "X", "step_high")
     assert (r["verdict"], r["limit_ns"], r["limit_datasheet_ns"]) == ("pass", 5000, 2500)
-    _, doc = _run(capsys, str(FW / "grbl/settings.md"), "--drive", "leadshine-dm542",
-                  "--limit", "step_high=12us")
+    _, doc = _run(
+        capsys,
+        str(FW / "grbl/settings.md"),
+        "--drive",
+        "leadshine-dm542",
+        "--limit",
+        "step_high=12us",
+    )
     assert _rule(doc, "X", "step_high")["fix"] == "set `$0` to at least 12 us"
 
 
@@ -97,18 +109,26 @@ def test_user_rule_file_extends(tmp_path: Path, capsys: pytest.CaptureFixture[st
     mine.write_text('id = "g202-slow"\nextends = "gecko-g202"\n[limits]\nstep_high = "40us"\n')
     _, doc = _run(capsys, str(FW / "linuxcnc/hm2-stepper/5i20.ini"), "--drive", str(mine))
     r = _rule(doc, "stepgen.00", "step_high")
-    assert (r["verdict"], r["limit_ns"], r["limit_status"]) == ("pass", 40000, "user")  # 40 us = 40 us
+    assert (r["verdict"], r["limit_ns"], r["limit_status"]) == (
+        "pass",
+        40000,
+        "user",
+    )  # 40 us = 40 us
     assert _rule(doc, "stepgen.00", "dir_hold")["limit_ns"] == 20000  # from gecko-g202
 
 
-def test_linuxcnc_software_stepgen_latency(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_linuxcnc_software_stepgen_latency(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     (tmp_path / "m.hal").write_text(
         "loadrt stepgen step_type=0\nsetp stepgen.0.steplen 5000\nsetp stepgen.0.stepspace 5000\n"
         "setp stepgen.0.dirsetup 10000\nsetp stepgen.0.dirhold 10000\n"
     )
     (tmp_path / "m.ini").write_text("[EMCMOT]\nBASE_PERIOD = 25000\n[HAL]\nHALFILE = m.hal\n")
     # one 25 us period each; J = 11 us -> 14 us guaranteed pulse
-    _, doc = _run(capsys, str(tmp_path / "m.ini"), "--drive", "leadshine-dm542", "--latency", "11us")
+    _, doc = _run(
+        capsys, str(tmp_path / "m.ini"), "--drive", "leadshine-dm542", "--latency", "11us"
+    )
     assert doc["firmware"] == "linuxcnc"
     r = _rule(doc, "stepgen.0", "step_high")
     assert (r["generator_ns"], r["verdict"]) == (14000, "pass")
@@ -116,8 +136,10 @@ def test_linuxcnc_software_stepgen_latency(tmp_path: Path, capsys: pytest.Captur
 
 def test_user_file_errors_all_at_once(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.toml"
-    bad.write_text('id = "bad"\nextends = "gecko-g202"\ninterface = "pwm"\n[limits]\nstep_hi = "1us"\n'
-                   'step_low = "2 furlongs"\n')
+    bad.write_text(
+        'id = "bad"\nextends = "gecko-g202"\ninterface = "pwm"\n[limits]\nstep_hi = "1us"\n'
+        'step_low = "2 furlongs"\n'
+    )
     assert main(["config", str(CNC_ONE), "--drive", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "3 errors" in err and "interface" in err and "step_hi" in err and "step_low" in err

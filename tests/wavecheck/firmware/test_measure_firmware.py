@@ -67,14 +67,19 @@ def test_same_comparisons_as_check(tmp_path: Path, capsys: pytest.CaptureFixture
 
 def test_text_report_and_no_firmware(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     vcd = _capture(tmp_path, 2500)
-    assert main(["measure", str(vcd), "--map", "step=STEP,dir=DIR", "--firmware", str(GRBL), "-q"]) == 1
+    assert (
+        main(["measure", str(vcd), "--map", "step=STEP,dir=DIR", "--firmware", str(GRBL), "-q"])
+        == 1
+    )
     out = capsys.readouterr().out
     assert "firmware: grbl" in out and "configured 10 us pulses" in out
     assert main(["measure", str(vcd), "--map", "step=STEP,dir=DIR", "-q"]) == 0
     assert "firmware" not in capsys.readouterr().out
 
 
-def test_readme_block(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+def test_readme_block(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The README's ``measure --firmware`` line, as written, on 2.5 us pulses of a grbl set to 10 us."""
     import re
     import shlex

@@ -23,8 +23,15 @@ FILES = {
     "smoothie": ["smoothieware/Smoothieboard/config"],
     "hm2": ["linuxcnc/hm2-stepper/5i20.ini", "linuxcnc/hm2-stepper/hm2-stepper.hal"],
 }
-EXPECT = {"grbl": "grbl", "klipper": "klipper", "marlin": "marlin", "rrf": "reprapfirmware",
-          "smoothie": "smoothieware", "hm2": "hm2", "linuxcnc": "linuxcnc"}
+EXPECT = {
+    "grbl": "grbl",
+    "klipper": "klipper",
+    "marlin": "marlin",
+    "rrf": "reprapfirmware",
+    "smoothie": "smoothieware",
+    "hm2": "hm2",
+    "linuxcnc": "linuxcnc",
+}
 
 
 @pytest.mark.parametrize("name", sorted(EXPECT))
@@ -41,7 +48,9 @@ def test_readme_firmware_command(
             "loadrt stepgen step_type=0\nsetp stepgen.0.steplen 5000\nsetp stepgen.0.stepspace 5000\n"
             "setp stepgen.0.dirsetup 20000\nsetp stepgen.0.dirhold 20000\n"
         )
-        (tmp_path / "machine.ini").write_text("[EMCMOT]\nBASE_PERIOD = 20000\n[HAL]\nHALFILE = machine.hal\n")
+        (tmp_path / "machine.ini").write_text(
+            "[EMCMOT]\nBASE_PERIOD = 20000\n[HAL]\nHALFILE = machine.hal\n"
+        )
     monkeypatch.chdir(tmp_path)
     argv = shlex.split(m.group(1).strip())
     assert argv[0] == "wavecheck"

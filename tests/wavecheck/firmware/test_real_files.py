@@ -44,7 +44,9 @@ def test_grbl_user_dumps() -> None:
 def test_klipper_skr_mini_e3_tmc_uart_both_edges() -> None:
     cfg = read_firmware(FW / "klipper/generic-bigtreetech-skr-mini-e3-v2.0.cfg")
     x = cfg.axis("stepper_x")
-    assert v(x.pulse) == 100 and x.pulse.status == "uncertain"  # [tmc2209 stepper_x] line 25, uart_pin
+    assert (
+        v(x.pulse) == 100 and x.pulse.status == "uncertain"
+    )  # [tmc2209 stepper_x] line 25, uart_pin
     assert x.both_edges and x.active_edge == "both"
     assert x.dir_inverted  # line 16: dir_pin: !PB12
     assert not cfg.axis("stepper_z").dir_inverted  # line 52: dir_pin: PC5
@@ -121,7 +123,9 @@ def test_rrf_cnc_one_external_drivers() -> None:
     cfg = read_firmware(FW / "reprapfirmware/cnc-one/config.g")
     x = cfg.axis("X")  # line 20: M584 X3 Y2:1 Z0; line 21: M569 P3 ... T5:5:10:0
     assert (v(x.pulse), v(x.idle), v(x.dir_setup)) == (5000, 5000, 10000)
-    assert v(x.dir_hold_trailing) == 0 and v(x.dir_hold) == 5000  # hold counts from the falling edge
+    assert (
+        v(x.dir_hold_trailing) == 0 and v(x.dir_hold) == 5000
+    )  # hold counts from the falling edge
     assert v(x.max_rate) == F(160 * 12000, 60)  # line 27: M92 X160; line 29: M203 X12000 mm/min
     assert cfg.axis("Y").info["drivers"] == "2,1"
 

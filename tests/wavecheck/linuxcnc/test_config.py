@@ -106,7 +106,11 @@ def test_stepspace_too_short_lowers_the_safe_rate(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("ini", "hal", "needle"),
     [
-        ("[EMCMOT]\nBASE_PERIOD = fast\n", "", r"a\.ini:2: \[EMCMOT\]BASE_PERIOD 'fast' is not a number"),
+        (
+            "[EMCMOT]\nBASE_PERIOD = fast\n",
+            "",
+            r"a\.ini:2: \[EMCMOT\]BASE_PERIOD 'fast' is not a number",
+        ),
         ("BASE_PERIOD = 1\n", "", r"line 1: 'BASE_PERIOD = 1' comes before any \[SECTION\]"),
         ("[EMCMOT]\n", "setp stepgen.0.steplen -5\n", r"a\.hal:1: stepgen\.0\.steplen '-5' is not"),
         ("[EMCMOT]\n", "setp stepgen.0.steplen [X]Y\n", r"\[X\]Y is not in"),

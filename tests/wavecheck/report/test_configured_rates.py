@@ -29,7 +29,9 @@ def _check(period_ns: int, dirhold_ns: int, latency: str | None) -> wavecheck.Re
     cfg = LinuxCNCConfig(base_period_ns=period_ns, params={"dirhold": dirhold_ns})
     j = None if latency is None else time_ns(latency)
     capture_report = wavecheck.check(GOOD, "gecko-g202")
-    return wavecheck.run_check(capture_report.capture, capture_report.drive, stepgen=cfg, latency_ns=j)
+    return wavecheck.run_check(
+        capture_report.capture, capture_report.drive, stepgen=cfg, latency_ns=j
+    )
 
 
 def test_report_carries_the_configured_rates_and_their_settings() -> None:
@@ -90,7 +92,9 @@ def test_pytest_plugin_shows_the_rates(pytester: pytest.Pytester, latency: str |
     result = pytester.runpytest("--junitxml=out.xml")
     # the capture passes, so expect = "fail" makes the verdict item fail and describe the report
     result.assert_outcomes(failed=1, passed=5)
-    result.stdout.fnmatch_lines(["*max step rate (stepgen channel 0, BASE_PERIOD 16 us): config 31.25 kHz*"])
+    result.stdout.fnmatch_lines(
+        ["*max step rate (stepgen channel 0, BASE_PERIOD 16 us): config 31.25 kHz*"]
+    )
     xml = (pytester.path / "out.xml").read_text()
     assert 'name="max_step_rate_hz.config" value="31250' in xml
     assert ('name="max_step_rate_hz.latency_safe"' in xml) == (latency is not None)

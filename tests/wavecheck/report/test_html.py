@@ -37,9 +37,7 @@ def test_rule_table_and_violations(failing_report: Report) -> None:
 
 
 def test_several_captures_and_errors(failing_report: Report, passing_report: Report) -> None:
-    page = render_html(
-        [passing_report, failing_report], plots=False, errors=["x.sr: no such file"]
-    )
+    page = render_html([passing_report, failing_report], plots=False, errors=["x.sr: no such file"])
     assert page.count('<section class="capture"') == 2
     assert 'data-verdict="pass"' in page and 'data-verdict="fail"' in page
     assert "x.sr: no such file" in page
@@ -47,7 +45,9 @@ def test_several_captures_and_errors(failing_report: Report, passing_report: Rep
 
 
 def _chromium() -> str:
-    exe = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)
+    exe = shutil.which("chromium") or (
+        "/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None
+    )
     if exe is None:
         if os.environ.get("CI") == "true":
             pytest.fail("chromium is missing in CI (make test installs Debian's chromium)")
@@ -56,9 +56,7 @@ def _chromium() -> str:
 
 
 @pytest.mark.browser
-def test_chromium_renders_verdict_and_rule_table(
-    failing_report: Report, tmp_path: Path
-) -> None:
+def test_chromium_renders_verdict_and_rule_table(failing_report: Report, tmp_path: Path) -> None:
     exe = _chromium()
     page = tmp_path / "report.html"
     write_html([failing_report], page)

@@ -47,7 +47,14 @@ def test_failing_report_is_valid_and_names_the_worst(failing_report: Report) -> 
     _check_counts(root)
     (suite,) = root.findall("testsuite")
     names = [c.get("name") for c in suite.findall("testcase")]
-    assert names == ["step_high", "step_low", "step_period", "dir_setup", "dir_hold", "enable_setup"]
+    assert names == [
+        "step_high",
+        "step_low",
+        "step_period",
+        "dir_setup",
+        "dir_hold",
+        "enable_setup",
+    ]
     assert {c.get("classname") for c in suite.findall("testcase")} == {"test"}
     failure = suite.find("testcase[@name='dir_hold']/failure")
     assert failure is not None

@@ -73,7 +73,15 @@ def test_two_axes_in_time_order_with_units(
     a twentieth of a tick of it."""
     out = tmp_path / "s.csv"
     code = main(
-        ["measure", str(smoothie_sr), *SMOOTHIE_MAP, "--steps-csv", str(out), "--steps-per-unit", "x=80"]
+        [
+            "measure",
+            str(smoothie_sr),
+            *SMOOTHIE_MAP,
+            "--steps-csv",
+            str(out),
+            "--steps-per-unit",
+            "x=80",
+        ]
     )
     capsys.readouterr()
     assert code == 0
@@ -113,18 +121,39 @@ def test_chunks_do_not_change_the_text() -> None:
     assert "".join(steps_csv_chunks(axes, tb, chunk=2)) == whole
     rows = list(csv.DictReader(io.StringIO(whole)))
     assert [(r["axis"], r["tick"]) for r in rows] == [
-        ("x", "0"), ("y", "5"), ("x", "10"), ("x", "25"), ("x", "25"), ("y", "25"), ("x", "40")
+        ("x", "0"),
+        ("y", "5"),
+        ("x", "10"),
+        ("x", "25"),
+        ("x", "25"),
+        ("y", "25"),
+        ("x", "40"),
     ]
     # a step at the same tick as the previous one of its axis has no rate; unknown: no velocity
-    assert [r["rate_hz"] for r in rows if r["axis"] == "x"] == ["", "100000.000", "66666.667", "", "66666.667"]
+    assert [r["rate_hz"] for r in rows if r["axis"] == "x"] == [
+        "",
+        "100000.000",
+        "66666.667",
+        "",
+        "66666.667",
+    ]
     assert rows[-1]["velocity_units_per_s"] == "" and rows[-1]["position_units"] == "1.000000"
 
 
 def test_several_captures_one_file_each(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     golden = REPO / "captures" / "golden"
     out = tmp_path / "steps.csv"
-    main(["check", str(golden / "g202-p16-dirhold2-worst.vcd"), str(G202), "--drive", "gecko-g202",
-          "--steps-csv", str(out)])
+    main(
+        [
+            "check",
+            str(golden / "g202-p16-dirhold2-worst.vcd"),
+            str(G202),
+            "--drive",
+            "gecko-g202",
+            "--steps-csv",
+            str(out),
+        ]
+    )
     capsys.readouterr()
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "steps-g202-p16-dirhold2-worst.csv",
@@ -137,7 +166,10 @@ def test_several_captures_one_file_each(tmp_path: Path, capsys: pytest.CaptureFi
     [
         (["--steps-per-unit", "80"], "give --steps-csv FILE too"),
         (["--steps-csv", "{out}", "--steps-per-unit", "-3"], "must be positive"),
-        (["--steps-csv", "{out}", "--steps-per-unit", "eighty"], "is not a number of steps per unit"),
+        (
+            ["--steps-csv", "{out}", "--steps-per-unit", "eighty"],
+            "is not a number of steps per unit",
+        ),
         (["--steps-csv", "{out}", "--steps-per-unit", "z=80"], "no axis 'z' is mapped"),
     ],
 )

@@ -31,7 +31,15 @@ def test_golden_streamed_equals_whole(block: str) -> None:
 
 @pytest.mark.skipif(not GRBL.exists(), reason="shared captures not present")
 def test_grbl_two_axes_streamed_equals_whole() -> None:
-    args = [str(GRBL), "--drive", "gecko-g202", "--map", "x.step=0,x.dir=1", "--map", "y.step=2,y.dir=3"]
+    args = [
+        str(GRBL),
+        "--drive",
+        "gecko-g202",
+        "--map",
+        "x.step=0,x.dir=1",
+        "--map",
+        "y.step=2,y.dir=3",
+    ]
     assert _check(*args, "--block-edges", "4096") == _check(*args, "--no-stream")
 
 
@@ -45,7 +53,9 @@ def test_block_edges_must_be_positive() -> None:
 
 
 @pytest.mark.skipif(not GRBL.exists(), reason="shared captures not present")
-def test_the_samples_are_read_once_for_every_axis(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_samples_are_read_once_for_every_axis(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     from wavecheck.capture.sr import SrBlocks
     from wavecheck.cli import _capture_args, main
 
@@ -58,6 +68,17 @@ def test_the_samples_are_read_once_for_every_axis(monkeypatch: pytest.MonkeyPatc
 
     monkeypatch.setattr(SrBlocks, "blocks", counting)
     monkeypatch.setattr(_capture_args, "open_capture", None)  # the whole path is not taken
-    main(["check", str(GRBL), "--drive", "gecko-g202", "--map", "x.step=0,x.dir=1", "--map", "y.step=2,y.dir=3"])
+    main(
+        [
+            "check",
+            str(GRBL),
+            "--drive",
+            "gecko-g202",
+            "--map",
+            "x.step=0,x.dir=1",
+            "--map",
+            "y.step=2,y.dir=3",
+        ]
+    )
     assert passes == [{0, 1, 2, 3}]  # one pass; only the mapped channels' edges extracted
     capsys.readouterr()
