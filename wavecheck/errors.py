@@ -13,6 +13,7 @@ from os import PathLike
 __all__ = [
     "CaptureError",
     "ConfigError",
+    "DeviceError",
     "RuleError",
     "UnitError",
     "UsageError",
@@ -62,6 +63,10 @@ class RuleError(WavecheckError):
 
 class ConfigError(WavecheckError):
     """A stepgen setting (option, INI/HAL value, latency model) is out of range or malformed."""
+
+
+class DeviceError(WavecheckError):
+    """A live acquisition failed: no device, sigrok-cli died or stopped early, samples were lost."""
 
 
 class UsageError(WavecheckError):

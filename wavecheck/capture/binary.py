@@ -19,9 +19,9 @@ has no time base.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
@@ -33,7 +33,10 @@ from wavecheck.progress import current
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency
 
-__all__ = ["MAX_CHANNELS", "BinaryFormat", "parse_binary_format", "read_binary"]
+if TYPE_CHECKING:
+    from wavecheck.stream.blocks import EdgeBlock
+
+__all__ = ["MAX_CHANNELS", "BinaryFormat", "SampleBlocks", "parse_binary_format", "read_binary"]
 
 #: The most channels a raw sample can carry here (64 bytes per sample, like the ``.sr`` reader).
 MAX_CHANNELS = 512
@@ -223,3 +226,98 @@ def read_binary(
         notes=notes,
         time_known=rate is not None,
     )
+
+
+class SampleBlocks:
+    """Raw samples arriving piece by piece (a live analyzer's pipe), scanned into
+    :class:`~wavecheck.stream.blocks.EdgeBlock` s: the streamed engine's source for
+    ``wavecheck watch``. Tick n is sample n; the time base is the sample rate, exactly.
+
+    :meth:`scan` takes any number of bytes (a sample split across two pieces is joined) and gives
+    the block of the samples completed so far; :meth:`capture` the finished skeleton.
+
+    Args:
+        label: what the capture and messages call the input (``"sigrok-cli demo (live)"``).
+        numchannels: channels per sample; unitsize ``ceil(numchannels / 8)`` bytes.
+        samplerate: samples per second.
+        names: channel names for bits 0, 1, … (the rest are named by their bit number).
+    """
+
+    def __init__(
+        self, label: str, numchannels: int, samplerate: Fraction, names: Sequence[str] = ()
+    ) -> None:
+        if not 1 <= numchannels <= MAX_CHANNELS:
+            raise UsageError(f"numchannels must be 1..{MAX_CHANNELS}, got {numchannels}")
+        self.label = label
+        self.unitsize = (numchannels + 7) // 8
+        self.bits = list(range(numchannels))
+        self.names = [names[b] if b < len(names) else str(b) for b in self.bits]
+        self.rate = samplerate
+        self.finder = EdgeFinder(self.unitsize, self.bits)
+        self.wanted = set(self.bits)
+        self.counts = [0] * numchannels
+        self.notes: list[str] = []
+        self._carry = b""
+        self.skeleton = self._capture(0)
+
+    @property
+    def nsamples(self) -> int:
+        """Whole samples scanned so far."""
+        return self.finder.nsamples
+
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` (bits) only; the others are only counted."""
+        self.wanted = set(channels)
+
+    def scan(self, data: bytes) -> EdgeBlock:
+        """The block of the samples ``data`` completes (its ``end`` is :attr:`nsamples`)."""
+        from wavecheck.stream.blocks import EdgeBlock
+
+        first = self.finder.last is None
+        if self._carry:
+            data, self._carry = self._carry + data, b""
+        whole = len(data) - len(data) % self.unitsize
+        if whole < len(data):
+            self._carry = data[whole:]
+        self.finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+        block = EdgeBlock(end=self.finder.nsamples)
+        if first and self.finder.last is not None:
+            block.start = 0
+            block.known = {b: (0, self.finder.initial[b]) for b in self.bits}
+        for b in self.bits:
+            e = self.finder.edges(b)
+            self.counts[b] += len(e)
+            if b in self.wanted and len(e):
+                block.edges[b] = e
+        return block
+
+    @property
+    def partial(self) -> int:
+        """Bytes of a sample not yet complete."""
+        return len(self._carry)
+
+    def _capture(self, end: int) -> Capture:
+        return Capture(
+            path=self.label,
+            format="binary",
+            timebase=Timebase.from_samplerate(self.rate),
+            resolution_ticks=1,
+            samplerate_hz=self.rate,
+            start=0,
+            end=end,
+            channels=[
+                Channel(
+                    name=self.names[b],
+                    index=b,
+                    initial=self.finder.initial[b],
+                    edges=np.zeros(0, dtype=np.int64),
+                    counted=self.counts[b],
+                )
+                for b in self.bits
+            ],
+            notes=list(self.notes),
+        )
+
+    def capture(self) -> Capture:
+        """The capture so far, without edges (each channel's edge count, the end)."""
+        return self._capture(self.finder.nsamples)

@@ -16,6 +16,7 @@ that libsigrok ignores, saying every edge lies exactly on its sample, so the rea
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import zipfile
@@ -30,6 +31,8 @@ from wavecheck.output import atomic_path
 __all__ = [
     "EXACT_SECTION",
     "SR_CHUNK_BYTES",
+    "SrRecorder",
+    "SrZip",
     "exact_edges_section",
     "rate_text",
     "samples_from_edges",
@@ -180,6 +183,49 @@ def write_sr(
     return _write_zip(target, pieces, metadata, compression, compresslevel, version)
 
 
+class SrZip:
+    """An srzip file written member by member into an open binary file: ``version`` and
+    ``metadata`` at once, then each :meth:`add` a ``logic-1-N`` member; :meth:`close` ends the zip.
+    Entries carry a fixed date (1980-01-01), so the bytes depend only on the input."""
+
+    def __init__(
+        self,
+        fh: BinaryIO | io.BytesIO,
+        metadata: str,
+        *,
+        compression: int = zipfile.ZIP_DEFLATED,
+        compresslevel: int | None = None,
+        version: str | bytes = "2",
+    ) -> None:
+        self.zip = zipfile.ZipFile(fh, "w")
+        self.compression = compression
+        self.compresslevel = compresslevel
+        self.members = 0
+        self.bytes = 0
+        self.zip.writestr(zipfile.ZipInfo("version"), version, compress_type=zipfile.ZIP_STORED)
+        self.zip.writestr(
+            zipfile.ZipInfo("metadata"),
+            metadata,
+            compress_type=zipfile.ZIP_DEFLATED,
+            compresslevel=compresslevel,
+        )
+
+    def add(self, piece: bytes) -> None:
+        """Write ``piece`` (whole samples) as the next ``logic-1-N`` member."""
+        self.members += 1
+        self.zip.writestr(
+            zipfile.ZipInfo(f"logic-1-{self.members}"),
+            piece,
+            compress_type=self.compression,
+            compresslevel=self.compresslevel,
+        )
+        self.bytes += len(piece)
+
+    def close(self) -> None:
+        """Write the zip's central directory."""
+        self.zip.close()
+
+
 def _write_zip(
     fh: BinaryIO | io.BytesIO,
     pieces: Iterable[bytes],
@@ -188,25 +234,58 @@ def _write_zip(
     compresslevel: int | None,
     version: str | bytes,
 ) -> int:
-    # ZipInfo entries carry a fixed date (1980-01-01), so the bytes depend only on the input
-    total = 0
-    with zipfile.ZipFile(fh, "w") as z:
-        z.writestr(zipfile.ZipInfo("version"), version, compress_type=zipfile.ZIP_STORED)
-        z.writestr(
-            zipfile.ZipInfo("metadata"),
-            metadata,
-            compress_type=zipfile.ZIP_DEFLATED,
-            compresslevel=compresslevel,
-        )
-        for k, piece in enumerate(pieces):
-            z.writestr(
-                zipfile.ZipInfo(f"logic-1-{k + 1}"),
-                piece,
-                compress_type=compression,
-                compresslevel=compresslevel,
-            )
-            total += len(piece)
-    return total
+    z = SrZip(fh, metadata, compression=compression, compresslevel=compresslevel, version=version)
+    for piece in pieces:
+        z.add(piece)
+    z.close()
+    return z.bytes
+
+
+class SrRecorder:
+    """A ``.sr`` file written while the samples arrive (``wavecheck watch --save``): bytes are
+    gathered into members of ``chunk_bytes`` (libsigrok's 4 MiB); the file appears under its
+    name only at :meth:`close` (atomically, :func:`wavecheck.output.atomic_path`) and
+    :meth:`discard` leaves nothing. Memory: one member."""
+
+    def __init__(
+        self,
+        target: str | os.PathLike[str],
+        metadata: str,
+        unitsize: int,
+        *,
+        chunk_bytes: int = SR_CHUNK_BYTES,
+        compresslevel: int | None = 1,
+    ) -> None:
+        self.step = max(unitsize, chunk_bytes - chunk_bytes % unitsize)
+        self._stack = contextlib.ExitStack()
+        tmp = self._stack.enter_context(atomic_path(target))
+        self._fh = self._stack.enter_context(open(tmp, "wb"))  # noqa: SIM115 - closed by the stack
+        self._zip = SrZip(self._fh, metadata, compresslevel=compresslevel)
+        self._buf = bytearray()
+
+    def add(self, data: bytes) -> None:
+        """Append sample bytes (the caller keeps them whole samples overall)."""
+        self._buf += data
+        while len(self._buf) >= self.step:
+            self._zip.add(bytes(self._buf[: self.step]))
+            del self._buf[: self.step]
+
+    @property
+    def bytes(self) -> int:
+        """Sample bytes taken so far."""
+        return self._zip.bytes + len(self._buf)
+
+    def close(self) -> None:
+        """Write the rest and put the file in place."""
+        if self._buf:
+            self._zip.add(bytes(self._buf))
+            self._buf.clear()
+        self._zip.close()
+        self._stack.close()
+
+    def discard(self) -> None:
+        """Leave no file (the temporary one is removed)."""
+        self._stack.__exit__(RuntimeError, RuntimeError("discarded"), None)
 
 
 def write_sr_edges(

@@ -18,6 +18,7 @@ COMMANDS = (
     "wavecheck.cli.config",
     "wavecheck.cli.latency",
     "wavecheck.cli.follow",
+    "wavecheck.cli.watch",
 )
 
 

@@ -13,9 +13,12 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 from wavecheck.axes import AxisMap
+from wavecheck.capture.model import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
 from wavecheck.cli._capture_args import (
     add_capture_arguments,
@@ -48,12 +51,23 @@ from wavecheck.engine import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
+from wavecheck.report.machine import MachineReport
 from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 from wavecheck.stream.blocks import BlockSource, open_stream
 from wavecheck.stream.engine import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
 
-__all__ = ["RENDERERS", "build_report", "register", "run", "write_outputs"]
+__all__ = [
+    "RENDERERS",
+    "CheckSetup",
+    "build_report",
+    "check_setup",
+    "finish_report",
+    "kept_violations",
+    "register",
+    "run",
+    "write_outputs",
+]
 
 #: ``--format`` name → renderer(report, args) → text.
 RENDERERS: dict[str, Callable[[Checked, argparse.Namespace], str]] = {
@@ -144,14 +158,22 @@ def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
     return source if any(n in named for n in leaf) else None
 
 
-def build_report(args: argparse.Namespace, path: str) -> Checked:
-    """Read ``path`` once and check every axis of ``args`` against its drive (no output)."""
-    if args.max_violations is not None and args.max_violations < 0:
-        raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    source = _stream_source(args, path)
-    capture = (
-        source.skeleton if source is not None else capture_from_args(args, path, resolution=False)
-    )
+@dataclass
+class CheckSetup:
+    """What ``check``'s options say about a capture: the axes, their drives and the engine's
+    keyword arguments (:func:`wavecheck.engine.check_machine`), and notes on how the roles were
+    found."""
+
+    axes: list[AxisMap]
+    drives: dict[str | None, Drive]
+    options: dict[str, Any]
+    resolution: Fraction | None
+    found: list[str]
+
+
+def check_setup(args: argparse.Namespace, capture: Capture) -> CheckSetup:
+    """Resolve ``args``' axes, drives (each loaded once, tuned by ``--limit``/``--margin``) and
+    options against ``capture`` (its channels; the edges are not needed)."""
     runs, found = axis_runs(args, capture)
     loaded: dict[str, Drive] = {}
     for axis in runs:
@@ -159,8 +181,6 @@ def build_report(args: argparse.Namespace, path: str) -> Checked:
             raise UsageError(f"--drive: axis {axis.name} has no drive")
         if axis.drive not in loaded:
             loaded[axis.drive] = tune_drive(load_drive(axis.drive), args.limit, args.margin)
-    axes = [AxisMap(a.name, a.roles) for a in runs]
-    drives = {a.name: loaded[a.drive] for a in runs if a.drive is not None}
     options: dict[str, Any] = {
         "step_types": {a.name: a.step_type for a in runs if a.step_type is not None},
         "forward_levels": {a.name: a.forward_level for a in runs},
@@ -171,28 +191,57 @@ def build_report(args: argparse.Namespace, path: str) -> Checked:
         "pulse_level": pulse_level(args),
         "latency_ns": latency_ns(args),
     }
-    resolution = resolution_from_args(args)  # exact, a fraction of a tick included
+    return CheckSetup(
+        [AxisMap(a.name, a.roles) for a in runs],
+        {a.name: loaded[a.drive] for a in runs if a.drive is not None},
+        options,
+        resolution_from_args(args),  # exact, a fraction of a tick included
+        found,
+    )
+
+
+def finish_report(args: argparse.Namespace, machine: MachineReport, found: list[str]) -> Checked:
+    """Add ``--firmware`` findings and the role notes; a single unnamed axis as its Report."""
+    for report in machine.axes:
+        if getattr(args, "firmware", None):  # the capture against its own firmware settings
+            report.firmware = check_firmware(args, report)
+        report.notes[:0] = found
+    if len(machine.axes) == 1 and machine.axes[0].axis is None:
+        return machine.axes[0]
+    return machine
+
+
+def build_report(args: argparse.Namespace, path: str) -> Checked:
+    """Read ``path`` once and check every axis of ``args`` against its drive (no output)."""
+    if args.max_violations is not None and args.max_violations < 0:
+        raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
+    source = _stream_source(args, path)
+    capture = (
+        source.skeleton if source is not None else capture_from_args(args, path, resolution=False)
+    )
+    setup = check_setup(args, capture)
     machine = None
     if source is not None:
-        keep = max(DEFAULT_VIOLATION_CAP, DEFAULT_TEXT_VIOLATIONS, args.max_violations or 0)
         try:
             machine = check_stream(
-                source, axes, drives, resolution, keep_violations=keep,
-                block_edges=args.block_edges or DEFAULT_BLOCK_EDGES, **options,
+                source, setup.axes, setup.drives, setup.resolution,
+                keep_violations=kept_violations(args),
+                block_edges=args.block_edges or DEFAULT_BLOCK_EDGES, **setup.options,
             )  # fmt: skip
         except NotStreamable:
             machine = None
     if machine is None:
         if source is not None:
             capture = capture_from_args(args, path, resolution=False)
-        machine = check_machine(capture, axes, drives, resolution, **options)
-    for report in machine.axes:
-        if args.firmware:  # the capture against its own firmware configuration
-            report.firmware = check_firmware(args, report)
-        report.notes[:0] = found
-    if len(machine.axes) == 1 and machine.axes[0].axis is None:
-        return machine.axes[0]
-    return machine
+        machine = check_machine(
+            capture, setup.axes, setup.drives, setup.resolution, **setup.options
+        )
+    return finish_report(args, machine, setup.found)
+
+
+def kept_violations(args: argparse.Namespace) -> int:
+    """Violations a streamed check keeps per rule: enough for every output's list."""
+    return max(DEFAULT_VIOLATION_CAP, DEFAULT_TEXT_VIOLATIONS, args.max_violations or 0)
 
 
 def write_outputs(args: argparse.Namespace, report: Checked) -> None:

@@ -402,6 +402,13 @@ class MachineStream:
         for a in self.axes:
             a.feed(block, self.block_edges)
 
+    def flush(self, end: int) -> None:
+        """Check now what has gathered up to ``end`` (the last block's end), however few edges:
+        a live check's figures stay current. The results do not depend on where windows end."""
+        for a in self.axes:
+            if a.pending:
+                a._window(end)
+
     def finish(self, capture: Capture) -> MachineReport:
         """The report of every axis (``capture``: the finished skeleton)."""
         reports = [a.finish(capture) for a in self.axes]

@@ -32,10 +32,12 @@ from wavecheck.drives.model import Figure
 from wavecheck.timebase import Timebase
 from wavecheck.verdict import Verdict
 
-__all__ = ["UNKNOWN_KEPT", "RuleSummary", "StepSummary"]
+__all__ = ["FRESH_KEPT", "UNKNOWN_KEPT", "RuleSummary", "StepSummary"]
 
 #: Unknown places and ambiguous steps listed (the first ones; the counts are exact).
 UNKNOWN_KEPT = 100
+#: Violations of one window handed to :attr:`RuleSummary.fresh`.
+FRESH_KEPT = 64
 
 _Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the whole path's order
 
@@ -71,6 +73,9 @@ class RuleSummary:
     _hist: Histogram = field(default_factory=lambda: Histogram(()))
     covered: set[int] = field(default_factory=set)
     """Start ticks of the unknown stretches an interval left out has touched (so far)."""
+    fresh: list[tuple[int, int]] | None = None
+    """When a list: (start, end) ticks of violations found since the caller last emptied it, in
+    time order, at most :data:`FRESH_KEPT` per window (a live watch saves snippets around them)."""
 
     # -- merging -----------------------------------------------------------------------------
     def _key(self, start: EdgeArray, end: EdgeArray) -> tuple[EdgeArray, EdgeArray]:
@@ -85,6 +90,9 @@ class RuleSummary:
         self._add_unknown(left_out)
         self.left_out += len(left_out)
         iv = part.intervals
+        if self.fresh is not None and part.violations:
+            f = np.flatnonzero(part.outcome == FAIL)[:FRESH_KEPT]
+            self.fresh.extend(zip(iv.start[f].tolist(), iv.end[f].tolist(), strict=True))
         if self.limit_ns is None:  # state_sequence: errors in time order, no length
             if len(self._worst) < self.keep:
                 for i in range(min(len(iv), self.keep - len(self._worst))):
@@ -95,7 +103,8 @@ class RuleSummary:
             return
         w = iv.measured
         a, b = self._key(iv.start, iv.end)
-        i = int(np.lexsort((b, a, w))[0])
+        least = np.flatnonzero(w == w.min())  # the shortest, ties broken as the whole path
+        i = int(least[np.lexsort((b[least], a[least]))[0]])
         best = (int(w[i]), int(a[i]), int(b[i]))
         if self._best is None or best < self._best:
             self._best = best
@@ -111,6 +120,10 @@ class RuleSummary:
                 self._above = above if self._above is None else min(self._above, above)
             self._exact += exact
         f = np.flatnonzero(part.outcome == FAIL)
+        if len(f) and len(self._worst) >= self.keep:  # only those that beat the last one kept
+            (kw, ka, kb), _, _, _ = self._worst[-1]
+            fw, fa, fb = w[f], a[f], b[f]
+            f = f[(fw < kw) | ((fw == kw) & ((fa < ka) | ((fa == ka) & (fb < kb))))]
         if len(f):
             fw, fa, fb = w[f], a[f], b[f]
             order = np.lexsort((fb, fa, fw))[: self.keep]

@@ -1,0 +1,261 @@
+"""``wavecheck watch --driver DRIVER --drive ID --map …``: check a running machine live.
+
+sigrok-cli is started on the logic analyzer (``wavecheck.live.sigrok``), its raw samples are
+checked as they arrive (``wavecheck.live.watch``), a status line shows the figures so far, and
+the end (``--time``, Ctrl-C, ``--stop-on-fail``) prints the same report as ``check`` with the same
+exit codes. A failed acquisition (no device, sigrok-cli dying or stopping early) still prints the
+report of what arrived, then a one-line error, exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from wavecheck.capture.binary import SampleBlocks
+from wavecheck.capture.srzip import SrRecorder, sr_metadata
+from wavecheck.cli._axis_args import add_axis_arguments
+from wavecheck.cli.check import (
+    RENDERERS,
+    check_setup,
+    finish_report,
+    kept_violations,
+    write_outputs,
+)
+from wavecheck.cli.config import add_tuning_arguments
+from wavecheck.engine import check_machine
+from wavecheck.errors import DeviceError, UsageError
+from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
+from wavecheck.live.snippets import SampleRing, Snippets
+from wavecheck.live.watch import Watch
+from wavecheck.output import output_file
+from wavecheck.stream.engine import MachineStream
+from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
+
+__all__ = ["register", "run"]
+
+#: Snippets written at most, unless --max-snippets says otherwise.
+DEFAULT_MAX_SNIPPETS = 100
+#: Edges a live check gathers at most before checking them (it also checks every 0.25 s).
+LIVE_BLOCK_EDGES = 1 << 16
+
+
+def register(sub: Any) -> None:
+    """Add the ``watch`` subcommand."""
+    p = sub.add_parser(
+        "watch",
+        help="check a running machine live, from a logic analyzer through sigrok-cli",
+        description="Start sigrok-cli on a logic analyzer and check every STEP/DIR edge as the "
+        "samples arrive. Ctrl-C or --time ends it with the full report. Exit 0 pass, 1 a rule "
+        "failed, 3 only indeterminate, 2 unusable input or a failed acquisition.",
+    )
+    dev = p.add_argument_group("analyzer")
+    dev.add_argument(
+        "--driver",
+        required=True,
+        metavar="DRIVER[:conn=…]",
+        help="sigrok driver and its options, as sigrok-cli -d takes them (fx2lafw, "
+        "demo:analog_channels=0, fx2lafw:conn=1.5)",
+    )
+    dev.add_argument(
+        "--samplerate",
+        metavar="RATE",
+        help="sample rate with its unit (24MHz); default: the device's current rate",
+    )
+    dev.add_argument(
+        "--channels",
+        metavar="NAMES",
+        help="logic channels to acquire, comma-separated (default: every logic channel); "
+        "bit 0 of the data is the first",
+    )
+    dev.add_argument(
+        "--config",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a device option passed to sigrok-cli --config (repeatable)",
+    )
+    dev.add_argument(
+        "--channel-group",
+        metavar="GROUP",
+        help="sigrok-cli -g: every --config applies to this channel group (then the sample rate "
+        "cannot be set in the same run; sigrok-cli 0.7.2)",
+    )
+    dev.add_argument("--sigrok-cli", metavar="PATH", help="the sigrok-cli program to run")
+    p.add_argument(
+        "--drive",
+        action="append",
+        required=True,
+        metavar="ID|FILE|AXIS=ID",
+        help="drive id or TOML file; AXIS=ID gives one axis its own drive (repeatable)",
+    )
+    add_axis_arguments(p)
+    add_tuning_arguments(p)
+    end = p.add_argument_group("when to stop")
+    end.add_argument("--time", metavar="TIME", help="watch this long (10m, 30s), exactly")
+    end.add_argument(
+        "--stop-on-fail", action="store_true", help="stop at the first violation found"
+    )
+    keep = p.add_argument_group("what to keep")
+    keep.add_argument(
+        "--snippets",
+        metavar="DIR",
+        help="write a short .sr around each violation into DIR (PulseView opens them)",
+    )
+    keep.add_argument(
+        "--snippet-window",
+        default="5ms",
+        metavar="TIME",
+        help="samples kept before and after each violation in a snippet (default 5ms)",
+    )
+    keep.add_argument(
+        "--max-snippets",
+        type=int,
+        default=DEFAULT_MAX_SNIPPETS,
+        metavar="N",
+        help=f"snippet files written at most (default {DEFAULT_MAX_SNIPPETS}; the rest counted)",
+    )
+    keep.add_argument(
+        "--save",
+        type=output_file,
+        metavar="FILE.sr",
+        help="keep the whole stream as a .sr file, written as it arrives",
+    )
+    p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
+    p.add_argument(
+        "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
+    )
+    p.add_argument(
+        "--max-violations", type=int, default=None, metavar="N", help="violations listed"
+    )
+    p.add_argument(
+        "--status",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help="the live status line: on a terminal (auto), always (a line each update), never",
+    )
+    p.set_defaults(func=run)
+
+
+def _time_samples(text: str | None, rate: Fraction, option: str) -> int | None:
+    if text is None:
+        return None
+    seconds = parse_option(text, option, "time")
+    if seconds <= 0:
+        raise UsageError(f"{option} {text}: must be positive")
+    n = seconds * rate
+    if n.denominator != 1:
+        raise UsageError(
+            f"{option} {text}: not a whole number of samples at {format_frequency(rate)} "
+            f"({float(n):.3f})"
+        )
+    return int(n)
+
+
+def _status(mode: str) -> Any:
+    if mode == "never" or (mode == "auto" and not sys.stderr.isatty()):
+        return None
+    if mode == "always" and not sys.stderr.isatty():
+        return lambda line: print(line, file=sys.stderr, flush=True)
+
+    def redraw(line: str) -> None:
+        sys.stderr.write("\r\x1b[2K" + line)
+        sys.stderr.flush()
+
+    return redraw
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``wavecheck watch``; returns the exit code."""
+    if args.max_violations is not None and args.max_violations < 0:
+        raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
+    if args.max_snippets < 0:
+        raise UsageError(f"--max-snippets must be 0 or more, got {args.max_snippets}")
+    program = sigrok_cli(args.sigrok_cli)
+    rate = None
+    if args.samplerate is not None:
+        rate = parse_option(args.samplerate, "--samplerate", "frequency", SAMPLE_RATE)
+        if rate.denominator != 1 or rate <= 0:
+            raise UsageError(f"--samplerate {args.samplerate}: must be a whole number of Hz")
+    info = probe_device(program, args.driver, rate=rate is None)
+    rate = rate if rate is not None else info.samplerate
+    if rate is None:
+        raise DeviceError(f"{args.driver}: the device states no sample rate (give --samplerate)")
+    names = info.logic
+    if args.channels:
+        wanted = [c.strip() for c in args.channels.split(",") if c.strip()]
+        unknown = [c for c in wanted if c not in names]
+        if unknown:
+            raise UsageError(
+                f"--channels: {', '.join(unknown)} not among {args.driver}'s logic channels "
+                f"({' '.join(names)})"
+            )
+        names = wanted
+    limit = _time_samples(args.time, rate, "--time")
+    window = _time_samples(args.snippet_window, rate, "--snippet-window") or 0
+    label = f"sigrok-cli -d {args.driver} at {format_frequency(rate)} (live)"
+    scanner = SampleBlocks(label, len(names), rate, names)
+    setup = check_setup(args, scanner.skeleton)
+    template = check_machine(
+        scanner.skeleton, setup.axes, setup.drives, setup.resolution, **setup.options
+    )
+    machine = MachineStream(
+        template,
+        setup.drives,
+        pulse_level=setup.options["pulse_level"],
+        resolution=setup.resolution,
+        user_table=setup.options["user_table"],
+        block_edges=LIVE_BLOCK_EDGES,
+        keep_violations=kept_violations(args),
+    )
+    scanner.want({r.index for a in machine.axes for r in a.roles.values()})
+    meta = sr_metadata(names, samplerate=int(rate), unitsize=scanner.unitsize, total_analog=0)
+    snippets = None
+    if args.snippets:
+        ring = SampleRing(scanner.unitsize, 2 * window + int(rate) * 2)
+        snippets = Snippets(Path(args.snippets), ring, names, rate, window, args.max_snippets)
+    command = acquisition_command(
+        program,
+        args.driver,
+        names,
+        samplerate=None if args.channel_group else rate,
+        samples=limit,
+        configs=args.config,
+        group=args.channel_group,
+    )
+    recorder = SrRecorder(args.save, meta, scanner.unitsize) if args.save else None
+    status = _status(args.status)
+    watch = Watch(
+        Acquisition(command, continuous=limit is None),
+        scanner,
+        machine,
+        limit=limit,
+        stop_on_fail=args.stop_on_fail,
+        snippets=snippets,
+        recorder=recorder,
+        status=status,
+    )
+    try:
+        result = watch.run()
+    except BaseException:
+        if recorder is not None:
+            recorder.discard()
+        raise
+    if status is not None and sys.stderr.isatty():
+        sys.stderr.write("\n")
+    if recorder is not None:
+        recorder.close()
+    report = finish_report(args, result.report, setup.found)
+    write_outputs(args, report)
+    print(
+        f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended})"
+        + (f"; {len(result.snippets)} snippet(s) in {args.snippets}" if snippets else "")
+        + (f", {snippets.left_out} more not written" if snippets and snippets.left_out else ""),
+        file=sys.stderr,
+    )
+    if result.failure is not None:
+        raise DeviceError(f"{label}: {result.failure}; the report covers the samples before it")
+    return report.exit_code

@@ -1,0 +1,186 @@
+"""The live loop of ``wavecheck watch``: samples from sigrok-cli, checked as they arrive.
+
+Each piece read from the pipe goes, in this order, to the ``--save`` recorder, the snippet ring,
+the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the streamed engine
+(:class:`~wavecheck.stream.engine.MachineStream`). At most every :data:`FLUSH_SECONDS` the engine
+checks what has gathered (so the figures are current whatever the step rate), the violations it
+found are handed to the snippets, and the status line is redrawn.
+
+The end: ``--time`` (sigrok-cli's ``--samples``: exactly that many samples), Ctrl-C or SIGTERM
+(the acquisition is stopped and the samples already taken are checked), ``--stop-on-fail``, or
+the data ending by itself. sigrok-cli dying, reporting an error or giving fewer samples than asked
+is a failure of the acquisition (:class:`~wavecheck.errors.DeviceError` at the CLI, exit 2), and
+the report still covers every sample that arrived; nothing is bridged over a gap.
+"""
+
+from __future__ import annotations
+
+import signal
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from types import FrameType
+
+from wavecheck.capture.binary import SampleBlocks
+from wavecheck.capture.srzip import SrRecorder
+from wavecheck.live.sigrok import Acquisition
+from wavecheck.live.snippets import Snippets
+from wavecheck.report.machine import MachineReport
+from wavecheck.stream.engine import MachineStream
+from wavecheck.units import format_ns, format_time
+
+__all__ = ["FLUSH_SECONDS", "READ_BYTES", "Watch", "WatchResult", "status_line"]
+
+#: Wall-clock seconds between checks of what has gathered (and status redraws).
+FLUSH_SECONDS = 0.25
+#: Bytes read from the pipe at a time.
+READ_BYTES = 1 << 20
+
+
+@dataclass
+class WatchResult:
+    """How a watch ended.
+
+    Attributes:
+        report: every axis's report over the samples that arrived.
+        ended: why it ended (``"time"``, ``"interrupted"``, ``"failure"``, ``"end of data"``).
+        failure: what went wrong with the acquisition (None: nothing).
+        samples: samples checked.
+        wall_s: seconds from start to end.
+    """
+
+    report: MachineReport
+    ended: str
+    failure: str | None
+    samples: int
+    wall_s: float
+    snippets: list[str] = field(default_factory=list)
+
+
+def status_line(machine: MachineStream, samples: int, rate: Fraction, wall_s: float) -> str:
+    """One line: elapsed capture time, samples, and per axis its steps, violations so far and
+    the closest rule with its margin."""
+    parts = [f"{format_time(Fraction(samples) / rate)} captured", f"{samples:,} samples"]
+    for a in machine.axes:
+        fails = sum(s.fails for s in a.summaries)
+        margins = [(s.min_margin_ns, s.rule) for s in a.summaries if s.min_margin_ns is not None]
+        closest = ""
+        if margins:
+            m, rule = min(margins)
+            closest = f", closest {rule} {format_ns(m, signed=True)}"
+        name = f"{a.template.axis}: " if a.template.axis else ""
+        parts.append(f"{name}{a.steps.count} steps, {fails} violation(s){closest}")
+    return f"[{wall_s:6.1f} s] " + " · ".join(parts)
+
+
+class Watch:
+    """One live check (see the module docstring)."""
+
+    def __init__(
+        self,
+        acquisition: Acquisition,
+        scanner: SampleBlocks,
+        machine: MachineStream,
+        *,
+        limit: int | None = None,
+        stop_on_fail: bool = False,
+        snippets: Snippets | None = None,
+        recorder: SrRecorder | None = None,
+        status: Callable[[str], None] | None = None,
+        status_seconds: float = 0.5,
+    ) -> None:
+        self.acq = acquisition
+        self.scanner = scanner
+        self.machine = machine
+        self.limit = limit
+        self.stop_on_fail = stop_on_fail
+        self.snippets = snippets
+        self.recorder = recorder
+        self.status = status
+        self.status_seconds = status_seconds
+        self.why: str | None = None
+        if snippets is not None:
+            for a in machine.axes:
+                for s in a.summaries:
+                    s.fresh = []
+
+    def _signal(self, signum: int, frame: FrameType | None) -> None:
+        if self.why is None:
+            self.why = "interrupted"
+        self.acq.stop()
+
+    def _check_now(self) -> None:
+        end = self.scanner.nsamples
+        self.machine.flush(end)
+        failed = False
+        for a in self.machine.axes:
+            for s in a.summaries:
+                failed = failed or s.fails > 0
+                if self.snippets is not None and s.fresh:
+                    for start, stop in s.fresh:
+                        self.snippets.add(a.template.axis, s.rule, start, stop)
+                    s.fresh.clear()
+        if self.snippets is not None:
+            self.snippets.due(end)
+        if failed and self.stop_on_fail and self.why is None:
+            self.why = "stop on fail"
+            self.acq.stop()
+
+    def run(self) -> WatchResult:
+        """Watch until the end; the report and how it ended."""
+        old = {s: signal.signal(s, self._signal) for s in (signal.SIGINT, signal.SIGTERM)}
+        t_start = time.monotonic()
+        last_check = last_status = t_start
+        try:
+            while True:
+                data = self.acq.read(READ_BYTES, FLUSH_SECONDS)
+                if data == b"":
+                    break
+                if data:
+                    if self.recorder is not None:
+                        self.recorder.add(data)
+                    if self.snippets is not None:
+                        self.snippets.ring.add(data)
+                    self.machine.feed(self.scanner.scan(data))
+                now = time.monotonic()
+                if now - last_check >= FLUSH_SECONDS:
+                    self._check_now()
+                    last_check = now
+                if self.status is not None and now - last_status >= self.status_seconds:
+                    self.status(
+                        status_line(self.machine, self.scanner.nsamples, self.scanner.rate,
+                                    now - t_start)
+                    )  # fmt: skip
+                    last_status = now
+        finally:
+            for s, handler in old.items():
+                signal.signal(s, handler)
+            code = self.acq.close()
+        self._check_now()
+        failure = self.acq.failure(code)
+        n = self.scanner.nsamples
+        if failure is None and self.limit is not None and self.why is None and n < self.limit:
+            failure = f"sigrok-cli ended after {n:,} of the {self.limit:,} samples asked for"
+        if self.scanner.partial:
+            self.scanner.notes.append(
+                f"the stream ended inside a sample ({self.scanner.partial} byte(s)): dropped"
+            )
+        if self.snippets is not None:
+            self.snippets.due(n, final=True)
+        capture = self.scanner.capture()
+        if self.why == "interrupted":
+            capture.notes.append(
+                f"watch interrupted after {format_time(Fraction(n) / self.scanner.rate)}: "
+                "every sample that arrived was checked"
+            )
+        report = self.machine.finish(capture)
+        ended = "failure" if failure else (self.why or ("time" if self.limit else "end of data"))
+        return WatchResult(
+            report,
+            ended,
+            failure,
+            n,
+            time.monotonic() - t_start,
+            [str(p) for p in self.snippets.written] if self.snippets else [],
+        )
