@@ -285,6 +285,8 @@ class SrRecorder:
 
     def discard(self) -> None:
         """Leave no file (the temporary one is removed)."""
+        with contextlib.suppress(OSError, ValueError):
+            self._zip.close()  # ends the zip object; its file is removed below
         self._stack.__exit__(RuntimeError, RuntimeError("discarded"), None)
 
 

@@ -278,3 +278,52 @@ def test_readme_pipe_block(grbl_sr: Path, tmp_path: Path) -> None:
         ]
 
     assert table(piped.stdout) == table(direct.stdout) and table(piped.stdout)
+
+
+# -- SampleBlocks: samples arriving in pieces (wavecheck watch) ------------------------------------
+@settings(max_examples=60)
+@given(
+    numchannels=st.integers(1, 20),
+    nsamples=st.integers(1, 300),
+    cuts=st.lists(st.integers(0, 10**6), max_size=12),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_sample_blocks_give_the_edges_of_the_whole_data_at_any_split(
+    numchannels: int, nsamples: int, cuts: list[int], seed: int
+) -> None:
+    """Bytes cut anywhere (inside a sample too) give, block by block, the edges a plain numpy
+    count finds in the whole data; the unwanted channels are only counted."""
+    from wavecheck.capture.binary import SampleBlocks
+
+    unitsize = (numchannels + 7) // 8
+    rng = np.random.default_rng(seed)
+    raw = rng.integers(0, 256, nsamples * unitsize, dtype=np.uint8)
+    raw[rng.random(len(raw)) < 0.8] = 0
+    raw = np.bitwise_xor.accumulate(raw.reshape(-1, unitsize), axis=0).ravel().astype(np.uint8)
+    data = raw.tobytes()
+    scanner = SampleBlocks("x", numchannels, MHZ)
+    scanner.want(range(0, numchannels, 2))
+    got: dict[int, list[int]] = {}
+    at = sorted({c % (len(data) + 1) for c in cuts} | {0, len(data)})
+    ends = []
+    for a, b in zip(at, at[1:], strict=False):
+        block = scanner.scan(data[a:b])
+        ends.append(block.end)
+        for ch, e in block.edges.items():
+            got.setdefault(ch, []).extend(e.tolist())
+    assert ends == sorted(ends) and scanner.nsamples == nsamples and scanner.partial == 0
+    cap = scanner.capture()
+    for bit in range(numchannels):
+        want = _edges(raw, unitsize, bit)
+        assert got.get(bit, []) == (want if bit % 2 == 0 else [])
+        assert cap.channels[bit].edge_count == len(want)
+        assert cap.channels[bit].initial == (raw[bit // 8] >> (bit % 8)) & 1
+
+
+def test_sample_blocks_keep_a_partial_sample_until_it_completes() -> None:
+    from wavecheck.capture.binary import SampleBlocks
+
+    scanner = SampleBlocks("x", 12, MHZ)  # two bytes per sample
+    assert scanner.scan(b"\x00\x00\x01").end == 1 and scanner.partial == 1
+    block = scanner.scan(b"\x00")
+    assert block.end == 2 and scanner.partial == 0 and block.edges[0].tolist() == [1]

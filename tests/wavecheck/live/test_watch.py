@@ -1,0 +1,167 @@
+"""``wavecheck watch`` against a real sigrok-cli driver: the ``demo`` device (issue 14, "Live from
+a logic analyzer").
+
+Facts used (sigrok-cli 0.7.2, ``../shared/reference/sigrok.md`` §(a)): the demo device runs at
+its sample rate in real time, 200 kHz unless told; with ``-g Logic --config pattern=incremental``
+its 8 logic channels carry a counter, so D_k toggles every 2**k samples: D3 is a step train of
+8-sample (40 us) pulses every 16 samples, rising at samples 8, 24, …, and D6 (toggling every 64
+samples, at D3's falling edges) a DIR line 8 samples before and after the nearest rising edge.
+A capture of the same pattern to a file (``sigrok-cli --samples N -o X.sr``) is the reference.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.skipif(
+    shutil.which("sigrok-cli") is None, reason="needs Debian's sigrok-cli (make system-deps)"
+)
+
+DEMO = ["--driver", "demo:analog_channels=0", "--channel-group", "Logic",
+        "--config", "pattern=incremental"]  # fmt: skip
+CHECK = ["--drive", "drv8825", "--map", "step=D3,dir=D6"]
+RATE = 200_000
+
+
+def _wavecheck(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "wavecheck", *args],
+        capture_output=True, text=True, cwd=cwd, timeout=120,
+    )  # fmt: skip
+
+
+def _start(*args: str, cwd: Path) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "wavecheck", "watch", *DEMO, *CHECK, "--status", "always", *args],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd,
+    )  # fmt: skip
+
+
+def _first_status(proc: subprocess.Popen[str]) -> str:
+    """Wait for a status line with steps in it (the watch is checking)."""
+    assert proc.stderr is not None
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if " steps" in line and not line.startswith("[   0.0"):
+            return line
+    raise AssertionError("no status line")
+
+
+def _rules(report: dict[str, object]) -> dict[str, object]:
+    return {k: v for k, v in report.items() if k != "capture"}
+
+
+def test_watch_reports_the_figures_of_a_file_capture_of_the_same_pattern(tmp_path: Path) -> None:
+    live = _wavecheck("watch", *DEMO, *CHECK, "--time", "1s", "--format", "json",
+                      "--save", "kept.sr", cwd=tmp_path)  # fmt: skip
+    assert live.returncode == 0, live.stderr
+    got = json.loads(live.stdout)
+    subprocess.run(
+        ["sigrok-cli", "-d", "demo:analog_channels=0", "-g", "Logic", "--config",
+         "pattern=incremental", "--samples", str(RATE), "-o", "file.sr"],
+        check=True, cwd=tmp_path, capture_output=True,
+    )  # fmt: skip
+    ref = json.loads(
+        _wavecheck("check", "file.sr", *CHECK, "--format", "json", cwd=tmp_path).stdout
+    )
+    assert _rules(got) == _rules(ref)
+    assert got["capture"]["duration_s"] == 1 and got["capture"]["samplerate_hz"] == RATE
+    # the known pulse train: (200000 + 7) // 16 rising edges of D3, each 40 us high and low
+    assert got["steps"]["count"] == (RATE + 7) // 16
+    by = {r["id"]: r for r in got["rules"]}
+    assert by["step_high"]["min_measured_ns"] == by["step_low"]["min_measured_ns"] == 40_000
+    assert by["dir_setup"]["min_measured_ns"] == by["dir_hold"]["min_measured_ns"] == 40_000
+    # --save kept the stream: the same bytes as sigrok-cli's own file of the pattern
+    kept = json.loads(
+        _wavecheck("check", "kept.sr", *CHECK, "--format", "json", cwd=tmp_path).stdout
+    )
+    assert _rules(kept) == _rules(got)
+    with zipfile.ZipFile(tmp_path / "kept.sr") as a, zipfile.ZipFile(tmp_path / "file.sr") as b:
+
+        def logic(z: zipfile.ZipFile) -> bytes:
+            names = sorted((n for n in z.namelist() if n.startswith("logic-1-")),
+                           key=lambda n: int(n.rsplit("-", 1)[1]))  # fmt: skip
+            return b"".join(z.read(n) for n in names)
+
+        assert logic(a) == logic(b)
+
+
+def test_ctrl_c_ends_with_the_complete_report_of_what_arrived(tmp_path: Path) -> None:
+    proc = _start("--format", "json", cwd=tmp_path)
+    _first_status(proc)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    report = json.loads(out)
+    n = Fraction(str(report["capture"]["duration_s"])) * RATE
+    assert n.denominator == 1 and n > RATE // 10
+    assert report["steps"]["count"] == (int(n) + 7) // 16  # every sample that came was checked
+    assert "(interrupted)" in err
+
+
+def test_sigrok_cli_killed_gives_exit_2_with_what_was_checked(tmp_path: Path) -> None:
+    proc = _start(cwd=tmp_path)
+    _first_status(proc)
+    children = subprocess.run(
+        ["pgrep", "-P", str(proc.pid), "sigrok-cli"], capture_output=True, text=True
+    ).stdout.split()
+    assert len(children) == 1
+    os.kill(int(children[0]), signal.SIGKILL)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 2
+    assert out.startswith("verdict: PASS") and "steps:" in out  # the report of what arrived
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("wavecheck: error:") and "killed by SIGKILL" in last
+    assert "Traceback" not in err
+
+
+def test_stop_on_fail_and_snippets_around_each_violation(tmp_path: Path) -> None:
+    """--limit dir_setup=60us makes every DIR change fail by 20 us (it has 40 us)."""
+    run = _wavecheck("watch", *DEMO, *CHECK, "--limit", "dir_setup=60us", "--stop-on-fail",
+                     "--snippets", "snips", "--snippet-window", "200us", "--max-snippets", "3",
+                     "--format", "json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 1, run.stderr
+    assert "(stop on fail)" in run.stderr
+    report = json.loads(run.stdout)
+    assert {r["id"]: r["min_margin_ns"] for r in report["rules"]}["dir_setup"] == -20_000
+    snippets = sorted((tmp_path / "snips").iterdir())
+    assert len(snippets) == 3
+    for snip in snippets:
+        meta = zipfile.ZipFile(snip).read("metadata").decode()
+        first = int(meta.split("first_sample=")[1].split()[0])
+        check = json.loads(_wavecheck("check", str(snip), *CHECK, "--limit", "dir_setup=60us",
+                                      "--format", "json", cwd=tmp_path).stdout)  # fmt: skip
+        v = check["violations"][0]
+        assert v["rule"] == "dir_setup" and v["margin_ns"] == -20_000
+        # the name is the violation's time in the watched stream
+        at = Fraction(str(v["time_s"])) + Fraction(first, RATE)
+        assert snip.name == f"{float(at):013.6f}s-dir_setup.sr"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--driver", "fx2lafw"], "found no device for driver 'fx2lafw'"),
+        ([*DEMO, "--time", "7us"], "--time 7us: not a whole number of samples"),
+        ([*DEMO, "--channels", "D1,Q9"], "--channels: Q9 not among"),
+        (["--driver", "demo", "--samplerate", "24"], "--samplerate"),
+    ],
+)
+def test_unusable_watch_is_one_line_and_exit_2(
+    tmp_path: Path, args: list[str], message: str
+) -> None:
+    run = _wavecheck("watch", *args, *CHECK, cwd=tmp_path)
+    assert run.returncode == 2
+    assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1
