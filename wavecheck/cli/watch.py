@@ -251,7 +251,9 @@ def run(args: argparse.Namespace) -> int:
     report = finish_report(args, result.report, setup.found)
     write_outputs(args, report)
     print(
-        f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended})"
+        f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended}); "
+        f"wavecheck used {result.cpu_s:.2f} s of processor time "
+        f"({100 * result.cpu_s / max(result.wall_s, 1e-9):.0f} % of one core)"
         + (f"; {len(result.snippets)} snippet(s) in {args.snippets}" if snippets else "")
         + (f", {snippets.left_out} more not written" if snippets and snippets.left_out else ""),
         file=sys.stderr,

@@ -48,6 +48,7 @@ class WatchResult:
         failure: what went wrong with the acquisition (None: nothing).
         samples: samples checked.
         wall_s: seconds from start to end.
+        cpu_s: processor seconds wavecheck spent (sigrok-cli's not counted).
     """
 
     report: MachineReport
@@ -55,6 +56,7 @@ class WatchResult:
     failure: str | None
     samples: int
     wall_s: float
+    cpu_s: float
     snippets: list[str] = field(default_factory=list)
 
 
@@ -131,6 +133,7 @@ class Watch:
         """Watch until the end; the report and how it ended."""
         old = {s: signal.signal(s, self._signal) for s in (signal.SIGINT, signal.SIGTERM)}
         t_start = time.monotonic()
+        cpu_start = time.process_time()
         last_check = last_status = t_start
         try:
             while True:
@@ -182,5 +185,6 @@ class Watch:
             failure,
             n,
             time.monotonic() - t_start,
+            time.process_time() - cpu_start,
             [str(p) for p in self.snippets.written] if self.snippets else [],
         )
