@@ -165,3 +165,18 @@ def test_unusable_watch_is_one_line_and_exit_2(
     run = _wavecheck("watch", *args, *CHECK, cwd=tmp_path)
     assert run.returncode == 2
     assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1
+
+
+def test_the_readme_watch_block_runs_as_written(tmp_path: Path) -> None:
+    import re
+    import shlex
+
+    text = (Path(__file__).resolve().parents[3] / "README.md").read_text()
+    m = re.search(r"<!-- readme-test: watch -->\n```sh\n(.*?)```", text, re.S)
+    assert m is not None
+    argv = shlex.split(m.group(1).replace("\\\n", " "))
+    assert argv[:2] == ["wavecheck", "watch"]
+    run = _wavecheck(*argv[1:], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "steps:   25000" in run.stdout  # 2 s at 200 kHz: (400000 + 7) // 16 rising edges of D3
+    assert (tmp_path / "demo.sr").is_file() and (tmp_path / "snippets").is_dir()
