@@ -363,6 +363,8 @@ class StepMonitor:
         for task in self._tasks:
             task.cancel()
         end = cocotb.simtime.get_sim_time("step")
+        for w in self._watched:  # a change of this time step a watcher has not yet seen
+            self._record(w.index, w.handle, end)
         fail, self.fail_on_violation = self.fail_on_violation, False
         try:
             self._check(NEVER)
