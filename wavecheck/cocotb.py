@@ -63,7 +63,6 @@ __all__ = ["DEFAULT_BATCH", "StepMonitor", "WavecheckViolation"]
 DEFAULT_BATCH = 8192
 #: A handle's value as text → the edge builder's code (0, 1; 2 for unknown).
 _CODES = {"0": 0, "1": 1, "L": 0, "H": 1, "l": 0, "h": 1}
-_ROLE_ARGS = {"step": "step", "dir": "dir", "enable": "enable", "up": "up", "down": "down"}
 
 Handle = Any  # a cocotb simulation object of one bit (LogicObject, a 1-bit LogicArrayObject)
 
