@@ -52,13 +52,16 @@ Works with pytest-xdist (each worker checks the captures of the items it runs, o
 
 The ``wavecheck_check`` fixture is :func:`wavecheck.check` with relative capture paths taken
 from pytest's rootdir, plus ``.expect(report, "pass")``, which fails with the same readable text.
+``wavecheck_dump("sim_build")`` is the newest simulator dump a simulation of the same test run
+wrote there (a cocotb test run with ``waves=True``); a ``path`` may be a glob for the same
+purpose (``path = "sim_build/*.fst"``: the newest match, when the item runs).
 """
 
 from __future__ import annotations
 
 import os
 import tomllib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -82,6 +85,7 @@ __all__ = [
     "pytest_addoption",
     "pytest_collect_file",
     "wavecheck_check",
+    "wavecheck_dump",
 ]
 
 VERDICTS = ("pass", "fail", "indeterminate")
@@ -359,9 +363,28 @@ def load_specs(path: Path) -> list[CaptureSpec]:
 _REPORTS: dict[tuple[str, str], Any] = {}
 
 
+def newest_match(path: Path) -> Path:
+    """``path`` itself, or for a glob (``sim_build/*.fst``) the newest file it matches.
+
+    Raises:
+        WavecheckFailure: a glob matches nothing (the simulation that writes it has not run).
+    """
+    if not any(c in str(path) for c in "*?["):
+        return path
+    hits = [
+        p for p in Path(path.anchor or ".").glob(str(path.relative_to(path.anchor))) if p.is_file()
+    ]
+    if not hits:
+        raise WavecheckFailure(f"no file matches {path} (has the simulation that writes it run?)")
+    return max(hits, key=lambda p: p.stat().st_mtime_ns)
+
+
 def _run(spec: CaptureSpec) -> Checked:
+    from dataclasses import replace
+
     from wavecheck.api import Axis, check, check_axes
 
+    spec = replace(spec, path=newest_match(spec.path))
     if spec.axes:  # every axis from one reading of the capture
         return check_axes(
             spec.path,
@@ -691,6 +714,36 @@ class WavecheckChecker:
                 f"expected {verdict.upper()}, got {_describe(report, self.max_violations)}",
                 pytrace=False,
             )
+
+
+def _dump(root: Path) -> Callable[[str | os.PathLike[str]], Path]:
+    def find(where: str | os.PathLike[str] = "sim_build") -> Path:
+        """The newest simulator dump (``.fst``, ``.vcd``, ``.ghw``) in the folder ``where``, or
+        the newest match of a glob (``"sim_build/*.fst"``), relative to pytest's rootdir; fails
+        the test readably when there is none."""
+        __tracebackhide__ = True
+        path = Path(where) if Path(where).is_absolute() else root / where
+        if path.is_dir():
+            found = [p for p in path.iterdir() if p.suffix in (".fst", ".vcd", ".ghw")]
+            if not found:
+                pytest.fail(f"no simulator dump (.fst, .vcd, .ghw) in {path}: run the "
+                            "simulation with waves=True (cocotb's runner) first", pytrace=False)  # fmt: skip
+            return max(found, key=lambda p: p.stat().st_mtime_ns)
+        try:
+            return newest_match(path)
+        except WavecheckFailure as err:
+            pytest.fail(str(err), pytrace=False)
+
+    return find
+
+
+@pytest.fixture
+def wavecheck_dump(request: pytest.FixtureRequest) -> Callable[[str | os.PathLike[str]], Path]:
+    """``wavecheck_dump("sim_build")`` → the dump a simulation of this test run wrote there (the
+    newest ``.fst``/``.vcd``/``.ghw``; cocotb's runner with ``waves=True`` writes
+    ``<build_dir>/<toplevel>.fst``), to check with ``wavecheck_check``. A ``wavecheck.toml``
+    ``path`` may be such a glob too (``"sim_build/*.fst"``): the newest match when the item runs."""
+    return _dump(Path(request.config.rootpath))
 
 
 @pytest.fixture
