@@ -347,9 +347,18 @@ def gen_edges(path: Path, *, nedges: int = 10_000_000, seed: int = 3) -> dict[st
 FILES = {
     "sr1g": ("stepdir_1G.sr", lambda p: gen_sr(p)),
     "sr100m": ("stepdir_100M.sr", lambda p: gen_sr(p, nsamples=100_000_000, seed=8)),
+    # issue 14's bounded-memory rows: the same motion as sr1g, 8 and 16 G samples (400 / 800 s
+    # at 20 MHz; 13 M / 26 M edges; 23 / 47 MB; ~1 / 2 min to make), and 2 G for --quick
+    "sr2g": ("stepdir_2G.sr", lambda p: gen_sr(p, nsamples=2_000_000_000)),
+    "sr8g": ("stepdir_8G.sr", lambda p: gen_sr(p, nsamples=8_000_000_000)),
+    "sr16g": ("stepdir_16G.sr", lambda p: gen_sr(p, nsamples=16_000_000_000)),
     "vcd_sim": ("steps_10M_sim.vcd", lambda p: gen_vcd(p, layout="sim")),
     "vcd_sigrok": ("steps_10M_sigrok.vcd", lambda p: gen_vcd(p, layout="sigrok")),
     "vcd_sim_1m": ("steps_1M_sim.vcd", lambda p: gen_vcd(p, nchanges=1_000_000, layout="sim")),
+    # issue 14: 50 M and 100 M changes (0.83 / 1.67 GB; ~15 / 30 s), and 2 M for --quick
+    "vcd_sim_2m": ("steps_2M_sim.vcd", lambda p: gen_vcd(p, nchanges=2_000_000)),
+    "vcd_sim_50m": ("steps_50M_sim.vcd", lambda p: gen_vcd(p, nchanges=50_000_000)),
+    "vcd_sim_100m": ("steps_100M_sim.vcd", lambda p: gen_vcd(p, nchanges=100_000_000)),
     "edges": ("edges_10M.npz", lambda p: gen_edges(p)),
     "edges_1m": ("edges_1M.npz", lambda p: gen_edges(p, nedges=1_000_000)),
 }

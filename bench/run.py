@@ -7,7 +7,7 @@ as JSON to ``bench/results/`` (git-ignored). Inputs are generated deterministica
 ``bench/data/`` by ``bench/gen.py`` when missing. The 2 CPUs are shared: a figure taken at a
 load above the CPU count is marked ``loaded`` in the table; re-run it (``--only``).
 
-Sections (goals of issues 18 and 7 in brackets):
+Sections (goals of issues 18, 7 and 14 in brackets):
 
 1. ``.sr`` end to end: ``wavecheck check`` (read, decode, every rule, text report) against
    ``sigrok-cli -i FILE -P stepper_motor:step=..:dir=..`` (decode only) on the real grbl capture
@@ -25,10 +25,19 @@ Sections (goals of issues 18 and 7 in brackets):
    writing the same trace.
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
    of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
+6. Bounded memory (issue 14): peak RSS of ``wavecheck check`` streamed (the default) on the
+   generated 8 G-sample ``.sr`` (13 M edges) [≤ 100 MB] and a 50 M-change VCD [≤ 150 MB], then
+   on captures twice as long (16 G samples, 100 M changes) [peak ≤ 1.1× the base's]; peer: the
+   same command with ``--no-stream`` (the whole-capture path), whose report must be identical;
+   the step count must be the generator's. ``--quick``: 1 G/2 G samples, 1 M/2 M changes.
+7. Standard input (issue 14): ``bench/stdin_pipe.py`` (grbl's raw samples through a pipe into
+   ``wavecheck check -``) against the arrival rate of sigrok's demo driver, 24 MHz × 8 channels
+   = 24 MB/s [CPU throughput ≥ 2×: under half a core]; peer: ``check grbl.sr``.
 
 Every command runs in its own process under ``/usr/bin/time -v`` (wall, CPU, max RSS); the
 competitors are interleaved run by run so that load from other users of the machine hits both
-sides alike. Figures are medians of ``--runs`` runs; min–max spreads are kept in the JSON.
+sides alike. Figures are medians of ``--runs`` runs (peak RSS: the largest); min–max spreads
+are kept in the JSON.
 """
 
 from __future__ import annotations
@@ -425,6 +434,141 @@ def bench_startup(runs: int) -> dict[str, Any]:
             "target": all(best[k] <= 0.25 for k in list(cmds)[:3])}  # fmt: skip
 
 
+#: Issue 14's bounded-memory cases: (label, base key, doubled key, map, peak RSS goal MB).
+MEMORY_CASES = {
+    "sr": ("8 G-sample .sr", "sr8g", "sr16g", "step=X_STEP,dir=X_DIR", 100),
+    "vcd": ("50 M-change VCD", "vcd_sim_50m", "vcd_sim_100m",
+            "step=axis_x.step,dir=axis_x.dir", 150),
+}  # fmt: skip
+MEMORY_QUICK = {"sr": ("sr1g", "sr2g"), "vcd": ("vcd_sim_1m", "vcd_sim_2m")}
+#: Doubling the capture may move the streamed peak by at most this factor.
+MEMORY_RATIO = 1.1
+
+
+def _rss_run(cmd: list[str], out: str) -> dict[str, Any]:
+    """One run of ``cmd`` under ``/usr/bin/time -v`` (exit 0 or 1 expected), stdout to ``out``."""
+    r = timed(cmd, out)
+    if r["rc"] not in (0, 1):
+        raise SystemExit(f"{sh(cmd)}: exit {r['rc']}: {r['stderr'][-300:]}")
+    return r
+
+
+def _truth_steps(path: Path) -> int:
+    """The steps of the checked axis (X) that ``bench/gen.py`` put into ``path``."""
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    if "axes" in truth:  # .sr
+        return int(truth["axes"]["X"]["steps"])
+    return int(truth["edges_per_signal"][0]) // 2  # VCD: x step rises and falls
+
+
+def _same(row: dict[str, Any]) -> str:
+    """Whether the streamed report is the whole path's and counts the steps generated."""
+    same = "report = --no-stream's" if row["same_report"] else "REPORT DIFFERS from --no-stream's"
+    steps = row["steps"] == row["truth_steps"]
+    return same + ("" if steps else f"; STEPS {row['steps']} ≠ generated {row['truth_steps']}")
+
+
+def _right(row: dict[str, Any]) -> bool:
+    return bool(row["same_report"]) and row["steps"] == row["truth_steps"]
+
+
+def bench_memory(quick: bool, runs: int) -> dict[str, Any]:
+    """Peak RSS of ``wavecheck check`` streamed (the default) against ``--no-stream`` on a long
+    capture and on one twice as long (issue 14); the reports of both paths compared."""
+    floor_cmd = [WAVECHECK, "check", str(TINY_VCD), "--drive", "gecko-g202"]
+    floor = min(r["max_rss_mb"] for r in [timed(floor_cmd) for _ in range(2)])
+    print(f"  floor: {sh(floor_cmd)}: max RSS {floor:.0f} MB (interpreter, numpy, wavecheck)")
+    out: dict[str, Any] = {"floor_mb": floor, "floor_command": sh(floor_cmd), "cases": {}}
+    for kind, (label, base_key, double_key, mapping, goal) in MEMORY_CASES.items():
+        if quick:
+            base_key, double_key = MEMORY_QUICK[kind]
+        rows: dict[str, Any] = {}
+        for key in (base_key, double_key):
+            path = ensure(key)
+            cmd = [WAVECHECK, "check", str(path), "--drive", "gecko-g202", "--map", mapping]
+            old = [*cmd, "--no-stream"]
+            print(
+                f"\n- {path.name} ({path.stat().st_size / 1e6:.0f} MB)\n  $ {sh(cmd)}\n  $ {sh(old)}"
+            )
+            loads, new_runs, old_runs = [], [], []
+            with tempfile.TemporaryDirectory() as tmp:
+                for _ in range(runs):  # interleaved
+                    loads.append(load1())
+                    new_runs.append(_rss_run(cmd, f"{tmp}/new.txt"))
+                    old_runs.append(_rss_run(old, f"{tmp}/old.txt"))
+                text = Path(f"{tmp}/new.txt").read_text()
+                same = text == Path(f"{tmp}/old.txt").read_text()
+            m = re.search(r"^steps:\s+(\d+)", text, re.M)
+            row = {
+                "file": str(path),
+                "commands": {"streamed": sh(cmd), "no_stream": sh(old)},
+                "streamed": new_runs,
+                "no_stream": old_runs,
+                "rss_mb": max(r["max_rss_mb"] for r in new_runs),
+                "no_stream_rss_mb": max(r["max_rss_mb"] for r in old_runs),
+                "wall_s": med(new_runs, "wall_s"),
+                "no_stream_wall_s": med(old_runs, "wall_s"),
+                "same_report": same,
+                "steps": int(m.group(1)) if m else None,
+                "truth_steps": _truth_steps(path),
+                "load": max(loads),
+            }
+            print(f"  streamed    max RSS {row['rss_mb']:5.0f} MB (runs "
+                  f"{spread(new_runs, 'max_rss_mb')}), {row['wall_s']:.2f} s\n"
+                  f"  --no-stream max RSS {row['no_stream_rss_mb']:5.0f} MB (runs "
+                  f"{spread(old_runs, 'max_rss_mb')}), {row['no_stream_wall_s']:.2f} s; "
+                  f"same report: {same}; steps {row['steps']} "
+                  f"(generated: {row['truth_steps']})")  # fmt: skip
+            rows[key] = row
+        b, d = rows[base_key], rows[double_key]
+        name = Path(b["file"]).name
+        goal_text = f"≤ {goal} MB" + (f" (set for the {label})" if quick else "")
+        ok = b["rss_mb"] <= goal and _right(b)
+        figure(f"`check` {name} peak RSS, streamed",
+               f"{b['rss_mb']:.0f} MB ({b['wall_s']:.2f} s; floor {floor:.0f} MB; {_same(b)})",
+               goal_text, ok, f"--no-stream {b['no_stream_rss_mb']:.0f} MB", b["load"])  # fmt: skip
+        ratio = d["rss_mb"] / b["rss_mb"]
+        old_ratio = d["no_stream_rss_mb"] / b["no_stream_rss_mb"]
+        ok = ratio <= MEMORY_RATIO and _right(d)
+        figure(f"`check` {Path(d['file']).name} (twice as long) peak RSS, streamed",
+               f"{ratio:.2f}× the base ({d['rss_mb']:.0f} MB; {d['wall_s']:.2f} s; {_same(d)})",
+               f"≤ {MEMORY_RATIO}×", ok,
+               f"--no-stream {d['no_stream_rss_mb']:.0f} MB = {old_ratio:.2f}×",
+               d["load"])  # fmt: skip
+        out["cases"][kind] = {"label": label, "goal_mb": goal, "ratio": ratio, "rows": rows}
+    return out
+
+
+def bench_stdin(runs: int) -> dict[str, Any]:
+    """``bench/stdin_pipe.py``: grbl's raw samples through a pipe into ``wavecheck check -``."""
+    cmd = [PY, str(HERE / "stdin_pipe.py"), "--runs", str(runs)]
+    print(f"  $ {sh(cmd)}")
+    load = load1()
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    if p.returncode:
+        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
+        return {"command": sh(cmd), "rc": p.returncode, "target": False}
+    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+    res.update(command=sh(cmd), load=load)
+    cpu_x = res["bytes"] / res["pipe_cpu_s"] / DEMO_BYTES_S
+    print(f"  {res['samples'] / 1e6:.1f} M samples ({res['bytes'] / 1e6:.1f} MB) through the pipe in "
+          f"{res['pipe_wall_s']:.2f} s wall, {res['pipe_cpu_s']:.2f} s CPU (with cat); "
+          f"the .sr itself {res['sr_wall_s']:.2f} s")  # fmt: skip
+    ok = cpu_x >= 2
+    figure("stdin: raw samples (grbl) into `check -`",
+           f"{res['MB_per_s']:.0f} MB/s = {res['vs_demo_24MHz_x8']:.1f}× 24 MB/s (CPU {cpu_x:.1f}×)",
+           "CPU ≥ 2× the demo driver's 24 MB/s (half a core)", ok,
+           f"`check grbl.sr` {res['sr_wall_s']:.2f} s; pipe {res['pipe_wall_s']:.2f} s",
+           load)  # fmt: skip
+    res["cpu_vs_demo"] = cpu_x
+    res["target"] = ok
+    return res
+
+
+#: Bytes a second from sigrok's demo driver at 24 MHz × 8 channels (one byte a sample).
+DEMO_BYTES_S = 24_000_000
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -434,14 +578,16 @@ def main() -> int:
         "--runs", type=int, default=None, help="runs per figure (default 3; 1 with --quick)"
     )
     ap.add_argument(
-        "--only", default="sr,vcd,checks,stepgen,startup", help="sections to run (comma list)"
+        "--only",
+        default="sr,vcd,checks,stepgen,startup,memory,stdin",
+        help="sections to run (comma list)",
     )
     args = ap.parse_args()
     runs = args.runs or (1 if args.quick else 3)
     only = set(args.only.split(","))
     started = _dt.datetime.now(_dt.UTC)
     mach = machine()
-    print("wavecheck benchmarks (issues 7 and 18)", started.strftime("%Y-%m-%d %H:%M UTC"))
+    print("wavecheck benchmarks (issues 7, 18 and 14)", started.strftime("%Y-%m-%d %H:%M UTC"))
     print(
         f"machine: {mach['nproc']} CPUs ({mach['cpu']}), {mach['ram_gib']} GiB RAM, kernel {mach['kernel']}; "
         f"load average at start {' '.join(mach['loadavg_start'])}"
@@ -500,6 +646,16 @@ def main() -> int:
     if "startup" in only:
         print("\n== 5. start-up ==")
         results["startup"] = bench_startup(runs)
+
+    if "memory" in only:
+        print(
+            "\n== 6. bounded memory: check streamed vs --no-stream, and a capture twice as long =="
+        )
+        results["memory"] = bench_memory(args.quick, runs)
+
+    if "stdin" in only:
+        print("\n== 7. standard input: raw samples through a pipe ==")
+        results["stdin"] = bench_stdin(runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end
