@@ -33,6 +33,10 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 7. Standard input (issue 14): ``bench/stdin_pipe.py`` (grbl's raw samples through a pipe into
    ``wavecheck check -``) against the arrival rate of sigrok's demo driver, 24 MHz × 8 channels
    = 24 MB/s [CPU throughput ≥ 2×: under half a core]; peer: ``check grbl.sr``.
+8. Live (issue 14): ``bench/watch_keepup.py`` runs ``wavecheck watch`` on sigrok's demo device
+   (24 MHz × 8 channels with its default pattern; 200 kHz with its counter pattern) and gives
+   the samples wavecheck can process per second of its CPU ÷ the arrival rate [≥ 2×: under half
+   a core].
 
 Every command runs in its own process under ``/usr/bin/time -v`` (wall, CPU, max RSS); the
 competitors are interleaved run by run so that load from other users of the machine hits both
@@ -569,6 +573,28 @@ def bench_stdin(runs: int) -> dict[str, Any]:
 DEMO_BYTES_S = 24_000_000
 
 
+def bench_watch(quick: bool) -> dict[str, Any]:
+    """``bench/watch_keepup.py``: ``wavecheck watch`` on sigrok's demo device, live."""
+    seconds = 3 if quick else 10
+    cmd = [PY, str(HERE / "watch_keepup.py"), "--seconds", str(seconds)]
+    print(f"  $ {sh(cmd)}")
+    load = load1()
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    if p.returncode:
+        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
+        return {"command": sh(cmd), "rc": p.returncode, "target": False}
+    cases = [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+    for c in cases:
+        print(f"  {c['case']}: {c['samples'] / 1e6:.1f} M samples in {c['wall_s']:.1f} s wall, "
+              f"{c['cpu_s']:.2f} s CPU (wavecheck only); paced {c['paced']:.2f}")  # fmt: skip
+        ok = c["keep_up"] >= 2
+        figure(f"watch keep-up, demo {c['case']}",
+               f"{c['keep_up']:.2f}× the arrival rate ({100 * c['core_share']:.0f} % of a core)",
+               "≥ 2× (under half a core)", ok, "sigrok-cli's pace: the sample rate", load)  # fmt: skip
+        c["target"] = ok
+    return {"command": sh(cmd), "cases": cases, "load": load}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -579,7 +605,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin",
+        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -656,6 +682,10 @@ def main() -> int:
     if "stdin" in only:
         print("\n== 7. standard input: raw samples through a pipe ==")
         results["stdin"] = bench_stdin(runs)
+
+    if "watch" in only:
+        print("\n== 8. live: wavecheck watch on sigrok's demo device ==")
+        results["watch"] = bench_watch(args.quick)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end
