@@ -65,6 +65,10 @@ demo: setup
 	@echo "== 6. a whole machine in one run: two axes, roles told from the channels, each axis checked =="
 	.venv/bin/wavecheck check captures/examples/two-axis.vcd --drive gecko-g202 || test $$? -eq 1
 	@echo
+	@echo "== 7. live: two seconds from sigrok's demo device (a counter: STEP on D3, DIR on D6), checked as it arrives =="
+	.venv/bin/wavecheck watch --driver demo:analog_channels=0 --channel-group Logic --config pattern=incremental \
+	  --time 2s --drive drv8825 --map step=D3,dir=D6 --snippets out/snippets --save out/demo-live.sr
+	@echo
 	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
 test: setup
