@@ -12,6 +12,11 @@ The figure has three parts:
 - one histogram per rule of every measured interval, with the limit as a vertical line, so the
   whole capture's distance from the datasheet shows.
 
+A streamed report (:mod:`wavecheck.stream`) keeps no capture: its timing diagrams are drawn from
+the small windows of the signals kept around the worst places (:mod:`wavecheck.stream.windows`;
+the same drawing), its histograms from each rule's fixed bins (four per octave), and the motion
+panel, which needs every step, is left out.
+
 matplotlib is imported lazily with the Agg backend (no display needed). Times are drawn in µs
 (or ns/ms when that reads better) relative to the start of the drawn interval; each panel's
 title gives the absolute time in the capture.
@@ -422,7 +427,10 @@ def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
         loc="left",
         color=status.get(r.verdict, "#222"),
     )
-    ax.set_xlabel("measured (log scale)" if log_x else f"measured ({unit})", fontsize=8.5)
+    bins = "" if isinstance(r, RuleResult) else ", 4 bins per octave"
+    ax.set_xlabel(
+        f"measured (log scale{bins})" if log_x else f"measured ({unit}{bins})", fontsize=8.5
+    )
     ax.set_ylabel("count", fontsize=8.5)
     ax.tick_params(labelsize=8)
     for side in ("top", "right"):

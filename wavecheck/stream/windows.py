@@ -165,10 +165,8 @@ class WindowKeeper:
             s = int(np.searchsorted(every, p[0], side="left"))
             first = max(a - 1, s - SIDE_EDGES, 0)
             cut = first > max(a - 1, 0) or (a == 0 and self.lost[role])
-            side = _Side([], level ^ (first & 1), SIDE_EDGES, cut=cut)
+            side = _Side([every[first:s].copy()], level ^ (first & 1), SIDE_EDGES, cut=cut)
             w.sides[role] = side
-            self._extend(w, side, every[first:s])
-            side.after = SIDE_EDGES
             self._extend(w, side, every[s:])
         return w
 
@@ -201,8 +199,10 @@ class WindowKeeper:
                 lv = side.level
                 if edges:
                     k = int(np.searchsorted(e, edges[-1], side="right"))
-                    lv ^= k & 1
-                    e = e[k:]
+                    if k == len(e):  # nothing after the edges so far: it adds nothing
+                        continue
+                    lv ^= k & 1  # the window holds edges[-1] (a window holds every edge of its
+                    e = e[k:]  # span): the level after it
                 if level is None:
                     initial = level = lv
                 elif lv != level:  # the gap's edges are not kept: one edge just before the window
