@@ -130,8 +130,9 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--no-stream",
         action="store_true",
-        help="read the whole capture into memory first (the reference path; --plot, --gtkw, "
-        "--html, --steps-csv and --firmware always do)",
+        help="read the whole capture into memory first (the reference path; --steps-csv and "
+        "--firmware always do; a streamed --plot, --gtkw or --html draws the signals from small "
+        "windows kept around the worst places)",
     )
     p.set_defaults(func=run)
 
@@ -139,7 +140,7 @@ def register(sub: Any) -> None:
 def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
     """A block reader for ``path`` when this check can be streamed (module
     :mod:`wavecheck.stream`), else None: read whole."""
-    whole_only = ("plot", "gtkw", "html", "steps_csv", "firmware", "no_stream")
+    whole_only = ("steps_csv", "firmware", "no_stream")  # they need every step
     if any(getattr(args, k, None) for k in whole_only):
         return None
     if args.block_edges is not None and args.block_edges < 1:

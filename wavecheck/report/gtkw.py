@@ -10,6 +10,9 @@ The dump file: a VCD capture is opened as it is (signals by their hierarchical n
 other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save file
 (``FILE.vcd`` for ``FILE.gtkw``) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
 channels only, raw (not inverted), on the largest VCD timescale that holds every edge exactly.
+A streamed check (:mod:`wavecheck.stream`) keeps only small windows of the signals around the
+worst places (:mod:`wavecheck.stream.windows`): the VCD then holds those windows, the level held
+between them, and a comment in both files says so. A VCD capture needs no windows.
 
 Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns, ``1 fs``
 in fs), as GTKWave reads them. Markers go to distinct times: a place whose time is already marked
@@ -125,12 +128,15 @@ def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str
     """Write the mapped channels of ``report``'s capture as a VCD (raw levels), atomically.
 
     Variables are named after the roles (``step``, ``dir``, ``phase_A`` …) in scope
-    ``wavecheck``. Returns the timescale used and the ticks → timescale-steps factor.
+    ``wavecheck``. A streamed report writes only its windows around the worst places
+    (:mod:`wavecheck.stream.windows`; the header comment says so). Returns the timescale used and
+    the ticks → timescale-steps factor.
     """
     cap = report.capture
     magnitude, unit, factor = vcd_timescale(cap.timebase.tick_s)
-    signals = report.interface.signals
+    signals = report.traces
     channels = ", ".join(f"{role}={sig.channel!r}" for role, sig in signals.items())
+    windows = "" if report.windows is None else f"; {report.windows.note}"
     write_vcd(
         path,
         [
@@ -144,7 +150,7 @@ def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str
         timescale=f"{magnitude} {unit}",
         end=_round(cap.end - cap.start, factor),
         scope="wavecheck",
-        comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels",
+        comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels{windows}",
         version="wavecheck",
     )
     return magnitude, unit, factor
@@ -227,6 +233,8 @@ def render_gtkw(
         f"wavecheck: {report.capture.path} vs {report.drive.id}: {report.verdict.upper()}, "
         f"{report.total_violations} violation(s)"
     )
+    if report.windows is not None and report.capture.format != "vcd":
+        save.comment(report.windows.note)
     save.dumpfile(os.fspath(dump_path))
     if save_path is not None:
         save.savefile(os.fspath(save_path))
@@ -280,7 +288,7 @@ def _neighbours(report: Report, tick: int) -> tuple[int, int]:
     """The mapped signals' last edge before ``tick`` and first edge after it (``tick`` itself
     where there is none)."""
     edges = np.concatenate(
-        [np.asarray(sig.edges, dtype=np.int64) for sig in report.interface.signals.values()]
+        [np.asarray(sig.edges, dtype=np.int64) for sig in report.traces.values()]
     )
     before, after = edges[edges < tick], edges[edges > tick]
     return (

@@ -20,13 +20,14 @@ from wavecheck.checks.result import RuleOutcome, RuleResult, Violation
 from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.errors import UsageError
-from wavecheck.interface import StepInterface
+from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
     from wavecheck.stream.summary import StepSummary
+    from wavecheck.stream.windows import SignalWindows
 
 __all__ = ["Report", "overall_verdict"]
 
@@ -67,9 +68,12 @@ class Report:
     rates: MaxStepRates
     notes: list[str] = field(default_factory=list)
     firmware: FirmwareCheck | None = None
+    """``check --firmware``: the capture against its own configuration (apart from the rules)."""
     axis: str | None = None
     """The axis name in a run of several axes (``--map x.step=…``), None for a single axis."""
-    """``check --firmware``: the capture against its own configuration (apart from the rules)."""
+    windows: SignalWindows | None = None
+    """A streamed report: the mapped signals in small windows around the worst places
+    (:mod:`wavecheck.stream.windows`); None on the whole-capture path."""
 
     @property
     def verdict(self) -> Verdict:
@@ -116,6 +120,12 @@ class Report:
                 "streamed (give --no-stream)"
             )
         return out
+
+    @property
+    def traces(self) -> dict[str, RoleSignal]:
+        """The mapped signals to draw: every edge on the whole-capture path, the windows around
+        the worst places on the streamed path (role → signal)."""
+        return self.interface.signals if self.windows is None else self.windows.signals
 
     @property
     def mapping(self) -> dict[str, str]:

@@ -12,6 +12,11 @@ The figure has three parts:
 - one histogram per rule of every measured interval, with the limit as a vertical line, so the
   whole capture's distance from the datasheet shows.
 
+A streamed report (:mod:`wavecheck.stream`) keeps no capture: its timing diagrams are drawn from
+the small windows of the signals kept around the worst places (:mod:`wavecheck.stream.windows`;
+the same drawing), its histograms from each rule's fixed bins (four per octave), and the motion
+panel, which needs every step, is left out.
+
 matplotlib is imported lazily with the Agg backend (no display needed). Times are drawn in µs
 (or ns/ms when that reads better) relative to the start of the drawn interval; each panel's
 title gives the absolute time in the capture.
@@ -29,7 +34,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.checks.result import FAIL, RuleResult
+from wavecheck.checks.result import FAIL, RuleOutcome, RuleResult
+from wavecheck.decode import StepEvents
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
 from wavecheck.units import SI_TIME, format_time
@@ -37,7 +43,17 @@ from wavecheck.units import SI_TIME, format_time
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["MAX_PLACES", "Place", "choose_places", "render_png", "write_plot"]
+__all__ = [
+    "MAX_PLACES",
+    "Place",
+    "binned",
+    "choose_places",
+    "hist_title",
+    "place_title",
+    "place_traces",
+    "render_png",
+    "write_plot",
+]
 
 #: Timing diagrams drawn at most.
 MAX_PLACES = 4
@@ -123,23 +139,16 @@ def choose_places(report: Report, n: int = MAX_PLACES) -> list[Place]:
             add(p)
         return places
     margins: list[tuple[Fraction, Place]] = []
-    for r in report.results():
-        i = _argmin(r)
-        if i is None or r.limit_ns is None:
+    for r in report.rules:
+        start, measured = r.min_margin_at_tick, r.min_measured_ns
+        if start is None or measured is None or r.limit_ns is None:
             continue
-        start, end = int(r.intervals.start[i]), int(r.intervals.end[i])
-        measured = r.timebase.ns(end - start)
+        end = start + int(measured / r.timebase.tick_ns)
         rel = (measured - r.limit_ns) / r.limit_ns if r.limit_ns else measured
         margins.append((rel, Place(r.rule, start, end, measured, r.limit_ns, False)))
     for _, p in sorted(margins, key=lambda m: m[0]):
         add(p)
     return places
-
-
-def _argmin(r: RuleResult) -> int | None:
-    if len(r.intervals) == 0:
-        return None
-    return int(np.argmin(r.intervals.measured))
 
 
 # -- units ----------------------------------------------------------------------------------------
@@ -175,15 +184,43 @@ def _roles(report: Report) -> list[str]:
     return sorted(roles, key=lambda r: _ROLE_ORDER.index(r) if r in _ROLE_ORDER else 99)
 
 
+def _extent(place: Place, tick_ns: float) -> tuple[float, float, float]:
+    """The ticks ``(lo, hi)`` a timing diagram of ``place`` shows (1.6 times the interval's width,
+    or the limit's, each side: within :func:`wavecheck.stream.windows.place_range`), and the
+    limit in ticks."""
+    span_ticks = max(place.end_tick - place.start_tick, 1)
+    limit_ticks = float(place.limit_ns) / tick_ns if place.limit_ns else 0.0
+    pad = 1.6 * max(span_ticks, limit_ticks, 1.0)
+    return (
+        place.start_tick - pad,
+        max(place.end_tick, place.start_tick + limit_ticks) + pad,
+        limit_ticks,
+    )
+
+
+def place_traces(
+    report: Report, place: Place
+) -> dict[str, tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]:
+    """Role → (times, levels) of the steps a timing diagram of ``place`` draws: times in ticks
+    from the diagram's left end to its right end, ``levels[k]`` the level from ``times[k]`` on
+    (the last repeated), at the drive's input."""
+    lo, hi, _ = _extent(place, float(report.capture.timebase.tick_ns))
+    out = {}
+    for role in _roles(report):
+        sig = report.traces[role]
+        a = int(np.searchsorted(sig.edges, int(math.floor(lo)), side="right"))
+        b = int(np.searchsorted(sig.edges, int(math.ceil(hi)), side="right"))
+        ts = sig.edges[a:b].astype(np.float64)
+        level0 = sig.initial ^ (a & 1)
+        levels = np.array([level0] + [level0 ^ ((k + 1) & 1) for k in range(len(ts))], dtype=float)
+        out[role] = (np.concatenate([[lo], ts, [hi]]), np.append(levels, levels[-1]))
+    return out
+
+
 def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
     tb = report.capture.timebase
     tick_ns = float(tb.tick_ns)
-    span_ticks = max(place.end_tick - place.start_tick, 1)
-    limit_ticks = float(place.limit_ns) / tick_ns if place.limit_ns else 0.0
-    width = max(span_ticks, limit_ticks, 1.0)
-    pad = 1.6 * width
-    lo = place.start_tick - pad
-    hi = max(place.end_tick, place.start_tick + limit_ticks) + pad
+    lo, hi, limit_ticks = _extent(place, tick_ns)
     unit, scale = _unit_for((hi - lo) * tick_ns / 4)
     t0 = place.start_tick
 
@@ -193,18 +230,11 @@ def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
     roles = _roles(report)
     n = len(roles)
     ypos = {role: (n - 1 - k) * 1.6 for k, role in enumerate(roles)}
-    for role in roles:
-        sig = report.interface.signals[role]
-        a = int(np.searchsorted(sig.edges, int(math.floor(lo)), side="right"))
-        b = int(np.searchsorted(sig.edges, int(math.ceil(hi)), side="right"))
-        ts = sig.edges[a:b].astype(np.float64)
-        level0 = sig.initial ^ (a & 1)
-        levels = np.array([level0] + [level0 ^ ((k + 1) & 1) for k in range(len(ts))], dtype=float)
-        xs = np.concatenate([[lo], ts, [hi]])
+    for role, (xs, levels) in place_traces(report, place).items():
         y = ypos[role]
-        ax.step(x(xs), np.append(levels, levels[-1]) + y, where="post", color=_TRACE_COLOR, lw=1.6)
+        ax.step(x(xs), levels + y, where="post", color=_TRACE_COLOR, lw=1.6)
         label = role.upper() if not role.startswith("phase") else role
-        inv = " (inv)" if sig.inverted else ""
+        inv = " (inv)" if report.traces[role].inverted else ""
         ax.text(x(lo), y + 0.5, f"{label}{inv} ", ha="right", va="center", fontsize=9, color="#333")
     color = _FAIL_COLOR if place.failed else _PASS_COLOR
     lane = (n - 1) * 1.6 + 1.55  # the annotation lane above every trace
@@ -247,11 +277,8 @@ def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
         fontweight="bold",
         bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1},
     )
-    t_s = tb.seconds(place.start_tick)
-    verdict = "FAIL" if place.failed else "smallest margin"
-    margin = "" if place.margin_ns is None else f", margin {_signed_ns(place.margin_ns)}"
     ax.set_title(
-        f"{index}. {place.rule} — {verdict} at t = {float(t_s):.6f} s{margin}",
+        place_title(report, place, index),
         fontsize=10,
         loc="left",
         color=color if place.failed else "#222",
@@ -263,6 +290,22 @@ def _draw_place(ax: Axes, report: Report, place: Place, index: int) -> None:
     for side in ("top", "right", "left"):
         ax.spines[side].set_visible(False)
     ax.tick_params(labelsize=8)
+
+
+def place_title(report: Report, place: Place, index: int) -> str:
+    """The title of the ``index``-th timing diagram."""
+    t_s = report.capture.timebase.seconds(place.start_tick)
+    verdict = "FAIL" if place.failed else "smallest margin"
+    margin = "" if place.margin_ns is None else f", margin {_signed_ns(place.margin_ns)}"
+    return f"{index}. {place.rule} — {verdict} at t = {float(t_s):.6f} s{margin}"
+
+
+def hist_title(r: RuleOutcome) -> str:
+    """The title of a rule's histogram."""
+    return (
+        f"{r.rule}: {r.checked:,} interval(s), {r.violations:,} fail, min margin "
+        f"{_signed_ns(r.min_margin_ns)}"
+    )
 
 
 def _human_ns(v: float, _pos: object = None) -> str:
@@ -277,36 +320,89 @@ def _count_label(v: float, _pos: object = None) -> str:
     return f"{v:,.0f}" if v >= 1 else ""
 
 
-def _draw_histogram(ax: Axes, r: RuleResult) -> None:
-    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+def _log_x(ax: Axes, lo: float, hi: float, limit: float) -> bool:
+    """Set a log time axis (ns, human tick labels) when the lengths span decades (the space
+    between pulses of a slow move); True when set."""
+    from matplotlib.ticker import FuncFormatter, NullFormatter
 
+    if not (lo > 0 and limit > 0 and max(hi, limit) / min(lo, limit) > 50):
+        return False
+    ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(FuncFormatter(_human_ns))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    return True
+
+
+def _bars_every(ax: Axes, r: RuleResult) -> tuple[str, float, bool, int]:
+    """Every measured interval in 60 bins (the whole-capture path): (unit, ns per unit, log x,
+    highest count)."""
     assert r.limit_ns is not None
     values = r.measured_ns
     limit = float(r.limit_ns)
     lo, hi = float(values.min()), float(values.max())
-    log_x = lo > 0 and limit > 0 and max(hi, limit) / min(lo, limit) > 50
+    log_x = _log_x(ax, lo, hi, limit)
     if log_x:
-        # decades of durations (the space between pulses of a slow move): log axis in ns with
-        # human tick labels
         unit, scale = "", 1.0
         a, b = math.log10(min(lo, limit) * 0.8), math.log10(max(hi, limit) * 1.25)
         bins: Any = np.logspace(a, b, 60)
-        ax.set_xscale("log")
-        ax.xaxis.set_major_formatter(FuncFormatter(_human_ns))
-        ax.xaxis.set_minor_formatter(NullFormatter())
     else:
         unit, scale = _unit_for(max(limit, float(np.median(values))) / 2 or 1.0)
         span = max(hi, limit) - min(lo, limit)
         pad = span * 0.08 if span > 0 else max(abs(limit), 1.0) * 0.1
         bins = (np.linspace(min(lo, limit) - pad, max(hi, limit) + pad, 60)) / scale
     v = values / scale
-    lim = limit / scale
     fails = r.outcome == FAIL
     ax.hist(v[~fails], bins=bins, color="#5b7db1", label="pass / indeterminate")
     if fails.any():
         ax.hist(v[fails], bins=bins, color=_FAIL_COLOR, label="fail")
     counts, _ = np.histogram(v, bins=bins)
-    if counts.max(initial=0) > 50:
+    return unit, scale, log_x, int(counts.max(initial=0))
+
+
+def binned(r: RuleOutcome) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
+    """A rule's fixed bins (:meth:`RuleOutcome.histogram`, four per octave of ticks) as
+    (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
+    from wavecheck.checks.result import Histogram
+
+    pairs = r.histogram().counts
+    tick = r.timebase.tick_ns
+    left = [0 if b == 0 else Histogram.lower_edge(b) * tick for b, _ in pairs]
+    right = [Histogram.lower_edge(b + 1) * tick for b, _ in pairs]
+    return np.array(left, float), np.array(right, float), [c for _, c in pairs]
+
+
+def _bars_binned(ax: Axes, r: RuleOutcome) -> tuple[str, float, bool, int]:
+    """The streamed path's fixed bins as bars (as :func:`_bars_every`); a bin wholly below the
+    limit is drawn as failing, one the limit splits as indeterminate."""
+    assert r.limit_ns is not None and r.min_measured_ns is not None
+    assert r.max_measured_ns is not None
+    limit = float(r.limit_ns)
+    left, right, counts = binned(r)
+    lo, hi = float(r.min_measured_ns), float(r.max_measured_ns)
+    log_x = _log_x(ax, lo, hi, limit)
+    if log_x:
+        unit, scale = "", 1.0
+        left = np.maximum(left, min(lo, limit) * 0.8)
+    else:
+        unit, scale = _unit_for(max(limit, hi) / 2 or 1.0)
+    colors = [
+        _FAIL_COLOR if b <= limit else "#5b7db1" if a >= limit else _INDET_COLOR
+        for a, b in zip(left.tolist(), right.tolist(), strict=True)
+    ]
+    ax.bar(left / scale, counts, width=(right - left) / scale, align="edge", color=colors)
+    return unit, scale, log_x, max(counts, default=0)
+
+
+def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
+    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+
+    assert r.limit_ns is not None
+    if isinstance(r, RuleResult):
+        unit, scale, log_x, top = _bars_every(ax, r)
+    else:
+        unit, scale, log_x, top = _bars_binned(ax, r)
+    lim = float(r.limit_ns) / scale
+    if top > 50:
         ax.set_yscale("log")
         ax.set_ylim(bottom=0.7)
         ax.yaxis.set_major_formatter(FuncFormatter(_count_label))
@@ -326,13 +422,15 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
     )
     status = {"fail": _FAIL_COLOR, "pass": _PASS_COLOR, "indeterminate": _INDET_COLOR}
     ax.set_title(
-        f"{r.rule}: {r.checked:,} interval(s), {r.violations:,} fail, min margin "
-        f"{_signed_ns(r.min_margin_ns)}",
+        hist_title(r),
         fontsize=9,
         loc="left",
         color=status.get(r.verdict, "#222"),
     )
-    ax.set_xlabel("measured (log scale)" if log_x else f"measured ({unit})", fontsize=8.5)
+    bins = "" if isinstance(r, RuleResult) else ", 4 bins per octave"
+    ax.set_xlabel(
+        f"measured (log scale{bins})" if log_x else f"measured ({unit}{bins})", fontsize=8.5
+    )
     ax.set_ylabel("count", fontsize=8.5)
     ax.tick_params(labelsize=8)
     for side in ("top", "right"):
@@ -347,12 +445,13 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
     from matplotlib.figure import Figure
 
     places = choose_places(report, max_places)
-    hist_rules = [r for r in report.results() if r.limit_ns is not None and len(r.intervals)]
+    hist_rules = [r for r in report.rules if r.limit_ns is not None and r.histogram().counts]
     n_roles = max(len(report.interface.signals), 1)
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
     hist_rows = math.ceil(len(hist_rules) / hist_cols)
-    motion = report.steps.count > 1  # position and step rate against time, reversals marked
+    # position and step rate against time, reversals marked (every step: not when streamed)
+    motion = isinstance(report.steps, StepEvents) and report.steps.count > 1
     heights = [diag_h] * len(places) + [2.4] * motion + [2.6] * hist_rows
     if not heights:
         heights = [1.0]

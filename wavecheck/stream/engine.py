@@ -64,6 +64,7 @@ from wavecheck.report.model import Report
 from wavecheck.rules import Rule
 from wavecheck.stream.blocks import BlockSource, EdgeBlock
 from wavecheck.stream.summary import RuleSummary, StepSummary
+from wavecheck.stream.windows import WindowKeeper, wanted_places
 
 __all__ = ["DEFAULT_BLOCK_EDGES", "AxisStream", "MachineStream", "NotStreamable", "check_stream"]
 
@@ -150,6 +151,8 @@ class AxisStream:
         self.timer_ticks: list[EdgeArray] = []
         self.timer_kept = 0
         self._resolution = resolution
+        self.windows = WindowKeeper(list(self.roles))
+        self._seen: list[tuple[int, int]] = []  # (checked, fails) per rule at the last window
 
     # -- feeding -------------------------------------------------------------------------------
     def feed(self, block: EdgeBlock, block_edges: int) -> None:
@@ -220,7 +223,18 @@ class AxisStream:
             else:
                 self._rule(r, iface, steps, t0, summary)
         self._rates(iface, steps, t0)
+        self._keep_windows(t0)
         self._trim(_context(iface, steps, self.edge, self.rules))
+
+    def _keep_windows(self, t0: int) -> None:
+        """Update the signal windows around the places the summaries name
+        (:mod:`wavecheck.stream.windows`); the places only when a rule's figures changed."""
+        seen = [(s.checked, s.fails) for s in self.summaries]
+        changed = seen != self._seen
+        self._seen = seen
+        places = wanted_places(list(self.summaries), self.tb.tick_ns) if changed else None
+        held = {role: (r.edges, r.level) for role, r in self.roles.items()}
+        self.windows.update(places, held, t0)
 
     def _rule(
         self, r: Rule, iface: StepInterface, steps: StepEvents, t0: int, s: RuleSummary
@@ -286,9 +300,10 @@ class AxisStream:
             self.timer_kept += min(room, len(ticks))
 
     def _trim(self, c0: int) -> None:
-        for r in self.roles.values():
+        for role, r in self.roles.items():
             k = int(np.searchsorted(r.edges, c0, side="left"))
             if k:
+                self.windows.trimmed(role, r.edges[:k])
                 r.level ^= k & 1
                 r.edges = r.edges[k:].copy()
 
@@ -328,6 +343,7 @@ class AxisStream:
             t,
             capture=capture,
             interface=iface,
+            windows=self.windows.signals(iface.signals),
             steps=self.steps,
             rules=list(self.summaries),
             rates=rates,
