@@ -6,8 +6,9 @@ reads): counts (checked, violations, indeterminate, unknown), the shortest and l
 and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
 the figures that decide ``decide_samplerate_hz``, and a fixed-bin
 :class:`~wavecheck.checks.result.Histogram`. What it does not keep: every interval (the
-whole-capture :class:`~wavecheck.checks.result.RuleResult` does), so renderers that draw every
-interval or the signals (``--plot``, ``--gtkw``) take the whole-capture path.
+whole-capture :class:`~wavecheck.checks.result.RuleResult` does): ``--plot``, ``--gtkw`` and
+``--html`` draw a streamed report from these summaries and the signal windows kept around the worst
+places (:mod:`wavecheck.stream.windows`); ``--steps-csv`` and ``--firmware`` read the capture whole.
 """
 
 from __future__ import annotations
