@@ -192,3 +192,33 @@ def test_context_cases(kind: str, chans: list, limits: dict, typ: int, block: in
     roles = {n: n for n, _, _ in chans}
     _same(cap, [AxisMap(None, roles)], {None: _drive(limits, None, kind)}, block,
           step_types={None: typ})  # fmt: skip
+
+
+def test_dir_changes_piling_up_without_steps_are_gone_over_log_n_times(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A DIR line that toggles 60,000 times before any step (a clock mapped as DIR): every change
+    waits for the next step (dir_setup), so the context holds them all; windows then wait for as
+    many new edges as are held, so they are few, and the figures still equal the whole path's."""
+    from wavecheck.stream import engine
+
+    calls = 0
+    original = engine.AxisStream._window
+
+    def counted(self: engine.AxisStream, t1: int) -> None:
+        nonlocal calls
+        calls += 1
+        original(self, t1)
+
+    monkeypatch.setattr(engine.AxisStream, "_window", counted)
+    dir_edges = np.arange(1, 60_001, dtype=np.int64) * 10
+    steps = 600_100 + np.arange(0, 40, dtype=np.int64) * 100  # then 20 pulses, 50 ticks high
+    cap = Capture(
+        path="pile-up", format="vcd", timebase=Timebase(Fraction(1, 10**9)), resolution_ticks=0,
+        samplerate_hz=None, start=0, end=700_000,
+        channels=[Channel("step", 0, 0, steps.copy()), Channel("dir", 1, 0, dir_edges)],
+    )  # fmt: skip
+    drive = _drive({"step_high": 10, "step_low": 10, "dir_setup": 5, "dir_hold": 5}, None)
+    axes = [AxisMap(None, {"step": "step", "dir": "dir"})]
+    _same(cap, axes, {None: drive}, 500)
+    assert calls <= 2 * 20  # _same runs the stream once: ~log2(60000/500) + a few, not 120
