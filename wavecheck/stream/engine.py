@@ -64,7 +64,7 @@ from wavecheck.report.model import Report
 from wavecheck.rules import Rule
 from wavecheck.stream.blocks import BlockSource, EdgeBlock
 from wavecheck.stream.summary import RuleSummary, StepSummary
-from wavecheck.stream.windows import WindowKeeper, wanted_places
+from wavecheck.stream.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 
 __all__ = ["DEFAULT_BLOCK_EDGES", "AxisStream", "MachineStream", "NotStreamable", "check_stream"]
 
@@ -153,7 +153,7 @@ class AxisStream:
         self.timer_kept = 0
         self._resolution = resolution
         self.windows = WindowKeeper(list(self.roles))
-        self._seen: list[tuple[int, int]] = []  # (checked, fails) per rule at the last window
+        self._seen: list[tuple[object, ...]] = []  # places_signature per rule at the last window
 
     # -- feeding -------------------------------------------------------------------------------
     def feed(self, block: EdgeBlock, block_edges: int) -> None:
@@ -232,8 +232,8 @@ class AxisStream:
 
     def _keep_windows(self, t0: int) -> None:
         """Update the signal windows around the places the summaries name
-        (:mod:`wavecheck.stream.windows`); the places only when a rule's figures changed."""
-        seen = [(s.checked, s.fails) for s in self.summaries]
+        (:mod:`wavecheck.stream.windows`); the places only when a rule's worst places changed."""
+        seen = [s.places_signature(PLACES_PER_RULE) for s in self.summaries]
         changed = seen != self._seen
         self._seen = seen
         places = wanted_places(list(self.summaries), self.tb.tick_ns) if changed else None

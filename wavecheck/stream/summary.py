@@ -134,6 +134,11 @@ class RuleSummary:
             ]
             self._worst = heapq.nsmallest(self.keep, [*self._worst, *new])
 
+    def places_signature(self, n: int) -> tuple[object, ...]:
+        """What the places of the worst ``n`` violations and of the smallest margin depend on:
+        equal signatures, equal places (cheap: no :class:`Violation` built)."""
+        return (self._best, tuple((w[1], w[2]) for w in self._worst[:n]))
+
     def _add_unknown(self, ticks: EdgeArray) -> None:
         heap = self._unknown_first
         for t in ticks.tolist():
