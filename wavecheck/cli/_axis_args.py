@@ -142,6 +142,15 @@ def _forward(text: str) -> int:
     return 1 if text == "high" else 0
 
 
+def roles_from_waveforms(args: argparse.Namespace, capture: Capture) -> bool:
+    """Whether the roles must be told from the waveforms: no ``--map`` and no channel named
+    after a role (``step``, ``up``, ``phase-A``, as the end of a hierarchical name)."""
+    named = ("step", "up", "phase-a")
+    return not args.map and not any(
+        c.name.rsplit(".", 1)[-1].strip().lower() in named for c in capture.channels
+    )
+
+
 def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
     """The axes of the run and a note on how they were found.
 
@@ -152,10 +161,7 @@ def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], 
     """
     if args.map:
         return parse_axes(args.map), []
-    if any(
-        c.name.rsplit(".", 1)[-1].strip().lower() in ("step", "up", "phase-a")
-        for c in capture.channels
-    ):
+    if not roles_from_waveforms(args, capture):
         return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
     from wavecheck.roles import propose
 

@@ -19,7 +19,13 @@ from typing import Any
 
 from wavecheck.axes import AxisMap
 from wavecheck.capture.model import Capture
-from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
+from wavecheck.cli._axis_args import (
+    add_axis_arguments,
+    axis_runs,
+    pulse_level,
+    roles_from_waveforms,
+    user_table,
+)
 from wavecheck.cli._capture_args import (
     add_capture_arguments,
     capture_from_args,
@@ -152,11 +158,9 @@ def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
         samplerate=samplerate_from_args(args),
         input_format=getattr(args, "input_format", None),
     )
-    if source is None or args.map:
+    if source is None or not roles_from_waveforms(args, source.skeleton):
         return source
-    named = ("step", "up", "phase-a")  # else the roles come from the waveforms: read whole
-    leaf = (c.name.rsplit(".", 1)[-1].strip().lower() for c in source.skeleton.channels)
-    return source if any(n in named for n in leaf) else None
+    return None  # the roles come from the waveforms: read whole
 
 
 @dataclass

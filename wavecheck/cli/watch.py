@@ -16,8 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.capture.binary import SampleBlocks
+from wavecheck.capture.model import Capture
 from wavecheck.capture.srzip import SrRecorder, sr_metadata
-from wavecheck.cli._axis_args import add_axis_arguments
+from wavecheck.cli._axis_args import add_axis_arguments, roles_from_waveforms
 from wavecheck.cli.check import (
     RENDERERS,
     check_setup,
@@ -28,6 +29,7 @@ from wavecheck.cli.check import (
 from wavecheck.cli.config import add_tuning_arguments
 from wavecheck.engine import check_machine
 from wavecheck.errors import DeviceError, UsageError
+from wavecheck.live.learn import RoleLearner
 from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
 from wavecheck.live.snippets import SampleRing, Snippets
 from wavecheck.live.watch import Watch
@@ -39,6 +41,8 @@ __all__ = ["register", "run"]
 
 #: Snippets written at most, unless --max-snippets says otherwise.
 DEFAULT_MAX_SNIPPETS = 100
+#: Bytes of samples kept at most while the roles are told from the waveforms (--learn).
+MAX_LEARN_BYTES = 256 << 20
 #: Edges a live check gathers at most before checking them (it also checks every 0.25 s).
 LIVE_BLOCK_EDGES = 1 << 16
 
@@ -94,6 +98,14 @@ def register(sub: Any) -> None:
     )
     add_axis_arguments(p)
     add_tuning_arguments(p)
+    p.add_argument(
+        "--learn",
+        default="5s",
+        metavar="TIME",
+        help="without --map (and no channel named after a role): tell the roles from at most "
+        "this much of the first samples, then check them and go on live (default 5s; at most "
+        "256 MiB of samples are kept)",
+    )
     end = p.add_argument_group("when to stop")
     end.add_argument("--time", metavar="TIME", help="watch this long (10m, 30s), exactly")
     end.add_argument(
@@ -198,20 +210,42 @@ def run(args: argparse.Namespace) -> int:
     window = _time_samples(args.snippet_window, rate, "--snippet-window") or 0
     label = f"sigrok-cli -d {args.driver} at {format_frequency(rate)} (live)"
     scanner = SampleBlocks(label, len(names), rate, names)
-    setup = check_setup(args, scanner.skeleton)
-    template = check_machine(
-        scanner.skeleton, setup.axes, setup.drives, setup.resolution, **setup.options
-    )
-    machine = MachineStream(
-        template,
-        setup.drives,
-        pulse_level=setup.options["pulse_level"],
-        resolution=setup.resolution,
-        user_table=setup.options["user_table"],
-        block_edges=LIVE_BLOCK_EDGES,
-        keep_violations=kept_violations(args),
-    )
-    scanner.want({r.index for a in machine.axes for r in a.roles.values()})
+    found: list[str] = []
+
+    def start(capture: Capture) -> MachineStream:
+        """The streamed check of ``args``' axes (roles resolved against ``capture``)."""
+        setup = check_setup(args, capture)
+        found[:] = setup.found
+        template = check_machine(
+            scanner.skeleton, setup.axes, setup.drives, setup.resolution, **setup.options
+        )
+        return MachineStream(
+            template,
+            setup.drives,
+            pulse_level=setup.options["pulse_level"],
+            resolution=setup.resolution,
+            user_table=setup.options["user_table"],
+            block_edges=LIVE_BLOCK_EDGES,
+            keep_violations=kept_violations(args),
+        )
+
+    def decide(capture: Capture, final: bool) -> MachineStream | None:
+        """The check once the roles can be told from ``capture`` (the first samples)."""
+        try:
+            machine = start(capture)
+        except UsageError:
+            if final:
+                raise
+            return None
+        print(f"wavecheck: {found[0]}", file=sys.stderr, flush=True)
+        return machine
+
+    checker: MachineStream | RoleLearner
+    if roles_from_waveforms(args, scanner.skeleton):
+        learn = _time_samples(args.learn, rate, "--learn") or 1
+        checker = RoleLearner(scanner, decide, min(learn, MAX_LEARN_BYTES // scanner.unitsize))
+    else:
+        checker = start(scanner.skeleton)
     meta = sr_metadata(names, samplerate=int(rate), unitsize=scanner.unitsize, total_analog=0)
     snippets = None
     if args.snippets:
@@ -231,7 +265,7 @@ def run(args: argparse.Namespace) -> int:
     watch = Watch(
         Acquisition(command, continuous=limit is None),
         scanner,
-        machine,
+        checker,
         limit=limit,
         stop_on_fail=args.stop_on_fail,
         snippets=snippets,
@@ -246,9 +280,11 @@ def run(args: argparse.Namespace) -> int:
         raise
     if status is not None and sys.stderr.isatty():
         sys.stderr.write("\n")
-    if recorder is not None:
-        recorder.close()
-    report = finish_report(args, result.report, setup.found)
+    if recorder is not None:  # what arrived is kept, also when the acquisition then failed
+        (recorder.close if result.samples else recorder.discard)()
+    if result.failure is not None and result.samples == 0:
+        raise DeviceError(f"{label}: {result.failure}; no samples arrived (nothing was checked)")
+    report = finish_report(args, result.report, found)
     write_outputs(args, report)
     print(
         f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended}); "

@@ -24,6 +24,8 @@ from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
 from wavecheck.capture.srzip import SrRecorder
+from wavecheck.errors import DeviceError
+from wavecheck.live.learn import RoleLearner
 from wavecheck.live.sigrok import Acquisition
 from wavecheck.live.snippets import Snippets
 from wavecheck.report.machine import MachineReport
@@ -83,7 +85,7 @@ class Watch:
         self,
         acquisition: Acquisition,
         scanner: SampleBlocks,
-        machine: MachineStream,
+        machine: MachineStream | RoleLearner,
         *,
         limit: int | None = None,
         stop_on_fail: bool = False,
@@ -94,7 +96,8 @@ class Watch:
     ) -> None:
         self.acq = acquisition
         self.scanner = scanner
-        self.machine = machine
+        self.learner = machine if isinstance(machine, RoleLearner) else None
+        self.machine = machine if isinstance(machine, MachineStream) else None
         self.limit = limit
         self.stop_on_fail = stop_on_fail
         self.snippets = snippets
@@ -102,17 +105,33 @@ class Watch:
         self.status = status
         self.status_seconds = status_seconds
         self.why: str | None = None
-        if snippets is not None:
+        if self.machine is not None:
+            self._start(self.machine)
+
+    def _start(self, machine: MachineStream) -> None:
+        """Check with ``machine`` from now on (the kept samples first, when learning)."""
+        self.machine = machine
+        if self.snippets is not None:
             for a in machine.axes:
                 for s in a.summaries:
                     s.fresh = []
+        self.scanner.want({r.index for a in machine.axes for r in a.roles.values()})
+        if self.learner is not None:
+            self.learner.replay(machine)
+            self.learner = None
 
     def _signal(self, signum: int, frame: FrameType | None) -> None:
         if self.why is None:
             self.why = "interrupted"
         self.acq.stop()
 
-    def _check_now(self) -> None:
+    def _check_now(self, final: bool = False) -> None:
+        if self.learner is not None:
+            machine = self.learner.attempt(final)
+            if machine is None:
+                return
+            self._start(machine)
+        assert self.machine is not None
         end = self.scanner.nsamples
         self.machine.flush(end)
         failed = False
@@ -128,6 +147,13 @@ class Watch:
         if failed and self.stop_on_fail and self.why is None:
             self.why = "stop on fail"
             self.acq.stop()
+
+    def _status(self, wall_s: float) -> str:
+        if self.machine is not None:
+            return status_line(self.machine, self.scanner.nsamples, self.scanner.rate, wall_s)
+        assert self.learner is not None
+        kept = Fraction(self.learner.samples) / self.scanner.rate
+        return f"[{wall_s:6.1f} s] telling the channels' roles from {format_time(kept)} of samples"
 
     def run(self) -> WatchResult:
         """Watch until the end; the report and how it ended."""
@@ -145,23 +171,33 @@ class Watch:
                         self.recorder.add(data)
                     if self.snippets is not None:
                         self.snippets.ring.add(data)
-                    self.machine.feed(self.scanner.scan(data))
+                    if self.machine is not None:
+                        self.machine.feed(self.scanner.scan(data))
+                    else:
+                        assert self.learner is not None
+                        self.learner.add(data)
                 now = time.monotonic()
                 if now - last_check >= FLUSH_SECONDS:
                     self._check_now()
                     last_check = now
                 if self.status is not None and now - last_status >= self.status_seconds:
-                    self.status(
-                        status_line(self.machine, self.scanner.nsamples, self.scanner.rate,
-                                    now - t_start)
-                    )  # fmt: skip
+                    self.status(self._status(now - t_start))
                     last_status = now
+        except BaseException:
+            self.acq.stop()
+            raise
         finally:
             for s, handler in old.items():
                 signal.signal(s, handler)
             code = self.acq.close()
-        self._check_now()
         failure = self.acq.failure(code)
+        if self.learner is not None and (failure or not self.learner.samples):
+            raise DeviceError(
+                f"{self.scanner.label}: {failure or 'no samples arrived'}, before the channels' "
+                "roles could be told (nothing was checked)"
+            )
+        self._check_now(final=True)
+        assert self.machine is not None
         n = self.scanner.nsamples
         if failure is None and self.limit is not None and self.why is None and n < self.limit:
             failure = f"sigrok-cli ended after {n:,} of the {self.limit:,} samples asked for"
