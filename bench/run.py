@@ -263,15 +263,24 @@ def bench_sr(
     return res
 
 
-def bench_sr_scan(path: Path, runs: int) -> dict[str, Any]:
-    cmd = [PY, str(HERE / "sr_scan.py"), str(path), "--repeat", str(max(3, runs))]
+def run_script(cmd: list[str]) -> tuple[list[dict[str, Any]], float] | dict[str, Any]:
+    """Run one of the bench scripts (in the repository root): its JSON lines and the load when it
+    started; on failure, the failed row to return (printed)."""
     print(f"  $ {sh(cmd)}")
     load = load1()
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
     if p.returncode:
-        print(f"  !! {p.stderr.strip()[-300:]}")
-        return {"error": p.stderr[-2000:], "target": False}
-    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
+        return {"command": sh(cmd), "rc": p.returncode, "error": p.stderr[-2000:], "target": False}
+    return [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")], load
+
+
+def bench_sr_scan(path: Path, runs: int) -> dict[str, Any]:
+    cmd = [PY, str(HERE / "sr_scan.py"), str(path), "--repeat", str(max(3, runs))]
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    res, load = got[0][-1], got[1]
     res["load"] = load
     ok = res["speedup"] >= 1.5 and res["same_edges"]
     print(f"  {res['samples'] / 1e6:.1f} M samples, {res['edges']} edges: new scan "
@@ -388,13 +397,10 @@ def bench_checks(path: Path, runs: int) -> dict[str, Any]:
 def bench_stepgen(quick: bool, runs: int) -> dict[str, Any]:
     cmd = [PY, str(HERE / "stepgen_vcd.py"), "--repeat", str(max(3, runs))]
     cmd += ["--seconds", "2"] if quick else []
-    print(f"  $ {sh(cmd)}")
-    load = load1()
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode:
-        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
-        return {"command": sh(cmd), "rc": p.returncode, "target": False}
-    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    res, load = got[0][-1], got[1]
     res.update(command=sh(cmd), load=load)
     print(f"  {res['simulated_s']:g} s simulated ({res['periods']} periods), {res['changes']} value "
           f"changes, {res['vcd_bytes'] / 1e6:.1f} MB: simulate {res['simulate_cpu_s']:.3f} s, write "
@@ -546,13 +552,10 @@ def bench_memory(quick: bool, runs: int) -> dict[str, Any]:
 def bench_stdin(runs: int) -> dict[str, Any]:
     """``bench/stdin_pipe.py``: grbl's raw samples through a pipe into ``wavecheck check -``."""
     cmd = [PY, str(HERE / "stdin_pipe.py"), "--runs", str(runs)]
-    print(f"  $ {sh(cmd)}")
-    load = load1()
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode:
-        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
-        return {"command": sh(cmd), "rc": p.returncode, "target": False}
-    res: dict[str, Any] = json.loads(p.stdout.strip().splitlines()[-1])
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    res, load = got[0][-1], got[1]
     res.update(command=sh(cmd), load=load)
     cpu_x = res["bytes"] / res["pipe_cpu_s"] / DEMO_BYTES_S
     print(f"  {res['samples'] / 1e6:.1f} M samples ({res['bytes'] / 1e6:.1f} MB) through the pipe in "
@@ -577,13 +580,10 @@ def bench_watch(quick: bool) -> dict[str, Any]:
     """``bench/watch_keepup.py``: ``wavecheck watch`` on sigrok's demo device, live."""
     seconds = 3 if quick else 10
     cmd = [PY, str(HERE / "watch_keepup.py"), "--seconds", str(seconds)]
-    print(f"  $ {sh(cmd)}")
-    load = load1()
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode:
-        print(f"  !! exit {p.returncode}: {p.stderr.strip()[-300:]}")
-        return {"command": sh(cmd), "rc": p.returncode, "target": False}
-    cases = [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    cases, load = got
     for c in cases:
         print(f"  {c['case']}: {c['samples'] / 1e6:.1f} M samples in {c['wall_s']:.1f} s wall, "
               f"{c['cpu_s']:.2f} s CPU (wavecheck only); paced {c['paced']:.2f}")  # fmt: skip

@@ -39,24 +39,7 @@ async def report_of_the_run(dut: Any) -> None:
     ).start()
     await dut.done.rising_edge
     report = await mon.finish()
-    rows = {
-        r.rule: {
-            "verdict": r.verdict,
-            "checked": r.checked,
-            "violations": r.violations,
-            "unknown": r.unknown,
-            "min_margin_ns": None if r.min_margin_ns is None else str(r.min_margin_ns),
-            "at_s": None if r.min_margin_at_s is None else str(r.min_margin_at_s),
-            "unknown_at": [int(t) for t in r.unknown_ticks],
-            "worst": [str(v.time_s) for v in r.worst_violations(5)],
-        }
-        for r in report.rules
-    }
-    out = {
-        "tick_s": str(report.capture.timebase.tick_s),
-        "steps": [report.steps.count, report.steps.forward, report.steps.reverse],
-        "rules": rows,
-    }
+    out = summary(report)
     with open(os.environ["WAVECHECK_SUMMARY"], "w", encoding="utf-8") as f:
         json.dump(out, f)
 
@@ -92,3 +75,25 @@ async def two_axes(dut: Any) -> None:
     }
     with open(os.environ["WAVECHECK_SUMMARY"], "w", encoding="utf-8") as f:
         json.dump(out, f)
+
+
+def summary(report: Any) -> dict[str, Any]:
+    """What the comparison with the dump looks at: time base, step counts and each rule's figures
+    (exact values as text, so they survive JSON)."""
+    return {
+        "tick_s": str(report.capture.timebase.tick_s),
+        "steps": [report.steps.count, report.steps.forward, report.steps.reverse],
+        "rules": {
+            r.rule: {
+                "verdict": r.verdict,
+                "checked": r.checked,
+                "violations": r.violations,
+                "unknown": r.unknown,
+                "min_margin_ns": None if r.min_margin_ns is None else str(r.min_margin_ns),
+                "at_s": None if r.min_margin_at_s is None else str(r.min_margin_at_s),
+                "unknown_at": [int(t) for t in r.unknown_ticks],
+                "worst": [str(v.time_s) for v in r.worst_violations(5)],
+            }
+            for r in report.rules
+        },
+    }

@@ -20,9 +20,10 @@ import sys
 import xml.etree.ElementTree as ET
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
 
 import pytest
+
+from tests.wavecheck.cocotb.stepgen_cocotb import summary as figures_of
 
 HERE = Path(__file__).parent
 DUT = HERE / "stepgen_dut.v"
@@ -107,26 +108,6 @@ def test_dir_hold_knob_fails_the_test_during_the_run(tmp_path: Path) -> None:
 
 
 # -- the monitor's report = wavecheck.check on the simulator's dump ---------------------------
-def _rows(report: Any) -> dict[str, Any]:
-    return {
-        "tick_s": str(report.capture.timebase.tick_s),
-        "steps": [report.steps.count, report.steps.forward, report.steps.reverse],
-        "rules": {
-            r.rule: {
-                "verdict": r.verdict,
-                "checked": r.checked,
-                "violations": r.violations,
-                "unknown": r.unknown,
-                "min_margin_ns": None if r.min_margin_ns is None else str(r.min_margin_ns),
-                "at_s": None if r.min_margin_at_s is None else str(r.min_margin_at_s),
-                "unknown_at": [int(t) for t in r.unknown_ticks],
-                "worst": [str(v.time_s) for v in r.worst_violations(5)],
-            }
-            for r in report.rules
-        },
-    }
-
-
 CASES = {
     "bad-hold-x-mid-run": {"DIR_HOLD_NS": 400, "XZ_AT_NS": 63_500, "XZ_NS": 1000},
     "good": {},
@@ -148,11 +129,11 @@ def test_report_equals_check_of_the_dump(tmp_path: Path, case: str, batch: int) 
     live = json.loads(summary.read_text())
     roles = {"step": f"{TOP}.step", "dir": f"{TOP}.dir"}
     fst = tmp_path / f"{TOP}.fst"
-    assert live == _rows(check(fst, "drv8825", map=roles))
+    assert live == figures_of(check(fst, "drv8825", map=roles))
     if shutil.which("fst2vcd"):  # the same run as VCD, written by GTKWave's converter
         vcd = tmp_path / f"{TOP}.vcd"
         subprocess.run(["fst2vcd", "-o", str(vcd), str(fst)], check=True, capture_output=True)
-        assert live == _rows(check(vcd, "drv8825", map=roles))
+        assert live == figures_of(check(vcd, "drv8825", map=roles))
     assert live["tick_s"] == str(Fraction(1, 10**12))  # the simulator's precision, 1 ps
     rules = live["rules"]
     hold = CASES[case].get("DIR_HOLD_NS", 1000)

@@ -17,6 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tests.wavecheck.stream.corpus import GOLDEN, GOLDEN_CASES, SHARED
 from wavecheck.axes import AxisMap
 from wavecheck.capture.model import NEVER, Capture, Channel
 from wavecheck.capture.open import open_capture
@@ -27,10 +28,6 @@ from wavecheck.report.machine import machine_dict
 from wavecheck.stream.blocks import MemorySource
 from wavecheck.stream.engine import check_stream
 from wavecheck.timebase import Timebase
-
-ROOT = Path(__file__).resolve().parents[3]
-GOLDEN = ROOT / "captures" / "golden"
-SHARED = ROOT.parent / "shared" / "captures"
 
 
 def _drive(
@@ -53,15 +50,6 @@ def _same(capture: Capture, axes: list[AxisMap], drives: dict, block: int, **kw:
 
 
 # -- the corpus -------------------------------------------------------------------------------
-GOLDEN_CASES = [
-    ("g202-p20-worst-dirhold.vcd", "gecko-g202", None),
-    ("g202-p16-dirhold2-worst.vcd", "gecko-g202", None),
-    ("stepgen0.vcd", "gecko-g202", None),
-    ("a4988-spike.vcd", "a4988", None),
-    ("xylotex-dirsetup-zero.vcd", "gecko-g202", None),
-    ("updown-uniform.vcd", "gecko-g202", 1),
-    ("stepgen1-quadrature.vcd", "gecko-g202", 2),
-]
 
 
 @pytest.mark.parametrize("block", [1, 2, 7, 64, 10**9])

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import shared_capture
+from tests.wavecheck.stream.corpus import GOLDEN, GOLDEN_CASES, ROOT
 from wavecheck.axes import AxisMap
 from wavecheck.capture.model import Capture, Channel
 from wavecheck.capture.open import open_capture
@@ -41,8 +42,6 @@ from wavecheck.stream.engine import check_stream
 from wavecheck.stream.windows import PLACES_PER_RULE, SIDE_EDGES, WindowKeeper
 from wavecheck.timebase import Timebase
 
-ROOT = Path(__file__).resolve().parents[3]
-GOLDEN = ROOT / "captures" / "golden"
 SMOOTHIE = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"
 GRBL = "sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr"
 
@@ -96,17 +95,6 @@ def _both(
     whole = check_machine(cap, axes, drives, **kw)  # type: ignore[arg-type]
     streamed = check_stream(MemorySource(cap, block), axes, drives, block_edges=block, **kw)  # type: ignore[arg-type]
     return list(zip(whole.axes, streamed.axes, strict=True))
-
-
-GOLDEN_CASES = [
-    ("g202-p20-worst-dirhold.vcd", "gecko-g202", None),
-    ("g202-p16-dirhold2-worst.vcd", "gecko-g202", None),
-    ("stepgen0.vcd", "gecko-g202", None),
-    ("a4988-spike.vcd", "a4988", None),
-    ("xylotex-dirsetup-zero.vcd", "gecko-g202", None),
-    ("updown-uniform.vcd", "gecko-g202", 1),
-    ("stepgen1-quadrature.vcd", "gecko-g202", 2),
-]
 
 
 @pytest.mark.parametrize("block", [1, 2, 7, 64, 10**9])
