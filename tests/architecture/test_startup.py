@@ -15,7 +15,7 @@ TINY = ROOT / "captures/golden/g202-p16-dirhold2-worst.vcd"
 
 #: Imported only where used: plotting, HTML/XML, pyvcd (the writer's header, the reference
 #: reader), the sigrok-cli layer, firmware readers, latency analysis, cross-checks, reports
-#: other than text/JSON.
+#: other than text/JSON, the live watch, cocotb.
 LAZY = (
     "matplotlib",
     "lxml",
@@ -26,6 +26,8 @@ LAZY = (
     "wavecheck.firmware.marlin",
     "wavecheck.firmware.capture",
     "wavecheck.latency",
+    "wavecheck.live",
+    "cocotb",
     "wavecheck.report.html",
     "wavecheck.report.plot",
     "wavecheck.report.junit",

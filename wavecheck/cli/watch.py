@@ -13,11 +13,9 @@ import argparse
 import sys
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from wavecheck.capture.binary import SampleBlocks
 from wavecheck.capture.model import Capture
-from wavecheck.capture.srzip import SrRecorder, sr_metadata
 from wavecheck.cli._axis_args import add_axis_arguments, roles_from_waveforms
 from wavecheck.cli.check import (
     RENDERERS,
@@ -29,12 +27,11 @@ from wavecheck.cli.check import (
 from wavecheck.cli.config import add_tuning_arguments
 from wavecheck.engine import check_machine
 from wavecheck.errors import DeviceError, UsageError
-from wavecheck.live.learn import RoleLearner
-from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
-from wavecheck.live.snippets import SampleRing, Snippets
-from wavecheck.live.watch import Watch
 from wavecheck.output import output_file
 from wavecheck.stream.engine import MachineStream
+
+if TYPE_CHECKING:
+    from wavecheck.live.learn import RoleLearner
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 __all__ = ["register", "run"]
@@ -182,6 +179,14 @@ def _status(mode: str) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck watch``; returns the exit code."""
+    # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
+    from wavecheck.capture.binary import SampleBlocks
+    from wavecheck.capture.srzip import SrRecorder, sr_metadata
+    from wavecheck.live.learn import RoleLearner
+    from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
+    from wavecheck.live.snippets import SampleRing, Snippets
+    from wavecheck.live.watch import Watch
+
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
     if args.max_snippets < 0:
