@@ -27,6 +27,7 @@ from wavecheck.verdict import Verdict, exit_code, overall_verdict
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
     from wavecheck.stream.summary import StepSummary
+    from wavecheck.stream.trace import StepTrace
     from wavecheck.stream.windows import SignalWindows
 
 __all__ = ["Report", "overall_verdict"]
@@ -74,6 +75,9 @@ class Report:
     windows: SignalWindows | None = None
     """A streamed report: the mapped signals in small windows around the worst places
     (:mod:`wavecheck.stream.windows`); None on the whole-capture path."""
+    trace: StepTrace | None = None
+    """A streamed report: position and step rate over time, thinned to a bounded number of
+    points (:mod:`wavecheck.stream.trace`), for the plot; None on the whole-capture path."""
 
     @property
     def verdict(self) -> Verdict:

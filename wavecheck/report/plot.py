@@ -14,8 +14,10 @@ The figure has three parts:
 
 A streamed report (:mod:`wavecheck.stream`) keeps no capture: its timing diagrams are drawn from
 the small windows of the signals kept around the worst places (:mod:`wavecheck.stream.windows`;
-the same drawing), its histograms from each rule's fixed bins (four per octave), and the motion
-panel, which needs every step, is left out.
+the same drawing), its histograms from each rule's fixed bins (four per octave), and its motion
+panel from the thinned step trace (:mod:`wavecheck.stream.trace`): per time bucket, the first and
+last step's position and the range reached, the fastest and slowest step, every reversal counted
+(the first ones marked); both titles say "thinned".
 
 matplotlib is imported lazily with the Agg backend (no display needed). Times are drawn in µs
 (or ns/ms when that reads better) relative to the start of the drawn interval; each panel's
@@ -42,12 +44,17 @@ from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from wavecheck.stream.trace import StepTrace
+    from wavecheck.timebase import Timebase
 
 __all__ = [
     "MAX_PLACES",
     "Place",
     "binned",
     "choose_places",
+    "figure",
     "hist_title",
     "place_title",
     "place_traces",
@@ -437,8 +444,57 @@ def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
         ax.spines[side].set_visible(False)
 
 
-def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> bytes:
-    """The report's figure as PNG bytes (timing diagrams, then histograms)."""
+def _draw_trace(ax_pos: Axes, ax_rate: Axes, trace: StepTrace, timebase: Timebase) -> None:
+    """A streamed report's motion panel from its thinned step trace (as
+    :func:`wavecheck.report.measure_plot.draw_motion` draws every step): position through each
+    bucket's first and last step over the range it reached, each bucket's fastest and slowest
+    step rate, reversals marked."""
+    from matplotlib.collections import PolyCollection
+
+    from wavecheck.report.measure_plot import MAX_MARKS
+
+    def sec(ticks: npt.NDArray[np.int64]) -> Any:
+        return timebase.ns_array(ticks) / 1e9
+
+    start, low, high = trace.envelope()
+    x0, width = sec(start), float(trace.width * timebase.tick_ns) / 1e9
+    boxes = [
+        [(a, lo), (a + width, lo), (a + width, hi), (a, hi)]
+        for a, lo, hi in zip(x0.tolist(), low.tolist(), high.tolist(), strict=True)
+    ]
+    ax_pos.add_collection(PolyCollection(boxes, facecolors=_TRACE_COLOR, alpha=0.2, lw=0))
+    t, p = trace.position_points()
+    ax_pos.plot(sec(t), p, drawstyle="steps-post", color=_TRACE_COLOR, lw=1)
+    t, gap = trace.rate_points()
+    rate = float(timebase.samplerate_hz) / gap
+    ms = 2 if len(rate) > 1000 else 5
+    ax_rate.plot(sec(t), rate, ".", ms=ms, color=_TRACE_COLOR)
+    if len(rate) and rate.max() / max(rate.min(), 1e-12) > 100:
+        ax_rate.set_yscale("log")
+    for ax in (ax_pos, ax_rate):
+        for x in sec(trace.reversal_ticks[:MAX_MARKS]).tolist():
+            ax.axvline(x, color=_FAIL_COLOR, lw=0.8, ls="--", alpha=0.7)
+        for side in ("top", "right"):
+            ax.spines[side].set_visible(False)
+        ax.tick_params(labelsize=8)
+    extra = f" (first {MAX_MARKS} marked)" if trace.reversals > MAX_MARKS else ""
+    bucket = _fmt_ns(trace.width * timebase.tick_ns)
+    ax_pos.set_title(
+        f"steps: position, {trace.reversals} reversal(s){extra} — thinned", fontsize=9, loc="left"
+    )
+    ax_pos.set_xlabel(
+        f"time (s); {len(p):,} points of {trace.count:,} steps, range per {bucket} shaded",
+        fontsize=8.5,
+    )
+    ax_pos.set_ylabel("position (steps)", fontsize=8.5)
+    ax_rate.set_title("steps: step rate — thinned", fontsize=9, loc="left")
+    ax_rate.set_xlabel(f"time (s); fastest and slowest step per {bucket}", fontsize=8.5)
+    ax_rate.set_ylabel("step rate (Hz)", fontsize=8.5)
+
+
+def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figure:
+    """The report's figure: timing diagrams, the motion panel (position and step rate, when
+    there are steps: every step, or a streamed report's thinned trace), then histograms."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -450,8 +506,9 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
     hist_rows = math.ceil(len(hist_rules) / hist_cols)
-    # position and step rate against time, reversals marked (every step: not when streamed)
-    motion = isinstance(report.steps, StepEvents) and report.steps.count > 1
+    every = isinstance(report.steps, StepEvents) and report.steps.count > 1
+    thinned = not every and report.trace is not None and report.trace.count > 1
+    motion = every or thinned
     heights = [diag_h] * len(places) + [2.4] * motion + [2.6] * hist_rows
     if not heights:
         heights = [1.0]
@@ -474,7 +531,11 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
 
         pair = grid[len(places), :].subgridspec(1, 2)
         ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
-        draw_motion(ax_pos, ax_rate, report.events(), report.capture.timebase, "steps")
+        if thinned:
+            assert report.trace is not None
+            _draw_trace(ax_pos, ax_rate, report.trace, report.capture.timebase)
+        else:
+            draw_motion(ax_pos, ax_rate, report.events(), report.capture.timebase, "steps")
     for k, r in enumerate(hist_rules):
         row, col = divmod(k, hist_cols)
         span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col
@@ -484,8 +545,13 @@ def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> 
         ax = fig.add_subplot(grid[0, :])
         ax.axis("off")
         ax.text(0.5, 0.5, "nothing measured", ha="center", va="center")
+    return fig
+
+
+def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> bytes:
+    """The report's figure (:func:`figure`) as PNG bytes."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    figure(report, max_places, dpi).savefig(buf, format="png")
     return buf.getvalue()
 
 

@@ -64,6 +64,7 @@ from wavecheck.report.model import Report
 from wavecheck.rules import Rule
 from wavecheck.stream.blocks import BlockSource, EdgeBlock
 from wavecheck.stream.summary import RuleSummary, StepSummary
+from wavecheck.stream.trace import StepTrace
 from wavecheck.stream.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 
 __all__ = ["DEFAULT_BLOCK_EDGES", "AxisStream", "MachineStream", "NotStreamable", "check_stream"]
@@ -143,6 +144,7 @@ class AxisStream:
             for r in self.rules
         ]
         self.steps = StepSummary()
+        self.trace = StepTrace()  # position and step rate, thinned, for the plot
         self.gap: tuple[int, int] | None = None
         self.pulses: dict[int, int] = {}
         self.start = skel.start
@@ -220,6 +222,7 @@ class AxisStream:
         )
         new = steps.ticks >= t0
         self.steps.add(steps.direction[new], steps.ambiguous[steps.ambiguous >= t0])
+        self.trace.add(steps.ticks[new], steps.direction[new])
         self._timer(steps.ticks[new])
         for r, summary in zip(self.rules, self.summaries, strict=True):
             if r.check == "sequence":
@@ -350,6 +353,7 @@ class AxisStream:
             interface=iface,
             windows=self.windows.signals(iface.signals),
             steps=self.steps,
+            trace=self.trace,
             rules=list(self.summaries),
             rates=rates,
             notes=[*capture.notes, *extra],
