@@ -85,13 +85,14 @@ class RuleSummary:
     def add(self, part: RuleResult, left_out: EdgeArray) -> None:
         """Merge one window's judged intervals (``part``) and the starts of the intervals it left
         out as unknown (touching an x/z stretch)."""
+        fails, indet = part.violations, part.indeterminate
         self.checked += part.checked
-        self.fails += part.violations
-        self.indet += part.indeterminate
+        self.fails += fails
+        self.indet += indet
         self._add_unknown(left_out)
         self.left_out += len(left_out)
         iv = part.intervals
-        if self.fresh is not None and part.violations:
+        if self.fresh is not None and fails:
             f = np.flatnonzero(part.outcome == FAIL)[:FRESH_KEPT]
             self.fresh.extend(zip(iv.start[f].tolist(), iv.end[f].tolist(), strict=True))
         if self.limit_ns is None:  # state_sequence: errors in time order, no length
@@ -104,28 +105,53 @@ class RuleSummary:
             return
         w = iv.measured
         a, b = self._key(iv.start, iv.end)
-        least = np.flatnonzero(w == w.min())  # the shortest, ties broken as the whole path
-        i = int(least[np.lexsort((b[least], a[least]))[0]])
-        best = (int(w[i]), int(a[i]), int(b[i]))
-        if self._best is None or best < self._best:
-            self._best = best
-        top = int(w.max())
-        self._longest = top if self._longest is None else max(self._longest, top)
-        self._hist = self._hist + Histogram.of(w)
-        ind = part.outcome == INDETERMINATE
-        if ind.any():
+        lo, hi = int(w.min()), int(w.max())
+        self._shortest(w, a, b, lo)
+        self._longest = hi if self._longest is None else max(self._longest, hi)
+        self._hist = self._hist + Histogram.of(w, (lo, hi))
+        if indet:
+            ind = part.outcome == INDETERMINATE
             below, above, exact = decide_parts(self.limit_ns, self.timebase, w[ind])
             if below is not None:
                 self._below = below if self._below is None else max(self._below, below)
             if above is not None:
                 self._above = above if self._above is None else min(self._above, above)
             self._exact += exact
-        f = np.flatnonzero(part.outcome == FAIL)
-        if len(f) and len(self._worst) >= self.keep:  # only those that beat the last one kept
+        if fails:
+            self._add_worst(part, w, a, b, lo)
+
+    def _shortest(self, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int) -> None:
+        """Keep the shortest interval (``lo`` ticks), ties broken as the whole path."""
+        if self._best is not None and (
+            lo > self._best[0] or lo == self._best[0] and a.min() > self._best[1]
+        ):
+            return  # cannot beat the one kept
+        least = np.flatnonzero(w == lo)
+        la = a[least]
+        first = int(la.min())
+        best = (lo, first, int(b[least[la == first]].min()))
+        if self._best is None or best < self._best:
+            self._best = best
+
+    def _add_worst(
+        self, part: RuleResult, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int
+    ) -> None:
+        """Merge the failed intervals that beat the last of the kept worst ones."""
+        fails = part.outcome == FAIL
+        if len(self._worst) >= self.keep:
             (kw, ka, kb), _, _, _ = self._worst[-1]
+            if lo > kw or lo == kw and a.min() > ka:
+                return  # a cheap reject: none is shorter, none as short and earlier
+            f = np.flatnonzero(fails & (w <= kw))
             fw, fa, fb = w[f], a[f], b[f]
             f = f[(fw < kw) | ((fw == kw) & ((fa < ka) | ((fa == ka) & (fb < kb))))]
+        else:
+            f = np.flatnonzero(fails)
+            if len(f) > self.keep:  # only the shortest ``keep`` lengths can be kept
+                fw = w[f]
+                f = f[fw <= np.partition(fw, self.keep - 1)[self.keep - 1]]
         if len(f):
+            iv = part.intervals
             fw, fa, fb = w[f], a[f], b[f]
             order = np.lexsort((fb, fa, fw))[: self.keep]
             new = [

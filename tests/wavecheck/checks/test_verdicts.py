@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from wavecheck.checks.primitives import Intervals
-from wavecheck.checks.result import FAIL, INDETERMINATE, PASS, evaluate
+from wavecheck.checks.result import FAIL, INDETERMINATE, PASS, Histogram, evaluate
 from wavecheck.timebase import Timebase
 
 
@@ -101,3 +101,31 @@ def test_worst_n_is_a_prefix_of_the_full_order(w: list[int], n: int) -> None:
     everything = [(v.measured_ns, v.start_tick) for v in r.worst_violations(len(w))]
     assert everything == sorted(everything)
     assert [(v.measured_ns, v.start_tick) for v in r.worst_violations(n)] == everything[:n]
+
+
+def _bin(w: int) -> int:
+    """The definition: bin 0 for w ≤ 0, else 4·(e − 1) + q + 1, 2^(e−1) ≤ w < 2^e, q the quarter."""
+    if w <= 0:
+        return 0
+    e = w.bit_length()
+    return 4 * (e - 1) + (4 * (w - 2 ** (e - 1))) // 2 ** (e - 1) + 1
+
+
+@given(
+    w=st.lists(st.integers(-3, 2**53 - 1), max_size=30)
+    | st.lists(st.integers(-3, 300), max_size=30)
+    | st.builds(
+        lambda base, d: [base + x for x in d],
+        st.integers(0, 2**52),
+        st.lists(st.integers(0, 70000), max_size=30),
+    )
+)
+def test_histogram_bins_match_the_definition(w: list[int]) -> None:
+    """Both ways of counting (each length when they span few ticks, else by bin) give the
+    definition's bins and counts."""
+    a = np.array(w, dtype=np.int64)
+    assert Histogram.bins(a).tolist() == [_bin(x) for x in w]
+    counts: dict[int, int] = {}
+    for x in w:
+        counts[_bin(x)] = counts.get(_bin(x), 0) + 1
+    assert Histogram.of(a).counts == tuple(sorted(counts.items()))
