@@ -268,6 +268,7 @@ class SampleBlocks:
     def want(self, channels: Iterable[int]) -> None:
         """Extract the edges of ``channels`` (bits) only; the others are only counted."""
         self.wanted = set(channels)
+        self.finder.want(slot for slot, b in enumerate(self.bits) if b in self.wanted)
 
     def scan(self, data: bytes) -> EdgeBlock:
         """The block of the samples ``data`` completes (its ``end`` is :attr:`nsamples`)."""
@@ -284,11 +285,10 @@ class SampleBlocks:
         if first and self.finder.last is not None:
             block.start = 0
             block.known = {b: (0, self.finder.initial[b]) for b in self.bits}
-        for b in self.bits:
-            e = self.finder.edges(b)
-            self.counts[b] += len(e)
-            if b in self.wanted and len(e):
+        for b in self.bits:  # slot b is bit b
+            if self.finder.wanted[b] and len(e := self.finder.edges(b)):
                 block.edges[b] = e
+        self.counts = list(self.finder.counted)
         return block
 
     @property

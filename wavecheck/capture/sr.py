@@ -342,7 +342,8 @@ def _entry_extents(path: str | os.PathLike[str], zf: zipfile.ZipFile) -> dict[in
 
 
 class _EdgeFinder:
-    """Edges of the enabled bits over a stream of sample blocks."""
+    """Edges of the enabled bits over a stream of sample blocks: the positions of the wanted bits'
+    changes (:meth:`want`; all at first), only the number of changes of the others."""
 
     def __init__(self, unitsize: int, bits: list[int]) -> None:
         self.unitsize = unitsize
@@ -354,8 +355,24 @@ class _EdgeFinder:
         self.last: bytes | None = None  # the previous block's last sample
         self.initial = [0] * len(bits)
         self.parts: list[list[npt.NDArray[np.int64]]] = [[] for _ in bits]
+        self.wanted = [True] * len(bits)
+        self.counted = [0] * len(bits)
+        """Changes of each slot so far (wanted or not)."""
         self.nsamples = 0
         self._ne = np.empty(0, dtype=bool)  # reused: fresh memory is costly to touch
+
+    def want(self, slots: Iterable[int]) -> None:
+        """Keep the positions of ``slots``' changes only; the others are only counted."""
+        keep = set(slots)
+        self.wanted = [slot in keep for slot in range(len(self.bits))]
+
+    def _found(self, slot: int, pos: npt.NDArray[np.int64] | int) -> None:
+        """Changes of ``slot`` at sample ``pos`` (ascending), or a number of changes (``int``)."""
+        if isinstance(pos, int):
+            self.counted[slot] += pos
+            return
+        self.counted[slot] += len(pos)
+        self.parts[slot].append(pos)
 
     def add(self, block: npt.NDArray[np.uint8]) -> None:
         """Add whole samples (``len(block)`` a multiple of ``unitsize``)."""
@@ -374,13 +391,19 @@ class _EdgeFinder:
                 d0 = first[col] ^ self.last[col]
                 for bit, slot in slots:
                     if (d0 >> bit) & 1:
-                        self.parts[slot].append(np.array([base], dtype=np.int64))
+                        self._found(
+                            slot, np.array([base], dtype=np.int64) if self.wanted[slot] else 1
+                        )
         self.last = bytes(block[(n - 1) * us : n * us])
         self.nsamples += n
         if n == 1:
             return
         self._ne = ne = _grow(self._ne, (len(block) - us) // 8)
-        at, xor = _changed_bytes(block[: n * us], us, ne)
+        changed = _changed_bytes(block[: n * us], us, ne, DENSE_WORDS)
+        if changed is None:  # dense: most samples change
+            self._dense(block[: n * us], base)
+            return
+        at, xor = changed
         if not len(at):
             return
         for col, slots in self.columns.items():
@@ -392,22 +415,52 @@ class _EdgeFinder:
                     continue
                 dv, pos = xor[sel], at[sel] // us + (base + 1)
             if len(slots) == 1 and not (dv & np.uint8(~(1 << slots[0][0]) & 0xFF)).any():
-                self.parts[slots[0][1]].append(pos)  # only this bit changes in the column
+                slot = slots[0][1]  # only this bit changes in the column
+                self._found(slot, pos if self.wanted[slot] else len(pos))
                 continue
             for bit, slot in slots:
                 sel = (dv & np.uint8(1 << bit)) != 0
-                if sel.any():
-                    self.parts[slot].append(pos[sel])
+                if self.wanted[slot]:
+                    if sel.any():
+                        self._found(slot, pos[sel])
+                else:
+                    self._found(slot, int(np.count_nonzero(sel)))
+
+    def _dense(self, block: npt.NDArray[np.uint8], base: int) -> None:
+        """:meth:`add` where most samples change: the XOR of every byte with the one a sample
+        earlier, bit by bit (the unwanted bits only counted)."""
+        us = self.unitsize
+        xor = np.bitwise_xor(block[us:], block[:-us]).reshape(-1, us)
+        scratch = np.empty(len(xor), dtype=np.uint8)
+        for col, slots in self.columns.items():
+            dv = xor[:, col]
+            for bit, slot in slots:
+                hit = np.bitwise_and(dv, np.uint8(1 << bit), out=scratch)
+                if self.wanted[slot]:
+                    pos = np.flatnonzero(hit)
+                    if len(pos):
+                        pos += base + 1
+                        self._found(slot, pos)
+                else:
+                    self._found(slot, int(np.count_nonzero(hit)))
 
     def edges(self, slot: int) -> npt.NDArray[np.int64]:
+        """The positions found for ``slot`` since the last call (empty if not wanted)."""
         parts = self.parts[slot]
         self.parts[slot] = []
         if not parts:
             return np.zeros(0, dtype=np.int64)
-        return np.concatenate(parts).astype(np.int64, copy=False)
+        if len(parts) == 1:
+            return parts[0]
+        return np.concatenate(parts)
 
 
 EdgeFinder = _EdgeFinder  # public: capture/binary.py scans raw samples with it
+
+
+#: The share of differing 8-byte words above which :func:`_changed_bytes` leaves the block to a
+#: plain XOR of every byte (positions of 8 bytes per differing word cost more than that).
+DENSE_WORDS = 0.25
 
 
 def _grow(buf: npt.NDArray[np.bool_], size: int) -> npt.NDArray[np.bool_]:
@@ -416,8 +469,11 @@ def _grow(buf: npt.NDArray[np.bool_], size: int) -> npt.NDArray[np.bool_]:
 
 
 def _changed_bytes(
-    block: npt.NDArray[np.uint8], step: int, scratch: npt.NDArray[np.bool_] | None = None
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.uint8]]:
+    block: npt.NDArray[np.uint8],
+    step: int,
+    scratch: npt.NDArray[np.bool_] | None = None,
+    dense: float | None = None,
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.uint8]] | None:
     """Where ``block[step:]`` differs from ``block[:-step]`` (the sample before): byte indexes
     into ``block[step:]`` and the XOR there (non-zero), ascending.
 
@@ -425,6 +481,8 @@ def _changed_bytes(
     with the same bytes one sample earlier (an unaligned ``uint64`` view, no XOR written over
     every byte), and only the bytes of differing words are looked at: ~3× faster than XOR +
     ``flatnonzero`` over the bytes. ``scratch`` (≥ (len − step) // 8 bools) is reused if given.
+    None when more than the share ``dense`` (if given) of the words differ: then the caller XORs
+    every byte instead.
     """
     size = len(block) - step
     if size <= 0:
@@ -436,6 +494,8 @@ def _changed_bytes(
     ne = scratch[:words]
     np.not_equal(cur[: 8 * words].view(np.uint64), prev[: 8 * words].view(np.uint64), out=ne)
     w = np.flatnonzero(ne)
+    if dense is not None and len(w) > dense * words:
+        return None
     at = (w[:, None] * 8 + _BYTE_OFFSETS).ravel()
     if 8 * words < size:  # the last few bytes, not a whole word
         at = np.concatenate([at, np.arange(8 * words, size, dtype=np.int64)])
@@ -735,6 +795,7 @@ class SrBlocks:
 
         with _open_zip(self.path) as zf, open(self.path, "rb") as raw:
             finder = _EdgeFinder(self.meta.unitsize, self.bits)
+            finder.want(slot for slot, b in enumerate(self.bits) if b in self.wanted)
             first = True
             for _ in _scan(self.path, zf, raw, self.meta, finder, self.chunk_bytes):
                 block = EdgeBlock(end=finder.nsamples, start=0 if first else None)
@@ -744,10 +805,11 @@ class SrBlocks:
                         block.known[b] = (0, finder.initial[slot])
                     first = False
                 for slot, b in enumerate(self.bits):
-                    e = finder.edges(slot)
-                    self.counts[b] += len(e)
-                    if b in self.wanted and len(e):
-                        block.edges[b] = e
+                    self.counts[b] = finder.counted[slot]
+                    if finder.wanted[slot]:
+                        e = finder.edges(slot)
+                        if len(e):
+                            block.edges[b] = e
                 yield block
             self.nsamples = finder.nsamples
 

@@ -103,8 +103,9 @@ def test_changed_bytes_equals_xor_and_flatnonzero(n: int, step: int) -> None:
     data=st.data(),
 )
 def test_edge_finder_equals_unpackbits(unitsize: int, data: st.DataObject) -> None:
-    """Any samples, any enabled bits, any split into blocks (whole samples): the same edges as
-    unpackbits over all samples, including changes exactly at block and word boundaries."""
+    """Any samples, any enabled bits, any split into blocks (whole samples), dense or sparse
+    blocks: the same edges as unpackbits over all samples for the wanted bits, including changes
+    exactly at block and word boundaries, and the same number of changes for every bit."""
     n = data.draw(st.integers(1, 80), label="samples")
     flips = data.draw(
         st.lists(st.tuples(st.integers(0, n - 1), st.integers(0, 8 * unitsize - 1)), max_size=60),
@@ -121,10 +122,20 @@ def test_edge_finder_equals_unpackbits(unitsize: int, data: st.DataObject) -> No
     cuts = (
         sorted(data.draw(st.sets(st.integers(1, n - 1), max_size=6), label="cuts")) if n > 1 else []
     )
+    wanted = data.draw(st.sets(st.sampled_from(range(len(bits)))), label="wanted slots")
+    # the share of changed words above which a block is XORed whole: 0 always, 2 never
+    dense = data.draw(st.sampled_from([0.0, sr.DENSE_WORDS, 2.0]), label="dense")
     finder = _EdgeFinder(unitsize, bits)
-    for a, b in zip([0, *cuts], [*cuts, n], strict=True):
-        finder.add(np.frombuffer(raw, np.uint8)[a * unitsize : b * unitsize])
+    finder.want(wanted)
+    saved, sr.DENSE_WORDS = sr.DENSE_WORDS, dense
+    try:
+        for a, b in zip([0, *cuts], [*cuts, n], strict=True):
+            finder.add(np.frombuffer(raw, np.uint8)[a * unitsize : b * unitsize])
+    finally:
+        sr.DENSE_WORDS = saved
     assert finder.nsamples == n
     for slot, bit in enumerate(bits):
         initial, edges = edges_by_unpacking(raw, unitsize, bit)
-        assert (finder.initial[slot], finder.edges(slot).tolist()) == (initial, edges)
+        got = finder.edges(slot).tolist()
+        assert (finder.initial[slot], got) == (initial, edges if slot in wanted else [])
+        assert finder.counted[slot] == len(edges)  # unwanted bits: only counted
