@@ -16,12 +16,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from wavecheck.capture.model import EdgeArray
 
-__all__ = ["Intervals", "holds", "periods", "setups", "widths"]
+__all__ = ["Intervals", "holds", "periods", "setups", "sorted_search", "widths"]
+
+#: :func:`sorted_search` counts over the ticks spanned when they are at most this many per event.
+DENSE_SPAN = 8
 
 
 @dataclass(frozen=True)
@@ -92,7 +97,7 @@ def setups(data: EdgeArray, ref: EdgeArray) -> Intervals:
     A data event with no reference event after it (the capture ends first) is not measured.
     A reference event at the same tick as the data event gives an interval of 0.
     """
-    k = np.searchsorted(ref, data, side="left")
+    k = sorted_search(ref, data, "left")
     ok = k < len(ref)
     return Intervals(data[ok], ref[k[ok]])
 
@@ -103,6 +108,25 @@ def holds(ref: EdgeArray, data: EdgeArray) -> Intervals:
     Only the last reference before a data event bounds it (earlier ones are further away). A data
     event with no reference before it (the capture starts after it) is not measured.
     """
-    k = np.searchsorted(ref, data, side="right") - 1
+    k = sorted_search(ref, data, "right") - 1
     ok = k >= 0
     return Intervals(ref[k[ok]], data[ok])
+
+
+def sorted_search(
+    ref: EdgeArray, keys: EdgeArray, side: Literal["left", "right"]
+) -> npt.NDArray[np.intp]:
+    """``np.searchsorted(ref, keys, side)`` for increasing ``ref`` (ticks).
+
+    Where the events are dense (the ticks they span at most :data:`DENSE_SPAN` per event, and
+    ``ref`` strictly increasing), a running count over the span instead of a binary search per
+    key: ~5× faster on a capture where nearly every sample is an edge."""
+    if len(ref) and len(keys):
+        lo = min(int(ref[0]), int(keys.min()))
+        span = max(int(ref[-1]), int(keys.max())) - lo
+        if span <= DENSE_SPAN * (len(ref) + len(keys)) and bool(np.all(ref[1:] > ref[:-1])):
+            below = np.zeros(span + 2, dtype=np.intp)  # below[j]: events of ref before lo + j
+            below[ref - (lo - 1)] = 1
+            np.cumsum(below, out=below)
+            return below[keys - (lo if side == "left" else lo - 1)]
+    return np.searchsorted(ref, keys, side=side)

@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
+from wavecheck.checks.primitives import Intervals, holds, periods, setups, sorted_search, widths
 
 A = np.asarray
 
@@ -65,3 +65,18 @@ def test_setups_holds_match_brute_force(ref_raw: list[int], data_raw: list[int])
     h = holds(A(ref, dtype=np.int64), A(data, dtype=np.int64))
     want_h = [(max(r for r in ref if r <= d), d) for d in data if any(r <= d for r in ref)]
     assert list(zip(h.start.tolist(), h.end.tolist(), strict=True)) == want_h
+
+
+_sorted_ticks = st.lists(st.integers(-50, 400), max_size=120).map(sorted)
+
+
+@given(ref=_sorted_ticks, keys=_sorted_ticks, side=st.sampled_from(["left", "right"]))
+def test_sorted_search_is_searchsorted(ref: list[int], keys: list[int], side: str) -> None:
+    """Dense events (counted over their span) and sparse or repeated ones (binary search): the
+    same indexes as numpy's searchsorted."""
+    r, k = A(ref, dtype=np.int64), A(keys, dtype=np.int64)
+    want = np.searchsorted(r, k, side=side)
+    assert sorted_search(r, k, side).tolist() == want.tolist()
+    strict = np.unique(r)  # strictly increasing: the counted path when dense
+    want = np.searchsorted(strict, k, side=side)
+    assert sorted_search(strict, k, side).tolist() == want.tolist()
