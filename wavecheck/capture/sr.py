@@ -435,7 +435,8 @@ class _EdgeFinder:
         for col, slots in self.columns.items():
             dv = xor[:, col]
             for bit, slot in slots:
-                hit = np.bitwise_and(dv, np.uint8(1 << bit), out=scratch)
+                np.right_shift(dv, bit, out=scratch)
+                hit = np.bitwise_and(scratch, 1, out=scratch).view(bool)  # 0/1: numpy's fast path
                 if self.wanted[slot]:
                     pos = np.flatnonzero(hit)
                     if len(pos):
