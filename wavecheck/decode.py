@@ -141,7 +141,10 @@ def level_before(
         same = np.zeros(len(ticks), dtype=np.bool_)
         same[at[hit]] = True
     else:
-        n = np.searchsorted(edges, ticks, side="left")
+        # here, not at the top: the checks package imports this module
+        from wavecheck.checks.primitives import sorted_search
+
+        n = sorted_search(edges, ticks, "left")  # dense edges: counted, not searched
         clipped = np.minimum(n, len(edges) - 1)
         same = (n < len(edges)) & (edges[clipped] == ticks)
     level = (sig.initial ^ (n & 1)).astype(np.int8)
