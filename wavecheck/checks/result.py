@@ -14,6 +14,7 @@ pass ⟺ W ≥ ⌈(limit + T) / tick⌉, fail ⟺ W ≤ ⌊(limit − T) / tick�
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -319,6 +320,7 @@ class Histogram:
             return cls(())
         lo, hi = (int(w.min()), int(w.max())) if bounds is None else bounds
         if hi - lo < _SPAN_COUNTED:  # count each length, then bin the distinct lengths
+            lo = 0 if 0 <= lo and hi < _SPAN_COUNTED else lo  # no shifted copy of w
             c = np.bincount(w - lo if lo else w)
             v = np.flatnonzero(c)
             n, b = c[v], cls.bins(v + lo)  # b ascends with v: equal bins are neighbours
@@ -383,6 +385,15 @@ class RuleOutcome(Protocol):
     def histogram(self) -> Histogram: ...
 
 
+@functools.lru_cache(maxsize=64)
+def _thresholds(limit_ns: Fraction, tick_ns: Fraction, resolution_ns: Fraction) -> tuple[int, int]:
+    """(pass_min, fail_max) in ticks: pass ⟺ W ≥ pass_min, fail ⟺ W ≤ fail_max (exact; once per
+    rule, not once per streamed window)."""
+    pass_min = _clamp(math.ceil((limit_ns + resolution_ns) / tick_ns))
+    fail_max = _clamp(math.floor((limit_ns - resolution_ns) / tick_ns))
+    return pass_min, fail_max
+
+
 def evaluate(
     rule: str,
     intervals: Intervals,
@@ -394,9 +405,7 @@ def evaluate(
 ) -> RuleResult:
     """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact ns);
     ``unknown_ticks`` are the starts of the intervals left out as unknown (not judged)."""
-    tick = timebase.tick_ns
-    pass_min = _clamp(math.ceil((limit_ns + resolution_ns) / tick))
-    fail_max = _clamp(math.floor((limit_ns - resolution_ns) / tick))
+    pass_min, fail_max = _thresholds(limit_ns, timebase.tick_ns, resolution_ns)
     w = intervals.measured
     if len(w) and w.min() >= pass_min:  # every one passes (the usual case), or every one fails
         outcome = np.full(len(w), PASS, dtype=np.int8)
