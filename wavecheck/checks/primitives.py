@@ -98,8 +98,8 @@ def setups(data: EdgeArray, ref: EdgeArray) -> Intervals:
     A reference event at the same tick as the data event gives an interval of 0.
     """
     k = sorted_search(ref, data, "left")
-    ok = k < len(ref)
-    return Intervals(data[ok], ref[k[ok]])
+    n = int(np.searchsorted(k, len(ref)))  # k ascends: the measured ones are a prefix
+    return Intervals(data[:n], ref[k[:n]])
 
 
 def holds(ref: EdgeArray, data: EdgeArray) -> Intervals:
@@ -109,8 +109,8 @@ def holds(ref: EdgeArray, data: EdgeArray) -> Intervals:
     event with no reference before it (the capture starts after it) is not measured.
     """
     k = sorted_search(ref, data, "right") - 1
-    ok = k >= 0
-    return Intervals(ref[k[ok]], data[ok])
+    n = int(np.searchsorted(k, 0))  # k ascends: the measured ones are a suffix
+    return Intervals(ref[k[n:]], data[n:])
 
 
 def sorted_search(
