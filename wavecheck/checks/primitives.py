@@ -52,6 +52,12 @@ class Intervals:
         """Lengths in ticks (``end - start``), computed once."""
         return self.end - self.start
 
+    @cached_property
+    def bounds(self) -> tuple[int, int]:
+        """The shortest and the longest length in ticks, computed once ((0, 0) when empty)."""
+        w = self.measured
+        return (int(w.min()), int(w.max())) if len(w) else (0, 0)
+
     @classmethod
     def empty(cls) -> Intervals:
         """No interval."""

@@ -323,10 +323,11 @@ class Histogram:
             lo = 0 if 0 <= lo and hi < _SPAN_COUNTED else lo  # no shifted copy of w
             c = np.bincount(w - lo if lo else w)
             v = np.flatnonzero(c)
-            n, b = c[v], cls.bins(v + lo)  # b ascends with v: equal bins are neighbours
-            first = np.flatnonzero(np.diff(b, prepend=-1))
-            pairs = zip(b[first].tolist(), np.add.reduceat(n, first).tolist(), strict=True)
-            return cls(tuple(pairs))
+            b = cls.bins(v + lo)  # ascending with v: its last is the largest
+            total = np.zeros(int(b[-1]) + 1, dtype=np.int64)
+            np.add.at(total, b, c[v])
+            b = np.flatnonzero(total)
+            return cls(tuple(zip(b.tolist(), total[b].tolist(), strict=True)))
         c = np.bincount(cls.bins(w))  # a few hundred bins at most: counting beats sorting
         b = np.flatnonzero(c)
         return cls(tuple(zip(b.tolist(), c[b].tolist(), strict=True)))
@@ -407,9 +408,10 @@ def evaluate(
     ``unknown_ticks`` are the starts of the intervals left out as unknown (not judged)."""
     pass_min, fail_max = _thresholds(limit_ns, timebase.tick_ns, resolution_ns)
     w = intervals.measured
-    if len(w) and w.min() >= pass_min:  # every one passes (the usual case), or every one fails
+    lo, hi = intervals.bounds
+    if len(w) and lo >= pass_min:  # every one passes (the usual case), or every one fails
         outcome = np.full(len(w), PASS, dtype=np.int8)
-    elif len(w) and w.max() <= min(fail_max, pass_min - 1):
+    elif len(w) and hi <= min(fail_max, pass_min - 1):
         outcome = np.full(len(w), FAIL, dtype=np.int8)
     else:
         outcome = np.full(len(w), INDETERMINATE, dtype=np.int8)

@@ -105,7 +105,7 @@ class RuleSummary:
             return
         w = iv.measured
         a, b = self._key(iv.start, iv.end)
-        lo, hi = int(w.min()), int(w.max())
+        lo, hi = iv.bounds
         self._shortest(w, a, b, lo)
         self._longest = hi if self._longest is None else max(self._longest, hi)
         self._hist = self._hist + Histogram.of(w, (lo, hi))
