@@ -137,16 +137,15 @@ class RuleSummary:
         self, part: RuleResult, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int
     ) -> None:
         """Merge the failed intervals that beat the last of the kept worst ones."""
-        fails = part.outcome == FAIL
         if len(self._worst) >= self.keep:
             (kw, ka, kb), _, _, _ = self._worst[-1]
             if lo > kw or lo == kw and a.min() > ka:
                 return  # a cheap reject: none is shorter, none as short and earlier
-            f = np.flatnonzero(fails & (w <= kw))
+            f = np.flatnonzero((part.outcome == FAIL) & (w <= kw))
             fw, fa, fb = w[f], a[f], b[f]
             f = f[(fw < kw) | ((fw == kw) & ((fa < ka) | ((fa == ka) & (fb < kb))))]
         else:
-            f = np.flatnonzero(fails)
+            f = np.flatnonzero(part.outcome == FAIL)
             if len(f) > self.keep:  # only the shortest ``keep`` lengths can be kept
                 fw = w[f]
                 f = f[fw <= np.partition(fw, self.keep - 1)[self.keep - 1]]
