@@ -79,19 +79,6 @@ def _edges(times: npt.NDArray[np.int64], codes: npt.NDArray[np.int8]) -> SignalE
     return b.signals()[0]
 
 
-def _channel(name: str, index: int, sig: SignalEdges, end: int) -> Channel:
-    return Channel(
-        name=name,
-        index=index,
-        initial=sig.initial if sig.known_from is not None else 0,
-        edges=sig.edges,
-        known_from=sig.known_from if sig.known_from is not None else end,
-        xz_times=sig.xz_times,
-        xz_ends=sig.xz_ends,
-        never_known=sig.known_from is None,
-    )
-
-
 def read_wellen(
     path: str | os.PathLike[str],
     *,
@@ -148,7 +135,7 @@ def read_wellen(
             "(--map step=NAME[0]); ranges taken as [width-1:0]"
         )
     start, end = first or 0, last or 0
-    channels = [_channel(n, i, s, end) for i, (n, s) in enumerate(found)]
+    channels = [s.channel(n, i, end) for i, (n, s) in enumerate(found)]
     never = [c.name for c in channels if c.never_known]
     if never:
         notes.append(f"{len(never)} channel(s) never have a known level: {', '.join(never[:10])}")
@@ -235,4 +222,4 @@ def load_bit(capture: Capture, key: str, vec: Vector, bit: int) -> Channel:
         raise UsageError(f"{capture.path}: vector {key!r} not found when reading it again")
     times, codes = _changes(var.signal, vec.width, pos)
     index = max((c.index for c in capture.channels), default=-1) + 1
-    return _channel(f"{key}[{bit}]", index, _edges(times, codes), capture.end)
+    return _edges(times, codes).channel(f"{key}[{bit}]", index, capture.end)

@@ -28,7 +28,6 @@ import shutil
 import signal
 import subprocess
 import threading
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -148,6 +147,7 @@ class Acquisition:
     process: subprocess.Popen[bytes] = field(init=False)
     stderr: collections.deque[str] = field(init=False)
     stopped_by_us: bool = field(init=False, default=False)
+    _drainer: threading.Thread = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         try:
@@ -161,7 +161,8 @@ class Acquisition:
         except OSError as err:
             raise DeviceError(f"{self.command[0]}: cannot run: {err.strerror or err}") from None
         self.stderr = collections.deque(maxlen=STDERR_LINES)
-        threading.Thread(target=self._drain, daemon=True).start()
+        self._drainer = threading.Thread(target=self._drain, daemon=True)
+        self._drainer.start()
 
     def _drain(self) -> None:
         assert self.process.stderr is not None
@@ -209,7 +210,7 @@ class Acquisition:
 
     def failure(self, status: int) -> str | None:
         """Why the acquisition counts as failed (None: it ended as asked)."""
-        time.sleep(0.05)  # let the stderr thread take the last lines
+        self._drainer.join(timeout=2.0)  # sigrok-cli has exited: its last lines are in
         errors = [line for line in self.stderr if "rror" in line or "ailed" in line]
         if status < 0 and not (self.stopped_by_us and status == -signal.SIGINT):
             name = signal.Signals(-status).name

@@ -505,6 +505,20 @@ class SignalEdges:
     xz_times: npt.NDArray[np.int64]  # ticks where a known level turns x/z
     xz_ends: npt.NDArray[np.int64]  # for each, the tick a known value comes back (or NEVER)
 
+    def channel(self, name: str, index: int, end: int) -> Channel:
+        """The capture's channel (a never-known one is unknown up to ``end``, the last tick)."""
+        known = self.known_from is not None
+        return Channel(
+            name=name,
+            index=index,
+            initial=self.initial if known else 0,
+            edges=self.edges,
+            known_from=self.known_from if self.known_from is not None else end,
+            xz_times=self.xz_times,
+            xz_ends=self.xz_ends,
+            never_known=not known,
+        )
+
 
 def build_capture(
     path: str | os.PathLike[str],
@@ -539,16 +553,7 @@ def build_capture(
         path, tb, header.comments, samplerate, resolution_s, notes, header.version
     )
     channels = [
-        Channel(
-            name=name,
-            index=i,
-            initial=sig.initial if sig.known_from is not None else 0,
-            edges=sig.edges,
-            known_from=sig.known_from if sig.known_from is not None else end,
-            xz_times=sig.xz_times,
-            xz_ends=sig.xz_ends,
-            never_known=sig.known_from is None,
-        )
+        sig.channel(name, i, end)
         for i, (name, sig) in enumerate(zip(layout.names, signals, strict=True))
     ]
     never = [
