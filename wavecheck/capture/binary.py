@@ -173,16 +173,10 @@ def read_binary(
     f = opened if opened is not None else source
     assert not isinstance(f, (str, os.PathLike))
     done = 0
-    carry = b""
     try:
         while data := _read_full(f, step):
             done += len(data)
-            if carry:
-                data, carry = carry + data, b""
-            whole = len(data) - len(data) % us
-            if whole < len(data):
-                carry = data[whole:]
-            finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+            finder.add_bytes(data)
             report(done, total)
     except OSError as err:
         raise CaptureError(
@@ -191,7 +185,7 @@ def read_binary(
     finally:
         if opened is not None:
             opened.close()
-    if carry:
+    if carry := finder.partial:
         raise CaptureError(
             label,
             f"byte {done - len(carry)}",
@@ -257,7 +251,6 @@ class SampleBlocks:
         self.wanted = set(self.bits)
         self.counts = [0] * numchannels
         self.notes: list[str] = []
-        self._carry = b""
         self.skeleton = self._capture(0)
 
     @property
@@ -275,12 +268,7 @@ class SampleBlocks:
         from wavecheck.stream.blocks import EdgeBlock
 
         first = self.finder.last is None
-        if self._carry:
-            data, self._carry = self._carry + data, b""
-        whole = len(data) - len(data) % self.unitsize
-        if whole < len(data):
-            self._carry = data[whole:]
-        self.finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+        self.finder.add_bytes(data)
         block = EdgeBlock(end=self.finder.nsamples)
         if first and self.finder.last is not None:
             block.start = 0
@@ -294,7 +282,7 @@ class SampleBlocks:
     @property
     def partial(self) -> int:
         """Bytes of a sample not yet complete."""
-        return len(self._carry)
+        return len(self.finder.partial)
 
     def _capture(self, end: int) -> Capture:
         return Capture(

@@ -359,6 +359,8 @@ class _EdgeFinder:
         self.counted = [0] * len(bits)
         """Changes of each slot so far (wanted or not)."""
         self.nsamples = 0
+        self.partial = b""
+        """The bytes of a sample not yet complete (:meth:`add_bytes`)."""
         self._ne = np.empty(0, dtype=bool)  # reused: fresh memory is costly to touch
 
     def want(self, slots: Iterable[int]) -> None:
@@ -373,6 +375,16 @@ class _EdgeFinder:
             return
         self.counted[slot] += len(pos)
         self.parts[slot].append(pos)
+
+    def add_bytes(self, data: bytes) -> None:
+        """Add the next bytes of the stream, however they are cut: a sample split between two
+        calls is kept in :attr:`partial` until its other part comes."""
+        if self.partial:
+            data, self.partial = self.partial + data, b""
+        whole = len(data) - len(data) % self.unitsize
+        if whole < len(data):
+            self.partial = data[whole:]
+        self.add(np.frombuffer(data, dtype=np.uint8, count=whole))
 
     def add(self, block: npt.NDArray[np.uint8]) -> None:
         """Add whole samples (``len(block)`` a multiple of ``unitsize``)."""
@@ -617,18 +629,13 @@ def _scan(
     for info in meta.members:
         got = 0
         try:
-            carry = b""
             room = meta.data_end.get(info.header_offset)
             for data in _member_blocks(zf, raw, info, step, room):
                 got += len(data)
-                if carry:
-                    data, carry = carry + data, b""
-                whole = len(data) - len(data) % meta.unitsize
-                if whole < len(data):
-                    carry = data[whole:]
-                finder.add(np.frombuffer(data, dtype=np.uint8, count=whole))
+                finder.add_bytes(data)
                 report(done + got, total)
                 yield
+            finder.partial = b""  # a member's last partial sample is not joined to the next's
         except _READ_ERRORS as err:
             raise CaptureError(
                 path,
