@@ -1,8 +1,8 @@
 """Time the check engine alone over an edge-array file; print one JSON line.
 
 ``python bench/check_bench.py FILE.npz [--repeat N] [--drive ID]``: builds a
-:class:`~wavecheck.capture.model.Capture` from the STEP/DIR arrays written by
-``bench/gen.py`` (no file reading), then runs :func:`wavecheck.engine.run_check` — decode,
+:class:`~wavecheck.capture.edges.Capture` from the STEP/DIR arrays written by
+``bench/gen.py`` (no file reading), then runs :func:`wavecheck.engine.plan.run_check` — decode,
 every rule, the step-rate figures — and the JSON renderer, ``N`` times. Reports the median wall
 and CPU (``process_time``: work done by this one process, which runs on one core: the numpy
 calls used here are single-threaded) and edges/s.
@@ -19,9 +19,9 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report.json import render_json
 from wavecheck.timebase import Timebase
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.timebase import Timebase
 
 

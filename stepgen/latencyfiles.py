@@ -272,7 +272,7 @@ def read_capture_latency(path: str | Path) -> tuple[int, str]:
         ConfigError: the edges are not on a periodic lattice (hardware-timed stepping).
     """
     from wavecheck.capture.open import open_capture
-    from wavecheck.engine import auto_map
+    from wavecheck.engine.plan import auto_map
     from wavecheck.latency import analyse
     from wavecheck.linuxcnc.steptypes import step_type
 

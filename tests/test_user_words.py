@@ -17,7 +17,7 @@ from tests.wavecheck.waves import capture, drive, pulses
 from wavecheck.cli import COMMANDS
 from wavecheck.cli import main as wavecheck_main
 from wavecheck.drives.library import list_drives, load_drive, rules_dir
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report import render_json, render_text
 from wavecheck.report.html import render_html
 

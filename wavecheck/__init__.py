@@ -1,7 +1,7 @@
 """wavecheck: check every edge of a STEP/DIR capture against a stepper drive's datasheet."""
 
 from wavecheck.api import Axis, check, check_axes
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.errors import (
     CaptureError,
     ConfigError,

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.axes import axes_from_tables
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine import check_machine, run_check
+from wavecheck.engine.plan import check_machine, run_check
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig
 from wavecheck.report.machine import MachineReport
@@ -123,7 +123,7 @@ def check(
 
     Args:
         capture: a file path (read with :func:`wavecheck.capture.open.open_capture`) or a
-            :class:`~wavecheck.capture.model.Capture`.
+            :class:`~wavecheck.capture.edges.Capture`.
         drive: a drive id from ``rules/``, a rule file path, or a :class:`Drive`.
         map: role → channel name or index (``{"step": "STEP (Y axis)"}``).
         invert: roles to invert.
@@ -190,7 +190,7 @@ def check_axes(
     :class:`~wavecheck.report.Report` per axis (``.axis("x")``) and the worst verdict.
 
     Args:
-        capture: a file path or a :class:`~wavecheck.capture.model.Capture`.
+        capture: a file path or a :class:`~wavecheck.capture.edges.Capture`.
         axes: axis name → its roles (``{"step": "5", "dir": "6"}``) or an :class:`Axis` with its
             own drive and options.
         drive: the drive of every axis that does not name its own.

@@ -14,9 +14,9 @@ The monitor watches the handles with one cocotb task each (``handle.value_change
 each value change at its simulation time in the simulator's precision (integer ticks: the time
 base is exactly ``10**cocotb.simtime.time_precision`` s), and every ``batch`` changes (or
 ``batch_time`` of simulated time) turns what it gathered into an
-:class:`~wavecheck.stream.blocks.EdgeBlock` with the VCD reader's edge builder (x/z/U/W/- are
+:class:`~wavecheck.capture.blocks.EdgeBlock` with the VCD reader's edge builder (x/z/U/W/- are
 unknown stretches; several changes at one time step: the last one wins) and feeds the streamed
-engine (:class:`~wavecheck.stream.engine.MachineStream`). With ``fail_on_violation`` (default),
+engine (:class:`~wavecheck.engine.axis.MachineStream`). With ``fail_on_violation`` (default),
 the first batch with a failed rule raises :class:`WavecheckViolation` (an ``AssertionError``) in
 the monitor's task, which fails the running cocotb test at that simulation time, naming the
 rule, the worst violation so far, its margin and the time. :meth:`StepMonitor.finish` checks the
@@ -44,16 +44,16 @@ except ImportError as err:  # pragma: no cover - the extra is part of the test i
     raise ImportError("wavecheck.cocotb needs cocotb 2: pip install 'wavecheck[cocotb]'") from err
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import NEVER, Capture, Channel
+from wavecheck.capture.blocks import EdgeBlock
+from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
-from wavecheck.checks.result import RuleOutcome
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import MachineStream
+from wavecheck.engine.plan import check_machine
+from wavecheck.engine.verdicts import RuleOutcome
 from wavecheck.errors import UsageError
 from wavecheck.report.machine import MachineReport
 from wavecheck.report.model import Report
-from wavecheck.stream.blocks import EdgeBlock
-from wavecheck.stream.engine import MachineStream
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns, format_time, parse_option
 

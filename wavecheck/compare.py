@@ -36,9 +36,9 @@ from typing import Literal
 import numpy as np
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import Drive
-from wavecheck.engine import check_machine
+from wavecheck.engine.plan import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.report.model import Report
 from wavecheck.verdict import overall_verdict
@@ -299,13 +299,13 @@ def compare_axes(
     step_type: int | None = None,
     forward_level: int = 0,
 ) -> MachineComparison:
-    """Check every axis of ``capture`` and of ``golden`` (:func:`wavecheck.engine.check_machine`,
+    """Check every axis of ``capture`` and of ``golden`` (:func:`wavecheck.engine.plan.check_machine`,
     each file read once; an axis against its drive in ``drives``, the same in both files) and
     compare each capture axis with the golden axis of the same name.
 
     Raises:
         UsageError: the two files' axes differ by name, an axis has no drive; what
-            :func:`wavecheck.engine.run_check` raises (prefixed ``golden`` for the golden).
+            :func:`wavecheck.engine.plan.run_check` raises (prefixed ``golden`` for the golden).
     """
     names = [a.name for a in axes]
     golden_names = [a.name for a in golden_axes]

@@ -49,7 +49,7 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.errors import UsageError
 
 __all__ = [

@@ -5,7 +5,7 @@ kind of the rule table (:mod:`wavecheck.rules`) that applies to the axis's step 
 period, DIR setup, DIR hold, dir delay, state hold, enable setup — the count, min, max, exact mean
 and percentiles, and where the extremes start; plus the instantaneous step-rate range (from the
 step periods). The intervals are built by the same code as ``check``'s
-(:func:`wavecheck.checks.compile.measure_intervals`), so the shortest interval here is the
+(:func:`wavecheck.engine.intervals.measure_intervals`), so the shortest interval here is the
 shortest ``check`` judges; there is no limit and no verdict.
 
 Every figure is in exact ticks of the capture's :class:`~wavecheck.timebase.Timebase`; the true
@@ -22,15 +22,15 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, EdgeArray
-from wavecheck.checks.compile import measure_intervals
-from wavecheck.checks.primitives import Intervals
-from wavecheck.checks.rates import pulse_level as generator_pulse_level
-from wavecheck.decode import StepEvents, decode
+from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.model import ActiveEdge
-from wavecheck.engine import auto_map, resolve_resolution_ns
+from wavecheck.engine.decode import StepEvents, decode
+from wavecheck.engine.interface import StepInterface, build_interface, mapped_channel_names
+from wavecheck.engine.intervals import measure_intervals
+from wavecheck.engine.plan import auto_map, resolve_resolution_ns
+from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.rates import pulse_level as generator_pulse_level
 from wavecheck.errors import UsageError
-from wavecheck.interface import StepInterface, build_interface, mapped_channel_names
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.rules import Rule, applicable
 from wavecheck.timebase import Timebase
@@ -281,7 +281,7 @@ def measure_axis(
     Args:
         capture: the capture (edges in ticks).
         mapping: role → channel name or index; roles missing are mapped by channel name
-            (:func:`wavecheck.engine.auto_map`).
+            (:func:`wavecheck.engine.plan.auto_map`).
         invert: roles to invert.
         step_type_number: LinuxCNC step type 0–15 (default: :func:`default_type`).
         active_edge: the STEP (UP/DOWN) edge that counts a step.

@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from wavecheck.checks.result import RuleOutcome
+    from wavecheck.engine.verdicts import RuleOutcome
     from wavecheck.report.machine import MachineReport
     from wavecheck.report.model import Report
 
@@ -182,7 +182,7 @@ class CaptureSpec:
 def _map_of(raw: Any, where: str) -> dict[str, str]:
     """A ``map`` value: a table or ``"role=CH,..."`` text."""
     if isinstance(raw, str):
-        from wavecheck.interface import parse_map
+        from wavecheck.engine.interface import parse_map
 
         return parse_map([raw])
     if isinstance(raw, dict):
@@ -221,8 +221,8 @@ def _axes(
 ) -> tuple[AxisSpec, ...]:
     """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
     from wavecheck.axes import axes_from_tables
+    from wavecheck.engine.interface import role_name
     from wavecheck.errors import WavecheckError
-    from wavecheck.interface import role_name
 
     raw = entry["axes"]
     if not isinstance(raw, dict) or not raw or not all(isinstance(v, dict) for v in raw.values()):
@@ -587,9 +587,9 @@ class AxisCollector(CaptureCollector):
 
 def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
     """The rules a check against ``drive_ref`` will evaluate, known without reading the capture."""
-    from wavecheck.checks.compile import planned_rules
     from wavecheck.drives.library import load_drive
-    from wavecheck.engine import default_step_type
+    from wavecheck.engine.intervals import planned_rules
+    from wavecheck.engine.plan import default_step_type
     from wavecheck.linuxcnc.steptypes import step_type
 
     drive = load_drive(drive_ref)

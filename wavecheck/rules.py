@@ -3,7 +3,7 @@
 Each rule is a generic timing check in the spirit of Verilog's ``$width``, ``$period``,
 ``$setup`` and ``$hold``: a *reference* event starts each interval and a *data* event ends it,
 and the interval must be at least the drive's figure. The checks compiler
-(:mod:`wavecheck.checks.compile`), the reports, the drive library (which keys a rule file may
+(:mod:`wavecheck.engine.intervals`), the reports, the drive library (which keys a rule file may
 give) and ``wavecheck drives`` all read this table; adding a rule is one entry here plus its
 measurement, if it needs a new kind, and its tests.
 

@@ -21,7 +21,7 @@ from tests.reliability.refcheck import min_margin, reference_check
 from tests.wavecheck.waves import drive as make_drive
 from wavecheck.capture.sr import read_sr
 from wavecheck.capture.vcd import read_vcd
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 
 TICK_NS = Fraction(100)  # VCD "$timescale 100 ns", .sr at 10 MHz
 
@@ -145,8 +145,8 @@ def test_the_comparison_has_teeth(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
     an engine that looked only strictly after the change (an off-by-one) is caught."""
     import numpy as np
 
-    import wavecheck.checks.compile as compiled
-    from wavecheck.checks.primitives import Intervals
+    import wavecheck.engine.intervals as compiled
+    from wavecheck.engine.primitives import Intervals
 
     w = {
         "step": (0, [10, 12, 20, 22]), "dir": (0, [20]), "end": 30,

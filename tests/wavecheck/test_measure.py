@@ -12,11 +12,11 @@ from hypothesis import strategies as st
 
 from tests.conftest import write_vcd
 from wavecheck.capture.open import open_capture
-from wavecheck.checks.primitives import Intervals
-from wavecheck.decode import StepEvents
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.tune import tune_drive
-from wavecheck.engine import run_check
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.plan import run_check
+from wavecheck.engine.primitives import Intervals
 from wavecheck.measure import (
     AxisSpec,
     _exact_sum,

@@ -14,9 +14,9 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
-from wavecheck.interface import build_interface, parse_map
+from wavecheck.engine.interface import build_interface, parse_map
 from wavecheck.roles import Proposal, propose
 from wavecheck.roles.dirs import DirFit, assign
 from wavecheck.roles.names import name_hint

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, EdgeFinder
 from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError, UsageError
@@ -34,7 +34,7 @@ from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency
 
 if TYPE_CHECKING:
-    from wavecheck.stream.blocks import EdgeBlock
+    from wavecheck.capture.blocks import EdgeBlock
 
 __all__ = ["MAX_CHANNELS", "BinaryFormat", "SampleBlocks", "parse_binary_format", "read_binary"]
 
@@ -224,7 +224,7 @@ def read_binary(
 
 class SampleBlocks:
     """Raw samples arriving piece by piece (a live analyzer's pipe), scanned into
-    :class:`~wavecheck.stream.blocks.EdgeBlock` s: the streamed engine's source for
+    :class:`~wavecheck.capture.blocks.EdgeBlock` s: the streamed engine's source for
     ``wavecheck watch``. Tick n is sample n; the time base is the sample rate, exactly.
 
     :meth:`scan` takes any number of bytes (a sample split across two pieces is joined) and gives
@@ -265,7 +265,7 @@ class SampleBlocks:
 
     def scan(self, data: bytes) -> EdgeBlock:
         """The block of the samples ``data`` completes (its ``end`` is :attr:`nsamples`)."""
-        from wavecheck.stream.blocks import EdgeBlock
+        from wavecheck.capture.blocks import EdgeBlock
 
         first = self.finder.last is None
         self.finder.add_bytes(data)

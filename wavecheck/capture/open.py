@@ -19,7 +19,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
 from wavecheck.errors import CaptureError, UsageError
 

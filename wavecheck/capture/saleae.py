@@ -18,7 +18,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase

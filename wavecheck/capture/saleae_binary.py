@@ -34,7 +34,7 @@ from typing import BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import NEVER, Capture, Channel
+from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.units import parse_frequency
 

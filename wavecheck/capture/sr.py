@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.srzip import EXACT_SECTION
 from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
@@ -42,7 +42,7 @@ from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency, parse_frequency
 
 if TYPE_CHECKING:
-    from wavecheck.stream.blocks import EdgeBlock
+    from wavecheck.capture.blocks import EdgeBlock
 
 
 def _load_zlib() -> Any:
@@ -759,7 +759,7 @@ def read_sr(
 
 
 class SrBlocks:
-    """A ``.sr`` read block by block (:class:`wavecheck.stream.blocks.BlockSource`): the
+    """A ``.sr`` read block by block (:class:`wavecheck.capture.blocks.BlockSource`): the
     edges of ``channels`` (indices; None: every channel) after each inflated block, the other
     channels only counted. Same scan as :func:`read_sr` (same arguments)."""
 
@@ -799,7 +799,7 @@ class SrBlocks:
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each inflated block of samples."""
-        from wavecheck.stream.blocks import EdgeBlock
+        from wavecheck.capture.blocks import EdgeBlock
 
         with _open_zip(self.path) as zf, open(self.path, "rb") as raw:
             finder = _EdgeFinder(self.meta.unitsize, self.bits)

@@ -25,7 +25,7 @@ from typing import Any, BinaryIO, cast
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel, Vector
+from wavecheck.capture.edges import Capture, Channel, Vector
 from wavecheck.capture.vcd.header import SignalEdges, resolution_of
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.errors import CaptureError, UsageError

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.errors import UsageError
 
 __all__ = [
@@ -34,7 +34,7 @@ class AxisRun:
     Attributes:
         name: the axis name (None: the unnamed single axis).
         roles: role → channel as written (``--map``, or inferred); roles left out are mapped by
-            channel name (:func:`wavecheck.engine.auto_map`).
+            channel name (:func:`wavecheck.engine.plan.auto_map`).
         invert: roles to invert (``--invert`` for this axis, then those found with the roles).
         step_type: LinuxCNC step type 0–15, None: the drive's (check) or the default (measure).
         forward_level: the DIR level that means forward (0 low, 1 high).

@@ -11,7 +11,7 @@ import argparse
 import os
 from fractions import Fraction
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
 from wavecheck.errors import UsageError
 from wavecheck.units import SAMPLE_RATE, parse_option

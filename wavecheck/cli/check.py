@@ -3,7 +3,7 @@
 Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 2
 unusable input or usage (one line, no traceback).
 
-The command is a thin layer: options → :func:`wavecheck.engine.run_check` → a renderer. New
+The command is a thin layer: options → :func:`wavecheck.engine.plan.run_check` → a renderer. New
 outputs register in :data:`RENDERERS` (``--format``); extra side outputs (plots, HTML, GTKWave
 files) can be added as options handled in :func:`write_outputs`.
 """
@@ -18,7 +18,8 @@ from fractions import Fraction
 from typing import Any
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture
+from wavecheck.capture.blocks import BlockSource, open_stream
+from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import (
     add_axis_arguments,
     axis_runs,
@@ -53,15 +54,14 @@ from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, c
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive
 from wavecheck.drives.tune import tune_drive
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
+from wavecheck.engine.plan import check_machine
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.machine import MachineReport
 from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
-from wavecheck.stream.blocks import BlockSource, open_stream
-from wavecheck.stream.engine import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
 
 __all__ = [
     "RENDERERS",
@@ -166,7 +166,7 @@ def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
 @dataclass
 class CheckSetup:
     """What ``check``'s options say about a capture: the axes, their drives and the engine's
-    keyword arguments (:func:`wavecheck.engine.check_machine`), and notes on how the roles were
+    keyword arguments (:func:`wavecheck.engine.plan.check_machine`), and notes on how the roles were
     found."""
 
     axes: list[AxisMap]

@@ -23,10 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.decode import StepEvents, decode
-from wavecheck.engine import auto_map
+from wavecheck.engine.decode import StepEvents, decode
+from wavecheck.engine.interface import build_interface, find_channel, parse_map
+from wavecheck.engine.plan import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,
@@ -36,7 +37,6 @@ from wavecheck.follow import (
     positions_at,
     read_command,
 )
-from wavecheck.interface import build_interface, find_channel, parse_map
 from wavecheck.linuxcnc.steptypes import step_type
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import parse_option

@@ -21,13 +21,13 @@ import sys
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import (
     add_capture_arguments,
     capture_from_args,
     resolution_from_args,
 )
-from wavecheck.engine import resolve_resolution_ns
+from wavecheck.engine.plan import resolve_resolution_ns
 from wavecheck.units import format_frequency, format_time, json_number
 
 __all__ = ["info_dict", "info_text", "register", "run"]

@@ -16,11 +16,11 @@ import sys
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.engine import auto_map
+from wavecheck.engine.interface import parse_map
+from wavecheck.engine.plan import auto_map
 from wavecheck.errors import UnitError, UsageError
-from wavecheck.interface import parse_map
 from wavecheck.linuxcnc.steptypes import step_type
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import format_ns, json_number, time_ns

@@ -15,7 +15,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, roles_from_waveforms
 from wavecheck.cli.check import (
     RENDERERS,
@@ -25,10 +25,10 @@ from wavecheck.cli.check import (
     write_outputs,
 )
 from wavecheck.cli.config import add_tuning_arguments
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import MachineStream
+from wavecheck.engine.plan import check_machine
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.output import output_file
-from wavecheck.stream.engine import MachineStream
 
 if TYPE_CHECKING:
     from wavecheck.live.learn import RoleLearner

@@ -20,9 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wavecheck.crosscheck.sigrok import DecoderOutput, SigrokInput
-from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge
-from wavecheck.interface import RoleSignal
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.interface import RoleSignal
 
 __all__ = ["CrosscheckResult", "compare"]
 

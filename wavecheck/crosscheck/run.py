@@ -6,7 +6,7 @@ Two independent decoders run on the same capture:
 - ``stepper_motor`` (rising edges only) writes one position line per step *except the last*:
   line k spans [edge k, edge k+1] in samples and shows the position after step k.
 
-Both are compared with :func:`wavecheck.decode.decode` on the same channels:
+Both are compared with :func:`wavecheck.engine.decode.decode` on the same channels:
 :mod:`wavecheck.crosscheck.sigrok` prepares sigrok-cli's input and runs it,
 :mod:`wavecheck.crosscheck.model` compares (and explains sigrok's known differences).
 """
@@ -17,14 +17,14 @@ import os
 import tempfile
 from pathlib import Path
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.sigrokcli import find_sigrok_cli
 from wavecheck.crosscheck.model import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import prepare_input, run_decoders
-from wavecheck.decode import decode
 from wavecheck.drives.model import ActiveEdge
+from wavecheck.engine.decode import decode
+from wavecheck.engine.interface import build_interface
 from wavecheck.errors import CaptureError, UsageError
-from wavecheck.interface import build_interface
 
 __all__ = ["crosscheck"]
 

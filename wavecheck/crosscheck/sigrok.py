@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, EdgeArray
+from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.capture.sigrokcli import SAMPLERATE_OPTION_FORMATS, convert, run_sigrok, show
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.drives.model import ActiveEdge

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from wavecheck.checks.rates import pulse_level
 from wavecheck.drives.model import ActiveEdge
+from wavecheck.engine.interface import StepInterface
+from wavecheck.engine.rates import pulse_level
 from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
-from wavecheck.interface import StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict

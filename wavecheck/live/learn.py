@@ -14,8 +14,8 @@ from collections.abc import Callable
 from fractions import Fraction
 
 from wavecheck.capture.binary import SampleBlocks, read_binary
-from wavecheck.capture.model import Capture
-from wavecheck.stream.engine import MachineStream
+from wavecheck.capture.edges import Capture
+from wavecheck.engine.axis import MachineStream
 
 __all__ = ["FIRST_TRY_S", "RoleLearner"]
 

@@ -2,7 +2,7 @@
 
 Each piece read from the pipe goes, in this order, to the ``--save`` recorder, the snippet ring,
 the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the streamed engine
-(:class:`~wavecheck.stream.engine.MachineStream`). At most every :data:`FLUSH_SECONDS` the engine
+(:class:`~wavecheck.engine.axis.MachineStream`). At most every :data:`FLUSH_SECONDS` the engine
 checks what has gathered (so the figures are current whatever the step rate), the violations it
 found are handed to the snippets, and the status line is redrawn.
 
@@ -24,12 +24,12 @@ from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
 from wavecheck.capture.srzip import SrRecorder
+from wavecheck.engine.axis import MachineStream
 from wavecheck.errors import DeviceError
 from wavecheck.live.learn import RoleLearner
 from wavecheck.live.sigrok import Acquisition
 from wavecheck.live.snippets import Snippets
 from wavecheck.report.machine import MachineReport
-from wavecheck.stream.engine import MachineStream
 from wavecheck.units import format_ns, format_time
 
 __all__ = ["FLUSH_SECONDS", "READ_BYTES", "Watch", "WatchResult", "status_line"]

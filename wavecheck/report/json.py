@@ -18,7 +18,7 @@ import json
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.checks.result import RuleOutcome, Violation
+from wavecheck.engine.verdicts import RuleOutcome, Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.model import Report

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
 
-from wavecheck.checks.result import RuleOutcome, Violation
+from wavecheck.engine.verdicts import RuleOutcome, Violation
 from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_ns
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.report.model import Report
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 

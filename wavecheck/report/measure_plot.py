@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from wavecheck.decode import StepEvents
+from wavecheck.engine.decode import StepEvents
 from wavecheck.measure import AxisMeasurement, IntervalStats, Measurement
 from wavecheck.timebase import Timebase
 

@@ -14,21 +14,21 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from wavecheck.capture.model import Capture
-from wavecheck.checks.rates import MaxStepRates
-from wavecheck.checks.result import RuleOutcome, RuleResult, Violation
-from wavecheck.decode import StepEvents
+from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.interface import RoleSignal, StepInterface
+from wavecheck.engine.rates import MaxStepRates
+from wavecheck.engine.verdicts import RuleOutcome, RuleResult, Violation
 from wavecheck.errors import UsageError
-from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 
 if TYPE_CHECKING:
+    from wavecheck.engine.results import StepSummary
+    from wavecheck.engine.trace import StepTrace
+    from wavecheck.engine.windows import SignalWindows
     from wavecheck.firmware.capture import FirmwareCheck
-    from wavecheck.stream.summary import StepSummary
-    from wavecheck.stream.trace import StepTrace
-    from wavecheck.stream.windows import SignalWindows
 
 __all__ = ["Report", "overall_verdict"]
 
@@ -46,7 +46,7 @@ class Report:
         forward_level: the DIR level taken as forward (type 0).
         resolution_ns: T used for the verdicts, exact ns (0 = exact).
         steps: the decoded steps (their counts only on the streamed path:
-            :class:`wavecheck.stream.summary.StepSummary`).
+            :class:`wavecheck.engine.results.StepSummary`).
         rules: one result per evaluated rule, in report order (every interval on the
             whole-capture path; summaries on the streamed path: :class:`RuleOutcome`).
         not_stated: rules of this step type the drive gives no limit for (not evaluated).
@@ -74,10 +74,10 @@ class Report:
     """The axis name in a run of several axes (``--map x.step=…``), None for a single axis."""
     windows: SignalWindows | None = None
     """A streamed report: the mapped signals in small windows around the worst places
-    (:mod:`wavecheck.stream.windows`); None on the whole-capture path."""
+    (:mod:`wavecheck.engine.windows`); None on the whole-capture path."""
     trace: StepTrace | None = None
     """A streamed report: position and step rate over time, thinned to a bounded number of
-    points (:mod:`wavecheck.stream.trace`), for the plot; None on the whole-capture path."""
+    points (:mod:`wavecheck.engine.trace`), for the plot; None on the whole-capture path."""
 
     @property
     def verdict(self) -> Verdict:

@@ -13,9 +13,9 @@ The figure has three parts:
   whole capture's distance from the datasheet shows.
 
 A streamed report (:mod:`wavecheck.stream`) keeps no capture: its timing diagrams are drawn from
-the small windows of the signals kept around the worst places (:mod:`wavecheck.stream.windows`;
+the small windows of the signals kept around the worst places (:mod:`wavecheck.engine.windows`;
 the same drawing), its histograms from each rule's fixed bins (four per octave), and its motion
-panel from the thinned step trace (:mod:`wavecheck.stream.trace`): per time bucket, the first and
+panel from the thinned step trace (:mod:`wavecheck.engine.trace`): per time bucket, the first and
 last step's position and the range reached, the fastest and slowest step, every reversal counted
 (the first ones marked); both titles say "thinned".
 
@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.checks.result import FAIL, RuleOutcome, RuleResult
-from wavecheck.decode import StepEvents
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.verdicts import FAIL, RuleOutcome, RuleResult
 from wavecheck.output import atomic_write
 from wavecheck.report.model import Report
 from wavecheck.units import SI_TIME, format_time
@@ -46,7 +46,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from wavecheck.stream.trace import StepTrace
+    from wavecheck.engine.trace import StepTrace
     from wavecheck.timebase import Timebase
 
 __all__ = [
@@ -193,7 +193,7 @@ def _roles(report: Report) -> list[str]:
 
 def _extent(place: Place, tick_ns: float) -> tuple[float, float, float]:
     """The ticks ``(lo, hi)`` a timing diagram of ``place`` shows (1.6 times the interval's width,
-    or the limit's, each side: within :func:`wavecheck.stream.windows.place_range`), and the
+    or the limit's, each side: within :func:`wavecheck.engine.windows.place_range`), and the
     limit in ticks."""
     span_ticks = max(place.end_tick - place.start_tick, 1)
     limit_ticks = float(place.limit_ns) / tick_ns if place.limit_ns else 0.0
@@ -369,7 +369,7 @@ def _bars_every(ax: Axes, r: RuleResult) -> tuple[str, float, bool, int]:
 def binned(r: RuleOutcome) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
     """A rule's fixed bins (:meth:`RuleOutcome.histogram`, four per octave of ticks) as
     (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
-    from wavecheck.checks.result import Histogram
+    from wavecheck.engine.verdicts import Histogram
 
     pairs = r.histogram().counts
     tick = r.timebase.tick_ns

@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
-from wavecheck.decode import StepEvents
+from wavecheck.capture.edges import EdgeArray
+from wavecheck.engine.decode import StepEvents
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
 from wavecheck.timebase import Timebase

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from wavecheck.checks.result import RuleOutcome
 from wavecheck.drives.model import MARK_LEGEND
+from wavecheck.engine.verdicts import RuleOutcome
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import ViolationGroup, group_violations
 from wavecheck.report.model import Report

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wavecheck.capture.model import Channel
+from wavecheck.capture.edges import Channel
 from wavecheck.roles.features import Pulses
 
 __all__ = ["Assignment", "DirFit", "assign", "dir_fit", "plural"]

@@ -25,7 +25,7 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel, EdgeArray
+from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.units import format_frequency, format_time
 
 __all__ = ["ChannelLook", "Pulses", "look_at", "pulses_of"]

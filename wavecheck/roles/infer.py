@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.roles.dirs import DirFit, assign, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at

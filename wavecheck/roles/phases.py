@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Channel
+from wavecheck.capture.edges import Channel
 from wavecheck.linuxcnc.steptypes import PHASE_NAMES, STATE_TABLES, step_type
 from wavecheck.roles.names import name_hint
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wavecheck.capture.model import Channel
+from wavecheck.capture.edges import Channel
 from wavecheck.roles.features import Pulses
 
 __all__ = ["UpDownFit", "up_down"]

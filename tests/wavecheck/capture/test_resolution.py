@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tests.wavecheck.capture.srutil import write_sr
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.sigrokcli import convert, find_sigrok_cli
 from wavecheck.capture.sr import read_sr
 from wavecheck.capture.vcd import read_vcd, read_vcd_reference

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import write_vcd
-from wavecheck.capture.model import NEVER
+from wavecheck.capture.edges import NEVER
 from wavecheck.capture.open import detect_format, open_capture
 from wavecheck.capture.saleae_binary import read_saleae_binary
 from wavecheck.cli import main

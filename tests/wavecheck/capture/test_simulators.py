@@ -18,8 +18,8 @@ import pytest
 from wavecheck.api import check
 from wavecheck.capture.open import detect_format, open_capture
 from wavecheck.capture.wellen import read_wellen
+from wavecheck.engine.interface import find_channel
 from wavecheck.errors import UsageError
-from wavecheck.interface import find_channel
 from wavecheck.report import Report
 
 SIM = Path(__file__).parent / "sim"

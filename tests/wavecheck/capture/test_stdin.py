@@ -15,7 +15,7 @@ import pytest
 
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
 
 REPO = Path(__file__).resolve().parents[3]

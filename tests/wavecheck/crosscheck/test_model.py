@@ -17,9 +17,9 @@ from wavecheck.crosscheck.sigrok import (
     parse_annotations,
     pick_downsample,
 )
-from wavecheck.decode import decode
+from wavecheck.engine.decode import decode
+from wavecheck.engine.interface import build_interface
 from wavecheck.errors import CaptureError
-from wavecheck.interface import build_interface
 
 
 def test_parse_annotations() -> None:

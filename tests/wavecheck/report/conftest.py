@@ -6,7 +6,7 @@ import pytest
 
 from tests.wavecheck.report.traces import stepgen_trace
 from tests.wavecheck.waves import capture, g202
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report.model import Report
 
 

@@ -12,7 +12,7 @@ from tests.conftest import write_vcd
 from tests.wavecheck.report.traces import stepgen_trace, write_stepgen_vcd
 from tests.wavecheck.waves import capture, g202
 from wavecheck.capture.open import open_capture
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report import gtkw
 from wavecheck.report.gtkw import WAVE_PIXELS, WINDOW_SIZE, vcd_timescale, view_of, write_gtkw
 from wavecheck.report.plot import Place

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tests.wavecheck.waves import capture, drive, pulses
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report.junit import Unreadable, classname, render_junit
 from wavecheck.report.model import Report
 

@@ -6,7 +6,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.decode import StepEvents
+from wavecheck.engine.decode import StepEvents
 from wavecheck.report.measure_plot import draw_motion
 from wavecheck.timebase import Timebase
 

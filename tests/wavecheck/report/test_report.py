@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
 from wavecheck.report import overall_verdict, render_json, render_text, report_dict
 
 US = 1000

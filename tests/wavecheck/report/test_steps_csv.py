@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 
 from wavecheck.capture.open import open_capture
 from wavecheck.cli import main
-from wavecheck.decode import StepEvents
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import run_check
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.plan import run_check
 from wavecheck.report.steps_csv import (
     AxisSteps,
     decimal_digits,

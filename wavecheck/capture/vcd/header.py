@@ -1,6 +1,6 @@
 """VCD header and what both VCD readers share: declarations, ``$timescale``, sigrok's
 ``$comment`` sample rate, the layout of the 1-bit signals the body is read into, and the final
-assembly of a :class:`~wavecheck.capture.model.Capture` from each signal's edges.
+assembly of a :class:`~wavecheck.capture.edges.Capture` from each signal's edges.
 
 The readers are :mod:`wavecheck.capture.vcd.reader` (the fast one) and
 :mod:`wavecheck.capture.vcd.reference` (the simple one the tests compare it with).
@@ -17,7 +17,7 @@ from typing import BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import Capture, Channel, Vector
+from wavecheck.capture.edges import Capture, Channel, Vector
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
 from wavecheck.units import parse_frequency

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, BinaryIO
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import NEVER, Capture
+from wavecheck.capture.edges import NEVER, Capture
 from wavecheck.capture.vcd.header import (
     SignalEdges,
     build_capture,
@@ -57,7 +57,7 @@ from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
 
 if TYPE_CHECKING:
-    from wavecheck.stream.blocks import EdgeBlock
+    from wavecheck.capture.blocks import EdgeBlock
 
 __all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "VcdBlocks", "read_vcd"]
 
@@ -657,7 +657,7 @@ def _read_body(
 
 
 class VcdBlocks:
-    """A VCD read block by block (:class:`wavecheck.stream.blocks.BlockSource`): after each
+    """A VCD read block by block (:class:`wavecheck.capture.blocks.BlockSource`): after each
     chunk of text, the edges of ``channels`` (indices; None: every one) and every channel's
     levels becoming known and x/z stretches; the other channels are only counted. The same
     tokenizer and edge builder as :func:`read_vcd` (same arguments)."""
@@ -720,7 +720,7 @@ class VcdBlocks:
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each chunk of text (the changes of its last timestamp held back)."""
-        from wavecheck.stream.blocks import EdgeBlock
+        from wavecheck.capture.blocks import EdgeBlock
 
         b = self.builder
         with open_vcd(self.path) as f:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from wavecheck.capture.model import NEVER, Capture
+from wavecheck.capture.edges import NEVER, Capture
 from wavecheck.capture.vcd.header import (
     SCALAR_VALUES,
     SignalEdges,

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import shared_capture, write_vcd
-from wavecheck.capture.model import Capture
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.vcd import read_vcd, read_vcd_reference
 from wavecheck.capture.vcd.reader import _timestamps_swar, _token_bounds
 from wavecheck.errors import CaptureError, UsageError

@@ -1,8 +1,8 @@
 """The streamed engine gives the whole-capture engine's report, field for field, at any block size.
 
-The oracle is :func:`wavecheck.engine.check_machine` (every interval in memory); the streamed path
-is :func:`wavecheck.stream.engine.check_stream` over blocks cut from the same capture
-(:class:`wavecheck.stream.blocks.MemorySource`), from one event per block up. Compared: the whole
+The oracle is :func:`wavecheck.engine.plan.check_machine` (every interval in memory); the streamed path
+is :func:`wavecheck.engine.axis.check_stream` over blocks cut from the same capture
+(:class:`wavecheck.capture.blocks.MemorySource`), from one event per block up. Compared: the whole
 JSON report (every rule's counts, margins and where, unknown places, the violations list, steps,
 rates, notes) plus each rule's histogram — nothing is left out as "a summary".
 """
@@ -17,16 +17,16 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.wavecheck.stream.corpus import GOLDEN, GOLDEN_CASES, SHARED
+from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, SHARED
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import NEVER, Capture, Channel
+from wavecheck.capture.blocks import MemorySource
+from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import check_stream
+from wavecheck.engine.plan import check_machine
 from wavecheck.report.machine import machine_dict
-from wavecheck.stream.blocks import MemorySource
-from wavecheck.stream.engine import check_stream
 from wavecheck.timebase import Timebase
 
 
@@ -153,7 +153,7 @@ def _ch(name: str, index: int, initial: int, edges: list[int]) -> Channel:
     return Channel(name, index, initial, np.array(edges, np.int64))
 
 
-#: Each case needs one context rule of the engine (:func:`wavecheck.stream.engine._context`):
+#: Each case needs one context rule of the engine (:func:`wavecheck.engine.axis._context`):
 #: dropping that rule makes one fail (checked by mutating the engine when it was written).
 CONTEXT_CASES = [
     # dir_setup: DIR changes before the first step all wait for it
@@ -188,7 +188,7 @@ def test_dir_changes_piling_up_without_steps_are_gone_over_log_n_times(
     """A DIR line that toggles 60,000 times before any step (a clock mapped as DIR): every change
     waits for the next step (dir_setup), so the context holds them all; windows then wait for as
     many new edges as are held, so they are few, and the figures still equal the whole path's."""
-    from wavecheck.stream import engine
+    from wavecheck.engine import axis as engine
 
     calls = 0
     original = engine.AxisStream._window

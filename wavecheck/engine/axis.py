@@ -1,9 +1,9 @@
 """The streamed check: the whole-capture engine run window by window, results merged exactly.
 
-Blocks (:mod:`wavecheck.stream.blocks`) are gathered until about ``block_edges`` edges have come;
+Blocks (:mod:`wavecheck.capture.blocks`) are gathered until about ``block_edges`` edges have come;
 then the window ``[t0, t1)`` (t1 the blocks' end) is checked by the *existing* vectorised code
-(:func:`wavecheck.decode.decode`, :func:`wavecheck.checks.compile.rule_intervals`,
-:func:`wavecheck.checks.result.evaluate`) on a sub-capture holding, per mapped channel, its
+(:func:`wavecheck.engine.decode.decode`, :func:`wavecheck.engine.intervals.rule_intervals`,
+:func:`wavecheck.engine.verdicts.evaluate`) on a sub-capture holding, per mapped channel, its
 edges from a context tick ``c0`` on (its level at ``c0`` as the initial level) up to ``t1``. An
 interval is kept only in the window where its later event lies (``max(start, end)`` in
 ``[t0, t1)``), so each is counted once; a step, a sequence error, a state change, a step gap and a
@@ -36,18 +36,10 @@ from fractions import Fraction
 import numpy as np
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import NEVER, Capture, EdgeArray
-from wavecheck.checks.compile import (
-    figure_of,
-    planned_rules,
-    rule_intervals,
-    split_unknown,
-)
-from wavecheck.checks.primitives import Intervals, widths
-from wavecheck.checks.rates import pulse_level as generator_level
-from wavecheck.checks.rates import rates_from
-from wavecheck.checks.result import evaluate
-from wavecheck.decode import (
+from wavecheck.capture.blocks import BlockSource, EdgeBlock
+from wavecheck.capture.edges import NEVER, Capture, EdgeArray
+from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.engine.decode import (
     StepEvents,
     active_edges,
     decode,
@@ -55,17 +47,25 @@ from wavecheck.decode import (
     phase_states,
     unknown_stretches,
 )
-from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine import ambiguous_note, check_machine, resolve_resolution_ns
-from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.engine.interface import RoleSignal, StepInterface
+from wavecheck.engine.intervals import (
+    figure_of,
+    planned_rules,
+    rule_intervals,
+    split_unknown,
+)
+from wavecheck.engine.plan import ambiguous_note, check_machine, resolve_resolution_ns
+from wavecheck.engine.primitives import Intervals, widths
+from wavecheck.engine.rates import pulse_level as generator_level
+from wavecheck.engine.rates import rates_from
+from wavecheck.engine.results import RuleSummary, StepSummary
+from wavecheck.engine.trace import StepTrace
+from wavecheck.engine.verdicts import evaluate
+from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 from wavecheck.linuxcnc.config import LinuxCNCConfig
 from wavecheck.report.machine import MachineReport, common_timer
 from wavecheck.report.model import Report
 from wavecheck.rules import Rule
-from wavecheck.stream.blocks import BlockSource, EdgeBlock
-from wavecheck.stream.summary import RuleSummary, StepSummary
-from wavecheck.stream.trace import StepTrace
-from wavecheck.stream.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 
 __all__ = ["DEFAULT_BLOCK_EDGES", "AxisStream", "MachineStream", "NotStreamable", "check_stream"]
 
@@ -98,7 +98,7 @@ class _Role:
 class AxisStream:
     """One axis checked block by block: :meth:`feed` each block, then :meth:`finish`.
 
-    ``template`` is :func:`wavecheck.engine.run_check`'s report on the capture's skeleton (no
+    ``template`` is :func:`wavecheck.engine.plan.run_check`'s report on the capture's skeleton (no
     edges): it resolves the mapping, step type, active edge and resolution exactly as the
     whole-capture path, and gives the parts that do not depend on the edges.
     """
@@ -235,7 +235,7 @@ class AxisStream:
 
     def _keep_windows(self, t0: int) -> None:
         """Update the signal windows around the places the summaries name
-        (:mod:`wavecheck.stream.windows`); the places only when a rule's worst places changed."""
+        (:mod:`wavecheck.engine.windows`); the places only when a rule's worst places changed."""
         seen = [s.places_signature(PLACES_PER_RULE) for s in self.summaries]
         changed = seen != self._seen
         self._seen = seen
@@ -273,7 +273,7 @@ class AxisStream:
                 steps.sequence_from[m].tolist(), steps.sequence_to[m].tolist(), strict=True
             )
         ]
-        from wavecheck.checks.result import sequence_result
+        from wavecheck.engine.verdicts import sequence_result
 
         part = sequence_result(err, details, 0, self.tb, s.resolution_ns)
         s.add(part, _EMPTY)
@@ -395,7 +395,7 @@ def _context(
 # -- several axes ------------------------------------------------------------------------------------
 class MachineStream:
     """Every axis of one capture, fed the same blocks: the streamed
-    :func:`wavecheck.engine.check_machine`. ``template`` is ``check_machine`` on the skeleton."""
+    :func:`wavecheck.engine.plan.check_machine`. ``template`` is ``check_machine`` on the skeleton."""
 
     def __init__(
         self,
@@ -471,7 +471,7 @@ def check_stream(
     latency_ns: Fraction | None = None,
     pulse_level: int = 1,
 ) -> MachineReport:
-    """:func:`wavecheck.engine.check_machine` over ``source``'s blocks (same arguments), in
+    """:func:`wavecheck.engine.plan.check_machine` over ``source``'s blocks (same arguments), in
     memory that does not grow with the capture; ``keep_violations`` violations kept per rule."""
     template = check_machine(
         source.skeleton,

@@ -13,14 +13,14 @@ from dataclasses import replace
 from fractions import Fraction
 
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture, EdgeArray
-from wavecheck.checks.compile import run_rules
-from wavecheck.checks.rates import max_step_rates
-from wavecheck.checks.rates import pulse_level as generator_pulse_level
-from wavecheck.decode import decode
+from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.engine.decode import decode
+from wavecheck.engine.interface import build_interface, mapped_channel_names
+from wavecheck.engine.intervals import run_rules
+from wavecheck.engine.rates import max_step_rates
+from wavecheck.engine.rates import pulse_level as generator_pulse_level
 from wavecheck.errors import UsageError
-from wavecheck.interface import build_interface, mapped_channel_names
 from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.report.machine import MachineReport, common_timer

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wavecheck.checks import rates
+from wavecheck.engine import rates
 
 
 @pytest.mark.parametrize("block", [1, 2, 3, 7, 1 << 20])

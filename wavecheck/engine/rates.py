@@ -27,10 +27,10 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.checks.primitives import Intervals, widths
-from wavecheck.decode import StepEvents
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.interface import StepInterface
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.interface import StepInterface
+from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.timebase import Timebase

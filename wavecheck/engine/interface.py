@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wavecheck.capture.model import Capture, Channel, EdgeArray
+from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
 
 __all__ = [

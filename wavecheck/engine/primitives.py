@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
+from wavecheck.capture.edges import EdgeArray
 
 __all__ = ["Intervals", "holds", "periods", "setups", "sorted_search", "widths"]
 

@@ -1,7 +1,7 @@
 """Edge blocks: what a streaming reader hands the streamed engine, a time slice at a time.
 
 A :class:`BlockSource` gives a capture's *skeleton* first (channel names and indices, time base,
-resolution: a :class:`~wavecheck.capture.model.Capture` whose channels hold no edges), then
+resolution: a :class:`~wavecheck.capture.edges.Capture` whose channels hold no edges), then
 :class:`EdgeBlock` s in time order, then the finished skeleton (start, end, notes, each channel's
 edge count). Readers: :func:`wavecheck.capture.sr.iter_sr_blocks` (``.sr``),
 :func:`wavecheck.capture.vcd.reader.iter_vcd_blocks` (VCD); :func:`capture_blocks` cuts a capture
@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-from wavecheck.capture.model import NEVER, Capture, Channel, EdgeArray
+from wavecheck.capture.edges import NEVER, Capture, Channel, EdgeArray
 
 __all__ = [
     "BlockSource",

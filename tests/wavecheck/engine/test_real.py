@@ -144,7 +144,7 @@ def test_phase_channels_suggest_the_step_type() -> None:
     import wavecheck
     from wavecheck.errors import UsageError
 
-    golden = Path(__file__).resolve().parents[2] / "captures" / "golden" / "stepgen1-quadrature.vcd"
+    golden = Path(__file__).resolve().parents[3] / "captures" / "golden" / "stepgen1-quadrature.vcd"
     with pytest.raises(UsageError, match=r"--type 2 for quadrature"):
         wavecheck.check(golden, "gecko-g202")
     assert wavecheck.check(golden, "gecko-g202", step_type=2).steps.count > 0

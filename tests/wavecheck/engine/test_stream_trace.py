@@ -1,6 +1,6 @@
 """A streamed report draws the position / step-rate panel from a thinned trace of the steps.
 
-The oracle is the whole-capture report's every step (:class:`wavecheck.decode.StepEvents`). On the
+The oracle is the whole-capture report's every step (:class:`wavecheck.engine.decode.StepEvents`). On the
 corpus and under hypothesis, at block sizes from one event up: every position point of the
 thinned trace lies on the whole path's position curve, each bucket's range is the whole path's
 range there, every rate point is one of the whole path's (tick, gap) points and each bucket's
@@ -22,19 +22,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import shared_capture
-from tests.wavecheck.stream.corpus import GOLDEN, GOLDEN_CASES, ROOT
+from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.blocks import MemorySource
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
-from wavecheck.decode import StepEvents
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import check_stream
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.plan import check_machine
+from wavecheck.engine.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
 from wavecheck.report.measure_plot import MAX_MARKS
 from wavecheck.report.model import Report
 from wavecheck.report.plot import figure
-from wavecheck.stream.blocks import MemorySource
-from wavecheck.stream.engine import check_stream
-from wavecheck.stream.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
 from wavecheck.timebase import Timebase
 
 SMOOTHIE = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"

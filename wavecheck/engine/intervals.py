@@ -30,18 +30,18 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
-from wavecheck.checks.primitives import Intervals, holds, periods, setups, widths
-from wavecheck.checks.result import RuleResult, evaluate, sequence_result
-from wavecheck.decode import (
+from wavecheck.capture.edges import EdgeArray
+from wavecheck.drives.model import ActiveEdge, Drive, Figure
+from wavecheck.engine.decode import (
     StepEvents,
     active_edges,
     phase_states,
     touches_stretches,
     unknown_stretches,
 )
-from wavecheck.drives.model import ActiveEdge, Drive, Figure
-from wavecheck.interface import RoleSignal, StepInterface
+from wavecheck.engine.interface import RoleSignal, StepInterface
+from wavecheck.engine.primitives import Intervals, holds, periods, setups, widths
+from wavecheck.engine.verdicts import RuleResult, evaluate, sequence_result
 from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.rules import RULE_IDS, Rule, applicable
 
@@ -259,7 +259,7 @@ def run_rules(
     """Measure and judge every applicable rule the drive states, in the table's order.
 
     ``pulse_level`` is the level of the generator's pulses at the drive's input
-    (:func:`wavecheck.checks.rates.pulse_level`)."""
+    (:func:`wavecheck.engine.rates.pulse_level`)."""
     tb = iface.capture.timebase
     run, not_stated = planned_rules(drive, st)
     results: list[RuleResult] = []

@@ -9,7 +9,7 @@ doubles, the origin stays) until it fits, so the memory does not depend on the c
 Each bucket keeps, from the steps in it (ticks exact, positions exact):
 
 - the first and the last step's tick and the position after each (forward − reverse, steps of
-  unknown direction counting 0, as :attr:`wavecheck.decode.StepEvents.position`): points on the
+  unknown direction counting 0, as :attr:`wavecheck.engine.decode.StepEvents.position`): points on the
   whole path's position curve; and the lowest and highest position reached in the bucket;
 - the fastest and the slowest step (the shortest and the longest time since the step before,
   that step's tick, the earliest on ties): points on the whole path's step-rate curve, each step's
@@ -28,7 +28,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
+from wavecheck.capture.edges import EdgeArray
 
 __all__ = ["MAX_BUCKETS", "REVERSALS_KEPT", "StepTrace"]
 

@@ -7,8 +7,8 @@ from fractions import Fraction
 import pytest
 
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.checks.rates import drive_rate
-from wavecheck.engine import run_check
+from wavecheck.engine.plan import run_check
+from wavecheck.engine.rates import drive_rate
 
 US = 1000
 

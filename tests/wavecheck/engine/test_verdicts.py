@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wavecheck.checks.primitives import Intervals
-from wavecheck.checks.result import FAIL, INDETERMINATE, PASS, Histogram, evaluate
+from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS, Histogram, evaluate
 from wavecheck.timebase import Timebase
 
 

@@ -23,9 +23,9 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
-from wavecheck.checks.primitives import Intervals
+from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.model import Figure
+from wavecheck.engine.primitives import Intervals
 from wavecheck.timebase import Timebase
 from wavecheck.verdict import Verdict
 
@@ -348,7 +348,7 @@ class Histogram:
 class RuleOutcome(Protocol):
     """What every report renderer reads of one rule's result: satisfied by :class:`RuleResult`
     (every interval kept: the whole-capture path) and by
-    :class:`wavecheck.stream.summary.RuleSummary` (counts, extremes, the worst violations and a
+    :class:`wavecheck.engine.results.RuleSummary` (counts, extremes, the worst violations and a
     histogram, merged block by block: the streamed path)."""
 
     rule: str

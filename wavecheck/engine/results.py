@@ -1,14 +1,14 @@
 """Mergeable results of the streamed engine: one rule's figures and the step counts, in bounded
 memory, merged window by window to exactly the whole-capture figures.
 
-:class:`RuleSummary` satisfies :class:`wavecheck.checks.result.RuleOutcome` (what every renderer
+:class:`RuleSummary` satisfies :class:`wavecheck.engine.verdicts.RuleOutcome` (what every renderer
 reads): counts (checked, violations, indeterminate, unknown), the shortest and longest interval
 and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
 the figures that decide ``decide_samplerate_hz``, and a fixed-bin
-:class:`~wavecheck.checks.result.Histogram`. What it does not keep: every interval (the
-whole-capture :class:`~wavecheck.checks.result.RuleResult` does): ``--plot``, ``--gtkw`` and
+:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval (the
+whole-capture :class:`~wavecheck.engine.verdicts.RuleResult` does): ``--plot``, ``--gtkw`` and
 ``--html`` draw a streamed report from these summaries and the signal windows kept around the worst
-places (:mod:`wavecheck.stream.windows`); ``--steps-csv`` and ``--firmware`` read the capture whole.
+places (:mod:`wavecheck.engine.windows`); ``--steps-csv`` and ``--firmware`` read the capture whole.
 """
 
 from __future__ import annotations
@@ -19,8 +19,9 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.capture.model import EdgeArray
-from wavecheck.checks.result import (
+from wavecheck.capture.edges import EdgeArray
+from wavecheck.drives.model import Figure
+from wavecheck.engine.verdicts import (
     FAIL,
     INDETERMINATE,
     Histogram,
@@ -29,7 +30,6 @@ from wavecheck.checks.result import (
     decide_parts,
     decide_rate,
 )
-from wavecheck.drives.model import Figure
 from wavecheck.timebase import Timebase
 from wavecheck.verdict import Verdict
 
@@ -289,7 +289,7 @@ class RuleSummary:
 @dataclass
 class StepSummary:
     """Step counts merged window by window: what the reports read of
-    :class:`wavecheck.decode.StepEvents` (which keeps every step)."""
+    :class:`wavecheck.engine.decode.StepEvents` (which keeps every step)."""
 
     count: int = 0
     forward: int = 0

@@ -21,13 +21,16 @@ import numpy as np
 import pytest
 
 from tests.conftest import shared_capture
-from tests.wavecheck.stream.corpus import GOLDEN, GOLDEN_CASES, ROOT
+from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT
 from wavecheck.axes import AxisMap
-from wavecheck.capture.model import Capture, Channel
+from wavecheck.capture.blocks import MemorySource
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import check_stream
+from wavecheck.engine.plan import check_machine
+from wavecheck.engine.windows import PLACES_PER_RULE, SIDE_EDGES, WindowKeeper
 from wavecheck.report.gtkw import MAX_MARKERS, _neighbours, write_gtkw
 from wavecheck.report.model import Report
 from wavecheck.report.plot import (
@@ -37,9 +40,6 @@ from wavecheck.report.plot import (
     place_title,
     place_traces,
 )
-from wavecheck.stream.blocks import MemorySource
-from wavecheck.stream.engine import check_stream
-from wavecheck.stream.windows import PLACES_PER_RULE, SIDE_EDGES, WindowKeeper
 from wavecheck.timebase import Timebase
 
 SMOOTHIE = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"

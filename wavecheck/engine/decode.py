@@ -33,10 +33,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.model import EdgeArray
+from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.model import ActiveEdge
+from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.errors import UsageError
-from wavecheck.interface import RoleSignal, StepInterface
 from wavecheck.linuxcnc.steptypes import StepType, step_type
 
 __all__ = [
@@ -142,7 +142,7 @@ def level_before(
         same[at[hit]] = True
     else:
         # here, not at the top: the checks package imports this module
-        from wavecheck.checks.primitives import sorted_search
+        from wavecheck.engine.primitives import sorted_search
 
         n = sorted_search(edges, ticks, "left")  # dense edges: counted, not searched
         clipped = np.minimum(n, len(edges) - 1)
@@ -153,7 +153,7 @@ def level_before(
 
 def unknown_stretches(iface: StepInterface, roles: Iterable[str]) -> tuple[EdgeArray, EdgeArray]:
     """The union of the unknown stretches of the mapped ``roles``: disjoint closed tick ranges
-    ``[starts[i], ends[i]]`` in time order (:meth:`wavecheck.capture.model.Channel.unknown_stretches`)."""
+    ``[starts[i], ends[i]]`` in time order (:meth:`wavecheck.capture.edges.Channel.unknown_stretches`)."""
     parts = [s.unknown for s in (iface.get(r) for r in roles) if s is not None]
     starts = np.concatenate([p[0] for p in parts]) if parts else _empty()
     ends = np.concatenate([p[1] for p in parts]) if parts else _empty()

@@ -9,13 +9,13 @@ from pathlib import Path
 import pytest
 
 from wavecheck.axes import AxisMap
+from wavecheck.capture.blocks import open_stream
 from wavecheck.capture.open import open_capture
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import check_machine
+from wavecheck.engine.axis import check_stream
+from wavecheck.engine.plan import check_machine
 from wavecheck.report.machine import machine_dict
-from wavecheck.stream.blocks import open_stream
-from wavecheck.stream.engine import check_stream
 
 ROOT = Path(__file__).resolve().parents[3]
 GOLDEN = ROOT / "captures" / "golden"
