@@ -2,7 +2,7 @@
 
 ``python bench/check_bench.py FILE.npz [--repeat N] [--drive ID]``: builds a
 :class:`~wavecheck.capture.edges.Capture` from the STEP/DIR arrays written by
-``bench/gen.py`` (no file reading), then runs :func:`wavecheck.engine.plan.run_check` — decode,
+``bench/gen.py`` (no file reading), then runs :func:`wavecheck.check` (a capture in memory: one block) — decode,
 every rule, the step-rate figures — and the JSON renderer, ``N`` times. Reports the median wall
 and CPU (``process_time``: work done by this one process, which runs on one core: the numpy
 calls used here are single-threaded) and edges/s.
@@ -19,9 +19,9 @@ from fractions import Fraction
 
 import numpy as np
 
+from wavecheck.api import check
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.plan import run_check
 from wavecheck.report.json import render_json
 from wavecheck.timebase import Timebase
 
@@ -56,7 +56,7 @@ def main() -> None:
     report = None
     for _ in range(args.repeat):
         t0, c0, s0 = time.perf_counter(), time.process_time(), os.times().system
-        report = run_check(cap, drive, {"step": "STEP", "dir": "DIR"})
+        report = check(cap, drive, map={"step": "STEP", "dir": "DIR"})
         t1, c1, s1 = time.perf_counter(), time.process_time(), os.times().system
         render_json(report, 100)
         t2 = time.perf_counter()

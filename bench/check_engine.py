@@ -1,4 +1,4 @@
-"""Time every rule of ``run_check`` over a synthetic 10 M-edge STEP capture (issue 7 target: < 1 s).
+"""Time every rule of the engine (``wavecheck.check``) over a synthetic 10 M-edge STEP capture (issue 7 target: < 1 s).
 
 Run: ``.venv/bin/python bench/check_engine.py [PULSES]`` (default 5 000 000 pulses = 10 M edges).
 """
@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from wavecheck.api import check
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine.plan import run_check
 from wavecheck.timebase import Timebase
 
 
@@ -55,7 +55,7 @@ def main() -> None:
     best = float("inf")
     for _ in range(3):
         t = time.perf_counter()
-        report = run_check(cap, drive)
+        report = check(cap, drive)
         report.violations(1000)
         best = min(best, time.perf_counter() - t)
     edges = len(step) + len(dir_edges)

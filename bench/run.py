@@ -378,7 +378,7 @@ def bench_checks(path: Path, runs: int) -> dict[str, Any]:
     res["process"] = t
     cpu = res["cpu_s"]
     print(
-        f"  run_check over {res['edges'] / 1e6:.0f} M edges ({res['steps']} steps, rules "
+        f"  the engine over {res['edges'] / 1e6:.0f} M edges ({res['steps']} steps, rules "
         f"{', '.join(res['rules'])}; {res['violations']} violations):"
     )
     print(

@@ -13,11 +13,11 @@ from pathlib import Path
 import pytest
 
 from stepgen.cli import main as stepgen_main
+from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, pulses
 from wavecheck.cli import COMMANDS
 from wavecheck.cli import main as wavecheck_main
 from wavecheck.drives.library import list_drives, load_drive, rules_dir
-from wavecheck.engine.plan import run_check
 from wavecheck.report import render_json, render_text
 from wavecheck.report.html import render_html
 

@@ -38,11 +38,11 @@ from stepgen.model import StepgenConfig
 from stepgen.motion import Motion
 from stepgen.plan import PARAMS, Plan, min_base_period_ns, plan
 from stepgen.simulate import Trace, simulate
+from wavecheck.api import check as check_report
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.library import list_drives, load_drive
 from wavecheck.drives.model import Drive
-from wavecheck.engine.plan import run_check
-from wavecheck.report.model import Report
+from wavecheck.engine.outcome import Report
 from wavecheck.rules import applicable
 from wavecheck.timebase import Timebase
 
@@ -335,7 +335,7 @@ def worst_case(
 
     def check(model: str) -> Report:
         trace = simulate(config, motion, model, n_periods=n, active_edge=pin_edge)  # type: ignore[arg-type]
-        return run_check(trace_capture(trace), drive, invert=invert)
+        return check_report(trace_capture(trace), drive, invert=invert)
 
     seen: dict[str, list[_RuleRun]] = {}
     for rule in RULES:

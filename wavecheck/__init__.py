@@ -1,7 +1,15 @@
-"""wavecheck: check every edge of a STEP/DIR capture against a stepper drive's datasheet."""
+"""wavecheck: check every edge of a STEP/DIR capture against a stepper drive's datasheet.
 
-from wavecheck.api import Axis, check, check_axes
-from wavecheck.engine.plan import run_check
+The names below are loaded when first used, so ``import wavecheck`` (and ``wavecheck --help``)
+costs no numpy: :func:`check`, :func:`check_axes`, :class:`Axis`, :class:`CheckOptions`,
+:class:`Report`, :class:`MachineReport`, :class:`Timebase` and the errors.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from wavecheck.errors import (
     CaptureError,
     ConfigError,
@@ -10,13 +18,17 @@ from wavecheck.errors import (
     UsageError,
     WavecheckError,
 )
-from wavecheck.report.machine import MachineReport
-from wavecheck.report.model import Report
-from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:
+    from wavecheck.api import Axis, check, check_axes
+    from wavecheck.engine.options import CheckOptions
+    from wavecheck.engine.outcome import MachineReport, Report
+    from wavecheck.timebase import Timebase
 
 __all__ = [
     "Axis",
     "CaptureError",
+    "CheckOptions",
     "ConfigError",
     "MachineReport",
     "Report",
@@ -28,9 +40,27 @@ __all__ = [
     "__version__",
     "check",
     "check_axes",
-    "run_check",
 ]
 
 #: The package version, written only here: pyproject.toml reads it at build time
 #: ([tool.setuptools.dynamic]), so the installed distribution always carries this value.
 __version__ = "0.1.0"
+
+_LAZY = {
+    "Axis": "wavecheck.api",
+    "check": "wavecheck.api",
+    "check_axes": "wavecheck.api",
+    "CheckOptions": "wavecheck.engine.options",
+    "MachineReport": "wavecheck.engine.outcome",
+    "Report": "wavecheck.engine.outcome",
+    "Timebase": "wavecheck.timebase",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'wavecheck' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value

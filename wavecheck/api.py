@@ -16,17 +16,18 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from wavecheck.axes import axes_from_tables
+from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine.plan import check_machine, run_check
+from wavecheck.engine.mapping import AxisMap, axes_from_tables
+from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, DEFAULT_KEEP, CheckOptions
+from wavecheck.engine.outcome import MachineReport, Report
+from wavecheck.engine.run import check_source
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig
-from wavecheck.report.machine import MachineReport
-from wavecheck.report.model import Report
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 
-__all__ = ["Axis", "check", "check_axes"]
+__all__ = ["Axis", "build_options", "check", "check_axes"]
 
 PathOrText = str | os.PathLike[str]
 
@@ -50,20 +51,21 @@ class Axis:
     forward_level: int | None = None
 
 
-def _open(
+def _source(
     capture: PathOrText | Capture, samplerate: str | Fraction | None, input_format: str | None
-) -> Capture:
-    """``capture`` itself, or the file read (``samplerate`` text needs its unit)."""
+) -> BlockSource:
+    """``capture`` itself as one block, or the file as a block source (``samplerate`` text needs
+    its unit)."""
     if isinstance(capture, Capture):
-        return capture
-    from wavecheck.capture.open import open_capture
+        return MemorySource(capture)
+    from wavecheck.capture.open import open_source
 
     rate = None
     if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
         rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
     elif samplerate is not None:
         rate = parse_frequency(samplerate, default_unit="Hz")
-    return open_capture(capture, samplerate=rate, input_format=input_format)
+    return open_source(capture, samplerate=rate, input_format=input_format)
 
 
 def _drive(drive: PathOrText | Drive) -> Drive:
@@ -94,10 +96,54 @@ def _latency_ns(latency: str | Fraction | None) -> Fraction | None:
     return seconds * 10**9
 
 
-def _resolution(resolution: str | Fraction | None) -> str | Fraction | None:
+def _resolution(resolution: str | Fraction | None) -> Fraction | None:
     if isinstance(resolution, str):
         return parse_option(resolution, "resolution", "time")
-    return resolution
+    return None if resolution is None else Fraction(resolution)
+
+
+def build_options(
+    drive: Mapping[str | None, Drive],
+    axes: tuple[AxisMap, ...] = (),
+    *,
+    invert: Iterable[str] = (),
+    step_type: Mapping[str | None, int] | None = None,
+    forward_level: Mapping[str | None, int] | None = None,
+    user_table: tuple[int, ...] | None = None,
+    pulse_level: int = 1,
+    active_edge: ActiveEdge | None = None,
+    resolution: str | Fraction | None = None,
+    limit: Iterable[str] = (),
+    margin: str | None = None,
+    ini: PathOrText | None = None,
+    hal: PathOrText | Sequence[PathOrText] | None = None,
+    channel: int = 0,
+    latency: str | Fraction | None = None,
+    pictures: bool = False,
+    keep_violations: int = DEFAULT_KEEP,
+    block_edges: int = DEFAULT_BLOCK_EDGES,
+) -> CheckOptions:
+    """The :class:`~wavecheck.engine.options.CheckOptions` of the Python entry points'
+    arguments (:func:`check`, :func:`check_axes`, :class:`wavecheck.cocotb.StepMonitor`):
+    times as text with their unit or exact seconds, LinuxCNC files read."""
+    return CheckOptions(
+        drive=drive,
+        axes=axes,
+        invert=tuple(invert),
+        step_type=dict(step_type or {}),
+        forward_level=dict(forward_level or {}),
+        user_table=None if user_table is None else tuple(user_table),
+        pulse_level=pulse_level,
+        active_edge=active_edge,
+        resolution=_resolution(resolution),
+        limits=tuple(limit),
+        margin=margin,
+        stepgen=_stepgen(ini, hal, channel),
+        latency_ns=_latency_ns(latency),
+        pictures=pictures,
+        keep_violations=keep_violations,
+        block_edges=block_edges,
+    )
 
 
 def check(
@@ -118,6 +164,9 @@ def check(
     hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
     channel: int = 0,
     latency: str | Fraction | None = None,
+    limit: Iterable[str] = (),
+    margin: str | None = None,
+    pictures: bool = False,
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
 
@@ -139,7 +188,11 @@ def check(
         hal: LinuxCNC HAL file(s) with the stepgen settings.
         channel: the stepgen channel of the HAL files.
         latency: the worst base-thread latency ``J`` (``"11us"`` or exact seconds) for
-            ``latency_safe``.
+            ``latency_safe`` (needs ``ini``/``hal``).
+        limit: ``"RULE=T"`` figures replacing the drive's (``--limit``).
+        margin: ``"2x"`` or ``"+500ns"`` tightening every figure (``--margin``).
+        pictures: keep what :func:`wavecheck.report.plot.render_plot` and the HTML/GTKWave
+            outputs draw (signal windows around the worst places, a thinned step trace).
 
     Raises:
         WavecheckError: unreadable capture or rule file, unknown channel, bad option.
@@ -149,20 +202,31 @@ def check(
             f"map {dict(map)}: roles named after an axis (x.step) are several axes: "
             "use wavecheck.check_axes(capture, {'x': {'step': ...}, ...})"
         )
-    return run_check(
-        _open(capture, samplerate, input_format),
-        _drive(drive),
-        map,
-        invert,
-        step_type,
-        _resolution(resolution),
-        forward_level=forward_level,
+    options = build_options(
+        {None: _drive(drive)},
+        (AxisMap(None, dict(map)),) if map else (),
+        invert=invert,
+        step_type=None if step_type is None else {None: step_type},
+        forward_level={None: forward_level},
+        user_table=user_table,
         pulse_level=pulse_level,
         active_edge=active_edge,
-        user_table=user_table,
-        stepgen=_stepgen(ini, hal, channel),
-        latency_ns=_latency_ns(latency),
+        resolution=resolution,
+        limit=limit,
+        margin=margin,
+        ini=ini,
+        hal=hal,
+        channel=channel,
+        latency=latency,
+        pictures=pictures,
     )
+    machine = check_source(_source(capture, samplerate, input_format), options)
+    if len(machine.axes) != 1 or machine.axes[0].axis is not None:
+        raise UsageError(
+            f"{machine.capture.path}: the waveforms show {len(machine.axes)} axes: "
+            "use wavecheck.check_axes, or give map="
+        )
+    return machine.axes[0]
 
 
 def check_axes(
@@ -184,6 +248,9 @@ def check_axes(
     hal: PathOrText | Sequence[PathOrText] | None = None,
     channel: int = 0,
     latency: str | Fraction | None = None,
+    limit: Iterable[str] = (),
+    margin: str | None = None,
+    pictures: bool = False,
 ) -> MachineReport:
     """Check every axis of a capture, read once, each against its drive (``wavecheck check
     --map x.step=5,x.dir=6 --map y.step=3,y.dir=4``); the report has one
@@ -197,7 +264,7 @@ def check_axes(
         map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
         invert, step_type, forward_level: for every axis that does not give its own.
         resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
-            channel, latency: as :func:`check`, for every axis.
+            channel, latency, limit, margin, pictures: as :func:`check`, for every axis.
 
     Raises:
         WavecheckError: an axis without a drive, a bad axis name or mapping (a channel in two
@@ -219,20 +286,29 @@ def check_axes(
             loaded[key] = _drive(ref)
         drives[name] = loaded[key]
     types = {n: a.step_type if a.step_type is not None else step_type for n, a in given.items()}
-    return check_machine(
-        _open(capture, samplerate, input_format),
-        maps,
+    options = build_options(
         drives,
-        _resolution(resolution),
-        step_types={n: t for n, t in types.items() if t is not None},
-        forward_levels={
+        tuple(maps),
+        invert=[
+            f"{n}.{role}"
+            for n, a in given.items()
+            for role in (invert if a.invert is None else a.invert)
+        ],
+        step_type={n: t for n, t in types.items() if t is not None},
+        forward_level={
             n: forward_level if a.forward_level is None else a.forward_level
             for n, a in given.items()
         },
-        invert={n: list(invert if a.invert is None else a.invert) for n, a in given.items()},
-        active_edge=active_edge,
         user_table=user_table,
-        stepgen=_stepgen(ini, hal, channel),
-        latency_ns=_latency_ns(latency),
         pulse_level=pulse_level,
+        active_edge=active_edge,
+        resolution=resolution,
+        limit=limit,
+        margin=margin,
+        ini=ini,
+        hal=hal,
+        channel=channel,
+        latency=latency,
+        pictures=pictures,
     )
+    return check_source(_source(capture, samplerate, input_format), options)

@@ -16,7 +16,7 @@ base is exactly ``10**cocotb.simtime.time_precision`` s), and every ``batch`` ch
 ``batch_time`` of simulated time) turns what it gathered into an
 :class:`~wavecheck.capture.blocks.EdgeBlock` with the VCD reader's edge builder (x/z/U/W/- are
 unknown stretches; several changes at one time step: the last one wins) and feeds the streamed
-engine (:class:`~wavecheck.engine.axis.MachineStream`). With ``fail_on_violation`` (default),
+engine (:class:`~wavecheck.engine.run.MachineCheck`). With ``fail_on_violation`` (default),
 the first batch with a failed rule raises :class:`WavecheckViolation` (an ``AssertionError``) in
 the monitor's task, which fails the running cocotb test at that simulation time, naming the
 rule, the worst violation so far, its margin and the time. :meth:`StepMonitor.finish` checks the
@@ -29,8 +29,8 @@ cocotb (>= 2.0, the ``cocotb`` extra) is imported only by this module.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any
 
@@ -43,17 +43,16 @@ try:
 except ImportError as err:  # pragma: no cover - the extra is part of the test install
     raise ImportError("wavecheck.cocotb needs cocotb 2: pip install 'wavecheck[cocotb]'") from err
 
-from wavecheck.axes import AxisMap
+from wavecheck.api import build_options
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine.axis import MachineStream
-from wavecheck.engine.plan import check_machine
-from wavecheck.engine.verdicts import RuleOutcome
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.outcome import MachineReport, Report
+from wavecheck.engine.results import RuleResult
+from wavecheck.engine.run import MachineCheck, machine_for
 from wavecheck.errors import UsageError
-from wavecheck.report.machine import MachineReport
-from wavecheck.report.model import Report
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns, format_time, parse_option
 
@@ -104,8 +103,9 @@ class StepMonitor:
             (``{"x": {"step": dut.xs, "dir": dut.xd}, "y": {...}}``); an axis may give its own
             ``"drive"`` in the same table. :meth:`finish` then returns a
             :class:`~wavecheck.report.machine.MachineReport`.
-        invert, step_type, forward_level, pulse_level, active_edge, resolution: as
-            :func:`wavecheck.check` (for every axis).
+        invert, step_type, forward_level, pulse_level, active_edge, resolution, user_table,
+            limit, margin, ini, hal, channel, latency: as :func:`wavecheck.check` (for every
+            axis).
         fail_on_violation: raise :class:`WavecheckViolation` as soon as a batch has a failed
             rule (failing the test at that simulation time), and in :meth:`finish`.
         batch: value changes gathered before they are checked.
@@ -134,6 +134,13 @@ class StepMonitor:
         pulse_level: int = 1,
         active_edge: ActiveEdge | None = None,
         resolution: str | Fraction | None = None,
+        user_table: tuple[int, ...] | None = None,
+        limit: Iterable[str] = (),
+        margin: str | None = None,
+        ini: str | os.PathLike[str] | None = None,
+        hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
+        channel: int = 0,
+        latency: str | Fraction | None = None,
         fail_on_violation: bool = True,
         batch: int = DEFAULT_BATCH,
         batch_time: str | Fraction | None = None,
@@ -157,15 +164,23 @@ class StepMonitor:
             self._drives[name] = _drive(ref)
         self._tables: dict[str | None, dict[str, Handle]] = tables
         self.several = bool(axes)
-        self.invert = tuple(invert)
-        self.step_type = step_type
-        self.forward_level = forward_level
-        self.pulse_level = pulse_level
-        self.active_edge = active_edge
-        self.resolution = (
-            parse_option(resolution, "resolution", "time")
-            if isinstance(resolution, str)
-            else resolution
+        self._options = build_options(  # a bad option fails here, not at start
+            self._drives,
+            invert=invert,
+            step_type=None if step_type is None else {None: step_type},
+            forward_level={None: forward_level},
+            user_table=user_table,
+            pulse_level=pulse_level,
+            active_edge=active_edge,
+            resolution=resolution,
+            limit=limit,
+            margin=margin,
+            ini=ini,
+            hal=hal,
+            channel=channel,
+            latency=latency,
+            keep_violations=keep_violations,
+            block_edges=1,  # a window per batch: the batches are this monitor's
         )
         self.fail_on_violation = fail_on_violation
         self.batch = max(1, batch)
@@ -174,10 +189,9 @@ class StepMonitor:
             if isinstance(batch_time, str)
             else batch_time
         )
-        self.keep_violations = keep_violations
         self._watched: list[_Watched] = []
         self._tasks: list[Task[None]] = []
-        self._stream: MachineStream | None = None
+        self._stream: MachineCheck | None = None
         self._report: MachineReport | None = None
         self._failed: set[tuple[str | None, str]] = set()
 
@@ -215,27 +229,8 @@ class StepMonitor:
             end=self._start,
             channels=[Channel(w.name, w.index, 0, empty.copy()) for w in self._watched],
         )
-        template = check_machine(
-            self._skeleton,
-            axes,
-            self._drives,
-            self.resolution,
-            step_types=None
-            if self.step_type is None
-            else dict.fromkeys(self._drives, self.step_type),
-            forward_levels=dict.fromkeys(self._drives, self.forward_level),
-            invert=dict.fromkeys(self._drives, self.invert),
-            active_edge=self.active_edge,
-            pulse_level=self.pulse_level,
-        )
-        self._stream = MachineStream(
-            template,
-            self._drives,
-            pulse_level=self.pulse_level,
-            resolution=self.resolution,
-            block_edges=1,  # a window per batch: the batches are this monitor's
-            keep_violations=self.keep_violations,
-        )
+        options = replace(self._options, axes=tuple(axes))
+        self._stream = machine_for(self._skeleton, options, axes)
         self._builder = EdgeBuilder(len(self._watched))
         self._known = np.zeros(len(self._watched), dtype=bool)
         self._counts = [0] * len(self._watched)
@@ -309,15 +304,20 @@ class StepMonitor:
     def _raise_new(self, at: int) -> None:
         assert self._stream is not None
         for axis in self._stream.axes:
-            name = axis.template.axis
-            for r in axis.summaries:
+            name = axis.plan.name
+            for r in axis.results:
                 if r.violations and (name, r.rule) not in self._failed:
                     self._failed.add((name, r.rule))
                     raise WavecheckViolation(
-                        self._message(r, axis.drive.id, name, self.timebase.seconds(at))
+                        self._message(
+                            r,
+                            axis.plan.drive.id if axis.plan.drive else "",
+                            name,
+                            self.timebase.seconds(at),
+                        )
                     )
 
-    def _message(self, r: RuleOutcome, drive: str, axis: str | None, at_s: Fraction | None) -> str:
+    def _message(self, r: RuleResult, drive: str, axis: str | None, at_s: Fraction | None) -> str:
         where = "" if axis is None else f" axis {axis}"
         when = "" if at_s is None else f" (by {format_time(at_s, 9)} of simulation)"
         worst = r.worst_violations(1)

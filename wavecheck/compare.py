@@ -35,12 +35,16 @@ from typing import Literal
 
 import numpy as np
 
-from wavecheck.axes import AxisMap
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import Drive
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.options import CheckOptions
+from wavecheck.engine.outcome import MachineReport, Report
+from wavecheck.engine.plan import AxisPlan
+from wavecheck.engine.run import check_capture
+from wavecheck.engine.sinks import StepCollector, StepSink
 from wavecheck.errors import UsageError
-from wavecheck.report.model import Report
 from wavecheck.verdict import overall_verdict
 
 __all__ = [
@@ -90,6 +94,7 @@ class Comparison:
 
     Attributes:
         capture / golden: the two reports.
+        capture_steps / golden_steps: every step of each.
         align: how times were aligned.
         tolerance_ns: the allowed per-step time difference, exact ns.
         compared: steps compared (the shorter count).
@@ -103,6 +108,8 @@ class Comparison:
 
     capture: Report
     golden: Report
+    capture_steps: StepEvents
+    golden_steps: StepEvents
     align: Align
     tolerance_ns: Fraction
     compared: int
@@ -164,14 +171,14 @@ def _pos(v: int | None) -> str:
     return "unknown" if v is None else f"{v:+d}"
 
 
-def _times_ns(report: Report, align: Align) -> np.ndarray:
-    ticks = report.events().ticks
+def _times_ns(steps: StepEvents, tick_ns: Fraction, align: Align) -> np.ndarray:
+    ticks = steps.ticks
     origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
-    return (ticks - origin).astype(np.float64) * float(report.capture.timebase.tick_ns)
+    return (ticks - origin).astype(np.float64) * float(tick_ns)
 
 
-def _exact_ns(report: Report, i: int, align: Align) -> Fraction:
-    ticks = report.events().ticks
+def _exact_ns(steps: StepEvents, report: Report, i: int, align: Align) -> Fraction:
+    ticks = steps.ticks
     origin = int(ticks[0]) if align == "first-step" and len(ticks) else 0
     return report.capture.timebase.ns(int(ticks[i]) - origin)
 
@@ -186,26 +193,33 @@ class _StepTimes:
 
 
 def _step_times(
-    capture: Report, golden: Report, tolerance_ns: Fraction, align: Align
+    capture: tuple[Report, StepEvents],
+    golden: tuple[Report, StepEvents],
+    tolerance_ns: Fraction,
+    align: Align,
 ) -> _StepTimes:
     """Step *i* of ``capture`` against step *i* of ``golden`` over the shorter count."""
-    n = min(capture.steps.count, golden.steps.count)
+    (cr, cs), (gr, gs) = capture, golden
+    n = min(cs.count, gs.count)
     if not n:
         return _StepTimes(0, None, None, 0, None)
-    d = _times_ns(capture, align)[:n] - _times_ns(golden, align)[:n]
+    d = (
+        _times_ns(cs, cr.capture.timebase.tick_ns, align)[:n]
+        - _times_ns(gs, gr.capture.timebase.tick_ns, align)[:n]
+    )
     i = int(np.argmax(np.abs(d)))
     return _StepTimes(
         compared=n,
-        max_abs_diff_ns=abs(_exact_ns(capture, i, align) - _exact_ns(golden, i, align)),
+        max_abs_diff_ns=abs(_exact_ns(cs, cr, i, align) - _exact_ns(gs, gr, i, align)),
         max_at_step=i,
         beyond_tolerance=int(np.count_nonzero(np.abs(d) > float(tolerance_ns) + 1e-3)),
         mean_diff_ns=float(d.mean()),
     )
 
 
-def _direction_mismatches(capture: Report, golden: Report, n: int) -> int:
+def _direction_mismatches(capture: StepEvents, golden: StepEvents, n: int) -> int:
     """Steps among the first ``n`` whose directions are both known and differ."""
-    dc, dg = capture.events().direction[:n], golden.events().direction[:n]
+    dc, dg = capture.direction[:n], golden.direction[:n]
     return int(np.count_nonzero((dc != 0) & (dg != 0) & (dc != dg)))
 
 
@@ -232,13 +246,18 @@ def _rule_diffs(capture: Report, golden: Report) -> list[RuleDiff]:
 
 
 def compare_reports(
-    capture: Report, golden: Report, tolerance_ns: Fraction, align: Align = "first-step"
+    capture: tuple[Report, StepEvents],
+    golden: tuple[Report, StepEvents],
+    tolerance_ns: Fraction,
+    align: Align = "first-step",
 ) -> Comparison:
-    """Compare two checked reports (see the module docstring)."""
+    """Compare two checked reports, each with its every step (see the module docstring)."""
     t = _step_times(capture, golden, tolerance_ns, align)
     return Comparison(
-        capture=capture,
-        golden=golden,
+        capture=capture[0],
+        golden=golden[0],
+        capture_steps=capture[1],
+        golden_steps=golden[1],
         align=align,
         tolerance_ns=tolerance_ns,
         compared=t.compared,
@@ -246,8 +265,8 @@ def compare_reports(
         max_at_step=t.max_at_step,
         beyond_tolerance=t.beyond_tolerance,
         mean_diff_ns=t.mean_diff_ns,
-        direction_mismatches=_direction_mismatches(capture, golden, t.compared),
-        rules=_rule_diffs(capture, golden),
+        direction_mismatches=_direction_mismatches(capture[1], golden[1], t.compared),
+        rules=_rule_diffs(capture[0], golden[0]),
     )
 
 
@@ -299,13 +318,13 @@ def compare_axes(
     step_type: int | None = None,
     forward_level: int = 0,
 ) -> MachineComparison:
-    """Check every axis of ``capture`` and of ``golden`` (:func:`wavecheck.engine.plan.check_machine`,
-    each file read once; an axis against its drive in ``drives``, the same in both files) and
-    compare each capture axis with the golden axis of the same name.
+    """Check every axis of ``capture`` and of ``golden`` (:func:`wavecheck.engine.run.check_capture`,
+    an axis against its drive in ``drives``, the same in both files) and compare each capture
+    axis with the golden axis of the same name.
 
     Raises:
-        UsageError: the two files' axes differ by name, an axis has no drive; what
-            :func:`wavecheck.engine.plan.run_check` raises (prefixed ``golden`` for the golden).
+        UsageError: the two files' axes differ by name, an axis has no drive; what the engine
+            raises (prefixed ``golden`` for the golden).
     """
     names = [a.name for a in axes]
     golden_names = [a.name for a in golden_axes]
@@ -316,35 +335,53 @@ def compare_axes(
             "axis of the same name (--map x.step=… for the capture, --golden-map x.step=… for "
             "the golden)"
         )
-    types: dict[str | None, int] = {} if step_type is None else dict.fromkeys(names, step_type)
-    forward: dict[str | None, int] = dict.fromkeys(names, forward_level)
-    checked = check_machine(
-        capture,
-        axes,
-        drives,
-        step_types=types,
-        forward_levels=forward,
-        invert=capture_invert,
-        cross_axis=False,
-    )
+    types: dict[str | None, int] = {} if step_type is None else {None: step_type}
+    checked, steps = _checked(capture, axes, drives, types, forward_level, capture_invert)
     try:
-        reference = check_machine(
-            golden,
-            golden_axes,
-            drives,
-            step_types=types,
-            forward_levels=forward,
-            invert=golden_invert,
-            cross_axis=False,
+        reference, golden_steps = _checked(
+            golden, golden_axes, drives, types, forward_level, golden_invert
         )
     except UsageError as err:
         raise UsageError(
             f"golden {err} (the golden's channels are mapped with --golden-map)"
         ) from None
-    by_name = {r.axis: r for r in reference.axes}
+    by_name = {r.axis: (r, s) for r, s in zip(reference.axes, golden_steps, strict=True)}
     return MachineComparison(
-        [compare_reports(r, by_name[r.axis], tolerance_ns, align) for r in checked.axes]
+        [
+            compare_reports((r, s), by_name[r.axis], tolerance_ns, align)
+            for r, s in zip(checked.axes, steps, strict=True)
+        ]
     )
+
+
+def _checked(
+    capture: Capture,
+    axes: Sequence[AxisMap],
+    drives: Mapping[str | None, Drive],
+    types: Mapping[str | None, int],
+    forward_level: int,
+    invert: Mapping[str | None, Iterable[str]] | None,
+) -> tuple[MachineReport, list[StepEvents]]:
+    """``capture`` checked (one block) and every step of each axis."""
+    collectors: list[StepCollector] = []
+
+    def sinks(plan: AxisPlan) -> list[StepSink]:
+        collectors.append(StepCollector())
+        return [collectors[-1]]
+
+    options = CheckOptions(
+        drive=drives,
+        axes=tuple(axes),
+        invert=tuple(
+            f"{axis}.{role}" if axis is not None else role
+            for axis, roles in (invert or {}).items()
+            for role in roles
+        ),
+        step_type=types,
+        forward_level={None: forward_level},
+    )
+    machine = check_capture(capture, options, step_sinks=sinks)
+    return machine, [c.events() for c in collectors]
 
 
 def compare(

@@ -69,9 +69,8 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from wavecheck.engine.verdicts import RuleOutcome
-    from wavecheck.report.machine import MachineReport
-    from wavecheck.report.model import Report
+    from wavecheck.engine.outcome import MachineReport, Report
+    from wavecheck.engine.results import RuleResult
 
     Checked = Report | MachineReport
 
@@ -220,8 +219,8 @@ def _axes(
     entry: dict[str, Any], where: str, folder: Path, defaults: AxisSpec, shared: dict[str, str]
 ) -> tuple[AxisSpec, ...]:
     """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
-    from wavecheck.axes import axes_from_tables
     from wavecheck.engine.interface import role_name
+    from wavecheck.engine.mapping import axes_from_tables
     from wavecheck.errors import WavecheckError
 
     raw = entry["axes"]
@@ -447,7 +446,7 @@ def _ns(v: Any) -> str:
     return format_ns(v, signed=True)
 
 
-def describe_rule(report: Report, r: RuleOutcome, max_violations: int = 3) -> str:
+def describe_rule(report: Report, r: RuleResult, max_violations: int = 3) -> str:
     """A readable account of one rule: verdict, counts, limit, margin and the worst violations."""
     limit = "-" if r.limit_ns is None else _ns(r.limit_ns).lstrip("+")
     lines = [
@@ -489,7 +488,7 @@ def _describe_report(report: Report, max_violations: int) -> str:
 
 def _describe(checked: Checked, max_violations: int) -> str:
     """A report's account, or a machine's: its verdict, then each axis that does not pass."""
-    from wavecheck.report.machine import MachineReport
+    from wavecheck.engine.outcome import MachineReport
 
     if not isinstance(checked, MachineReport):
         return _describe_report(checked, max_violations)
@@ -501,6 +500,11 @@ def _describe(checked: Checked, max_violations: int) -> str:
 
 
 # -- collection ---------------------------------------------------------------------------------
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Each session reads its captures afresh (a long-lived process may run several)."""
+    _REPORTS.clear()
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     """Add the ``--wavecheck-*`` options."""
     group = parser.getgroup("wavecheck", "waveform checks from wavecheck.toml")
@@ -614,7 +618,7 @@ class RuleItem(pytest.Item):
         return self.spec.name if self.axis is None else f"{self.spec.name}::{self.axis.name}"
 
     def runtest(self) -> None:
-        from wavecheck.report.machine import MachineReport
+        from wavecheck.engine.outcome import MachineReport
 
         checked = _report(self.config_path, self.spec)
         report: Checked = checked
@@ -637,7 +641,7 @@ class RuleItem(pytest.Item):
                     f"{self._where}: expected {expect.upper()}, got {_describe(report, max_v)}"
                 )
             return
-        from wavecheck.report.machine import MachineReport
+        from wavecheck.engine.outcome import MachineReport
 
         assert not isinstance(report, MachineReport)  # rule items belong to one report
         r = report.rule(self.rule)
@@ -656,8 +660,8 @@ class RuleItem(pytest.Item):
         folder = self.config.getoption("wavecheck_report_dir")
         if not folder:
             return
+        from wavecheck.engine.outcome import MachineReport
         from wavecheck.report.html import write_html
-        from wavecheck.report.machine import MachineReport
 
         os.makedirs(folder, exist_ok=True)
         target = Path(folder) / f"{self.spec.name}.html"

@@ -33,6 +33,7 @@ __all__ = [
     "TIME_RULES",
     "Check",
     "Figure",
+    "Hold",
     "Rule",
     "applicable",
     "rule",
@@ -44,6 +45,9 @@ Check = Literal["width", "period", "setup", "hold", "switch", "sequence"]
 or after it; ``hold`` the last ``ref`` event at or before each ``data`` event → that event;
 ``switch`` the end of the last pulse on one up/down line → the first active edge on the other;
 ``sequence`` moves to a state that is not a neighbour in the table (no interval, no limit)."""
+
+Hold = Literal["edges", "step", "unstepped_dir"]
+"""What a rule's intervals need kept between the engine's windows (:attr:`Rule.holds`)."""
 
 Figure = Literal["time", "max_rate", "none"]
 """Where a rule's limit comes from: the drive file's time figure of the same id (ns), the
@@ -75,6 +79,15 @@ class Rule:
     measured); ``"pulse"`` stands for the step type's pulse roles, ``"phases"`` for its phase
     outputs. Empty for rules that measure one signal's own edges."""
 
+    listed_by_end: bool = False
+    """Equal intervals are listed in the order of their end event, not their start (the worst
+    violations, the place of the smallest margin): a DIR hold by its DIR change, a dir delay by
+    the pulse after the switch."""
+    holds: tuple[Hold, ...] = ()
+    """What the engine must keep from one window for the next so that an interval begun there
+    is measured whole (:mod:`wavecheck.engine.axis`): ``edges`` the last edge of each signal,
+    ``step`` the last step, ``unstepped_dir`` every DIR change while no step came yet."""
+
     def roles_for(self, st: StepType) -> tuple[str, ...]:
         """:attr:`roles` with ``"pulse"``/``"phases"`` expanded for step type ``st``."""
         out: list[str] = []
@@ -98,6 +111,7 @@ RULES: tuple[Rule, ...] = (
         ref="pulse",
         data="pulse",
         level=1,
+        holds=("edges",),
     ),
     Rule(
         "step_low",
@@ -108,6 +122,7 @@ RULES: tuple[Rule, ...] = (
         ref="pulse",
         data="pulse",
         level=0,
+        holds=("edges",),
     ),
     Rule(
         "step_period",
@@ -118,6 +133,7 @@ RULES: tuple[Rule, ...] = (
         ref="step",
         data="step",
         roles=("pulse",),
+        holds=("step",),
     ),
     Rule(
         "dir_setup",
@@ -128,6 +144,7 @@ RULES: tuple[Rule, ...] = (
         ref="dir",
         data="active",
         roles=("step", "dir"),
+        holds=("step", "unstepped_dir"),
     ),
     Rule(
         "dir_hold",
@@ -139,6 +156,8 @@ RULES: tuple[Rule, ...] = (
         ref="active",
         data="dir",
         roles=("step", "dir"),
+        listed_by_end=True,
+        holds=("step",),
     ),
     Rule(
         "dir_delay",
@@ -149,6 +168,8 @@ RULES: tuple[Rule, ...] = (
         ref="line",
         data="line",
         roles=("up", "down"),
+        listed_by_end=True,
+        holds=("edges", "step"),
     ),
     Rule(
         "state_hold",
@@ -159,6 +180,7 @@ RULES: tuple[Rule, ...] = (
         ref="state",
         data="state",
         roles=("phases",),
+        holds=("edges",),
     ),
     Rule(
         "state_sequence",
@@ -166,6 +188,7 @@ RULES: tuple[Rule, ...] = (
         "sequence",
         "none",
         ("phases",),
+        holds=("edges",),
     ),
     Rule(
         "enable_setup",
@@ -176,6 +199,7 @@ RULES: tuple[Rule, ...] = (
         ref="enable",
         data="step",
         roles=("pulse", "enable"),
+        holds=("edges", "step"),
     ),
 )
 

@@ -16,12 +16,12 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import write_vcd
+from tests.engine_probe import run_check
 from tests.reliability.corpus import samples_from_edges, sr_bytes, sr_metadata
 from tests.reliability.refcheck import min_margin, reference_check
 from tests.wavecheck.waves import drive as make_drive
 from wavecheck.capture.sr import read_sr
 from wavecheck.capture.vcd import read_vcd
-from wavecheck.engine.plan import run_check
 
 TICK_NS = Fraction(100)  # VCD "$timescale 100 ns", .sr at 10 MHz
 

@@ -38,15 +38,23 @@ def test_the_capture_is_read_once(monkeypatch: pytest.MonkeyPatch) -> None:
     import wavecheck.capture.open as opener
 
     calls = []
-    real = opener.open_capture
+    real = opener.open_source
 
     def counting(*a, **k):  # type: ignore[no-untyped-def]
-        calls.append(a[0])
-        return real(*a, **k)
+        source = real(*a, **k)
+        blocks = source.blocks
+        calls.append(0)
 
-    monkeypatch.setattr(opener, "open_capture", counting)
+        def counted():  # type: ignore[no-untyped-def]
+            calls[-1] += 1
+            return blocks()
+
+        source.blocks = counted
+        return source
+
+    monkeypatch.setattr(opener, "open_source", counting)
     check_axes(TWO_AXIS, {"x": X, "y": Y}, "gecko-g202")
-    assert len(calls) == 1
+    assert calls == [1]  # one source, its blocks read once for both axes
 
 
 def test_an_axis_takes_its_own_drive_and_options(smoothie_sr: Path) -> None:

@@ -43,7 +43,7 @@ COUNTING_CONFTEST = """
 import wavecheck.capture.open as opener
 
 OPENED = []
-_real = opener.open_capture
+_real = opener.open_source
 
 
 def _counting(path, *args, **kwargs):
@@ -51,7 +51,7 @@ def _counting(path, *args, **kwargs):
     return _real(path, *args, **kwargs)
 
 
-opener.open_capture = _counting
+opener.open_source = _counting
 
 
 def pytest_terminal_summary(terminalreporter):

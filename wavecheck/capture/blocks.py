@@ -12,19 +12,19 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
-from fractions import Fraction
 from typing import Protocol
 
 import numpy as np
 
-from wavecheck.capture.edges import NEVER, Capture, Channel, EdgeArray
+from wavecheck.capture.edges import NEVER, Capture, Channel, EdgeArray, Vector
 
 __all__ = [
     "BlockSource",
     "EdgeBlock",
     "MemorySource",
+    "WHOLE",
     "capture_blocks",
-    "open_stream",
+    "assemble",
     "skeleton_of",
 ]
 
@@ -80,23 +80,111 @@ def skeleton_of(capture: Capture) -> Capture:
     return replace(capture, channels=chans, notes=list(capture.notes))
 
 
-class MemorySource:
-    """Blocks cut from a capture in memory, about ``block_edges`` edges each (over all channels;
-    at least one distinct tick per block)."""
+#: ``block_edges`` of a capture in memory given as one block.
+WHOLE = 1 << 62
 
-    def __init__(self, capture: Capture, block_edges: int) -> None:
+
+class MemorySource:
+    """A capture in memory as a block source: one block (the default), or blocks of about
+    ``block_edges`` edges each (over all channels; at least one distinct tick per block: the
+    tests' way to cut a capture anywhere)."""
+
+    def __init__(self, capture: Capture, block_edges: int = WHOLE) -> None:
         self.whole = capture
         self.block_edges = max(1, block_edges)
         self.skeleton = skeleton_of(capture)
+        self.skeleton.bit_reader = self._bit
+
+    def _bit(self, key: str, vec: Vector, bit: int) -> Channel:
+        """A vector's bit: read into the capture (its edges come with the blocks), given to the
+        skeleton without them."""
+        ch = self.whole.bit(key, bit)
+        empty = np.zeros(0, dtype=np.int64)
+        return replace(ch, edges=empty, xz_times=empty, xz_ends=empty, counted=ch.edge_count)
 
     def blocks(self) -> Iterator[EdgeBlock]:
-        return capture_blocks(self.whole, self.block_edges)
+        if self.block_edges >= WHOLE:
+            yield _one_block(self.whole)
+        else:
+            yield from capture_blocks(self.whole, self.block_edges)
 
     def capture(self) -> Capture:
         return self.skeleton
 
     def want(self, channels: Iterable[int]) -> None:
         pass  # the capture is in memory already
+
+
+def _one_block(capture: Capture) -> EdgeBlock:
+    """Every edge of ``capture`` as one block."""
+    block = EdgeBlock(end=NEVER, start=capture.start)
+    for c in capture.channels:
+        if len(c.edges):
+            block.edges[c.index] = c.edges
+        if not c.never_known:
+            block.known[c.index] = (c.known_from, c.initial)
+        if len(c.xz_times):
+            block.xz_starts[c.index] = c.xz_times
+        ends = c.xz_ends[c.xz_ends != NEVER]
+        if len(ends):
+            block.xz_ends[c.index] = ends
+    return block
+
+
+def assemble(skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = None) -> Capture:
+    """The capture that ``blocks`` of a source with ``skeleton`` make (its channels' edges, levels
+    and unknown stretches); ``end``: its last tick (default the skeleton's, or the last edge seen
+    when that is later: a capture read only in part)."""
+    parts: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
+    xz: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
+    back: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
+    known: dict[int, tuple[int, int]] = {}
+    k: tuple[int, int] | None
+    start = skeleton.start
+    last = skeleton.end
+    for block in blocks:
+        if block.start is not None:
+            start = block.start
+        for i, e in block.edges.items():
+            parts.setdefault(i, []).append(e)
+            last = max(last, int(e[-1])) if len(e) else last
+        for i, e in block.xz_starts.items():
+            xz.setdefault(i, []).append(e)
+        for i, e in block.xz_ends.items():
+            back.setdefault(i, []).append(e)
+        for i, k in block.known.items():
+            known.setdefault(i, k)
+    empty = np.zeros(0, dtype=np.int64)
+
+    def joined(arrays: list[EdgeArray]) -> EdgeArray:
+        return np.concatenate(arrays).astype(np.int64, copy=False) if arrays else empty.copy()
+
+    chans = []
+    for c in skeleton.channels:
+        starts = joined(xz.get(c.index, []))
+        ends = joined(back.get(c.index, []))
+        if len(ends) < len(starts):
+            ends = np.concatenate([ends, np.full(len(starts) - len(ends), NEVER, np.int64)])
+        k = known.get(c.index)
+        chans.append(
+            replace(
+                c,
+                edges=joined(parts.get(c.index, [])),
+                initial=k[1] if k else 0,
+                known_from=k[0] if k else start,
+                never_known=k is None,
+                xz_times=starts,
+                xz_ends=ends,
+                counted=None,
+            )
+        )
+    return replace(
+        skeleton,
+        start=start,
+        end=last if end is None else end,
+        channels=chans,
+        notes=list(skeleton.notes),
+    )
 
 
 def _events(ch: Channel) -> EdgeArray:
@@ -128,33 +216,3 @@ def capture_blocks(capture: Capture, block_edges: int) -> Iterator[EdgeBlock]:
                     getattr(block, name)[c.index] = arr[sel]
         lo = hi
         yield block
-
-
-def open_stream(
-    path: str,
-    *,
-    samplerate: Fraction | None = None,
-    resolution_s: Fraction | None = None,
-    input_format: str | None = None,
-    chunk_bytes: int | None = None,
-) -> BlockSource | None:
-    """A block reader for ``path`` (a ``.sr`` or VCD file, told as
-    :func:`wavecheck.capture.open.open_capture` tells them), or None when there is none (standard
-    input, a pipe, FST/GHW, formats read through sigrok-cli, a VCD with options): read whole."""
-    from wavecheck.capture.open import detect_format, is_stream
-
-    if is_stream(path):
-        return None
-    fmt = (input_format.strip() if input_format else detect_format(path)).lower()
-    if fmt in ("sr", "srzip", "sigrok"):
-        from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
-
-        size = chunk_bytes or DEFAULT_CHUNK_BYTES
-        return SrBlocks(path, samplerate=samplerate, resolution_s=resolution_s, chunk_bytes=size)
-    if fmt == "vcd":
-        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
-        from wavecheck.capture.vcd.reader import VcdBlocks
-
-        size = chunk_bytes or VCD_CHUNK
-        return VcdBlocks(path, samplerate=samplerate, resolution_s=resolution_s, chunk_bytes=size)
-    return None

@@ -7,6 +7,7 @@ hundreds of millions of samples costs only its edges.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -160,6 +161,12 @@ class Capture:
     time_known: bool = True
     vectors: dict[str, Vector] = field(default_factory=dict)
     bit_source: str | None = None
+    bit_reader: Callable[[str, Vector, int], Channel] | None = field(
+        default=None, repr=False, compare=False
+    )
+    """How :meth:`bit` makes a vector's bit a channel (``(full name, vector, declared index)`` →
+    the new channel, numbered after the others); None: read the file again (pywellen). A block
+    reader sets its own, so the bit's edges come with its blocks."""
 
     def bit(self, ref: str, bit: int) -> Channel:
         """Bit ``bit`` (an index of the declared range, ``stout[3]``) of the vector ``ref`` as a
@@ -171,8 +178,6 @@ class Capture:
             UsageError: no such vector, several match, the bit is outside the range, or the
                 file cannot be read again (standard input).
         """
-        from wavecheck.capture.wellen import load_bit
-
         name = f"{ref}[{bit}]"
         for ch in self.channels:
             if ch.name == name:
@@ -198,7 +203,12 @@ class Capture:
         for ch in self.channels:
             if ch.name == full:
                 return ch
-        ch = load_bit(self, hits[0], vec, bit)
+        if self.bit_reader is not None:
+            ch = self.bit_reader(hits[0], vec, bit)
+        else:
+            from wavecheck.capture.wellen import load_bit
+
+            ch = load_bit(self, hits[0], vec, bit)
         self.channels.append(ch)
         return ch
 

@@ -17,13 +17,16 @@ import tempfile
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 from wavecheck.capture.edges import Capture
 from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
 from wavecheck.errors import CaptureError, UsageError
 
-__all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
+if TYPE_CHECKING:
+    from wavecheck.capture.blocks import BlockSource
+
+__all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture", "open_source"]
 
 _ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
 _BY_EXTENSION = {
@@ -319,3 +322,56 @@ def detect_path_exists(path: str | os.PathLike[str]) -> None:
         raise CaptureError(path, None, "is a folder, not a capture file")
     if p.stat().st_size == 0:
         raise CaptureError(path, None, "the file is empty")
+
+
+def open_source(
+    path: str | os.PathLike[str],
+    *,
+    samplerate: Fraction | None = None,
+    resolution_s: Fraction | None = None,
+    input_format: str | None = None,
+    require_time: bool = True,
+    channel_names: Sequence[str] | None = None,
+    chunk_bytes: int | None = None,
+) -> BlockSource:
+    """A block source for any capture (as :func:`open_capture` reads it): ``.sr`` and VCD files
+    are read block by block in bounded memory; every other input is read whole first and given
+    as one block (:class:`~wavecheck.capture.blocks.MemorySource`, its ``whole_reason`` says why).
+
+    Raises:
+        CaptureError: the file cannot be read (the message names the file and the place).
+    """
+    if samplerate is not None and samplerate <= 0:
+        raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
+    if not is_stream(path):
+        fmt = (input_format.strip() if input_format else detect_format(path)).lower()
+        if fmt in ("sr", "srzip", "sigrok"):
+            from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
+
+            return SrBlocks(
+                path,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES,
+            )
+        if fmt == "vcd":
+            from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
+            from wavecheck.capture.vcd.reader import VcdBlocks
+
+            return VcdBlocks(
+                path,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                chunk_bytes=chunk_bytes or VCD_CHUNK,
+            )
+    from wavecheck.capture.blocks import MemorySource
+
+    whole = open_capture(
+        path,
+        samplerate=samplerate,
+        resolution_s=resolution_s,
+        input_format=input_format,
+        require_time=require_time,
+        channel_names=channel_names,
+    )
+    return MemorySource(whole)

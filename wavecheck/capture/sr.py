@@ -783,6 +783,7 @@ class SrBlocks:
         self.counts = dict.fromkeys(self.bits, 0)
         self.initial = dict.fromkeys(self.bits, 0)
         self.nsamples = 0
+        self._finder: _EdgeFinder | None = None
         self.skeleton = _assemble(path, self.meta, self.rate, self.notes, resolution_s,
                                   self._channels(), 0, end_notes=False)  # fmt: skip
 
@@ -794,15 +795,17 @@ class SrBlocks:
         ]  # fmt: skip
 
     def want(self, channels: Iterable[int]) -> None:
-        """Extract the edges of ``channels`` only (before :meth:`blocks`)."""
+        """Extract the edges of ``channels`` only (from the next block on)."""
         self.wanted = set(channels)
+        if self._finder is not None:
+            self._finder.want(slot for slot, b in enumerate(self.bits) if b in self.wanted)
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each inflated block of samples."""
         from wavecheck.capture.blocks import EdgeBlock
 
         with _open_zip(self.path) as zf, open(self.path, "rb") as raw:
-            finder = _EdgeFinder(self.meta.unitsize, self.bits)
+            finder = self._finder = _EdgeFinder(self.meta.unitsize, self.bits)
             finder.want(slot for slot, b in enumerate(self.bits) if b in self.wanted)
             first = True
             for _ in _scan(self.path, zf, raw, self.meta, finder, self.chunk_bytes):

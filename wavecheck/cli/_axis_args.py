@@ -3,7 +3,7 @@
 Options added by :func:`add_axis_arguments`: ``--map`` (``[AXIS.]ROLE=CH``), ``--invert``,
 ``--type``, ``--user-step-type``, ``--dir-forward``, ``--pulse-level``, ``--active-edge``.
 :func:`axis_runs` turns them and an opened capture into one :class:`AxisRun` per axis (the
-syntax is :mod:`wavecheck.axes`); without ``--map`` the roles come from channel names or are
+syntax is :mod:`wavecheck.engine.mapping`); without ``--map`` the roles come from channel names or are
 inferred from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
 """
 
@@ -13,8 +13,10 @@ import argparse
 from dataclasses import dataclass
 from typing import Any
 
-from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.capture.edges import Capture
+from wavecheck.drives.model import Drive
+from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert, split_per_axis
+from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, CheckOptions
 from wavecheck.errors import UsageError
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "add_axis_arguments",
     "axes_of",
     "axis_runs",
+    "check_options",
     "pulse_level",
     "user_table",
 ]
@@ -218,3 +221,65 @@ def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun]
             )
         )
     return runs, found
+
+
+def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> CheckOptions:
+    """The options object (:class:`~wavecheck.engine.options.CheckOptions`) of the mapping,
+    capture, rule and configuration options of ``args``; built once and kept on ``args``.
+    ``with_drive=False``: a command without a drive (``measure``).
+
+    Raises:
+        UsageError: a malformed option (the axes are checked against the capture later).
+    """
+    cached = getattr(args, "_check_options", None)
+    if isinstance(cached, CheckOptions):
+        return cached
+    from wavecheck.cli._capture_args import resolution_from_args
+    from wavecheck.cli._reports import latency_ns, stepgen_config
+    from wavecheck.drives.library import load_drive
+
+    drives: dict[str | None, Drive] = {}
+    if with_drive:
+        loaded: dict[str, Drive] = {}
+        for axis, ref in split_per_axis(args.drive, "--drive").items():
+            if ref not in loaded:
+                loaded[ref] = load_drive(ref)
+            drives[axis] = loaded[ref]
+    types = {
+        axis: _int_option(text, "--type")
+        for axis, text in split_per_axis(args.type, "--type").items()
+    }
+    forward = {
+        axis: _forward(text)
+        for axis, text in split_per_axis(args.dir_forward, "--dir-forward").items()
+    }
+    block = getattr(args, "block_edges", None)
+    options = CheckOptions(
+        drive=drives,
+        axes=tuple(parse_axes(args.map)) if args.map else (),
+        invert=tuple(args.invert),
+        step_type=types,
+        forward_level=forward,
+        user_table=user_table(args),
+        pulse_level=pulse_level(args),
+        active_edge=args.active_edge,
+        resolution=resolution_from_args(args),
+        limits=tuple(getattr(args, "limit", None) or ()),
+        margin=getattr(args, "margin", None),
+        stepgen=stepgen_config(args) if with_drive else None,
+        latency_ns=latency_ns(args) if with_drive else None,
+        keep_violations=kept_violations(args),
+        block_edges=DEFAULT_BLOCK_EDGES if block is None else block,
+        pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
+    )
+    args._check_options = options
+    return options
+
+
+def kept_violations(args: argparse.Namespace) -> int:
+    """Violations kept per rule: enough for every output's list."""
+    from wavecheck.report.json import DEFAULT_VIOLATION_CAP
+    from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
+
+    given = getattr(args, "max_violations", None) or 0
+    return max(DEFAULT_VIOLATION_CAP, DEFAULT_TEXT_VIOLATIONS, given)

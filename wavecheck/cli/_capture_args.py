@@ -11,8 +11,9 @@ import argparse
 import os
 from fractions import Fraction
 
+from wavecheck.capture.blocks import BlockSource
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import open_capture
+from wavecheck.capture.open import open_capture, open_source
 from wavecheck.errors import UsageError
 from wavecheck.units import SAMPLE_RATE, parse_option
 
@@ -21,6 +22,7 @@ __all__ = [
     "capture_from_args",
     "resolution_from_args",
     "samplerate_from_args",
+    "source_from_args",
 ]
 
 
@@ -108,6 +110,23 @@ def capture_from_args(
         input_format=getattr(args, "input_format", None),
         require_time=require_time,
         channel_names=_channel_names(getattr(args, "channels", None)),
+    )
+
+
+def source_from_args(args: argparse.Namespace, path: str | os.PathLike[str]) -> BlockSource:
+    """``path`` as a block source (:func:`wavecheck.capture.open.open_source`) with the options
+    added by :func:`add_capture_arguments`; ``--resolution`` is the engine's (exact).
+
+    Raises:
+        UnitError: a bad ``--samplerate`` value.
+        CaptureError: the file cannot be read.
+    """
+    return open_source(
+        path,
+        samplerate=samplerate_from_args(args),
+        input_format=getattr(args, "input_format", None),
+        channel_names=_channel_names(getattr(args, "channels", None)),
+        chunk_bytes=getattr(args, "chunk_bytes", None),
     )
 
 

@@ -32,13 +32,13 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.cli.linuxcnc import add_file_arguments
+from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
-from wavecheck.report.model import Report
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
 from wavecheck.units import BASE_PERIOD, LATENCY, format_time, option_ns
 from wavecheck.verdict import overall_verdict, worst_exit_code

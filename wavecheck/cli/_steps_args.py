@@ -7,17 +7,19 @@ write one CSV each, named ``FILE-<capture stem>.csv``.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from wavecheck.axes import per_axis
+from wavecheck.capture.blocks import BlockSource
+from wavecheck.engine.mapping import split_per_axis
+from wavecheck.engine.plan import AxisPlan
+from wavecheck.engine.sinks import StepSink
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
-from wavecheck.report.steps_csv import AxisSteps, steps_per_unit_of, write_steps_csv
-from wavecheck.timebase import Timebase
+from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of
 
-__all__ = ["add_steps_arguments", "check_steps_arguments", "steps_csv_path", "write_steps"]
+__all__ = ["add_steps_arguments", "check_steps_arguments", "steps_csv_path", "steps_writer"]
 
 
 def add_steps_arguments(p: Any) -> None:
@@ -58,12 +60,18 @@ def steps_csv_path(target: str, capture: str, used: set[str]) -> str:
     return name
 
 
-def write_steps(
-    args: argparse.Namespace, target: str, axes: Sequence[AxisSteps], timebase: Timebase
-) -> int:
-    """Write the steps of ``axes`` to ``target`` with ``--steps-per-unit`` applied; the rows."""
-    names = [a.name for a in axes]
-    spu = steps_per_unit_of(per_axis(args.steps_per_unit, "--steps-per-unit", names))
-    return write_steps_csv(
-        target, [AxisSteps(a.name, a.steps, spu.get(a.name)) for a in axes], timebase
+def steps_writer(
+    args: argparse.Namespace, target: str, source: BlockSource
+) -> tuple[StepsCsvWriter, Callable[[AxisPlan], list[StepSink]]]:
+    """The ``--steps-csv`` writer of one capture (``--steps-per-unit`` applied) and the
+    engine's factory of its axis sinks."""
+    spu = steps_per_unit_of(split_per_axis(args.steps_per_unit, "--steps-per-unit"))
+    writer = StepsCsvWriter(
+        target, source.skeleton.timebase, bool(args.steps_per_unit), named=set(spu) - {None}
     )
+
+    def sinks(plan: AxisPlan) -> list[StepSink]:
+        value = spu.get(plan.name, spu.get(None))
+        return [writer.sink(plan.name, value)]
+
+    return writer, sinks

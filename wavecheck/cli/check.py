@@ -3,7 +3,7 @@
 Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 2
 unusable input or usage (one line, no traceback).
 
-The command is a thin layer: options → :func:`wavecheck.engine.plan.run_check` → a renderer. New
+The command is a thin layer: options → :func:`wavecheck.engine.run.check_source` → a renderer. New
 outputs register in :data:`RENDERERS` (``--format``); extra side outputs (plots, HTML, GTKWave
 files) can be added as options handled in :func:`write_outputs`.
 """
@@ -13,63 +13,39 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
-from fractions import Fraction
 from typing import Any
 
-from wavecheck.axes import AxisMap
-from wavecheck.capture.blocks import BlockSource, open_stream
-from wavecheck.capture.edges import Capture
-from wavecheck.cli._axis_args import (
-    add_axis_arguments,
-    axis_runs,
-    pulse_level,
-    roles_from_waveforms,
-    user_table,
-)
-from wavecheck.cli._capture_args import (
-    add_capture_arguments,
-    capture_from_args,
-    resolution_from_args,
-)
+from wavecheck.capture.blocks import WHOLE
+from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
     add_report_arguments,
     axis_reports,
     expand_captures,
-    latency_ns,
     render_json_report,
     render_junit_report,
     render_text_report,
     run_checks,
-    stepgen_config,
 )
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
     check_steps_arguments,
     steps_csv_path,
-    write_steps,
+    steps_writer,
 )
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
-from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import Drive
-from wavecheck.drives.tune import tune_drive
-from wavecheck.engine.axis import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.outcome import MachineReport
+from wavecheck.engine.run import check_source, start
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
-from wavecheck.report.machine import MachineReport
-from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 
 __all__ = [
     "RENDERERS",
-    "CheckSetup",
     "build_report",
-    "check_setup",
     "finish_report",
-    "kept_violations",
     "register",
     "run",
     "write_outputs",
@@ -130,123 +106,51 @@ def register(sub: Any) -> None:
         type=int,
         default=None,
         metavar="N",
-        help="check a .sr or VCD block by block, about N edges at a time (memory follows N, "
-        "not the capture's length; default 262144)",
+        help="check about N edges at a time (memory follows N, not the capture's length; "
+        "default 262144)",
     )
     p.add_argument(
         "--no-stream",
         action="store_true",
-        help="read the whole capture into memory first (the reference path; --steps-csv and "
-        "--firmware always do; a streamed --plot, --gtkw or --html draws the signals from small "
-        "windows kept around the worst places)",
+        help="check the whole capture as one window (the same engine with one block: memory "
+        "follows the capture; the results are the same)",
     )
     p.set_defaults(func=run)
 
 
-def _stream_source(args: argparse.Namespace, path: str) -> BlockSource | None:
-    """A block reader for ``path`` when this check can be streamed (module
-    :mod:`wavecheck.stream`), else None: read whole."""
-    whole_only = ("steps_csv", "firmware", "no_stream")  # they need every step
-    if any(getattr(args, k, None) for k in whole_only):
-        return None
-    if args.block_edges is not None and args.block_edges < 1:
-        raise UsageError(f"--block-edges must be 1 or more, got {args.block_edges}")
-    from wavecheck.cli._capture_args import samplerate_from_args
-
-    source = open_stream(
-        path,
-        samplerate=samplerate_from_args(args),
-        input_format=getattr(args, "input_format", None),
-    )
-    if source is None or not roles_from_waveforms(args, source.skeleton):
-        return source
-    return None  # the roles come from the waveforms: read whole
-
-
-@dataclass
-class CheckSetup:
-    """What ``check``'s options say about a capture: the axes, their drives and the engine's
-    keyword arguments (:func:`wavecheck.engine.plan.check_machine`), and notes on how the roles were
-    found."""
-
-    axes: list[AxisMap]
-    drives: dict[str | None, Drive]
-    options: dict[str, Any]
-    resolution: Fraction | None
-    found: list[str]
-
-
-def check_setup(args: argparse.Namespace, capture: Capture) -> CheckSetup:
-    """Resolve ``args``' axes, drives (each loaded once, tuned by ``--limit``/``--margin``) and
-    options against ``capture`` (its channels; the edges are not needed)."""
-    runs, found = axis_runs(args, capture)
-    loaded: dict[str, Drive] = {}
-    for axis in runs:
-        if axis.drive is None:  # check's --drive is required; axis_runs gives every axis one
-            raise UsageError(f"--drive: axis {axis.name} has no drive")
-        if axis.drive not in loaded:
-            loaded[axis.drive] = tune_drive(load_drive(axis.drive), args.limit, args.margin)
-    options: dict[str, Any] = {
-        "step_types": {a.name: a.step_type for a in runs if a.step_type is not None},
-        "forward_levels": {a.name: a.forward_level for a in runs},
-        "invert": {a.name: a.invert for a in runs},
-        "active_edge": args.active_edge,
-        "user_table": user_table(args),
-        "stepgen": stepgen_config(args),
-        "pulse_level": pulse_level(args),
-        "latency_ns": latency_ns(args),
-    }
-    return CheckSetup(
-        [AxisMap(a.name, a.roles) for a in runs],
-        {a.name: loaded[a.drive] for a in runs if a.drive is not None},
-        options,
-        resolution_from_args(args),  # exact, a fraction of a tick included
-        found,
-    )
-
-
-def finish_report(args: argparse.Namespace, machine: MachineReport, found: list[str]) -> Checked:
-    """Add ``--firmware`` findings and the role notes; a single unnamed axis as its Report."""
+def finish_report(args: argparse.Namespace, machine: MachineReport) -> Checked:
+    """Add ``--firmware`` findings; a single unnamed axis as its Report."""
     for report in machine.axes:
         if getattr(args, "firmware", None):  # the capture against its own firmware settings
             report.firmware = check_firmware(args, report)
-        report.notes[:0] = found
     if len(machine.axes) == 1 and machine.axes[0].axis is None:
         return machine.axes[0]
     return machine
 
 
-def build_report(args: argparse.Namespace, path: str) -> Checked:
-    """Read ``path`` once and check every axis of ``args`` against its drive (no output)."""
+def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = None) -> Checked:
+    """Read ``path`` once and check every axis of ``args`` against its drive (and write the
+    steps to ``steps_csv`` as they are decoded)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    source = _stream_source(args, path)
-    capture = (
-        source.skeleton if source is not None else capture_from_args(args, path, resolution=False)
-    )
-    setup = check_setup(args, capture)
-    machine = None
-    if source is not None:
-        try:
-            machine = check_stream(
-                source, setup.axes, setup.drives, setup.resolution,
-                keep_violations=kept_violations(args),
-                block_edges=args.block_edges or DEFAULT_BLOCK_EDGES, **setup.options,
-            )  # fmt: skip
-        except NotStreamable:
-            machine = None
-    if machine is None:
-        if source is not None:
-            capture = capture_from_args(args, path, resolution=False)
-        machine = check_machine(
-            capture, setup.axes, setup.drives, setup.resolution, **setup.options
-        )
-    return finish_report(args, machine, setup.found)
-
-
-def kept_violations(args: argparse.Namespace) -> int:
-    """Violations a streamed check keeps per rule: enough for every output's list."""
-    return max(DEFAULT_VIOLATION_CAP, DEFAULT_TEXT_VIOLATIONS, args.max_violations or 0)
+    if args.no_stream:
+        args.block_edges = WHOLE
+    options = check_options(args)
+    source = source_from_args(args, path)
+    if steps_csv is None:
+        return finish_report(args, check_source(source, options))
+    writer, sinks = steps_writer(args, steps_csv, source)
+    try:
+        machine, blocks = start(source, options, step_sinks=sinks)
+        for block in blocks:
+            machine.feed(block)
+            writer.settled(machine.settled(block.end))
+        checked = finish_report(args, machine.finish(source.capture()))
+    except BaseException:
+        writer.abort()
+        raise
+    writer.close()
+    return checked
 
 
 def write_outputs(args: argparse.Namespace, report: Checked) -> None:
@@ -273,12 +177,8 @@ def run(args: argparse.Namespace) -> int:
     used: set[str] = set()
 
     def build_and_export(a: argparse.Namespace, path: str) -> Checked:
-        """:func:`build_report`, then the capture's steps to ``--steps-csv``."""
-        checked = build_report(a, path)
+        """:func:`build_report`, the capture's steps written to ``--steps-csv`` meanwhile."""
         target = steps_csv_path(a.steps_csv, path, used) if several else a.steps_csv
-        reports = axis_reports(checked)
-        axes = [AxisSteps(r.axis, r.events()) for r in reports]
-        write_steps(a, target, axes, reports[0].capture.timebase)
-        return checked
+        return build_report(a, path, target)
 
     return run_checks(args, build_and_export, write_outputs)

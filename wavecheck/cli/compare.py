@@ -22,12 +22,12 @@ import sys
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.axes import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.capture.open import open_capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.compare import Comparison, MachineComparison, compare_axes
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive
+from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import format_ns, format_time, json_number, option_ns
@@ -69,7 +69,7 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
     ]
     align = "the first step" if c.align == "first-step" else "time 0 of each file"
     if c.max_abs_diff_ns is not None and c.max_at_step is not None:
-        t = c.golden.capture.timebase.seconds(int(c.golden.events().ticks[c.max_at_step]))
+        t = c.golden.capture.timebase.seconds(int(c.golden_steps.ticks[c.max_at_step]))
         out.append(
             f"step times:     aligned on {align}; max |Δt| {format_ns(c.max_abs_diff_ns)} at step "
             f"{c.max_at_step} (golden t = {float(t):.9f} s); mean Δt "

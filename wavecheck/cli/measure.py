@@ -2,8 +2,8 @@
 
 Per axis: steps, reversals, and for every interval kind of the step type the count, min, max,
 mean, percentiles and where the extremes are, plus the step-rate range
-(:mod:`wavecheck.measure`; the intervals are ``check``'s). Text or ``--format json``
-(:mod:`wavecheck.report.measure`), ``--plot``/``--html`` with position, step rate and histograms,
+(:mod:`wavecheck.measurement`; the intervals are ``check``'s). Text or ``--format json``
+(:mod:`wavecheck.report.measurement`), ``--plot``/``--html`` with position, step rate and histograms,
 ``--steps-csv`` with every step. Exit 0, or 2 for unusable input (nothing is judged).
 
 ``--firmware FILE`` (issue 15) compares each axis's measured minima with the configuration that
@@ -19,19 +19,14 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
-from wavecheck.cli._axis_args import add_axis_arguments, axis_runs, pulse_level, user_table
-from wavecheck.cli._capture_args import (
-    add_capture_arguments,
-    capture_from_args,
-    resolution_from_args,
-)
-from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, write_steps
+from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
+from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
 from wavecheck.cli.config import add_firmware_arguments, check_firmware
-from wavecheck.measure import AxisSpec, Measurement, measure
+from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
-from wavecheck.report.measure import measurement_dict, render_measure_text
-from wavecheck.report.steps_csv import AxisSteps
+from wavecheck.report.measurement import measurement_dict, render_measure_text
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 if TYPE_CHECKING:
@@ -77,18 +72,19 @@ def register(sub: Any) -> None:
 
 
 def build_measurement(args: argparse.Namespace) -> Measurement:
-    """Read the capture once and measure every axis of ``args`` (no output)."""
-    capture = capture_from_args(args, args.capture, resolution=False)
-    runs, found = axis_runs(args, capture)
-    m = measure(
-        capture,
-        [AxisSpec(r.name, r.roles, r.invert, r.step_type, r.forward_level) for r in runs],
-        resolution_from_args(args),
-        active_edge=args.active_edge,
-        user_table=user_table(args),
-        pulse_level=pulse_level(args),
-    )
-    m.notes[:0] = found
+    """Read the capture once and measure every axis of ``args``; ``--steps-csv`` is written
+    meanwhile."""
+    source = source_from_args(args, args.capture)
+    options = check_options(args, with_drive=False)
+    if not args.steps_csv:
+        return measure(source, options)
+    writer, sinks = steps_writer(args, args.steps_csv, source)
+    try:
+        m = measure(source, options, step_sinks=sinks, settled=writer.settled)
+    except BaseException:
+        writer.abort()
+        raise
+    writer.close()
     return m
 
 
@@ -132,23 +128,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"measured {len(m.axes)} axis/axes ({steps} steps); report written to {args.output}")
     else:
         sys.stdout.write(text)
-    if args.steps_csv:
-        write_steps(
-            args,
-            args.steps_csv,
-            [AxisSteps(a.name, a.steps) for a in m.axes],
-            m.capture.timebase,
-        )
     png = None
     if args.plot or args.html:
-        from wavecheck.report.measure_plot import render_measure_png
+        from wavecheck.report.measurement_plot import render_measure_png
 
         png = render_measure_png(m)
     if args.plot:
         assert png is not None
         atomic_write(args.plot, png)
     if args.html:
-        from wavecheck.report.measure import write_measure_html
+        from wavecheck.report.measurement import write_measure_html
 
         write_measure_html(m, args.html, png)
     return EXIT_FAIL if any(fc.verdict == "fail" for fc in own) else EXIT_PASS

@@ -11,28 +11,22 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
-from wavecheck.cli._axis_args import add_axis_arguments, roles_from_waveforms
-from wavecheck.cli.check import (
-    RENDERERS,
-    check_setup,
-    finish_report,
-    kept_violations,
-    write_outputs,
-)
+from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
 from wavecheck.cli.config import add_tuning_arguments
-from wavecheck.engine.axis import MachineStream
-from wavecheck.engine.plan import check_machine
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.output import output_file
+from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 if TYPE_CHECKING:
+    from wavecheck.engine.run import MachineCheck
     from wavecheck.live.learn import RoleLearner
-from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 __all__ = ["register", "run"]
 
@@ -217,24 +211,16 @@ def run(args: argparse.Namespace) -> int:
     scanner = SampleBlocks(label, len(names), rate, names)
     found: list[str] = []
 
-    def start(capture: Capture) -> MachineStream:
-        """The streamed check of ``args``' axes (roles resolved against ``capture``)."""
-        setup = check_setup(args, capture)
-        found[:] = setup.found
-        template = check_machine(
-            scanner.skeleton, setup.axes, setup.drives, setup.resolution, **setup.options
-        )
-        return MachineStream(
-            template,
-            setup.drives,
-            pulse_level=setup.options["pulse_level"],
-            resolution=setup.resolution,
-            user_table=setup.options["user_table"],
-            block_edges=LIVE_BLOCK_EDGES,
-            keep_violations=kept_violations(args),
-        )
+    from wavecheck.engine.run import axes_for, machine_for, needs_waveforms
 
-    def decide(capture: Capture, final: bool) -> MachineStream | None:
+    options = replace(check_options(args), block_edges=LIVE_BLOCK_EDGES)
+
+    def start(capture: Capture) -> MachineCheck:
+        """The live check of ``args``' axes (roles resolved against ``capture``)."""
+        axes, found[:] = axes_for(options, capture)
+        return machine_for(scanner.skeleton, options, axes, found)
+
+    def decide(capture: Capture, final: bool) -> MachineCheck | None:
         """The check once the roles can be told from ``capture`` (the first samples)."""
         try:
             machine = start(capture)
@@ -245,8 +231,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"wavecheck: {found[0]}", file=sys.stderr, flush=True)
         return machine
 
-    checker: MachineStream | RoleLearner
-    if roles_from_waveforms(args, scanner.skeleton):
+    checker: MachineCheck | RoleLearner
+    if needs_waveforms(options, scanner.skeleton):
         learn = _time_samples(args.learn, rate, "--learn") or 1
         checker = RoleLearner(scanner, decide, min(learn, MAX_LEARN_BYTES // scanner.unitsize))
     else:
@@ -289,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
         (recorder.close if result.samples else recorder.discard)()
     if result.failure is not None and result.samples == 0:
         raise DeviceError(f"{label}: {result.failure}; no samples arrived (nothing was checked)")
-    report = finish_report(args, result.report, found)
+    report = finish_report(args, result.report)
     write_outputs(args, report)
     print(
         f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended}); "

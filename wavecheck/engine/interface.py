@@ -21,6 +21,7 @@ __all__ = [
     "StepInterface",
     "build_interface",
     "find_channel",
+    "leaf_name",
     "mapped_channel_names",
     "parse_map",
     "role_name",
@@ -39,6 +40,12 @@ ROLES: tuple[str, ...] = (
     "enable",
 )
 _ROLE_BY_KEY = {r.lower().replace("_", "-"): r for r in ROLES}
+
+
+def leaf_name(name: str) -> str:
+    """A channel name's last dotted part, as a role would be spelt: ``"stepgen.0.phase_A"`` →
+    ``"phase-a"``, ``"top.STEP"`` → ``"step"``."""
+    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
 
 
 def role_name(name: str) -> str:
@@ -185,6 +192,8 @@ class RoleSignal:
     inverted: bool
     unknown: tuple[EdgeArray, EdgeArray] = field(default_factory=_no_stretches)
     """Closed tick ranges where the level is not known (:meth:`Channel.unknown_stretches`)."""
+    index: int = -1
+    """The channel's index in the capture (−1: not from a capture)."""
 
 
 @dataclass
@@ -261,5 +270,6 @@ def build_interface(
             known_from=ch.known_from,
             inverted=flip,
             unknown=ch.unknown_stretches(capture.start),
+            index=ch.index,
         )
     return StepInterface(capture=capture, signals=signals)

@@ -24,7 +24,6 @@ comes back) is not judged: an event may be hidden there. It is counted as unknow
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
@@ -37,22 +36,17 @@ from wavecheck.engine.decode import (
     active_edges,
     phase_states,
     touches_stretches,
-    unknown_stretches,
 )
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.primitives import Intervals, holds, periods, setups, widths
-from wavecheck.engine.verdicts import RuleResult, evaluate, sequence_result
 from wavecheck.linuxcnc.steptypes import StepType
-from wavecheck.rules import RULE_IDS, Rule, applicable
+from wavecheck.rules import Rule, applicable
 
 __all__ = [
-    "RuleSet",
     "applicable_rules",
     "figure_of",
-    "measure_intervals",
     "planned_rules",
     "rule_intervals",
-    "run_rules",
     "split_unknown",
 ]
 
@@ -198,93 +192,7 @@ def split_unknown(
     return ~out, covered
 
 
-def _known(
-    intervals: Intervals, iface: StepInterface, st: StepType, r: Rule
-) -> tuple[Intervals, EdgeArray]:
-    """Split off the intervals that touch an unknown stretch of a signal the rule involves (an
-    event of that signal may be hidden there): the rest, and where the unknown ones are — the
-    start tick of each interval left out, and the start of each stretch no measured interval
-    touches (an interval hidden wholly inside it, such as a DIR change there before a step)."""
-    starts, ends = unknown_stretches(iface, r.roles_for(st))
-    if len(starts) == 0:
-        return intervals, np.zeros(0, dtype=np.int64)
-    keep, covered = split_unknown(intervals, starts, ends)
-    where = np.sort(np.concatenate([intervals.start[~keep], starts[~covered]]))
-    return Intervals(intervals.start[keep], intervals.end[keep]), where
-
-
-def measure_intervals(
-    rule: Rule,
-    iface: StepInterface,
-    st: StepType,
-    steps: StepEvents,
-    active_edge: ActiveEdge,
-    pulse_level: int = 1,
-) -> Intervals:
-    """Every complete, known interval of ``rule`` (a rule with intervals: not ``sequence``), in
-    ticks, with no limit and no verdict: what :func:`run_rules` judges and ``wavecheck measure``
-    summarises. An interval whose role is not mapped (no DIR, no ENABLE) is simply absent.
-
-    ``pulse_level`` is the level of the generator's pulses at the drive's input (only
-    ``dir_delay`` depends on it; see :func:`_dir_delay`)."""
-    return _known(_intervals(rule, iface, st, steps, active_edge, pulse_level), iface, st, rule)[0]
-
-
 #: The limit (exact ns) and figure of a rule for a drive (None: the drive states none).
 figure_of = _figure
-#: Every interval of a rule (unknown stretches not yet split off): the streamed engine's input.
+#: Every interval of a rule (unknown stretches not yet split off): what the engine judges.
 rule_intervals = _intervals
-
-
-@dataclass(frozen=True)
-class RuleSet:
-    """What was evaluated and why the rest was not."""
-
-    results: list[RuleResult]
-    not_stated: tuple[str, ...]
-    """Rules of this step type for which the drive gives no limit."""
-    not_applicable: tuple[str, ...]
-    """Rules the drive states that do not apply to this step type."""
-
-
-def run_rules(
-    iface: StepInterface,
-    st: StepType,
-    steps: StepEvents,
-    drive: Drive,
-    resolution_ns: Fraction,
-    active_edge: ActiveEdge,
-    pulse_level: int = 1,
-) -> RuleSet:
-    """Measure and judge every applicable rule the drive states, in the table's order.
-
-    ``pulse_level`` is the level of the generator's pulses at the drive's input
-    (:func:`wavecheck.engine.rates.pulse_level`)."""
-    tb = iface.capture.timebase
-    run, not_stated = planned_rules(drive, st)
-    results: list[RuleResult] = []
-    for r in run:
-        if r.check == "sequence":
-            details = [
-                f"state {a} → {b}"
-                for a, b in zip(
-                    steps.sequence_from.tolist(), steps.sequence_to.tolist(), strict=True
-                )
-            ]
-            results.append(
-                sequence_result(
-                    steps.sequence_errors, details, steps.transitions, tb, resolution_ns
-                )
-            )
-            continue
-        fig = _figure(drive, r)
-        assert fig is not None
-        limit, figure = fig
-        known, unknown = _known(
-            _intervals(r, iface, st, steps, active_edge, pulse_level), iface, st, r
-        )
-        results.append(evaluate(r.id, known, limit, tb, resolution_ns, figure, unknown))
-    stated = set(drive.limits) | ({"step_period"} if drive.max_rate is not None else set())
-    used = applicable_rules(st)
-    not_applicable = tuple(r for r in RULE_IDS if r in stated and r not in used)
-    return RuleSet(results, not_stated, not_applicable)

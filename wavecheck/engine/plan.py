@@ -1,46 +1,47 @@
-"""Check one capture against one drive: map → decode → measure every rule → report.
+"""Each axis resolved against a capture's channels, before any edge is read.
 
-:func:`run_check` is the library entry point the CLI (and later the HTML/JUnit/plot outputs,
-several captures, INI/HAL configurations) build on; it does no I/O. :func:`check_machine` checks
-every axis of one capture (each against its own drive) from the same edge arrays; ``check``,
-``compare``, :func:`wavecheck.check_axes` and the pytest plugin all go through it.
+:func:`plan_axis` turns one axis of the options (:class:`~wavecheck.engine.options.CheckOptions`)
+and a capture's *skeleton* (its channels, time base and resolution: no edges are needed) into an
+:class:`AxisPlan`: the step type, the channel and inversion of every role, the active edge, the
+pulse level, the resolution T, the rules to measure with their limits, the configured step rates
+and the notes that do not depend on the edges. The engine (:mod:`wavecheck.engine.axis`) then
+feeds the plan's channels block by block.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import replace
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, replace
 from fractions import Fraction
 
-from wavecheck.axes import AxisMap
 from wavecheck.capture.edges import Capture, EdgeArray
-from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.engine.decode import decode
-from wavecheck.engine.interface import build_interface, mapped_channel_names
-from wavecheck.engine.intervals import run_rules
-from wavecheck.engine.rates import max_step_rates
-from wavecheck.engine.rates import pulse_level as generator_pulse_level
+from wavecheck.drives.model import ActiveEdge, Drive, Figure
+from wavecheck.drives.tune import tune_drive
+from wavecheck.engine.interface import (
+    StepInterface,
+    build_interface,
+    leaf_name,
+    mapped_channel_names,
+)
+from wavecheck.engine.intervals import figure_of, planned_rules
+from wavecheck.engine.mapping import AxisMap, check_axis_names, split_invert
+from wavecheck.engine.options import CheckOptions, for_axis
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.config import LinuxCNCConfig, config_rates
+from wavecheck.linuxcnc.config import ConfigRates, config_rates
 from wavecheck.linuxcnc.steptypes import StepType, step_type
-from wavecheck.report.machine import MachineReport, common_timer
-from wavecheck.report.model import Report
+from wavecheck.rules import RULE_IDS, Rule, applicable
 from wavecheck.timebase import Timebase
-from wavecheck.units import format_time, parse_time
+from wavecheck.units import format_time
 
 __all__ = [
+    "AxisPlan",
     "ambiguous_note",
     "auto_map",
-    "check_machine",
     "default_step_type",
+    "plan_axes",
+    "plan_axis",
     "resolve_resolution_ns",
-    "run_check",
 ]
-
-
-def _leaf(name: str) -> str:
-    """``"stepgen.0.phase-A"`` → ``"phase-a"``; ``"top.STEP"`` → ``"step"``."""
-    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
 
 
 def auto_map(capture: Capture, st: StepType, taken: Iterable[str] = ()) -> dict[str, str]:
@@ -54,7 +55,7 @@ def auto_map(capture: Capture, st: StepType, taken: Iterable[str] = ()) -> dict[
     used = set(taken)
     mapping: dict[str, str] = {}
     for role in roles:
-        hits = [c for c in capture.channels if _leaf(c.name) == role.lower()]
+        hits = [c for c in capture.channels if leaf_name(c.name) == role.lower()]
         if len(hits) == 1 and hits[0].name not in used:
             mapping[role] = hits[0].name
     return mapping
@@ -65,7 +66,7 @@ def _suggest_type(capture: Capture, st: StepType) -> None:
     capture whose channels are named like phase outputs (``phase-A``, ``stepgen.0.phase-B``)."""
     if st.kind == "phases":
         return
-    phases = sorted(c.name for c in capture.channels if _leaf(c.name).startswith("phase-"))
+    phases = sorted(c.name for c in capture.channels if leaf_name(c.name).startswith("phase-"))
     if phases:
         raise UsageError(
             f"{capture.path}: no {st.pulse_roles[0]!r} channel, but {', '.join(map(repr, phases))} "
@@ -88,12 +89,33 @@ def default_step_type(drive: Drive) -> int:
     return 0
 
 
+def _measured_step_type(capture: Capture, roles: Mapping[str, str]) -> int:
+    """The step type of an axis measured without a drive: 1 when it has UP/DOWN (mapped or a
+    channel so named), the one the phase outputs' waveforms walk, else 0 (step/dir)."""
+    named = {leaf_name(c.name) for c in capture.channels}
+    keys = {k.lower() for k in roles}
+    if "step" in keys or ("step" in named and not keys & {"up", "down"}):
+        return 0
+    if keys & {"up", "down"} or "up" in named:
+        return 1
+    if any(k.startswith("phase-") for k in keys | named):
+        from wavecheck.roles import propose
+
+        found = [a.step_type for a in propose(capture).axes if a.step_type]
+        if len(set(found)) == 1:
+            return found[0]
+        raise UsageError(
+            f"{capture.path}: phase outputs but no step type: give --type (2 for quadrature, "
+            "3-14 for the other phase tables, 15 with --user-step-type)"
+        )
+    return 0
+
+
 def resolve_resolution_ns(
-    capture: Capture, resolution: str | Fraction | None
+    capture: Capture, resolution: Fraction | None
 ) -> tuple[Fraction, str | None]:
-    """T in exact ns, and a note for the report: the user's ``--resolution`` (a time such as
-    ``"500ns"``, or exact seconds as a Fraction) if given, else the capture's own (one sample
-    period; 0 for a simulator VCD).
+    """T in exact ns, and a note for the report: the user's resolution (exact seconds) if
+    given, else the capture's own (one sample period; 0 for a simulator VCD).
 
     The user's value is taken exactly as given, a fraction of a tick included (100 ns on a 1 us
     timescale stays 100 ns); a value finer than a sampled capture's own resolution is used too,
@@ -101,14 +123,13 @@ def resolve_resolution_ns(
     """
     if resolution is None:
         return capture.resolution_ns, None
-    seconds = parse_time(resolution) if isinstance(resolution, str) else Fraction(resolution)
-    if seconds < 0:
-        raise UsageError(f"--resolution must not be negative, got {format_time(seconds)}")
-    ns = seconds * 10**9
+    if resolution < 0:
+        raise UsageError(f"--resolution must not be negative, got {format_time(resolution)}")
+    ns = resolution * 10**9
     own = capture.resolution_ns
     if own and ns < own:
         return ns, (
-            f"--resolution {format_time(seconds)} is finer than the capture's sample period "
+            f"--resolution {format_time(resolution)} is finer than the capture's sample period "
             f"{format_time(own / 10**9)}: verdicts assume it"
         )
     return ns, None
@@ -116,7 +137,7 @@ def resolve_resolution_ns(
 
 def ambiguous_note(count: int, first: EdgeArray, timebase: Timebase) -> str | None:
     """The report's note on ``count`` steps of ambiguous direction, ``first[0]`` the first one's
-    tick (None when there is none); shared with the streamed engine (:mod:`wavecheck.stream`)."""
+    tick (None when there is none)."""
     if not count:
         return None
     at = format_time(timebase.seconds(int(first[0])))
@@ -126,178 +147,195 @@ def ambiguous_note(count: int, first: EdgeArray, timebase: Timebase) -> str | No
     )
 
 
-def run_check(
+@dataclass(frozen=True)
+class AxisPlan:
+    """One axis resolved against a capture's channels (module docstring).
+
+    Attributes:
+        name: the axis name (None: the unnamed single axis).
+        drive: the drive (its figures tuned by ``--limit``/``--margin``); None: measured only.
+        step_type: the LinuxCNC step type decoded.
+        interface: the mapped roles (channel, index, inversion; no edges).
+        active_edge: the edge that counts a step.
+        forward_level: the DIR level taken as forward.
+        level: the level of the generator's pulses at the drive's input.
+        resolution_ns: T used for the verdicts, exact ns.
+        user_table: the state table of step type 15.
+        rules: the rules measured, in report order.
+        limits: rule id → (limit in exact ns, its figure); absent for ``state_sequence`` and
+            for every rule of a measured-only axis.
+        not_stated: rules of this step type the drive gives no figure for.
+        not_applicable: rules the drive states that this step type has no use for.
+        configured: the stepgen configuration's ``config``/``latency_safe`` rates.
+        notes: what the report should say that does not depend on the edges (no DIR mapped).
+        resolution_note: what the report should say of a ``--resolution`` finer than the
+            capture's own.
+        found: how the roles were found (the waveforms' mapping), said first.
+    """
+
+    name: str | None
+    drive: Drive | None
+    step_type: StepType
+    interface: StepInterface
+    active_edge: ActiveEdge
+    forward_level: int
+    level: int
+    resolution_ns: Fraction
+    user_table: tuple[int, ...] | None
+    rules: tuple[Rule, ...]
+    limits: Mapping[str, tuple[Fraction, Figure]]
+    not_stated: tuple[str, ...]
+    not_applicable: tuple[str, ...]
+    configured: ConfigRates | None
+    notes: tuple[str, ...]
+    resolution_note: str | None = None
+    found: tuple[str, ...] = ()
+
+    @property
+    def channels(self) -> set[int]:
+        """The capture channels the axis reads (indices)."""
+        return {s.index for s in self.interface.signals.values()}
+
+
+def _pulse_level(iface: StepInterface, st: StepType, generator_level: int) -> int:
+    """The level of the generator's pulses at the drive's input: ``generator_level``, flipped
+    when the pulse roles are inverted."""
+    inverted = any(s.inverted for s in (iface.get(r) for r in st.pulse_roles) if s is not None)
+    return generator_level ^ int(inverted)
+
+
+def plan_axis(
     capture: Capture,
-    drive: Drive,
-    mapping: Mapping[str, str] | None = None,
+    axis: AxisMap,
+    options: CheckOptions,
+    drive: Drive | None,
     invert: Iterable[str] = (),
-    step_type_number: int | None = None,
-    resolution: str | Fraction | None = None,
-    *,
-    forward_level: int = 0,
-    active_edge: ActiveEdge | None = None,
-    user_table: tuple[int, ...] | None = None,
-    stepgen: LinuxCNCConfig | None = None,
-    latency_ns: Fraction | None = None,
-    pulse_level: int = 1,
-    axis: str | None = None,
-) -> Report:
-    """Check ``capture`` against ``drive``.
+    waveforms: Capture | None = None,
+) -> AxisPlan:
+    """Resolve ``axis`` against ``capture``'s channels (a skeleton is enough).
 
     Args:
-        capture: the capture (edges in ticks).
-        drive: the drive's rules.
-        mapping: role → channel name or index; roles missing here are mapped by name when a
-            channel is called after the role (see :func:`auto_map`).
-        invert: roles to invert so that levels are the drive's input levels.
-        step_type_number: LinuxCNC step type 0–15; default the drive's (its ``step_type``, else
-            1 for an up/down drive, else 0).
-        resolution: T override (``"500ns"`` or exact seconds); default the capture's.
-        forward_level: DIR level meaning forward (default 0: DIR high = reverse, as LinuxCNC
-            and grbl drive it).
-        active_edge: override the drive's active edge.
-        user_table: state table for step type 15.
-        stepgen: a LinuxCNC stepgen configuration (INI/HAL, options) for the ``config`` and
-            ``latency_safe`` step rates; the STEP pin counts as inverted between stepgen and the
-            drive when ``invert`` holds ``step``.
-        latency_ns: the worst base-thread latency ``J`` for ``latency_safe`` (ns).
-        axis: the axis name in a run of several axes (kept on the report).
-        pulse_level: the level of the generator's step pulses at its output (1 high, as LinuxCNC,
-            grbl, Marlin, Klipper and Smoothieware make them by default; 0 low); with ``invert``
-            the drive sees the other level.
+        capture: the capture (channels, time base, resolution).
+        axis: the axis's name and mapping (roles left out are mapped by channel name).
+        options: the run's options (step type, forward level, active edge … per axis).
+        drive: the axis's drive, tuned; None: measured only (no limit, no verdict).
+        invert: the roles to invert on this axis.
+        waveforms: the capture with edges (or its first part), when it was read to tell the
+            roles: a measured-only axis of phase outputs takes the step type they walk.
 
     Raises:
-        WavecheckError: unusable input (unknown channel or role, bad type, bad resolution).
+        UsageError: an unknown channel or role, a bad step type, a pulse role not mapped.
     """
-    st = step_type(
-        default_step_type(drive) if step_type_number is None else step_type_number, user_table
-    )
-    explicit = dict(mapping or {})
+    explicit = dict(axis.roles)
+    number = for_axis(options.step_type, axis.name)
+    if number is None:
+        number = axis.step_type
+    if number is None:
+        number = (
+            _measured_step_type(waveforms or capture, explicit)
+            if drive is None
+            else default_step_type(drive)
+        )
+    st = step_type(number, options.user_table)
     full_map = auto_map(capture, st, mapped_channel_names(capture, explicit))
     full_map.update(explicit)
-    iface = build_interface(capture, full_map, invert)
-    edge: ActiveEdge = active_edge or drive.active_edge
+    iface = build_interface(capture, full_map, [*invert, *axis.invert])
     for role in st.pulse_roles:
         if iface.get(role) is None:
             _suggest_type(capture, st)
         iface.require(role)
-    resolution_ns, resolution_note = resolve_resolution_ns(capture, resolution)
-    steps = decode(
-        iface, st.number, active_edge=edge, forward_level=forward_level, user_table=user_table
-    )
-    if pulse_level not in (0, 1):
-        raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {pulse_level!r}")
-    level = generator_pulse_level(iface, st, pulse_level)
-    ruleset = run_rules(iface, st, steps, drive, resolution_ns, edge, level)
-    own = next(
-        (r for r in ruleset.results if r.rule == ("step_high" if level else "step_low")), None
-    )
-    rates = max_step_rates(
-        iface,
-        st,
-        steps,
-        drive,
-        edge,
-        capture.timebase,
-        level=level,
-        pulse_verdict=None if own is None else own.verdict,
-    )
-    if stepgen is not None:
-        configured = config_rates(
-            stepgen,
-            drive,
-            latency_ns,
-            step_inverted=iface.signals["step"].inverted if "step" in iface.signals else False,
-            step_type=st.number,
-        )
-        rates = replace(rates, configured=configured)
-    notes = list(capture.notes)
+    edge: ActiveEdge = options.active_edge or ("rising" if drive is None else drive.active_edge)
+    resolution_ns, resolution_note = resolve_resolution_ns(capture, options.resolution)
+    notes = []
     if st.kind == "step-dir" and iface.get("dir") is None:
         notes.append("no DIR channel mapped: step directions are unknown, DIR rules unchecked")
-    amb = ambiguous_note(steps.ambiguous_count, steps.ambiguous, capture.timebase)
-    if amb:
-        notes.append(amb)
-    if resolution_note:
-        notes.append(resolution_note)
-    return Report(
-        capture=capture,
+    forward = for_axis(options.forward_level, axis.name)
+    if drive is None:
+        rules = tuple(r for r in applicable(st.kind) if r.check != "sequence")
+        limits: dict[str, tuple[Fraction, Figure]] = {}
+        not_stated: tuple[str, ...] = ()
+        not_applicable: tuple[str, ...] = ()
+    else:
+        rules, not_stated = planned_rules(drive, st)
+        limits = {r.id: fig for r in rules if (fig := figure_of(drive, r)) is not None}
+        stated = set(drive.limits) | ({"step_period"} if drive.max_rate is not None else set())
+        used = {r.id for r in applicable(st.kind)}
+        not_applicable = tuple(r for r in RULE_IDS if r in stated and r not in used)
+    configured = None
+    if options.stepgen is not None and drive is not None:
+        step = iface.get("step")
+        configured = config_rates(
+            options.stepgen,
+            drive,
+            options.latency_ns,
+            step_inverted=step.inverted if step is not None else False,
+            step_type=st.number,
+        )
+    return AxisPlan(
+        name=axis.name,
         drive=drive,
         step_type=st,
         interface=iface,
         active_edge=edge,
-        forward_level=forward_level,
+        forward_level=0 if forward is None else forward,
+        level=_pulse_level(iface, st, options.pulse_level),
         resolution_ns=resolution_ns,
-        steps=steps,
-        rules=ruleset.results,
-        not_stated=ruleset.not_stated,
-        not_applicable=ruleset.not_applicable,
-        rates=rates,
-        notes=notes,
-        axis=axis,
+        user_table=options.user_table,
+        rules=rules,
+        limits=limits,
+        not_stated=not_stated,
+        not_applicable=not_applicable,
+        configured=configured,
+        notes=tuple(notes),
+        resolution_note=resolution_note,
     )
 
 
-def check_machine(
+def plan_axes(
     capture: Capture,
-    axes: Sequence[AxisMap],
-    drives: Mapping[str | None, Drive],
-    resolution: str | Fraction | None = None,
-    *,
-    step_types: Mapping[str | None, int] | None = None,
-    forward_levels: Mapping[str | None, int] | None = None,
-    invert: Mapping[str | None, Iterable[str]] | None = None,
-    active_edge: ActiveEdge | None = None,
-    user_table: tuple[int, ...] | None = None,
-    stepgen: LinuxCNCConfig | None = None,
-    latency_ns: Fraction | None = None,
-    pulse_level: int = 1,
-    cross_axis: bool = True,
-) -> MachineReport:
-    """Check every axis of ``capture`` with :func:`run_check`, from the same edge arrays.
-
-    Args:
-        capture: the capture, read once.
-        axes: the axes (:func:`wavecheck.axes.parse_axes`, :func:`wavecheck.axes.axes_from_tables`;
-            one unnamed axis for a single-axis run).
-        drives: axis name → its drive (every axis needs one).
-        resolution: T for every axis (as :func:`run_check`).
-        step_types: axis → LinuxCNC step type; an axis not listed takes the type found with its
-            roles (:attr:`AxisMap.step_type`), else its drive's.
-        forward_levels: axis → DIR level meaning forward (default 0).
-        invert: axis → roles to invert, on top of the roles found inverted with its mapping.
-        active_edge, user_table, stepgen, latency_ns, pulse_level: as :func:`run_check`, for
-            every axis.
-        cross_axis: add the common-timer note (:func:`wavecheck.report.machine.common_timer`)
-            when there are several axes.
+    axes: list[AxisMap],
+    options: CheckOptions,
+    waveforms: Capture | None = None,
+) -> list[AxisPlan]:
+    """Every axis of ``axes`` planned on ``capture``, each with its own drive (loaded once per
+    drive and tuned by the options' ``limits`` and ``margin``); ``waveforms``: as
+    :func:`plan_axis`.
 
     Raises:
-        WavecheckError: an axis without a drive, or what :func:`run_check` raises.
+        UsageError: an axis without a drive (when the run has drives), and what
+            :func:`plan_axis` raises.
     """
-    types = step_types or {}
-    forward = forward_levels or {}
-    inverts = invert or {}
-    reports = []
-    for axis in axes:
-        if axis.name not in drives:
-            raise UsageError(f"axis {axis.name} has no drive")
-        reports.append(
-            run_check(
-                capture,
-                drives[axis.name],
-                axis.roles,
-                [*inverts.get(axis.name, ()), *axis.invert],
-                types.get(axis.name, axis.step_type),
-                resolution,
-                forward_level=forward.get(axis.name, 0),
-                active_edge=active_edge,
-                user_table=user_table,
-                stepgen=stepgen,
-                pulse_level=pulse_level,
-                latency_ns=latency_ns,
-                axis=axis.name,
-            )
-        )
-    several = bool(reports) and (len(reports) > 1 or reports[0].axis is not None)
-    return MachineReport(
-        capture, reports, [common_timer(reports)] if cross_axis and several else []
+    names = [a.name for a in axes]
+    check_axis_names(
+        {
+            "--drive": options.drive,
+            "--type": options.step_type,
+            "--dir-forward": options.forward_level,
+        },
+        names,
     )
+    inverts = split_invert(options.invert, names)
+    tuned: dict[int, Drive] = {}
+    plans = []
+    for axis in axes:
+        drive = None
+        if not options.measure_only:
+            given = for_axis(options.drive, axis.name)
+            if given is None:
+                raise UsageError(
+                    f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)"
+                )
+            if id(given) not in tuned:
+                tuned[id(given)] = (
+                    tune_drive(given, options.limits, options.margin)
+                    if options.limits or options.margin
+                    else given
+                )
+            drive = tuned[id(given)]
+        plans.append(plan_axis(capture, axis, options, drive, inverts[axis.name], waveforms))
+    return plans
+
+
+def with_found(plan: AxisPlan, found: Iterable[str]) -> AxisPlan:
+    """``plan`` with the notes on how its roles were found."""
+    return replace(plan, found=tuple(found))

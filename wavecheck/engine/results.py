@@ -1,7 +1,7 @@
 """Mergeable results of the streamed engine: one rule's figures and the step counts, in bounded
 memory, merged window by window to exactly the whole-capture figures.
 
-:class:`RuleSummary` satisfies :class:`wavecheck.engine.verdicts.RuleOutcome` (what every renderer
+:class:`RuleResult` satisfies :class:`wavecheck.engine.verdicts.RuleOutcome` (what every renderer
 reads): counts (checked, violations, indeterminate, unknown), the shortest and longest interval
 and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
 the figures that decide ``decide_samplerate_hz``, and a fixed-bin
@@ -25,7 +25,7 @@ from wavecheck.engine.verdicts import (
     FAIL,
     INDETERMINATE,
     Histogram,
-    RuleResult,
+    Judged,
     Violation,
     decide_parts,
     decide_rate,
@@ -33,18 +33,18 @@ from wavecheck.engine.verdicts import (
 from wavecheck.timebase import Timebase
 from wavecheck.verdict import Verdict
 
-__all__ = ["FRESH_KEPT", "UNKNOWN_KEPT", "RuleSummary", "StepSummary"]
+__all__ = ["FRESH_KEPT", "UNKNOWN_KEPT", "RuleResult", "StepCounts"]
 
 #: Unknown places and ambiguous steps listed (the first ones; the counts are exact).
 UNKNOWN_KEPT = 100
-#: Violations of one window handed to :attr:`RuleSummary.fresh`.
+#: Violations of one window handed to :attr:`RuleResult.fresh`.
 FRESH_KEPT = 64
 
 _Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the whole path's order
 
 
 @dataclass
-class RuleSummary:
+class RuleResult:
     """One rule's results merged window by window (see the module docstring).
 
     ``order_by_end``: the whole-capture path lists this rule's intervals by their end event
@@ -82,7 +82,7 @@ class RuleSummary:
     def _key(self, start: EdgeArray, end: EdgeArray) -> tuple[EdgeArray, EdgeArray]:
         return (end, start) if self.order_by_end else (start, end)
 
-    def add(self, part: RuleResult, left_out: EdgeArray) -> None:
+    def add(self, part: Judged, left_out: EdgeArray) -> None:
         """Merge one window's judged intervals (``part``) and the starts of the intervals it left
         out as unknown (touching an x/z stretch)."""
         fails, indet = part.violations, part.indeterminate
@@ -133,9 +133,7 @@ class RuleSummary:
         if self._best is None or best < self._best:
             self._best = best
 
-    def _add_worst(
-        self, part: RuleResult, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int
-    ) -> None:
+    def _add_worst(self, part: Judged, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int) -> None:
         """Merge the failed intervals that beat the last of the kept worst ones."""
         if len(self._worst) >= self.keep:
             (kw, ka, kb), _, _, _ = self._worst[-1]
@@ -287,7 +285,7 @@ class RuleSummary:
 
 
 @dataclass
-class StepSummary:
+class StepCounts:
     """Step counts merged window by window: what the reports read of
     :class:`wavecheck.engine.decode.StepEvents` (which keeps every step)."""
 

@@ -1,7 +1,7 @@
 """A thinned step trace kept while streaming: position and step rate over time in bounded memory.
 
 The whole-capture path draws position and step rate from every step
-(:func:`wavecheck.report.measure_plot.draw_motion`). A streamed check keeps, per axis, a
+(:func:`wavecheck.report.measurement_plot.draw_motion`). A streamed check keeps, per axis, a
 :class:`StepTrace`: at most :data:`MAX_BUCKETS` time buckets of equal width (ticks) from the first
 step on. When a step falls past the last bucket, neighbouring buckets merge pairwise (the width
 doubles, the origin stays) until it fits, so the memory does not depend on the capture's length.
@@ -107,10 +107,11 @@ class StepTrace:
     """One axis's thinned step trace (module docstring): :meth:`add` each window's new steps in
     time order; read :meth:`position_points`, :meth:`rate_points`, :meth:`envelope`."""
 
-    def __init__(self, buckets: int = MAX_BUCKETS) -> None:
+    def __init__(self, buckets: int = MAX_BUCKETS, reversals_kept: int = REVERSALS_KEPT) -> None:
         if buckets < 1 or buckets & (buckets - 1):
             raise ValueError(f"buckets must be a power of two, not {buckets}")
         self.size = buckets
+        self.reversals_kept = reversals_kept
         self.width = 1
         """Ticks per bucket (a power of two)."""
         self.origin: int | None = None
@@ -122,7 +123,7 @@ class StepTrace:
         self.reversals = 0
         """Reversals seen (exact)."""
         self.reversal_ticks: EdgeArray = np.zeros(0, np.int64)
-        """The first :data:`REVERSALS_KEPT` reversals' ticks."""
+        """The first ``reversals_kept`` reversals' ticks."""
         self._b = _Buckets.empty(buckets)
         self._last_tick: int | None = None
         self._last_dir = 0  # last known direction (0: none yet)
@@ -142,7 +143,7 @@ class StepTrace:
         flip = (d != prev) & (prev != 0)
         rev = np.zeros(n, np.int64)
         rev[known[flip]] = 1
-        room = REVERSALS_KEPT - len(self.reversal_ticks)
+        room = self.reversals_kept - len(self.reversal_ticks)
         if room > 0:
             self.reversal_ticks = np.concatenate([self.reversal_ticks, ticks[known[flip]][:room]])
 
@@ -200,6 +201,12 @@ class StepTrace:
     def buckets(self) -> int:
         """Buckets holding a step."""
         return int(np.count_nonzero(self._b.count))
+
+    @property
+    def thinned(self) -> bool:
+        """Whether a bucket holds more than two steps (its first and last are drawn): the curves
+        then leave steps out; otherwise they hold every step."""
+        return bool((self._b.count > 2).any())
 
     def _used(self) -> _Buckets:
         return self._b.take(np.flatnonzero(self._b.count))

@@ -18,25 +18,20 @@ import functools
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.drives.model import Figure
 from wavecheck.engine.primitives import Intervals
 from wavecheck.timebase import Timebase
-from wavecheck.verdict import Verdict
 
 __all__ = [
     "FAIL",
     "INDETERMINATE",
     "PASS",
     "Histogram",
-    "RuleOutcome",
-    "RuleResult",
-    "Verdict",
+    "Judged",
     "Violation",
     "decide_parts",
     "decide_rate",
@@ -81,181 +76,34 @@ class Violation:
 
 
 @dataclass
-class RuleResult:
-    """All intervals of one rule and their verdicts.
+class Judged:
+    """One window's intervals of one rule and their verdicts: what :func:`evaluate` gives and
+    :class:`wavecheck.engine.results.RuleResult` merges (every interval of the window; nothing
+    of it is kept once merged).
 
     Attributes:
         rule: the rule id (``step_high``, ``dir_hold``, …, ``state_sequence``).
-        limit_ns: the minimum in exact ns (None for ``state_sequence``).
-        figure: the drive's figure the limit comes from (source, status), if any.
-        intervals: every measured interval (start/end ticks), in time order.
+        intervals: the measured intervals (start/end ticks).
         outcome: ``PASS``/``FAIL``/``INDETERMINATE`` per interval (int8).
-        timebase: the capture's tick.
-        resolution_ns: T used for the verdicts, exact ns.
         checked: how many intervals (or state changes) were examined.
         details: per-interval text, only for ``state_sequence``.
-        unknown_ticks: start tick of every interval left out because it touches an unknown
-            (``x``/``z``) stretch of a signal the rule involves, in time order.
     """
 
     rule: str
-    limit_ns: Fraction | None
-    figure: Figure | None
     intervals: Intervals
     outcome: npt.NDArray[np.int8]
-    timebase: Timebase
-    resolution_ns: Fraction
     checked: int
     details: list[str] = field(default_factory=list)
-    unknown_ticks: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
-    # -- counts and verdict -------------------------------------------------------------------
     @property
     def violations(self) -> int:
         """Number of failed intervals."""
         return int(np.count_nonzero(self.outcome == FAIL))
 
     @property
-    def unknown(self) -> int:
-        """Number of intervals not judged because they touch an unknown stretch."""
-        return int(len(self.unknown_ticks))
-
-    @property
     def indeterminate(self) -> int:
         """Number of intervals this resolution cannot decide."""
         return int(np.count_nonzero(self.outcome == INDETERMINATE))
-
-    @property
-    def verdict(self) -> Verdict:
-        """fail if any interval fails, else indeterminate if any is, else pass; unchecked when
-        there was no interval of this kind (that is not a pass)."""
-        if self.checked == 0:
-            return "unchecked"
-        if self.violations:
-            return "fail"
-        if self.indeterminate:
-            return "indeterminate"
-        return "pass"
-
-    # -- measured values ---------------------------------------------------------------------
-    @property
-    def measured_ticks(self) -> EdgeArray:
-        """Every measured interval in ticks (int64)."""
-        return self.intervals.measured
-
-    @property
-    def measured_ns(self) -> npt.NDArray[np.float64]:
-        """Every measured interval in ns, as floats — for plots and histograms only."""
-        return self.timebase.ns_array(self.intervals.measured)
-
-    @property
-    def violation_ticks(self) -> EdgeArray:
-        """Start tick of every failed interval, in time order."""
-        return self.intervals.start[self.outcome == FAIL]
-
-    @property
-    def indeterminate_ticks(self) -> EdgeArray:
-        """Start tick of every indeterminate interval, in time order."""
-        return self.intervals.start[self.outcome == INDETERMINATE]
-
-    def _argmin(self) -> int | None:
-        if self.limit_ns is None or len(self.intervals) == 0:
-            return None
-        return int(np.argmin(self.intervals.measured))
-
-    @property
-    def min_measured_ns(self) -> Fraction | None:
-        """The shortest measured interval in exact ns (None when none was measured)."""
-        i = self._argmin()
-        if i is None:
-            return None
-        return self.timebase.ns(int(self.intervals.measured[i]))
-
-    @property
-    def max_measured_ns(self) -> Fraction | None:
-        """The longest measured interval in exact ns."""
-        if len(self.intervals) == 0 or self.limit_ns is None:
-            return None
-        return self.timebase.ns(int(self.intervals.measured.max()))
-
-    @property
-    def min_margin_ns(self) -> Fraction | None:
-        """min(measured − limit) over all intervals, exact ns (negative = the worst violation)."""
-        m = self.min_measured_ns
-        return None if m is None or self.limit_ns is None else m - self.limit_ns
-
-    @property
-    def min_margin_at_tick(self) -> int | None:
-        """Start tick of the interval with the smallest margin (the first such one)."""
-        i = self._argmin()
-        return None if i is None else int(self.intervals.start[i])
-
-    @property
-    def min_margin_at_s(self) -> Fraction | None:
-        """:attr:`min_margin_at_tick` in exact seconds."""
-        t = self.min_margin_at_tick
-        return None if t is None else self.timebase.seconds(t)
-
-    @property
-    def decide_samplerate_hz(self) -> Fraction | None:
-        """The sample rate at which the nearest-to-decided indeterminate interval would be decided,
-        if its true length were the measured one (|measured − limit| > 2·T′); None when nothing is
-        indeterminate or the closest one measured exactly the limit (no rate decides it)."""
-        if self.limit_ns is None or not self.indeterminate:
-            return None
-        return decide_rate(
-            self.limit_ns,
-            self.timebase,
-            *decide_parts(
-                self.limit_ns, self.timebase, self.intervals.measured[self.outcome == INDETERMINATE]
-            ),
-        )
-
-    def histogram(self) -> Histogram:
-        """The measured intervals in the fixed bins of :class:`Histogram` (mergeable; empty for
-        ``state_sequence``, which measures nothing)."""
-        if self.limit_ns is None:
-            return Histogram(())
-        return Histogram.of(self.intervals.measured)
-
-    # -- violations -------------------------------------------------------------------------
-    def violation(self, i: int) -> Violation:
-        """The violation of interval ``i`` (which must have failed)."""
-        start = int(self.intervals.start[i])
-        end = int(self.intervals.end[i])
-        if self.limit_ns is None:
-            measured = margin = None
-        else:
-            measured = self.timebase.ns(end - start)
-            margin = measured - self.limit_ns
-        detail = self.details[i] if i < len(self.details) else ""
-        return Violation(
-            rule=self.rule,
-            start_tick=start,
-            end_tick=end,
-            time_s=self.timebase.seconds(start),
-            measured_ns=measured,
-            limit_ns=self.limit_ns,
-            margin_ns=margin,
-            detail=detail,
-        )
-
-    def worst_violations(self, n: int) -> list[Violation]:
-        """Up to ``n`` failed intervals, shortest (worst margin) first, ties in time order."""
-        idx = np.flatnonzero(self.outcome == FAIL)
-        if n <= 0 or len(idx) == 0:
-            return []
-        if self.limit_ns is not None:
-            m = self.intervals.measured[idx]
-            if len(idx) > n:
-                # the n shortest; among intervals tied with the n-th, the earliest ones
-                kth = np.partition(m, n - 1)[n - 1]
-                shorter = np.flatnonzero(m < kth)
-                tied = np.flatnonzero(m == kth)[: n - len(shorter)]
-                keep = np.concatenate([shorter, tied])
-                idx, m = idx[keep], m[keep]
-            idx = idx[np.lexsort((idx, m))]
-        return [self.violation(int(i)) for i in idx[:n]]
 
 
 def decide_parts(
@@ -263,7 +111,7 @@ def decide_parts(
 ) -> tuple[int | None, int | None, int]:
     """Of the indeterminate lengths ``w`` (ticks): the longest below the limit, the shortest above
     it (None when there is none) and how many are neither (exactly the limit): the three
-    mergeable figures :attr:`RuleResult.decide_samplerate_hz` needs."""
+    mergeable figures :attr:`wavecheck.engine.results.RuleResult.decide_samplerate_hz` needs."""
     lim_ticks = limit_ns / timebase.tick_ns
     below = w[w <= _clamp(math.ceil(lim_ticks) - 1)]
     above = w[w >= _clamp(math.floor(lim_ticks) + 1)]
@@ -278,7 +126,7 @@ def decide_rate(
     limit_ns: Fraction, timebase: Timebase, below: int | None, above: int | None, exact: int
 ) -> Fraction | None:
     """The sample rate that decides the nearest-to-decided indeterminate interval (see
-    :attr:`RuleResult.decide_samplerate_hz`), from :func:`decide_parts`' figures."""
+    :attr:`wavecheck.engine.results.RuleResult.decide_samplerate_hz`), from :func:`decide_parts`' figures."""
     tick = timebase.tick_ns
     gaps = []
     if below is not None:
@@ -345,47 +193,6 @@ class Histogram:
         return Fraction(2**e) * (1 + Fraction(q, 4))
 
 
-class RuleOutcome(Protocol):
-    """What every report renderer reads of one rule's result: satisfied by :class:`RuleResult`
-    (every interval kept: the whole-capture path) and by
-    :class:`wavecheck.engine.results.RuleSummary` (counts, extremes, the worst violations and a
-    histogram, merged block by block: the streamed path)."""
-
-    rule: str
-    limit_ns: Fraction | None
-    figure: Figure | None
-    timebase: Timebase
-    resolution_ns: Fraction
-    checked: int
-
-    @property
-    def violations(self) -> int: ...
-    @property
-    def indeterminate(self) -> int: ...
-    @property
-    def unknown(self) -> int: ...
-    @property
-    def unknown_ticks(self) -> EdgeArray:
-        """The first (up to 100 on the streamed path) unknown places, in time order."""
-
-    @property
-    def verdict(self) -> Verdict: ...
-    @property
-    def min_measured_ns(self) -> Fraction | None: ...
-    @property
-    def max_measured_ns(self) -> Fraction | None: ...
-    @property
-    def min_margin_ns(self) -> Fraction | None: ...
-    @property
-    def min_margin_at_tick(self) -> int | None: ...
-    @property
-    def min_margin_at_s(self) -> Fraction | None: ...
-    @property
-    def decide_samplerate_hz(self) -> Fraction | None: ...
-    def worst_violations(self, n: int) -> list[Violation]: ...
-    def histogram(self) -> Histogram: ...
-
-
 @functools.lru_cache(maxsize=64)
 def _thresholds(limit_ns: Fraction, tick_ns: Fraction, resolution_ns: Fraction) -> tuple[int, int]:
     """(pass_min, fail_max) in ticks: pass ⟺ W ≥ pass_min, fail ⟺ W ≤ fail_max (exact; once per
@@ -401,11 +208,9 @@ def evaluate(
     limit_ns: Fraction,
     timebase: Timebase,
     resolution_ns: Fraction,
-    figure: Figure | None = None,
-    unknown_ticks: EdgeArray | None = None,
-) -> RuleResult:
-    """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact ns);
-    ``unknown_ticks`` are the starts of the intervals left out as unknown (not judged)."""
+) -> Judged:
+    """Judge every interval of ``rule`` against ``limit_ns`` (exact ns) at resolution T (exact
+    ns)."""
     pass_min, fail_max = _thresholds(limit_ns, timebase.tick_ns, resolution_ns)
     w = intervals.measured
     lo, hi = intervals.bounds
@@ -417,35 +222,16 @@ def evaluate(
         outcome = np.full(len(w), INDETERMINATE, dtype=np.int8)
         outcome[w <= fail_max] = FAIL
         outcome[w >= pass_min] = PASS  # pass is tested first: it wins where both hold (T = 0)
-    return RuleResult(
-        rule=rule,
-        limit_ns=limit_ns,
-        figure=figure,
-        intervals=intervals,
-        outcome=outcome,
-        timebase=timebase,
-        resolution_ns=resolution_ns,
-        checked=len(intervals),
-        unknown_ticks=np.zeros(0, np.int64) if unknown_ticks is None else unknown_ticks,
-    )
+    return Judged(rule, intervals, outcome, len(intervals))
 
 
-def sequence_result(
-    ticks: EdgeArray,
-    details: list[str],
-    transitions: int,
-    timebase: Timebase,
-    resolution_ns: Fraction,
-) -> RuleResult:
-    """The ``state_sequence`` rule: every listed tick is a move to a non-neighbour state."""
-    return RuleResult(
-        rule="state_sequence",
-        limit_ns=None,
-        figure=None,
-        intervals=Intervals(ticks, ticks),
-        outcome=np.full(len(ticks), FAIL, dtype=np.int8),
-        timebase=timebase,
-        resolution_ns=resolution_ns,
-        checked=transitions,
-        details=details,
+def sequence_result(ticks: EdgeArray, details: list[str], transitions: int) -> Judged:
+    """The ``state_sequence`` rule: every listed tick is a move to a non-neighbour state, of
+    ``transitions`` state changes examined."""
+    return Judged(
+        "state_sequence",
+        Intervals(ticks, ticks),
+        np.full(len(ticks), FAIL, dtype=np.int8),
+        transitions,
+        details,
     )

@@ -31,7 +31,7 @@ import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.engine.interface import RoleSignal
-from wavecheck.engine.verdicts import RuleOutcome
+from wavecheck.engine.results import RuleResult
 
 __all__ = [
     "BACK_EDGES",
@@ -62,7 +62,7 @@ def place_range(start: int, end: int, limit_ticks: int) -> tuple[int, int]:
     return min(start, end) - 2 * width, max(start, end, start + limit_ticks) + 2 * width
 
 
-def wanted_places(rules: list[RuleOutcome], tick_ns: Fraction) -> set[Place]:
+def wanted_places(rules: list[RuleResult], tick_ns: Fraction) -> set[Place]:
     """The places whose windows the renderers may read: each rule's :data:`PLACES_PER_RULE`
     worst violations and the interval of its smallest margin."""
     out: set[Place] = set()
@@ -114,7 +114,7 @@ class SignalWindows:
         """One line for a file that shows the windows (the GTKWave companion VCD)."""
         cut = f", {self.cut} cut to {SIDE_EDGES} edges a side" if self.cut else ""
         return (
-            f"streamed check: only {self.count} window(s) around the worst places hold edges"
+            f"only {self.count} window(s) around the worst places hold edges"
             f"{cut}; between them the level is held"
         )
 

@@ -1,8 +1,8 @@
 """Did the configured timing take effect? A capture against its own firmware's guarantee.
 
 :func:`firmware_check` compares what a capture shows of one axis (:class:`Observed`: from
-``check``'s :class:`~wavecheck.report.model.Report`, or from ``measure``'s
-:class:`~wavecheck.measure.AxisMeasurement` without a drive) with an axis's
+``check``'s :class:`~wavecheck.engine.outcome.Report`, or from ``measure``'s
+:class:`~wavecheck.measurement.AxisMeasurement` without a drive) with an axis's
 :class:`~wavecheck.firmware.model.GeneratorGuarantee`: the shortest measured pulse vs the configured
 pulse, the shortest DIR setup seen vs the configured delay (to the drive's active edge: plus the
 pulse when that edge ends the pulse), in both-edge mode the shortest space too, and the highest
@@ -28,8 +28,8 @@ from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict
 
 if TYPE_CHECKING:
-    from wavecheck.measure import AxisMeasurement
-    from wavecheck.report.model import Report
+    from wavecheck.engine.outcome import Report
+    from wavecheck.measurement import AxisMeasurement
 
 __all__ = [
     "Comparison",

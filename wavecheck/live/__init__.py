@@ -3,5 +3,5 @@
 :mod:`.sigrok` starts and stops sigrok-cli and reads its raw samples; :mod:`.snippets` keeps the
 recent samples and writes a short ``.sr`` around each violation; :mod:`.watch` runs the loop
 (samples → :class:`~wavecheck.capture.binary.SampleBlocks` →
-:class:`~wavecheck.engine.axis.MachineStream`) with a status line and the stop conditions.
+:class:`~wavecheck.engine.axis.MachineCheck`) with a status line and the stop conditions.
 """

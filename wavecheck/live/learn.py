@@ -15,7 +15,7 @@ from fractions import Fraction
 
 from wavecheck.capture.binary import SampleBlocks, read_binary
 from wavecheck.capture.edges import Capture
-from wavecheck.engine.axis import MachineStream
+from wavecheck.engine.run import MachineCheck
 
 __all__ = ["FIRST_TRY_S", "RoleLearner"]
 
@@ -30,7 +30,7 @@ class RoleLearner:
     def __init__(
         self,
         scanner: SampleBlocks,
-        decide: Callable[[Capture, bool], MachineStream | None],
+        decide: Callable[[Capture, bool], MachineCheck | None],
         limit: int,
     ) -> None:
         self.scanner = scanner
@@ -48,7 +48,7 @@ class RoleLearner:
         """Keep the next bytes of the stream."""
         self.kept += data
 
-    def attempt(self, final: bool = False) -> MachineStream | None:
+    def attempt(self, final: bool = False) -> MachineCheck | None:
         """Try the inference when enough samples came since the last try (``final``: now, and
         raise if it cannot decide)."""
         n = self.samples
@@ -66,7 +66,7 @@ class RoleLearner:
         )
         return self.decide(capture, final)
 
-    def replay(self, machine: MachineStream) -> None:
+    def replay(self, machine: MachineCheck) -> None:
         """Check the kept samples with ``machine`` (what :meth:`attempt` gave) and let them go."""
         data, self.kept = bytes(self.kept), bytearray()
         machine.feed(self.scanner.scan(data))

@@ -2,7 +2,7 @@
 
 Each piece read from the pipe goes, in this order, to the ``--save`` recorder, the snippet ring,
 the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the streamed engine
-(:class:`~wavecheck.engine.axis.MachineStream`). At most every :data:`FLUSH_SECONDS` the engine
+(:class:`~wavecheck.engine.run.MachineCheck`). At most every :data:`FLUSH_SECONDS` the engine
 checks what has gathered (so the figures are current whatever the step rate), the violations it
 found are handed to the snippets, and the status line is redrawn.
 
@@ -24,12 +24,12 @@ from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
 from wavecheck.capture.srzip import SrRecorder
-from wavecheck.engine.axis import MachineStream
+from wavecheck.engine.outcome import MachineReport
+from wavecheck.engine.run import MachineCheck
 from wavecheck.errors import DeviceError
 from wavecheck.live.learn import RoleLearner
 from wavecheck.live.sigrok import Acquisition
 from wavecheck.live.snippets import Snippets
-from wavecheck.report.machine import MachineReport
 from wavecheck.units import format_ns, format_time
 
 __all__ = ["FLUSH_SECONDS", "READ_BYTES", "Watch", "WatchResult", "status_line"]
@@ -62,18 +62,18 @@ class WatchResult:
     snippets: list[str] = field(default_factory=list)
 
 
-def status_line(machine: MachineStream, samples: int, rate: Fraction, wall_s: float) -> str:
+def status_line(machine: MachineCheck, samples: int, rate: Fraction, wall_s: float) -> str:
     """One line: elapsed capture time, samples, and per axis its steps, violations so far and
     the closest rule with its margin."""
     parts = [f"{format_time(Fraction(samples) / rate)} captured", f"{samples:,} samples"]
     for a in machine.axes:
-        fails = sum(s.fails for s in a.summaries)
-        margins = [(s.min_margin_ns, s.rule) for s in a.summaries if s.min_margin_ns is not None]
+        fails = sum(s.fails for s in a.results)
+        margins = [(s.min_margin_ns, s.rule) for s in a.results if s.min_margin_ns is not None]
         closest = ""
         if margins:
             m, rule = min(margins)
             closest = f", closest {rule} {format_ns(m, signed=True)}"
-        name = f"{a.template.axis}: " if a.template.axis else ""
+        name = f"{a.plan.name}: " if a.plan.name else ""
         parts.append(f"{name}{a.steps.count} steps, {fails} violation(s){closest}")
     return f"[{wall_s:6.1f} s] " + " · ".join(parts)
 
@@ -85,7 +85,7 @@ class Watch:
         self,
         acquisition: Acquisition,
         scanner: SampleBlocks,
-        machine: MachineStream | RoleLearner,
+        machine: MachineCheck | RoleLearner,
         *,
         limit: int | None = None,
         stop_on_fail: bool = False,
@@ -97,7 +97,7 @@ class Watch:
         self.acq = acquisition
         self.scanner = scanner
         self.learner = machine if isinstance(machine, RoleLearner) else None
-        self.machine = machine if isinstance(machine, MachineStream) else None
+        self.machine = machine if isinstance(machine, MachineCheck) else None
         self.limit = limit
         self.stop_on_fail = stop_on_fail
         self.snippets = snippets
@@ -108,14 +108,14 @@ class Watch:
         if self.machine is not None:
             self._start(self.machine)
 
-    def _start(self, machine: MachineStream) -> None:
+    def _start(self, machine: MachineCheck) -> None:
         """Check with ``machine`` from now on (the kept samples first, when learning)."""
         self.machine = machine
         if self.snippets is not None:
             for a in machine.axes:
-                for s in a.summaries:
+                for s in a.results:
                     s.fresh = []
-        self.scanner.want({r.index for a in machine.axes for r in a.roles.values()})
+        self.scanner.want(machine.channels)
         if self.learner is not None:
             self.learner.replay(machine)
             self.learner = None
@@ -136,11 +136,11 @@ class Watch:
         self.machine.flush(end)
         failed = False
         for a in self.machine.axes:
-            for s in a.summaries:
+            for s in a.results:
                 failed = failed or s.fails > 0
                 if self.snippets is not None and s.fresh:
                     for start, stop in s.fresh:
-                        self.snippets.add(a.template.axis, s.rule, start, stop)
+                        self.snippets.add(a.plan.name, s.rule, start, stop)
                     s.fresh.clear()
         if self.snippets is not None:
             self.snippets.due(end)

@@ -43,8 +43,8 @@ import numpy.typing as npt
 
 from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
+from wavecheck.engine.outcome import Report
 from wavecheck.output import atomic_write
-from wavecheck.report.model import Report
 from wavecheck.report.plot import Place, choose_places
 from wavecheck.units import SI_TIME, format_time
 

@@ -22,10 +22,10 @@ from collections.abc import Sequence
 from fractions import Fraction
 
 from wavecheck.drives.model import MARK_LEGEND
+from wavecheck.engine.outcome import Report
 from wavecheck.output import atomic_write
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import group_violations
-from wavecheck.report.model import Report
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import overall_verdict
 

@@ -16,20 +16,24 @@ from __future__ import annotations
 
 import json
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
-from wavecheck.engine.verdicts import RuleOutcome, Violation
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.results import RuleResult
+from wavecheck.engine.verdicts import Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.assumptions import assumptions
-from wavecheck.report.model import Report
 from wavecheck.units import json_number
+
+if TYPE_CHECKING:
+    from wavecheck.firmware.capture import FirmwareCheck
 
 __all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
 
 DEFAULT_VIOLATION_CAP = 1000
 
 
-def _rule(r: RuleOutcome) -> dict[str, Any]:
+def _rule(r: RuleResult) -> dict[str, Any]:
     fig = r.figure
     return {
         "id": r.rule,
@@ -52,7 +56,7 @@ def _rule(r: RuleOutcome) -> dict[str, Any]:
     }
 
 
-def _datasheet_ns(r: RuleOutcome) -> Fraction | None:
+def _datasheet_ns(r: RuleResult) -> Fraction | None:
     fig = r.figure
     if fig is None or fig.datasheet is None:
         return None
@@ -153,7 +157,7 @@ def _firmware(report: Report) -> dict[str, Any]:
         return {}
     from wavecheck.firmware.render import firmware_check_dict
 
-    return {"firmware": firmware_check_dict(report.firmware)}
+    return {"firmware": firmware_check_dict(cast("FirmwareCheck", report.firmware))}
 
 
 def _configured(cfg: ConfigRates | None) -> dict[str, Any]:

@@ -24,8 +24,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
 
-from wavecheck.engine.verdicts import RuleOutcome, Violation
-from wavecheck.report.model import Report
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.results import RuleResult
+from wavecheck.engine.verdicts import Violation
 from wavecheck.units import format_frequency, format_ns
 
 __all__ = ["Unreadable", "classname", "render_junit"]
@@ -62,7 +63,7 @@ def _describe(v: Violation) -> str:
     )
 
 
-def _testcase(suite: ET.Element, report: Report, r: RuleOutcome) -> str:
+def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
     case = ET.SubElement(suite, "testcase", classname=_classname(report), name=r.rule, time="0")
     if r.verdict == "fail":
         worst = r.worst_violations(_LISTED)

@@ -1,4 +1,4 @@
-"""A run of several axes on one capture: one :class:`Report` per axis, read once, one verdict.
+"""The outputs of a run of several axes on one capture (:class:`~wavecheck.engine.outcome.MachineReport`).
 
 The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and lists the axes::
 
@@ -7,76 +7,16 @@ The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and li
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
 Cross-axis facts: the step counts side by side and whether the axes' step edges lie on one common
-periodic lattice (one base thread or timer: :mod:`wavecheck.latency`).
+periodic lattice (one base thread or timer: :func:`wavecheck.engine.run.common_timer`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
+from wavecheck.engine.outcome import MachineReport
 
-from wavecheck.capture.edges import Capture
-from wavecheck.report.model import Report
-from wavecheck.verdict import Verdict, exit_code, overall_verdict
-
-__all__ = ["MachineReport", "common_timer", "machine_dict", "render_machine_text"]
-
-
-@dataclass
-class MachineReport:
-    """Every axis of one capture, checked from the same edge arrays."""
-
-    capture: Capture
-    axes: list[Report]
-    notes: list[str] = field(default_factory=list)
-
-    @property
-    def verdict(self) -> Verdict:
-        """The worst verdict of the axes."""
-        return overall_verdict(r.verdict for r in self.axes)
-
-    @property
-    def exit_code(self) -> int:
-        """0 pass, 1 an axis failed, 3 only indeterminate or unchecked."""
-        return exit_code(self.verdict)
-
-    @property
-    def total_violations(self) -> int:
-        """Violations over every axis."""
-        return sum(r.total_violations for r in self.axes)
-
-    def axis(self, name: str) -> Report:
-        """The report of axis ``name`` (KeyError when there is none)."""
-        for r in self.axes:
-            if r.axis == name:
-                return r
-        raise KeyError(name)
-
-
-def common_timer(reports: list[Report]) -> str:
-    """One line: do the axes' steps lie on one common periodic lattice (one thread or timer)?"""
-    from wavecheck.latency import analyse_times
-
-    cap = reports[0].capture
-    ticks = [r.events().ticks for r in reports if r.steps.count]
-    if len(ticks) < 2:
-        return "fewer than two axes step: no common timer to look for"
-    times = np.unique(np.concatenate(ticks))
-    found = analyse_times(
-        times,
-        tick_ns=cap.timebase.tick_ns,
-        resolution_ns=reports[0].resolution_ns,
-        path=cap.path,
-    )
-    if found.lattice and found.period_ns is not None:
-        return (
-            f"the steps of every axis lie on one {float(found.period_ns) / 1000:g} us lattice: "
-            "one base thread or timer makes them"
-        )
-    why = found.reason.split(" (")[0]
-    return f"the axes' steps are not on one common periodic lattice ({why})"
+__all__ = ["machine_dict", "render_machine_text"]
 
 
 def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:

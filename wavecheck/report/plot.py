@@ -7,17 +7,16 @@ The figure has three parts:
   violation of each failing rule first, then the next worst — or, when nothing fails, around the
   smallest margin of each rule. The measured interval is drawn as an arrow and labelled, the
   rule's limit as a shaded span from the same start, so "too short" is visible at a glance;
-- position and step rate against time, reversals marked
-  (:func:`wavecheck.report.measure_plot.draw_motion`, as ``wavecheck measure`` draws them);
-- one histogram per rule of every measured interval, with the limit as a vertical line, so the
-  whole capture's distance from the datasheet shows.
+- position and step rate against time, reversals marked;
+- one histogram per rule of every measured interval (each rule's fixed bins, four per octave),
+  with the limit as a vertical line, so the whole capture's distance from the datasheet shows.
 
-A streamed report (:mod:`wavecheck.stream`) keeps no capture: its timing diagrams are drawn from
-the small windows of the signals kept around the worst places (:mod:`wavecheck.engine.windows`;
-the same drawing), its histograms from each rule's fixed bins (four per octave), and its motion
-panel from the thinned step trace (:mod:`wavecheck.engine.trace`): per time bucket, the first and
-last step's position and the range reached, the fastest and slowest step, every reversal counted
-(the first ones marked); both titles say "thinned".
+A report keeps no capture: its timing diagrams are drawn from the small windows of the signals
+kept around the worst places (:mod:`wavecheck.engine.windows`), its motion panel from the step
+trace (:mod:`wavecheck.engine.trace`): per time bucket, the first and last step's position and the
+range reached, the fastest and slowest step, every reversal counted (the first ones marked);
+when a bucket holds more than two steps the titles say "thinned". The check must have kept
+pictures (:attr:`wavecheck.engine.options.CheckOptions.pictures`).
 
 matplotlib is imported lazily with the Agg backend (no display needed). Times are drawn in µs
 (or ns/ms when that reads better) relative to the start of the drawn interval; each panel's
@@ -36,18 +35,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.verdicts import FAIL, RuleOutcome, RuleResult
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.results import RuleResult
 from wavecheck.output import atomic_write
-from wavecheck.report.model import Report
 from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from wavecheck.engine.trace import StepTrace
-    from wavecheck.timebase import Timebase
 
 __all__ = [
     "MAX_PLACES",
@@ -307,7 +303,7 @@ def place_title(report: Report, place: Place, index: int) -> str:
     return f"{index}. {place.rule} — {verdict} at t = {float(t_s):.6f} s{margin}"
 
 
-def hist_title(r: RuleOutcome) -> str:
+def hist_title(r: RuleResult) -> str:
     """The title of a rule's histogram."""
     return (
         f"{r.rule}: {r.checked:,} interval(s), {r.violations:,} fail, min margin "
@@ -340,34 +336,8 @@ def _log_x(ax: Axes, lo: float, hi: float, limit: float) -> bool:
     return True
 
 
-def _bars_every(ax: Axes, r: RuleResult) -> tuple[str, float, bool, int]:
-    """Every measured interval in 60 bins (the whole-capture path): (unit, ns per unit, log x,
-    highest count)."""
-    assert r.limit_ns is not None
-    values = r.measured_ns
-    limit = float(r.limit_ns)
-    lo, hi = float(values.min()), float(values.max())
-    log_x = _log_x(ax, lo, hi, limit)
-    if log_x:
-        unit, scale = "", 1.0
-        a, b = math.log10(min(lo, limit) * 0.8), math.log10(max(hi, limit) * 1.25)
-        bins: Any = np.logspace(a, b, 60)
-    else:
-        unit, scale = _unit_for(max(limit, float(np.median(values))) / 2 or 1.0)
-        span = max(hi, limit) - min(lo, limit)
-        pad = span * 0.08 if span > 0 else max(abs(limit), 1.0) * 0.1
-        bins = (np.linspace(min(lo, limit) - pad, max(hi, limit) + pad, 60)) / scale
-    v = values / scale
-    fails = r.outcome == FAIL
-    ax.hist(v[~fails], bins=bins, color="#5b7db1", label="pass / indeterminate")
-    if fails.any():
-        ax.hist(v[fails], bins=bins, color=_FAIL_COLOR, label="fail")
-    counts, _ = np.histogram(v, bins=bins)
-    return unit, scale, log_x, int(counts.max(initial=0))
-
-
-def binned(r: RuleOutcome) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
-    """A rule's fixed bins (:meth:`RuleOutcome.histogram`, four per octave of ticks) as
+def binned(r: RuleResult) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
+    """A rule's fixed bins (:meth:`RuleResult.histogram`, four per octave of ticks) as
     (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
     from wavecheck.engine.verdicts import Histogram
 
@@ -378,9 +348,9 @@ def binned(r: RuleOutcome) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.floa
     return np.array(left, float), np.array(right, float), [c for _, c in pairs]
 
 
-def _bars_binned(ax: Axes, r: RuleOutcome) -> tuple[str, float, bool, int]:
-    """The streamed path's fixed bins as bars (as :func:`_bars_every`); a bin wholly below the
-    limit is drawn as failing, one the limit splits as indeterminate."""
+def _bars_binned(ax: Axes, r: RuleResult) -> tuple[str, float, bool, int]:
+    """A rule's fixed bins as bars: (unit, ns per unit, log x, highest count); a bin wholly
+    below the limit is drawn as failing, one the limit splits as indeterminate."""
     assert r.limit_ns is not None and r.min_measured_ns is not None
     assert r.max_measured_ns is not None
     limit = float(r.limit_ns)
@@ -400,14 +370,11 @@ def _bars_binned(ax: Axes, r: RuleOutcome) -> tuple[str, float, bool, int]:
     return unit, scale, log_x, max(counts, default=0)
 
 
-def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
+def _draw_histogram(ax: Axes, r: RuleResult) -> None:
     from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
     assert r.limit_ns is not None
-    if isinstance(r, RuleResult):
-        unit, scale, log_x, top = _bars_every(ax, r)
-    else:
-        unit, scale, log_x, top = _bars_binned(ax, r)
+    unit, scale, log_x, top = _bars_binned(ax, r)
     lim = float(r.limit_ns) / scale
     if top > 50:
         ax.set_yscale("log")
@@ -434,7 +401,7 @@ def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
         loc="left",
         color=status.get(r.verdict, "#222"),
     )
-    bins = "" if isinstance(r, RuleResult) else ", 4 bins per octave"
+    bins = ", 4 bins per octave"
     ax.set_xlabel(
         f"measured (log scale{bins})" if log_x else f"measured ({unit}{bins})", fontsize=8.5
     )
@@ -442,54 +409,6 @@ def _draw_histogram(ax: Axes, r: RuleOutcome) -> None:
     ax.tick_params(labelsize=8)
     for side in ("top", "right"):
         ax.spines[side].set_visible(False)
-
-
-def _draw_trace(ax_pos: Axes, ax_rate: Axes, trace: StepTrace, timebase: Timebase) -> None:
-    """A streamed report's motion panel from its thinned step trace (as
-    :func:`wavecheck.report.measure_plot.draw_motion` draws every step): position through each
-    bucket's first and last step over the range it reached, each bucket's fastest and slowest
-    step rate, reversals marked."""
-    from matplotlib.collections import PolyCollection
-
-    from wavecheck.report.measure_plot import MAX_MARKS
-
-    def sec(ticks: npt.NDArray[np.int64]) -> Any:
-        return timebase.ns_array(ticks) / 1e9
-
-    start, low, high = trace.envelope()
-    x0, width = sec(start), float(trace.width * timebase.tick_ns) / 1e9
-    boxes = [
-        [(a, lo), (a + width, lo), (a + width, hi), (a, hi)]
-        for a, lo, hi in zip(x0.tolist(), low.tolist(), high.tolist(), strict=True)
-    ]
-    ax_pos.add_collection(PolyCollection(boxes, facecolors=_TRACE_COLOR, alpha=0.2, lw=0))
-    t, p = trace.position_points()
-    ax_pos.plot(sec(t), p, drawstyle="steps-post", color=_TRACE_COLOR, lw=1)
-    t, gap = trace.rate_points()
-    rate = float(timebase.samplerate_hz) / gap
-    ms = 2 if len(rate) > 1000 else 5
-    ax_rate.plot(sec(t), rate, ".", ms=ms, color=_TRACE_COLOR)
-    if len(rate) and rate.max() / max(rate.min(), 1e-12) > 100:
-        ax_rate.set_yscale("log")
-    for ax in (ax_pos, ax_rate):
-        for x in sec(trace.reversal_ticks[:MAX_MARKS]).tolist():
-            ax.axvline(x, color=_FAIL_COLOR, lw=0.8, ls="--", alpha=0.7)
-        for side in ("top", "right"):
-            ax.spines[side].set_visible(False)
-        ax.tick_params(labelsize=8)
-    extra = f" (first {MAX_MARKS} marked)" if trace.reversals > MAX_MARKS else ""
-    bucket = _fmt_ns(trace.width * timebase.tick_ns)
-    ax_pos.set_title(
-        f"steps: position, {trace.reversals} reversal(s){extra} — thinned", fontsize=9, loc="left"
-    )
-    ax_pos.set_xlabel(
-        f"time (s); {len(p):,} points of {trace.count:,} steps, range per {bucket} shaded",
-        fontsize=8.5,
-    )
-    ax_pos.set_ylabel("position (steps)", fontsize=8.5)
-    ax_rate.set_title("steps: step rate — thinned", fontsize=9, loc="left")
-    ax_rate.set_xlabel(f"time (s); fastest and slowest step per {bucket}", fontsize=8.5)
-    ax_rate.set_ylabel("step rate (Hz)", fontsize=8.5)
 
 
 def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figure:
@@ -506,9 +425,7 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
     hist_rows = math.ceil(len(hist_rules) / hist_cols)
-    every = isinstance(report.steps, StepEvents) and report.steps.count > 1
-    thinned = not every and report.trace is not None and report.trace.count > 1
-    motion = every or thinned
+    motion = report.trace is not None and report.trace.count > 1
     heights = [diag_h] * len(places) + [2.4] * motion + [2.6] * hist_rows
     if not heights:
         heights = [1.0]
@@ -527,15 +444,12 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
         ax = fig.add_subplot(grid[k, :])
         _draw_place(ax, report, place, k + 1)
     if motion:
-        from wavecheck.report.measure_plot import draw_motion
+        from wavecheck.report.measurement_plot import draw_motion
 
         pair = grid[len(places), :].subgridspec(1, 2)
         ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
-        if thinned:
-            assert report.trace is not None
-            _draw_trace(ax_pos, ax_rate, report.trace, report.capture.timebase)
-        else:
-            draw_motion(ax_pos, ax_rate, report.events(), report.capture.timebase, "steps")
+        assert report.trace is not None
+        draw_motion(ax_pos, ax_rate, report.trace, report.capture.timebase, "steps")
     for k, r in enumerate(hist_rules):
         row, col = divmod(k, hist_cols)
         span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col

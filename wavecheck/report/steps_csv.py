@@ -25,6 +25,7 @@ formatted by numpy, through :func:`wavecheck.output.atomic_path` (whole or not a
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 from collections.abc import Iterator, Mapping, Sequence
@@ -37,12 +38,14 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.mapping import check_axis_names
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
 from wavecheck.timebase import Timebase
 
 __all__ = [
     "AxisSteps",
+    "StepsCsvWriter",
     "decimal_digits",
     "format_times",
     "parse_steps_per_unit",
@@ -189,6 +192,174 @@ def parse_steps_per_unit(text: str, option: str = "--steps-per-unit") -> Fractio
     return value
 
 
+def _format(
+    ticks: EdgeArray,
+    which: npt.NDArray[np.int32],
+    direction: npt.NDArray[np.int8],
+    position: EdgeArray,
+    gaps: EdgeArray,
+    first: npt.NDArray[np.bool_],
+    names: npt.NDArray[np.str_],
+    per_unit: npt.NDArray[np.float64] | None,
+    timebase: Timebase,
+) -> str:
+    """The rows of steps already in order (one line each, no final newline)."""
+    hz = float(timebase.samplerate_hz)
+    valid = ~first
+    rate = np.divide(hz, gaps, out=np.zeros(len(ticks)), where=valid)
+    fields = [
+        _decimal_field(*_time_parts(ticks, timebase.tick_s)),
+        _Field("%d", [ticks.tolist()]),
+        _Field("%s", [names[which].tolist()]),
+        _Field("%d", [direction.tolist()]),
+        _Field("%d", [position.tolist()]),
+        _fixed_field(rate, valid, RATE_PLACES),
+    ]
+    if per_unit is not None:
+        spu = per_unit[which]
+        has = ~np.isnan(spu)
+        fields += [
+            _fixed_field(position / np.where(has, spu, 1.0), has, UNIT_PLACES),
+            _fixed_field(
+                direction * rate / np.where(has, spu, 1.0),
+                has & valid & (direction != 0),
+                UNIT_PLACES,
+            ),
+        ]
+    return _rows(fields)
+
+
+class _Pending:
+    """One axis's steps handed over and not yet written, with what the next ones continue."""
+
+    def __init__(self) -> None:
+        self.parts: list[tuple[EdgeArray, npt.NDArray[np.int8], EdgeArray, EdgeArray]] = []
+        self.position = 0
+        self.last: int | None = None
+
+    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None:
+        if not len(ticks):
+            return
+        position = self.position + np.cumsum(direction, dtype=np.int64)
+        prev = np.empty(len(ticks), dtype=np.int64)
+        prev[1:] = ticks[:-1]
+        prev[0] = ticks[0] if self.last is None else self.last
+        self.parts.append((ticks.copy(), direction.copy(), position, ticks - prev))
+        self.position = int(position[-1])
+        self.last = int(ticks[-1])
+
+    def take(self, before: int) -> tuple[EdgeArray, npt.NDArray[np.int8], EdgeArray, EdgeArray]:
+        """The steps before tick ``before``, removed."""
+        if not self.parts:
+            z = np.zeros(0, dtype=np.int64)
+            return z, np.zeros(0, np.int8), z, z
+        t, d, p, g = (np.concatenate(x) for x in zip(*self.parts, strict=True))
+        k = int(np.searchsorted(t, before, side="left"))
+        self.parts = [(t[k:], d[k:], p[k:], g[k:])] if k < len(t) else []
+        return t[:k], d[:k], p[:k], g[:k]
+
+
+class StepsCsvWriter:
+    """The CSV written while the engine runs: each axis's steps come through its sink
+    (:meth:`sink`), and :meth:`settled` writes every row before a tick no axis can still add
+    steps before, in time order over all axes; :meth:`close` writes the rest and puts the file
+    in place (whole or not at all, :func:`wavecheck.output.atomic_path`).
+
+    Args:
+        target: the CSV file.
+        timebase: the capture's tick.
+        units: write the machine-unit columns.
+        named: axes ``--steps-per-unit`` names (each must be an axis of the run).
+    """
+
+    def __init__(
+        self,
+        target: str | os.PathLike[str],
+        timebase: Timebase,
+        units: bool,
+        named: set[str | None] | None = None,
+    ) -> None:
+        self.target = target
+        self.timebase = timebase
+        self.units = units
+        self.named = set(named or ())
+        self._checked = False
+        self.names: list[str] = []
+        self._axis_names: list[str | None] = []
+        self.per_unit: list[float] = []
+        self.axes: list[_Pending] = []
+        self.rows = 0
+        self._stack = contextlib.ExitStack()
+        try:
+            path = self._stack.enter_context(atomic_path(target))
+            self._file = self._stack.enter_context(open(path, "w", encoding="utf-8", newline=""))
+            self._file.write(",".join(HEADER + (UNIT_HEADER if units else ())) + "\n")
+        except OSError as err:
+            self._stack.close()
+            raise UsageError(f"{os.fspath(target)}: cannot write ({err.strerror or err})") from None
+
+    def sink(self, name: str | None, steps_per_unit: Fraction | None = None) -> _Pending:
+        """The step sink of the next axis (``name`` None: the single unnamed axis)."""
+        self._axis_names.append(name)
+        self.names.append("" if name is None else _csv_field(name))
+        self.per_unit.append(np.nan if steps_per_unit is None else float(steps_per_unit))
+        pending = _Pending()
+        self.axes.append(pending)
+        return pending
+
+    def settled(self, before: int) -> None:
+        """Write every step before tick ``before`` (no axis adds one earlier any more)."""
+        if not self._checked:  # every axis has its sink by now
+            self._checked = True
+            check_axis_names({"--steps-per-unit": self.named}, self._axis_names)
+        taken = [a.take(before) for a in self.axes]
+        n = sum(len(t[0]) for t in taken)
+        if not n:
+            return
+        ticks = np.concatenate([t[0] for t in taken])
+        which = np.concatenate([np.full(len(t[0]), k, dtype=np.int32) for k, t in enumerate(taken)])
+        order = np.lexsort((which, ticks))
+        cols = [np.concatenate([t[i] for t in taken])[order] for i in range(1, 4)]
+        direction, position, gaps = cols[0], cols[1], cols[2]
+        ticks, which = ticks[order], which[order]
+        first = gaps <= 0
+        names = np.array(self.names, dtype=np.str_)
+        per_unit = np.array(self.per_unit) if self.units else None
+        for i in range(0, n, CHUNK):
+            j = slice(i, i + CHUNK)
+            self._write(
+                _format(ticks[j], which[j], direction[j], position[j], gaps[j], first[j],
+                        names, per_unit, self.timebase) + "\n"
+            )  # fmt: skip
+        self.rows += n
+
+    def _write(self, text: str) -> None:
+        try:
+            self._file.write(text)
+        except OSError as err:
+            self.abort()
+            if err.errno == errno.EPIPE:
+                raise
+            raise UsageError(
+                f"{os.fspath(self.target)}: cannot write ({err.strerror or err})"
+            ) from None
+
+    def close(self) -> int:
+        """Write the rest and put the file in place; the number of rows."""
+        self.settled(_LIMIT)
+        try:
+            self._stack.close()
+        except OSError as err:
+            raise UsageError(
+                f"{os.fspath(self.target)}: cannot write ({err.strerror or err})"
+            ) from None
+        return self.rows
+
+    def abort(self) -> None:
+        """Leave no file (an error stopped the run)."""
+        self._stack.__exit__(RuntimeError, RuntimeError("aborted"), None)
+
+
 def steps_csv_chunks(
     axes: Sequence[AxisSteps], timebase: Timebase, chunk: int = CHUNK
 ) -> Iterator[str]:
@@ -197,7 +368,6 @@ def steps_csv_chunks(
     yield ",".join(HEADER + (UNIT_HEADER if units else ())) + "\n"
     if not axes:
         return
-    hz = float(timebase.samplerate_hz)
     ticks = np.concatenate([a.steps.ticks for a in axes])
     which = np.concatenate([np.full(a.steps.count, k, dtype=np.int32) for k, a in enumerate(axes)])
     direction = np.concatenate([a.steps.direction for a in axes])
@@ -205,33 +375,16 @@ def steps_csv_chunks(
     gaps = np.concatenate([np.diff(a.steps.ticks, prepend=a.steps.ticks[:1]) for a in axes])
     first = np.concatenate([np.arange(a.steps.count) == 0 for a in axes]) | (gaps <= 0)
     names = np.array(["" if a.name is None else _csv_field(a.name) for a in axes], dtype=np.str_)
-    per_unit = np.array(
-        [np.nan if a.steps_per_unit is None else float(a.steps_per_unit) for a in axes]
+    per_unit = (
+        np.array([np.nan if a.steps_per_unit is None else float(a.steps_per_unit) for a in axes])
+        if units
+        else None
     )
     order = np.lexsort((which, ticks))
     for i in range(0, len(order), chunk):
         idx = order[i : i + chunk]
-        t, k, d = ticks[idx], which[idx], direction[idx]
-        valid = ~first[idx]
-        rate = np.divide(hz, gaps[idx], out=np.zeros(len(idx)), where=valid)
-        fields = [
-            _decimal_field(*_time_parts(t, timebase.tick_s)),
-            _Field("%d", [t.tolist()]),
-            _Field("%s", [names[k].tolist()]),
-            _Field("%d", [d.tolist()]),
-            _Field("%d", [position[idx].tolist()]),
-            _fixed_field(rate, valid, RATE_PLACES),
-        ]
-        if units:
-            spu = per_unit[k]
-            has = ~np.isnan(spu)
-            fields += [
-                _fixed_field(position[idx] / np.where(has, spu, 1.0), has, UNIT_PLACES),
-                _fixed_field(
-                    d * rate / np.where(has, spu, 1.0), has & valid & (d != 0), UNIT_PLACES
-                ),
-            ]
-        yield _rows(fields) + "\n"
+        yield _format(ticks[idx], which[idx], direction[idx], position[idx], gaps[idx],
+                      first[idx], names, per_unit, timebase) + "\n"  # fmt: skip
 
 
 def _csv_field(text: str) -> str:
@@ -265,5 +418,5 @@ def write_steps_csv(
 def steps_per_unit_of(
     values: Mapping[str | None, str], option: str = "--steps-per-unit"
 ) -> dict[str | None, Fraction]:
-    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.axes.per_axis`) as numbers."""
+    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.engine.mapping.per_axis`) as numbers."""
     return {axis: parse_steps_per_unit(text, option) for axis, text in values.items()}

@@ -8,13 +8,17 @@ A limit whose figure is uncertain or a firmware default carries its mark (``100 
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import TYPE_CHECKING, cast
 
 from wavecheck.drives.model import MARK_LEGEND
-from wavecheck.engine.verdicts import RuleOutcome
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.results import RuleResult
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import ViolationGroup, group_violations
-from wavecheck.report.model import Report
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
+
+if TYPE_CHECKING:
+    from wavecheck.firmware.capture import FirmwareCheck
 
 __all__ = ["DEFAULT_TEXT_VIOLATIONS", "rate_lines", "render_text"]
 
@@ -54,12 +58,12 @@ def rate_lines(report: Report) -> list[str]:
     return out
 
 
-def _at(r: RuleOutcome) -> str:
+def _at(r: RuleResult) -> str:
     t = r.min_margin_at_s
     return "-" if t is None else f"{float(t):.9f} s"
 
 
-def _mark(r: RuleOutcome) -> str:
+def _mark(r: RuleResult) -> str:
     return r.figure.mark if r.figure is not None else ""
 
 
@@ -204,5 +208,5 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
     if report.firmware is not None:  # check --firmware
         from wavecheck.firmware.render import firmware_check_lines
 
-        out += ["", *firmware_check_lines(report.firmware)]
+        out += ["", *firmware_check_lines(cast("FirmwareCheck", report.firmware))]
     return "\n".join(out) + "\n"

@@ -12,6 +12,7 @@ import pytest
 
 import wavecheck
 from stepgen.cli import main
+from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 
 # a servo whose loop is stable with P = 20, I = 100 (test_servo_loop's "stiff"-like plant)
@@ -58,8 +59,7 @@ def test_servo_quadrature_decodes_back_to_the_encoder_counts(tmp_path: Path) -> 
     )
     assert code == 0
     t_counts, v_counts = _vcd_vector(out, "counts")
-    report = wavecheck.check(out, "gecko-g202", step_type=2)
-    steps = report.steps
+    steps = run_check(open_capture(out), "gecko-g202", step_type_number=2).steps
     assert steps.forward > 900 and steps.reverse > 600 and steps.unknown == 0
     assert len(steps.sequence_errors) == 0
     assert (
@@ -87,8 +87,8 @@ def test_servo_sr_decodes_to_the_same_counts(tmp_path: Path) -> None:
     ]
     assert main(["simulate", *args, "-o", str(vcd)]) == 0
     assert main(["simulate", *args, "-o", str(sr)]) == 0
-    a = wavecheck.check(vcd, "gecko-g202", step_type=2).steps
-    b = wavecheck.check(sr, "gecko-g202", step_type=2).steps
+    a = run_check(open_capture(vcd), "gecko-g202", step_type_number=2).steps
+    b = run_check(open_capture(sr), "gecko-g202", step_type_number=2).steps
     cap = open_capture(sr)
     assert [c.name for c in cap.channels] == ["phase-A", "phase-B"]
     assert b.position.tolist() == a.position.tolist() and b.final_position == 30

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from wavecheck.axes import parse_axes, per_axis, split_invert
 from wavecheck.cli import main
+from wavecheck.engine.mapping import parse_axes, per_axis, split_invert
 from wavecheck.errors import UsageError
 
 SMOOTHIE = ["--map", "x.step=5,x.dir=6", "--map", "y.step=3,y.dir=4"]
@@ -89,15 +89,23 @@ def test_the_capture_is_read_once(
     from wavecheck.cli import _capture_args
 
     calls = []
-    real = _capture_args.open_capture
+    real = _capture_args.open_source
 
     def counting(*a, **k):  # type: ignore[no-untyped-def]
-        calls.append(a[0])
-        return real(*a, **k)
+        source = real(*a, **k)
+        blocks = source.blocks
+        calls.append(0)
 
-    monkeypatch.setattr(_capture_args, "open_capture", counting)
-    main(["check", str(smoothie_sr), "--drive", "gecko-g202", *SMOOTHIE, "--no-stream"])
-    assert len(calls) == 1  # the streamed path: tests/wavecheck/stream/test_stream_cli.py
+        def counted():  # type: ignore[no-untyped-def]
+            calls[-1] += 1
+            return blocks()
+
+        source.blocks = counted
+        return source
+
+    monkeypatch.setattr(_capture_args, "open_source", counting)
+    main(["check", str(smoothie_sr), "--drive", "gecko-g202", *SMOOTHIE])
+    assert calls == [1]  # one source, its blocks read once for both axes
 
 
 def test_each_axis_its_own_drive(smoothie_sr: Path, capsys: pytest.CaptureFixture[str]) -> None:

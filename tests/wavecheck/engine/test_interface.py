@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from tests.engine_probe import run_check
 from tests.reliability.helpers import cli
 from tests.wavecheck.waves import capture, drive, pulses
 from wavecheck.engine.interface import build_interface, parse_map
-from wavecheck.engine.plan import run_check
 from wavecheck.errors import UsageError
 
 US = 1000

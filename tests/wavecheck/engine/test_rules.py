@@ -6,8 +6,8 @@ from fractions import Fraction
 
 import pytest
 
+from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.engine.plan import run_check
 from wavecheck.linuxcnc.steptypes import step_type
 
 US = 1000  # ticks per µs at the default 1 ns tick

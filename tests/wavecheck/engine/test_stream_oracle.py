@@ -1,10 +1,12 @@
-"""The streamed engine gives the whole-capture engine's report, field for field, at any block size.
+"""One block or many: the engine gives the same report, field for field, at any block size.
 
-The oracle is :func:`wavecheck.engine.plan.check_machine` (every interval in memory); the streamed path
-is :func:`wavecheck.engine.axis.check_stream` over blocks cut from the same capture
-(:class:`wavecheck.capture.blocks.MemorySource`), from one event per block up. Compared: the whole
-JSON report (every rule's counts, margins and where, unknown places, the violations list, steps,
-rates, notes) plus each rule's histogram — nothing is left out as "a summary".
+The oracle is the engine fed the whole capture as one block and checking it as one window
+(every interval in memory at once); against it, the same capture cut into blocks
+(:class:`wavecheck.capture.blocks.MemorySource`) from one event per block up, each window checked
+as it gathers. Compared: the whole JSON report (every rule's counts, margins and where, unknown
+places, the violations list, steps, rates, notes) plus each rule's histogram — nothing is left
+out as "a summary". (:mod:`tests.reliability.test_reference_agreement` holds the one-window
+figures against a plain per-interval reference.)
 """
 
 from __future__ import annotations
@@ -17,15 +19,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, SHARED
-from wavecheck.axes import AxisMap
-from wavecheck.capture.blocks import MemorySource
+from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, SHARED, engine_check
+from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine.axis import check_stream
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.outcome import MachineReport
 from wavecheck.report.machine import machine_dict
 from wavecheck.timebase import Timebase
 
@@ -38,9 +39,16 @@ def _drive(
     return Drive("t", "test drive", Path("t.toml"), "user", interface, "rising", fig, rate)  # type: ignore[arg-type]
 
 
+def _check(
+    capture: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object
+) -> MachineReport:
+    """The engine on ``capture`` cut into blocks of about ``block`` edges, a window each."""
+    return engine_check(MemorySource(capture, block), axes, drives, block, **kw)
+
+
 def _same(capture: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object) -> None:
-    whole = check_machine(capture, axes, drives, **kw)  # type: ignore[arg-type]
-    streamed = check_stream(MemorySource(capture, block), axes, drives, block_edges=block, **kw)  # type: ignore[arg-type]
+    whole = _check(capture, axes, drives, WHOLE, **kw)
+    streamed = _check(capture, axes, drives, block, **kw)
     assert machine_dict(streamed, 10**6) == machine_dict(whole, 10**6)
     for a, b in zip(whole.axes, streamed.axes, strict=True):
         assert [r.histogram() for r in a.rules] == [r.histogram() for r in b.rules]
@@ -153,7 +161,7 @@ def _ch(name: str, index: int, initial: int, edges: list[int]) -> Channel:
     return Channel(name, index, initial, np.array(edges, np.int64))
 
 
-#: Each case needs one context rule of the engine (:func:`wavecheck.engine.axis._context`):
+#: Each case needs one context rule of the engine (:meth:`wavecheck.engine.axis.AxisCheck._context`):
 #: dropping that rule makes one fail (checked by mutating the engine when it was written).
 CONTEXT_CASES = [
     # dir_setup: DIR changes before the first step all wait for it
@@ -191,14 +199,14 @@ def test_dir_changes_piling_up_without_steps_are_gone_over_log_n_times(
     from wavecheck.engine import axis as engine
 
     calls = 0
-    original = engine.AxisStream._window
+    original = engine.AxisCheck.window
 
-    def counted(self: engine.AxisStream, t1: int) -> None:
+    def counted(self: engine.AxisCheck, t1: int) -> None:
         nonlocal calls
         calls += 1
         original(self, t1)
 
-    monkeypatch.setattr(engine.AxisStream, "_window", counted)
+    monkeypatch.setattr(engine.AxisCheck, "window", counted)
     dir_edges = np.arange(1, 60_001, dtype=np.int64) * 10
     steps = 600_100 + np.arange(0, 40, dtype=np.int64) * 100  # then 20 pulses, 50 ticks high
     cap = Capture(
@@ -209,4 +217,4 @@ def test_dir_changes_piling_up_without_steps_are_gone_over_log_n_times(
     drive = _drive({"step_high": 10, "step_low": 10, "dir_setup": 5, "dir_hold": 5}, None)
     axes = [AxisMap(None, {"step": "step", "dir": "dir"})]
     _same(cap, axes, {None: drive}, 500)
-    assert calls <= 2 * 20  # _same runs the stream once: ~log2(60000/500) + a few, not 120
+    assert calls <= 2 * 20 + 1  # the one-window run once, the blocks ~log2(60000/500) + a few

@@ -1,6 +1,7 @@
 """The block readers (``.sr``: :class:`wavecheck.capture.sr.SrBlocks`, VCD:
-:class:`wavecheck.capture.vcd.reader.VcdBlocks`) feed the streamed engine to the whole-capture
-report, at small read sizes (many blocks), on the golden traces and the shared real captures."""
+:class:`wavecheck.capture.vcd.reader.VcdBlocks`) feed the engine to the report of the whole read
+given as one block, at small read sizes (many blocks), on the golden traces and the shared real
+captures."""
 
 from __future__ import annotations
 
@@ -8,13 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from wavecheck.axes import AxisMap
-from wavecheck.capture.blocks import open_stream
-from wavecheck.capture.open import open_capture
+from tests.wavecheck.engine.corpus import engine_check
+from wavecheck.capture.blocks import WHOLE, MemorySource
+from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.axis import check_stream
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.mapping import AxisMap
 from wavecheck.report.machine import machine_dict
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -26,10 +26,8 @@ def _agree(
     path: Path, axes: list[AxisMap], drive: str, chunk: int, block: int, **kw: object
 ) -> None:
     drives = {a.name: load_drive(drive) for a in axes}
-    whole = check_machine(open_capture(path), axes, drives, **kw)  # type: ignore[arg-type]
-    source = open_stream(str(path), chunk_bytes=chunk)
-    assert source is not None
-    streamed = check_stream(source, axes, drives, block_edges=block, **kw)  # type: ignore[arg-type]
+    whole = engine_check(MemorySource(open_capture(path)), axes, drives, WHOLE, **kw)
+    streamed = engine_check(open_source(str(path), chunk_bytes=chunk), axes, drives, block, **kw)
     assert machine_dict(streamed, 10**6) == machine_dict(whole, 10**6)
 
 

@@ -1,12 +1,12 @@
-"""A streamed report draws the position / step-rate panel from a thinned trace of the steps.
+"""A report draws the position / step-rate panel from a thinned trace of the steps.
 
-The oracle is the whole-capture report's every step (:class:`wavecheck.engine.decode.StepEvents`). On the
-corpus and under hypothesis, at block sizes from one event up: every position point of the
-thinned trace lies on the whole path's position curve, each bucket's range is the whole path's
-range there, every rate point is one of the whole path's (tick, gap) points and each bucket's
-fastest and slowest step are the whole path's over the same bucket, the reversals are counted
-exactly. A capture 16 times longer keeps no more points. The streamed PNG has the whole path's
-panels, the motion titles saying "thinned".
+The oracle is every step, as a step sink collects them (:class:`wavecheck.engine.sinks.StepCollector`,
+:class:`wavecheck.engine.decode.StepEvents`). On the corpus and under hypothesis, at block sizes
+from one event up: every position point of the thinned trace lies on the whole position curve,
+each bucket's range is the whole curve's range there, every rate point is one of the whole
+(tick, gap) points and each bucket's fastest and slowest step are the whole's over the same
+bucket, the reversals are counted exactly. A capture 16 times longer keeps no more points. The
+PNG of a capture cut into blocks has the one-block PNG's panels, word for word.
 """
 
 from __future__ import annotations
@@ -23,17 +23,18 @@ from hypothesis import strategies as st
 
 from tests.conftest import shared_capture
 from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT
-from wavecheck.axes import AxisMap
-from wavecheck.capture.blocks import MemorySource
+from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.axis import check_stream
 from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.options import CheckOptions
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.run import check_source
+from wavecheck.engine.sinks import StepCollector
 from wavecheck.engine.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
-from wavecheck.report.measure_plot import MAX_MARKS
-from wavecheck.report.model import Report
+from wavecheck.report.measurement_plot import MAX_MARKS
 from wavecheck.report.plot import figure
 from wavecheck.timebase import Timebase
 
@@ -101,31 +102,49 @@ def _on_the_curve(trace: StepTrace, s: StepEvents) -> None:
     assert np.array_equal(trace.reversal_ticks, rev[:REVERSALS_KEPT])
 
 
-def _both(cap: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object) -> list[tuple[Report, Report]]:  # fmt: skip
-    whole = check_machine(cap, axes, drives, **kw)  # type: ignore[arg-type]
-    streamed = check_stream(MemorySource(cap, block), axes, drives, block_edges=block, **kw)  # type: ignore[arg-type]
-    return list(zip(whole.axes, streamed.axes, strict=True))
+def _run(
+    cap: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object
+) -> list[tuple[Report, StepEvents]]:
+    """Each axis's report (pictures kept) and every step a sink was given, ``cap`` cut into
+    blocks of about ``block`` edges."""
+    collectors: list[StepCollector] = []
+
+    def sinks(plan: object) -> list[StepCollector]:
+        collectors.append(StepCollector())
+        return [collectors[-1]]
+
+    types = kw.get("step_types") or {}
+    options = CheckOptions(drive=drives, axes=tuple(axes), step_type=types, block_edges=block,  # type: ignore[arg-type]
+                           pictures=True)  # fmt: skip
+    machine = check_source(MemorySource(cap, block), options, step_sinks=sinks)
+    return [(r, c.events()) for r, c in zip(machine.axes, collectors, strict=True)]
+
+
+def _both(cap: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object) -> list[tuple[Report, Report, StepEvents]]:  # fmt: skip
+    """(one block, ``block``-edge blocks, every step) per axis."""
+    whole = _run(cap, axes, drives, WHOLE, **kw)
+    cut = _run(cap, axes, drives, block, **kw)
+    for (_, a), (_, b) in zip(whole, cut, strict=True):
+        assert np.array_equal(a.ticks, b.ticks) and np.array_equal(a.direction, b.direction)
+    return [(w, c, steps) for (w, steps), (c, _) in zip(whole, cut, strict=True)]
 
 
 def _titles(report: Report) -> list[str]:
     return [ax.get_title(loc="left") for ax in figure(report).axes]
 
 
-def _same_panels(whole: Report, streamed: Report) -> None:
-    """The streamed figure has the whole figure's panels; the motion titles say "thinned"."""
+def _same_panels(whole: Report, streamed: Report, steps: StepEvents) -> None:
+    """The figure of the blocks is the one-block figure, panel for panel; the motion titles say
+    "thinned" only when a bucket left steps out."""
     a, b = _titles(whole), _titles(streamed)
-    assert len(a) == len(b)
+    assert a == b
     motion = [k for k, t in enumerate(a) if t.startswith("steps: ")]
-    assert len(motion) == (2 if whole.events().count > 1 else 0)
-    for k, (x, y) in enumerate(zip(a, b, strict=True)):
-        if k not in motion:
-            assert x == y
-        else:
-            assert "thinned" in y and "thinned" not in x
+    assert len(motion) == (2 if steps.count > 1 else 0)
     if motion:
-        assert b[motion[0]] == a[motion[0]] + " — thinned"  # position, reversals
-        assert a[motion[1]] == "steps: instantaneous step rate"
-        assert b[motion[1]] == "steps: step rate — thinned"
+        assert streamed.trace is not None
+        thinned = streamed.trace.thinned
+        assert ("thinned" in b[motion[0]]) == thinned
+        assert b[motion[1]] == "steps: step rate" + (" — thinned" if thinned else "")
 
 
 @pytest.mark.parametrize("block", [1, 7, 10**9])
@@ -133,11 +152,11 @@ def _same_panels(whole: Report, streamed: Report) -> None:
 def test_golden_traces(name: str, drive: str, typ: int | None, block: int) -> None:
     cap = open_capture(GOLDEN / name)
     types = {None: typ} if typ is not None else None
-    for whole, streamed in _both(cap, [AxisMap(None, {})], {None: load_drive(drive)}, block,
-                                 step_types=types):  # fmt: skip
-        assert streamed.trace is not None and whole.trace is None
-        _on_the_curve(streamed.trace, whole.events())
-        _same_panels(whole, streamed)
+    for whole, streamed, steps in _both(cap, [AxisMap(None, {})], {None: load_drive(drive)},
+                                        block, step_types=types):  # fmt: skip
+        assert streamed.trace is not None and whole.trace is not None
+        _on_the_curve(streamed.trace, steps)
+        _same_panels(whole, streamed, steps)
 
 
 @pytest.mark.parametrize("block", [1, 4096])
@@ -147,16 +166,16 @@ def test_real_captures(block: int) -> None:
         (GRBL, [AxisMap(None, {"step": "STEP (Y axis)"})]),  # no DIR: every direction unknown
     ]:
         cap = open_capture(shared_capture(name))
-        (whole, streamed), = _both(cap, axes, {None: load_drive("gecko-g202")}, block)  # fmt: skip
-        assert streamed.trace is not None and whole.events().count > 700
-        _on_the_curve(streamed.trace, whole.events())
-        _same_panels(whole, streamed)
+        (whole, streamed, steps), = _both(cap, axes, {None: load_drive("gecko-g202")}, block)  # fmt: skip
+        assert streamed.trace is not None and steps.count > 700
+        _on_the_curve(streamed.trace, steps)
+        _same_panels(whole, streamed, steps)
 
 
 def test_the_corpus_reverses() -> None:
     """The golden traces above have a reversal to count and mark."""
     cap = open_capture(GOLDEN / "g202-p16-dirhold2-worst.vcd")
-    (whole, streamed), = _both(cap, [AxisMap(None, {})], {None: load_drive("gecko-g202")}, 3)  # fmt: skip
+    (whole, streamed, _), = _both(cap, [AxisMap(None, {})], {None: load_drive("gecko-g202")}, 3)  # fmt: skip
     assert streamed.trace is not None and streamed.trace.reversals > 0
     assert len(streamed.trace.reversal_ticks) == streamed.trace.reversals
 
@@ -235,7 +254,8 @@ def _plot(tmp_path: Path, *args: str) -> bytes:
 
 
 def test_cli_streamed_png_has_the_panel(tmp_path: Path) -> None:
-    """The streamed PNG is as tall as the whole one: the same rows, the panel among them."""
+    """The PNG of a capture checked in many windows is as tall as the one-window PNG: the same
+    rows, the panel among them."""
     from PIL import Image
 
     args = [str(shared_capture(SMOOTHIE)), "--drive", "gecko-g202", "--map", "step=5,dir=6"]
@@ -262,10 +282,14 @@ def test_a_long_capture_keeps_few_points() -> None:
 
     drive = load_drive("gecko-g202")
     got = []
+
+    def _run3(c: Capture, drive: object) -> list[tuple[Report, Report, StepEvents]]:
+        return _both(c, [AxisMap(None, {})], {None: drive}, 1 << 14)
+
     for steps in (20_000, 320_000):
         c = cap(steps)
-        (whole, streamed), = _both(c, [AxisMap(None, {})], {None: drive}, 1 << 14)  # fmt: skip
+        (_, streamed, steps), = _run3(c, drive)  # fmt: skip
         assert streamed.trace is not None
-        _on_the_curve(streamed.trace, whole.events())
+        _on_the_curve(streamed.trace, steps)
         got.append(streamed.trace.buckets)
     assert got[1] <= MAX_BUCKETS and got[0] <= MAX_BUCKETS

@@ -1,11 +1,12 @@
-"""A streamed report draws what the whole-capture report draws, from small windows of the signals.
+"""A report draws from small windows of the signals what every edge would draw.
 
-The oracle is the whole-capture report (every edge in memory). On the corpus captures of the
-streamed engine's tests and at block sizes from one event up, the streamed report gives the same
-``--plot`` places, the same traces in each timing diagram, the same titles (diagrams and
-histograms), the same GTKWave save file (markers, view; the dump path and the streamed note
-aside) and the same neighbouring edges of each marked place. The windows stay bounded when every
-interval fails, and a window cut by its edge cap says so.
+The oracle is the one-block report drawn from every edge of the capture (its windows replaced by
+the whole signals). On the corpus captures of the engine's tests and at block sizes from one event
+up, the report drawn from its windows gives the same ``--plot`` places, the same traces in each
+timing diagram, the same titles (diagrams and histograms), the same GTKWave save file (markers,
+view; the dump path and the windows note aside) and the same neighbouring edges of each marked
+place. The windows stay bounded when every interval fails, and a window cut by its edge cap says
+so.
 """
 
 from __future__ import annotations
@@ -21,18 +22,17 @@ import numpy as np
 import pytest
 
 from tests.conftest import shared_capture
-from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT
-from wavecheck.axes import AxisMap
-from wavecheck.capture.blocks import MemorySource
+from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT, engine_check
+from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.engine.axis import check_stream
-from wavecheck.engine.plan import check_machine
+from wavecheck.engine.interface import build_interface
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.outcome import Report
 from wavecheck.engine.windows import PLACES_PER_RULE, SIDE_EDGES, WindowKeeper
 from wavecheck.report.gtkw import MAX_MARKERS, _neighbours, write_gtkw
-from wavecheck.report.model import Report
 from wavecheck.report.plot import (
     MAX_PLACES,
     choose_places,
@@ -59,7 +59,7 @@ def _gtkw(report: Report, folder: Path) -> str:
     return "\n".join(
         line
         for line in text.splitlines()
-        if not line.startswith(("[dumpfile]", "[savefile]", "[*] streamed check:"))
+        if not line.startswith(("[dumpfile]", "[savefile]", "[*] only "))
     )
 
 
@@ -92,9 +92,14 @@ def _same_drawings(whole: Report, streamed: Report, tmp_path: Path) -> None:
 def _both(
     cap: Capture, axes: list[AxisMap], drives: dict, block: int, **kw: object
 ) -> list[tuple[Report, Report]]:
-    whole = check_machine(cap, axes, drives, **kw)  # type: ignore[arg-type]
-    streamed = check_stream(MemorySource(cap, block), axes, drives, block_edges=block, **kw)  # type: ignore[arg-type]
-    return list(zip(whole.axes, streamed.axes, strict=True))
+    """(the one-block report drawing every edge, the report of ``block``-edge blocks) per axis."""
+    one = engine_check(MemorySource(cap), axes, drives, WHOLE, **kw)
+    streamed = engine_check(MemorySource(cap, block), axes, drives, block, **kw)
+    every = [
+        replace(r, windows=None, interface=build_interface(cap, r.mapping, r.inverted))
+        for r in one.axes
+    ]
+    return list(zip(every, streamed.axes, strict=True))
 
 
 @pytest.mark.parametrize("block", [1, 2, 7, 64, 10**9])
@@ -157,16 +162,16 @@ def _cli(tmp_path: Path, capture: Path, *args: str) -> tuple[str, str, str]:
 def test_cli_streams_plot_gtkw_and_html(tmp_path: Path) -> None:
     sr = shared_capture(SMOOTHIE)
     args = ["--drive", "gecko-g202", "--map", "step=5,dir=6"]
-    gw, hw, pw = _cli(tmp_path / "w", sr, *args, "--no-stream")
+    gw, hw, pw = _cli(tmp_path / "w", sr, *args, "--no-stream")  # one window
+    whole_vcd = (tmp_path / "w" / "w.vcd").read_text()
+    assert "window(s) around the worst places hold edges" in whole_vcd.splitlines()[0]
     for block in ("1", "262144"):
         gs, hs, ps = _cli(tmp_path / block, sr, *args, "--block-edges", block)
-        assert "[*] streamed check: only" in gs and "streamed check" not in gw
-        strip = re.compile(r"^\[(dumpfile|savefile)\].*$|^\[\*\] streamed check:.*\n", re.M)
+        strip = re.compile(r"^\[(dumpfile|savefile)\].*$", re.M)
         assert strip.sub("", gs) == strip.sub("", gw)
         assert hs == hw and ps == pw == "89504e470d0a1a0a"  # the same page; a PNG each
         vcd = (tmp_path / block / "w.vcd").read_text()
-        assert "streamed check: only" in vcd.splitlines()[0]
-        assert len(vcd) < len((tmp_path / "w" / "w.vcd").read_text()) / 3
+        assert vcd.splitlines()[1:] == whole_vcd.splitlines()[1:]
 
 
 # -- bounded memory -------------------------------------------------------------------------------
@@ -198,8 +203,8 @@ def _peak(
         peak[:] = [max(x, y) for x, y in zip(peak, _held(self), strict=True)]
 
     monkeypatch.setattr(WindowKeeper, "update", watched)
-    report = check_stream(MemorySource(cap, block), [AxisMap(None, {})], {None: drive},
-                          block_edges=block).axes[0]  # fmt: skip
+    report = engine_check(MemorySource(cap, block), [AxisMap(None, {})], {None: drive},
+                          block).axes[0]  # fmt: skip
     assert report.rule("step_high").violations == len(cap.channels[0].edges) // 2  # type: ignore[union-attr]
     return peak[0], peak[1]
 

@@ -9,17 +9,22 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.engine_probe import FullRule
 from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.results import RuleResult
 from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS, Histogram, evaluate
 from wavecheck.timebase import Timebase
 
 
-def _ev(measured_ticks: list[int], limit_ns, tick_ns=1, res_ns=0):
+def _ev(measured_ticks: list[int], limit_ns, tick_ns=1, res_ns=0) -> FullRule:
+    """The intervals judged (:func:`evaluate`) and merged into the rule's result, as the engine
+    does with one window."""
     start = np.arange(len(measured_ticks), dtype=np.int64) * 10**6
     iv = Intervals(start, start + np.asarray(measured_ticks, dtype=np.int64))
-    return evaluate(
-        "step_high", iv, Fraction(limit_ns), Timebase(Fraction(tick_ns) / 10**9), Fraction(res_ns)
-    )
+    tb = Timebase(Fraction(tick_ns) / 10**9)
+    result = RuleResult("step_high", Fraction(limit_ns), None, tb, Fraction(res_ns))
+    result.add(evaluate("step_high", iv, Fraction(limit_ns), tb, Fraction(res_ns)), start[:0])
+    return FullRule(result, iv)
 
 
 def test_exactly_at_the_minimum_passes_one_tick_shorter_fails() -> None:

@@ -12,6 +12,8 @@ import pytest
 from lxml import etree
 
 import wavecheck
+from tests.engine_probe import run_check
+from wavecheck.capture.open import open_capture
 from wavecheck.linuxcnc.config import LinuxCNCConfig
 from wavecheck.report.html import render_html
 from wavecheck.report.json import report_dict
@@ -28,10 +30,7 @@ GOOD = REPO / "captures/golden/g202-p16-dirhold2-worst.vcd"
 def _check(period_ns: int, dirhold_ns: int, latency: str | None) -> wavecheck.Report:
     cfg = LinuxCNCConfig(base_period_ns=period_ns, params={"dirhold": dirhold_ns})
     j = None if latency is None else time_ns(latency)
-    capture_report = wavecheck.check(GOOD, "gecko-g202")
-    return wavecheck.run_check(
-        capture_report.capture, capture_report.drive, stepgen=cfg, latency_ns=j
-    )
+    return run_check(open_capture(GOOD), "gecko-g202", stepgen=cfg, latency_ns=j).report
 
 
 def test_report_carries_the_configured_rates_and_their_settings() -> None:

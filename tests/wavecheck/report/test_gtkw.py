@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import write_vcd
+from tests.engine_probe import run_check
 from tests.wavecheck.report.traces import stepgen_trace, write_stepgen_vcd
 from tests.wavecheck.waves import capture, g202
 from wavecheck.capture.open import open_capture
-from wavecheck.engine.plan import run_check
 from wavecheck.report import gtkw
 from wavecheck.report.gtkw import WAVE_PIXELS, WINDOW_SIZE, vcd_timescale, view_of, write_gtkw
 from wavecheck.report.plot import Place
@@ -25,7 +25,7 @@ def _markers(text: str) -> list[int]:
 
 def test_vcd_capture_is_opened_as_is(tmp_path: Path) -> None:
     vcd = write_stepgen_vcd(tmp_path / "run.vcd")
-    report = run_check(open_capture(vcd), g202())
+    report = run_check(open_capture(vcd), g202(), pictures=True)
     out = tmp_path / "run.gtkw"
     assert write_gtkw(report, out) is None
     text = out.read_text()
@@ -41,7 +41,7 @@ def test_markers_follow_the_vcd_time_unit(tmp_path: Path) -> None:
     trace = stepgen_trace()
     ten_ns = {k: (init, [t // 10 for t in edges]) for k, (init, edges) in trace.items()}
     vcd = write_vcd(tmp_path / "run.vcd", ten_ns, timescale="10 ns")
-    report = run_check(open_capture(vcd), g202())
+    report = run_check(open_capture(vcd), g202(), pictures=True)
     out = tmp_path / "run.gtkw"
     write_gtkw(report, out)
     # GTKWave counts in the unit (ns), not in timescale steps
@@ -52,7 +52,7 @@ def test_non_vcd_capture_gets_a_vcd_beside_the_save_file(tmp_path: Path) -> None
     vcd = write_stepgen_vcd(tmp_path / "src.vcd")
     cap = open_capture(vcd)
     cap.format = "sr"  # as if read from a .sr: the save file cannot open it directly
-    report = run_check(cap, g202(), {"step": "STEP", "dir": "DIR"}, invert=["step"])
+    report = run_check(cap, g202(), {"step": "STEP", "dir": "DIR"}, invert=["step"], pictures=True)
     out = tmp_path / "out" / "run.gtkw"
     out.parent.mkdir()
     written = write_gtkw(report, out)
@@ -60,12 +60,19 @@ def test_non_vcd_capture_gets_a_vcd_beside_the_save_file(tmp_path: Path) -> None
     text = out.read_text()
     assert f'[dumpfile] "{written}"' in text
     assert re.search(r"^@68\n\+\{STEP\} wavecheck\.step$", text, re.M)  # 0x40 = invert
-    # the VCD written holds the raw channels: reading it back gives the same edges
+    # the VCD written holds the raw channels of the windows kept around the worst places:
+    # reading it back gives their edges (inside a window, the capture's own)
     back = open_capture(written)
     assert [c.name for c in back.channels] == ["step", "dir"]
-    for ch, orig in zip(back.channels, (cap.channel("STEP"), cap.channel("DIR")), strict=True):
-        assert ch.initial == orig.initial
-        assert list(ch.edges) == list(orig.edges)
+    assert report.windows is not None
+    for ch, role in zip(back.channels, ("step", "dir"), strict=True):
+        kept = report.windows.signals[role]
+        assert ch.initial == kept.initial ^ int(kept.inverted)
+        assert list(ch.edges) == list(kept.edges)
+        whole = set(cap.channel(kept.channel).edges.tolist())
+        # an edge that is not the capture's joins two windows: one tick before the next one's
+        joins = set(kept.edges.tolist()) - whole
+        assert len(kept.edges) > len(joins) and all(t + 1 in whole for t in joins)
     assert sorted(p.name for p in out.parent.iterdir()) == ["run.gtkw", "run.vcd"]
 
 
@@ -78,13 +85,15 @@ def test_sr_like_capture_at_2mhz(tmp_path: Path) -> None:
         resolution_ticks=1,
     )
     cap.format = "sr"
-    report = run_check(cap, g202())
+    report = run_check(cap, g202(), pictures=True)
     out = tmp_path / "run.gtkw"
     vcd = write_gtkw(report, out)
     assert vcd is not None and "$timescale 100 ns $end" in vcd.read_text()
     assert _markers(out.read_text()) == [500 * v.start_tick for v in report.violations()]
     back = open_capture(vcd)
-    assert list(back.channel("step").edges) == [5 * t for t in cap.channel("STEP").edges]
+    assert report.windows is not None
+    kept = report.windows.signals["step"].edges
+    assert list(back.channel("step").edges) == [5 * t for t in kept]
 
 
 def test_vcd_timescale() -> None:
@@ -104,7 +113,7 @@ def test_markers_go_to_distinct_times(tmp_path: Path, monkeypatch: pytest.Monkey
     # places that share a time (repeated identical violations) get one marker; the next
     # distinct place takes the next letter
     vcd = write_stepgen_vcd(tmp_path / "run.vcd")
-    report = run_check(open_capture(vcd), g202())
+    report = run_check(open_capture(vcd), g202(), pictures=True)
     v = report.violations()
     place = [Place(x.rule, x.start_tick, x.end_tick, x.measured_ns, x.limit_ns, True) for x in v]
     repeated = [place[0], place[0], place[1], place[0], place[1], place[2]]
@@ -118,7 +127,7 @@ def test_markers_go_to_distinct_times(tmp_path: Path, monkeypatch: pytest.Monkey
 
 def test_save_file_sets_the_window_and_shows_the_worst_interval(tmp_path: Path) -> None:
     vcd = write_stepgen_vcd(tmp_path / "run.vcd")
-    report = run_check(open_capture(vcd), g202())
+    report = run_check(open_capture(vcd), g202(), pictures=True)
     out = tmp_path / "run.gtkw"
     write_gtkw(report, out)
     text = out.read_text()
@@ -147,8 +156,9 @@ def test_a_state_change_is_shown_with_its_neighbouring_edges(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     vcd = write_stepgen_vcd(tmp_path / "run.vcd")
-    report = run_check(open_capture(vcd), g202())
-    step = list(report.interface.signals["step"].edges)
+    cap = open_capture(vcd)
+    report = run_check(cap, g202(), pictures=True)
+    step = list(cap.channel(report.mapping["step"]).edges)
     tick = step[10]
     place = Place("state_sequence", tick, tick, None, None, True, "state 1 → 3")
     monkeypatch.setattr(gtkw, "choose_places", lambda report, n: [place])

@@ -21,8 +21,8 @@ from tests.conftest import shared_capture, write_vcd
 from tests.wavecheck.report.traces import stepgen_trace
 from wavecheck import check
 from wavecheck.cli import main
+from wavecheck.engine.outcome import Report
 from wavecheck.report.gtkw import write_gtkw
-from wavecheck.report.model import Report
 
 REPO = Path(__file__).resolve().parents[3]
 LETTERS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ"

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from wavecheck.engine.outcome import Report
 from wavecheck.report.html import render_html, write_html
-from wavecheck.report.model import Report
 
 
 def test_self_contained(failing_report: Report) -> None:

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, pulses
-from wavecheck.engine.plan import run_check
+from wavecheck.engine.outcome import Report
 from wavecheck.report.junit import Unreadable, classname, render_junit
-from wavecheck.report.model import Report
 
 XSD = Path(__file__).resolve().parents[2] / "data" / "junit-10.xsd"
 

@@ -6,8 +6,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from wavecheck.engine.decode import StepEvents
-from wavecheck.report.measure_plot import draw_motion
+from wavecheck.engine.trace import StepTrace
+from wavecheck.report.measurement_plot import draw_motion
 from wavecheck.timebase import Timebase
 
 
@@ -15,10 +15,11 @@ def test_reversals_are_marked_on_both_panels() -> None:
     from matplotlib.figure import Figure
 
     d = np.array([1, 1, 1, -1, -1, 0, 1, 1], dtype=np.int8)
-    steps = StepEvents(np.arange(8, dtype=np.int64) * 1000, d, np.cumsum(d, dtype=np.int64))
+    trace = StepTrace()
+    trace.add(np.arange(8, dtype=np.int64) * 1000, d)
     fig = Figure()
     pos, rate = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
-    draw_motion(pos, rate, steps, Timebase(Fraction(1, 10**6)), "x")
+    draw_motion(pos, rate, trace, Timebase(Fraction(1, 10**6)), "x")
     assert pos.get_title(loc="left") == "x: position, 2 reversal(s)"
     for ax in (pos, rate):
         marks = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError
-from wavecheck.report.model import Report
 from wavecheck.report.plot import choose_places, render_png, write_plot
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
+from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.engine.plan import run_check
 from wavecheck.report import overall_verdict, render_json, render_text, report_dict
 
 US = 1000

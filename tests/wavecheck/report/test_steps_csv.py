@@ -12,11 +12,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 from wavecheck.cli import main
 from wavecheck.drives.library import load_drive
 from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.plan import run_check
 from wavecheck.report.steps_csv import (
     AxisSteps,
     decimal_digits,

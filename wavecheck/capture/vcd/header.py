@@ -38,6 +38,8 @@ __all__ = [
     "read_header",
     "resolution_of",
     "stated_samplerate",
+    "vector_of",
+    "vectors_of",
 ]
 
 _MAX_HEADER_BYTES = 64 << 20
@@ -479,19 +481,25 @@ def header_timebase(header: VcdHeader, notes: list[str]) -> Timebase:
 _RANGE = re.compile(r"^(.*?)\s*\[\s*(-?\d+)\s*:\s*(-?\d+)\s*\]$")
 
 
+def vector_of(d: VarDecl) -> Vector | None:
+    """The bit vector ``d`` declares (a wire or reg wider than 1 bit), named by its full name
+    without the range (``tb.stout`` for ``stout [3:0]``) with its declared range; None for
+    anything else."""
+    if d.size <= 1 or d.type in _NON_SIGNAL_TYPES or d.type in _NOT_VECTORS:
+        return None
+    m = _RANGE.match(d.full_name)
+    if m and abs(int(m.group(2)) - int(m.group(3))) + 1 == d.size:
+        return Vector(d.size, int(m.group(2)), int(m.group(3)), m.group(1))
+    return Vector(d.size, d.size - 1, 0, d.full_name)
+
+
 def vectors_of(header: VcdHeader) -> dict[str, Vector]:
-    """The header's bit vectors (wires and regs wider than 1 bit) by full name without the
-    range (``tb.stout`` for ``stout [3:0]``), with their declared ranges."""
+    """The header's bit vectors by name (:func:`vector_of`)."""
     out: dict[str, Vector] = {}
     for d in header.vars:
-        if d.size <= 1 or d.type in _NON_SIGNAL_TYPES or d.type in _NOT_VECTORS:
-            continue
-        m = _RANGE.match(d.full_name)
-        if m and abs(int(m.group(2)) - int(m.group(3))) + 1 == d.size:
-            base, msb, lsb = m.group(1), int(m.group(2)), int(m.group(3))
-        else:
-            base, msb, lsb = d.full_name, d.size - 1, 0
-        out.setdefault(base, Vector(d.size, msb, lsb, base))
+        v = vector_of(d)
+        if v is not None:
+            out.setdefault(v.key, v)
     return out
 
 

@@ -37,13 +37,14 @@ import contextlib
 import os
 import re
 from collections.abc import Iterable, Iterator
+from dataclasses import replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.edges import NEVER, Capture
+from wavecheck.capture.edges import NEVER, Capture, Channel, Vector
 from wavecheck.capture.vcd.header import (
     SignalEdges,
     build_capture,
@@ -51,6 +52,7 @@ from wavecheck.capture.vcd.header import (
     layout_of,
     open_vcd,
     read_header,
+    vector_of,
     vectors_of,
 )
 from wavecheck.errors import CaptureError, UsageError
@@ -239,10 +241,16 @@ def _ends(starts: npt.NDArray[np.int64], back: npt.NDArray[np.int64]) -> npt.NDA
 
 
 class _IdMap:
-    """Maps id-code tokens to channel numbers (−2 = a skipped vector/real, −1 = unknown)."""
+    """Maps id-code tokens to channel numbers (−2 = a skipped vector/real, −1 = unknown,
+    −3 − k = vector ``k`` of the bits read: :class:`_BitPlan`)."""
 
-    def __init__(self, ids: list[str], vector_ids: set[str]) -> None:
-        allid = [(c, i) for i, c in enumerate(ids)] + [(c, -2) for c in vector_ids]
+    def __init__(
+        self, ids: list[str], vector_ids: set[str], wanted: dict[str, int] | None = None
+    ) -> None:
+        wanted = wanted or {}
+        allid = [(c, i) for i, c in enumerate(ids)] + [
+            (c, -3 - wanted[c] if c in wanted else -2) for c in vector_ids
+        ]
         self.maxlen = max((len(c.encode("latin-1")) for c, _ in allid), default=1)
         if self.maxlen == 1:
             self.lut = np.full(256, -1, dtype=np.int32)
@@ -292,9 +300,11 @@ class _Body:
         line0: int,
         offset0: int,
         source: BinaryIO | None = None,
+        bits: list[list[tuple[int, int]]] | None = None,
     ) -> None:
         self.path = path
         self.idmap = idmap
+        self.bits = bits or []  # per vector read: (bit position from the right, channel)
         self.builder = builder
         self.offset0 = offset0  # file offset of the next buffer
         # Line numbers are for messages only: with a seekable ``source`` they are counted when
@@ -414,6 +424,13 @@ class _Body:
                 j = int(vi[np.flatnonzero(vsig == -1)[0]])
                 code = buf[starts[j] : min(ends[j], starts[j] + 30)].decode("latin-1")
                 raise self.error(buf, int(starts[j]), f"unknown id code {code!r}")
+            if self.bits and (vsig <= -3).any():  # bits of vectors mapped as channels
+                bi, bs, bv = self._bit_changes(a, starts, ends, vi[vsig <= -3], vsig[vsig <= -3])
+                merged = np.concatenate([sc, bi])
+                order = np.argsort(merged, kind="stable")
+                sc = merged[order]
+                sig = np.concatenate([sig, bs])[order]
+                val = np.concatenate([val, bv])[order]
             onebit = vsig >= 0
             if onebit.any():  # "b1 !" on a 1-bit signal is a scalar change
                 vi, vs = vi[onebit], vsig[onebit]
@@ -454,6 +471,43 @@ class _Body:
             self.time = int(tvals[-1])
         self._emit(sig.astype(np.int32, copy=False), times, val, final)
         return consumed
+
+    def _bit_changes(
+        self,
+        a: npt.NDArray[np.uint8],
+        starts: npt.NDArray[np.int64],
+        ends: npt.NDArray[np.int64],
+        vi: npt.NDArray[np.int64],
+        code: npt.NDArray[np.int32],
+    ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int32], npt.NDArray[np.int8]]:
+        """The changes of the bits read from vector value tokens: each id token ``vi`` (its
+        value ``bVALUE`` just before it) of vector ``-3 - code``, as (token index, channel,
+        value code). A value shorter than the vector is extended on the left with its first
+        digit when that is x/z, else with 0 (IEEE 1364's rule)."""
+        first_digit = starts[vi - 1] + 1
+        end = ends[vi - 1]
+        length = end - first_digit
+        lead = a[np.minimum(first_digit, len(a) - 1)] | 0x20
+        pad = np.where((length > 0) & ((lead == ord("x")) | (lead == ord("z"))), lead, ord("0"))
+        tok, chan, vals = [], [], []
+        for k, plan in enumerate(self.bits):
+            sel = np.flatnonzero(code == -3 - k)
+            if not len(sel):
+                continue
+            for pos, channel in plan:
+                inside = length[sel] > pos
+                ch = np.where(inside, a[np.maximum(end[sel] - 1 - pos, 0)], pad[sel])
+                tok.append(vi[sel])
+                chan.append(np.full(len(sel), channel, np.int32))
+                vals.append(_VALUE[ch.astype(np.uint8)])
+        if not tok:
+            z = np.zeros(0, np.int64)
+            return z, np.zeros(0, np.int32), np.zeros(0, np.int8)
+        v = np.concatenate(vals)
+        if (v < 0).any():
+            j = int(np.concatenate(tok)[np.flatnonzero(v < 0)[0]]) - 1
+            raise self.error(bytes(a), int(starts[j]), "bad digit in a vector value")
+        return np.concatenate(tok), np.concatenate(chan), v
 
     def _timestamps(
         self,
@@ -660,7 +714,11 @@ class VcdBlocks:
     """A VCD read block by block (:class:`wavecheck.capture.blocks.BlockSource`): after each
     chunk of text, the edges of ``channels`` (indices; None: every one) and every channel's
     levels becoming known and x/z stretches; the other channels are only counted. The same
-    tokenizer and edge builder as :func:`read_vcd` (same arguments)."""
+    tokenizer and edge builder as :func:`read_vcd` (same arguments).
+
+    A bit of a vector mapped as a channel (:meth:`Capture.bit` on the skeleton: ``stout[3]``)
+    becomes a channel numbered after the file's, its edges read from the vector's value changes
+    in the same pass (before :meth:`blocks`)."""
 
     def __init__(
         self,
@@ -688,10 +746,14 @@ class VcdBlocks:
         self.last_time: int | None = None
         self.pre_time = False
         self.builder = _EdgeBuilder(n)
+        self.vectors = vectors_of(self.header)
+        self.bit_ids: dict[str, int] = {}  # id code -> vector number among those read
+        self.bit_plan: list[list[tuple[int, int]]] = []  # per vector: (position, channel)
+        self.bit_channels: list[Channel] = []
         self.skeleton = self._assemble(0, 0, end=False)
 
     def want(self, channels: Iterable[int]) -> None:
-        """Extract the edges of ``channels`` only (before :meth:`blocks`)."""
+        """Extract the edges of ``channels`` only (from the next block on)."""
         self.wanted = set(channels)
 
     def _assemble(self, first: int | None, last: int | None, end: bool = True) -> Capture:
@@ -708,26 +770,68 @@ class VcdBlocks:
             else SignalEdges(
                 0, 0, np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
             )
-            for i in range(b.nsig)
+            for i in range(len(self.lay.ids))
         ]
         cap = build_capture(
             self.path, self.header, self.lay, self.tb, sigs, first, last, self.pre_time,
             list(self.notes), self.samplerate, self.resolution_s,
         )  # fmt: skip
-        for ch, k in zip(cap.channels, self.counts, strict=True):
+        for ch, k in zip(cap.channels, self.counts, strict=False):
             ch.counted = k
+        cap.vectors = dict(self.vectors)
+        cap.bit_reader = self._bit
+        b = self.builder
+        for ch in self.bit_channels:
+            i = ch.index
+            known = end and i < b.nsig and b.last_known[i] >= 0
+            cap.channels.append(
+                replace(
+                    ch,
+                    initial=int(b.initial[i]) if known else 0,
+                    known_from=int(b.known_from[i]) if known else 0,
+                    never_known=end and not known,
+                    counted=self.counts[i] if i < len(self.counts) else 0,
+                )
+            )
         return cap
+
+    def _bit(self, key: str, vec: Vector, bit: int) -> Channel:
+        """Bit ``bit`` (declared index) of vector ``key`` as a new channel, read in the pass."""
+        pos = vec.position(bit)
+        if pos is None:
+            raise UsageError(
+                f"{self.path}: {key}{vec.range_text} has no bit {bit} "
+                f"(bits {min(vec.msb, vec.lsb)} to {max(vec.msb, vec.lsb)})"
+            )
+        ids = {
+            d.id_code for d in self.header.vars if (v := vector_of(d)) is not None and v.key == key
+        }
+        ids &= self.lay.vector_ids
+        if not ids:
+            raise UsageError(f"{self.path}: vector {key!r} has no value changes to read")
+        k = next((self.bit_ids[c] for c in ids if c in self.bit_ids), len(self.bit_plan))
+        if k == len(self.bit_plan):
+            self.bit_plan.append([])
+            self.bit_ids.update(dict.fromkeys(ids, k))
+        index = len(self.lay.ids) + len(self.bit_channels)
+        self.bit_plan[k].append((pos, index))
+        self.wanted.add(index)
+        self.counts.append(0)
+        ch = Channel(f"{key}[{bit}]", index, 0, np.zeros(0, np.int64), counted=0)
+        self.bit_channels.append(ch)
+        return ch
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each chunk of text (the changes of its last timestamp held back)."""
         from wavecheck.capture.blocks import EdgeBlock
 
-        b = self.builder
+        b = self.builder = _EdgeBuilder(len(self.lay.ids) + len(self.bit_channels))
         with open_vcd(self.path) as f:
             _, rest = read_header(self.path, f)
             body = _Body(
-                self.path, _IdMap(self.lay.ids, self.lay.vector_ids), b,
+                self.path, _IdMap(self.lay.ids, self.lay.vector_ids, self.bit_ids), b,
                 self.header.body_line, self.header.body_offset, f if f.seekable() else None,
+                self.bit_plan,
             )  # fmt: skip
             known = np.zeros(b.nsig, dtype=bool)
             started = False

@@ -4,7 +4,8 @@ Per axis, position (steps) and instantaneous step rate (1 / the time since the p
 against time, with every reversal marked by a dashed line — the picture to hold against the
 G-code. Then, per axis, one histogram per interval kind measured (no limit: ``measure`` has no
 drive), the shortest and the median marked. matplotlib is imported lazily with the Agg backend;
-long captures are thinned for drawing only (every figure in the text and JSON is from all steps).
+long captures are thinned for drawing only (every figure in the text and JSON is from all steps;
+:func:`draw_motion` is also the motion panel of ``check --plot``).
 """
 
 from __future__ import annotations
@@ -15,18 +16,19 @@ import os
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
-from wavecheck.engine.decode import StepEvents
-from wavecheck.measure import AxisMeasurement, IntervalStats, Measurement
+from wavecheck.engine.trace import StepTrace
+from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
 from wavecheck.timebase import Timebase
+from wavecheck.units import format_ns
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 __all__ = ["draw_motion", "render_measure_png"]
 
-#: Points drawn per curve at most (every k-th step beyond it).
-MAX_POINTS = 20_000
+
 #: Reversals marked at most per panel.
 MAX_MARKS = 200
 _LINE = "#1f3b73"
@@ -40,32 +42,55 @@ def _style(ax: Axes) -> None:
 
 
 def draw_motion(
-    ax_pos: Axes, ax_rate: Axes, steps: StepEvents, timebase: Timebase, title: str
+    ax_pos: Axes, ax_rate: Axes, trace: StepTrace, timebase: Timebase, title: str
 ) -> None:
-    """Position and step rate of ``steps`` against time (s) on two axes, reversals marked."""
-    t = timebase.ns_array(steps.ticks) / 1e9
-    stride = max(1, math.ceil(len(t) / MAX_POINTS))
-    ax_pos.plot(t[::stride], steps.position[::stride], drawstyle="steps-post", color=_LINE, lw=1)
-    gaps = np.diff(steps.ticks)
-    ok = gaps > 0
-    rate = float(timebase.samplerate_hz) / gaps[ok]
-    ax_rate.plot(
-        t[1:][ok][::stride], rate[::stride], ".", ms=2 if len(rate) > 1000 else 5, color=_LINE
-    )
+    """Position and step rate of an axis's steps against time (s) on two axes, reversals marked,
+    from its step trace (:mod:`wavecheck.engine.trace`): every step when it holds them all, else
+    the position through each bucket's first and last step over the range it reached and each
+    bucket's fastest and slowest step (the titles then say "thinned")."""
+    from matplotlib.collections import PolyCollection
+
+    def sec(ticks: npt.NDArray[np.int64]) -> Any:
+        return timebase.ns_array(ticks) / 1e9
+
+    start, low, high = trace.envelope()
+    bucket = format_ns(trace.width * timebase.tick_ns)
+    if trace.thinned:
+        x0, width = sec(start), float(trace.width * timebase.tick_ns) / 1e9
+        boxes = [
+            [(a, lo), (a + width, lo), (a + width, hi), (a, hi)]
+            for a, lo, hi in zip(x0.tolist(), low.tolist(), high.tolist(), strict=True)
+        ]
+        ax_pos.add_collection(PolyCollection(boxes, facecolors=_LINE, alpha=0.2, lw=0))
+    t, p = trace.position_points()
+    ax_pos.plot(sec(t), p, drawstyle="steps-post", color=_LINE, lw=1)
+    t, gap = trace.rate_points()
+    rate = float(timebase.samplerate_hz) / gap
+    ms = 2 if len(rate) > 1000 else 5
+    ax_rate.plot(sec(t), rate, ".", ms=ms, color=_LINE)
     if len(rate) and rate.max() / max(rate.min(), 1e-12) > 100:
         ax_rate.set_yscale("log")
-    known = steps.direction != 0
-    d, tk = steps.direction[known], t[known]
-    rev = tk[1:][d[1:] != d[:-1]]
     for ax in (ax_pos, ax_rate):
-        for x in rev[:MAX_MARKS]:
+        for x in sec(trace.reversal_ticks[:MAX_MARKS]).tolist():
             ax.axvline(x, color=_MARK, lw=0.8, ls="--", alpha=0.7)
-        ax.set_xlabel("time (s)", fontsize=8.5)
         _style(ax)
-    extra = f" (first {MAX_MARKS} marked)" if len(rev) > MAX_MARKS else ""
-    ax_pos.set_title(f"{title}: position, {len(rev)} reversal(s){extra}", fontsize=9, loc="left")
+    extra = f" (first {MAX_MARKS} marked)" if trace.reversals > MAX_MARKS else ""
+    thin = " — thinned" if trace.thinned else ""
+    ax_pos.set_title(
+        f"{title}: position, {trace.reversals} reversal(s){extra}{thin}", fontsize=9, loc="left"
+    )
+    ax_pos.set_xlabel(
+        f"time (s); {len(p):,} points of {trace.count:,} steps, range per {bucket} shaded"
+        if trace.thinned
+        else f"time (s); every one of {trace.count:,} steps",
+        fontsize=8.5,
+    )
     ax_pos.set_ylabel("position (steps)", fontsize=8.5)
-    ax_rate.set_title(f"{title}: instantaneous step rate", fontsize=9, loc="left")
+    ax_rate.set_title(f"{title}: step rate{thin}", fontsize=9, loc="left")
+    ax_rate.set_xlabel(
+        f"time (s); fastest and slowest step per {bucket}" if trace.thinned else "time (s)",
+        fontsize=8.5,
+    )
     ax_rate.set_ylabel("step rate (Hz)", fontsize=8.5)
 
 
@@ -76,8 +101,9 @@ def _time_label(v: float, _pos: object = None) -> str:
     return "0" if v == 0 else format_time(v / 1e9, 3)
 
 
-def _draw_histogram(ax: Axes, s: IntervalStats, values: Any, title: str) -> None:
-    ns = values * float(s.timebase.tick_ns)
+def _draw_histogram(ax: Axes, s: IntervalStats, distribution: tuple[Any, Any], title: str) -> None:
+    lengths, counts_of = distribution
+    ns = lengths * float(s.timebase.tick_ns)
     lo, hi = float(ns.min()), float(ns.max())
     if lo > 0 and hi / lo > 50:
         bins: Any = np.logspace(math.log10(lo * 0.8), math.log10(hi * 1.25), 60)
@@ -85,16 +111,17 @@ def _draw_histogram(ax: Axes, s: IntervalStats, values: Any, title: str) -> None
     else:
         pad = (hi - lo) * 0.08 or max(abs(lo), 1.0) * 0.1
         bins = np.linspace(lo - pad, hi + pad, 60)
-    ax.hist(ns, bins=bins, color="#5b7db1")
-    counts, _ = np.histogram(ns, bins=bins)
+    ax.hist(ns, bins=bins, weights=counts_of, color="#5b7db1")
+    counts, _ = np.histogram(ns, bins=bins, weights=counts_of)
     if counts.max(initial=0) > 50:
         ax.set_yscale("log")
         ax.set_ylim(bottom=0.7)
     assert s.min_ns is not None
-    ax.axvline(float(s.min_ns), color=_MARK, lw=1.2, ls="--")
+    ax.axvline(float(s.min_ns), color=_MARK, lw=1.2, ls="--", label="shortest")
     med = s.percentile_ns(50)
     if med is not None:
-        ax.axvline(float(med), color="#27ae60", lw=1.0, ls=":")
+        ax.axvline(float(med), color="#27ae60", lw=1.0, ls=":", label="median")
+    ax.legend(fontsize=7.5, frameon=False, loc="upper right")
     from wavecheck.units import format_ns
 
     ax.set_title(
@@ -129,13 +156,13 @@ def render_measure_png(m: Measurement, dpi: int = 110) -> bytes:
     tb = m.capture.timebase
     for k, a in enumerate(m.axes):
         name = "axis" if a.name is None else f"axis {a.name}"
-        draw_motion(fig.add_subplot(grid[k, 0]), fig.add_subplot(grid[k, 1]), a.steps, tb, name)
+        draw_motion(fig.add_subplot(grid[k, 0]), fig.add_subplot(grid[k, 1]), a.trace, tb, name)
     several = len(m.axes) > 1
     for k, (a, s) in enumerate(hists):
         row, col = divmod(k, 2)
         span = slice(None) if k == len(hists) - 1 and col == 0 else col
         ax = fig.add_subplot(grid[len(m.axes) + row, span])
-        _draw_histogram(ax, s, a.intervals[s.rule].measured, f"{a.name} " if several else "")
+        _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     return buf.getvalue()

@@ -25,7 +25,7 @@ import os
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.measure import PERCENTILES, AxisMeasurement, IntervalStats, Measurement
+from wavecheck.measurement import PERCENTILES, AxisMeasurement, IntervalStats, Measurement
 from wavecheck.output import atomic_write
 from wavecheck.units import format_ns, format_rate, format_time, json_number
 
@@ -72,8 +72,8 @@ def _axis_head(a: AxisMeasurement) -> list[str]:
     steps = a.steps
     pos = steps.final_position
     tb = a.interface.capture.timebase
-    rev = len(a.reversals)
-    first = f" (first at {_at(tb.seconds(int(a.reversals[0])))})" if rev else ""
+    rev = a.reversals
+    first = f" (first at {_at(tb.seconds(int(a.reversal_ticks[0])))})" if rev else ""
     lines = [
         f"{label}: {mapping}{inv}; step type {st.number} ({st.kind}); active edge "
         f"{a.active_edge}"
@@ -185,9 +185,9 @@ def _axis_dict(a: AxisMeasurement) -> dict[str, Any]:
             "reverse": steps.reverse,
             "unknown": steps.unknown,
             "final_position": steps.final_position,
-            "reversals": int(len(a.reversals)),
+            "reversals": a.reversals,
             "reversals_at_s": [
-                json_number(tb.seconds(int(t))) for t in a.reversals[:MAX_REVERSALS].tolist()
+                json_number(tb.seconds(int(t))) for t in a.reversal_ticks[:MAX_REVERSALS].tolist()
             ],
             "sequence_errors": a.sequence_errors,
         },

@@ -17,7 +17,15 @@ from dataclasses import dataclass, field
 from wavecheck.engine.interface import parse_map, role_name
 from wavecheck.errors import UsageError
 
-__all__ = ["AxisMap", "axes_from_tables", "parse_axes", "per_axis", "split_invert"]
+__all__ = [
+    "AxisMap",
+    "axes_from_tables",
+    "check_axis_names",
+    "parse_axes",
+    "per_axis",
+    "split_invert",
+    "split_per_axis",
+]
 
 _AXIS = re.compile(r"^[A-Za-z0-9_-]+$")
 #: Roles one line may serve for several axes.
@@ -197,6 +205,43 @@ def per_axis(
         if value is not None:
             out[a] = value
     return out
+
+
+def split_per_axis(values: Sequence[str] | str | None, option: str) -> dict[str | None, str]:
+    """``--drive ID`` / ``--drive x=ID`` values → axis (None: every axis not named) → value, by
+    their syntax alone (the axes are checked when they are known: :func:`check_axis_names`);
+    a later value for the same axis wins, as argparse's usual repeat."""
+    if values is None:
+        return {}
+    if isinstance(values, str):
+        values = [values]
+    out: dict[str | None, str] = {}
+    for v in values:
+        axis, sep, rest = v.partition("=")
+        if sep and _AXIS.match(axis):
+            if not rest:
+                raise UsageError(f"{option} {v}: give a value after {axis}=")
+            out[axis] = rest
+        else:
+            out[None] = v
+    return out
+
+
+def check_axis_names(given: Mapping[str, Iterable[str | None]], axes: Sequence[str | None]) -> None:
+    """Refuse a per-axis value for an axis that is not mapped (``given``: option → the axes it
+    names).
+
+    Raises:
+        UsageError: ``--drive z=…`` where no axis z is mapped.
+    """
+    known = {a for a in axes if a is not None}
+    for option, names in given.items():
+        for name in names:
+            if name is not None and name not in known:
+                raise UsageError(
+                    f"{option} {name}=…: no axis {name!r} is mapped "
+                    f"(axes: {', '.join(sorted(known)) or 'none'})"
+                )
 
 
 def split_invert(roles: Iterable[str], axes: Sequence[str | None]) -> dict[str | None, list[str]]:

@@ -1,0 +1,181 @@
+"""The tests' window into the engine: a check that also keeps every step and every interval.
+
+The engine keeps mergeable results only (:class:`wavecheck.engine.results.RuleResult`). Tests of
+the measurements themselves need every interval and its verdict, and every step: :func:`run_check`
+runs the one engine (:func:`wavecheck.engine.run.check_source`) with a step collector and an
+interval sink attached, and returns the report wrapped so that ``report.rule(id)`` also has
+``intervals``, ``outcome``, ``measured_ticks``, ``violation_ticks``, ``indeterminate_ticks`` and
+``report.steps`` also has ``ticks``, ``direction``, ``position`` and ``sequence_errors``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from wavecheck.capture.blocks import WHOLE, MemorySource
+from wavecheck.capture.edges import Capture
+from wavecheck.drives.library import load_drive
+from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.options import CheckOptions
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.plan import AxisPlan
+from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.results import RuleResult
+from wavecheck.engine.run import check_source
+from wavecheck.engine.sinks import StepCollector, StepSink
+from wavecheck.engine.verdicts import FAIL, INDETERMINATE, evaluate
+from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.rules import Rule
+from wavecheck.units import parse_time
+
+__all__ = ["FullReport", "FullRule", "options", "run_check"]
+
+
+class _Collect:
+    """Every known interval of every rule, in the order the engine hands them over."""
+
+    def __init__(self) -> None:
+        self.parts: dict[str, list[Intervals]] = {}
+
+    def add_intervals(self, rule: Rule, intervals: Intervals) -> None:
+        self.parts.setdefault(rule.id, []).append(intervals)
+
+    def of(self, rule: str) -> Intervals:
+        parts = self.parts.get(rule, [])
+        if not parts:
+            return Intervals.empty()
+        return Intervals(
+            np.concatenate([p.start for p in parts]), np.concatenate([p.end for p in parts])
+        )
+
+
+class FullRule:
+    """A rule's result (:class:`RuleResult`) with every interval and its verdict."""
+
+    def __init__(self, result: RuleResult, intervals: Intervals) -> None:
+        self.result = result
+        self.intervals = intervals
+        if result.limit_ns is None:
+            self.outcome = np.full(len(intervals), FAIL, dtype=np.int8)
+        else:
+            self.outcome = evaluate(
+                result.rule, intervals, result.limit_ns, result.timebase, result.resolution_ns
+            ).outcome
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.result, name)
+
+    @property
+    def measured_ticks(self) -> Any:
+        return self.intervals.measured
+
+    @property
+    def violation_ticks(self) -> Any:
+        return self.intervals.start[self.outcome == FAIL]
+
+    @property
+    def indeterminate_ticks(self) -> Any:
+        return self.intervals.start[self.outcome == INDETERMINATE]
+
+
+class _Steps:
+    """The step counts with every step."""
+
+    def __init__(self, report: Report, every: StepEvents) -> None:
+        self.counts = report.steps
+        self.every = every
+        seq = report.rule("state_sequence")
+        errors = [v.start_tick for v in seq.worst_violations(seq.violations)] if seq else []
+        self.sequence_errors = np.array(sorted(errors), dtype=np.int64)
+
+    def __getattr__(self, name: str) -> Any:
+        if name in ("ticks", "direction", "position"):
+            return getattr(self.every, name)
+        return getattr(self.counts, name)
+
+
+class FullReport:
+    """A :class:`Report` whose rules keep every interval and whose steps keep every step."""
+
+    def __init__(self, report: Report, steps: StepEvents, intervals: _Collect) -> None:
+        self.report = report
+        self.steps = _Steps(report, steps)
+        self._rules = {r.rule: FullRule(r, intervals.of(r.rule)) for r in report.rules}
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.report, name)
+
+    def rule(self, rule_id: str) -> FullRule | None:
+        return self._rules.get(rule_id)
+
+    def events(self) -> StepEvents:
+        return self.steps.every
+
+
+def options(
+    drive: Drive | str,
+    mapping: Mapping[str, str] | None = None,
+    invert: Iterable[str] = (),
+    step_type_number: int | None = None,
+    resolution: str | Fraction | None = None,
+    *,
+    forward_level: int = 0,
+    active_edge: ActiveEdge | None = None,
+    user_table: tuple[int, ...] | None = None,
+    stepgen: LinuxCNCConfig | None = None,
+    latency_ns: Fraction | None = None,
+    pulse_level: int = 1,
+    pictures: bool = False,
+    block_edges: int = WHOLE,
+) -> CheckOptions:
+    """The options object of the old ``run_check`` arguments (one unnamed axis)."""
+    return CheckOptions(
+        drive={None: load_drive(drive) if isinstance(drive, str) else drive},
+        axes=(AxisMap(None, dict(mapping)),) if mapping else (),
+        invert=tuple(invert),
+        step_type={} if step_type_number is None else {None: step_type_number},
+        forward_level={None: forward_level},
+        user_table=user_table,
+        pulse_level=pulse_level,
+        active_edge=active_edge,
+        resolution=parse_time(resolution) if isinstance(resolution, str) else resolution,
+        stepgen=stepgen,
+        latency_ns=latency_ns,
+        pictures=pictures,
+        block_edges=block_edges,
+    )
+
+
+def run_check(
+    capture: Capture,
+    drive: Drive | str,
+    mapping: Mapping[str, str] | None = None,
+    invert: Iterable[str] = (),
+    step_type_number: int | None = None,
+    resolution: str | Fraction | None = None,
+    *,
+    source_block_edges: int = WHOLE,
+    **kw: Any,
+) -> FullReport:
+    """Check one axis of ``capture`` with the engine, keeping every step and interval
+    (``source_block_edges``: the capture cut into blocks of about that many edges)."""
+    steps = StepCollector()
+    intervals = _Collect()
+
+    def step_sinks(plan: AxisPlan) -> list[StepSink]:
+        return [steps]
+
+    machine = check_source(
+        MemorySource(capture, source_block_edges),
+        options(drive, mapping, invert, step_type_number, resolution, **kw),
+        step_sinks=step_sinks,
+        interval_sinks=lambda plan: intervals,
+    )
+    (report,) = machine.axes
+    return FullReport(report, steps.events(), intervals)

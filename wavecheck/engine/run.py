@@ -1,0 +1,312 @@
+"""The engine's entry: a block source and the options in, one report per axis out.
+
+:func:`check_source` reads a :class:`~wavecheck.capture.blocks.BlockSource` once: it finds the axes
+(the options' mapping; else channels named after their roles; else the roles told from the
+waveforms of the first :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges, which are
+then checked like the rest), plans each axis on the source's skeleton
+(:mod:`wavecheck.engine.plan`), feeds every block to every axis (:mod:`wavecheck.engine.axis`) and
+returns a :class:`~wavecheck.engine.outcome.MachineReport`. A capture already in memory is a
+source of one block (:func:`check_capture`). With several axes, a note says whether their steps lie
+on one common periodic lattice (one thread or timer makes them), judged on each axis's first
+:data:`TIMER_STEPS` steps.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Iterator, Sequence
+
+import numpy as np
+
+from wavecheck.capture.blocks import BlockSource, EdgeBlock, MemorySource, assemble
+from wavecheck.capture.edges import Capture, EdgeArray
+from wavecheck.engine.axis import AxisCheck
+from wavecheck.engine.interface import leaf_name
+from wavecheck.engine.mapping import AxisMap
+from wavecheck.engine.options import CheckOptions
+from wavecheck.engine.outcome import MachineReport
+from wavecheck.engine.plan import AxisPlan, plan_axes, with_found
+from wavecheck.engine.sinks import IntervalSink, StepSink, TimerSample
+from wavecheck.errors import UsageError
+
+__all__ = [
+    "TIMER_STEPS",
+    "MachineCheck",
+    "axes_from_waveforms",
+    "check_capture",
+    "check_source",
+    "common_timer",
+    "axes_for",
+    "machine_for",
+    "names_give_roles",
+    "needs_waveforms",
+    "start",
+]
+
+#: Steps per axis the several-axes common-timer note looks at (the first ones).
+TIMER_STEPS = 1 << 16
+
+StepSinks = Callable[[AxisPlan], Sequence[StepSink]]
+IntervalSinks = Callable[[AxisPlan], IntervalSink | None]
+
+_NAMED = ("step", "up", "phase-a")
+
+
+def names_give_roles(capture: Capture) -> bool:
+    """Whether a channel is named after a pulse role (``step``, ``up``, ``phase-A``, as the
+    last part of a hierarchical name): then roles are mapped by name, not told from waveforms."""
+    return any(leaf_name(c.name) in _NAMED for c in capture.channels)
+
+
+def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
+    """The axes the waveforms of ``capture`` show (:func:`wavecheck.roles.propose`) and a note on
+    how they were found.
+
+    Raises:
+        UsageError: the waveforms do not settle the roles (the candidates and the ``--map``
+            line to copy are in the message).
+    """
+    from wavecheck.roles import propose
+
+    proposal = propose(capture)
+    if not proposal.unambiguous:
+        conflicts = (
+            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
+            or "no STEP, UP/DOWN or phase channel found"
+        )
+        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
+            f"give --map{hint}"
+        )
+    single = len(proposal.axes) == 1
+    axes = [
+        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
+        for a in proposal.axes
+    ]
+    found = f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}"
+    return axes, [found.rstrip()]
+
+
+def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: object) -> str:
+    """One line: do the axes' steps (``ticks``, one array per axis) lie on one common periodic
+    lattice (one thread or timer)?"""
+    from fractions import Fraction
+
+    from wavecheck.latency import analyse_times
+
+    stepping = [t for t in ticks if len(t)]
+    if len(stepping) < 2:
+        return "fewer than two axes step: no common timer to look for"
+    times = np.unique(np.concatenate(stepping))
+    assert isinstance(resolution_ns, Fraction)
+    found = analyse_times(
+        times, tick_ns=capture.timebase.tick_ns, resolution_ns=resolution_ns, path=capture.path
+    )
+    if found.lattice and found.period_ns is not None:
+        return (
+            f"the steps of every axis lie on one {float(found.period_ns) / 1000:g} us lattice: "
+            "one base thread or timer makes them"
+        )
+    why = found.reason.split(" (")[0]
+    return f"the axes' steps are not on one common periodic lattice ({why})"
+
+
+class MachineCheck:
+    """Every axis of one capture, fed the same blocks: :meth:`feed`, then :meth:`finish`.
+
+    Args:
+        skeleton: the capture's skeleton.
+        plans: the axes, planned on it.
+        options: the run's options (block size, violations kept, pictures).
+        step_sinks: each axis's extra step sinks (``--steps-csv``, ``compare`` …).
+        interval_sinks: each axis's interval sink (``measure``).
+    """
+
+    def __init__(
+        self,
+        skeleton: Capture,
+        plans: Sequence[AxisPlan],
+        options: CheckOptions,
+        *,
+        step_sinks: StepSinks | None = None,
+        interval_sinks: IntervalSinks | None = None,
+    ) -> None:
+        self.options = options
+        self.block_edges = options.block_edges
+        several = len(plans) > 1 or (len(plans) == 1 and plans[0].name is not None)
+        self.timers = [TimerSample(TIMER_STEPS) for _ in plans] if several else []
+        self.axes = [
+            AxisCheck(
+                p,
+                skeleton,
+                keep_violations=options.keep_violations,
+                pictures=options.pictures,
+                step_sinks=[
+                    *(step_sinks(p) if step_sinks is not None else ()),
+                    *self.timers[k : k + 1],
+                ],
+                interval_sink=None if interval_sinks is None else interval_sinks(p),
+            )
+            for k, p in enumerate(plans)
+        ]
+
+    @property
+    def channels(self) -> set[int]:
+        """The channels every axis reads (indices)."""
+        return {i for a in self.axes for i in a.plan.channels}
+
+    def feed(self, block: EdgeBlock) -> None:
+        """Take one block (every axis)."""
+        for a in self.axes:
+            a.feed(block, self.block_edges)
+
+    def flush(self, end: int) -> None:
+        """Check now what has gathered up to ``end`` (a live check's figures stay current)."""
+        for a in self.axes:
+            a.flush(end)
+
+    def settled(self, end: int) -> int:
+        """The tick before which every axis has handed all its steps to its sinks, once the
+        blocks up to ``end`` are fed (an axis with edges waiting holds it at its last window)."""
+        return min((a.t0 if a.pending else end for a in self.axes), default=end)
+
+    def close(self) -> None:
+        """Check the last window of every axis."""
+        for a in self.axes:
+            a.close()
+
+    def finish(self, capture: Capture) -> MachineReport:
+        """Close every axis and give the reports (``capture``: the finished skeleton)."""
+        self.close()
+        reports = [a.report(capture) for a in self.axes if a.plan.drive is not None]
+        notes = []
+        if self.timers:
+            res = reports[0].resolution_ns if reports else capture.resolution_ns
+            note = common_timer([t.ticks for t in self.timers], capture, res)
+            if any(t.seen > t.kept for t in self.timers):
+                note += f" (judged on each axis's first {TIMER_STEPS} steps)"
+            notes.append(note)
+        return MachineReport(capture, reports, notes)
+
+
+def axes_for(options: CheckOptions, capture: Capture) -> tuple[list[AxisMap], list[str]]:
+    """The axes to check on ``capture`` and the notes on how they were found: the options'
+    mapping; else the channels named after their roles; else the roles its waveforms show
+    (``capture`` then holds edges: the whole capture, or its first part).
+
+    Raises:
+        UsageError: the waveforms do not settle the roles.
+    """
+    if options.axes:
+        return list(options.axes), []
+    if names_give_roles(capture):
+        return [AxisMap(None, {})], []
+    return axes_from_waveforms(capture)
+
+
+def needs_waveforms(options: CheckOptions, skeleton: Capture) -> bool:
+    """Whether the axes must be told from the waveforms (no mapping, no channel named after a
+    role; or, measured without a drive or step type, phase outputs: the step type they walk):
+    the edges of every channel are needed first."""
+    if not options.axes and not names_give_roles(skeleton):
+        return True
+    phases = any(leaf_name(c.name).startswith("phase-") for c in skeleton.channels)
+    return options.measure_only and phases and not options.step_type
+
+
+def machine_for(
+    skeleton: Capture,
+    options: CheckOptions,
+    axes: Sequence[AxisMap],
+    found: Sequence[str] = (),
+    *,
+    waveforms: Capture | None = None,
+    step_sinks: StepSinks | None = None,
+    interval_sinks: IntervalSinks | None = None,
+) -> MachineCheck:
+    """Every axis of ``axes`` planned on ``skeleton`` (``found``: how they were found, a note of
+    each report; ``waveforms``: the capture read to find them) and ready to be fed."""
+    plans = [with_found(p, found) for p in plan_axes(skeleton, list(axes), options, waveforms)]
+    return MachineCheck(
+        skeleton, plans, options, step_sinks=step_sinks, interval_sinks=interval_sinks
+    )
+
+
+def start(
+    source: BlockSource,
+    options: CheckOptions,
+    *,
+    step_sinks: StepSinks | None = None,
+    interval_sinks: IntervalSinks | None = None,
+) -> tuple[MachineCheck, Iterator[EdgeBlock]]:
+    """The axes of ``source`` planned and ready to be fed, and the source's blocks to feed them.
+
+    Without a mapping or role names, the roles are told from the waveforms of the first
+    :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read), which
+    then come first among the blocks."""
+    skeleton = source.skeleton
+    blocks: Iterator[EdgeBlock]
+    waveforms = None
+    if needs_waveforms(options, skeleton):
+        source.want(range(len(skeleton.channels)))
+        it = source.blocks()
+        read: list[EdgeBlock] = []
+        edges = 0
+        for block in it:
+            read.append(block)
+            edges += sum(len(e) for e in block.edges.values())
+            if edges >= options.infer_edges:
+                break
+        waveforms = assemble(skeleton, read)
+        axes, found = axes_for(options, waveforms)
+        if edges >= options.infer_edges:
+            found = [f"{found[0]} (told from the first {edges} edges)"]
+        blocks = itertools.chain(read, it)
+    else:
+        axes, found = axes_for(options, skeleton)
+    machine = machine_for(
+        skeleton,
+        options,
+        axes,
+        found,
+        waveforms=waveforms,
+        step_sinks=step_sinks,
+        interval_sinks=interval_sinks,
+    )
+    source.want(machine.channels)
+    if waveforms is None:
+        blocks = source.blocks()  # after planning: a bit of a vector is a channel of the source
+    return machine, blocks
+
+
+def check_source(
+    source: BlockSource,
+    options: CheckOptions,
+    *,
+    step_sinks: StepSinks | None = None,
+    interval_sinks: IntervalSinks | None = None,
+) -> MachineReport:
+    """Check every axis of ``source`` (read once) with ``options``.
+
+    Raises:
+        WavecheckError: an unreadable source, a mapping or option that does not fit its
+            channels, roles that cannot be told from the waveforms.
+    """
+    machine, blocks = start(source, options, step_sinks=step_sinks, interval_sinks=interval_sinks)
+    for block in blocks:
+        machine.feed(block)
+    return machine.finish(source.capture())
+
+
+def check_capture(
+    capture: Capture,
+    options: CheckOptions,
+    *,
+    step_sinks: StepSinks | None = None,
+    interval_sinks: IntervalSinks | None = None,
+) -> MachineReport:
+    """:func:`check_source` on a capture already in memory (one block)."""
+    return check_source(
+        MemorySource(capture), options, step_sinks=step_sinks, interval_sinks=interval_sinks
+    )

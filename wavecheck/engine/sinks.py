@@ -1,0 +1,79 @@
+"""What needs more of a check than its results: step and interval sinks the engine feeds.
+
+The engine keeps, per rule, only mergeable results (:mod:`wavecheck.engine.results`). Whatever
+needs every step (``--steps-csv``, ``compare``, ``follow``, the common-timer note, the plot's step
+trace) or every interval (``wavecheck measure``'s percentiles) is a *sink*: the engine hands it each
+window's new steps or intervals, in time order, once each, and keeps nothing for it.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.capture.edges import EdgeArray
+from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.primitives import Intervals
+from wavecheck.rules import Rule
+
+__all__ = ["IntervalSink", "StepCollector", "StepSink", "TimerSample"]
+
+_EMPTY = np.zeros(0, dtype=np.int64)
+
+
+class StepSink(Protocol):
+    """Takes each window's new steps (ticks increasing; direction +1, −1, 0 unknown)."""
+
+    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None: ...
+
+
+class IntervalSink(Protocol):
+    """Takes each window's complete, known intervals of each measured rule (not judged)."""
+
+    def add_intervals(self, rule: Rule, intervals: Intervals) -> None: ...
+
+
+class StepCollector:
+    """Every step, kept (memory follows the number of steps): ``compare``, ``follow`` and the
+    tests read :meth:`events`."""
+
+    def __init__(self) -> None:
+        self._ticks: list[EdgeArray] = []
+        self._dirs: list[npt.NDArray[np.int8]] = []
+
+    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None:
+        if len(ticks):
+            self._ticks.append(ticks.copy())
+            self._dirs.append(direction.copy())
+
+    def events(self) -> StepEvents:
+        """The steps so far: ticks, directions and running positions."""
+        ticks = np.concatenate(self._ticks) if self._ticks else _EMPTY.copy()
+        dirs = np.concatenate(self._dirs) if self._dirs else np.zeros(0, np.int8)
+        self._ticks, self._dirs = [ticks], [dirs]
+        return StepEvents(ticks, dirs, np.cumsum(dirs, dtype=np.int64))
+
+
+class TimerSample:
+    """The first ``limit`` step ticks (the several-axes common-timer note reads a bounded
+    sample, stated in the note)."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self._parts: list[EdgeArray] = []
+        self.kept = 0
+        self.seen = 0
+
+    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None:
+        self.seen += len(ticks)
+        room = self.limit - self.kept
+        if room > 0 and len(ticks):
+            self._parts.append(ticks[:room].copy())
+            self.kept += min(room, len(ticks))
+
+    @property
+    def ticks(self) -> EdgeArray:
+        """The sampled step ticks, increasing."""
+        return np.concatenate(self._parts) if self._parts else _EMPTY.copy()
