@@ -49,8 +49,10 @@ from stepgen.latencyfiles import check_latency_path, read_histogram
 from stepgen.model import InvocationRun
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.linuxcnc.steptypes import kind_of
+from wavecheck.rules import RULE_IDS
 from wavecheck.rules import RULES as TABLE
+from wavecheck.rules import rule as table_rule
+from wavecheck.steptypes import kind_of
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
 __all__ = [
@@ -209,41 +211,43 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
     def alternate(events: np.ndarray) -> np.ndarray:
         return np.unique(events)[1::2]
 
-    if kind == "phases":
-        # a phase type's steps are its state changes: step_period measures the same intervals
-        if rule not in ("state_hold", "step_period"):
-            raise ConfigError(
-                f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
-            )
+    r = table_rule(rule) if rule in RULE_IDS else None
+    if r is None or kind not in r.kinds or r.check in ("sequence",) or r.ref == "enable":
+        usable = [
+            x.id for x in TABLE if kind in x.kinds and x.check != "sequence" and x.ref != "enable"
+        ]
+        raise ConfigError(
+            f"rule {rule!r} does not apply to step type {stype} (use {', '.join(usable)})"
+        )
+    # The table says which event closes each interval (wavecheck.rules): a width ends at the edge
+    # leaving its level; a period at every other of its events (alternate invocations late); a
+    # hold at its data event; a setup at the first data event after each reference event; a
+    # switch at the first active edge on the other line.
+    if kind == "phases":  # the steps are the state changes (step_period and state_hold alike)
         return alternate(np.concatenate([t[p] for p in run.pins]))
     lines = ("step",) if kind == "step-dir" else ("up", "down")
     rises = np.unique(np.concatenate([rising(p) for p in lines]))
     falls = np.unique(np.concatenate([falling(p) for p in lines]))
     active = rises if active_edge == "rising" else falls
-    if rule == "step_high":
-        return falls
-    if rule == "step_low":
-        return rises
-    if rule == "step_period":
+    if r.check == "width":
+        return falls if r.level == 1 else rises
+    if r.check == "period":
         return alternate(active)
-    if kind == "step-dir" and rule == "dir_hold":
+    if r.check == "hold":
         return t["dir"]
-    if kind == "step-dir" and rule == "dir_setup":
-        changes = t["dir"]
-        pos = np.searchsorted(active, changes, side="left")  # first active edge at/after a change
+    if r.check == "setup":
+        pos = np.searchsorted(active, t["dir"], side="left")  # first active edge at/after
         pos = pos[pos < len(active)]
         return np.unique(active[pos])
-    if kind == "up-down" and rule == "dir_delay":
-        # ends at the active edge of the first pulse on the other line
-        pick = rising if active_edge == "rising" else falling
-        up, down = pick("up"), pick("down")
-        lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
-        at = np.concatenate([up, down])
-        order = np.argsort(at, kind="stable")
-        at, lab = at[order], lab[order]
-        switch = np.flatnonzero(lab[1:] != lab[:-1]) + 1
-        return at[switch]
-    raise ConfigError(f"rule {rule!r} does not apply to step type {stype}")
+    # switch: the active edge of the first pulse on the other line
+    pick = rising if active_edge == "rising" else falling
+    up, down = pick("up"), pick("down")
+    lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
+    at = np.concatenate([up, down])
+    order = np.argsort(at, kind="stable")
+    at, lab = at[order], lab[order]
+    switch = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+    return at[switch]
 
 
 def catchup_for(

@@ -274,7 +274,7 @@ def read_capture_latency(path: str | Path) -> tuple[int, str]:
     from wavecheck.capture.open import open_capture
     from wavecheck.engine.plan import auto_map
     from wavecheck.latency import analyse
-    from wavecheck.linuxcnc.steptypes import step_type
+    from wavecheck.steptypes import step_type
 
     capture = open_capture(path)
     names: list[str] = []

@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.steptypes import StepType, step_type
+from wavecheck.steptypes import StepType, step_type
 
 __all__ = [
     "HALF_STEP",
@@ -163,7 +163,7 @@ class StepgenConfig:
         return self.thread_order == "update-first"
 
     def kind(self) -> StepType:
-        """The :class:`~wavecheck.linuxcnc.steptypes.StepType` (raises ConfigError for a bad type)."""
+        """The :class:`~wavecheck.steptypes.StepType` (raises ConfigError for a bad type)."""
         return step_type(self.step_type, self.user_step_type or None)
 
     @property

@@ -34,6 +34,7 @@ from wavecheck.linuxcnc.timing import (
     require_figures,
     step_rate_hz,
 )
+from wavecheck.rules import width_rule
 from wavecheck.units import exact_ns, format_time
 
 __all__ = [
@@ -295,8 +296,8 @@ def _choose_periods(
     """steplen, stepspace, dirsetup, dirhold in whole periods of ``period`` under latency ``j``,
     and why each has that many."""
     pulse_level = "low" if step_inverted else "high"
-    active_rule = "step_low" if step_inverted else "step_high"
-    idle_rule = "step_high" if step_inverted else "step_low"
+    active_rule = width_rule(0 if step_inverted else 1)  # stepgen's pulse at the drive
+    idle_rule = width_rule(1 if step_inverted else 0)
     starts = active_at(drive, step_inverted) == "start"
 
     def need(rule: str) -> int:
@@ -397,7 +398,7 @@ def _assumptions(drive: Drive, step_inverted: bool, active_at: ActiveAt) -> tupl
     other = "high" if step_inverted else "low"
     out = [
         f"STEP pin {pin}: stepgen's pulse (steplen) is the drive's {level} time "
-        f"({'step_low' if step_inverted else 'step_high'}), stepspace its {other} time.",
+        f"({width_rule(0 if step_inverted else 1)}), stepspace its {other} time.",
         f"{drive.name} steps on the {drive.active_edge} edge = the {active_at.upper()} of stepgen's "
         f"pulse, so steplen is the drive's {'t_active' if active_at == 'start' else 't_idle'}"
         + (

@@ -15,7 +15,7 @@ one servo period (``stepgen.update-freq`` then make-pulses in the base thread / 
   unit (``floor(x·N)/N``; N = 0: unquantised). Units: position units (mm, rev …), "force" in any
   unit F consistent with ``Kt`` (F per amplifier unit), ``J`` in F·s²/unit, ``B`` in F·s/unit.
   The encoder's count at each sub-step is recorded for A/B quadrature output
-  (:func:`quadrature_edges`, the ``step_type 2`` table of :mod:`wavecheck.linuxcnc.steptypes`).
+  (:func:`quadrature_edges`, the ``step_type 2`` table of :mod:`wavecheck.steptypes`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from stepgen.model import (
     run_from_arrays,
 )
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.steptypes import STATE_TABLES
+from wavecheck.steptypes import STATE_TABLES
 
 __all__ = [
     "MAX_ABS_COUNT",

@@ -34,8 +34,8 @@ from wavecheck.engine.results import StepCounts
 from wavecheck.engine.run import start
 from wavecheck.engine.sinks import StepSink
 from wavecheck.engine.trace import StepTrace
-from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.rules import Rule
+from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 
 __all__ = [

@@ -594,7 +594,7 @@ def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
     from wavecheck.drives.library import load_drive
     from wavecheck.engine.intervals import planned_rules
     from wavecheck.engine.plan import default_step_type
-    from wavecheck.linuxcnc.steptypes import step_type
+    from wavecheck.steptypes import step_type
 
     drive = load_drive(drive_ref)
     st = step_type(default_step_type(drive) if type_number is None else type_number)

@@ -23,20 +23,24 @@ Events (levels at the drive's input, after ``--invert``):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Literal
 
-from wavecheck.linuxcnc.steptypes import StepKind, StepType
+from wavecheck.steptypes import StepKind, StepType
 
 __all__ = [
     "RULES",
     "RULE_IDS",
+    "PLAN_RULES",
     "TIME_RULES",
     "Check",
     "Figure",
     "Hold",
     "Rule",
     "applicable",
+    "rate_rule",
     "rule",
+    "width_rule",
 ]
 
 Check = Literal["width", "period", "setup", "hold", "switch", "sequence"]
@@ -87,6 +91,14 @@ class Rule:
     """What the engine must keep from one window for the next so that an interval begun there
     is measured whole (:mod:`wavecheck.engine.axis`): ``edges`` the last edge of each signal,
     ``step`` the last step, ``unstepped_dir`` every DIR change while no step came yet."""
+    plan: bool = False
+    """A figure a stepgen plan needs (``stepgen plan``: steplen, stepspace, dirsetup, dirhold
+    are chosen from it; ``wavecheck drives`` marks a drive without it as not plannable)."""
+
+    def limit_ns(self, value: Fraction) -> Fraction:
+        """The interval minimum in exact ns of a drive figure ``value`` (ns for a time figure;
+        for ``max_rate``, Hz: the shortest period 1/value)."""
+        return Fraction(10**9) / value if self.figure == "max_rate" else Fraction(value)
 
     def roles_for(self, st: StepType) -> tuple[str, ...]:
         """:attr:`roles` with ``"pulse"``/``"phases"`` expanded for step type ``st``."""
@@ -112,6 +124,7 @@ RULES: tuple[Rule, ...] = (
         data="pulse",
         level=1,
         holds=("edges",),
+        plan=True,
     ),
     Rule(
         "step_low",
@@ -123,6 +136,7 @@ RULES: tuple[Rule, ...] = (
         data="pulse",
         level=0,
         holds=("edges",),
+        plan=True,
     ),
     Rule(
         "step_period",
@@ -145,6 +159,7 @@ RULES: tuple[Rule, ...] = (
         data="active",
         roles=("step", "dir"),
         holds=("step", "unstepped_dir"),
+        plan=True,
     ),
     Rule(
         "dir_hold",
@@ -158,6 +173,7 @@ RULES: tuple[Rule, ...] = (
         roles=("step", "dir"),
         listed_by_end=True,
         holds=("step",),
+        plan=True,
     ),
     Rule(
         "dir_delay",
@@ -207,6 +223,8 @@ RULES: tuple[Rule, ...] = (
 RULE_IDS: tuple[str, ...] = tuple(r.id for r in RULES)
 #: The rules a drive file gives as a time figure (ns), in report order.
 TIME_RULES: tuple[str, ...] = tuple(r.id for r in RULES if r.figure == "time")
+#: The figures a stepgen plan needs (:attr:`Rule.plan`), in report order.
+PLAN_RULES: tuple[str, ...] = tuple(r.id for r in RULES if r.plan)
 
 _BY_ID = {r.id: r for r in RULES}
 
@@ -214,6 +232,18 @@ _BY_ID = {r.id: r for r in RULES}
 def rule(rule_id: str) -> Rule:
     """The rule ``rule_id`` (KeyError for an unknown id)."""
     return _BY_ID[rule_id]
+
+
+def width_rule(level: int) -> str:
+    """The id of the rule measuring every stretch of the pulse lines at ``level`` (1:
+    ``step_high``, 0: ``step_low``): a generator's pulses at ``level``, or the gaps between
+    pulses at the other level."""
+    return next(r.id for r in RULES if r.check == "width" and r.level == level)
+
+
+def rate_rule() -> str:
+    """The id of the rule whose limit is 1 / the drive's maximum step rate."""
+    return next(r.id for r in RULES if r.figure == "max_rate")
 
 
 def applicable(kind: StepKind) -> tuple[Rule, ...]:

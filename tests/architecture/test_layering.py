@@ -99,3 +99,138 @@ def test_each_rule_is_declared_once_in_the_rule_table() -> None:
                 if len(found) >= 5:
                     rivals.append(f"{module}:{getattr(node, 'lineno', '?')} {sorted(found)}")
     assert not rivals, "rule lists outside wavecheck/rules.py: " + "; ".join(rivals)
+
+
+# -- layers: capture → blocks → engine (decode/check) → report → cli; firmware beside; stepgen on top
+#: Lowest first. A module may import its own layer and the layers below it, never one above;
+#: and the packages of one layer import each other without a circle. Imports inside functions and
+#: under ``TYPE_CHECKING`` count: they are dependencies too.
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("base", ("wavecheck.errors", "wavecheck.units", "wavecheck.verdict", "wavecheck.timebase",
+              "wavecheck.progress", "wavecheck.output")),
+    ("vocabulary", ("wavecheck.steptypes", "wavecheck.rules")),
+    ("drives", ("wavecheck.drives",)),
+    ("linuxcnc", ("wavecheck.linuxcnc",)),
+    ("capture", ("wavecheck.capture",)),
+    ("roles", ("wavecheck.roles",)),
+    ("step times", ("wavecheck.latency", "wavecheck.lattice")),
+    ("engine", ("wavecheck.engine",)),
+    ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",
+                            "wavecheck.crosscheck", "wavecheck.firmware")),
+    ("report", ("wavecheck.report",)),
+    ("entry points", ("wavecheck.api", "wavecheck.live", "wavecheck.cocotb",
+                      "wavecheck.pytest_plugin", "wavecheck.sigrok")),
+    ("cli", ("wavecheck.cli", "wavecheck.__main__", "wavecheck")),
+    ("stepgen", ("stepgen",)),
+)  # fmt: skip
+
+
+def _layer(module: str) -> tuple[int, str]:
+    """(layer number, the layer entry it belongs to) of a module name (longest prefix)."""
+    best: tuple[int, str] | None = None
+    for k, (_, names) in enumerate(LAYERS):
+        for n in names:
+            if module == n or module.startswith(n + "."):
+                if best is None or len(n) > len(best[1]):
+                    best = (k, n)
+    assert best is not None, f"{module} is in no layer of LAYERS: add it"
+    return best
+
+
+def _deps() -> dict[str, set[str]]:
+    """Module → the project modules it imports (at any depth of the file)."""
+    mods = {m for pkg in PACKAGES for m, _ in _modules(pkg)}
+    out: dict[str, set[str]] = {}
+    for pkg in PACKAGES:
+        for module, path in _modules(pkg):
+            names = set()
+            for n in _imported(path):
+                # "from wavecheck.engine import axis": the name may be a module itself
+                while n and n not in mods:
+                    n = n.rpartition(".")[0]
+                if n:
+                    names.add(n)
+            out[module] = names - {module}
+    return out
+
+
+def test_every_module_is_in_a_layer() -> None:
+    for pkg in PACKAGES:
+        for module, _ in _modules(pkg):
+            _layer(module)
+
+
+def test_no_module_imports_a_higher_layer() -> None:
+    bad = []
+    for module, names in _deps().items():
+        k, _ = _layer(module)
+        for n in sorted(names):
+            j, _ = _layer(n)
+            if j > k:
+                bad.append(f"{module} ({LAYERS[k][0]}) imports {n} ({LAYERS[j][0]})")
+    assert not bad, "\n".join(bad)
+
+
+def test_no_circle_between_packages() -> None:
+    """The graph of the layers' entries (packages and top-level modules) has no cycle."""
+    graph: dict[str, set[str]] = {}
+    for module, names in _deps().items():
+        a = _layer(module)[1]
+        graph.setdefault(a, set()).update(_layer(n)[1] for n in names if _layer(n)[1] != a)
+    seen: dict[str, int] = {}  # 1 on the path, 2 done
+    path: list[str] = []
+
+    def visit(u: str) -> None:
+        seen[u] = 1
+        path.append(u)
+        for v in sorted(graph.get(u, ())):
+            if seen.get(v) == 1:
+                raise AssertionError("circle: " + " → ".join([*path[path.index(v) :], v]))
+            if v not in seen:
+                visit(v)
+        path.pop()
+        seen[u] = 2
+
+    for u in sorted(graph):
+        if u not in seen:
+            visit(u)
+
+
+def test_the_layer_test_sees_an_import_inside_type_checking(tmp_path: Path) -> None:
+    probe = tmp_path / "probe.py"
+    probe.write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from wavecheck.cli import main\n"
+    )
+    assert "wavecheck.cli" in _imported(probe)
+
+
+def _rule_branches(path: Path) -> list[str]:
+    """``x == "dir_setup"``, ``r in ("step_high", …)``, ``"step_high" if … else "step_low"``:
+    a branch on a rule id (a table keyed by rule id is no branch)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        parts: list[ast.expr] = []
+        if isinstance(node, ast.Compare):
+            parts = [node.left, *node.comparators]
+        elif isinstance(node, ast.IfExp):
+            parts = [node.body, node.orelse]
+        for p in parts:
+            if _literal_rule_ids(p) or (isinstance(p, ast.Constant) and p.value in RULE_IDS):
+                out.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+                break
+    return out
+
+
+def test_no_module_outside_the_rule_table_branches_on_a_rule_id() -> None:
+    """What a rule needs (its pulse level, the events that close it, what the engine holds between
+    windows, whether a plan needs it) is declared in wavecheck/rules.py."""
+    table = ROOT / "wavecheck" / "rules.py"
+    pending = ROOT / "wavecheck" / "firmware"  # being rewritten (issue 24): its turn comes next
+    bad = [
+        hit
+        for pkg in PACKAGES
+        for _, path in _modules(pkg)
+        if path != table and pending not in path.parents
+        for hit in _rule_branches(path)
+    ]
+    assert not bad, "branches on a rule id: " + ", ".join(bad)

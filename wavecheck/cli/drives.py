@@ -9,11 +9,12 @@ from typing import Any
 
 from wavecheck.drives.library import list_drives, load_drive
 from wavecheck.drives.model import MARK_LEGEND, TIME_RULES, Drive, Figure
+from wavecheck.rules import PLAN_RULES
 from wavecheck.units import format_frequency, format_time
 
 __all__ = ["drive_json", "register", "run"]
 
-_COLUMNS = ("step_high", "step_low", "dir_setup", "dir_hold")
+_COLUMNS = PLAN_RULES
 
 
 def register(sub: Any) -> None:
@@ -71,20 +72,11 @@ def drive_json(drive: Drive) -> dict[str, Any]:
         "path": str(drive.path),
         "limits": {r: _figure_json(f, "value_ns", drive) for r, f in drive.limits.items()},
         "max_rate": _figure_json(drive.max_rate, "value_hz", drive) if drive.max_rate else None,
-        "drive_rate_hz": _number(r) if (r := _drive_rate(drive)) is not None else None,
+        "drive_rate_hz": _number(r) if (r := drive.step_rate()[0]) is not None else None,
         "complete": drive.complete,
         "notes": list(drive.notes),
         "sources": dict(drive.sources),
     }
-
-
-def _drive_rate(drive: Drive) -> Fraction | None:
-    """The design's ``drive`` rate: min(datasheet max rate, 1 / (step_high + step_low)), in Hz."""
-    rates = [drive.max_rate.value] if drive.max_rate else []
-    high, low = drive.limit_ns("step_high"), drive.limit_ns("step_low")
-    if high is not None and low is not None and high + low > 0:
-        rates.append(Fraction(10**9) / (high + low))
-    return min(rates) if rates else None
 
 
 def _us(fig: Figure | None) -> str:
@@ -140,7 +132,7 @@ def _show(d: Drive) -> str:
     missing = [r for r in _COLUMNS if r not in d.limits] + ([] if d.max_rate else ["max_rate"])
     if missing:
         out.append(f"    not stated (not checked): {', '.join(missing)}")
-    rate = _drive_rate(d)
+    rate = d.step_rate()[0]
     if rate is not None:
         out.append(f"  drive step rate limit: {format_frequency(rate)}")
     if d.notes:

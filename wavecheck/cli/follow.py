@@ -37,8 +37,8 @@ from wavecheck.follow import (
     positions_at,
     read_command,
 )
-from wavecheck.linuxcnc.steptypes import step_type
 from wavecheck.output import atomic_write, output_file
+from wavecheck.steptypes import step_type
 from wavecheck.units import parse_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 

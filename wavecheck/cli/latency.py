@@ -21,8 +21,8 @@ from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.engine.interface import parse_map
 from wavecheck.engine.plan import auto_map
 from wavecheck.errors import UnitError, UsageError
-from wavecheck.linuxcnc.steptypes import step_type
 from wavecheck.output import atomic_write, output_file
+from wavecheck.steptypes import step_type
 from wavecheck.units import format_ns, json_number, time_ns
 from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
 

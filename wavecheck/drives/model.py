@@ -12,7 +12,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Literal
 
-from wavecheck.rules import TIME_RULES
+from wavecheck.rules import PLAN_RULES, TIME_RULES, rule, width_rule
 
 __all__ = [
     "MARK_LEGEND",
@@ -89,10 +89,32 @@ class Drive:
     opto: bool | None = None
     """True for opto-isolated inputs (margins matter more), None when not known."""
 
-    def limit_ns(self, rule: str) -> Fraction | None:
-        """The minimum of ``rule`` in exact ns, or None when the drive states none."""
-        fig = self.limits.get(rule)
-        return fig.value if fig is not None else None
+    def figure(self, rule_id: str) -> Figure | None:
+        """The figure ``rule_id``'s limit comes from (its time figure, or the maximum step rate
+        for the rate rule), None when the drive states none."""
+        return self.max_rate if rule(rule_id).figure == "max_rate" else self.limits.get(rule_id)
+
+    def limit_ns(self, rule_id: str) -> Fraction | None:
+        """The minimum of ``rule_id``'s intervals in exact ns, or None when the drive states
+        none (the rate rule: 1 / the maximum step rate)."""
+        fig = self.figure(rule_id)
+        if fig is None or (rule(rule_id).figure == "max_rate" and fig.value <= 0):
+            return None
+        return rule(rule_id).limit_ns(fig.value)
+
+    def step_rate(self) -> tuple[Fraction | None, str | None]:
+        """The drive's own maximum step rate in exact Hz, min(the stated maximum rate, 1 /
+        (shortest high + shortest low)), and which limits it (``"max_rate"``, ``"pulse"``);
+        (None, None) when it states neither."""
+        candidates: list[tuple[Fraction, str]] = []
+        if self.max_rate is not None and self.max_rate.value > 0:
+            candidates.append((self.max_rate.value, "max_rate"))
+        hi, lo = self.limit_ns(width_rule(1)), self.limit_ns(width_rule(0))
+        if hi is not None and lo is not None and hi + lo > 0:
+            candidates.append((Fraction(10**9) / (hi + lo), "pulse"))
+        if not candidates:
+            return None, None
+        return min(candidates, key=lambda c: c[0])
 
     @property
     def edge_mark(self) -> str:
@@ -102,4 +124,4 @@ class Drive:
     @property
     def complete(self) -> bool:
         """True when step high/low and DIR setup/hold are all given (enough to plan stepgen)."""
-        return all(r in self.limits for r in ("step_high", "step_low", "dir_setup", "dir_hold"))
+        return all(r in self.limits for r in PLAN_RULES)

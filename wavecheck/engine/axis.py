@@ -52,7 +52,7 @@ from wavecheck.engine.sinks import IntervalSink, StepSink
 from wavecheck.engine.trace import StepTrace
 from wavecheck.engine.verdicts import evaluate, sequence_result
 from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
-from wavecheck.rules import Rule
+from wavecheck.rules import Rule, width_rule
 
 __all__ = ["AxisCheck"]
 
@@ -323,7 +323,7 @@ class AxisCheck:
         """The report of this axis (after :meth:`close`; ``capture``: the finished skeleton)."""
         plan = self.plan
         assert plan.drive is not None, "a measured-only axis has no report"
-        own_id = "step_high" if plan.level else "step_low"
+        own_id = width_rule(plan.level)
         own = next((s for s in self.results if s.rule == own_id), None)
         rates = rates_from(
             plan.drive,

@@ -14,7 +14,7 @@ the drive's input (after ``--invert``).
   stretch may be a hidden one), or with no DIR mapped, also have direction 0 ("unknown").
 - Type 1 (up/down): one forward step per active UP edge, one reverse step per active DOWN edge.
   Active edges of UP and DOWN at the same tick are ambiguous.
-- Types 2–15 (state tables of :mod:`wavecheck.linuxcnc.steptypes`): the phase outputs form a state at every
+- Types 2–15 (state tables of :mod:`wavecheck.steptypes`): the phase outputs form a state at every
   tick where any phase changes; a move to the next state in the table is a forward step, to the
   previous one a reverse step. Any other move (a non-neighbour, or a state not in the table) is a
   ``state_sequence`` error, listed in :attr:`StepEvents.sequence_errors`, not a crash. Moving
@@ -37,7 +37,7 @@ from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.steptypes import StepType, step_type
+from wavecheck.steptypes import StepType, step_type
 
 __all__ = [
     "StepEvents",

@@ -39,8 +39,8 @@ from wavecheck.engine.decode import (
 )
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.primitives import Intervals, holds, periods, setups, widths
-from wavecheck.linuxcnc.steptypes import StepType
 from wavecheck.rules import Rule, applicable
+from wavecheck.steptypes import StepType
 
 __all__ = [
     "applicable_rules",

@@ -23,7 +23,7 @@ from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.trace import StepTrace
 from wavecheck.engine.verdicts import Violation
 from wavecheck.engine.windows import SignalWindows
-from wavecheck.linuxcnc.steptypes import StepType
+from wavecheck.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 
 __all__ = ["MachineReport", "OwnSettingsCheck", "Report", "overall_verdict"]

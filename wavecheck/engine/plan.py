@@ -28,8 +28,8 @@ from wavecheck.engine.mapping import AxisMap, check_axis_names, split_invert
 from wavecheck.engine.options import CheckOptions, for_axis
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.config import ConfigRates, config_rates
-from wavecheck.linuxcnc.steptypes import StepType, step_type
 from wavecheck.rules import RULE_IDS, Rule, applicable
+from wavecheck.steptypes import StepType, step_type
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_time
 
@@ -258,9 +258,8 @@ def plan_axis(
     else:
         rules, not_stated = planned_rules(drive, st)
         limits = {r.id: fig for r in rules if (fig := figure_of(drive, r)) is not None}
-        stated = set(drive.limits) | ({"step_period"} if drive.max_rate is not None else set())
         used = {r.id for r in applicable(st.kind)}
-        not_applicable = tuple(r for r in RULE_IDS if r in stated and r not in used)
+        not_applicable = tuple(r for r in RULE_IDS if r not in used and drive.figure(r) is not None)
     configured = None
     if options.stepgen is not None and drive is not None:
         step = iface.get("step")

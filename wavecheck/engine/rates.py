@@ -32,7 +32,8 @@ from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.linuxcnc.config import ConfigRates
-from wavecheck.linuxcnc.steptypes import StepType
+from wavecheck.rules import width_rule
+from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 
 __all__ = ["MaxStepRates", "max_step_rates", "rates_from"]
@@ -125,19 +126,6 @@ class MaxStepRates:
         return None if self.configured is None else self.configured.latency_safe
 
 
-def drive_rate(drive: Drive) -> tuple[Fraction | None, str | None]:
-    """The drive's own maximum step rate (Hz) and which figure limits it."""
-    candidates: list[tuple[Fraction, str]] = []
-    if drive.max_rate is not None and drive.max_rate.value > 0:
-        candidates.append((drive.max_rate.value, "max_rate"))
-    hi, lo = drive.limit_ns("step_high"), drive.limit_ns("step_low")
-    if hi is not None and lo is not None and hi + lo > 0:
-        candidates.append((_GIGA / (hi + lo), "pulse"))
-    if not candidates:
-        return None, None
-    return min(candidates, key=lambda c: c[0])
-
-
 def _median(start: npt.NDArray[np.int64], end: npt.NDArray[np.int64]) -> int:
     """The lower median of ``end - start`` (arrays not empty)."""
     d = end - start
@@ -201,7 +189,7 @@ def rates_from(
     successive steps and the tick of the first such step (None: fewer than two steps), ``pulse``
     the longest and the (lower) median complete pulse at ``level`` in ticks (None: no complete
     pulse). Both are mergeable block by block (:mod:`wavecheck.stream`)."""
-    cap, limited_by = drive_rate(drive)
+    cap, limited_by = drive.step_rate()
     observed = observed_at = None
     if gap is not None and gap[0] > 0:
         observed = _GIGA / timebase.ns(gap[0])
@@ -214,7 +202,7 @@ def rates_from(
         return replace(out, headroom_note="no complete pulse in the capture")
     longest = timebase.ns(pulse[0])
     typical = timebase.ns(pulse[1])
-    own, other = ("step_high", "step_low") if level == 1 else ("step_low", "step_high")
+    own, other = width_rule(level), width_rule(1 - level)
     idle_min = drive.limit_ns(other)
     out = replace(out, longest_pulse_ns=longest, typical_pulse_ns=typical, idle_min_ns=idle_min)
     if pulse_verdict == "fail":

@@ -23,7 +23,7 @@ from wavecheck.drives.model import ActiveEdge
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.rates import pulse_level
 from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
-from wavecheck.linuxcnc.steptypes import StepType
+from wavecheck.steptypes import StepType
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict
 

@@ -1,6 +1,6 @@
-"""What the validator knows of LinuxCNC.
+"""What the validator knows of LinuxCNC's configuration (its step types 0–15 and their state
+tables, the vocabulary of every step interface, are :mod:`wavecheck.steptypes`).
 
-- :mod:`~wavecheck.linuxcnc.steptypes`: step types 0–15 and their state tables;
 - :mod:`~wavecheck.linuxcnc.timing`: stepgen's n·P − J interval arithmetic;
 - :mod:`~wavecheck.linuxcnc.files`: INI files, HAL words, halcmd's ``[SECTION]KEY`` references;
 - :mod:`~wavecheck.linuxcnc.config`: stepgen's settings from INI/HAL, the config/latency_safe rates;

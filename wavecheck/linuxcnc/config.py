@@ -57,8 +57,8 @@ from wavecheck.linuxcnc.files import (
     read_text,
     resolve_ref,
 )
-from wavecheck.linuxcnc.steptypes import kind_of
 from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
+from wavecheck.steptypes import kind_of
 
 __all__ = ["TIMING_PARAMS", "ConfigRates", "LinuxCNCConfig", "config_rates", "read_config"]
 

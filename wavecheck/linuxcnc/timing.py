@@ -31,6 +31,7 @@ from typing import Literal
 
 from wavecheck.drives.model import Drive
 from wavecheck.errors import ConfigError
+from wavecheck.rules import PLAN_RULES, rate_rule, width_rule
 
 __all__ = [
     "PARAMS",
@@ -48,7 +49,6 @@ __all__ = [
 #: stepgen's timing parameters for step type 0, in the order LinuxCNC lists them.
 PARAMS: tuple[str, ...] = ("steplen", "stepspace", "dirsetup", "dirhold")
 #: The drive figures the arithmetic needs.
-PLAN_RULES: tuple[str, ...] = ("step_high", "step_low", "dir_setup", "dir_hold")
 
 ActiveAt = Literal["start", "end"]
 """Where the drive's active edge lies on stepgen's pulse: its start or its end."""
@@ -80,9 +80,7 @@ def active_at(drive: Drive, step_inverted: bool) -> ActiveAt:
 
 def period_limit_ns(drive: Drive) -> Fraction | None:
     """The drive's shortest step period 1/fmax in ns, if it states a max rate."""
-    if drive.max_rate is None or drive.max_rate.value <= 0:
-        return None
-    return Fraction(10**9) / drive.max_rate.value
+    return drive.limit_ns(rate_rule())
 
 
 def require_figures(drive: Drive, rules: tuple[str, ...] = PLAN_RULES) -> None:
@@ -131,7 +129,7 @@ class Requirement:
 
 
 def _limit(drive: Drive, rule: str) -> Fraction:
-    value = period_limit_ns(drive) if rule == "step_period" else drive.limit_ns(rule)
+    value = drive.limit_ns(rule)
     assert value is not None
     return value
 
@@ -158,8 +156,8 @@ def evaluate(
     require_figures(drive)
     j = Fraction(latency_ns)
     at = active_at(drive, step_inverted)
-    active_rule = "step_low" if step_inverted else "step_high"
-    idle_rule = "step_high" if step_inverted else "step_low"
+    active_rule = width_rule(0 if step_inverted else 1)  # stepgen's pulse at the drive
+    idle_rule = width_rule(1 if step_inverted else 0)
     rows: list[tuple[str, str, tuple[str, ...]]] = [
         (active_rule, "stepgen's pulse", ("steplen",)),
         (idle_rule, "between pulses, same direction", ("stepspace",)),

@@ -23,6 +23,7 @@ from wavecheck.engine.results import RuleResult
 from wavecheck.engine.verdicts import Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report.assumptions import assumptions
+from wavecheck.rules import rule
 from wavecheck.units import json_number
 
 if TYPE_CHECKING:
@@ -60,7 +61,7 @@ def _datasheet_ns(r: RuleResult) -> Fraction | None:
     fig = r.figure
     if fig is None or fig.datasheet is None:
         return None
-    return Fraction(10**9) / fig.datasheet if r.rule == "step_period" else fig.datasheet
+    return rule(r.rule).limit_ns(fig.datasheet)
 
 
 def _violation(v: Violation) -> dict[str, Any]:

@@ -15,6 +15,7 @@ from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import ViolationGroup, group_violations
+from wavecheck.rules import rule
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
 
 if TYPE_CHECKING:
@@ -167,7 +168,7 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
     out += _table(rows)
     out += [
         f"{r.rule}: limit {_ns(r.limit_ns)} applied ({r.figure.applied}); datasheet "
-        f"{_ns(r.figure.datasheet) if r.rule != 'step_period' else _ns(10**9 / r.figure.datasheet)}"
+        f"{_ns(rule(r.rule).limit_ns(r.figure.datasheet))}"
         for r in report.rules
         if r.figure is not None and r.figure.applied and r.figure.datasheet is not None
     ]

@@ -13,7 +13,7 @@ import shlex
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from wavecheck.linuxcnc.steptypes import StepKind
+from wavecheck.steptypes import StepKind
 
 __all__ = [
     "AxisProposal",

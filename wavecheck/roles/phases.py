@@ -27,8 +27,8 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
-from wavecheck.linuxcnc.steptypes import PHASE_NAMES, STATE_TABLES, step_type
 from wavecheck.roles.names import name_hint
+from wavecheck.steptypes import PHASE_NAMES, STATE_TABLES, step_type
 
 __all__ = ["PhaseGroup", "find_phase_groups"]
 

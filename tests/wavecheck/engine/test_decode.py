@@ -11,7 +11,7 @@ from tests.wavecheck.waves import capture, pulses
 from wavecheck.engine.decode import active_edges, decode
 from wavecheck.engine.interface import build_interface
 from wavecheck.errors import ConfigError, UsageError
-from wavecheck.linuxcnc.steptypes import STATE_TABLES, step_type
+from wavecheck.steptypes import STATE_TABLES, step_type
 
 
 def _iface(signals, mapping, invert=()):

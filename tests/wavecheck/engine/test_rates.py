@@ -8,18 +8,18 @@ import pytest
 
 from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.engine.rates import drive_rate
+
 
 US = 1000
 
 
 def test_drive_rate_is_the_smaller_of_max_rate_and_pulse_sum() -> None:
-    assert drive_rate(g202()) == (Fraction(200_000), "max_rate")  # 1/(4.5+0.5 µs) = 200 kHz too
-    assert drive_rate(drive(max_rate_hz=500_000, step_high=1900, step_low=1900)) == (
+    assert g202().step_rate() == (Fraction(200_000), "max_rate")  # 1/(4.5+0.5 µs) = 200 kHz too
+    assert drive(max_rate_hz=500_000, step_high=1900, step_low=1900).step_rate() == (
         Fraction(10**9, 3800),
         "pulse",
     )
-    assert drive_rate(drive(step_high=1)) == (None, None)
+    assert drive(step_high=1).step_rate() == (None, None)
 
 
 def test_observed_and_headroom_rising_edge() -> None:

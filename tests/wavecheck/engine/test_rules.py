@@ -8,7 +8,7 @@ import pytest
 
 from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, g202, pulses
-from wavecheck.linuxcnc.steptypes import step_type
+from wavecheck.steptypes import step_type
 
 US = 1000  # ticks per µs at the default 1 ns tick
 
