@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import re
 from fractions import Fraction
 
 from wavecheck.errors import ConfigError, UnitError
@@ -12,7 +13,7 @@ from wavecheck.units import exact_number, shown
 
 __all__ = ["MAX_CONFIG_BYTES", "number", "read_text", "where"]
 
-_SUFFIX = "fFlLuU"
+_SUFFIX = re.compile(r"(.*[\d.])[fFlLuU]+")
 
 
 def number(
@@ -32,8 +33,9 @@ def number(
             an exponent beyond ±40, or out of the range (the range is named).
     """
     raw = text.strip()
+    suffixed = _SUFFIX.fullmatch(raw)
     try:
-        value = exact_number(raw.rstrip(_SUFFIX))
+        value = exact_number(suffixed.group(1) if suffixed else raw)
     except UnitError as err:
         raise ConfigError(f"{place}: {what} {err}") from None
     if (low is not None and value < low) or (high is not None and value > high):

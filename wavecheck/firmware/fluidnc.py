@@ -18,8 +18,9 @@ What each engine guarantees at the pin:
   after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
   (``uncertain``).
 - **I2S_STATIC / I2S_STREAM**: pins change only at I2S frame boundaries; the pulse is raised to
-  at least one frame, capped at 20 µs, rounded up to whole frames; ``dir_delay_us`` is pushed as
-  samples before the step (0: DIR and STEP change in the same frame).
+  at least one frame, capped at 20 µs, rounded up to whole frames; ``dir_delay_us`` becomes
+  whole frames before the step, rounded down (``i2s_out_push_sample`` divides by the frame;
+  I2S_STREAM pushes at least one), so a delay under one frame may be none on I2S_STATIC.
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
 after the last pulse's leading edge when the step rate stays under the engine's maximum
@@ -60,9 +61,12 @@ _AXES = "xyzabcuvw"
 
 
 def looks_like(text: str) -> bool:
-    """A FluidNC machine file: top-level ``axes:`` with ``stepping:`` or a ``board:`` line."""
-    return bool(re.search(r"^axes\s*:", text, re.M)) and bool(
-        re.search(r"^(stepping|board|kinematics)\s*:", text, re.M)
+    """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
+    (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
+    return (
+        bool(re.search(r"^axes\s*:\s*(#.*)?$", text, re.M))
+        and bool(re.search(r"^\s+[xyzabc]\s*:\s*(#.*)?$", text, re.M))
+        and not re.search(r"^\[[^\]]+\]\s*$", text, re.M)
     )
 
 
@@ -200,9 +204,16 @@ def _setup(engine: str, dir_delay: Guaranteed, frame: Fraction | None) -> Guaran
         note = "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
         return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
     assert frame is not None
-    value = ceil_to(dd, frame)
-    note = "I2S: dir_delay_us is pushed as frames before the step (0: DIR and STEP in one frame)"
-    return Guaranteed(value, dir_delay.setting, dir_delay.where, "us", "derived", note)
+    frames = dd // frame
+    if engine == "I2S_STREAM" and dd:
+        frames = max(frames, 1)  # i2s_out_push_sample: whole frames, at least one sample
+    note = (
+        "I2S: dir_delay_us becomes whole frames before the step (FluidNC's I2SOut.cpp divides "
+        "it by the frame"
+        + (", at least one" if engine == "I2S_STREAM" else "; DIR and STEP may share a frame")
+        + ")"
+    )
+    return Guaranteed(frames * frame, dir_delay.setting, dir_delay.where, "us", "derived", note)
 
 
 def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fraction | None:

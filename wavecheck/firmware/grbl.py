@@ -135,8 +135,9 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         files=(p,),
         unsupported=(f"not timing settings, not read: {' '.join(other)}",) if other else (),
         notes=(
-            f"{flavour} (read from the settings present); $0 and $29 apply to every axis; "
-            "$2/$3 bit 0 = X, 1 = Y, 2 = Z",
+            f"{flavour} (read from the settings present); "
+            + ("$0 and $29 apply" if flavour == "grblHAL" else "$0 applies")
+            + " to every axis; $2/$3 bit 0 = X, 1 = Y, 2 = Z",
             *notes,
         ),
         fixer=_fixer(flavour),

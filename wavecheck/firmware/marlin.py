@@ -46,6 +46,7 @@ from wavecheck.firmware.guarantee import (
     unknown,
 )
 from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
+from wavecheck.units import shown
 
 __all__ = ["ERAS", "Era", "Table", "looks_like", "read"]
 
@@ -176,9 +177,11 @@ def _options(h: Headers, name: str, unit: str, scale: int = 1) -> list[_Opt]:
             continue
         v = evaluate(h, d.value)
         if not isinstance(v, Num):
-            raise ConfigError(f"{d.where}: {name} {d.value!r} is not a number ({unit})")
+            raise ConfigError(f"{d.where}: {name} {shown(d.value)} is not a number ({unit})")
         if not 0 <= v.value <= 10**12:
-            raise ConfigError(f"{d.where}: {name} {d.value!r} is out of range (0 .. 1e12 {unit})")
+            raise ConfigError(
+                f"{d.where}: {name} {shown(d.value)} is out of range (0 .. 1e12 {unit})"
+            )
         out.append(_Opt(v.value * scale, d.where, d.depends))
     return out
 

@@ -294,6 +294,9 @@ class Headers:
 
 
 _UNKNOWN = ("unk", "?")
+#: C++ functional casts Marlin's configurations use: name → makes a floating value.
+_CASTS = {"double": True, "float": True, "int": False, "long": False, "uint32_t": False,
+          "int32_t": False}  # fmt: skip
 _FUNCTIONS = {
     "ENABLED",
     "DISABLED",
@@ -491,6 +494,17 @@ class _Parser:
                 return _tri(self.h._defined(name))
             if tok in _FUNCTIONS:
                 return self.call(tok)
+            if tok in _CASTS and self.peek() == "(":
+                self.take()
+                inner = self.expr()
+                if self.peek() == ")":
+                    self.take()
+                if not isinstance(inner, Num):
+                    return None
+                if _CASTS[tok]:
+                    return Num(inner.value, False)
+                whole = abs(inner.value.numerator) // inner.value.denominator
+                return Num(Fraction(whole if inner.value >= 0 else -whole), True)
             if tok in ("true", "false"):
                 return Num(Fraction(int(tok == "true")), True)
             if self.peek() == "(":

@@ -39,7 +39,9 @@ __all__ = ["looks_like", "read"]
 
 _FAST_NS = Fraction(200)
 _MB6XD_NS = Fraction(2500)
-_WORD = re.compile(r"([A-Za-z])\s*(\"[^\"]*\"|\{[^}]*\}|[-+0-9.:eE]+)?")
+_WORD = re.compile(
+    r"([A-Za-z])\s*(\"[^\"]*\"|\{[^}]*\}|[-+]?(?:(?i:nan|inf(?:inity)?)\b|[-+0-9.:eE]+))?"
+)
 _AXES = "XYZUVWABCD"
 _MAX_INCLUDES = 64
 _US = 1000
