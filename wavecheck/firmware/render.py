@@ -231,6 +231,12 @@ def config_junit(result: ConfigResult) -> str:
         counts = {"failure": 0, "skipped": 0, "pass": 0}
         for row in pair.rows:
             counts[_junit_case(suite, f"{base}.{pair.axis.axis}", row)] += 1
+        if pair.verdict == "unchecked":  # the command exits 3: the suite must not read as green
+            case = ET.SubElement(suite, "testcase", classname=f"{base}.{pair.axis.axis}",
+                                 name="verdict", time="0")  # fmt: skip
+            ET.SubElement(case, "failure", type="unchecked",
+                          message="nothing was checked: the drive states none of the figures")  # fmt: skip
+            counts["failure"] += 1
         suite.set("tests", str(sum(counts.values())))
         suite.set("failures", str(counts["failure"]))
         suite.set("errors", "0")

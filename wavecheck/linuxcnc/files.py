@@ -96,7 +96,7 @@ def _read_ini_into(path: Path, ini: IniFile, stack: list[Path]) -> None:
         raw = lines[no]
         no += 1
         while raw.rstrip().endswith("\\") and no < len(lines):
-            raw = raw.rstrip()[:-1] + " " + lines[no].strip()
+            raw = raw.rstrip()[:-1].rstrip() + " " + lines[no].strip()
             no += 1
         line = raw.strip()
         if line.startswith("#INCLUDE"):
