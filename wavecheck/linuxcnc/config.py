@@ -99,6 +99,9 @@ class LinuxCNCConfig:
             / ``velocity-cmd``, None if not set.
         enable: ``setp stepgen.N.enable`` (None: not set).
         enable_connected: a ``net`` drives ``stepgen.N.enable``.
+        stepgen_loaded: a ``loadrt stepgen`` was read.
+        hal_read: HAL commands were read (a configuration's HAL files, not only options).
+        stepgen_named: a HAL command names a ``stepgen.`` pin, parameter or function.
         ignored: what the files say that the model does not honour, one line each.
     """
 
@@ -118,6 +121,8 @@ class LinuxCNCConfig:
     enable: bool | None = None
     enable_connected: bool = False
     stepgen_loaded: bool = False
+    hal_read: bool = False
+    stepgen_named: bool = False
     ignored: list[str] = field(default_factory=list)
 
     def periods(self) -> dict[str, int]:
@@ -321,6 +326,8 @@ def _parse_lines(lines: Sequence[HalLine], cfg: LinuxCNCConfig, ini: IniFile | N
         words = hal_words(hal.text)
         if not words:
             continue
+        if any(w.startswith("stepgen.") for w in words):
+            cfg.stepgen_named = True
         if words[0] == "loadrt" and len(words) > 1:
             module = ini_value(words[1], ini)
             if module in ("stepgen", "threads", "motmod"):
@@ -409,7 +416,7 @@ def read_config_lines(
     (:func:`~wavecheck.linuxcnc.files.hal_lines`)."""
     if channel < 0:
         raise ConfigError(f"--channel {channel} must be 0 or more")
-    cfg = LinuxCNCConfig(channel=channel)
+    cfg = LinuxCNCConfig(channel=channel, hal_read=bool(lines))
     if ini_file is not None:
         for key, attr in (("BASE_PERIOD", "base_period_ns"), ("SERVO_PERIOD", "servo_period_ns")):
             found = ini_file.get("EMCMOT", key)
@@ -466,6 +473,11 @@ def config_rates(
         step_type: the step type checked (default ``cfg.step_type``, else 0). Types ≥ 2 have no
             stepspace (config = 1 / (steplen·P)) and no latency_safe (the plan is step/dir's).
     """
+    if cfg.hal_read and not cfg.stepgen_loaded and not cfg.stepgen_named:
+        return ConfigRates(None, None, (
+            "no software stepgen: the HAL files load no stepgen, so stepgen's config and "
+            "latency_safe rates do not apply (a hostmot2 or other card makes the steps)",
+        ), cfg.channel, cfg.base_period_ns or 0, None)  # fmt: skip
     p = cfg.require_base_period()
     j = None if latency_ns is None else Fraction(latency_ns)
 
