@@ -29,6 +29,7 @@ from wavecheck.linuxcnc.files import (
     hal_lines,
     hal_words,
     ini_value,
+    is_file,
     read_ini,
     read_text,
 )
@@ -198,11 +199,11 @@ def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
 def _find(folder: Path, name: str, libs: list[Path]) -> Path | None:
     if name.startswith("LIB:"):
         candidates = [d / name[4:] for d in libs]
-    elif Path(name).expanduser().is_absolute():
-        candidates = [Path(name).expanduser()]
+    elif Path(name).is_absolute():
+        candidates = [Path(name)]
     else:
         candidates = [folder / name, *(d / name for d in libs)]
-    return next((c for c in candidates if c.is_file()), None)
+    return next((c for c in candidates if is_file(c)), None)
 
 
 def _add(files: LinuxCNCFiles, hal: Path) -> None:

@@ -30,6 +30,7 @@ delta tower may step faster, so its rate is unknown.
 
 from __future__ import annotations
 
+import glob
 import os
 import re
 from dataclasses import dataclass, field
@@ -46,6 +47,7 @@ from wavecheck.firmware.guarantee import (
     Role,
     unknown,
 )
+from wavecheck.linuxcnc.files import is_file
 
 __all__ = ["MCUS", "TMC_SECTIONS", "looks_like", "read"]
 
@@ -142,12 +144,17 @@ def _parse(
 def _include(
     path: Path, pattern: str, sections: dict[str, _Section], header: list[str], seen: set[Path]
 ) -> list[str]:
-    found = sorted(path.parent.glob(pattern)) if pattern else []
+    try:
+        found = sorted(
+            Path(p) for p in glob.glob(os.path.join(path.parent, pattern))[:_MAX_INCLUDES]
+        )
+    except (OSError, ValueError):
+        found = []
     if not found:
         return [f"{path}: [include {pattern}] matches no file beside it; not read"]
     notes: list[str] = []
     for inc in found:
-        if inc.resolve() in seen or not inc.is_file():
+        if not is_file(inc) or inc.resolve() in seen:
             continue
         if len(seen) >= _MAX_INCLUDES:
             raise ConfigError(f"{path}: more than {_MAX_INCLUDES} included files")
@@ -256,7 +263,7 @@ def _mcus(
 
 def _not_avr_pin(pin: str) -> bool:
     """True for a pin name no ATmega has: a port pin numbered 8 or more, ``P1.20``, ``gpio5``."""
-    m = re.fullmatch(r"P([A-Z])(\d+)", pin, re.I)
+    m = re.fullmatch(r"P([A-Z])(\d{1,3})", pin, re.I)
     if m:
         return int(m.group(2)) >= 8
     return bool(re.fullmatch(r"P\d+\.\d+|gpio\d+(_\d+)?", pin, re.I))

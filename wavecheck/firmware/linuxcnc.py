@@ -98,6 +98,12 @@ def axes(files: LinuxCNCFiles, latency_ns: Fraction | None) -> list[GeneratorGua
 
 
 def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
+    if cfg.base_period_ns is None:
+        place = cfg.sources.get("step_type", files.path)
+        raise ConfigError(
+            f"{place}: stepgen is loaded but no base period is known: no [EMCMOT] BASE_PERIOD, "
+            "and stepgen.make-pulses runs in no thread with a period"
+        )
     p = cfg.require_base_period()
     n = cfg.periods()
     src = cfg.sources
@@ -198,7 +204,9 @@ def joint_of(files: LinuxCNCFiles, gen: str) -> tuple[int | None, str]:
     joint = None
     for pin in (f"{gen}.position-cmd", f"{gen}.velocity-cmd"):
         for other in files.on_signal(pin):
-            m = re.fullmatch(r"joint\.(\d+)\.motor-pos-cmd|axis\.(\d+)\.motor-pos-cmd", other)
+            m = re.fullmatch(
+                r"joint\.(\d{1,3})\.motor-pos-cmd|axis\.(\d{1,3})\.motor-pos-cmd", other
+            )
             if m:
                 joint = int(m.group(1) or m.group(2))
     if joint is None:

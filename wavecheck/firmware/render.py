@@ -117,12 +117,14 @@ def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
         "unit": fig.unit,
         "status": fig.status,
         "note": fig.note,
+        "disputed": json_number(fig.disputed),
     }
 
 
 def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
     return {
         "axis": a.axis,
+        "aliases": list(a.aliases),
         "pulse_level": a.pulse_level,
         "active_edge": a.active_edge,
         "both_edges": a.both_edges,

@@ -34,6 +34,7 @@ from wavecheck.firmware.guarantee import (
     Role,
     unknown,
 )
+from wavecheck.linuxcnc.files import is_file
 
 __all__ = ["looks_like", "read"]
 
@@ -127,7 +128,7 @@ def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: 
         return
     rel = re.sub(r"^(\d+:)?/?(sys/)?", "", name)
     inc = sys_dir / rel
-    if not inc.is_file():
+    if not is_file(inc):
         st.unsupported.append(f'{at}: M98 P"{name}" is not beside {path.name}; not read')
         return
     if inc.resolve() in seen or len(seen) >= _MAX_INCLUDES:

@@ -22,6 +22,7 @@ __all__ = [
     "hal_words",
     "ini_value",
     "int_ns",
+    "is_file",
     "MAX_CONFIG_BYTES",
     "loadrt_args",
     "read_ini",
@@ -63,6 +64,15 @@ class IniFile:
         return f"{files[index] if index < len(files) else self.path}:{value[1]}"
 
 
+def is_file(path: str | os.PathLike[str]) -> bool:
+    """True for an existing regular file; False for a name the system refuses (too long, a
+    NUL byte) as for a missing one."""
+    try:
+        return Path(path).is_file()
+    except (OSError, ValueError):
+        return False
+
+
 #: ``#INCLUDE`` nesting LinuxCNC's INI files may use (a loop is refused).
 _MAX_INCLUDE_DEPTH = 8
 
@@ -101,8 +111,8 @@ def _read_ini_into(path: Path, ini: IniFile, stack: list[Path]) -> None:
         line = raw.strip()
         if line.startswith("#INCLUDE"):
             name = line[len("#INCLUDE") :].strip()
-            target = (path.parent / name).expanduser()
-            if not name or not target.is_file():
+            target = path.parent / name
+            if not name or not is_file(target):
                 raise ConfigError(f"{path}:{first}: #INCLUDE {name}: no such file beside it")
             _read_ini_into(target, ini, stack)
             continue
