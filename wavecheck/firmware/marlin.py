@@ -297,6 +297,9 @@ class _Timing:
     pre: Fraction
     rate: Fraction | None
     why: str
+    """How the pulse and rate were found (defaults, 0 = unset)."""
+    dir_why: str = ""
+    """How the DIR delay was found."""
 
 
 def _timing(era: Era, table: Table, types: set[str], settings: dict[str, _Opt]) -> _Timing | None:
@@ -332,14 +335,16 @@ def _timing(era: Era, table: Table, types: set[str], settings: dict[str, _Opt]) 
     else:
         return None
     post = settings["post"].value
+    dir_why = ""
     if post is None:
-        post = Fraction(_first(table.dir_ns, table.dir_else, types)[0] or 0)
+        dv, row = _first(table.dir_ns, table.dir_else, types)
+        post, dir_why = Fraction(dv or 0), f"Marlin's default for {row}"
     pre = settings["pre"].value
     if era.single_dir_delay:
         pre = Fraction(0)
     elif pre is None:
         pre = post
-    return _Timing(high, low, post, pre, rate, "; ".join(why))
+    return _Timing(high, low, post, pre, rate, "; ".join(why), dir_why)
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
@@ -451,13 +456,13 @@ def _figures(
             results[0][0], results[0][1]
         )  # fmt: skip
 
-    def source(name: str, opt: _Opt, t: _Timing, unit: str) -> tuple[str, str, str]:
+    def source(name: str, opt: _Opt, why: str) -> tuple[str, str, str]:
         if opt.value is not None:
             return name, opt.where, "set"
-        return name, "Marlin default" + (f" ({t.why})" if t.why else ""), "default"
+        return name, why or "Marlin's default", "default"
 
     t, s = pick(lambda x: x.pulse)
-    name, at, st = source(pulse_name, s["pulse"], t, "")
+    name, at, st = source(pulse_name, s["pulse"], t.why)
     if s["pulse"].value is not None and t.pulse != s["pulse"].value:
         at = f"{at}; {t.why}"
     pulse = Guaranteed(t.pulse, name, at, "ns" if era is ERAS[0] else "us", "uncertain",
@@ -468,7 +473,7 @@ def _figures(
                       "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), enforced "
                       "between pulses of one interrupt")  # fmt: skip
     t, s = pick(lambda x: x.post)
-    name, at, st = source(post_name, s["post"], t, "ns")
+    name, at, st = source(post_name, s["post"], t.dir_why)
     setup = Guaranteed(t.post, name, at, "ns", st,  # type: ignore[arg-type]
                        "" if t.post else 'no delay: "expect at least 10 us, one stepper ISR"')  # fmt: skip
     t, s = pick(lambda x: x.pre)

@@ -7,6 +7,7 @@ import os
 import re
 import shlex
 import stat
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +26,7 @@ __all__ = [
     "is_file",
     "MAX_CONFIG_BYTES",
     "loadrt_args",
+    "logical_lines",
     "read_ini",
     "read_text",
     "resolve_ref",
@@ -64,6 +66,25 @@ class IniFile:
         return f"{files[index] if index < len(files) else self.path}:{value[1]}"
 
 
+def logical_lines(text: str) -> Iterator[tuple[int, str]]:
+    """(first line number, text) of each line with its ``\\`` continuations joined by one space
+    (LinuxCNC's INI and HAL files continue a line so), stripped; linear in the text."""
+    parts: list[str] = []
+    first = 1
+    for no, raw in enumerate(text.splitlines(), 1):
+        if not parts:
+            first = no
+        line = raw.strip()
+        if line.endswith("\\"):
+            parts.append(line[:-1].strip())
+            continue
+        parts.append(line)
+        yield first, " ".join(p for p in parts if p)
+        parts = []
+    if parts:
+        yield first, " ".join(p for p in parts if p)
+
+
 def is_file(path: str | os.PathLike[str]) -> bool:
     """True for an existing regular file; False for a name the system refuses (too long, a
     NUL byte) as for a missing one."""
@@ -99,16 +120,7 @@ def _read_ini_into(path: Path, ini: IniFile, stack: list[Path]) -> None:
                           f"more than {_MAX_INCLUDE_DEPTH} deep")  # fmt: skip
     text = read_text(path)
     stack = [*stack, path.resolve()]
-    lines = text.splitlines()
-    no = 0
-    while no < len(lines):
-        first = no + 1
-        raw = lines[no]
-        no += 1
-        while raw.rstrip().endswith("\\") and no < len(lines):
-            raw = raw.rstrip()[:-1].rstrip() + " " + lines[no].strip()
-            no += 1
-        line = raw.strip()
+    for first, line in logical_lines(text):
         if line.startswith("#INCLUDE"):
             name = line[len("#INCLUDE") :].strip()
             target = path.parent / name
@@ -251,15 +263,7 @@ def hal_lines(path: str | os.PathLike[str]) -> tuple[list[HalLine], list[str]]:
     tcl = str(path).lower().endswith(".tcl")
     out: list[HalLine] = []
     computed: list[str] = []
-    lines = text.splitlines()
-    no = 0
-    while no < len(lines):
-        first = no + 1
-        raw = lines[no]
-        no += 1
-        while raw.rstrip().endswith("\\") and no < len(lines):
-            raw = raw.rstrip()[:-1] + " " + lines[no]
-            no += 1
+    for first, raw in logical_lines(text):
         line = (raw.split(";#", 1)[0] if tcl else raw).split("#", 1)[0].strip()
         if not line:
             continue

@@ -52,7 +52,7 @@ def test_hal_continuations_keep_their_first_line(tmp_path: Path) -> None:
     )
     lines, computed = hal_lines(tmp_path / "m.hal")
     assert [(x.text, x.where.rsplit(":", 1)[1]) for x in lines] == [
-        ("loadrt stepgen    step_type=0", "2"), ("setp stepgen.0.steplen 1", "4")]  # fmt: skip
+        ("loadrt stepgen step_type=0", "2"), ("setp stepgen.0.steplen 1", "4")]  # fmt: skip
     assert computed == []
 
 
