@@ -30,9 +30,9 @@ __all__ = ["UNMODELLED", "looks_like", "read"]
 UNMODELLED: dict[str, str] = {
     "hal_gm": "the General Mechatronics GM6-PCI card's step generators",
     "hal_ppmc": "the Pico Systems PPMC/USC/UPC boards' step generators",
-    "pluto_step": "the Pluto-P FPGA step generator",
-    "hal_motenc": "the Vital Systems MOTENC card",
-    "hal_ax5214h": "the Axiom AX5214H card",
+    "pluto_step": "the Pluto-P FPGA's step generators",
+    "hal_motenc": "the Vital Systems MOTENC card's outputs",
+    "hal_ax5214h": "the Axiom AX5214H card's outputs",
 }
 _HM2 = re.compile(r"^(hostmot2|hm2_\w+)$")
 
