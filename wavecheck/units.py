@@ -48,6 +48,7 @@ __all__ = [
     "Plausible",
     "check_plausible",
     "exact_ns",
+    "exact_number",
     "format_frequency",
     "format_ns",
     "format_rate",
@@ -149,6 +150,24 @@ def _in_range(value: Fraction, dim: Dimension, text: object) -> None:
     if value and not low <= abs(value) <= high:
         why = f"out of range (a {dim} is from {span})"
         raise _Bad(f"{shown(text)} is {why}", why)
+
+
+_BARE = re.compile(rf"^\s*({_NUMBER})\s*$")
+
+
+def exact_number(text: str) -> Fraction:
+    """A bare number as written in a file (``"333.3333"``, ``"1e-6"``, ``"1000."``), exact, with
+    the bounds of every number here: NaN, infinities, more than 40 significant digits and
+    exponents beyond ±40 are refused (a :class:`~wavecheck.errors.UnitError` whose ``reason``
+    says why), so ``1e999999999`` costs no time.
+
+    >>> exact_number("2.5e-6")
+    Fraction(1, 400000)
+    """
+    match = _BARE.match(text)
+    if not match:
+        raise _Bad(f"{shown(text)} is not a number", "not a number")
+    return _exact(match.group(1), text)
 
 
 def is_number(text: object) -> bool:

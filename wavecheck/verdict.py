@@ -7,7 +7,7 @@ A rule is ``pass``, ``fail``, ``indeterminate`` (the sample rate cannot decide i
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Literal
 
 __all__ = [
@@ -18,6 +18,7 @@ __all__ = [
     "Verdict",
     "exit_code",
     "overall_verdict",
+    "qualified_verdict",
     "verdict_of_exit",
     "worst_exit_code",
 ]
@@ -62,3 +63,11 @@ def verdict_of_exit(code: int) -> Verdict | None:
 def worst_exit_code(codes: Iterable[int]) -> int:
     """The worst of several exit codes: 2 > 1 > 3 > 0."""
     return max(codes, key=lambda c: _SEVERITY.get(c, 3), default=EXIT_PASS)
+
+
+def qualified_verdict(verdict: Verdict | str, unchecked: Mapping[str, Sequence[str]]) -> str:
+    """The verdict as a report's verdict line says it: upper case, followed by the rules that
+    were not checked grouped by why (``unchecked``: reason → rule ids), so a PASS never hides an
+    unchecked rule: ``PASS (dir_setup, dir_hold not checked: no DIR channel)``."""
+    parts = [f"{', '.join(rules)} not checked: {why}" for why, rules in unchecked.items() if rules]
+    return verdict.upper() + (f" ({'; '.join(parts)})" if parts else "")

@@ -1,16 +1,18 @@
 """``wavecheck config FILE --drive ID [--drive AXIS=ID]``: can this firmware configuration meet
 the drive? No capture needed.
 
-FILE is a grbl/grblHAL ``$$`` dump, a Klipper ``printer.cfg``, a Marlin ``Configuration.h`` (its
-``Configuration_adv.h`` is read beside it), a RepRapFirmware ``config.g``, a Smoothieware
-``config``, or a LinuxCNC INI (software stepgen or Mesa hm2 stepgen; its HALFILEs are read). The
+FILE is a grbl/grblHAL/Grbl_ESP32 ``$$`` dump, a Klipper ``printer.cfg``, a Marlin
+``Configuration.h`` (its ``Configuration_adv.h`` is read beside it), a RepRapFirmware ``config.g``,
+a Smoothieware ``config``, a FluidNC ``config.yaml``, or a LinuxCNC INI (software stepgen or Mesa
+hm2 stepgen, decided by what its HALFILEs load). The
 format is detected by content (``--firmware-format`` forces it). For every axis and every rule:
 the generator's guaranteed figure, the drive's limit, the margin, pass/fail, the max step rate the
 pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 something cannot be
 proven from the configuration (measure it), 2 unusable input.
 
-Also here: the options ``check`` shares (``--firmware``, ``--limit``, ``--margin``) and
-:func:`check_firmware`, which ``check --firmware`` runs on each report.
+Also here: the options ``check`` shares (``--firmware``, ``--firmware-axis``, ``--limit``,
+``--margin``) and :func:`check_firmware`, which ``check --firmware`` runs on each report and
+``measure --firmware`` on each axis (pairing: :mod:`wavecheck.firmware.pairing`).
 """
 
 from __future__ import annotations
@@ -25,14 +27,12 @@ from wavecheck.drives.model import Drive
 from wavecheck.drives.tune import tune_drive
 from wavecheck.errors import UsageError
 from wavecheck.firmware import FIRMWARES, read_firmware
-from wavecheck.firmware.model import FirmwareConfig
+from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import parse_frequency, time_ns
-from wavecheck.verdict import exit_code, overall_verdict
 
 if TYPE_CHECKING:  # imported where used: only with a firmware configuration
     from wavecheck.firmware.capture import FirmwareCheck
-    from wavecheck.firmware.evaluate import PairResult
 
 __all__ = [
     "add_firmware_arguments",
@@ -74,7 +74,16 @@ def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = Fal
         p.add_argument(
             "--axis",
             metavar="NAME",
-            help="the axis of --firmware FILE captured (default: the first)",
+            help="the axis of --firmware FILE a single unnamed capture axis is (default: the "
+            "only or the first; the report says which)",
+        )
+        p.add_argument(
+            "--firmware-axis",
+            action="append",
+            default=[],
+            metavar="CAPTURE=FIRMWARE",
+            help="pair a capture axis with a firmware axis of another name (y=beta, "
+            "x=stepper_x; repeatable); otherwise axes pair by name",
         )
     p.add_argument(
         "--firmware-format",
@@ -97,18 +106,19 @@ def _read(args: argparse.Namespace, path: str) -> FirmwareConfig:
     )
 
 
-def check_firmware(args: argparse.Namespace, report: Any) -> FirmwareCheck:
-    """``check --firmware``: the report's capture against the configured axis."""
-    from wavecheck.firmware.capture import firmware_check
+def check_firmware(args: argparse.Namespace, subject: Any) -> FirmwareCheck:
+    """``check --firmware`` / ``measure --firmware``: one capture axis (a Report or an
+    :class:`~wavecheck.firmware.capture.Observed`) against its firmware axis."""
+    from wavecheck.firmware.capture import Observed, firmware_check
+    from wavecheck.firmware.pairing import pair_axis, parse_pairs
 
     cached = getattr(args, "_firmware_config", None)
     cfg: FirmwareConfig = cached if cached is not None else _read(args, args.firmware)
     args._firmware_config = cfg
-    try:
-        axis = cfg.axis(args.axis) if args.axis else cfg.axes[0]
-    except KeyError as err:
-        raise UsageError(f"--axis: {err.args[0]}") from None
-    return firmware_check(report, cfg, axis)
+    name = subject.axis_name if isinstance(subject, Observed) else subject.axis
+    pairing = pair_axis(cfg, name, parse_pairs(getattr(args, "firmware_axis", []) or []),
+                        getattr(args, "axis", None))  # fmt: skip
+    return firmware_check(subject, cfg, pairing.axis, str(pairing))
 
 
 def register(sub: Any) -> None:
@@ -129,7 +139,12 @@ def register(sub: Any) -> None:
     add_tuning_arguments(p)
     add_firmware_arguments(p, positional=True)
     p.add_argument("--latency", metavar="J", help="LinuxCNC: worst base-thread latency (e.g. 11us)")
-    p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    p.add_argument(
+        "--format",
+        choices=("text", "json", "junit"),
+        default="text",
+        help="report format (junit: one test case per axis and rule, for CI)",
+    )
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
@@ -139,16 +154,17 @@ def register(sub: Any) -> None:
 def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Drive]]:
     default: Drive | None = None
     per_axis: dict[str, Drive] = {}
-    names = {a.lower(): a for a in cfg.axis_names}
     for text in args.drive:
         axis, sep, ident = text.partition("=")
         drive = tune_drive(load_drive(ident if sep else text), args.limit, args.margin)
         if sep:
-            if axis.lower() not in names:
+            found = cfg.find(axis)
+            if found is None:
                 raise UsageError(
-                    f"--drive {text}: no axis {axis!r} in {cfg.path} (axes: {', '.join(cfg.axis_names)})"
+                    f"--drive {text}: no axis {axis!r} in {cfg.path} "
+                    f"(axes: {', '.join(cfg.axis_names)})"
                 )
-            per_axis[names[axis.lower()]] = drive
+            per_axis[found.axis] = drive
         elif default is None:
             default = drive
         else:
@@ -163,25 +179,25 @@ def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Dr
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck config``; returns the exit code."""
-    from wavecheck.firmware.evaluate import evaluate_pair
-    from wavecheck.firmware.render import config_dict, config_text
+    from wavecheck.firmware.evaluate import evaluate_config
+    from wavecheck.report.firmware import config_dict, config_junit, config_text
 
     cfg = _read(args, args.file)
-    results: list[PairResult] = [evaluate_pair(cfg, cfg.axis(a), d) for a, d in _drives(args, cfg)]
-    if not results:
+    result = evaluate_config(cfg, [(cfg.axis(a), d) for a, d in _drives(args, cfg)])
+    if not result.pairs:
         raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")
-    verdict = overall_verdict(r.verdict for r in results)
-    code = exit_code(verdict)
     if args.format == "json":
-        text = (
-            json.dumps(config_dict(cfg, results, verdict, code), indent=2, ensure_ascii=False)
-            + "\n"
-        )
+        text = json.dumps(config_dict(result), indent=2, ensure_ascii=False) + "\n"
+    elif args.format == "junit":
+        text = config_junit(result)
     else:
-        text = config_text(cfg, results, verdict)
+        text = config_text(result)
     if args.output:
         atomic_write(args.output, text)
-        print(f"{verdict}: {len(results)} axis/drive pair(s); report written to {args.output}")
+        print(
+            f"{result.verdict_line}: {len(result.pairs)} axis/drive pair(s); report written to "
+            f"{args.output}"
+        )
     else:
         sys.stdout.write(text)
-    return code
+    return result.exit_code

@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     if args.format == "json":
         doc = measurement_dict(m)
         if own:
-            from wavecheck.firmware.render import firmware_check_dict
+            from wavecheck.report.firmware import firmware_check_dict
 
             for axis, fc in zip(doc["axes"], own, strict=True):
                 axis["firmware"] = firmware_check_dict(fc)
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         text = render_measure_text(m)
         if own:
-            from wavecheck.firmware.render import firmware_check_lines
+            from wavecheck.report.firmware import firmware_check_lines
 
             for a, fc in zip(m.axes, own, strict=True):
                 head = [] if a.name is None else [f"axis {a.name}:"]

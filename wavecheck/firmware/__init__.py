@@ -1,21 +1,30 @@
 """Step-generator settings of motion firmware: what each configuration guarantees on the wire.
 
 :func:`read_firmware` detects the format by content (or takes ``fmt``) and returns one
-:class:`~wavecheck.firmware.model.FirmwareConfig` with a
-:class:`~wavecheck.firmware.model.GeneratorGuarantee` per axis. :mod:`.evaluate` compares a
+:class:`~wavecheck.firmware.guarantee.FirmwareConfig` with a
+:class:`~wavecheck.firmware.guarantee.GeneratorGuarantee` per axis. :mod:`.evaluate` compares a
 guarantee with a drive (``wavecheck config``); :mod:`.capture` compares it with a checked capture
-(``wavecheck check --firmware``).
+(``wavecheck check --firmware``); :mod:`.pairing` pairs capture axes with firmware axes.
+
+Every file is read with a bound (:func:`~wavecheck.linuxcnc.files.read_text`: devices, FIFOs
+and files over 4 MiB are refused) and every number with one (:func:`._text.number`).
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import read_text
-from wavecheck.firmware.model import FIRMWARES, FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.firmware.guarantee import (
+    FIRMWARES,
+    FirmwareConfig,
+    GeneratorGuarantee,
+    Guaranteed,
+)
 
 __all__ = [
     "FIRMWARES",
@@ -26,38 +35,43 @@ __all__ = [
     "read_firmware",
 ]
 
+#: Reader module of each format, in detection order (LinuxCNC INIs are decided by what their
+#: HAL files load, in :mod:`.linuxcnc_config`, so ``hm2`` and ``linuxcnc`` share one reader).
+_DETECT = ("grbl", "fluidnc", "marlin", "klipper", "rrf", "smoothie", "linuxcnc_config")
+_MODULE = {
+    "grbl": "grbl",
+    "klipper": "klipper",
+    "marlin": "marlin",
+    "reprapfirmware": "rrf",
+    "smoothieware": "smoothie",
+    "fluidnc": "fluidnc",
+    "hm2": "linuxcnc_config",
+    "linuxcnc": "linuxcnc_config",
+}
+_NAME = {"rrf": "reprapfirmware", "smoothie": "smoothieware", "linuxcnc_config": "linuxcnc"}
+
+
+def _reader(module: str):  # type: ignore[no-untyped-def]
+    # the readers are imported when a configuration is read, not at start-up
+    return importlib.import_module(f"wavecheck.firmware.{module}")
+
 
 def detect(path: str | os.PathLike[str]) -> str:
-    """The firmware of ``path`` by its content (a Marlin folder counts as Marlin).
+    """The firmware of ``path`` by its content (a Marlin folder counts as Marlin; a LinuxCNC
+    INI or HAL file is ``linuxcnc``, whatever step generator it loads).
 
     Raises:
         ConfigError: no format recognised (the hint names ``--firmware-format``).
     """
-    # the readers are imported when a configuration is read, not at start-up
-    from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smoothie
-
-    detectors = (
-        ("grbl", grbl.looks_like),
-        ("marlin", marlin.looks_like),
-        ("klipper", klipper.looks_like),
-        ("reprapfirmware", rrf.looks_like),
-        ("smoothieware", smoothie.looks_like),
-        ("hm2", hm2.looks_like),
-        ("linuxcnc", linuxcnc.looks_like),
-    )
     p = Path(path)
     if p.is_dir():
         if (p / "Configuration.h").is_file():
             return "marlin"
         raise ConfigError(f"{path}: a folder without Configuration.h; give a configuration file")
     text = read_text(p)
-    if p.suffix.lower() == ".ini" and hm2.looks_like(text):
-        return "hm2" if "[HOSTMOT2]" in text else "linuxcnc"
-    for name, looks in detectors:
-        if looks(text):
-            if name == "hm2" and p.suffix.lower() == ".ini" and "[HOSTMOT2]" not in text:
-                continue
-            return name
+    for module in _DETECT:
+        if _reader(module).looks_like(text):
+            return _NAME.get(module, module)
     raise ConfigError(
         f"{path}: not a configuration wavecheck recognises ({', '.join(FIRMWARES)}); "
         "give --firmware-format NAME if it is one of them"
@@ -73,21 +87,12 @@ def read_firmware(
 ) -> FirmwareConfig:
     """Read ``path`` as ``fmt`` (default: detected). ``latency_ns`` is LinuxCNC's J,
     ``clock_hz`` the hm2 stepgen clock."""
-    from wavecheck.firmware import grbl, hm2, klipper, linuxcnc, marlin, rrf, smoothie
-
     name = fmt or detect(path)
     if name not in FIRMWARES:
         raise ConfigError(f"unknown firmware format {name!r} (one of {', '.join(FIRMWARES)})")
-    if name == "grbl":
-        return grbl.read(path)
-    if name == "klipper":
-        return klipper.read(path)
-    if name == "marlin":
-        return marlin.read(path)
-    if name == "reprapfirmware":
-        return rrf.read(path)
-    if name == "smoothieware":
-        return smoothie.read(path)
-    if name == "hm2":
-        return hm2.read(path, clock_hz)
-    return linuxcnc.read(path, latency_ns)
+    reader = _reader(_MODULE[name])
+    if _MODULE[name] == "linuxcnc_config":
+        cfg: FirmwareConfig = reader.read(path, latency_ns=latency_ns, clock_hz=clock_hz, want=fmt)
+    else:
+        cfg = reader.read(path)
+    return cfg

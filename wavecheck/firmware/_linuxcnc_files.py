@@ -1,42 +1,51 @@
-"""The files of a LinuxCNC configuration: an INI and the HAL files its ``[HAL] HALFILE`` names
-(or one HAL file given alone). Shared by the hm2 and software-stepgen readers."""
+"""The files of a LinuxCNC configuration, read as the ``linuxcnc`` script reads them: the INI
+(continuations and ``#INCLUDE`` followed, :func:`~wavecheck.linuxcnc.files.read_ini`), every
+``[HAL] HALFILE`` and ``POSTGUI_HALFILE`` (beside the INI, else in LinuxCNC's HAL library;
+``LIB:name`` only there; ``.tcl`` files read for their literal HAL commands) and every
+``HALCMD``; or one HAL file given alone.
+
+LinuxCNC's HAL library is looked for in ``$HALLIB_DIR``, in the ``lib/hallib`` folder of a
+LinuxCNC tree the INI sits in (``…/configs/…`` beside ``…/lib/hallib``, as a run-in-place build
+has it) and in the installed ``/usr/share/linuxcnc/hallib``. A HALFILE found nowhere is named,
+with the consequence, in :attr:`LinuxCNCFiles.not_read`.
+
+:class:`LinuxCNCFiles` also answers what the HAL commands say: which modules are loaded, the
+``setp`` values, which pins share a signal and which function runs in which thread. Shared by
+the software-stepgen and hm2 readers and by :mod:`.linuxcnc_config`, which decides from it.
+"""
 
 from __future__ import annotations
 
 import os
 import re
+from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
-from wavecheck.linuxcnc.files import IniFile, read_ini
+from wavecheck.errors import ConfigError
+from wavecheck.linuxcnc.files import (
+    HalLine,
+    IniFile,
+    hal_lines,
+    hal_words,
+    ini_value,
+    is_file,
+    read_ini,
+    read_text,
+)
 
-__all__ = ["expand_refs", "files_of", "is_ini"]
+__all__ = ["LinuxCNCFiles", "expand_refs", "hallib_dirs", "is_ini", "scan"]
 
 _INLINE = re.compile(r"\[([^\]]+)\]\(([^)]+)\)")
+_INSTALLED_HALLIB = Path("/usr/share/linuxcnc/hallib")
+_MAX_HAL_FILES = 64
 
 
 def is_ini(text: str) -> bool:
     """True for an INI file (section headers and ``KEY = VALUE`` lines, no HAL commands)."""
-    return bool(re.search(r"^\s*\[[A-Z_0-9]+\]\s*$", text, re.M)) and not re.search(
+    return bool(re.search(r"^\s*(\[[A-Za-z_0-9]+\]|#INCLUDE\s)", text, re.M)) and not re.search(
         r"^\s*(loadrt|setp|net|addf)\s", text, re.M
     )
-
-
-def files_of(
-    path: str | os.PathLike[str], text: str
-) -> tuple[IniFile | None, list[Path], list[str]]:
-    """(INI or None, HAL files, notes) for ``path`` (an INI or a HAL file)."""
-    if not is_ini(text):
-        return None, [Path(path)], []
-    ini = read_ini(path)
-    hals: list[Path] = []
-    notes: list[str] = []
-    for value, line in ini.sections.get("HAL", {}).get("HALFILE", []):
-        hal = Path(path).parent / value
-        if hal.is_file():
-            hals.append(hal)
-        else:
-            notes.append(f"{path}:{line}: HALFILE {value} not found beside the INI; not read")
-    return ini, hals, notes
 
 
 def expand_refs(text: str, ini: IniFile | None) -> str:
@@ -50,3 +59,157 @@ def expand_refs(text: str, ini: IniFile | None) -> str:
         return found[0].strip('"') if found else m.group(0)
 
     return _INLINE.sub(sub, text)
+
+
+def hallib_dirs(ini_path: Path) -> list[Path]:
+    """LinuxCNC's HAL library folders for a configuration at ``ini_path``, existing ones only."""
+    found: list[Path] = []
+    env = os.environ.get("HALLIB_DIR")
+    if env:
+        found.append(Path(env))
+    for parent in ini_path.resolve().parents:
+        if parent.name == "configs" and (parent.parent / "lib" / "hallib").is_dir():
+            found.append(parent.parent / "lib" / "hallib")
+            break
+    found.append(_INSTALLED_HALLIB)
+    return [d for d in dict.fromkeys(found) if d.is_dir()]
+
+
+@dataclass
+class LinuxCNCFiles:
+    """A LinuxCNC configuration read (see the module doc).
+
+    Attributes:
+        path: the file given (an INI or a HAL file).
+        ini: the INI, None for a HAL file given alone.
+        hal_files: the HAL and Tcl files read, in order.
+        lines: every HAL command, INI references not yet substituted.
+        not_read: HALFILEs not found, one line each with the consequence.
+        computed: Tcl commands whose words are computed (not evaluated).
+    """
+
+    path: str
+    ini: IniFile | None
+    hal_files: list[str] = field(default_factory=list)
+    lines: list[HalLine] = field(default_factory=list)
+    not_read: list[str] = field(default_factory=list)
+    computed: list[str] = field(default_factory=list)
+
+    def words(self, line: HalLine) -> list[str]:
+        """A command's words, inline ``[SECTION](KEY)`` references substituted."""
+        return hal_words(expand_refs(line.text, self.ini))
+
+    @cached_property
+    def loads(self) -> list[tuple[str, str]]:
+        """(module, ``file:line``) of every ``loadrt``, INI references resolved."""
+        out = []
+        for line in self.lines:
+            w = self.words(line)
+            if len(w) > 1 and w[0] == "loadrt":
+                module = ini_value(w[1], self.ini).split()
+                out.append((module[0] if module else w[1], line.where))
+        return out
+
+    @cached_property
+    def setp(self) -> dict[str, tuple[str, str]]:
+        """Parameter or pin → (its last ``setp`` value as written, ``file:line``)."""
+        out: dict[str, tuple[str, str]] = {}
+        for line in self.lines:
+            w = self.words(line)
+            if len(w) >= 3 and w[0] == "setp":
+                out[w[1]] = (w[2], line.where)
+            elif len(w) >= 3 and w[1] == "=":
+                out[w[0]] = (w[2], line.where)
+        return out
+
+    @cached_property
+    def signal_of(self) -> dict[str, str]:
+        """Pin → the signal it is on (``net``, ``linksp``, ``linkps``)."""
+        out: dict[str, str] = {}
+        for line in self.lines:
+            w = self.words(line)
+            if len(w) >= 3 and w[0] == "net":
+                for pin in w[2:]:
+                    if pin not in ("=>", "<=", "<=>"):
+                        out[pin] = w[1]
+            elif len(w) >= 3 and w[0] == "linksp":
+                out[w[2]] = w[1]
+            elif len(w) >= 3 and w[0] == "linkps":
+                out[w[1]] = w[2]
+        return out
+
+    def on_signal(self, pin: str) -> list[str]:
+        """The other pins on ``pin``'s signal."""
+        sig = self.signal_of.get(pin)
+        return [p for p, s in self.signal_of.items() if s == sig and p != pin] if sig else []
+
+    @cached_property
+    def thread_of(self) -> dict[str, str]:
+        """HAL function → the thread it is added to (``addf``)."""
+        out: dict[str, str] = {}
+        for line in self.lines:
+            w = self.words(line)
+            if len(w) >= 3 and w[0] == "addf":
+                out[w[1]] = w[2]
+        return out
+
+    def ini_setting(self, section: str, key: str) -> tuple[str, str] | None:
+        """(value, ``file:line``) of an INI setting, None without it."""
+        if self.ini is None or self.ini.get(section, key) is None:
+            return None
+        value = self.ini.get(section, key)
+        assert value is not None
+        return value[0], self.ini.place(section, key)
+
+
+def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
+    """Read the configuration at ``path`` (an INI, or one HAL/Tcl file)."""
+    p = Path(path)
+    text = read_text(p)
+    if not is_ini(text):
+        files = LinuxCNCFiles(str(p), None)
+        _add(files, p)
+        return files
+    ini = read_ini(p)
+    files = LinuxCNCFiles(str(p), ini)
+    libs = hallib_dirs(p)
+    for key in ("HALFILE", "POSTGUI_HALFILE"):
+        for index, (value, _) in enumerate(ini.sections.get("HAL", {}).get(key, [])):
+            name = value.split()[0] if value.split() else ""
+            if not name:
+                continue
+            at = ini.place("HAL", key, index)
+            found = _find(p.parent, name, libs)
+            if found is None:
+                where_looked = "LinuxCNC's HAL library" if name.startswith("LIB:") else (
+                    "beside the INI or in LinuxCNC's HAL library"
+                )  # fmt: skip
+                files.not_read.append(
+                    f"{at}: {key} {name} is not {where_looked} "
+                    f"({', '.join(map(str, libs)) or 'no HAL library found'}); its commands are "
+                    "not read"
+                )
+                continue
+            _add(files, found)
+    for index, (value, _) in enumerate(ini.sections.get("HAL", {}).get("HALCMD", [])):
+        files.lines.append(HalLine(value, ini.place("HAL", "HALCMD", index)))
+    return files
+
+
+def _find(folder: Path, name: str, libs: list[Path]) -> Path | None:
+    if name.startswith("LIB:"):
+        candidates = [d / name[4:] for d in libs]
+    elif Path(name).is_absolute():
+        candidates = [Path(name)]
+    else:
+        candidates = [folder / name, *(d / name for d in libs)]
+    return next((c for c in candidates if is_file(c)), None)
+
+
+def _add(files: LinuxCNCFiles, hal: Path) -> None:
+    if len(files.hal_files) >= _MAX_HAL_FILES:
+        raise ConfigError(f"{files.path}: more than {_MAX_HAL_FILES} HAL files")
+    lines, computed = hal_lines(hal)
+    files.hal_files.append(str(hal))
+    files.lines += lines
+    files.computed += computed

@@ -1,38 +1,48 @@
-"""Small helpers the firmware readers share: exact numbers, reading a file, ``file:line``."""
+"""Small helpers the firmware readers share: bounded reading, exact bounded numbers,
+``file:line``."""
 
 from __future__ import annotations
 
 import os
-from decimal import Decimal, InvalidOperation
+import re
 from fractions import Fraction
-from pathlib import Path
 
-from wavecheck.errors import ConfigError
+from wavecheck.errors import ConfigError, UnitError
+from wavecheck.linuxcnc.files import MAX_CONFIG_BYTES, read_text
+from wavecheck.units import exact_number, shown
 
-__all__ = ["MAX_BYTES", "number", "read_text", "where"]
+__all__ = ["MAX_CONFIG_BYTES", "number", "read_text", "where"]
 
-#: Configuration files are small; anything larger is not one (bounded memory on hostile input).
-MAX_BYTES = 8 * 1024 * 1024
+_SUFFIX = re.compile(r"(.*[\d.])[fFlLuU]+")
 
 
-def read_text(path: str | os.PathLike[str]) -> str:
-    """The file as text (undecodable bytes replaced); ConfigError when unreadable or huge."""
-    p = Path(path)
+def number(
+    text: str,
+    place: str,
+    what: str,
+    *,
+    low: Fraction | int | None = None,
+    high: Fraction | int | None = None,
+    unit: str = "",
+) -> Fraction:
+    """``text`` as an exact number (``"333.3333"``, ``"1e-6"``, ``"1000."``, C's ``2.5f``),
+    within ``low``..``high`` when given.
+
+    Raises:
+        ConfigError: ``place: what 'text' …`` — not a number, NaN/inf, more than 40 digits or
+            an exponent beyond ±40, or out of the range (the range is named).
+    """
+    raw = text.strip()
+    suffixed = _SUFFIX.fullmatch(raw)
     try:
-        size = p.stat().st_size
-        if size > MAX_BYTES:
-            raise ConfigError(f"{path}: {size} bytes is too large for a configuration file")
-        return p.read_text(encoding="utf-8", errors="replace")
-    except OSError as err:
-        raise ConfigError(f"{path}: cannot read: {err.strerror or err}") from None
-
-
-def number(text: str, place: str, what: str) -> Fraction:
-    """``text`` as an exact number (``"333.3333"``, ``"1e-6"``, ``"1000."``)."""
-    try:
-        value = Fraction(Decimal(text.strip().rstrip("fFlLuU")))
-    except (InvalidOperation, ValueError, OverflowError):
-        raise ConfigError(f"{place}: {what} {text.strip()!r} is not a number") from None
+        value = exact_number(suffixed.group(1) if suffixed else raw)
+    except UnitError as err:
+        raise ConfigError(f"{place}: {what} {err}") from None
+    if (low is not None and value < low) or (high is not None and value > high):
+        span = f"{low if low is not None else '-inf'} .. {high if high is not None else 'inf'}"
+        raise ConfigError(
+            f"{place}: {what} {shown(raw)} is out of range ({span}{' ' + unit if unit else ''})"
+        )
     return value
 
 

@@ -3,7 +3,7 @@
 :func:`firmware_check` compares what a capture shows of one axis (:class:`Observed`: from
 ``check``'s :class:`~wavecheck.engine.outcome.Report`, or from ``measure``'s
 :class:`~wavecheck.measurement.AxisMeasurement` without a drive) with an axis's
-:class:`~wavecheck.firmware.model.GeneratorGuarantee`: the shortest measured pulse vs the configured
+:class:`~wavecheck.firmware.guarantee.GeneratorGuarantee`: the shortest measured pulse vs the configured
 pulse, the shortest DIR setup seen vs the configured delay (to the drive's active edge: plus the
 pulse when that edge ends the pulse), in both-edge mode the shortest space too, and the highest
 step rate vs the configured maximum. A capture shorter than its own configuration (by more than
@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.rates import pulse_level
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.rules import rate_rule, width_rule
 from wavecheck.steptypes import StepType
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict
@@ -54,6 +55,7 @@ class Observed:
         rate_hz: the highest instantaneous step rate, exact Hz (None: fewer than two steps).
         rate_at_s: where that rate's step interval starts, exact s.
         unmeasured: why a rule has no figure, in words (``"the drive states no {rule}"``).
+        axis_name: the capture axis's name in a run of several axes (None: unnamed).
     """
 
     interface: StepInterface
@@ -64,6 +66,7 @@ class Observed:
     rate_hz: Fraction | None
     rate_at_s: Fraction | None
     unmeasured: str = "the drive states no {rule}"
+    axis_name: str | None = None
 
 
 def observed_in_report(report: Report) -> Observed:
@@ -74,7 +77,8 @@ def observed_in_report(report: Report) -> Observed:
         if r.min_measured_ns is not None
     }
     return Observed(report.interface, report.step_type, report.active_edge, report.resolution_ns,
-                    shortest, report.rates.observed, report.rates.observed_at_s)  # fmt: skip
+                    shortest, report.rates.observed, report.rates.observed_at_s,
+                    axis_name=report.axis)  # fmt: skip
 
 
 def observed_in_measurement(axis: AxisMeasurement, resolution_ns: Fraction) -> Observed:
@@ -85,12 +89,13 @@ def observed_in_measurement(axis: AxisMeasurement, resolution_ns: Fraction) -> O
         ns = s.min_ns
         if ns is not None:
             shortest[s.rule] = (ns, None if s.min_at is None else s.timebase.seconds(s.min_at))
-    period = next((s for s in axis.stats if s.rule == "step_period"), None)
+    period = next((s for s in axis.stats if s.rule == rate_rule()), None)
     at = None
     if period is not None and period.min_at is not None:
         at = period.timebase.seconds(period.min_at)
     return Observed(axis.interface, axis.step_type, axis.active_edge, resolution_ns,
-                    shortest, axis.rate_max_hz, at, "it was not measured (no such interval in the capture)")  # fmt: skip
+                    shortest, axis.rate_max_hz, at, "it was not measured (no such interval in the capture)",
+                    axis_name=axis.name)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -119,6 +124,8 @@ class FirmwareCheck:
     path: str
     axis: GeneratorGuarantee
     comparisons: tuple[Comparison, ...]
+    pairing: str = ""
+    """Which capture axis was compared with this firmware axis, and how they were paired."""
 
     @property
     def verdict(self) -> Verdict:
@@ -198,13 +205,16 @@ def _time(
 
 
 def firmware_check(
-    subject: Report | Observed, config: FirmwareConfig, axis: GeneratorGuarantee
+    subject: Report | Observed,
+    config: FirmwareConfig,
+    axis: GeneratorGuarantee,
+    pairing: str = "",
 ) -> FirmwareCheck:
     """Compare a capture (``check``'s report, or an :class:`Observed`) with ``axis``'s
-    configured figures (see the module doc)."""
+    configured figures (see the module doc); ``pairing`` says how the two were paired."""
     seen = subject if isinstance(subject, Observed) else observed_in_report(subject)
     level = pulse_level(seen.interface, seen.step_type, axis.pulse_level)
-    pulse_rule, space_rule = ("step_high", "step_low") if level else ("step_low", "step_high")
+    pulse_rule, space_rule = width_rule(level), width_rule(1 - level)
     leading = "rising" if level else "falling"
     out = [_time(seen, "pulse", pulse_rule, axis.pulse, Fraction(0), "pulses")]
     if axis.both_edges:
@@ -246,4 +256,4 @@ def firmware_check(
                 f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
             )
         )
-    return FirmwareCheck(config.firmware, config.path, axis, tuple(out))
+    return FirmwareCheck(config.firmware, config.path, axis, tuple(out), pairing)

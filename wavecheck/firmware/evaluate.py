@@ -9,6 +9,11 @@ generator in both-edge mode configures the drive (TMC ``dedge``) to count both e
 ``step_period`` compares the axis's configured max step rate with the drive's. The max step rate
 of the pair is min(the drive's max rate, 1 / (pulse + the drive's minimum for the idle level)), or
 1 / the longest of the pulse and the two level minimums in both-edge mode.
+
+A figure whose sources disagree (:attr:`Guaranteed.disputed`) is judged under both readings: a
+rule that passes under one and fails under the other is indeterminate, and says so.
+:class:`ConfigResult` holds every pair, the overall verdict (:mod:`wavecheck.verdict`) and the
+rules that were not checked, with why.
 """
 
 from __future__ import annotations
@@ -17,13 +22,15 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
-from wavecheck.rules import applicable
-from wavecheck.verdict import Verdict, overall_verdict
+from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
+from wavecheck.rules import Rule, applicable
+from wavecheck.units import format_ns
+from wavecheck.verdict import Verdict, exit_code, overall_verdict, qualified_verdict
 
-__all__ = ["PairResult", "PairRow", "evaluate_pair"]
+__all__ = ["ConfigResult", "PairResult", "PairRow", "evaluate_config", "evaluate_pair"]
 
 _GIGA = Fraction(10**9)
+_SILENT = "the configuration says nothing about it"
 
 
 @dataclass(frozen=True)
@@ -40,6 +47,8 @@ class PairRow:
     verdict: Verdict
     fix: str = ""
     note: str = ""
+    why_unchecked: str = ""
+    """For an ``unchecked`` row: why (the drive states no figure; the configuration says nothing)."""
 
 
 @dataclass(frozen=True)
@@ -59,39 +68,79 @@ class PairResult:
         return overall_verdict(r.verdict for r in self.rows)
 
 
+@dataclass(frozen=True)
+class ConfigResult:
+    """``wavecheck config``'s answer: every axis/drive pair of one configuration."""
+
+    config: FirmwareConfig
+    pairs: tuple[PairResult, ...]
+
+    @property
+    def verdict(self) -> Verdict:
+        """The worst verdict of the pairs (:func:`~wavecheck.verdict.overall_verdict`)."""
+        return overall_verdict(p.verdict for p in self.pairs)
+
+    @property
+    def exit_code(self) -> int:
+        """0 pass, 1 a rule fails, 3 something cannot be proven (:mod:`wavecheck.verdict`)."""
+        return exit_code(self.verdict)
+
+    @property
+    def unchecked(self) -> dict[str, tuple[str, ...]]:
+        """Why → the rules not checked for that reason (on any axis), in rule order."""
+        out: dict[str, list[str]] = {}
+        for pair in self.pairs:
+            for row in pair.rows:
+                if row.verdict == "unchecked":
+                    rules = out.setdefault(row.why_unchecked or _SILENT, [])
+                    if row.rule not in rules:
+                        rules.append(row.rule)
+        return {why: tuple(rules) for why, rules in out.items()}
+
+    @property
+    def verdict_line(self) -> str:
+        """``PASS (dir_setup, dir_hold not checked: drive tb6600 states no figure)``."""
+        return qualified_verdict(self.verdict, self.unchecked)
+
+
 def _mapping(
-    g: GeneratorGuarantee, drive: Drive, rule: str
+    g: GeneratorGuarantee, drive: Drive, r: Rule
 ) -> tuple[Role | None, Guaranteed | None, Fraction, str]:
-    """(role, figure, offset added, note) for ``rule``."""
+    """(role, figure, offset added, note) for rule ``r``, by what the rule table says it
+    measures: a width at the pulse level is the pulse, at the other the idle time; a DIR setup or
+    hold is the generator's DIR delay or hold (from the trailing edge when the drive's active
+    edge ends the pulse); the rate rule the maximum step rate."""
     edge = "both" if g.both_edges else drive.active_edge
     trailing = edge != g.leading_edge and not g.both_edges
-    if rule == "step_high":
-        role: Role = "pulse" if g.pulse_level else "idle"
+    if r.check == "width":
+        role: Role = "pulse" if r.level == g.pulse_level else "idle"
         return role, g.figure(role), Fraction(0), ""
-    if rule == "step_low":
-        role = "idle" if g.pulse_level else "pulse"
-        return role, g.figure(role), Fraction(0), ""
-    if rule == "dir_setup":
+    if r.check == "setup" and r.ref == "dir":
         if trailing and edge != "both" and g.pulse.value is not None:
-            return (
-                "dir_setup",
-                g.dir_setup,
-                g.pulse.value,
-                "the drive's active edge ends the pulse: setup + pulse",
-            )
-        return "dir_setup", g.dir_setup, Fraction(0), ""
-    if rule == "dir_hold":
+            note = "the drive's active edge ends the pulse: setup + pulse"
+            return "setup", g.dir_setup, g.pulse.value, note
+        return "setup", g.dir_setup, Fraction(0), ""
+    if r.check == "hold" and r.data == "dir":
         if trailing:
-            return (
-                "dir_hold",
-                g.dir_hold_trailing,
-                Fraction(0),
-                "the drive's active edge ends the pulse: hold from the trailing edge",
-            )
-        return "dir_hold", g.dir_hold, Fraction(0), ""
-    if rule == "step_period":
+            note = "the drive's active edge ends the pulse: hold from the trailing edge"
+            return "hold", g.dir_hold_trailing, Fraction(0), note
+        return "hold", g.dir_hold, Fraction(0), ""
+    if r.figure == "max_rate":
         return "max_rate", g.max_rate, Fraction(0), ""
-    return None, None, Fraction(0), "the configuration says nothing about this"
+    return None, None, Fraction(0), _SILENT
+
+
+def _as_ns(v: Fraction | None, rate: bool, offset: Fraction) -> Fraction | None:
+    """A figure as ns to compare with the limit (a rate as its period)."""
+    if v is None:
+        return None
+    if rate:
+        return _GIGA / v if v else None
+    return v + offset
+
+
+def _judge(value: Fraction, limit: Fraction) -> Verdict:
+    return "pass" if value >= limit else "fail"
 
 
 def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -> PairResult:
@@ -100,34 +149,17 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
     for r in applicable("step-dir"):
         if r.figure == "none":
             continue
-        role, fig, offset, note = _mapping(g, drive, r.id)
-        if r.figure == "max_rate":
-            limit_fig = drive.max_rate
-            limit = _GIGA / limit_fig.value if limit_fig else None
-            value = _GIGA / fig.value if fig is not None and fig.value else None
-        else:
-            limit_fig = drive.limits.get(r.id)
-            limit = limit_fig.value if limit_fig else None
-            value = fig.value + offset if fig is not None and fig.value is not None else None
-        if role is None:
-            rows.append(
-                PairRow(r.id, None, None, None, limit, limit_fig, None, "unchecked", note=note)
-            )
-            continue
-        if limit is None:
-            rows.append(
-                PairRow(
-                    r.id,
-                    role,
-                    value,
-                    fig,
-                    None,
-                    None,
-                    None,
-                    "unchecked",
-                    note="the drive states no limit",
-                )
-            )
+        role, fig, offset, note = _mapping(g, drive, r)
+        rate = r.figure == "max_rate"
+        limit_fig = drive.max_rate if rate else drive.limits.get(r.id)
+        limit = (_GIGA / limit_fig.value if rate else limit_fig.value) if limit_fig else None
+
+        value = _as_ns(fig.value, rate, offset) if fig is not None else None
+        other = _as_ns(fig.disputed, rate, offset) if fig is not None else None
+        if role is None or limit is None:
+            why = note if role is None else f"drive {drive.id} states no figure"
+            rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, None, "unchecked",
+                                note=note, why_unchecked=why))  # fmt: skip
             continue
         if value is None:
             why = (
@@ -135,33 +167,27 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if fig is not None and fig.note
                 else note or "no bound in the configuration"
             )
-            rows.append(
-                PairRow(
-                    r.id,
-                    role,
-                    None,
-                    fig,
-                    limit,
-                    limit_fig,
-                    None,
-                    "indeterminate",
-                    note=f"{why}; measure it",
-                )
-            )
+            rows.append(PairRow(r.id, role, None, fig, limit, limit_fig, None, "indeterminate",
+                                note=f"{why}; measure it"))  # fmt: skip
             continue
         margin = value - limit
-        verdict: Verdict = "pass" if margin >= 0 else "fail"
+        verdict = _judge(value, limit)
+        if other is not None:
+            second = _judge(other, limit)
+            said = f"{format_ns(value)} under the reading used, {format_ns(other)} under the other"
+            note = "; ".join(x for x in (note, said) if x)
+            if second != verdict:
+                verdict = "indeterminate"
+                note += ": the readings give different verdicts (measure it)"
         fix = ""
-        if verdict == "fail" and role is not None:
+        if verdict in ("fail", "indeterminate") and (verdict == "fail" or other is not None):
             need = (
                 (drive.max_rate.value if drive.max_rate else Fraction(0))
                 if role == "max_rate"
                 else limit - offset
             )
-            if r.id == "dir_hold" and note and g.pulse.value is not None:
-                need = (
-                    limit + g.pulse.value
-                )  # a hold from the trailing edge, as a hold from the leading one
+            if role == "hold" and "trailing" in note and g.pulse.value is not None:
+                need = limit + g.pulse.value  # a trailing-edge hold, as a leading-edge one
                 note += " (inverting STEP would make it the leading edge)"
             fix = config.fix(g, role, need)
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
@@ -169,6 +195,13 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
     if drive.active_edge == "both" and not g.both_edges:
         notes.append("the drive counts both edges but the generator makes one step per pulse")
     return PairResult(config.firmware, g, drive, tuple(rows), _pair_rate(g, drive), tuple(notes))
+
+
+def evaluate_config(
+    config: FirmwareConfig, pairs: list[tuple[GeneratorGuarantee, Drive]]
+) -> ConfigResult:
+    """Every pair (axis, drive) of ``config`` judged (:func:`evaluate_pair`)."""
+    return ConfigResult(config, tuple(evaluate_pair(config, g, d) for g, d in pairs))
 
 
 def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
@@ -181,8 +214,7 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
     else:
         width = max(v for v in (pulse, pulse_lim, Fraction(0)) if v is not None)
         total = width + (idle_lim or Fraction(0))
-        timing = (
-            _GIGA / total if total > 0 and (idle_lim is not None or pulse is not None) else None
-        )
+        known = idle_lim is not None or pulse is not None
+        timing = _GIGA / total if total > 0 and known else None
     rates = [v for v in (timing, drive.max_rate.value if drive.max_rate else None) if v is not None]
     return min(rates) if rates else None

@@ -1,4 +1,4 @@
-"""grbl 1.1 and grblHAL: a ``$$`` settings dump.
+"""grbl 1.1, grblHAL and Grbl_ESP32: a ``$$`` settings dump.
 
 Read (reference ``firmware-timing.md`` §1–2): ``$0`` step pulse (µs; integer on grbl, float on
 grblHAL), ``$2``/``$3`` step/dir invert masks (bit 0 = X), ``$29`` grblHAL's pulse delay (µs,
@@ -6,9 +6,16 @@ applied on a direction change), ``$100…`` steps/mm and ``$110…`` max rates (
 carry grbl 0.9's `` (description)`` and spaces around ``=``; a file holding several dumps (a
 user's notes) is read up to the first repeated setting, the rest named in the notes.
 
+The flavour decides the defaults and the advice: grblHAL when a grblHAL-only setting is present
+(``$14``–``$19``, ``$28``, ``$29``, ``$33``+, a fractional ``$0``); Grbl_ESP32 when the file
+names the ESP32 or has settings for more than three axes without them; grbl otherwise. A dump
+without ``$0`` uses the flavour's default, marked as such (grbl 10 µs, grblHAL 5 µs; Grbl_ESP32's
+default is machine-specific: unknown).
+
 Guarantees: the pulse is ≈ ``$0`` (grbl calibrates an interrupt-overhead offset on a 0.5 µs timer;
-grblHAL rounds per driver) — status ``uncertain``. DIR is written a few CPU cycles before STEP
-(setup ≈ 0) unless grblHAL's ``$29`` is set; hold after the leading edge ≥ one step tick ≥ the
+grblHAL rounds per driver; Grbl_ESP32 uses RMT or I2S) — status ``uncertain``. DIR is written a
+few CPU cycles before STEP (setup ≈ 0) unless grblHAL's ``$29`` is set (Grbl_ESP32 keeps its DIR
+delay outside the numbered settings: unknown); hold after the leading edge ≥ one step tick ≥ the
 pulse. The max step rate of an axis is ``$10n × $11n / 60``; grbl does not enforce its 30 kHz.
 """
 
@@ -16,22 +23,46 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from fractions import Fraction
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware.guarantee import (
+    FirmwareConfig,
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+    unknown,
+)
 
-__all__ = ["looks_like", "read"]
+__all__ = ["FLAVOURS", "looks_like", "read"]
 
-_LINE = re.compile(r"^\s*\$(\d+)\s*=\s*([-+0-9.eE]+)\s*(?:\((.*)\))?\s*$")
+_LINE = re.compile(r"^\s*\$(\d{1,4})\s*=\s*(\S+)\s*(?:\((.*)\))?\s*$")
 _AXES = "XYZABC"
+#: Settings only grblHAL has (grbl 1.1 and Grbl_ESP32 number none of them).
+_HAL_ONLY = {14, 15, 16, 17, 18, 19, 28, 29, *range(33, 100)}
+#: The default ``$0`` of each flavour when the dump has none (µs): grbl's defaults.h, grblHAL's
+#: config.h since build 20250328 (earlier builds 10), Grbl_ESP32: per machine file (None).
+FLAVOURS: dict[str, Fraction | None] = {
+    "grbl": Fraction(10),
+    "grblHAL": Fraction(5),
+    "Grbl_ESP32": None,
+}
+_US = 1000
+_PULSE_NOTES = {
+    "grbl": "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on "
+    "a scope, not enforced)",
+    "grblHAL": "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
+    "Grbl_ESP32": "Grbl_ESP32: made by the RMT or I2S engine (I2S rounds to its frame)",
+}
 
 
 def looks_like(text: str) -> bool:
-    """A ``$$`` dump: a ``$0=`` line and at least two more ``$n=`` lines."""
-    lines = [m for m in (_LINE.match(x) for x in text.splitlines()) if m]
-    return len(lines) >= 3 and any(m.group(1) == "0" for m in lines)
+    """A ``$$`` dump: at least three ``$n=value`` lines, one of them a pulse, steps/mm or max
+    rate setting."""
+    found = [m.group(1) for m in (_LINE.match(x) for x in text.splitlines()) if m]
+    return len(found) >= 3 and any(n in ("0", *map(str, range(100, 116))) for n in found)
 
 
 def _settings(path: str, text: str) -> tuple[dict[int, tuple[Fraction, str, int]], list[str]]:
@@ -43,151 +74,192 @@ def _settings(path: str, text: str) -> tuple[dict[int, tuple[Fraction, str, int]
             continue
         n = int(m.group(1))
         if n in found:
+            first = min(found.values(), key=lambda v: v[2])[2]
             notes.append(
-                f"{path}: the dump that starts at line {found[min(found)][2]} is read; a second "
-                f"one starts near line {no} and is ignored"
+                f"{path}: the dump that starts at line {first} is read; a second one starts near "
+                f"line {no} and is ignored"
             )
             break
-        found[n] = (number(m.group(2), where(path, no), f"${n}"), m.group(2), no)
+        found[n] = (Fraction(0), m.group(2), no)
+    for n in (0, 2, 3, 29, *range(100, 106), *range(110, 116)):  # the settings read
+        if n in found:
+            raw, no = found[n][1:]
+            found[n] = (number(raw, where(path, no), f"${n}"), raw, no)
     return found, notes
+
+
+def _flavour(text: str, settings: dict[int, tuple[Fraction, str, int]]) -> str:
+    if any(n in _HAL_ONLY for n in settings) or (0 in settings and settings[0][0].denominator != 1):
+        return "grblHAL"
+    if re.search(r"grbl.?esp32|\besp32\b", text, re.I) or any(
+        n in settings for n in (103, 104, 105, 113, 114, 115)
+    ):
+        return "Grbl_ESP32"
+    return "grbl"
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     """Read a ``$$`` dump (see the module doc)."""
+    p = str(path)
     text = read_text(path)
-    settings, notes = _settings(str(path), text)
-    if 0 not in settings:
-        raise ConfigError(f"{path}: no $0 (step pulse) line: not a grbl $$ dump")
-    hal = 29 in settings or settings[0][0].denominator != 1 or any(n > 132 for n in settings)
-    name = "grblHAL" if hal else "grbl"
-    us0, raw0, line0 = settings[0]
-    at0 = where(path, line0)
+    settings, notes = _settings(p, text)
+    if not settings:
+        raise ConfigError(f"{p}: no $n=value line: not a grbl $$ dump")
+    flavour = _flavour(text, settings)
+    pulse = _pulse(p, flavour, settings)
 
     def mask(n: int) -> int:
-        return int(settings[n][0]) if n in settings else 0
+        if n not in settings:
+            return 0
+        value, raw, line = settings[n]
+        number(raw, where(p, line), f"${n}", low=0, high=255)
+        return int(value)
 
     step_mask, dir_mask = mask(2), mask(3)
-    pulse = Guaranteed(
-        us0 * 1000,
-        "$0",
-        at0,
-        "us",
-        "uncertain",
-        "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on a "
-        "scope, not enforced)"
-        if not hal
-        else "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
-    )
-    if hal and settings.get(29, (Fraction(0),))[0] > 0:
-        us29, _, line29 = settings[29]
-        setup = Guaranteed(
-            us29 * 1000,
-            "$29",
-            where(path, line29),
-            "us",
-            "uncertain",
-            "grblHAL applies $29 only when DIR changes, less the driver's latency allowance",
-        )
-    else:
-        setup = Guaranteed(
-            Fraction(0),
-            "$29" if hal else "STEP_PULSE_DELAY",
-            "firmware default",
-            "us",
-            "default",
-            "DIR is written a few CPU cycles before STEP in the same interrupt: no setup time is "
-            "guaranteed" + ("" if hal else " (STEP_PULSE_DELAY is compile-time, not in $$)"),
-        )
+    setup = _setup(p, flavour, settings)
     axes = []
     for bit, axis in enumerate(_AXES):
-        spm, rate = settings.get(100 + bit), settings.get(110 + bit)
+        spm = settings.get(100 + bit)
         if spm is None:
             continue
-        info = {"steps/mm": f"{spm[1]} (${100 + bit}, {where(path, spm[2])})"}
-        if rate is not None:
-            info["max rate"] = f"{rate[1]} mm/min (${110 + bit}, {where(path, rate[2])})"
-            hz = spm[0] * rate[0] / 60
-            max_rate = Guaranteed(
-                hz,
-                f"${100 + bit} x ${110 + bit} / 60",
-                where(path, rate[2]),
-                "mm/min",
-                "derived",
-                "grbl claims up to 30 kHz but does not enforce it",
-            )
-            idle_value = Fraction(10**9) / hz - pulse.value if hz > 0 and pulse.value else None
-        else:
-            max_rate = Guaranteed(None, f"${110 + bit}", "", "mm/min", "unknown", "not in the dump")
-            idle_value = None
-        idle = Guaranteed(
-            idle_value if idle_value is None or idle_value > 0 else Fraction(0),
-            f"${110 + bit}",
-            max_rate.where,
-            "mm/min",
-            "uncertain" if idle_value else "unknown",
-            "1 / (max step rate) - pulse: the step interrupt spaces steps (Bresenham, AMASS)",
-        )
-        axes.append(
-            GeneratorGuarantee(
-                axis=axis,
-                pulse=pulse,
-                idle=idle,
-                dir_setup=setup,
-                dir_hold=Guaranteed(
-                    pulse.value,
-                    "$0",
-                    at0,
-                    "us",
-                    "uncertain",
-                    "DIR changes at the next step tick, at least one pulse after the leading edge",
-                ),
-                max_rate=max_rate,
-                pulse_level=0 if step_mask >> bit & 1 else 1,
-                dir_hold_trailing=Guaranteed(
-                    Fraction(0),
-                    "$0",
-                    at0,
-                    "us",
-                    "uncertain",
-                    "the next tick may follow the end of the pulse at once",
-                ),
-                dir_inverted=bool(dir_mask >> bit & 1),
-                info=info,
-            )
-        )
+        axes.append(_axis(p, bit, axis, spm, settings.get(110 + bit), pulse, setup,
+                          step_mask, dir_mask))  # fmt: skip
     if not axes:
-        raise ConfigError(f"{path}: no $100.. (steps/mm) lines: no axis to check")
+        raise ConfigError(f"{p}: no $100.. (steps/mm) lines: no axis to check")
     known = {0, 2, 3, 29, *range(100, 106), *range(110, 116)}
     other = [f"${n}" for n in sorted(settings) if n not in known]
     return FirmwareConfig(
         firmware="grbl",
-        path=str(path),
+        path=p,
         axes=tuple(axes),
-        files=(str(path),),
+        files=(p,),
         unsupported=(f"not timing settings, not read: {' '.join(other)}",) if other else (),
         notes=(
-            f"{name}: $0 and $29 apply to every axis; $2/$3 bit 0 = X, 1 = Y, 2 = Z",
+            f"{flavour} (read from the settings present); "
+            + ("$0 and $29 apply" if flavour == "grblHAL" else "$0 applies")
+            + " to every axis; $2/$3 bit 0 = X, 1 = Y, 2 = Z",
             *notes,
         ),
-        fixer=_fixer(hal),
+        fixer=_fixer(flavour),
     )
 
 
-def _fixer(hal: bool):  # type: ignore[no-untyped-def]
+def _pulse(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int]]) -> Guaranteed:
+    if 0 not in settings:
+        default = FLAVOURS[flavour]
+        if default is None:
+            return unknown("$0", f"{flavour}: no $0 in the dump and the default is per machine")
+        note = f"{flavour}'s default $0 (the dump has no $0 line): {default} us"
+        return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note)
+    us0, raw0, line0 = settings[0]
+    at = where(path, line0)
+    number(raw0, at, "$0 (step pulse)", low=0, high=255, unit="us")
+    return Guaranteed(us0 * _US, "$0", at, "us", "uncertain", _PULSE_NOTES[flavour])
+
+
+def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int]]) -> Guaranteed:
+    if flavour == "grblHAL" and settings.get(29, (Fraction(0),))[0] > 0:
+        us29, raw29, line29 = settings[29]
+        at = where(path, line29)
+        number(raw29, at, "$29 (pulse delay)", low=0, high=255, unit="us")
+        return Guaranteed(us29 * _US, "$29", at, "us", "uncertain",
+                          "grblHAL applies $29 only when DIR changes, less the driver's latency "
+                          "allowance")  # fmt: skip
+    if flavour == "Grbl_ESP32":
+        return unknown(
+            "direction delay",
+            "Grbl_ESP32 keeps its DIR delay outside the numbered $ settings (compile-time or a "
+            "named setting): not in this dump",
+        )
+    return Guaranteed(
+        Fraction(0), "$29" if flavour == "grblHAL" else "STEP_PULSE_DELAY", "firmware default",
+        "us", "default",
+        "DIR is written a few CPU cycles before STEP in the same interrupt: no setup time is "
+        "guaranteed" + ("" if flavour == "grblHAL" else " (STEP_PULSE_DELAY is compile-time, "
+                        "not in $$)"),
+    )  # fmt: skip
+
+
+def _axis(
+    path: str,
+    bit: int,
+    axis: str,
+    spm: tuple[Fraction, str, int],
+    rate: tuple[Fraction, str, int] | None,
+    pulse: Guaranteed,
+    setup: Guaranteed,
+    step_mask: int,
+    dir_mask: int,
+) -> GeneratorGuarantee:
+    spm_at = where(path, spm[2])
+    number(spm[1], spm_at, f"${100 + bit} (steps/mm)", low=0, high=10**7)
+    info = {"steps/mm": f"{spm[1]} (${100 + bit}, {spm_at})"}
+    if rate is not None:
+        rate_at = where(path, rate[2])
+        number(rate[1], rate_at, f"${110 + bit} (max rate)", low=0, high=10**9, unit="mm/min")
+        info["max rate"] = f"{rate[1]} mm/min (${110 + bit}, {rate_at})"
+        hz = spm[0] * rate[0] / 60
+        max_rate = Guaranteed(hz, f"${100 + bit} x ${110 + bit} / 60", rate_at, "mm/min",
+                              "derived", "grbl claims up to 30 kHz but does not enforce it")  # fmt: skip
+        gap = Fraction(10**9) / hz - pulse.value if hz > 0 and pulse.value else None
+    else:
+        max_rate = Guaranteed(None, f"${110 + bit}", "", "mm/min", "unknown", "not in the dump")
+        gap = None
+    idle = Guaranteed(
+        None if gap is None else max(gap, Fraction(0)), f"${110 + bit}", max_rate.where,
+        "mm/min", "uncertain" if gap is not None else "unknown",
+        "1 / (max step rate) - pulse: the step interrupt spaces steps (Bresenham, AMASS)",
+    )  # fmt: skip
+    return GeneratorGuarantee(
+        axis=axis,
+        pulse=pulse,
+        idle=idle,
+        dir_setup=setup,
+        dir_hold=Guaranteed(
+            pulse.value,
+            "$0",
+            pulse.where,
+            "us",
+            "uncertain",
+            "DIR changes at the next step tick, at least one pulse after the leading edge",
+        ),  # fmt: skip
+        max_rate=max_rate,
+        pulse_level=0 if step_mask >> bit & 1 else 1,
+        dir_hold_trailing=Guaranteed(
+            Fraction(0),
+            "$0",
+            pulse.where,
+            "us",
+            "uncertain",
+            "the next tick may follow the end of the pulse at once",
+        ),  # fmt: skip
+        dir_inverted=bool(dir_mask >> bit & 1),
+        info=info,
+    )
+
+
+def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
+    hal = flavour == "grblHAL"
+
     def us(ns: Fraction) -> str:
-        v = ns / 1000
+        v = ns / _US
         if hal:
             return f"{float(-(-v * 10 // 1) / 10):g}"
         return str(-(-v // 1))
 
     def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
         bit = _AXES.index(axis.axis) if axis.axis in _AXES else 0
-        if role in ("pulse", "dir_hold"):
-            low = " (grbl refuses values below 3)" if not hal and need < 3000 else ""
+        if role in ("pulse", "hold"):
+            low = " (grbl refuses values below 3)" if flavour == "grbl" and need < 3000 else ""
             return f"set `$0` to at least {us(need)} us{low}"
-        if role == "dir_setup":
+        if role == "setup":
             if hal:
                 return f"set `$29` to at least {us(need)} us (drivers that support it)"
+            if flavour == "Grbl_ESP32":
+                return (
+                    f"set Grbl_ESP32's direction delay to at least {us(need)} us (a named or "
+                    "compile-time setting, not a $ number)"
+                )
             return (
                 f"grbl cannot delay DIR from $$: compile STEP_PULSE_DELAY {us(need)} (us) into "
                 "config.h, or invert STEP with `$2` so the drive counts the trailing edge"
@@ -195,7 +267,7 @@ def _fixer(hal: bool):  # type: ignore[no-untyped-def]
         spm = axis.info.get("steps/mm", "").split(" ")[0]
         if role == "idle" and axis.pulse.value is not None:
             need = Fraction(10**9) / (axis.pulse.value + need)
-        if spm:
+        if spm and Fraction(spm) > 0:
             mm_min = need * 60 / Fraction(spm)
             return f"lower `${110 + bit}` to at most {float(mm_min):.6g} mm/min"
         return f"lower `${110 + bit}`"

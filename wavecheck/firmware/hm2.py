@@ -4,127 +4,91 @@
 The driver truncates each ns value to clocks of the stepgen clock ``f`` (14-bit registers; at
 most 0x3FFF clocks); the firmware holds the pulse and the space N+1 clocks, so
 ``step_high ≥ (⌊steplen·f⌋+1)/f > steplen`` always: without the clock the set value is the bound.
-DIR setup and hold load N clocks (≈ ⌊dirsetup·f⌋/f, up to one clock short: ``uncertain``), and
-whether dirhold counts from the pulse's start (the VHDL) or its end (the man page) is disputed, so
-the hold from the leading edge is taken as dirhold alone. Max rate: 1e9/(steplen + stepspace),
-and maxvel × |position-scale| when maxvel is set. Unset parameters start at 0x3FFF clocks.
+DIR setup loads N clocks (≈ ⌊dirsetup·f⌋/f, up to one clock short: ``uncertain``).
+
+DIR hold: the man page says dirhold counts "after a step ends", the VHDL
+(``kubstepgenz.vhd``) loads the hold counter when the pulse starts. This reader uses the man
+page's reading — hold from the leading edge = steplen + dirhold, from the trailing edge =
+dirhold — and keeps the VHDL's (dirhold, and dirhold − steplen) as the disputed figure: a rule
+whose verdict differs under the two readings is indeterminate, and the note names both.
+Max rate: 1e9/(steplen + stepspace), and maxvel × |position-scale| when maxvel is set. Unset
+parameters start at 0x3FFF clocks.
 """
 
 from __future__ import annotations
 
-import os
 import re
 from fractions import Fraction
 
-from wavecheck.errors import ConfigError
-from wavecheck.firmware._linuxcnc_files import expand_refs, files_of
-from wavecheck.firmware._text import number, read_text, where
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
-from wavecheck.linuxcnc.files import hal_words, resolve_ref
+from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
+from wavecheck.firmware._text import number
+from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware.linuxcnc import joint_of
+from wavecheck.linuxcnc.files import resolve_ref
 
-__all__ = ["looks_like", "read"]
+__all__ = ["STEPGEN", "axes", "fix"]
 
-_SETP = re.compile(r"^hm2_[^.]+\.\d+\.stepgen\.(\d+)\.([a-z_-]+)$")
+#: An hm2 stepgen parameter: ``hm2_<board>.<n>.stepgen.<NN>.<param>``.
+STEPGEN = re.compile(r"^(hm2_[^.\s]+\.\d+)\.stepgen\.(\d+)\.([a-z_-]+)$")
 _PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "position-scale", "maxvel", "step_type")
 _REG_MAX = 0x3FFF
+_DISPUTE = (
+    "the man page counts dirhold after the step ends (used here); the VHDL (kubstepgenz.vhd) "
+    "counts it from the step's start"
+)
 
 
-def looks_like(text: str) -> bool:
-    """A HAL file with hm2 stepgen parameters, or an INI with a ``[HOSTMOT2]`` section."""
-    return bool(
-        re.search(r"\bhm2_\S*\.stepgen\.\d+\.", text) or re.search(r"^\s*\[HOSTMOT2\]", text, re.M)
-    )
-
-
-def read(path: str | os.PathLike[str], clock_hz: Fraction | None = None) -> FirmwareConfig:
-    """Read the hm2 stepgens of a LinuxCNC INI (its HALFILEs) or of one HAL file."""
-    text = read_text(path)
-    ini, hals, notes = files_of(path, text)
-    gens: dict[str, dict[str, tuple[Fraction, str]]] = {}
-    for hal in hals:
-        lines = read_text(hal).replace("\\\n", " ").splitlines()
-        for no, raw in enumerate(lines, 1):
-            line = expand_refs(raw.split("#", 1)[0].strip(), ini)
-            words = hal_words(line) if line else []
-            if len(words) >= 3 and words[0] == "setp":
-                m = _SETP.match(words[1])
-                if m and m.group(2) in _PARAMS:
-                    at = where(hal, no)
-                    value = resolve_ref(words[2], ini, at)
-                    gens.setdefault(m.group(1), {})[m.group(2)] = (number(value, at, words[1]), at)
-    if not gens:
-        raise ConfigError(
-            f"{path}: no `setp hm2_….stepgen.NN.*` line in {', '.join(map(str, hals)) or 'it'}"
-        )
-    f = clock_hz
-    axes = []
-    for nn, params in sorted(gens.items()):
-        axes.append(_axis(nn, params, f))
-    clock = "unknown (give it for the exact rounding)" if f is None else f"{float(f):g} Hz"
-    return FirmwareConfig(
-        firmware="hm2",
-        path=str(path),
-        axes=tuple(axes),
-        files=(str(path), *map(str, hals)),
-        notes=(f"stepgen clock {clock}; registers are truncated to whole clocks", *notes),
-        fixer=_fix,
-    )
+def axes(files: LinuxCNCFiles, clock_hz: Fraction | None) -> list[GeneratorGuarantee]:
+    """One guarantee per hm2 stepgen that the HAL files set a parameter of."""
+    gens: dict[tuple[str, str], dict[str, tuple[Fraction, str]]] = {}
+    for name, (raw, at) in files.setp.items():
+        m = STEPGEN.match(name)
+        if m and m.group(3) in _PARAMS:
+            value = resolve_ref(raw, files.ini, at)
+            gens.setdefault((m.group(1), m.group(2)), {})[m.group(3)] = (
+                number(value, at, name, low=-(10**9), high=10**12),
+                at,
+            )
+    return [
+        _axis(board, nn, params, clock_hz, files) for (board, nn), params in sorted(gens.items())
+    ]
 
 
 def _axis(
-    nn: str, params: dict[str, tuple[Fraction, str]], f: Fraction | None
+    board: str,
+    nn: str,
+    params: dict[str, tuple[Fraction, str]],
+    f: Fraction | None,
+    files: LinuxCNCFiles,
 ) -> GeneratorGuarantee:
     def fig(name: str, extra_clock: int, status: str, note: str = "") -> Guaranteed:
         if name not in params:
             if f is None:
-                return Guaranteed(
-                    None,
-                    name,
-                    "",
-                    "ns",
-                    "unknown",
-                    "not set: 0x3FFF clocks at load (clock unknown)",
-                )
-            return Guaranteed(
-                Fraction(_REG_MAX + extra_clock) / f * 10**9,
-                name,
-                "driver default",
-                "ns",
-                "default",
-            )
+                return Guaranteed(None, name, "", "ns", "unknown",
+                                  "not set: 0x3FFF clocks at load (clock unknown)")  # fmt: skip
+            return Guaranteed(Fraction(_REG_MAX + extra_clock) / f * 10**9, name,
+                              "driver default", "ns", "default")  # fmt: skip
         ns, at = params[name]
         if f is None:
             return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
-        reg = min(int(ns * f / 10**9), _REG_MAX)
+        reg = min(int(max(ns, Fraction(0)) * f / 10**9), _REG_MAX)
         return Guaranteed(
-            Fraction(reg + extra_clock) * 10**9 / f,
-            name,
-            at,
-            "ns",
+            Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns",
             "derived" if extra_clock else "uncertain",
             f"{reg} clocks{' + 1' if extra_clock else ''} at {float(f):g} Hz"
             + (f"; {note}" if note else ""),
-        )
+        )  # fmt: skip
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
     setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
-    hold = fig(
-        "dirhold",
-        0,
-        "uncertain",
-        "counted from the pulse's start (VHDL) or its end (man page): disputed",
-    )
+    hold_raw = fig("dirhold", 0, "uncertain")
+    hold, trailing = _hold(pulse, hold_raw)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
-        rate = Guaranteed(
-            Fraction(10**9) / (pulse.value + idle.value),
-            "1e9 / (steplen + stepspace)",
-            pulse.where,
-            "ns",
-            "derived",
-        )
+        rate = Guaranteed(Fraction(10**9) / (pulse.value + idle.value),
+                          "1e9 / (steplen + stepspace)", pulse.where, "ns", "derived")  # fmt: skip
     mv, scale = params.get("maxvel"), params.get("position-scale")
     if scale:
         info["position-scale"] = f"{float(scale[0]):g} steps/unit ({scale[1]})"
@@ -135,9 +99,14 @@ def _axis(
             rate = Guaranteed(hz, "maxvel x position-scale", mv[1], "units/s", "derived")
     notes: tuple[str, ...] = ()
     if "step_type" in params and params["step_type"][0] != 0:
-        notes = (
-            f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir (0) is modelled",
-        )
+        notes = (f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir "
+                 "(0) is modelled",)  # fmt: skip
+    joint, letter = joint_of(files, f"{board}.stepgen.{nn}")
+    aliases = tuple(
+        a
+        for a in (f"{board}.stepgen.{nn}", f"joint.{joint}" if joint is not None else "", letter)
+        if a
+    )
     return GeneratorGuarantee(
         axis=f"stepgen.{nn}",
         pulse=pulse,
@@ -145,18 +114,39 @@ def _axis(
         dir_setup=setup,
         dir_hold=hold,
         max_rate=rate,
+        dir_hold_trailing=trailing,
         info=info,
         notes=notes,
+        aliases=aliases,
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    name = {
-        "pulse": "steplen",
-        "idle": "stepspace",
-        "dir_setup": "dirsetup",
-        "dir_hold": "dirhold",
-    }.get(role)
+def _hold(pulse: Guaranteed, hold: Guaranteed) -> tuple[Guaranteed, Guaranteed]:
+    """(from the leading edge, from the trailing edge) under the man page's reading, each with
+    the VHDL's reading as the disputed figure."""
+    if hold.value is None or pulse.value is None:
+        return (
+            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note or _DISPUTE),
+            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note or _DISPUTE),
+        )
+    lead = Guaranteed(pulse.value + hold.value, "steplen + dirhold", hold.where, "ns", "uncertain",
+                      f"{_DISPUTE}: VHDL {float(hold.value):g} ns",
+                      disputed=hold.value)  # fmt: skip
+    vhdl_trailing = max(hold.value - pulse.value, Fraction(0))
+    trail = Guaranteed(hold.value, "dirhold", hold.where, "ns", "uncertain",
+                       f"{_DISPUTE}: VHDL {float(vhdl_trailing):g} ns", disputed=vhdl_trailing)  # fmt: skip
+    return lead, trail
+
+
+def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    """The hm2 setting to change so that ``role`` reaches ``need``."""
+    name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
+            "hold": "dirhold"}.get(role)  # fmt: skip
     if name is None:
         return f"lower hm2_….{axis.axis}.maxvel so that it steps at most {float(need):.6g} steps/s"
+    if role == "hold":
+        # both readings: the VHDL's counts from the step's start, so dirhold alone must reach it
+        return (
+            f"set hm2_….{axis.axis}.dirhold (the INI's DIRHOLD) to at least {int(-(-need // 1))} ns"
+        )
     return f"set hm2_….{axis.axis}.{name} (the INI's {name.upper()}) to at least {int(-(-need // 1))} ns"

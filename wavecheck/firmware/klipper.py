@@ -1,240 +1,401 @@
-"""Klipper: ``printer.cfg`` (reference ``firmware-timing.md`` §3).
+"""Klipper: ``printer.cfg`` (reference ``firmware-timing.md`` §3; ``docs/Config_Reference.md``).
 
-Read per ``[stepper_*]``/``[extruder*]`` section: ``step_pin``/``dir_pin`` (a leading ``!``
-inverts), ``step_pulse_duration`` (s), ``microsteps``, ``rotation_distance``,
-``full_steps_per_rotation`` (default 200), ``gear_ratio``; ``[printer] max_velocity`` and
-``max_z_velocity`` (mm/s); a ``[tmc2130|2208|2209|2240|2660|5160 NAME]`` section with
-``uart_pin`` or ``cs_pin`` for the same stepper.
+Every section with a ``step_pin`` is a step generator: ``[stepper_x]``, ``[stepper_z1]``,
+``[extruder1]``, ``[extruder_stepper NAME]``, ``[dual_carriage]``, ``[manual_stepper NAME]``,
+``[stepper_a]`` … Read per stepper: ``step_pin``/``dir_pin`` (a leading ``!`` inverts; a
+``name:`` prefix puts the pin on another MCU), ``step_pulse_duration`` (s), ``microsteps``,
+``rotation_distance``, ``full_steps_per_rotation`` (default 200), ``gear_ratio``; a
+``[tmc2130|2208|2209|2240|2660|5160 NAME]`` section with ``uart_pin`` or ``cs_pin`` for the same
+stepper; ``[printer] kinematics``, ``max_velocity`` and ``max_z_velocity`` (mm/s, default
+``max_velocity``). ``[include FILE]`` sections are followed (beside the file, globs allowed).
 
 Klipper's own rules: the default pulse is 2 µs, or 100 ns with both-edge stepping requested
-when a TMC section drives the stepper over UART/SPI; an explicit ``step_pulse_duration``
-always wins. Both edges are used only for a pulse ≤ 500 ns on an MCU that is not AVR. On the
-full step path (ARM, single edge) pulse, space, DIR setup and DIR hold (from the leading edge)
-are each ≥ the duration; on the AVR fast path (pulse ≤ 2.5 µs) the pulse is instruction time
-and on the both-edge fast path the MCU enforces no minimum: those figures are ``uncertain`` or
-unknown. The MCU is taken as AVR when the file's comments name an ATmega/AVR.
+when a TMC section drives the stepper over UART/SPI; an explicit ``step_pulse_duration`` always
+wins. Both edges are used only for a pulse ≤ 500 ns on an MCU that is not AVR. On the full step
+path (ARM, single edge) pulse, space, DIR setup and DIR hold (from the leading edge) are each ≥
+the duration; on the AVR fast path (pulse ≤ 40 MCU ticks) the pulse is instruction time and on
+the both-edge fast path the MCU enforces no minimum: those figures are ``uncertain`` or unknown.
+The duration is truncated to whole MCU clock ticks (:data:`MCUS`, Klipper's Kconfig clocks).
+
+The MCU of each stepper is read from the chip names in the file's header comments and in its
+``[mcu]`` section (its ``serial:`` path names the chip), and from its pins (a port pin numbered
+8 or more, ``P1.20`` or ``gpio5`` is no ATmega). When nothing decides it, an AVR is possible and
+the figures that depend on it are unknown, with the reason.
+
+The max step rate is ``max_velocity × steps/mm`` only where the stepper moves one cartesian
+axis: ``[stepper_z*]`` (``max_z_velocity``) on cartesian, corexy and hybrid-corexy machines,
+x/y/dual-carriage steppers on cartesian ones, ``y`` on corexz; a motor of a coupled pair or a
+delta tower may step faster, so its rate is unknown.
 """
 
 from __future__ import annotations
 
+import glob
 import os
 import re
 from dataclasses import dataclass, field
 from fractions import Fraction
+from pathlib import Path
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
-from wavecheck.firmware.model import (
+from wavecheck.firmware.guarantee import (
+    MAX_AXES,
     FirmwareConfig,
     GeneratorGuarantee,
     Guaranteed,
     Role,
     unknown,
 )
+from wavecheck.linuxcnc.files import is_file
 
-__all__ = ["TMC_SECTIONS", "looks_like", "read"]
+__all__ = ["MCUS", "TMC_SECTIONS", "looks_like", "read"]
 
 #: TMC sections that switch a stepper to 100 ns and both-edge stepping (klippy/extras/tmc.py).
 TMC_SECTIONS = ("tmc2130", "tmc2208", "tmc2209", "tmc2240", "tmc2660", "tmc5160")
+#: Chip name pattern → (AVR?, the clocks Klipper's Kconfig offers for it, Hz; empty: not read).
+MCUS: tuple[tuple[str, bool, tuple[int, ...]], ...] = (
+    (r"atmega(2560|1280|1281|32u4)|at90usb\d+", True, (16_000_000, 8_000_000)),
+    (r"atmega(1284p?|644p?|328p?|168)", True, (16_000_000, 20_000_000, 8_000_000)),
+    (r"stm32f0\d\d", False, (48_000_000,)),
+    (r"stm32f103|gd32f103", False, (72_000_000, 64_000_000)),
+    (r"stm32f207", False, (120_000_000,)),
+    (r"stm32f401", False, (84_000_000,)),
+    (r"stm32f40[57]", False, (168_000_000,)),
+    (r"stm32f446", False, (180_000_000,)),
+    (r"lpc1768", False, (100_000_000,)),
+    (r"lpc1769", False, (120_000_000,)),
+    (r"stm32\w+|gd32\w+|lpc17\d\d|sam[a-z]?\d\w*|atsam\w*|rp2040|hc32\w+|"
+     r"esp32\w*|beaglebone|linux|raspberry|ar100", False, ()),
+)  # fmt: skip
 _DEFAULT_NS = Fraction(2000)
 _TMC_NS = Fraction(100)
 _BOTH_EDGE_MAX_NS = 500
-_AVR_FAST_NS = 2500
+_AVR_FAST_TICKS = 40
+_MAX_NS = 10**6  # step_pulse_duration 0 .. 0.001 s
+_MAX_INCLUDES = 64
 _SECTION = re.compile(r"^\[([^\]]+)\]\s*(?:[#;].*)?$")
-_KEY = re.compile(r"^([A-Za-z0-9_]+)\s*[:=]\s*(.*?)\s*(?:[#;].*)?$")
+_KEY = re.compile(r"^([A-Za-z0-9_]+)\s*[:=]\s*(.*?)\s*(?:\s[#;].*)?$")
+_CHIP = re.compile("|".join(f"(?:{m[0]})" for m in MCUS), re.I)
+_AXIS_OF = re.compile(r"^stepper_([a-z])\d*$|^(dual_carriage)$")
 
 
 @dataclass
 class _Section:
     name: str
+    path: str
     line: int
     keys: dict[str, tuple[str, int]] = field(default_factory=dict)
 
+    def at(self, key: str) -> str:
+        return where(self.path, self.keys[key][1])
+
+
+@dataclass(frozen=True)
+class _Mcu:
+    """What the file tells of one MCU: AVR (True/False/None = undecided) and its clocks."""
+
+    name: str
+    avr: bool | None
+    clocks: tuple[int, ...]
+    why: str
+
 
 def looks_like(text: str) -> bool:
-    """A Klipper config: a ``[stepper_…]`` or ``[printer]`` section and ``key: value`` lines."""
-    return bool(re.search(r"^\[(stepper_\w+|printer)\]", text, re.M)) and bool(
-        re.search(r"^\w+\s*:", text, re.M)
-    )
+    """A Klipper config: ``[section]`` headers with ``key: value`` lines, one of them a
+    ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section."""
+    return bool(
+        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]]*\]", text, re.M)
+    ) and bool(re.search(r"^\w+\s*:", text, re.M))
 
 
-def _parse(text: str) -> tuple[dict[str, _Section], bool]:
-    sections: dict[str, _Section] = {}
+def _parse(
+    path: Path, sections: dict[str, _Section], header: list[str], seen: set[Path]
+) -> list[str]:
+    """Sections of ``path`` (and its includes) into ``sections``; returns notes."""
+    notes: list[str] = []
     current: _Section | None = None
-    avr = bool(re.search(r"^#.*\b(atmega\w*|AVR)\b", text, re.M | re.I))
+    text = read_text(path)
     for no, raw in enumerate(text.splitlines(), 1):
-        if not raw.strip() or raw.lstrip()[0] in "#;" or raw[0] in " \t":
+        stripped = raw.strip()
+        if not stripped:
             continue
-        m = _SECTION.match(raw.strip())
+        if stripped[0] in "#;":
+            if current is None or current.name.split(" ")[0] == "mcu":
+                header.append(stripped)
+            continue
+        if raw[0] in " \t":
+            continue  # a continuation line of a multi-line value
+        m = _SECTION.match(stripped)
         if m:
             name = " ".join(m.group(1).split())
-            current = sections.setdefault(name, _Section(name, no))
+            if name.startswith("include "):
+                notes += _include(path, name[len("include ") :].strip(), sections, header, seen)
+                current = None
+                continue
+            current = sections.setdefault(name, _Section(name, str(path), no))
             continue
         k = _KEY.match(raw)
         if k and current is not None:
             current.keys[k.group(1).lower()] = (k.group(2), no)
-    return sections, avr
+    return notes
+
+
+def _include(
+    path: Path, pattern: str, sections: dict[str, _Section], header: list[str], seen: set[Path]
+) -> list[str]:
+    try:
+        found = sorted(
+            Path(p) for p in glob.glob(os.path.join(path.parent, pattern))[:_MAX_INCLUDES]
+        )
+    except (OSError, ValueError):
+        found = []
+    if not found:
+        return [f"{path}: [include {pattern}] matches no file beside it; not read"]
+    notes: list[str] = []
+    for inc in found:
+        if not is_file(inc) or inc.resolve() in seen:
+            continue
+        if len(seen) >= _MAX_INCLUDES:
+            raise ConfigError(f"{path}: more than {_MAX_INCLUDES} included files")
+        seen.add(inc.resolve())
+        notes += _parse(inc, sections, header, seen)
+    return notes
+
+
+def read(path: str | os.PathLike[str]) -> FirmwareConfig:
+    """Read a ``printer.cfg`` (see the module doc)."""
+    p = Path(path)
+    sections: dict[str, _Section] = {}
+    header: list[str] = []
+    notes = _parse(p, sections, header, {p.resolve()})
+    printer = sections.get("printer")
+    tmc: dict[str, _Section] = {}
+    for name, sec in sections.items():
+        kind, _, target = name.partition(" ")
+        if kind in TMC_SECTIONS and target and ("uart_pin" in sec.keys or "cs_pin" in sec.keys):
+            tmc[target] = sec
+    steppers = [s for s in sections.values() if "step_pin" in s.keys]
+    if not steppers:
+        raise ConfigError(
+            f"{p}: no section with a step_pin (a Klipper file without steppers: nothing to check)"
+        )
+    if len(steppers) > MAX_AXES:
+        raise ConfigError(f"{p}: {len(steppers)} stepper sections (at most {MAX_AXES} are read)")
+    mcus = _mcus(sections, header, steppers)
+    kinematics = printer.keys.get("kinematics", ("", 0))[0].lower() if printer else ""
+    axes = [_axis(str(p), sec, tmc.get(sec.name), printer, kinematics, mcus) for sec in steppers]
+    return FirmwareConfig(
+        firmware="klipper",
+        path=str(p),
+        axes=tuple(axes),
+        files=tuple(dict.fromkeys([str(p), *(s.path for s in sections.values())])),
+        notes=(
+            *(f"MCU {m.name}: {m.why}" for m in mcus.values()),
+            f"kinematics {kinematics or 'not given'}"
+            + (
+                f" ({printer.at('kinematics')})" if printer and "kinematics" in printer.keys else ""
+            ),
+            "Klipper drops a step followed by an opposite step less than 750 us later (host side)",
+            *notes,
+        ),
+        fixer=_fix,
+    )
+
+
+def _bare(pin: str) -> tuple[bool, str, str]:
+    """(inverted, MCU name, pin) of Klipper's ``[^~][!][mcu:]pin``."""
+    text = pin.strip().lstrip("^~").strip()
+    inverted = text.startswith("!")
+    name, sep, rest = text.lstrip("!").partition(":")
+    return inverted, (name.strip() if sep else "mcu"), (rest if sep else name).strip()
+
+
+def _mcu_of(pin: str) -> str:
+    return _bare(pin)[1]
+
+
+def _mcus(
+    sections: dict[str, _Section], header: list[str], steppers: list[_Section]
+) -> dict[str, _Mcu]:
+    out: dict[str, _Mcu] = {}
+    names = {_mcu_of(s.keys["step_pin"][0]) for s in steppers}
+    for name in sorted(names):
+        sec = sections.get("mcu" if name == "mcu" else f"mcu {name}")
+        texts = [v for v, _ in sec.keys.values()] if sec else []
+        if name == "mcu":
+            texts += header
+        chips = {m.group(0).lower() for t in texts for m in _CHIP.finditer(t)}
+        found = [
+            (c, next(row for row in MCUS if re.fullmatch(row[0], c, re.I)))
+            for c in sorted(chips)
+            if any(re.fullmatch(row[0], c, re.I) for row in MCUS)
+        ]
+        pins = [
+            _bare(s.keys[k][0])[2]
+            for s in steppers
+            if _mcu_of(s.keys["step_pin"][0]) == name
+            for k in ("step_pin", "dir_pin")
+            if k in s.keys
+        ]
+        not_avr_pin = next((q for q in pins if _not_avr_pin(q)), None)
+        if found:
+            avrs = {row[1] for _, row in found}
+            clocks = tuple(sorted({c for _, row in found for c in row[2]}))
+            if not_avr_pin and True in avrs:
+                avrs = {False}
+            avr = avrs.pop() if len(avrs) == 1 else None
+            chip = ", ".join(sorted({c for c, _ in found}))
+            why = f"{chip} named in the file" + (
+                "" if avr is not None else " (AVR and ARM both named: AVR possible)"
+            )
+            out[name] = _Mcu(name, avr, clocks if all(row[2] for _, row in found) else (), why)
+        elif not_avr_pin:
+            out[name] = _Mcu(name, False, (), f"no chip named; pin {not_avr_pin} is no ATmega pin")
+        else:
+            out[name] = _Mcu(
+                name, None, (),
+                "no chip named and its pins fit an ATmega: AVR possible (figures that depend on "
+                "it are unknown)",
+            )  # fmt: skip
+    return out
+
+
+def _not_avr_pin(pin: str) -> bool:
+    """True for a pin name no ATmega has: a port pin numbered 8 or more, ``P1.20``, ``gpio5``."""
+    m = re.fullmatch(r"P([A-Z])(\d{1,3})", pin, re.I)
+    if m:
+        return int(m.group(2)) >= 8
+    return bool(re.fullmatch(r"P\d+\.\d+|gpio\d+(_\d+)?", pin, re.I))
 
 
 def _steps_per_mm(path: str, sec: _Section) -> tuple[Fraction | None, str]:
     keys = sec.keys
     if "rotation_distance" not in keys or "microsteps" not in keys:
         return None, ""
-    full = number(*_kv(path, keys, "full_steps_per_rotation", "200"), "full_steps_per_rotation")
-    micro = number(*_kv(path, keys, "microsteps"), "microsteps")
-    dist = number(*_kv(path, keys, "rotation_distance"), "rotation_distance")
+    full = (
+        number(keys["full_steps_per_rotation"][0], sec.at("full_steps_per_rotation"),
+               "full_steps_per_rotation", low=1, high=10**6)
+        if "full_steps_per_rotation" in keys
+        else Fraction(200)
+    )  # fmt: skip
+    micro = number(keys["microsteps"][0], sec.at("microsteps"), "microsteps", low=1, high=10**6)
+    dist = number(keys["rotation_distance"][0], sec.at("rotation_distance"), "rotation_distance",
+                  low=0, high=10**9)  # fmt: skip
+    if dist == 0:
+        raise ConfigError(f"{sec.at('rotation_distance')}: rotation_distance must be > 0")
     ratio = Fraction(1)
     if "gear_ratio" in keys:
-        for pair in keys["gear_ratio"][0].split(","):
+        place = sec.at("gear_ratio")
+        for pair in keys["gear_ratio"][0].split(",")[:16]:
             a, _, b = pair.partition(":")
-            place = where(path, keys["gear_ratio"][1])
-            ratio *= number(a, place, "gear_ratio") / number(b or "1", place, "gear_ratio")
-    if dist <= 0:
-        raise ConfigError(
-            f"{where(path, keys['rotation_distance'][1])}: rotation_distance must be > 0"
-        )
+            ratio *= number(a, place, "gear_ratio", low=0, high=10**6) / number(
+                b or "1", place, "gear_ratio", low=Fraction(1, 10**6), high=10**6
+            )
     spm = full * micro * ratio / dist
-    return (
-        spm,
-        f"{float(spm):g} (full_steps_per_rotation x microsteps x gear_ratio / rotation_distance, {where(path, keys['rotation_distance'][1])})",
+    text = (
+        f"{float(spm):g} (full_steps_per_rotation x microsteps x gear_ratio / rotation_distance, "
+        f"{sec.at('rotation_distance')})"
     )
+    return spm, text
 
 
-def _kv(
-    path: str, keys: dict[str, tuple[str, int]], key: str, default: str | None = None
-) -> tuple[str, str]:
-    if key in keys:
-        return keys[key][0], where(path, keys[key][1])
-    assert default is not None
-    return default, "firmware default"
+def _pulse_source(
+    path: str, sec: _Section, tmc: _Section | None
+) -> tuple[Fraction, tuple[str, str, str, str]]:
+    if "step_pulse_duration" in sec.keys:
+        at = sec.at("step_pulse_duration")
+        raw = sec.keys["step_pulse_duration"][0]
+        ns = number(raw, at, "step_pulse_duration", low=0, high=Fraction(1, 1000), unit="s") * 10**9
+        return ns, ("step_pulse_duration", at, "s", "set")
+    if tmc is not None:
+        return _TMC_NS, (
+            "step_pulse_duration",
+            f"firmware default ([{tmc.name}] at {where(tmc.path, tmc.line)})",
+            "s",
+            "default",
+        )
+    return _DEFAULT_NS, ("step_pulse_duration", "firmware default", "s", "default")
 
 
-def read(path: str | os.PathLike[str]) -> FirmwareConfig:
-    """Read a ``printer.cfg`` (see the module doc)."""
-    p = str(path)
-    sections, avr = _parse(read_text(path))
-    printer = sections.get("printer")
-    tmc: dict[str, tuple[str, int]] = {}
-    for name, sec in sections.items():
-        kind, _, target = name.partition(" ")
-        if kind in TMC_SECTIONS and target and ("uart_pin" in sec.keys or "cs_pin" in sec.keys):
-            tmc[target] = (kind, sec.line)
-    axes = []
-    for name, sec in sections.items():
-        if not (name.startswith("stepper_") or name.startswith("extruder")) or " " in name:
-            continue
-        if "step_pin" not in sec.keys:
-            continue
-        axes.append(_axis(p, sec, tmc.get(name), printer, avr))
-    if not axes:
-        raise ConfigError(f"{path}: no [stepper_*] or [extruder] section with a step_pin")
-    mcu = "AVR (named in the file's comments)" if avr else "not AVR (no ATmega/AVR named)"
-    return FirmwareConfig(
-        firmware="klipper",
-        path=p,
-        axes=tuple(axes),
-        files=(p,),
-        notes=(
-            f"MCU taken as {mcu}: it decides which step path runs",
-            "step_pulse_duration is truncated to MCU clock ticks (100 ns at 72 MHz is 97.2 ns)",
-            "Klipper drops a step followed by an opposite step less than 750 us later (host side)",
-        ),
-        fixer=_fix,
-    )
+def _truncated(ns: Fraction, mcu: _Mcu) -> tuple[Fraction, str, bool]:
+    """(the pulse after truncation to MCU ticks, a note, exact?)."""
+    if mcu.clocks:
+        made = min(Fraction(int(ns * f / 10**9), f) * 10**9 for f in mcu.clocks)
+        if made == ns:
+            return ns, "", True
+        mhz = "/".join(f"{f / 1e6:g}" for f in mcu.clocks)
+        return made, f"truncated to whole ticks of the MCU clock ({mhz} MHz)", True
+    if (ns / 1000).denominator == 1:
+        return ns, "", True  # a whole us is a whole number of ticks of every whole-MHz clock
+    return ns, "truncated to whole MCU clock ticks (clock not known: up to one tick shorter)", False
 
 
 def _axis(
     path: str,
     sec: _Section,
-    tmc: tuple[str, int] | None,
+    tmc: _Section | None,
     printer: _Section | None,
-    avr: bool,
+    kinematics: str,
+    mcus: dict[str, _Mcu],
 ) -> GeneratorGuarantee:
     keys = sec.keys
     step_pin = keys["step_pin"][0]
     dir_pin = keys.get("dir_pin", ("", 0))[0]
+    mcu = mcus[_mcu_of(step_pin)]
+    ns, src = _pulse_source(path, sec, tmc)
     notes: list[str] = []
-    if "step_pulse_duration" in keys:
-        raw, line = keys["step_pulse_duration"]
-        ns = number(raw, where(path, line), "step_pulse_duration") * 10**9
-        src = ("step_pulse_duration", where(path, line), "s", "set")
-    elif tmc is not None:
-        ns = _TMC_NS
-        src = (
-            "step_pulse_duration",
-            f"firmware default ([{tmc[0]} {sec.name}] at {where(path, tmc[1])})",
-            "s",
-            "default",
-        )
-    else:
-        ns = _DEFAULT_NS
-        src = ("step_pulse_duration", "firmware default", "s", "default")
-    if ns < 0 or ns > 10**6:
-        raise ConfigError(f"{src[1]}: step_pulse_duration must be 0 .. 0.001 s")
-    both = tmc is not None and ns <= _BOTH_EDGE_MAX_NS and not avr
+    both_ok = tmc is not None and ns <= _BOTH_EDGE_MAX_NS
+    both = both_ok and mcu.avr is False
     if tmc is not None and not both:
-        why = "the MCU is AVR" if avr else f"the pulse {float(ns):g} ns is over 500 ns"
-        notes.append(f"{tmc[0]} requests both-edge stepping, refused because {why}")
+        why = (
+            f"the pulse {float(ns):g} ns is over 500 ns"
+            if not both_ok
+            else ("the MCU is AVR" if mcu.avr else "the MCU may be AVR (not identified)")
+        )
+        notes.append(f"{tmc.name.split()[0]} requests both-edge stepping, refused because {why}")
+    made, trunc, exact = _truncated(ns, mcu)
+    status = src[3] if exact and not trunc else ("derived" if exact else "uncertain")
 
-    def fig(status: str = "", note: str = "") -> Guaranteed:
-        return Guaranteed(ns, src[0], src[1], src[2], status or src[3], note)  # type: ignore[arg-type]
+    def fig(st: str = "", note: str = "") -> Guaranteed:
+        text = "; ".join(x for x in (note, trunc) if x)
+        return Guaranteed(made, src[0], src[1], src[2], (st or status), text)  # type: ignore[arg-type]
 
+    fast_avr = mcu.avr is not False and (
+        any(ns * f / 10**9 <= _AVR_FAST_TICKS for f in mcu.clocks) if mcu.clocks else ns <= 2500
+    )
+    trailing: Guaranteed | None
     if both:
-        pulse = fig(
-            "uncertain",
-            "both-edge fast path: toggles follow the host schedule; the MCU enforces no minimum",
-        )
-        idle, setup, hold = pulse, pulse, pulse
-        trailing = pulse
+        pulse = fig("uncertain",
+                    "both-edge fast path: toggles follow the host schedule; the MCU enforces no "
+                    "minimum")  # fmt: skip
+        idle, setup, hold, trailing = pulse, pulse, pulse, pulse
         notes.append(
-            f"both-edge stepping ({tmc[0] if tmc else ''} dedge): every STEP edge is a step"
+            f"both-edge stepping ({tmc.name.split()[0] if tmc else ''} dedge): every STEP edge is a step"
         )
-    elif avr and ns <= _AVR_FAST_NS:
-        pulse = unknown(
-            "step_pulse_duration",
-            "AVR fast path: both STEP writes in one event, the pulse is instruction time",
-            src[1],
-        )
+    elif fast_avr:
+        what = "AVR" if mcu.avr else "an AVR (the MCU is not identified)"
+        pulse = unknown("step_pulse_duration",
+                        f"on {what} the fast path makes both STEP writes in one event: the pulse "
+                        "is instruction time", src[1])  # fmt: skip
         idle = fig("uncertain", "the next step is scheduled at least this long after the last one")
         setup = fig("uncertain")
-        hold = unknown(
-            "step_pulse_duration",
-            "AVR fast path: DIR may toggle between the two STEP edges",
-            src[1],
-        )
+        hold = unknown("step_pulse_duration",
+                       f"on {what} the fast path may toggle DIR between the two STEP edges",
+                       src[1])  # fmt: skip
         trailing = None
     else:
         pulse, idle, setup, hold = fig(), fig(), fig(), fig()
-        trailing = Guaranteed(
-            Fraction(0),
-            src[0],
-            src[1],
-            src[2],
-            "derived",
-            "DIR toggles right after the trailing edge",
-        )
-    info: dict[str, str] = {}
+        trailing = Guaranteed(Fraction(0), src[0], src[1], src[2], "derived",
+                              "DIR toggles right after the trailing edge")  # fmt: skip
+    info: dict[str, str] = {"mcu": f"{mcu.name} ({mcu.why})"}
     spm, spm_text = _steps_per_mm(path, sec)
     if spm_text:
         info["steps/mm"] = spm_text
-    speed_key = "max_z_velocity" if sec.name == "stepper_z" else "max_velocity"
-    max_rate = Guaranteed(
-        None, "max_velocity", "", "mm/s", "unknown", "Klipper has no step-rate setting"
+    max_rate = _rate(sec, printer, kinematics, spm, info)
+    alias = re.sub(
+        r"^stepper_|^extruder(?=\d*$)", lambda m: "" if m.group(0) == "stepper_" else "e", sec.name
     )
-    if printer is not None and not sec.name.startswith("extruder"):
-        found = printer.keys.get(speed_key) or printer.keys.get("max_velocity")
-        name = speed_key if speed_key in printer.keys else "max_velocity"
-        if found and spm is not None:
-            v = number(found[0], where(path, found[1]), name)
-            info["max speed"] = f"{found[0]} mm/s ([printer] {name}, {where(path, found[1])})"
-            max_rate = Guaranteed(
-                v * spm,
-                f"{name} x steps/mm",
-                where(path, found[1]),
-                "mm/s",
-                "derived",
-                "cartesian kinematics assumed (corexy/delta steppers may run faster)",
-            )
     return GeneratorGuarantee(
         axis=sec.name,
         pulse=pulse,
@@ -242,25 +403,69 @@ def _axis(
         dir_setup=setup,
         dir_hold=hold,
         max_rate=max_rate,
-        pulse_level=0 if step_pin.lstrip("^~").startswith("!") else 1,
+        pulse_level=0 if _bare(step_pin)[0] else 1,
         both_edges=both,
         dir_hold_trailing=trailing,
-        dir_inverted=dir_pin.lstrip("^~").startswith("!"),
+        dir_inverted=_bare(dir_pin)[0],
         info=info,
         notes=tuple(notes),
+        aliases=(alias,) if alias != sec.name else (),
     )
 
 
+def _rate(
+    sec: _Section,
+    printer: _Section | None,
+    kinematics: str,
+    spm: Fraction | None,
+    info: dict[str, str],
+) -> Guaranteed:
+    none = Guaranteed(
+        None, "max_velocity", "", "mm/s", "unknown", "Klipper has no step-rate setting"
+    )
+    m = _AXIS_OF.match(sec.name)
+    if printer is None or spm is None or m is None:
+        return none
+    axis = "x" if m.group(2) else m.group(1)
+    cartesian_axes = {
+        "cartesian": "xyz",
+        "corexy": "z",
+        "hybrid_corexy": "z",
+        "corexz": "y",
+        "hybrid_corexz": "y",
+    }.get(kinematics, "")
+    if axis not in cartesian_axes:
+        what = f"{kinematics or 'unknown'} kinematics"
+        return unknown("max_velocity",
+                       f"{what}: {sec.name} does not move one cartesian axis alone and may step "
+                       "faster than max_velocity x steps/mm")  # fmt: skip
+    name = "max_z_velocity" if axis == "z" and "max_z_velocity" in printer.keys else "max_velocity"
+    if name not in printer.keys:
+        return none
+    raw, _ = printer.keys[name]
+    at = printer.at(name)
+    v = number(raw, at, name, low=0, high=10**6, unit="mm/s")
+    default = (
+        " (max_z_velocity not set: max_velocity)" if axis == "z" and name == "max_velocity" else ""
+    )
+    info["max speed"] = f"{raw} mm/s ([printer] {name}, {at}){default}"
+    return Guaranteed(v * spm, f"{name} x steps/mm", at, "mm/s", "derived",
+                      f"{kinematics}: {sec.name} moves {axis} alone")  # fmt: skip
+
+
 def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    if (
-        role == "max_rate"
-        or role == "idle"
-        and axis.both_edges is False
+    if role == "max_rate" or (
+        role == "idle"
+        and not axis.both_edges
         and axis.max_rate.known
         and axis.pulse.value is not None
         and axis.pulse.value >= need
     ):
-        return f"lower max_velocity in [printer] so that {axis.axis} steps at most {float(need if role == 'max_rate' else Fraction(10**9) / (axis.pulse.value + need)):.6g} steps/s"  # type: ignore[operator]
+        rate = need if role == "max_rate" else Fraction(10**9) / ((axis.pulse.value or 0) + need)
+        return (
+            f"lower max_velocity in [printer] so that {axis.axis} steps at most "
+            f"{float(rate):.6g} steps/s"
+        )
     s = float(need / 10**9)
     extra = (
         " (over 0.0000005 this turns both-edge stepping off)"

@@ -1,142 +1,251 @@
-"""LinuxCNC's software stepgen: the INI (``[EMCMOT] BASE_PERIOD``) and its HAL files, read by
-:mod:`wavecheck.linuxcnc.config`; the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
+"""LinuxCNC's software stepgen: the channels a configuration loads (``loadrt stepgen``), read by
+:mod:`wavecheck.linuxcnc.config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
 
 stepgen rounds each parameter up to whole base periods ``P``, and any base-thread run may be up to
 ``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on the wire:
 that is the guarantee (``stepgen plan``'s latency-aware answer; ``J`` = 0 when not given, with a
 note). Across a reversal the space between pulses is only dirhold + dirsetup periods; LinuxCNC's
 dirhold counts from the end of the pulse, so the hold from the leading edge is steplen + dirhold.
+
+The output pin: when ``stepgen.N.step`` drives a parallel-port pin (``net … parport.P.pin-NN-out``)
+its ``-invert`` makes pulses low, and with ``-reset 1`` and ``parport.P.reset`` in the base thread
+the pin is written high each period and reset after ``parport.P.reset-time`` ns (at most P/4,
+hal_parport clamps it): the pulse on the pin is the reset time and the rest of the period is idle,
+whatever ``stepspace`` is (StepConf's "doublestep": ``steplen 1``, ``stepspace 0``, one step per
+period; reference ``stepgen-linuxcnc.md`` §2.3, hal_parport's man page).
 """
 
 from __future__ import annotations
 
-import os
 import re
+from collections.abc import Callable
+from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._linuxcnc_files import files_of
-from wavecheck.firmware._text import read_text
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
-from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
+from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
+from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role, unknown
+from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config_lines
+from wavecheck.linuxcnc.files import ini_value, int_ns
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
 
-__all__ = ["looks_like", "read"]
+__all__ = ["PinOut", "axes", "fixer", "joint_of", "pin_out"]
 
 _MAX_CHANNELS = 16
 
 
-def looks_like(text: str) -> bool:
-    """A LinuxCNC INI (``[EMCMOT]``) or a HAL file with software stepgen."""
-    return bool(
-        re.search(r"^\s*\[EMCMOT\]", text, re.M)
-        or re.search(r"^\s*loadrt\s+stepgen\b|\bstepgen\.\d+\.", text, re.M)
-    )
+@dataclass(frozen=True)
+class PinOut:
+    """What stands between a stepgen output and the wire: a parallel-port pin, if any.
+
+    Attributes:
+        pin: the port pin (``parport.0.pin-02-out``), "" when the output drives no port pin.
+        inverted: the pin's ``-invert`` is set.
+        reset_ns: the pulse the ``reset`` function makes (ns, after hal_parport's P/4 clamp),
+            None when the pin is not reset.
+        reset_where: where the reset time (or its absence) comes from.
+    """
+
+    pin: str = ""
+    inverted: bool = False
+    reset_ns: Fraction | None = None
+    reset_where: str = ""
+    reset_unknown: str = ""
 
 
-def read(path: str | os.PathLike[str], latency_ns: Fraction | None = None) -> FirmwareConfig:
-    """Read every software stepgen channel of a LinuxCNC configuration (an INI or a HAL file)."""
-    text = read_text(path)
-    ini, hals, notes = files_of(path, text)
-    ini_path = path if ini is not None else None
+def _true(value: str) -> bool:
+    return value.strip().lower() in ("1", "true")
+
+
+def pin_out(files: LinuxCNCFiles, output: str, period_ns: int) -> PinOut:
+    """The parallel-port pin ``output`` (``stepgen.0.step``) drives, its inversion and reset."""
+    pins = [p for p in files.on_signal(output) if p.startswith("parport.") and p.endswith("-out")]
+    if not pins:
+        return PinOut()
+    pin = pins[0]
+    port = pin.split(".")[1]
+    inverted = _true(files.setp.get(f"{pin}-invert", ("0", ""))[0])
+    if not _true(files.setp.get(f"{pin}-reset", ("0", ""))[0]):
+        return PinOut(pin, inverted)
+    funct = f"parport.{port}.reset"
+    if funct not in files.thread_of:
+        return PinOut(
+            pin, inverted, reset_unknown=f"{pin}-reset is set but {funct} runs in no thread"
+        )
+    found = files.setp.get(f"parport.{port}.reset-time")
+    if found is None:
+        return PinOut(pin, inverted, reset_unknown=f"parport.{port}.reset-time is not set")
+    ns = int_ns(ini_value(found[0], files.ini), found[1], f"parport.{port}.reset-time")
+    clamp = Fraction(period_ns // 4)
+    return PinOut(pin, inverted, min(Fraction(ns), clamp), found[1])
+
+
+def axes(files: LinuxCNCFiles, latency_ns: Fraction | None) -> list[GeneratorGuarantee]:
+    """One guarantee per software stepgen channel (empty when stepgen is not loaded)."""
     configs: list[LinuxCNCConfig] = []
     for channel in range(_MAX_CHANNELS):
         try:
-            cfg = read_config(ini_path, [str(h) for h in hals], channel)
+            cfg = read_config_lines(files.ini, files.lines, channel)
         except ConfigError as err:
             if configs and "is not loaded" in str(err):
                 break
             raise
-        configs.append(cfg)
         if not cfg.stepgen_loaded:
-            break
+            return []
+        configs.append(cfg)
     j = Fraction(latency_ns) if latency_ns is not None else Fraction(0)
-    axes = tuple(_axis(cfg, j) for cfg in configs)
-    jnote = (
-        f"every interval is n x BASE_PERIOD - J with J = {float(j):g} ns"
-        if latency_ns is not None
-        else "J = 0 assumed (give --latency for the latency-aware figures, as stepgen plan does)"
-    )
-    ignored = tuple(i for cfg in configs for i in cfg.ignored)
-    return FirmwareConfig(
-        firmware="linuxcnc",
-        path=str(path),
-        axes=axes,
-        files=(str(path), *map(str, hals)),
-        unsupported=tuple(dict.fromkeys(ignored)),
-        notes=(jnote, *notes),
-        fixer=_fixer(j),
-    )
+    return [_axis(files, cfg, j) for cfg in configs]
 
 
-def _axis(cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
+def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
+    if cfg.base_period_ns is None:
+        place = cfg.sources.get("step_type", files.path)
+        raise ConfigError(
+            f"{place}: stepgen is loaded but no base period is known: no [EMCMOT] BASE_PERIOD, "
+            "and stepgen.make-pulses runs in no thread with a period"
+        )
     p = cfg.require_base_period()
     n = cfg.periods()
     src = cfg.sources
 
-    def fig(names: tuple[str, ...], setting: str, note: str = "") -> Guaranteed:
+    def fig(
+        names: tuple[str, ...], setting: str, note: str = "", minus: Fraction = Fraction(0)
+    ) -> Guaranteed:
         periods = sum(n[x] for x in names)
-        value = max(periods * p - j, Fraction(0))
+        value = max(periods * p - j - minus, Fraction(0))
         at = src.get(names[-1], "stepgen default (1 ns = one period)")
-        return Guaranteed(
-            value,
-            setting,
-            at,
-            "ns",
-            "derived",
-            f"{periods} x {p} ns - J" + (f"; {note}" if note else ""),
-        )
+        extra = f" - {float(minus):g} ns" if minus else ""
+        return Guaranteed(value, setting, at, "ns", "derived",
+                          f"{periods} x {p} ns{extra} - J" + (f"; {note}" if note else ""))  # fmt: skip
 
-    same = n["stepspace"]
-    reversal = n["dirhold"] + n["dirsetup"]
-    idle = (
-        fig(("stepspace",), "stepspace")
-        if same <= reversal
-        else fig(("dirhold", "dirsetup"), "dirhold + dirsetup", "across a reversal")
-    )
+    step = pin_out(files, f"stepgen.{cfg.channel}.step", p)
+    dirp = pin_out(files, f"stepgen.{cfg.channel}.dir", p)
+    notes: list[str] = []
+    if cfg.step_type not in (None, 0):
+        notes.append(f"step_type {cfg.step_type}: only step/dir (0) is modelled here")
+    if step.pin:
+        notes.append(f"STEP drives {step.pin}" + (" (inverted)" if step.inverted else ""))
+    if step.reset_ns is not None or step.reset_unknown:
+        pulse, idle, hold, trailing, rate = _reset(cfg, step, p, n, j, notes)
+    else:
+        same = n["stepspace"]
+        reversal = n["dirhold"] + n["dirsetup"]
+        idle = (
+            fig(("stepspace",), "stepspace")
+            if same <= reversal
+            else fig(("dirhold", "dirsetup"), "dirhold + dirsetup", "across a reversal")
+        )
+        pulse = fig(("steplen",), "steplen")
+        hold = fig(("steplen", "dirhold"), "steplen + dirhold",
+                   "dirhold counts from the end of the pulse")  # fmt: skip
+        trailing = fig(("dirhold",), "dirhold")
+        rate = Guaranteed(step_rate_hz(p, n["steplen"] + n["stepspace"]),
+                          "1 / ((steplen + stepspace) x P)",
+                          src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
+                          "stepgen's own clamp")  # fmt: skip
+        if n["stepspace"] == 0:
+            notes.append("stepspace 0 without the parport reset function: STEP stays high at the "
+                         "top rate")  # fmt: skip
     info = {
         "base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
         **{k: f"{v} base periods" for k, v in n.items()},
     }
-    notes: tuple[str, ...] = ()
-    if cfg.step_type not in (None, 0):
-        notes = (f"step_type {cfg.step_type}: only step/dir (0) is modelled here",)
+    joint, letter = joint_of(files, f"stepgen.{cfg.channel}")
+    aliases = tuple(a for a in (f"joint.{joint}" if joint is not None else "", letter) if a)
     return GeneratorGuarantee(
         axis=f"stepgen.{cfg.channel}",
-        pulse=fig(("steplen",), "steplen"),
+        pulse=pulse,
         idle=idle,
         dir_setup=fig(("dirsetup",), "dirsetup"),
-        dir_hold=fig(
-            ("steplen", "dirhold"), "steplen + dirhold", "dirhold counts from the end of the pulse"
-        ),
-        max_rate=Guaranteed(
-            step_rate_hz(p, n["steplen"] + n["stepspace"]),
-            "1 / ((steplen + stepspace) x P)",
-            src.get("stepspace", src.get("BASE_PERIOD", "")),
-            "ns",
-            "derived",
-            "stepgen's own clamp",
-        ),
-        dir_hold_trailing=fig(("dirhold",), "dirhold"),
+        dir_hold=hold,
+        max_rate=rate,
+        pulse_level=0 if step.inverted else 1,
+        dir_hold_trailing=trailing,
+        dir_inverted=dirp.inverted,
         info=info,
-        notes=notes,
+        notes=tuple(notes),
+        aliases=aliases,
     )
 
 
-def _fixer(j: Fraction):  # type: ignore[no-untyped-def]
+def _reset(
+    cfg: LinuxCNCConfig, step: PinOut, p: int, n: dict[str, int], j: Fraction, notes: list[str]
+) -> tuple[Guaranteed, Guaranteed, Guaranteed, Guaranteed, Guaranteed]:
+    """Pulse, idle, DIR hold (leading, trailing) and rate on a parport pin with ``reset``."""
+    src = cfg.sources
+    if step.reset_ns is None:
+        pulse = unknown("reset-time", f"{step.reset_unknown}: the pulse on {step.pin} is not known")
+    else:
+        pulse = Guaranteed(step.reset_ns, "parport reset-time", step.reset_where, "ns", "derived",
+                           f"the reset function lowers {step.pin} reset-time after the write "
+                           f"(clamped to P/4 = {p // 4} ns)")  # fmt: skip
+    width = pulse.value or Fraction(0)
+    idle = Guaranteed(max(p - width - j, Fraction(0)), "BASE_PERIOD - reset-time",
+                      src.get("BASE_PERIOD", ""), "ns", "derived",
+                      "the pin is written once per period: the rest of the period is idle, less J")  # fmt: skip
+    lead = n["steplen"] + n["dirhold"]
+    hold = Guaranteed(max(lead * p - j, Fraction(0)), "steplen + dirhold", src.get("dirhold", ""),
+                      "ns", "derived", f"{lead} x {p} ns - J from the write that starts the pulse")  # fmt: skip
+    trailing = Guaranteed(max(lead * p - width - j, Fraction(0)), "steplen + dirhold - reset-time",
+                          src.get("dirhold", ""), "ns", "derived", "from the reset that ends the pulse")  # fmt: skip
+    per_step = n["steplen"] + n["stepspace"]
+    rate = Guaranteed(step_rate_hz(p, per_step), "1 / ((steplen + stepspace) x P)",
+                      src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
+                      "stepgen's own clamp; the reset pin makes one pulse per period")  # fmt: skip
+    notes.append(f"{step.pin} is reset each period (parport reset): the pulse is the reset time")
+    if n["steplen"] > 1:
+        notes.append(f"steplen is {n['steplen']} periods with the reset function: each step makes "
+                     f"{n['steplen']} pulses on {step.pin} (StepConf sets steplen 1)")  # fmt: skip
+    return pulse, idle, hold, trailing, rate
+
+
+def joint_of(files: LinuxCNCFiles, gen: str) -> tuple[int | None, str]:
+    """(the joint whose command drives ``gen``, that joint's axis letter or "")."""
+    joint = None
+    for pin in (f"{gen}.position-cmd", f"{gen}.velocity-cmd"):
+        for other in files.on_signal(pin):
+            m = re.fullmatch(
+                r"joint\.(\d{1,3})\.motor-pos-cmd|axis\.(\d{1,3})\.motor-pos-cmd", other
+            )
+            if m:
+                joint = int(m.group(1) or m.group(2))
+    if joint is None:
+        return None, ""
+    return joint, _letter(files, joint)
+
+
+def _letter(files: LinuxCNCFiles, joint: int) -> str:
+    kins = files.ini_setting("KINS", "KINEMATICS")
+    coords = ""
+    if kins:
+        m = re.search(r"coordinates=(\w+)", kins[0])
+        coords = m.group(1) if m else ""
+    if not coords:
+        traj = files.ini_setting("TRAJ", "COORDINATES")
+        coords = "".join(traj[0].split()) if traj else ""
+    return coords[joint].lower() if joint < len(coords) else ""
+
+
+def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
+    """How to say which stepgen setting to change, at latency ``j``."""
+
     def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
         p = int(axis.info.get("base period", "0 ns").split(" ")[0])
-        name = {
-            "pulse": "steplen",
-            "idle": "stepspace",
-            "dir_setup": "dirsetup",
-            "dir_hold": "dirhold",
-        }.get(role)
+        name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
+                "hold": "dirhold"}.get(role)  # fmt: skip
         if name is None or p <= 0:
-            return f"lower the joint's MAX_VELOCITY so that {axis.axis} steps at most {float(need):.6g} steps/s"
-        if role == "dir_hold":
+            return (
+                f"lower the joint's MAX_VELOCITY so that {axis.axis} steps at most "
+                f"{float(need):.6g} steps/s"
+            )
+        if role == "pulse" and axis.pulse.setting == "parport reset-time":
+            return f"set the parport reset-time to at least {int(-(-need // 1))} ns (at most P/4)"
+        if role == "hold":
             need -= int(axis.info.get("steplen", "0").split(" ")[0]) * p
         periods = periods_needed(max(need, Fraction(0)), j, p)
-        return f"set {axis.axis}.{name} to at least {periods * p} ns ({periods} base periods of {p} ns at J = {float(j):g} ns)"
+        return (
+            f"set {axis.axis}.{name} to at least {periods * p} ns ({periods} base periods of "
+            f"{p} ns at J = {float(j):g} ns)"
+        )
 
     return fix

@@ -1,59 +1,141 @@
 """Marlin: ``Configuration.h`` + ``Configuration_adv.h`` (reference ``firmware-timing.md`` §4).
 
-Read (the first active ``#define`` of each name; preprocessor conditions are not evaluated):
-``X_DRIVER_TYPE`` … ``E7_DRIVER_TYPE``, ``MINIMUM_STEPPER_PULSE_NS`` (2.1.3) or
-``MINIMUM_STEPPER_PULSE`` (µs, older), ``MAXIMUM_STEPPER_RATE`` (Hz),
-``MINIMUM_STEPPER_POST_DIR_DELAY`` (ns; DIR written → next pulse: the **setup**) and
-``MINIMUM_STEPPER_PRE_DIR_DELAY`` (ns; end of the last pulse → DIR written: the **hold**, so
-hold from the leading edge = pulse + PRE), ``EDGE_STEPPING``/``SQUARE_WAVE_STEPPING``,
-``STEP_STATE_X LOW`` / ``INVERT_X_STEP_PIN true``, ``INVERT_X_DIR``,
-``DEFAULT_AXIS_STEPS_PER_UNIT`` and ``DEFAULT_MAX_FEEDRATE`` (mm/s).
+Both files are read through :mod:`.preprocessor` (``#if``/``#else`` branches evaluated, macros
+that name macros expanded). Read: ``X_DRIVER_TYPE`` … ``E7_DRIVER_TYPE`` (and ``X2``/``Y2``/
+``Z2``–``Z4``), ``MINIMUM_STEPPER_PULSE_NS`` (2.1.3 format) or ``MINIMUM_STEPPER_PULSE`` (µs,
+older), ``MAXIMUM_STEPPER_RATE`` (Hz), ``MINIMUM_STEPPER_POST_DIR_DELAY`` (ns; DIR written →
+next pulse: the **setup**) and ``MINIMUM_STEPPER_PRE_DIR_DELAY`` (ns; end of the last pulse → DIR
+written: the **hold**, so hold from the leading edge = pulse + PRE; 1.1.x had one
+``MINIMUM_STEPPER_DIR_DELAY``, the setup), ``EDGE_STEPPING``/``SQUARE_WAVE_STEPPING``,
+``STEP_STATE_X LOW`` / ``INVERT_X_STEP_PIN true``, ``INVERT_X_DIR``, ``EXTRUDERS``,
+``DISTINCT_E_FACTORS``, ``DEFAULT_AXIS_STEPS_PER_UNIT`` and ``DEFAULT_MAX_FEEDRATE`` (mm/s; C
+expressions such as ``4000/3`` evaluated as C does, integer division included; a list that
+cannot be evaluated only loses the per-axis rate).
 
-Marlin's defaults when a figure is not set (``Conditionals-4-adv.h``): one value for the whole
-machine from the slowest driver type on any axis (:data:`DEFAULTS`). Low time =
-max(1e9 / MAXIMUM_STEPPER_RATE − pulse, pulse), only pulse set: low = pulse; only the rate:
-both 5e8 / rate. Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up
-to ½ tick short: the pulse is ``uncertain``. ``EDGE_STEPPING`` on a TMC axis driven over
-UART/SPI (not ``_STANDALONE``) makes every STEP edge a step.
+The version comes from ``CONFIGURATION_H_VERSION`` (else from the names the file uses) and
+decides Marlin's defaults when a figure is not set (:data:`ERAS`): one value for the whole
+machine from the slowest driver type present on any axis. Until 2.1.2 a pulse of 0 µs (the TMC
+and LV8729 default, or a user's 0) is "not set", so high = low = 5e8 / rate; from 2.1.3 a
+defined ``MINIMUM_STEPPER_PULSE_NS 0`` is 0. Low time = max(1e9 / rate − pulse, pulse) when both
+are set. Before 2.1, a driver whose ``X_DRIVER_TYPE`` is not defined is an A4988 (the files say
+so). Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up to ½ tick
+short: it is ``uncertain``. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
+``_STANDALONE``) makes every STEP edge a step.
+
+A figure that depends on a branch the files cannot decide is the smallest over the branches
+(the largest for the max rate), and the note names the branch.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._text import number, read_text, where
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware._text import read_text
+from wavecheck.firmware.guarantee import (
+    FirmwareConfig,
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+    unknown,
+)
+from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
+from wavecheck.units import shown
 
-__all__ = ["DEFAULTS", "MarlinDefault", "looks_like", "read"]
+__all__ = ["ERAS", "Era", "Table", "looks_like", "read"]
+
+_Row = tuple[tuple[str, ...], int]
 
 
 @dataclass(frozen=True)
-class MarlinDefault:
-    """One row of Marlin's per-driver defaults (``Conditionals-4-adv.h`` @ 00354a11)."""
+class Table:
+    """Marlin's per-driver defaults: ordered rows, the first whose driver type is present wins
+    (``TMC`` stands for every Trinamic type), then the ``…_else`` value (None: not defined)."""
 
-    prefix: str
-    pulse_ns: int
-    dir_delay_ns: int
-    max_rate_hz: int
+    pulse_ns: tuple[_Row, ...]
+    pulse_else: int | None
+    dir_ns: tuple[_Row, ...]
+    dir_else: int
+    rate_hz: tuple[_Row, ...]
+    rate_else: int | None
 
 
-#: Marlin's defaults by driver type (a type matches a row when it starts with ``prefix``).
-DEFAULTS: tuple[MarlinDefault, ...] = (
-    MarlinDefault("TB6560", 30000, 15000, 15000),
-    MarlinDefault("TB6600", 3000, 1500, 150000),
-    MarlinDefault("DRV8825", 2000, 650, 250000),
-    MarlinDefault("A4988", 1000, 200, 500000),
-    MarlinDefault("A5984", 1000, 400, 500000),
-    MarlinDefault("LV8729", 500, 500, 1000000),
-    MarlinDefault("TMC", 100, 100, 5000000),
-)
-_AXES = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W", *(f"E{i}" for i in range(8)))
-_DEFINE = re.compile(r"^\s*#define\s+([A-Z0-9_]+)\b(.*)$")
+@dataclass(frozen=True)
+class Era:
+    """The Marlin versions that share one way of reading the timing settings."""
+
+    name: str
+    first: tuple[int, ...]
+    """The first version of the era (``(2, 1, 3)``)."""
+    tables: tuple[Table, ...]
+    """The default tables of the era's releases; a figure is the smallest over them (the rate
+    the largest) when they differ."""
+    zero_is_unset: bool
+    """``#if MINIMUM_STEPPER_PULSE && …`` (≤ 2.1.2) rather than ``defined()`` (2.1.3)."""
+    single_dir_delay: bool
+    """1.1.x: one ``MINIMUM_STEPPER_DIR_DELAY`` (the setup), no PRE delay."""
+    source: str
+
+
+_T213 = Table(
+    pulse_ns=((("TB6560",), 30000), (("TB6600",), 3000), (("DRV8825",), 2000),
+              (("A4988", "A5984"), 1000), (("LV8729",), 500), (("TMC",), 100)),
+    pulse_else=None,
+    dir_ns=((("TB6560",), 15000), (("TB6600",), 1500), (("DRV8825",), 650), (("LV8729",), 500),
+            (("A5984",), 400), (("A4988",), 200), (("TMC",), 100)),
+    dir_else=0,
+    rate_hz=((("TB6560",), 15000), (("TB6600",), 150000), (("DRV8825",), 250000),
+             (("A4988", "A5984"), 500000), (("LV8729",), 1000000), (("TMC",), 5000000)),
+    rate_else=None,
+)  # fmt: skip
+_T2022 = Table(
+    pulse_ns=((("TB6560",), 30000), (("TB6600",), 3000), (("DRV8825",), 2000),
+              (("A4988", "A5984"), 1000), (("TMC",), 0), (("LV8729",), 0)),
+    pulse_else=2000,
+    dir_ns=((("TB6560",), 15000), (("TB6600",), 1500), (("DRV8825",), 650), (("LV8729",), 500),
+            (("A5984",), 400), (("A4988",), 200), (("TMC",), 70)),
+    dir_else=0,
+    rate_hz=((("TB6560",), 15000), (("TB6600",), 150000), (("DRV8825",), 250000),
+             (("A4988",), 500000), (("LV8729",), 1000000), (("TMC",), 5000000)),
+    rate_else=250000,
+)  # fmt: skip
+_T2019 = Table(
+    pulse_ns=((("TB6560",), 30000), (("TB6600",), 3000), (("DRV8825",), 2000),
+              (("A4988", "A5984"), 1000), (("LV8729",), 0), (("TMC",), 0)),
+    pulse_else=2000,
+    dir_ns=((("TB6560",), 15000), (("TB6600",), 1500), (("DRV8825",), 650), (("LV8729",), 500),
+            (("A5984",), 400), (("A4988",), 200), (("TMC",), 20)),
+    dir_else=0,
+    rate_hz=((("TB6560",), 15000), (("TB6600",), 150000), (("LV8729",), 200000),
+             (("DRV8825",), 250000), (("TMC",), 400000), (("A4988",), 500000)),
+    rate_else=250000,
+)  # fmt: skip
+#: Marlin's eras, newest first.
+ERAS: tuple[Era, ...] = (
+    Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
+        "Conditionals-4-adv.h @ 00354a11 (firmware-timing.md §4)"),
+    Era("2.0.x to 2.1.2", (2, 0, 0), (_T2019, _T2022), True, False,
+        "Conditionals_post.h (2019) and Conditionals_adv.h (2022): the two tables of these "
+        "releases; the smaller figure of the two"),
+    Era("1.1.x", (1, 1, 0), (_T2019,), True, True,
+        "Conditionals_post.h (2019) taken for 1.1.x: one DIR delay, the setup"),
+)  # fmt: skip
+_LINEAR = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W")
+_DRIVER_AXES = (*_LINEAR, "X2", "Y2", "Z2", "Z3", "Z4", *(f"E{i}" for i in range(8)))
+_KINEMATIC = {
+    "COREXY": "XY", "COREYX": "XY", "MARKFORGED_XY": "XY", "MARKFORGED_YX": "XY",
+    "COREXZ": "XZ", "COREZX": "XZ", "COREYZ": "YZ", "COREZY": "YZ",
+    "DELTA": "XYZ", "MORGAN_SCARA": "XYZ", "MP_SCARA": "XYZ", "AXEL_TPARA": "XYZ",
+    "POLARGRAPH": "XYZ", "POLAR": "XYZ",
+}  # fmt: skip
+_MAX_COMBOS = 4096
+_GIGA = Fraction(10**9)
 
 
 def looks_like(text: str) -> bool:
@@ -63,16 +145,6 @@ def looks_like(text: str) -> bool:
             r"#define\s+(CONFIGURATION(_ADV)?_H_VERSION|X_DRIVER_TYPE|MINIMUM_STEPPER_PULSE)", text
         )
     )
-
-
-def _defines(path: Path) -> dict[str, tuple[str, str]]:
-    out: dict[str, tuple[str, str]] = {}
-    for no, line in enumerate(read_text(path).splitlines(), 1):
-        m = _DEFINE.match(line)
-        if m and m.group(1) not in out:
-            value = re.sub(r"/\*.*?\*/", "", m.group(2)).split("//")[0].strip()
-            out[m.group(1)] = (value, where(path, no))
-    return out
 
 
 def _pair(path: Path) -> list[Path]:
@@ -86,190 +158,265 @@ def _pair(path: Path) -> list[Path]:
     return found
 
 
-def _list(value: str, place: str, what: str) -> list[Fraction]:
-    inner = value.strip().lstrip("{").rstrip("}")
-    return [number(v, place, what) for v in inner.split(",") if v.strip()]
+@dataclass(frozen=True)
+class _Opt:
+    """One possible value of a setting: the number (None: not defined), where, and the
+    undecidable branch it depends on."""
+
+    value: Fraction | None
+    where: str
+    depends: tuple[str, ...]
+
+
+def _options(h: Headers, name: str, unit: str, scale: int = 1) -> list[_Opt]:
+    """Every value ``name`` may end with (a setting not mentioned: one ``None`` option)."""
+    out: list[_Opt] = []
+    for d in h.candidates(name) or [Definition(name, None, None, "", ())]:
+        if d.value is None:
+            out.append(_Opt(None, d.where, d.depends))
+            continue
+        v = evaluate(h, d.value)
+        if not isinstance(v, Num):
+            raise ConfigError(f"{d.where}: {name} {shown(d.value)} is not a number ({unit})")
+        if not 0 <= v.value <= 10**12:
+            raise ConfigError(
+                f"{d.where}: {name} {shown(d.value)} is out of range (0 .. 1e12 {unit})"
+            )
+        out.append(_Opt(v.value * scale, d.where, d.depends))
+    return out
+
+
+def _version(h: Headers, texts: str) -> tuple[Era, str]:
+    for key in ("CONFIGURATION_H_VERSION", "CONFIGURATION_ADV_H_VERSION"):
+        d = h.definition(key)
+        if d is not None and re.fullmatch(r"0?\d{5,7}", d.value or ""):
+            digits = (d.value or "").lstrip("0")
+            digits = digits.zfill(len(digits) + len(digits) % 2)
+            parts = tuple(int(digits[i : i + 2]) for i in range(0, len(digits), 2))
+            era = next((e for e in ERAS if parts[:3] >= e.first), ERAS[-1])
+            version = ".".join(map(str, parts[:2] + tuple(p for p in parts[2:] if p)))
+            return era, f"Marlin {version} ({key} {d.value} at {d.where}): {era.name} defaults"
+    if "MINIMUM_STEPPER_PULSE_NS" in texts:
+        return ERAS[0], "version not given; MINIMUM_STEPPER_PULSE_NS: 2.1.3 and later"
+    if "MINIMUM_STEPPER_POST_DIR_DELAY" in texts:
+        return ERAS[1], "version not given; POST/PRE DIR delays: 2.0.x to 2.1.2"
+    if "MINIMUM_STEPPER_DIR_DELAY" in texts:
+        return ERAS[2], "version not given; one MINIMUM_STEPPER_DIR_DELAY: 1.1.x"
+    return ERAS[0], "version not given and no timing names: 2.1.3 defaults assumed"
+
+
+@dataclass(frozen=True)
+class _Driver:
+    axis: str
+    options: tuple[tuple[str, str, tuple[str, ...]], ...]
+    """(driver type, where, depends) for each possible type."""
+
+
+def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
+    assumed = era.name != ERAS[0].name or "A4988 is assumed for unspecified drivers" in texts
+    extruders = 1
+    e = h.definition("EXTRUDERS")
+    if e is not None:
+        v = evaluate(h, e.value or "")
+        if isinstance(v, Num) and 0 <= v.value <= 8:
+            extruders = int(v.value)
+    out = []
+    for axis in _DRIVER_AXES:
+        options = []
+        for d in h.candidates(f"{axis}_DRIVER_TYPE"):
+            if d.value is None:
+                continue
+            v = evaluate(h, d.value)
+            kind = v if isinstance(v, str) else (d.value.split() or ["?"])[0]
+            options.append((kind, d.where, d.depends))
+        implied = assumed and (axis in ("X", "Y", "Z") or (
+            axis.startswith("E") and int(axis[1:]) < extruders))  # fmt: skip
+        if options and any(d.value is None for d in h.candidates(f"{axis}_DRIVER_TYPE")):
+            if implied:
+                options.append(("A4988", "assumed (not defined)", options[0][2]))
+        if not options and implied:
+            options.append(
+                ("A4988", "Marlin's default: A4988 is assumed for unspecified drivers", ())
+            )
+        if options:
+            out.append(_Driver(axis, tuple(options)))
+    return out
+
+
+def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
+    """What Marlin's own headers derive from ``Configuration.h`` before ``Configuration_adv.h``
+    (``drivers.h``, ``Conditionals``): ``HAS_DRIVER(T)``, ``AXIS_IS_TMC(A)``,
+    ``HAS_TRINAMIC_CONFIG``, ``HAS_TRINAMIC_STANDALONE``, ``HAS_MULTI_EXTRUDER``."""
+    types = {d.axis: {k for k, _, _ in d.options} for d in drivers}
+
+    def tri(results: list[bool]) -> bool | None:
+        return True if all(results) else False if not any(results) else None
+
+    def any_axis(test: Callable[[str], bool]) -> bool | None:
+        per_axis = [tri([test(t) for t in ts]) for ts in types.values()]
+        if any(p is True for p in per_axis):
+            return True
+        return False if all(p is False for p in per_axis) else None
+
+    def config(t: str) -> bool:
+        return t.startswith("TMC") and not t.endswith("STANDALONE")
+
+    h.functions["HAS_DRIVER"] = lambda a: any_axis(lambda t: t == a[0].strip()) if a else None
+    h.functions["AXIS_IS_TMC"] = lambda a: (
+        tri([config(t) for t in types.get(a[0].strip(), {""})]) if a else None
+    )
+    derived = {
+        "HAS_TRINAMIC_CONFIG": any_axis(config),
+        "HAS_TRINAMIC_STANDALONE": any_axis(lambda t: t.startswith("TMC") and not config(t)),
+    }
+    ext = h.definition("EXTRUDERS")
+    if ext is not None:
+        n = evaluate(h, ext.value or "")
+        derived["HAS_MULTI_EXTRUDER"] = n.value > 1 if isinstance(n, Num) else None
+    for name, value in derived.items():
+        if value is not None:
+            h.predefine(name, "1" if value else "0", f"derived from the driver types ({where})")
+
+
+def _present(row: tuple[str, ...], types: set[str]) -> bool:
+    return any(t.startswith("TMC") if r == "TMC" else t == r for r in row for t in types)
+
+
+def _first(rows: Sequence[_Row], other: int | None, types: set[str]) -> tuple[int | None, str]:
+    for row, value in rows:
+        if _present(row, types):
+            return value, "/".join(row)
+    return other, "none of the listed drivers"
+
+
+@dataclass(frozen=True)
+class _Timing:
+    pulse: Fraction | None
+    low: Fraction | None
+    post: Fraction
+    pre: Fraction
+    rate: Fraction | None
+    why: str
+    """How the pulse and rate were found (defaults, 0 = unset)."""
+    dir_why: str = ""
+    """How the DIR delay was found."""
+
+
+def _timing(era: Era, table: Table, types: set[str], settings: dict[str, _Opt]) -> _Timing | None:
+    """One combination of driver types and settings under one table (None: the build fails)."""
+    pulse_set = settings["pulse"].value
+    rate_set = settings["rate"].value
+    why = []
+    if pulse_set is None:
+        dv, row = _first(table.pulse_ns, table.pulse_else, types)
+        pulse = None if dv is None else Fraction(dv)
+        why.append(f"pulse: Marlin's default for {row}")
+    else:
+        pulse = pulse_set
+    if rate_set is None:
+        rv, row = _first(table.rate_hz, table.rate_else, types)
+        rate = None if rv is None else Fraction(rv)
+        why.append(f"rate: Marlin's default for {row}")
+    else:
+        rate = rate_set
+    have_pulse = pulse is not None and (pulse != 0 or not era.zero_is_unset)
+    have_rate = rate is not None and rate > 0
+    if have_pulse and have_rate:
+        assert pulse is not None and rate is not None
+        period = _GIGA / rate
+        high, low = pulse, max(period - min(period, pulse), pulse)
+    elif have_pulse:
+        assert pulse is not None
+        high = low = pulse
+    elif have_rate:
+        assert rate is not None
+        high = low = Fraction(5 * 10**8) / rate
+        why.append("pulse 0 or unset: high = low = 5e8 / rate")
+    else:
+        return None
+    post = settings["post"].value
+    dir_why = ""
+    if post is None:
+        dv, row = _first(table.dir_ns, table.dir_else, types)
+        post, dir_why = Fraction(dv or 0), f"Marlin's default for {row}"
+    pre = settings["pre"].value
+    if era.single_dir_delay:
+        pre = Fraction(0)
+    elif pre is None:
+        pre = post
+    return _Timing(high, low, post, pre, rate, "; ".join(why), dir_why)
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     """Read a Marlin configuration (a ``Configuration.h``, its ``_adv`` sibling, or their folder)."""
     files = _pair(Path(path))
-    d: dict[str, tuple[str, str]] = {}
-    for file in files:
-        for name, entry in _defines(file).items():
-            d.setdefault(name, entry)
-    drivers = {a: d[f"{a}_DRIVER_TYPE"] for a in _AXES if f"{a}_DRIVER_TYPE" in d}
+    h = Headers()
+    texts = [read_text(f) for f in files]
+    joined = "\n".join(texts)
+    h.feed(str(files[0]), texts[0])
+    era, version_note = _version(h, joined)
+    drivers = _drivers(h, era, joined)
+    _derive(h, drivers, str(files[0]))
+    for file, text in zip(files[1:], texts[1:], strict=True):
+        h.feed(str(file), text)
+    era, version_note = _version(h, joined)
+    drivers = _drivers(h, era, joined)
     if not drivers:
-        raise ConfigError(f"{path}: no X_DRIVER_TYPE … defines: not a Marlin Configuration.h")
+        raise ConfigError(
+            f"{files[0]}: no X_DRIVER_TYPE … defined (Marlin 2.1 names every stepper's driver): "
+            "no stepper to check"
+        )
+    pulse_name = "MINIMUM_STEPPER_PULSE_NS" if era is ERAS[0] else "MINIMUM_STEPPER_PULSE"
+    post_name = (
+        "MINIMUM_STEPPER_DIR_DELAY" if era.single_dir_delay else "MINIMUM_STEPPER_POST_DIR_DELAY"
+    )
+    dims: dict[str, list[_Opt]] = {
+        "pulse": _options(h, pulse_name, "ns" if era is ERAS[0] else "us", 1 if era is ERAS[0] else 1000),
+        "rate": _options(h, "MAXIMUM_STEPPER_RATE", "Hz"),
+        "post": _options(h, post_name, "ns"),
+        "pre": _options(h, "MINIMUM_STEPPER_PRE_DIR_DELAY", "ns"),
+    }  # fmt: skip
+    combos = 1
+    for d in drivers:
+        combos *= len(d.options)
+    for opts in dims.values():
+        combos *= len(opts)
+    if combos > _MAX_COMBOS:
+        raise ConfigError(
+            f"{files[0]}: {combos} combinations of undecidable #if branches decide the timing "
+            f"(at most {_MAX_COMBOS} are evaluated)"
+        )
+    results: list[tuple[_Timing, dict[str, _Opt], tuple[str, ...]]] = []
+    for types in itertools.product(*(d.options for d in drivers)):
+        for values in itertools.product(*dims.values()):
+            settings = dict(zip(dims, values, strict=True))
+            for table in era.tables:
+                t = _timing(era, table, {k for k, _, _ in types}, settings)
+                if t is not None:
+                    deps = tuple(x for _, _, dep in types for x in dep) + tuple(
+                        x for o in values for x in o.depends
+                    )
+                    results.append((t, settings, deps))
     notes = [
+        version_note,
+        f"defaults from {era.source}",
         "Marlin's timing is global: one pulse, DIR delay and rate for every axis",
-        "preprocessor conditions are not evaluated: the first active #define of a name is read",
         "EEPROM, M92 and M203 may override steps/unit and feed rates at run time",
+        *(f"{e} (an active #error: this configuration would not build)" for e in h.errors),
     ]
-    rows = [r for r in DEFAULTS if any(t.startswith(r.prefix) for t, _ in drivers.values())]
+    undecided = sorted({x for _, _, deps in results for x in deps})
+    if undecided:
+        notes.append(
+            "figures depend on branches the files cannot decide (the smallest is used): "
+            + "; ".join(undecided)
+        )
     unknown_types = sorted(
-        {t for t, _ in drivers.values() if not any(t.startswith(r.prefix) for r in DEFAULTS)}
-    )
+        {k for d in drivers for k, _, _ in d.options
+         if not any(_present(row, {k}) for row, _ in era.tables[0].rate_hz)}
+    )  # fmt: skip
     unsupported = [f"driver type {t}: no Marlin default timing is modelled" for t in unknown_types]
-    types = ", ".join(sorted({t for t, _ in drivers.values()}))
-
-    def default(field: str, pick) -> tuple[Fraction, str] | None:  # type: ignore[no-untyped-def]
-        if not rows:
-            return None
-        row = pick(rows, key=lambda r: getattr(r, field))
-        return Fraction(getattr(row, field)), f"Marlin default for {row.prefix} (drivers: {types})"
-
-    old = "MINIMUM_STEPPER_PULSE_NS" not in d and "MINIMUM_STEPPER_PULSE" in d
-    if "MINIMUM_STEPPER_PULSE_NS" in d:
-        v, w = d["MINIMUM_STEPPER_PULSE_NS"]
-        pulse = Guaranteed(
-            number(v, w, "MINIMUM_STEPPER_PULSE_NS"),
-            "MINIMUM_STEPPER_PULSE_NS",
-            w,
-            "ns",
-            "uncertain",
-        )
-    elif old:
-        v, w = d["MINIMUM_STEPPER_PULSE"]
-        pulse = Guaranteed(
-            number(v, w, "MINIMUM_STEPPER_PULSE") * 1000,
-            "MINIMUM_STEPPER_PULSE",
-            w,
-            "us",
-            "uncertain",
-        )
-    else:
-        dv = default("pulse_ns", max)
-        pulse = Guaranteed(
-            dv[0] if dv else None,
-            "MINIMUM_STEPPER_PULSE_NS",
-            dv[1] if dv else "",
-            "ns",
-            "default" if dv else "unknown",
-        )
-    pulse = Guaranteed(
-        pulse.value,
-        pulse.setting,
-        pulse.where,
-        pulse.unit,
-        "uncertain" if pulse.value is not None else "unknown",
-        "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 tick short"
-        + ("" if pulse.status != "default" else " (Marlin's default)"),
-    )
-    if "MAXIMUM_STEPPER_RATE" in d:
-        v, w = d["MAXIMUM_STEPPER_RATE"]
-        rate = Guaranteed(
-            number(v, w, "MAXIMUM_STEPPER_RATE"), "MAXIMUM_STEPPER_RATE", w, "Hz", "set"
-        )
-    else:
-        dv = default("max_rate_hz", min)
-        rate = Guaranteed(
-            dv[0] if dv else None,
-            "MAXIMUM_STEPPER_RATE",
-            dv[1] if dv else "",
-            "Hz",
-            "default" if dv else "unknown",
-        )
-    idle = _low(pulse, rate)
-    delays: dict[str, Guaranteed] = {}
-    for key in ("POST", "PRE"):
-        name = f"MINIMUM_STEPPER_{key}_DIR_DELAY"
-        legacy = "MINIMUM_STEPPER_DIR_DELAY"
-        if name in d:
-            v, w = d[name]
-            delays[key] = Guaranteed(number(v, w, name), name, w, "ns", "set")
-        elif legacy in d:
-            v, w = d[legacy]
-            delays[key] = Guaranteed(number(v, w, legacy), legacy, w, "ns", "set")
-    if "PRE" not in delays and "POST" in delays:
-        post = delays["POST"]
-        delays["PRE"] = Guaranteed(
-            post.value,
-            "MINIMUM_STEPPER_PRE_DIR_DELAY",
-            post.where,
-            "ns",
-            "default",
-            "PRE defaults to the POST value",
-        )
-    for key in ("POST", "PRE"):
-        if key not in delays:
-            dv = default("dir_delay_ns", max)
-            delays[key] = Guaranteed(
-                dv[0] if dv else Fraction(0),
-                f"MINIMUM_STEPPER_{key}_DIR_DELAY",
-                dv[1] if dv else "firmware default",
-                "ns",
-                "default",
-                ""
-                if dv
-                else 'no default for these drivers: 0 ("expect at least 10 us, one stepper ISR")',
-            )
-    setup = delays["POST"]
-    pre = delays["PRE"]
-    hold = Guaranteed(
-        None if pulse.value is None or pre.value is None else pulse.value + pre.value,
-        "MINIMUM_STEPPER_PULSE_NS + MINIMUM_STEPPER_PRE_DIR_DELAY",
-        pre.where,
-        "ns",
-        "derived",
-        "PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge = pulse + PRE",
-    )
-    edge = next((k for k in ("EDGE_STEPPING", "SQUARE_WAVE_STEPPING") if k in d), None)
-    spu = (
-        _list(*d["DEFAULT_AXIS_STEPS_PER_UNIT"], "DEFAULT_AXIS_STEPS_PER_UNIT")
-        if "DEFAULT_AXIS_STEPS_PER_UNIT" in d
-        else []
-    )
-    feed = (
-        _list(*d["DEFAULT_MAX_FEEDRATE"], "DEFAULT_MAX_FEEDRATE")
-        if "DEFAULT_MAX_FEEDRATE" in d
-        else []
-    )
-    axes = []
-    for i, (axis, (dtype, dwhere)) in enumerate(drivers.items()):
-        letter = "E" if axis.startswith("E") else axis
-        both = edge is not None and dtype.startswith("TMC") and not dtype.endswith("STANDALONE")
-        level = 1
-        for key in (f"STEP_STATE_{letter}", f"INVERT_{letter}_STEP_PIN"):
-            if key in d:
-                level = 0 if d[key][0] in ("LOW", "true") else 1
-        inv = d.get(f"INVERT_{axis}_DIR", d.get(f"INVERT_{letter}_DIR", ("false", "")))[0] == "true"
-        info = {"driver type": f"{dtype} ({dwhere})"}
-        axis_rate = rate
-        if spu and feed:
-            s, fr = spu[min(i, len(spu) - 1)], feed[min(i, len(feed) - 1)]
-            info["steps/unit"] = (
-                f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {d['DEFAULT_AXIS_STEPS_PER_UNIT'][1]})"
-            )
-            info["max feedrate"] = (
-                f"{float(fr):g} mm/s (DEFAULT_MAX_FEEDRATE, {d['DEFAULT_MAX_FEEDRATE'][1]})"
-            )
-            hz = s * fr
-            if rate.value is None or hz < rate.value:
-                axis_rate = Guaranteed(
-                    hz,
-                    "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE",
-                    d["DEFAULT_MAX_FEEDRATE"][1],
-                    "mm/s",
-                    "derived",
-                    f"{float(s):g} steps/unit x {float(fr):g} mm/s",
-                )
-        axes.append(
-            GeneratorGuarantee(
-                axis=axis,
-                pulse=pulse,
-                idle=idle,
-                dir_setup=setup,
-                dir_hold=hold,
-                max_rate=axis_rate,
-                pulse_level=level,
-                both_edges=both,
-                dir_hold_trailing=pre,
-                dir_inverted=inv,
-                info=info,
-                notes=(f"{edge} with a {dtype} driver: every STEP edge is a step",) if both else (),
-            )
-        )
+    figs = _figures(results, dims, era, pulse_name, post_name)
+    axes = [_axis(h, era, d, drivers, figs) for d in drivers]
     return FirmwareConfig(
         firmware="marlin",
         path=str(path),
@@ -277,46 +424,199 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         files=tuple(str(f) for f in files),
         unsupported=tuple(unsupported),
         notes=tuple(notes),
-        fixer=_fixer(old),
+        fixer=_fixer(era is not ERAS[0]),
     )
 
 
-def _low(pulse: Guaranteed, rate: Guaranteed) -> Guaranteed:
-    p, r = pulse.value, rate.value
-    if p is None and r is None:
-        return Guaranteed(
-            None, "MAXIMUM_STEPPER_RATE", "", "Hz", "unknown", "neither pulse nor rate known"
-        )
-    if r is None or r <= 0:
-        assert p is not None
-        return Guaranteed(
-            p,
-            pulse.setting,
-            pulse.where,
-            pulse.unit,
-            "derived",
-            "only the pulse is set: low = pulse",
-        )
-    if p is None or p == 0:
-        return Guaranteed(
-            Fraction(5 * 10**8) / r,
-            "MAXIMUM_STEPPER_RATE",
-            rate.where,
-            "Hz",
-            "derived",
-            "only the rate is set: low = 5e8 / rate",
-        )
-    return Guaranteed(
-        max(Fraction(10**9) / r - p, p),
-        "MAXIMUM_STEPPER_RATE",
-        rate.where,
-        "Hz",
-        "derived",
-        "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), enforced between pulses of one interrupt",
+@dataclass(frozen=True)
+class _Figures:
+    pulse: Guaranteed
+    idle: Guaranteed
+    setup: Guaranteed
+    pre: Guaranteed
+    hold: Guaranteed
+    rate: Guaranteed
+
+
+def _figures(
+    results: list[tuple[_Timing, dict[str, _Opt], tuple[str, ...]]],
+    dims: dict[str, list[_Opt]],
+    era: Era,
+    pulse_name: str,
+    post_name: str,
+) -> _Figures:
+    if not results:
+        none = unknown(pulse_name, "neither a pulse nor a rate is known (Marlin would not build)")
+        return _Figures(none, none, none, none, none, none)
+
+    def pick(key: Callable[[_Timing], Fraction | None]) -> tuple[_Timing, dict[str, _Opt]]:
+        """The combination that gives the smallest figure (the lower bound over branches)."""
+        valid = [(t, s) for t, s, _ in results if key(t) is not None]
+        return min(valid, key=lambda ts: key(ts[0]) or Fraction(0)) if valid else (
+            results[0][0], results[0][1]
+        )  # fmt: skip
+
+    def source(name: str, opt: _Opt, why: str) -> tuple[str, str, str]:
+        if opt.value is not None:
+            return name, opt.where, "set"
+        return name, why or "Marlin's default", "default"
+
+    t, s = pick(lambda x: x.pulse)
+    name, at, st = source(pulse_name, s["pulse"], t.why)
+    if s["pulse"].value is not None and t.pulse != s["pulse"].value:
+        at = f"{at}; {t.why}"
+    pulse = Guaranteed(t.pulse, name, at, "ns" if era is ERAS[0] else "us", "uncertain",
+                       "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 tick "
+                       "short" + (" (Marlin's default)" if st == "default" else ""))  # fmt: skip
+    t, s = pick(lambda x: x.low)
+    idle = Guaranteed(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default", "Hz",
+                      "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), enforced "
+                      "between pulses of one interrupt")  # fmt: skip
+    t, s = pick(lambda x: x.post)
+    name, at, st = source(post_name, s["post"], t.dir_why)
+    setup = Guaranteed(t.post, name, at, "ns", st,  # type: ignore[arg-type]
+                       "" if t.post else 'no delay: "expect at least 10 us, one stepper ISR"')  # fmt: skip
+    t, s = pick(lambda x: x.pre)
+    pre_set = s["pre"].value is not None
+    pre = Guaranteed(
+        t.pre,
+        "MINIMUM_STEPPER_PRE_DIR_DELAY" if not era.single_dir_delay else "(no PRE delay in 1.1.x)",
+        s["pre"].where if pre_set else "Marlin default (PRE defaults to POST)",
+        "ns", "set" if pre_set else "default",
+    )  # fmt: skip
+    t, s = pick(lambda x: None if x.pulse is None else x.pulse + x.pre)
+    hold = Guaranteed(
+        None if t.pulse is None else t.pulse + t.pre, f"{pulse_name} + PRE_DIR_DELAY", pre.where,
+        "ns", "derived",
+        "PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge = pulse + PRE",
+    )  # fmt: skip
+    rated = [(t, s) for t, s, _ in results if t.rate is not None]
+    if rated:
+        t, s = max(rated, key=lambda ts: ts[0].rate or 0)
+        st = "set" if s["rate"].value is not None else "default"
+        rate = Guaranteed(t.rate, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
+                          "Hz", st)  # type: ignore[arg-type]  # fmt: skip
+    else:
+        rate = Guaranteed(None, "MAXIMUM_STEPPER_RATE", "", "Hz", "unknown")
+    return _Figures(pulse, idle, setup, pre, hold, rate)
+
+
+def _array(h: Headers, name: str) -> tuple[list[Fraction], str] | None:
+    d = h.definition(name)
+    if d is None or d.value is None:
+        return None
+    inner = d.value.strip()
+    if not (inner.startswith("{") and inner.endswith("}")):
+        expanded = " ".join(t for _, t in h.expand(inner))
+        inner = expanded.strip()
+        if not (inner.startswith("{") and inner.endswith("}")):
+            return None
+    values = []
+    for part in _split_top(inner[1:-1]):
+        v = evaluate(h, part)
+        if not isinstance(v, Num) or not 0 <= v.value <= 10**9:
+            return None
+        values.append(v.value)
+    return (values, d.where) if values else None
+
+
+def _split_top(text: str) -> list[str]:
+    parts: list[str] = []
+    cur: list[str] = []
+    depth = 0
+    for ch in text:
+        if ch in "({":
+            depth += 1
+        elif ch in ")}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            parts.append("".join(cur))
+            cur = []
+        else:
+            cur.append(ch)
+    if "".join(cur).strip():
+        parts.append("".join(cur))
+    return parts
+
+
+def _axis(
+    h: Headers, era: Era, d: _Driver, drivers: list[_Driver], figs: _Figures
+) -> GeneratorGuarantee:
+    axis = d.axis
+    letter = "E" if axis.startswith("E") else axis[0]
+    types = {k for k, _, _ in d.options}
+    tmc_config = {t.startswith("TMC") and not t.endswith("STANDALONE") for t in types}
+    edge = next(
+        (k for k in ("EDGE_STEPPING", "SQUARE_WAVE_STEPPING") if h.enabled(k) is not False), None
+    )
+    edge_on = h.enabled(edge) if edge else False
+    both = bool(edge_on) and tmc_config == {True}
+    notes = []
+    if edge and (edge_on is None or (edge_on and len(tmc_config) > 1)):
+        notes.append(f"{edge} may make every STEP edge a step (undecidable branch): measure it")
+    if both:
+        notes.append(f"{edge} with a {'/'.join(sorted(types))} driver: every STEP edge is a step")
+    level = 1
+    for key in (f"STEP_STATE_{letter}", f"INVERT_{letter}_STEP_PIN"):
+        dd = h.definition(key)
+        if dd is not None:
+            level = 0 if (dd.value or "").strip() in ("LOW", "true", "1") else 1
+    inv_def = h.definition(f"INVERT_{axis}_DIR") or h.definition(f"INVERT_{letter}_DIR")
+    inv = inv_def is not None and (inv_def.value or "").strip() in ("true", "1")
+    kind = " or ".join(f"{k} ({w})" for k, w, _ in d.options)
+    info = {"driver type": kind}
+    rate = _axis_rate(h, axis, drivers, figs.rate, info)
+    return GeneratorGuarantee(
+        axis=axis,
+        pulse=figs.pulse,
+        idle=figs.idle,
+        dir_setup=figs.setup,
+        dir_hold=figs.hold,
+        max_rate=rate,
+        pulse_level=level,
+        both_edges=both,
+        dir_hold_trailing=figs.pre,
+        dir_inverted=inv,
+        info=info,
+        notes=tuple(notes),
     )
 
 
-def _fixer(old: bool):  # type: ignore[no-untyped-def]
+def _axis_rate(
+    h: Headers, axis: str, drivers: list[_Driver], global_rate: Guaranteed, info: dict[str, str]
+) -> Guaranteed:
+    spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
+    kinematic = {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
+    base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
+    fallback = Guaranteed(global_rate.value, global_rate.setting, global_rate.where, "Hz",
+                          "uncertain" if global_rate.value is not None else "unknown",
+                          "the driver rate Marlin times pulses for; not a cap on motion")  # fmt: skip
+    if base in kinematic:
+        fallback = Guaranteed(fallback.value, fallback.setting, fallback.where, "Hz",
+                              fallback.status, fallback.note + "; kinematics couple this axis "
+                              "with others (steps/unit x feedrate does not bound it)")  # fmt: skip
+        return fallback
+    if spu is None or feed is None:
+        return fallback
+    linear = [a for a in _LINEAR if any(d.axis == a for d in drivers)]
+    if base == "E":
+        distinct = h.enabled("DISTINCT_E_FACTORS") is True
+        index = len(linear) + (int(axis[1:]) if distinct else 0)
+    else:
+        index = _LINEAR.index(base) if base in linear else len(linear)
+        index = linear.index(base) if base in linear else index
+    s = spu[0][min(index, len(spu[0]) - 1)]
+    f = feed[0][min(index, len(feed[0]) - 1)]
+    info["steps/unit"] = f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {spu[1]})"
+    info["max feedrate"] = f"{float(f):g} mm/s (DEFAULT_MAX_FEEDRATE, {feed[1]})"
+    hz = s * f
+    if global_rate.value is not None and hz >= global_rate.value:
+        return fallback
+    return Guaranteed(hz, "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE", feed[1], "mm/s",
+                      "derived", f"{float(s):g} steps/unit x {float(f):g} mm/s")  # fmt: skip
+
+
+def _fixer(old: bool) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
     def ns(v: Fraction) -> int:
         return int(-(-v // 1))
 
@@ -328,11 +628,16 @@ def _fixer(old: bool):  # type: ignore[no-untyped-def]
         if role == "idle":
             p = axis.pulse.value or Fraction(0)
             if need > p:
-                return f"Marlin: define MAXIMUM_STEPPER_RATE {int(Fraction(10**9) / (p + need))} (or lower)"
+                return f"Marlin: define MAXIMUM_STEPPER_RATE {int(_GIGA / (p + need))} (or lower)"
+            if old:
+                return f"Marlin: define MINIMUM_STEPPER_PULSE {int(-(-need // 1000))} (us)"
             return f"Marlin: define MINIMUM_STEPPER_PULSE_NS {ns(need)}"
-        if role == "dir_setup":
-            return f"Marlin: define MINIMUM_STEPPER_POST_DIR_DELAY {ns(need)}"
-        if role == "dir_hold":
+        if role == "setup":
+            name = "MINIMUM_STEPPER_POST_DIR_DELAY"
+            if axis.dir_hold_trailing is not None and "1.1.x" in axis.dir_hold_trailing.setting:
+                name = "MINIMUM_STEPPER_DIR_DELAY"
+            return f"Marlin: define {name} {ns(need)}"
+        if role == "hold":
             p = axis.pulse.value or Fraction(0)
             return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(max(need - p, Fraction(0)))}"
         return (

@@ -1,163 +1,342 @@
 """RepRapFirmware: ``config.g`` (reference ``firmware-timing.md`` §5).
 
-Read: ``M569 P<driver> S<dir> T<a:b:c:d>`` (µs: step high, step low, DIR setup before the
-rising edge, DIR hold after the *falling* edge; one value is used for all four, two or three
-are refused by the firmware), ``M584`` (axis → drivers; default X0 Y1 Z2 E3), ``M92``
-(steps/mm), ``M203`` (mm/min). Timing is global: a driver with any field over 0.2 µs is "slow"
-and every slow driver gets the largest value of each field over all slow drivers (rounded up to
-step clocks); a driver without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits
-for nothing, so its DIR setup and hold cannot be read from the file. The Duet 3 MB6XD (default
-2.5 µs each, worst of all drivers) is not distinguished from the other boards.
+Read, in file order and through ``M98 P"file.g"`` includes (beside the file, as ``/sys``):
+``M569 P<driver> T<a:b:c:d>`` (µs: step high, step low, DIR setup before the rising edge, DIR
+hold after the *falling* edge; one value is used for all four, two or three are refused by the
+firmware), ``M584`` (axis → drivers, ``E`` for extruders; default X0 Y1 Z2 E3), ``M350``
+(microstepping, default 16) and ``M92`` (steps/mm; ``S`` = at that microstepping; a later
+``M350`` rescales it, as RRF does), ``M203`` (mm/min). Driver ``1`` and ``0.1`` are the same
+main-board driver; ``B.N`` with B > 0 is an expansion board's.
+
+Timing is global: a main-board driver with any field over 0.2 µs is "slow" and every slow driver
+gets the largest value of each field over all slow drivers (rounded up to step clocks); a driver
+without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits for nothing, so its DIR
+setup and hold cannot be read from the file. On a Duet 3 MB6XD (named in the file's comments)
+every driver defaults to 2.5 µs per field and the largest of all drivers applies to all. An
+expansion board applies T with its own firmware (``uncertain``). Meta-commands (``if``, ``var``,
+``{expressions}``) are not evaluated: a value written as an expression is not read (named).
 """
 
 from __future__ import annotations
 
 import os
 import re
+from dataclasses import dataclass, field
 from fractions import Fraction
+from pathlib import Path
 
+from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role, unknown
+from wavecheck.firmware.guarantee import (
+    FirmwareConfig,
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+    unknown,
+)
+from wavecheck.linuxcnc.files import is_file
 
 __all__ = ["looks_like", "read"]
 
 _FAST_NS = Fraction(200)
-_WORD = re.compile(r"([A-Za-z])\s*(\"[^\"]*\"|[-+0-9.:]+)?")
-_FIELDS = ("pulse", "idle", "dir_setup", "dir_hold")
+_MB6XD_NS = Fraction(2500)
+_WORD = re.compile(
+    r"([A-Za-z])\s*(\"[^\"]*\"|\{[^}]*\}|[-+]?(?:(?i:nan|inf(?:inity)?)\b|[-+0-9.:eE]+))?"
+)
+_AXES = "XYZUVWABCD"
+_MAX_INCLUDES = 64
+_US = 1000
 
 
 def looks_like(text: str) -> bool:
-    """A ``config.g``: ``M569``/``M584``/``M92`` commands at line starts."""
-    return len(re.findall(r"^\s*M(569|584|92|350|203)\b", text, re.M)) >= 2
+    """A ``config.g``: ``M569``/``M584``/``M92``/``M350``/``M203`` commands, or a file of
+    ``M98 P"….g"`` includes."""
+    return (
+        len(re.findall(r"^\s*M(569|584|92|350|203)\b", text, re.M)) >= 2
+        or len(re.findall(r"^\s*M98\s+P\"[^\"]+\.g\"", text, re.M)) >= 2
+    )
 
 
-def _words(line: str) -> dict[str, str]:
+@dataclass
+class _State:
+    axis_drivers: dict[str, list[str]] = field(
+        default_factory=lambda: {"X": ["0.0"], "Y": ["0.1"], "Z": ["0.2"]}
+    )
+    extruders: list[str] = field(default_factory=lambda: ["0.3"])
+    timing: dict[str, tuple[list[Fraction], str]] = field(default_factory=dict)
+    micro: dict[str, Fraction] = field(default_factory=dict)
+    spm: dict[str, tuple[Fraction, str]] = field(default_factory=dict)
+    speed: dict[str, tuple[Fraction, str]] = field(default_factory=dict)
+    unsupported: list[str] = field(default_factory=list)
+    files: list[str] = field(default_factory=list)
+    board_6xd: str = ""
+    coupled: dict[str, str] = field(default_factory=dict)  # axis → why its rate is unknown
+
+
+def _words(line: str) -> list[tuple[str, str]]:
     code = line.split(";")[0]
-    return {m.group(1).upper(): (m.group(2) or "") for m in _WORD.finditer(code)}
+    return [(m.group(1).upper(), m.group(2) or "") for m in _WORD.finditer(code)]
+
+
+def _driver(text: str) -> str:
+    """``1`` → ``0.1`` (the main board), ``1.2`` stays."""
+    return text if "." in text else f"0.{text}"
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     """Read a ``config.g`` (see the module doc)."""
-    p = str(path)
-    axis_drivers: dict[str, list[str]] = {"X": ["0"], "Y": ["1"], "Z": ["2"]}
-    timing: dict[str, tuple[list[Fraction], str]] = {}
-    spm: dict[str, tuple[Fraction, str]] = {}
-    speed: dict[str, tuple[Fraction, str]] = {}
-    unsupported: list[str] = []
-    for no, line in enumerate(read_text(path).splitlines(), 1):
-        w = _words(line)
-        at = where(p, no)
-        cmd = next(iter(w.items()), ("", ""))
-        if cmd[0] != "M":
+    p = Path(path)
+    state = _State()
+    _feed(p, p.parent, state, {p.resolve()})
+    return _config(str(p), state)
+
+
+def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
+    st.files.append(str(path))
+    text = read_text(path)
+    if not st.board_6xd and re.search(r"\b(MB\s*)?6XD\b", text, re.I):
+        st.board_6xd = f"{path} names a Duet 3 MB6XD"
+    for no, line in enumerate(text.splitlines(), 1):
+        words = _words(line)
+        if not words or words[0][0] != "M":
             continue
-        rest = {k: v for k, v in list(w.items())[1:]}
-        if cmd[1] == "584":
-            for axis, drv in rest.items():
-                if axis in "XYZUVWABC" and drv:
-                    axis_drivers[axis] = drv.split(":")
-        elif cmd[1] == "569" and "P" in rest and "T" in rest:
-            fields = [number(v, at, "M569 T") * 1000 for v in rest["T"].split(":")]
-            if len(fields) == 1:
-                fields *= 4
-            if len(fields) != 4:
-                unsupported.append(
-                    f"{at}: M569 T{rest['T']}: RepRapFirmware refuses 2 or 3 values (bad timing parameter); ignored"
-                )
-                continue
-            timing[rest["P"]] = (fields, at)
-        elif cmd[1] in ("92", "203"):
-            if "S" in rest and cmd[1] == "92":
-                unsupported.append(f"{at}: M92 S (microstepping rescale) is not modelled")
-            for axis, v in rest.items():
-                if axis in "XYZUVWABC" and v and ":" not in v:
-                    (spm if cmd[1] == "92" else speed)[axis] = (
-                        number(v, at, f"M{cmd[1]} {axis}"),
-                        at,
-                    )
-    slow = {d: t for d, t in timing.items() if any(f > _FAST_NS for f in t[0])}
-    worst: list[Guaranteed] = []
-    for i, _role in enumerate(_FIELDS):
+        code, rest = words[0][1], words[1:]
+        at = where(path, no)
+        if code == "98":
+            _include(path, sys_dir, dict(rest).get("P", ""), at, st, seen)
+        elif code == "584":
+            for letter, value in rest:
+                if value and not value.startswith("{"):
+                    drivers = [_driver(d) for d in value.split(":") if d]
+                    if letter == "E":
+                        st.extruders = drivers
+                    elif letter in _AXES:
+                        st.axis_drivers[letter] = drivers
+        elif code == "569":
+            _m569(dict(rest), at, st)
+        elif code in ("665", "667", "669"):
+            _kinematics(code, dict(rest), at, st)
+        elif code == "350":
+            _m350(rest, at, st)
+        elif code in ("92", "203"):
+            _m92_203(code, rest, at, st)
+
+
+def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: set[Path]) -> None:
+    name = target.strip('"')
+    if not name:
+        return
+    rel = re.sub(r"^(\d+:)?/?(sys/)?", "", name)
+    inc = sys_dir / rel
+    if not is_file(inc):
+        st.unsupported.append(f'{at}: M98 P"{name}" is not beside {path.name}; not read')
+        return
+    if inc.resolve() in seen or len(seen) >= _MAX_INCLUDES:
+        return
+    seen.add(inc.resolve())
+    _feed(inc, sys_dir, st, seen)
+
+
+def _m569(words: dict[str, str], at: str, st: _State) -> None:
+    if "P" not in words or "T" not in words or not words["T"]:
+        return
+    if words["T"].startswith("{"):
+        st.unsupported.append(f"{at}: M569 T{words['T']} is an expression; not read")
+        return
+    fields = [
+        number(v, at, "M569 T", low=0, high=10**6, unit="us") * _US for v in words["T"].split(":")
+    ]
+    if len(fields) == 1:
+        fields *= 4
+    if len(fields) != 4:
+        st.unsupported.append(
+            f"{at}: M569 T{words['T']}: RepRapFirmware refuses 2 or 3 values (bad timing "
+            "parameter); ignored"
+        )
+        return
+    for drv in words["P"].split(":"):
+        st.timing[_driver(drv)] = (fields, at)
+
+
+def _kinematics(code: str, words: dict[str, str], at: str, st: _State) -> None:
+    """``M665`` (delta), ``M667 S1|2|3`` (CoreXY/XZ/YZ, older firmware) and ``M669 K…``
+    (RRF's KinematicsType: 0 cartesian, 1 CoreXY, 2 CoreXZ, 5 CoreXYU, 8 CoreXYUV, the others
+    delta, SCARA, polar, Hangprinter…): axes whose motors do not move one axis alone, so
+    steps/mm × M203 does not bound their step rate."""
+    if code == "665":
+        axes, what = "XYZ", "M665 (delta)"
+    elif code == "667":
+        axes, what = (
+            {"1": "XY", "2": "XZ", "3": "YZ"}.get(words.get("S", ""), ""),
+            f"M667 S{words.get('S')}",
+        )
+    else:
+        kind = words.get("K", "")
+        axes = {"": "", "0": "", "1": "XY", "2": "XZ", "5": "XYU", "8": "XYUV"}.get(kind, "XYZ")
+        what = f"M669 K{kind}"
+    for a in axes:
+        st.coupled[a] = f"{what} at {at}"
+
+
+def _m350(words: list[tuple[str, str]], at: str, st: _State) -> None:
+    for letter, value in words:
+        if letter not in (*_AXES, "E") or not value or value.startswith("{"):
+            continue
+        for i, v in enumerate(value.split(":")):
+            key = letter if letter != "E" else f"E{i}"
+            new = number(v, at, f"M350 {letter}", low=1, high=256)
+            old = st.micro.get(key, Fraction(16))
+            if key in st.spm:
+                spm, first = st.spm[key]
+                st.spm[key] = (spm * new / old, f"{first}, rescaled by M350 at {at}")
+            st.micro[key] = new
+
+
+def _m92_203(code: str, words: list[tuple[str, str]], at: str, st: _State) -> None:
+    s = dict(words).get("S")
+    for letter, value in words:
+        if letter not in (*_AXES, "E"):
+            continue
+        if not value or value.startswith("{"):
+            st.unsupported.append(f"{at}: M{code} {letter}{value} is not a number; not read")
+            continue
+        for i, v in enumerate(value.split(":")):
+            key = letter if letter != "E" else f"E{i}"
+            x = number(v, at, f"M{code} {letter}", low=0, high=10**9)
+            if code == "92":
+                if s and not s.startswith("{"):
+                    at_s = number(s, at, "M92 S", low=1, high=256)
+                    x = x * st.micro.get(key, Fraction(16)) / at_s
+                st.spm[key] = (x, at)
+            else:
+                st.speed[key] = (x, at)
+
+
+def _config(path: str, st: _State) -> FirmwareConfig:
+    main = {d: t for d, t in st.timing.items() if d.startswith("0.")}
+    if st.board_6xd:
+        used = {d for ds in st.axis_drivers.values() for d in ds} | set(st.extruders)
+        slow = {
+            d: main.get(d, ([_MB6XD_NS] * 4, "MB6XD default 2.5 us"))
+            for d in used
+            if d.startswith("0.")
+        }
+    else:
+        slow = {d: t for d, t in main.items() if any(f > _FAST_NS for f in t[0])}
+    worst = _worst(slow)
+    logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
+    axes = []
+    for name, drivers in logical:
+        if name not in st.spm and name not in st.speed and not any(d in st.timing for d in drivers):
+            continue
+        axes.append(_axis(name, drivers, st, slow, worst))
+    if not axes:
+        missing = [u for u in st.unsupported if " M98 " in u]
+        if missing:
+            raise ConfigError(
+                f"{missing[0].split(': M98')[0]}: M98 includes only, and {len(missing)} of them "
+                f"are not beside {Path(path).name} (first: {missing[0].split('P')[1].split()[0]}"
+                "): give the config.g of the full /sys folder"
+            )
+        raise ConfigError(
+            f"{path}: no M569 T, M92 or M203 for any axis in {', '.join(st.files)} "
+            "(nothing to check)"
+        )
+    notes = [
+        "M569 T timing is global over all slow drivers (the largest of each field)",
+        "step clock 750 kHz on Duet 3 (1.333 us), core/128 on Duet 2: figures are rounded up",
+    ]
+    if st.board_6xd:
+        notes.insert(0, f"{st.board_6xd}: every driver 2.5 us per field unless T says more")
+    return FirmwareConfig(
+        firmware="reprapfirmware",
+        path=path,
+        axes=tuple(axes),
+        files=tuple(dict.fromkeys(st.files)),
+        unsupported=tuple(dict.fromkeys(st.unsupported)),
+        notes=tuple(notes),
+        fixer=_fix,
+    )
+
+
+def _worst(slow: dict[str, tuple[list[Fraction], str]]) -> list[Guaranteed]:
+    out = []
+    for i in range(4):
         if not slow:
             break
         drv, (fields, at) = max(slow.items(), key=lambda kv: kv[1][0][i])
-        worst.append(
-            Guaranteed(
-                fields[i],
-                f"M569 P{drv} T (field {i + 1})",
-                at,
-                "us",
-                "set",
-                "largest over all slow drivers; rounded up to step clocks",
-            )
+        note = "largest over all slow drivers; rounded up to step clocks"
+        out.append(Guaranteed(fields[i], f"M569 P{drv} T (field {i + 1})", at, "us", "set", note))
+    return out
+
+
+def _axis(
+    name: str,
+    drivers: list[str],
+    st: _State,
+    slow: dict[str, tuple[list[Fraction], str]],
+    worst: list[Guaranteed],
+) -> GeneratorGuarantee:
+    expansion = [d for d in drivers if not d.startswith("0.")]
+    hold_t: Guaranteed | None
+    if expansion and all(d in st.timing for d in expansion) and not any(d in slow for d in drivers):
+        fields, at = st.timing[expansion[0]]
+        note = f"expansion board driver {expansion[0]}: its own firmware applies T"
+        pulse, idle, setup, hold_t = (
+            Guaranteed(f, "M569 T", at, "us", "uncertain", note) for f in fields
         )
-    axes = []
-    for axis, drivers in axis_drivers.items():
-        if axis not in spm and axis not in speed and not any(d in timing for d in drivers):
-            continue
-        is_slow = any(d in slow for d in drivers)
-        if is_slow:
-            pulse, idle, setup, hold_t = worst
-            hold = Guaranteed(
-                pulse.value + hold_t.value,  # type: ignore[operator]
-                "M569 T fields 1 + 4",
-                hold_t.where,
-                "us",
-                "derived",
-                "hold counts from the falling edge: from the rising edge add the high time",
-            )
-        else:
-            note = "no T: a fast driver; the firmware assumes >= 0.2 us high and low"
-            pulse = Guaranteed(_FAST_NS, "M569 T", "firmware default", "us", "uncertain", note)
-            idle = pulse
-            setup = unknown("M569 T", "fast driver: no DIR setup wait; measure it")
-            hold = unknown("M569 T", "fast driver: no DIR hold wait; measure it")
-            hold_t = None
-        info = {"drivers": ",".join(drivers)}
-        rate = Guaranteed(None, "M203", "", "mm/min", "unknown", "no M92/M203 for this axis")
-        if axis in spm:
-            info["steps/mm"] = f"{float(spm[axis][0]):g} (M92, {spm[axis][1]})"
-        if axis in speed:
-            info["max speed"] = f"{float(speed[axis][0]):g} mm/min (M203, {speed[axis][1]})"
-        if axis in spm and axis in speed:
-            rate = Guaranteed(
-                spm[axis][0] * speed[axis][0] / 60,
-                "M92 x M203 / 60",
-                speed[axis][1],
-                "mm/min",
-                "derived",
-            )
-        axes.append(
-            GeneratorGuarantee(
-                axis=axis,
-                pulse=pulse,
-                idle=idle,
-                dir_setup=setup,
-                dir_hold=hold,
-                max_rate=rate,
-                dir_hold_trailing=hold_t,
-                info=info,
-            )
-        )
-    return FirmwareConfig(
-        firmware="reprapfirmware",
-        path=p,
-        axes=tuple(axes),
-        files=(p,),
-        unsupported=tuple(unsupported),
-        notes=(
-            "M569 T timing is global over all slow drivers (the largest of each field)",
-            "step clock 750 kHz on Duet 3 (1.333 us), core/128 on Duet 2: figures are rounded up",
-        ),
-        fixer=_fix,
+        hold = _hold(pulse, hold_t)
+    elif any(d in slow for d in drivers) and worst:
+        pulse, idle, setup, hold_t = worst
+        hold = _hold(pulse, hold_t)
+    else:
+        note = "no T: a fast driver; the firmware assumes >= 0.2 us high and low"
+        if expansion:
+            note = f"expansion board driver {expansion[0]} without T: its own firmware's timing"
+        pulse = Guaranteed(_FAST_NS, "M569 T", "firmware default", "us", "uncertain", note)
+        idle = pulse
+        setup = unknown("M569 T", "fast driver: no DIR setup wait; measure it")
+        hold = unknown("M569 T", "fast driver: no DIR hold wait; measure it")
+        hold_t = None
+    info = {"drivers": ",".join(d.removeprefix("0.") for d in drivers)}
+    rate = Guaranteed(None, "M203", "", "mm/min", "unknown", "no M92/M203 for this axis")
+    if name in st.spm:
+        info["steps/mm"] = f"{float(st.spm[name][0]):g} (M92, {st.spm[name][1]})"
+    if name in st.speed:
+        info["max speed"] = f"{float(st.speed[name][0]):g} mm/min (M203, {st.speed[name][1]})"
+    if name in st.coupled:
+        rate = unknown("M203", f"kinematics {st.coupled[name]} couple {name} with other axes: "
+                       "its motor may step faster than M92 x M203 / 60")  # fmt: skip
+    elif name in st.spm and name in st.speed:
+        hz = st.spm[name][0] * st.speed[name][0] / 60
+        rate = Guaranteed(hz, "M92 x M203 / 60", st.speed[name][1], "mm/min", "derived")
+    return GeneratorGuarantee(
+        axis=name,
+        pulse=pulse,
+        idle=idle,
+        dir_setup=setup,
+        dir_hold=hold,
+        max_rate=rate,
+        dir_hold_trailing=hold_t,
+        info=info,
+        aliases=("E",) if name == "E0" else (),
+    )
+
+
+def _hold(pulse: Guaranteed, hold_t: Guaranteed) -> Guaranteed:
+    assert pulse.value is not None and hold_t.value is not None
+    note = "hold counts from the falling edge: from the rising edge add the high time"
+    return Guaranteed(
+        pulse.value + hold_t.value, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note
     )
 
 
 def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
     us = float(-(-need // 100)) / 10
     drivers = axis.info.get("drivers", "?").split(",")[0]
-    field = {"pulse": 1, "idle": 2, "dir_setup": 3, "dir_hold": 4}.get(role)
-    if field == 4 and axis.pulse.value is not None:
+    field_no = {"pulse": 1, "idle": 2, "setup": 3, "hold": 4}.get(role)
+    if field_no == 4 and axis.pulse.value is not None:
         us = float(-(-(need - axis.pulse.value) // 100)) / 10
-    if field is None:
+    if field_no is None:
         return f"lower M203 {axis.axis} so that it steps at most {float(need):.6g} steps/s"
-    return f"M569 P{drivers} T a:b:c:d with field {field} at least {max(us, 0):g} (us)"
+    return f"M569 P{drivers} T a:b:c:d with field {field_no} at least {max(us, 0):g} (us)"

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
@@ -49,18 +50,27 @@ from typing import Any
 from wavecheck.drives.model import Drive
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.files import (
+    HalLine,
     IniFile,
+    hal_lines,
     hal_words,
+    ini_value,
     int_ns,
     loadrt_args,
     read_ini,
-    read_text,
     resolve_ref,
 )
 from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
 from wavecheck.steptypes import kind_of
 
-__all__ = ["TIMING_PARAMS", "ConfigRates", "LinuxCNCConfig", "config_rates", "read_config"]
+__all__ = [
+    "TIMING_PARAMS",
+    "ConfigRates",
+    "LinuxCNCConfig",
+    "config_rates",
+    "read_config",
+    "read_config_lines",
+]
 
 #: stepgen's timing parameters (ns, u32), in LinuxCNC's order.
 TIMING_PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay")
@@ -89,6 +99,9 @@ class LinuxCNCConfig:
             / ``velocity-cmd``, None if not set.
         enable: ``setp stepgen.N.enable`` (None: not set).
         enable_connected: a ``net`` drives ``stepgen.N.enable``.
+        stepgen_loaded: a ``loadrt stepgen`` was read.
+        hal_read: HAL commands were read (a configuration's HAL files, not only options).
+        stepgen_named: a HAL command names a ``stepgen.`` pin, parameter or function.
         ignored: what the files say that the model does not honour, one line each.
     """
 
@@ -108,6 +121,8 @@ class LinuxCNCConfig:
     enable: bool | None = None
     enable_connected: bool = False
     stepgen_loaded: bool = False
+    hal_read: bool = False
+    stepgen_named: bool = False
     ignored: list[str] = field(default_factory=list)
 
     def periods(self) -> dict[str, int]:
@@ -304,26 +319,21 @@ def _parse_setp(name: str, value: str, cfg: LinuxCNCConfig, where: str, prefix: 
         )
 
 
-def _parse_hal(path: str | os.PathLike[str], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
-    text = read_text(path)
-    lines = text.replace("\\\n", " ").splitlines()
+def _parse_lines(lines: Sequence[HalLine], cfg: LinuxCNCConfig, ini: IniFile | None) -> None:
     prefix = f"stepgen.{cfg.channel}."
-    for no, raw in enumerate(lines, 1):
-        line = raw.split("#", 1)[0].strip()
-        if not line:
-            continue
-        where = f"{path}:{no}"
-        words = hal_words(line)
+    for hal in lines:
+        where = hal.where
+        words = hal_words(hal.text)
         if not words:
             continue
+        if any(w.startswith("stepgen.") for w in words):
+            cfg.stepgen_named = True
         if words[0] == "loadrt" and len(words) > 1:
-            args = loadrt_args(words[2:], ini, where)
-            if words[1] == "stepgen":
-                _parse_loadrt_stepgen(args, cfg, where)
-            elif words[1] == "threads":
-                _parse_loadrt_threads(args, cfg, where)
-            elif words[1] == "motmod":
-                _parse_loadrt_motmod(args, cfg, where)
+            module = ini_value(words[1], ini)
+            if module in ("stepgen", "threads", "motmod"):
+                args = loadrt_args(words[2:], ini, where)
+                {"stepgen": _parse_loadrt_stepgen, "threads": _parse_loadrt_threads,
+                 "motmod": _parse_loadrt_motmod}[module](args, cfg, where)  # fmt: skip
             continue
         if words[0] == "addf":
             _parse_addf(words, cfg, where)
@@ -393,24 +403,32 @@ def read_config(
     Raises:
         ConfigError: unreadable files, malformed values, a channel that is not loaded.
     """
+    ini_file = read_ini(ini) if ini is not None else None
+    hals = [] if hal is None else ([hal] if isinstance(hal, (str, os.PathLike)) else list(hal))
+    lines = [line for h in hals for line in hal_lines(h)[0]]
+    return read_config_lines(ini_file, lines, channel)
+
+
+def read_config_lines(
+    ini_file: IniFile | None, lines: Sequence[HalLine], channel: int = 0
+) -> LinuxCNCConfig:
+    """:func:`read_config` from an INI already read and HAL commands already read
+    (:func:`~wavecheck.linuxcnc.files.hal_lines`)."""
     if channel < 0:
         raise ConfigError(f"--channel {channel} must be 0 or more")
-    cfg = LinuxCNCConfig(channel=channel)
-    ini_file = read_ini(ini) if ini is not None else None
+    cfg = LinuxCNCConfig(channel=channel, hal_read=bool(lines))
     if ini_file is not None:
         for key, attr in (("BASE_PERIOD", "base_period_ns"), ("SERVO_PERIOD", "servo_period_ns")):
             found = ini_file.get("EMCMOT", key)
             if found is None:
                 continue
-            where = f"{ini}:{found[1]}"
-            ns = int_ns(found[0].split()[0], where, f"[EMCMOT]{key}")
+            where = ini_file.place("EMCMOT", key)
+            ns = int_ns(found[0].split()[0] if found[0].split() else "", where, f"[EMCMOT]{key}")
             if ns == 0:
                 raise ConfigError(f"{where}: [EMCMOT]{key} must be > 0 ns")
             setattr(cfg, attr, ns)
             cfg.sources[key] = where
-    hals = [] if hal is None else ([hal] if isinstance(hal, (str, os.PathLike)) else list(hal))
-    for h in hals:
-        _parse_hal(h, cfg, ini_file)
+    _parse_lines(lines, cfg, ini_file)
     _apply_threads(cfg)
     return cfg
 
@@ -455,6 +473,11 @@ def config_rates(
         step_type: the step type checked (default ``cfg.step_type``, else 0). Types ≥ 2 have no
             stepspace (config = 1 / (steplen·P)) and no latency_safe (the plan is step/dir's).
     """
+    if cfg.hal_read and not cfg.stepgen_loaded and not cfg.stepgen_named:
+        return ConfigRates(None, None, (
+            "no software stepgen: the HAL files load no stepgen, so stepgen's config and "
+            "latency_safe rates do not apply (a hostmot2 or other card makes the steps)",
+        ), cfg.channel, cfg.base_period_ns or 0, None)  # fmt: skip
     p = cfg.require_base_period()
     j = None if latency_ns is None else Fraction(latency_ns)
 

@@ -197,7 +197,7 @@ def _joint_refs(hal: _PidHal, inst: str) -> set[int]:
     """The ``n`` of every ``[JOINT_n]`` reference among ``inst``'s setp values."""
     out: set[int] = set()
     for raw, _ in hal.setp.get(inst, {}).values():
-        m = re.match(r"^\[JOINT_(\d+)\]", raw)
+        m = re.match(r"^\[JOINT_(\d{1,6})\]", raw)
         if m:
             out.add(int(m.group(1)))
     return out
@@ -206,7 +206,7 @@ def _joint_refs(hal: _PidHal, inst: str) -> set[int]:
 def _motor_joint(hal: _PidHal, inst: str) -> int | None:
     """The joint whose ``motor-pos-cmd`` is netted to ``inst.command``."""
     for pin, _ in _net_peers(hal, f"{inst}.command"):
-        m = re.match(r"^joint\.(\d+)\.motor-pos-cmd$", pin)
+        m = re.match(r"^joint\.(\d{1,6})\.motor-pos-cmd$", pin)
         if m:
             return int(m.group(1))
     return None

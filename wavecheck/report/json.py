@@ -156,7 +156,7 @@ def _firmware(report: Report) -> dict[str, Any]:
     """``check --firmware``: the capture against its own configuration (key absent otherwise)."""
     if report.firmware is None:
         return {}
-    from wavecheck.firmware.render import firmware_check_dict
+    from wavecheck.report.firmware import firmware_check_dict
 
     return {"firmware": firmware_check_dict(cast("FirmwareCheck", report.firmware))}
 

@@ -42,6 +42,7 @@ def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
                 "violations_total": d["violations_total"],
                 "max_step_rate_hz": d["max_step_rate_hz"],
                 "verdict": d["verdict"],
+                **({"firmware": d["firmware"]} if "firmware" in d else {}),  # check --firmware
             }
         )
     for c in capture.get("channels", []):

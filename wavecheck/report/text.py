@@ -207,7 +207,7 @@ def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -
     out += [f"note: {a}" for a in assumptions(report)]
     out += configured
     if report.firmware is not None:  # check --firmware
-        from wavecheck.firmware.render import firmware_check_lines
+        from wavecheck.report.firmware import firmware_check_lines
 
         out += ["", *firmware_check_lines(cast("FirmwareCheck", report.firmware))]
     return "\n".join(out) + "\n"

@@ -9,7 +9,6 @@ import pytest
 from tests.engine_probe import run_check
 from tests.wavecheck.waves import capture, drive, g202, pulses
 
-
 US = 1000
 
 

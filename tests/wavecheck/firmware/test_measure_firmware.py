@@ -75,22 +75,3 @@ def test_text_report_and_no_firmware(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert "firmware: grbl" in out and "configured 10 us pulses" in out
     assert main(["measure", str(vcd), "--map", "step=STEP,dir=DIR", "-q"]) == 0
     assert "firmware" not in capsys.readouterr().out
-
-
-def test_readme_block(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """The README's ``measure --firmware`` line, as written, on 2.5 us pulses of a grbl set to 10 us."""
-    import re
-    import shlex
-    import shutil
-
-    text = (Path(__file__).resolve().parents[3] / "README.md").read_text(encoding="utf-8")
-    m = re.search(r"<!-- readme-test: firmware-measure -->\n```sh\n(.*?)```", text, re.S)
-    assert m, "README has no block marked readme-test: firmware-measure"
-    _capture(tmp_path, 2500)
-    shutil.copy(GRBL, tmp_path / "settings.md")
-    monkeypatch.chdir(tmp_path)
-    argv = shlex.split(m.group(1))
-    assert argv[0] == "wavecheck" and main(argv[1:]) == 1
-    assert "configured 10 us pulses" in capsys.readouterr().out

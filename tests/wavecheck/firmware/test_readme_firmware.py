@@ -1,10 +1,11 @@
-"""The README's one-line command per firmware, run as written on the shared real files."""
+"""The README's firmware commands, run as written from the repository's root on the real
+configurations it ships in ``captures/firmware/`` (issue 26: they named files that did not ship).
+Each file there is byte for byte the one in the shared set the README of that folder names."""
 
 from __future__ import annotations
 
 import re
 import shlex
-import shutil
 from pathlib import Path
 
 import pytest
@@ -12,49 +13,54 @@ import pytest
 from wavecheck.cli import main
 
 REPO = Path(__file__).resolve().parents[3]
-FW = Path("/work/shared/firmware")
-pytestmark = pytest.mark.skipif(not FW.is_dir(), reason="shared firmware files not present")
-
-FILES = {
-    "grbl": ["grbl/settings.md"],
-    "klipper": ["klipper/generic-bigtreetech-skr-mini-e3-v2.0.cfg"],
-    "marlin": ["marlin/VORONDesign/Configuration.h", "marlin/VORONDesign/Configuration_adv.h"],
-    "rrf": ["reprapfirmware/cnc-one/config.g"],
-    "smoothie": ["smoothieware/Smoothieboard/config"],
-    "hm2": ["linuxcnc/hm2-stepper/5i20.ini", "linuxcnc/hm2-stepper/hm2-stepper.hal"],
-}
+SHIPPED = REPO / "captures" / "firmware"
+BLOCKS = re.findall(
+    r"<!-- readme-test: firmware-(\w+) -->\n```sh\n(.*?)```", (REPO / "README.md").read_text(), re.S
+)
 EXPECT = {
     "grbl": "grbl",
     "klipper": "klipper",
     "marlin": "marlin",
     "rrf": "reprapfirmware",
     "smoothie": "smoothieware",
+    "fluidnc": "fluidnc",
     "hm2": "hm2",
     "linuxcnc": "linuxcnc",
 }
 
 
-@pytest.mark.parametrize("name", sorted(EXPECT))
+def test_every_firmware_has_a_block() -> None:
+    assert {name for name, _ in BLOCKS} == {*EXPECT, "measure"}
+
+
+@pytest.mark.parametrize("name,block", BLOCKS, ids=[n for n, _ in BLOCKS])
 def test_readme_firmware_command(
-    name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    name: str, block: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    m = re.search(rf"<!-- readme-test: firmware-{name} -->\n```sh\n(.*?)```", text, re.S)
-    assert m, f"README has no firmware-{name} block"
-    for rel in FILES.get(name, []):
-        shutil.copy(FW / rel, tmp_path / Path(rel).name)
-    if name == "linuxcnc":  # the README's machine.ini: a software stepgen configuration
-        (tmp_path / "machine.hal").write_text(
-            "loadrt stepgen step_type=0\nsetp stepgen.0.steplen 5000\nsetp stepgen.0.stepspace 5000\n"
-            "setp stepgen.0.dirsetup 20000\nsetp stepgen.0.dirhold 20000\n"
-        )
-        (tmp_path / "machine.ini").write_text(
-            "[EMCMOT]\nBASE_PERIOD = 20000\n[HAL]\nHALFILE = machine.hal\n"
-        )
-    monkeypatch.chdir(tmp_path)
-    argv = shlex.split(m.group(1).strip())
+    monkeypatch.chdir(REPO)
+    argv = shlex.split(block.replace("\\\n", " "))
     assert argv[0] == "wavecheck"
+    for arg in argv:
+        if arg.startswith("captures/"):
+            assert (REPO / arg).is_file(), f"the README names {arg}, which does not ship"
     code = main(argv[1:])
     out = capsys.readouterr().out
     assert code in (0, 1, 3)
-    assert out.startswith(f"{EXPECT[name]} configuration") and "verdict:" in out
+    if name == "measure":
+        assert "paired: capture axis y ↔ firmware axis Y (same name)" in out
+        return
+    assert out.startswith(f"{EXPECT[name]} configuration") and "\nverdict: " in out
+
+
+SHARED = Path("/work/shared")
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason="shared firmware files not present")
+def test_shipped_files_are_unchanged_copies() -> None:
+    """Each shipped file is byte for byte a file of the shared real sets."""
+    pool = {p.read_bytes() for d in ("firmware", "firmware-corpus")
+            for p in (SHARED / d).rglob("*") if p.is_file() and p.stat().st_size < 1 << 20}  # fmt: skip
+    shipped = [p for p in SHIPPED.rglob("*") if p.is_file() and p.name != "README.md"]
+    assert len(shipped) >= 12
+    for p in shipped:
+        assert p.read_bytes() in pool, f"{p} is not an unchanged copy"

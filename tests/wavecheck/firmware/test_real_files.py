@@ -44,9 +44,10 @@ def test_grbl_user_dumps() -> None:
 def test_klipper_skr_mini_e3_tmc_uart_both_edges() -> None:
     cfg = read_firmware(FW / "klipper/generic-bigtreetech-skr-mini-e3-v2.0.cfg")
     x = cfg.axis("stepper_x")
-    assert (
-        v(x.pulse) == 100 and x.pulse.status == "uncertain"
-    )  # [tmc2209 stepper_x] line 25, uart_pin
+    # [tmc2209 stepper_x] line 25, uart_pin: 100 ns, truncated to MCU ticks (klippy/mcu.py) of
+    # an STM32F103 (header comment), 72 MHz or 64 MHz (Klipper's src/stm32/Kconfig): 6 ticks at
+    # 64 MHz = 93.75 ns is the smaller
+    assert v(x.pulse) == F(375, 4) and x.pulse.status == "uncertain"
     assert x.both_edges and x.active_edge == "both"
     assert x.dir_inverted  # line 16: dir_pin: !PB12
     assert not cfg.axis("stepper_z").dir_inverted  # line 52: dir_pin: PC5
@@ -63,7 +64,9 @@ def test_klipper_mellow_explicit_duration_wins() -> None:
     assert not x.both_edges  # 4 us > 500 ns: the TMC section's both-edge request is refused
     assert v(x.dir_setup) == 4000 and v(x.dir_hold) == 4000
     ext = cfg.axis("extruder")
-    assert v(ext.pulse) == 100 and ext.both_edges  # [tmc2209 extruder] line 134, no duration
+    # [tmc2209 extruder] line 134, no duration: 100 ns = 16.8 ticks of the STM32F407's 168 MHz,
+    # truncated to 16 ticks (klippy/mcu.py; Klipper's src/stm32/Kconfig)
+    assert v(ext.pulse) == F(16 * 10**9, 168_000_000) and ext.both_edges
 
 
 def test_klipper_duet3_6xd_default_2us() -> None:
@@ -104,7 +107,10 @@ def test_marlin_voron_drv8825_defaults() -> None:
     assert v(x.dir_setup) == 650 and v(x.dir_hold_trailing) == 650
     assert v(x.idle) == 2000  # max(1e9/250 kHz - 2000, 2000)
     assert not x.both_edges  # EDGE_STEPPING (adv:3479) has no effect without TMC
-    assert v(x.max_rate) == 80 * 300  # Configuration.h:1291, :1303
+    # COREXY is enabled (a Voron 2): X and Y motors are coupled, so steps/unit x feedrate does not
+    # bound them; the driver rate Marlin times pulses for is what is left (uncertain)
+    assert v(x.max_rate) == 250_000 and x.max_rate.status == "uncertain"
+    assert v(cfg.axis("Z").max_rate) == 400 * 5  # Configuration.h:1291, :1303 (Z is cartesian)
 
 
 def test_marlin_ortur_old_format() -> None:
@@ -127,7 +133,7 @@ def test_rrf_cnc_one_external_drivers() -> None:
         v(x.dir_hold_trailing) == 0 and v(x.dir_hold) == 5000
     )  # hold counts from the falling edge
     assert v(x.max_rate) == F(160 * 12000, 60)  # line 27: M92 X160; line 29: M203 X12000 mm/min
-    assert cfg.axis("Y").info["drivers"] == "2,1"
+    assert cfg.axis("Y").info["drivers"] == "2,1"  # line 20: M584 Y2:1
 
 
 def test_rrf_hummel_default_timing() -> None:
@@ -135,8 +141,10 @@ def test_rrf_hummel_default_timing() -> None:
     x = cfg.axis("X")  # line 19: M569 P0 S1, no T: a fast driver
     assert v(x.pulse) == 200 and x.pulse.status == "uncertain"
     assert x.dir_setup.value is None
-    assert v(x.max_rate) == F(80 * 6000, 60)  # line 25: M92 X80; line 27: M203 X6000
-    assert v(cfg.axis("Z").max_rate) == F(400 * 180, 60)
+    # line 10: M669 K2 is CoreXZ in RRF's KinematicsType (the file's comment says CoreXY): X and Z
+    # are coupled, so M92 x M203 does not bound them; Y moves alone
+    assert x.max_rate.value is None and "M669 K2" in x.max_rate.note
+    assert v(cfg.axis("Y").max_rate) == F(80 * 6000, 60)  # line 25: M92 Y80; line 27: M203 Y6000
 
 
 def test_smoothieboard_defaults() -> None:
@@ -152,7 +160,10 @@ def test_hm2_5i20() -> None:
     cfg = read_firmware(FW / "linuxcnc/hm2-stepper/5i20.ini")
     assert cfg.firmware == "hm2" and cfg.axis_names == ("stepgen.00", "stepgen.01", "stepgen.02")
     s = cfg.axes[0]  # 5i20.ini:123-126 DIRSETUP 200, DIRHOLD 200, STEPLEN 40000, STEPSPACE 40000
-    assert (v(s.pulse), v(s.idle), v(s.dir_setup), v(s.dir_hold)) == (40000, 40000, 200, 200)
+    assert (v(s.pulse), v(s.idle), v(s.dir_setup)) == (40000, 40000, 200)
+    # DIR hold: the man page counts dirhold after the step ends (steplen + dirhold from the
+    # leading edge); the VHDL counts it from the step's start (200 ns): both are kept
+    assert v(s.dir_hold) == 40200 and s.dir_hold.disputed == 200
     assert s.pulse.where.endswith("hm2-stepper.hal:84")
     assert v(s.max_rate) == 12 * 1000  # 5i20.ini:106 STEPGEN_MAX_VEL 12 x :110 SCALE 1000
 

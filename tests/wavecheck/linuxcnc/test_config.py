@@ -234,3 +234,15 @@ def test_the_real_hm2_configuration_reads(tmp_path: Path) -> None:
         pytest.skip(f"shared firmware folder not present: {folder}")
     cfg = read_config(folder / "5i20.ini", [folder / "hm2-stepper.hal"])
     assert cfg.base_period_ns is None or cfg.base_period_ns > 0
+
+
+def test_no_stepgen_loaded_gives_no_stepgen_rates(tmp_path: Path) -> None:
+    """issue 24: `check --ini` reported "config 500 Hz" for a stepgen the HAL files never load
+    (a Mesa configuration): with HAL files read and no `loadrt stepgen`, there are no rates."""
+    ini = tmp_path / "m.ini"
+    ini.write_text("[EMCMOT]\nBASE_PERIOD = 1000000\n")
+    hal = tmp_path / "m.hal"
+    hal.write_text("loadrt hostmot2\nloadrt hm2_pci\nsetp hm2_5i20.0.stepgen.00.steplen 1250\n")
+    rates = config_rates(read_config(ini, hal), g202(), 10_000)
+    assert rates.config is None and rates.latency_safe is None
+    assert "no software stepgen" in rates.notes[0]

@@ -18,15 +18,18 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import cached_property
 from typing import Literal
 
 from wavecheck.drives.model import ActiveEdge
+from wavecheck.errors import ConfigError
 
 __all__ = [
     "FIRMWARES",
     "Fixer",
     "FirmwareConfig",
     "GStatus",
+    "MAX_AXES",
     "GeneratorGuarantee",
     "Guaranteed",
     "Role",
@@ -41,11 +44,15 @@ FIRMWARES: tuple[str, ...] = (
     "marlin",
     "reprapfirmware",
     "smoothieware",
+    "fluidnc",
     "hm2",
     "linuxcnc",
 )
 
-Role = Literal["pulse", "idle", "dir_setup", "dir_hold", "max_rate"]
+#: More step generators than any machine has: a file naming more is refused (bounded time).
+MAX_AXES = 256
+
+Role = Literal["pulse", "idle", "setup", "hold", "max_rate"]
 """A generator figure: pulse width, time between pulses, DIR setup/hold, max step rate."""
 
 GStatus = Literal["set", "default", "derived", "uncertain", "unknown"]
@@ -69,6 +76,10 @@ class Guaranteed:
     """The unit the setting is written in (``us``, ``ns``, ``s``, ``Hz``, ``mm/min`` …)."""
     status: GStatus = "set"
     note: str = ""
+    disputed: Fraction | None = None
+    """Where the sources disagree (hm2: the man page and the VHDL), the bound under the other
+    reading; :attr:`note` names both, and a rule whose verdict differs under it is
+    indeterminate."""
 
     @property
     def known(self) -> bool:
@@ -98,6 +109,9 @@ class GeneratorGuarantee:
         dir_inverted: the firmware inverts this axis's DIR pin (information only).
         info: further settings read (steps/unit, max speed …), name → text with source.
         notes: what the user should know about this axis.
+        aliases: other names the axis is known by (``x`` for Klipper's ``stepper_x``, the
+            joint's axis letter for a LinuxCNC stepgen): ``check --firmware`` pairs a capture
+            axis with the firmware axis of the same name or alias.
     """
 
     axis: str
@@ -112,6 +126,12 @@ class GeneratorGuarantee:
     dir_inverted: bool = False
     info: Mapping[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    aliases: tuple[str, ...] = ()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The axis name and its aliases."""
+        return (self.axis, *self.aliases)
 
     @property
     def leading_edge(self) -> ActiveEdge:
@@ -134,10 +154,16 @@ class GeneratorGuarantee:
         return self.idle if self.pulse_level else self.pulse
 
     def figure(self, role: Role) -> Guaranteed:
-        """The figure of ``role``."""
-        figure: Guaranteed = getattr(self, role)
+        """The figure of ``role`` (``setup``: the DIR delay before a pulse, ``hold``: DIR held
+        after it, from the leading edge)."""
+        figure: Guaranteed = getattr(self, _FIELDS[role])
         return figure
 
+
+_FIELDS: dict[str, str] = {
+    "pulse": "pulse", "idle": "idle", "setup": "dir_setup", "hold": "dir_hold",
+    "max_rate": "max_rate",
+}  # fmt: skip
 
 Fixer = Callable[[GeneratorGuarantee, "Role", Fraction], str]
 """(axis, role, value needed: ns, or Hz for ``max_rate``) → the setting to change, in the
@@ -171,12 +197,29 @@ class FirmwareConfig:
     notes: tuple[str, ...] = ()
     fixer: Fixer = _no_fix
 
+    def __post_init__(self) -> None:
+        if len(self.axes) > MAX_AXES:
+            raise ConfigError(
+                f"{self.path}: {len(self.axes)} step generators, more than any machine has "
+                f"(at most {MAX_AXES} are read)"
+            )
+
+    @cached_property
+    def _by_name(self) -> dict[str, GeneratorGuarantee]:
+        by_alias = {n.lower(): a for a in reversed(self.axes) for n in a.aliases}
+        return by_alias | {a.axis.lower(): a for a in reversed(self.axes)}
+
     def axis(self, name: str) -> GeneratorGuarantee:
-        """The axis called ``name`` (case-insensitive; KeyError lists the axes)."""
-        for a in self.axes:
-            if a.axis.lower() == name.lower():
-                return a
-        raise KeyError(f"no axis {name!r} in {self.path} (axes: {', '.join(self.axis_names)})")
+        """The axis called ``name`` or known by that alias (case-insensitive; KeyError lists the
+        axes)."""
+        found = self._by_name.get(name.lower())
+        if found is None:
+            raise KeyError(f"no axis {name!r} in {self.path} (axes: {', '.join(self.axis_names)})")
+        return found
+
+    def find(self, name: str) -> GeneratorGuarantee | None:
+        """The axis called ``name`` or known by that alias, None if there is none."""
+        return self._by_name.get(name.lower())
 
     @property
     def axis_names(self) -> tuple[str, ...]:

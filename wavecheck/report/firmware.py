@@ -8,12 +8,14 @@ from typing import Any
 
 from wavecheck.drives.model import Figure
 from wavecheck.firmware.capture import FirmwareCheck
-from wavecheck.firmware.evaluate import PairResult
-from wavecheck.firmware.model import FirmwareConfig, GeneratorGuarantee, Guaranteed
+from wavecheck.firmware.evaluate import ConfigResult, PairRow
+from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed
+from wavecheck.rules import rule
 from wavecheck.units import format_ns, format_rate, json_number
 
 __all__ = [
     "config_dict",
+    "config_junit",
     "config_text",
     "firmware_check_dict",
     "firmware_check_lines",
@@ -45,8 +47,9 @@ def _axis_head(a: GeneratorGuarantee) -> str:
     return f"axis {a.axis}: pulses {level} at the pin, {edges}"
 
 
-def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) -> str:
+def config_text(result: ConfigResult) -> str:
     """The text report of ``wavecheck config``."""
+    cfg, results = result.config, result.pairs
     out = [f"{cfg.firmware} configuration {cfg.path}"]
     out += [f"  read: {f}" for f in cfg.files if f != cfg.path]
     out += [f"  note: {n}" for n in cfg.notes]
@@ -57,7 +60,7 @@ def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) ->
         out += [f"  {k}: {v}" for k, v in a.info.items()]
         rows = [["rule", "generator", "limit", "margin", "verdict", "from"]]
         for r in res.rows:
-            rate = r.rule == "step_period"
+            rate = rule(r.rule).figure == "max_rate"
             gen = (
                 "-"
                 if r.source is None
@@ -99,7 +102,7 @@ def config_text(cfg: FirmwareConfig, results: list[PairResult], verdict: str) ->
     out += [
         "",
         "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
-        f"verdict: {verdict.upper()}",
+        f"verdict: {result.verdict_line}",
     ]
     return "\n".join(out) + "\n"
 
@@ -115,12 +118,14 @@ def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
         "unit": fig.unit,
         "status": fig.status,
         "note": fig.note,
+        "disputed": json_number(fig.disputed),
     }
 
 
 def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
     return {
         "axis": a.axis,
+        "aliases": list(a.aliases),
         "pulse_level": a.pulse_level,
         "active_edge": a.active_edge,
         "both_edges": a.both_edges,
@@ -138,10 +143,9 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
     }
 
 
-def config_dict(
-    cfg: FirmwareConfig, results: list[PairResult], verdict: str, code: int
-) -> dict[str, Any]:
+def config_dict(result: ConfigResult) -> dict[str, Any]:
     """The JSON report of ``wavecheck config``."""
+    cfg, results = result.config, result.pairs
     return {
         "firmware": cfg.firmware,
         "path": cfg.path,
@@ -164,11 +168,7 @@ def config_dict(
                         "limit_ns": json_number(r.limit_ns),
                         "limit_status": r.limit.status if r.limit else None,
                         "limit_datasheet_ns": json_number(
-                            (
-                                Fraction(10**9) / r.limit.datasheet
-                                if r.rule == "step_period"
-                                else r.limit.datasheet
-                            )
+                            rule(r.rule).limit_ns(r.limit.datasheet)
                             if r.limit is not None and r.limit.datasheet is not None
                             else None
                         ),
@@ -176,22 +176,86 @@ def config_dict(
                         "verdict": r.verdict,
                         "fix": r.fix,
                         "note": r.note,
+                        "why_unchecked": r.why_unchecked,
                     }
                     for r in res.rows
                 ],
             }
             for res in results
         ],
-        "verdict": verdict,
-        "exit_code": code,
+        "verdict": result.verdict,
+        "verdict_line": result.verdict_line,
+        "unchecked": [
+            {"why": why, "rules": list(rules)} for why, rules in result.unchecked.items()
+        ],
+        "exit_code": result.exit_code,
     }
+
+
+def _junit_case(suite: Any, classname: str, row: PairRow) -> str:
+    """One rule as a JUnit test case (the conventions of :mod:`wavecheck.report.junit`)."""
+    import xml.etree.ElementTree as ET
+
+    case = ET.SubElement(suite, "testcase", classname=classname, name=row.rule, time="0")
+    lim = format_ns(row.limit_ns)
+    gen = format_ns(row.guaranteed_ns, missing="unknown")
+    if row.verdict in ("fail", "indeterminate"):
+        what = "fails" if row.verdict == "fail" else "cannot be proven"
+        el = ET.SubElement(case, "failure", type=row.verdict,
+                           message=f"{row.rule} {what}: generator {gen}, limit {lim}")  # fmt: skip
+        el.text = "\n".join(x for x in (row.note, f"fix: {row.fix}" if row.fix else "") if x)
+        return "failure"
+    if row.verdict == "unchecked":
+        ET.SubElement(case, "skipped", message=row.why_unchecked or row.note or "not checked")
+        return "skipped"
+    return "pass"
+
+
+def config_junit(result: ConfigResult) -> str:
+    """JUnit XML of ``wavecheck config``: one ``testsuite`` per axis/drive pair, one
+    ``testcase`` per rule (failure: fail or indeterminate; skipped: unchecked, with why)."""
+    import xml.etree.ElementTree as ET
+
+    from wavecheck.report.junit import classname
+
+    root = ET.Element("testsuites", name="wavecheck config")
+    base = classname(result.config.path)
+    for pair in result.pairs:
+        suite = ET.SubElement(root, "testsuite",
+                              name=f"{result.config.path} [axis {pair.axis.axis}, drive {pair.drive.id}]")  # fmt: skip
+        props = ET.SubElement(suite, "properties")
+        for key, value in (("firmware", result.config.firmware), ("drive", pair.drive.id),
+                           ("verdict", pair.verdict)):  # fmt: skip
+            ET.SubElement(props, "property", name=key, value=value)
+        counts = {"failure": 0, "skipped": 0, "pass": 0}
+        for row in pair.rows:
+            counts[_junit_case(suite, f"{base}.{pair.axis.axis}", row)] += 1
+        if pair.verdict == "unchecked":  # the command exits 3: the suite must not read as green
+            case = ET.SubElement(suite, "testcase", classname=f"{base}.{pair.axis.axis}",
+                                 name="verdict", time="0")  # fmt: skip
+            ET.SubElement(case, "failure", type="unchecked",
+                          message="nothing was checked: the drive states none of the figures")  # fmt: skip
+            counts["failure"] += 1
+        suite.set("tests", str(sum(counts.values())))
+        suite.set("failures", str(counts["failure"]))
+        suite.set("errors", "0")
+        suite.set("skipped", str(counts["skipped"]))
+        suite.set("time", "0")
+    for key in ("tests", "failures", "errors", "skipped"):
+        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
+    root.set("time", "0")
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
 
 def firmware_check_lines(fc: FirmwareCheck) -> list[str]:
     """The ``firmware`` section of the text report of ``check --firmware``."""
     out = [
-        f"firmware: {fc.firmware} {fc.path}, axis {fc.axis.axis} (apart from the drive rules): {fc.verdict.upper()}"
+        f"firmware: {fc.firmware} {fc.path}, axis {fc.axis.axis} (apart from the drive rules): "
+        f"{fc.verdict.upper()}"
     ]
+    if fc.pairing:
+        out.append(f"  paired: {fc.pairing}")
     for c in fc.comparisons:
         out.append(f"  {c.what:<10} {c.verdict.upper():<13} {c.message}")
     return out
@@ -203,6 +267,7 @@ def firmware_check_dict(fc: FirmwareCheck) -> dict[str, Any]:
         "firmware": fc.firmware,
         "path": fc.path,
         "axis": fc.axis.axis,
+        "pairing": fc.pairing,
         "verdict": fc.verdict,
         "findings": sum(c.verdict == "fail" for c in fc.comparisons),
         "comparisons": [

@@ -1,0 +1,65 @@
+"""``wavecheck config``'s verdict line names the rules it did not check and why (issue 26: a
+grbl configuration against a TB6600 was a plain PASS with DIR setup unchecked), the result
+keeps them as data, and ``--format junit`` gives CI one test case per axis and rule."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from wavecheck.cli import main
+from wavecheck.drives.library import load_drive
+from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
+
+GRBL = Path("/work/shared/firmware/grbl/settings.md")
+pytestmark = pytest.mark.skipif(not GRBL.is_file(), reason="shared firmware files not present")
+
+
+def test_a_pass_names_what_was_not_checked(capsys: pytest.CaptureFixture[str]) -> None:
+    """TB6600 states no DIR setup/hold and no max rate (rules/tb6600.toml): those are not
+    checked, and the verdict line says so instead of a plain PASS."""
+    assert main(["config", str(GRBL), "--drive", "tb6600"]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith("verdict: PASS (")
+    assert "step_period, dir_setup, dir_hold not checked: drive tb6600 states no figure" in last
+
+
+def test_unchecked_rules_are_data_on_the_result() -> None:
+    cfg = read_firmware(GRBL)
+    result = evaluate_config(cfg, [(a, load_drive("tb6600")) for a in cfg.axes])
+    assert result.verdict == "pass" and result.exit_code == 0
+    assert result.unchecked["drive tb6600 states no figure"] == (
+        "step_period", "dir_setup", "dir_hold")  # fmt: skip
+    assert result.verdict_line.startswith("PASS (step_period, dir_setup, dir_hold not checked")
+
+
+def test_json_carries_the_verdict_line(capsys: pytest.CaptureFixture[str]) -> None:
+    main(["config", str(GRBL), "--drive", "tb6600", "--format", "json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["verdict"] == "pass" and doc["verdict_line"].startswith("PASS (")
+    assert {"why": "drive tb6600 states no figure",
+            "rules": ["step_period", "dir_setup", "dir_hold"]} in doc["unchecked"]  # fmt: skip
+
+
+def test_junit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "config.xml"
+    code = main(["config", str(GRBL), "--drive", "leadshine-dm542", "--format", "junit",
+                 "-o", str(out)])  # fmt: skip
+    assert code == 1  # grbl: no DIR setup against the DM542's 5 us
+    assert capsys.readouterr().out.startswith("FAIL (")
+    root = ET.parse(out).getroot()
+    suites = root.findall("testsuite")
+    assert [s.get("name", "").split("[")[1] for s in suites] == [
+        f"axis {a}, drive leadshine-dm542]" for a in "XYZ"]  # fmt: skip
+    x = {c.get("name"): c for c in suites[0].findall("testcase")}
+    failure = x["dir_setup"].find("failure")
+    assert failure is not None and failure.get("type") == "fail"
+    assert x["step_high"].find("failure") is None and x["step_high"].find("skipped") is None
+    skipped = x["enable_setup"].find("skipped")
+    assert skipped is not None and "says nothing" in skipped.get("message", "")
+    assert root.get("failures") == str(sum(int(s.get("failures", "0")) for s in suites))
+    assert x["dir_setup"].get("classname", "").endswith("grbl/settings.X")

@@ -1,0 +1,317 @@
+"""FluidNC: a machine ``config.yaml`` (reference ``firmware-timing.md`` §10; FluidNC's wiki
+``config/axes`` and ``FluidNC/src/Stepping.cpp`` where the reference is silent).
+
+Read with PyYAML (the node tree keeps every value's line): ``stepping:`` ``engine`` (default RMT),
+``pulse_us`` (default 4, 0..30), ``dir_delay_us`` (default 0, 0..10), ``disable_delay_us``;
+``i2so: min_pulse_us`` (the I2S frame, default 2 µs); per axis ``steps_per_mm``,
+``max_rate_mm_per_min`` and ``motor0``/``motor1`` with one driver section that has a
+``step_pin`` (``standard_stepper``, ``stepstick``, ``tmc_2209`` …; an ``rc_servo`` or other
+motor without one is not a step generator). ``gpio.26:low`` is an inverted pin. FluidNC's own
+parser also takes ``key:value`` without a space; such lines are read as it reads them.
+
+What each engine guarantees at the pin:
+
+- **RMT**: each step is one RMT item, ``dir_delay_us`` at the idle level (one 0.25 µs tick when
+  0) then ``pulse_us`` active: the pulse and the DIR setup are hardware-timed, before every
+  pulse. Max rate 1e6 / (2·pulse + dir_delay) steps/s.
+- **TIMED**: the CPU raises the pin, spins ``pulse_us`` and lowers it; ``dir_delay_us`` is spun
+  after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
+  (``uncertain``).
+- **I2S_STATIC / I2S_STREAM**: pins change only at I2S frame boundaries; the pulse is raised to
+  at least one frame, capped at 20 µs, rounded up to whole frames; ``dir_delay_us`` becomes
+  whole frames before the step, rounded down (``i2s_out_push_sample`` divides by the frame;
+  I2S_STREAM pushes at least one), so a delay under one frame may be none on I2S_STATIC.
+
+DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
+after the last pulse's leading edge when the step rate stays under the engine's maximum
+(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+
+import yaml
+
+from wavecheck.errors import ConfigError
+from wavecheck.firmware._text import number, read_text, where
+from wavecheck.firmware.guarantee import (
+    FirmwareConfig,
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+    ceil_to,
+    unknown,
+)
+
+__all__ = ["ENGINES", "looks_like", "read"]
+
+#: FluidNC's stepping engines, as ``stepping: engine:`` names them (case-insensitive).
+ENGINES = ("RMT", "TIMED", "I2S_STATIC", "I2S_STREAM")
+_US = Fraction(1000)
+_RMT_TICK_NS = Fraction(250)  # RMT clock 4 ticks/us: a dir_delay of 0 is one tick
+_I2S_MAX_US = 20
+_I2S_FRAME_US = 2
+_NO_SPACE = re.compile(r"^(\s*[A-Za-z0-9_]+)\s*:(?=[^\s])", re.M)
+_AXES = "xyzabcuvw"
+
+
+def looks_like(text: str) -> bool:
+    """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
+    (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
+    return (
+        bool(re.search(r"^axes\s*:\s*(#.*)?$", text, re.M))
+        and bool(re.search(r"^\s+[xyzabc]\s*:\s*(#.*)?$", text, re.M))
+        and not re.search(r"^\[[^\]]+\]\s*$", text, re.M)
+    )
+
+
+@dataclass(frozen=True)
+class _Value:
+    text: str
+    line: int
+
+
+def _compose(path: str, text: str) -> yaml.Node:
+    try:
+        node = yaml.compose(_NO_SPACE.sub(r"\1: ", text), Loader=yaml.CSafeLoader)
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        line = f":{mark.line + 1}" if mark is not None else ""
+        raise ConfigError(f"{path}{line}: not YAML FluidNC reads: {err.problem}") from None
+    except (yaml.YAMLError, RecursionError) as err:
+        raise ConfigError(f"{path}: not YAML FluidNC reads ({type(err).__name__})") from None
+    if not isinstance(node, yaml.MappingNode):
+        raise ConfigError(f"{path}: not a FluidNC machine file (no top-level settings)")
+    return node
+
+
+def _items(node: yaml.Node | None) -> Iterator[tuple[str, yaml.Node]]:
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            if isinstance(key, yaml.ScalarNode):
+                yield str(key.value).strip().lower(), value
+
+
+def _child(node: yaml.Node | None, key: str) -> yaml.Node | None:
+    return next((v for k, v in _items(node) if k == key), None)
+
+
+def _scalar(node: yaml.Node | None, key: str) -> _Value | None:
+    found = _child(node, key)
+    if isinstance(found, yaml.ScalarNode):
+        return _Value(str(found.value).strip(), found.start_mark.line + 1)
+    return None
+
+
+def _us(path: str, node: yaml.Node | None, key: str, default: int, high: int) -> Guaranteed:
+    """A whole-µs setting of ``node`` as ns (FluidNC stores these as integers)."""
+    found = _scalar(node, key)
+    if found is None:
+        return Guaranteed(Fraction(default) * _US, key, "firmware default", "us", "default")
+    at = where(path, found.line)
+    value = number(found.text, at, key, low=0, high=high, unit="us")
+    return Guaranteed(Fraction(int(value)) * _US, key, at, "us", "set")
+
+
+def read(path: str | os.PathLike[str]) -> FirmwareConfig:
+    """Read a FluidNC ``config.yaml`` (see the module doc)."""
+    p = str(path)
+    root = _compose(p, read_text(path))
+    stepping = _child(root, "stepping")
+    engine_v = _scalar(stepping, "engine")
+    engine = engine_v.text.upper() if engine_v else "RMT"
+    if engine not in ENGINES:
+        raise ConfigError(
+            f"{where(p, engine_v.line) if engine_v else p}: stepping engine {engine_v and engine_v.text!r}"
+            f" is not one of {', '.join(ENGINES)}"
+        )
+    engine_at = where(p, engine_v.line) if engine_v else "firmware default"
+    pulse = _us(p, stepping, "pulse_us", 4, 30)
+    dir_delay = _us(p, stepping, "dir_delay_us", 0, 10)
+    notes = [
+        f"stepping engine {engine} ({engine_at}); pulse_us and dir_delay_us apply to every motor"
+    ]
+    pulse, frame = _engine_pulse(p, root, engine, pulse, notes)
+    setup = _setup(engine, dir_delay, frame)
+    engine_max = _engine_rate(engine, pulse, dir_delay)
+    axes_node = _child(root, "axes")
+    axes: list[GeneratorGuarantee] = []
+    for name, axis_node in _items(axes_node):
+        if name not in _AXES:
+            continue
+        for motor in ("motor0", "motor1"):
+            driver = _driver(_child(axis_node, motor))
+            if driver is None:
+                continue
+            kind, drv = driver
+            axes.append(
+                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine)
+            )
+    if not axes:
+        raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
+    return FirmwareConfig(
+        firmware="fluidnc",
+        path=p,
+        axes=tuple(axes),
+        files=(p,),
+        notes=tuple(notes),
+        fixer=_fix,
+    )
+
+
+def _engine_pulse(
+    path: str, root: yaml.Node, engine: str, pulse: Guaranteed, notes: list[str]
+) -> tuple[Guaranteed, Fraction | None]:
+    """The pulse as the engine makes it, and the I2S frame (ns) or None."""
+    if not engine.startswith("I2S"):
+        status = "set" if engine == "RMT" else "uncertain"
+        note = (
+            "RMT: hardware-timed"
+            if engine == "RMT"
+            else "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
+        )
+        return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", status, note), None  # type: ignore[arg-type]
+    frame_v = _scalar(_child(root, "i2so"), "min_pulse_us")
+    frame_us = (
+        number(
+            frame_v.text, where(path, frame_v.line), "i2so min_pulse_us", low=1, high=_I2S_MAX_US
+        )
+        if frame_v
+        else Fraction(_I2S_FRAME_US)
+    )
+    frame = frame_us * _US
+    assert pulse.value is not None
+    wanted = min(max(pulse.value, frame), _I2S_MAX_US * _US)
+    made = ceil_to(wanted, frame)
+    note = f"I2S: pins change on {float(frame_us):g} us frames; pulse {float(made / _US):g} us"
+    if made != pulse.value:
+        notes.append(f"FluidNC adjusts stepping/pulse_us to {float(made / _US):g} us ({note})")
+    return Guaranteed(made, pulse.setting, pulse.where, "us", "derived", note), frame
+
+
+def _setup(engine: str, dir_delay: Guaranteed, frame: Fraction | None) -> Guaranteed:
+    dd = dir_delay.value or Fraction(0)
+    if engine == "RMT":
+        value = dd if dd else _RMT_TICK_NS
+        note = "RMT: every pulse starts with dir_delay_us at the idle level (one 0.25 us tick at 0)"
+        return Guaranteed(value, dir_delay.setting, dir_delay.where, "us", "set", note)
+    if engine == "TIMED":
+        note = "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
+        return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
+    assert frame is not None
+    frames = dd // frame
+    if engine == "I2S_STREAM" and dd:
+        frames = max(frames, 1)  # i2s_out_push_sample: whole frames, at least one sample
+    note = (
+        "I2S: dir_delay_us becomes whole frames before the step (FluidNC's I2SOut.cpp divides "
+        "it by the frame"
+        + (", at least one" if engine == "I2S_STREAM" else "; DIR and STEP may share a frame")
+        + ")"
+    )
+    return Guaranteed(frames * frame, dir_delay.setting, dir_delay.where, "us", "derived", note)
+
+
+def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fraction | None:
+    p, dd = pulse.value or Fraction(0), dir_delay.value or Fraction(0)
+    if engine == "RMT":
+        return Fraction(10**9) / (2 * p + dd) if 2 * p + dd else None
+    if engine.startswith("I2S"):
+        return Fraction(10**9) / (2 * p) if p else None
+    return Fraction(10**9) / (2 * p) if p else None
+
+
+def _driver(motor: yaml.Node | None) -> tuple[str, yaml.Node] | None:
+    for kind, node in _items(motor):
+        if _scalar(node, "step_pin") is not None:
+            return kind, node
+    return None
+
+
+def _pin(value: _Value | None) -> tuple[str, bool]:
+    """(pin, inverted) of ``gpio.26:low`` style pin text."""
+    if value is None:
+        return "", False
+    parts = [s.strip().lower() for s in value.text.split(":")]
+    return parts[0], "low" in parts[1:]
+
+
+def _axis(
+    path: str,
+    name: str,
+    motor: str,
+    kind: str,
+    drv: yaml.Node,
+    axis_node: yaml.Node,
+    pulse: Guaranteed,
+    setup: Guaranteed,
+    engine_max: Fraction | None,
+    engine: str,
+) -> GeneratorGuarantee:
+    step_pin, step_low = _pin(_scalar(drv, "step_pin"))
+    _, dir_low = _pin(_scalar(drv, "direction_pin"))
+    info = {"driver": f"{kind} ({motor}, step_pin {step_pin})"}
+    spm_v = _scalar(axis_node, "steps_per_mm")
+    rate_v = _scalar(axis_node, "max_rate_mm_per_min")
+    max_rate = Guaranteed(None, "max_rate_mm_per_min", "", "mm/min", "unknown", "not set")
+    idle: Guaranteed = unknown("max_rate_mm_per_min", "no steps_per_mm or max rate for this axis")
+    if spm_v and rate_v:
+        spm_at, rate_at = where(path, spm_v.line), where(path, rate_v.line)
+        spm = number(spm_v.text, spm_at, "steps_per_mm", low=0)
+        mm_min = number(rate_v.text, rate_at, "max_rate_mm_per_min", low=0)
+        info["steps/mm"] = f"{spm_v.text} (steps_per_mm, {spm_at})"
+        info["max rate"] = f"{rate_v.text} mm/min (max_rate_mm_per_min, {rate_at})"
+        hz = spm * mm_min / 60
+        note = f"{name}: steps_per_mm x max_rate_mm_per_min / 60"
+        if engine_max is not None:
+            note += f"; the {engine} engine makes at most {float(engine_max):.6g} steps/s"
+        max_rate = Guaranteed(hz, "steps_per_mm x max_rate_mm_per_min / 60", rate_at,
+                              "mm/min", "derived", note)  # fmt: skip
+        if hz > 0 and pulse.value is not None:
+            gap = Fraction(10**9) / hz - pulse.value
+            idle = Guaranteed(
+                max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at, "mm/min", "uncertain",
+                "1 / (max step rate) - pulse: the step timer spaces the steps",
+            )  # fmt: skip
+    hold_note = "DIR changes at a later step event: at least one pulse after the leading edge"
+    return GeneratorGuarantee(
+        axis=name if motor == "motor0" else f"{name}.{motor}",
+        pulse=pulse,
+        idle=idle,
+        dir_setup=setup,
+        dir_hold=Guaranteed(pulse.value, "pulse_us", pulse.where, "us", "uncertain", hold_note),
+        max_rate=max_rate,
+        pulse_level=0 if step_low else 1,
+        dir_hold_trailing=Guaranteed(
+            Fraction(0),
+            "pulse_us",
+            pulse.where,
+            "us",
+            "uncertain",
+            "DIR may change right after the pulse ends",
+        ),  # fmt: skip
+        dir_inverted=dir_low,
+        info=info,
+        aliases=(f"{name}.motor0",) if motor == "motor0" else (),
+    )
+
+
+def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    us = -(-need // _US)
+    if role in ("pulse", "hold"):
+        return f"set `stepping: pulse_us: {us}` (whole us, at most 30)"
+    if role == "setup":
+        return f"set `stepping: dir_delay_us: {us}` (whole us, at most 10)"
+    if role == "idle" and axis.pulse.value is not None:
+        need = Fraction(10**9) / (axis.pulse.value + need)
+    spm = axis.info.get("steps/mm", "").split(" ")[0]
+    if spm:
+        return (
+            f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min` to at most "
+            f"{float(need * 60 / Fraction(spm)):.6g}"
+        )
+    return f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min`"
