@@ -1,0 +1,424 @@
+"""The libsigrokdecode protocol decoder ``wavecheck`` (API version 3).
+
+libsigrokdecode imports this package under its folder name, ``wavecheck`` (the name ``-P`` and
+PulseView use), so the real ``wavecheck`` package is imported only in :meth:`Decoder.decode`, after
+this package has stepped out of its way in ``sys.modules`` (:func:`_wavecheck`), from the paths
+``wavecheck sigrok install`` recorded in ``install.json`` beside this file (libsigrokdecode's
+embedded Python does not see the virtual environment wavecheck lives in).
+
+Per edge (``wait()`` on an edge of any assigned channel) the judge
+(:mod:`wavecheck.sigrok.judge`) decides the intervals that edge closes and the decoder puts
+them at once: nothing tells a decoder that the capture has ended (module doc of the judge). The
+edges also go to the block engine, whose summary is put when libsigrokdecode ends the input
+(sigrok-cli) and, optionally, at every pause of ``pause`` without an edge (PulseView).
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import sys
+import threading
+from typing import Any
+
+try:
+    import sigrokdecode as srd
+except ImportError:  # imported outside libsigrokdecode (tests, tools): a plain base class
+    srd = None
+
+_Base: Any = srd.Decoder if srd is not None else object
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_LOCK = threading.Lock()
+_ADAPTER: dict[str, Any] = {}
+
+CHANNELS = ({"id": "step", "name": "STEP/UP/A", "desc": "STEP (type 0), UP (type 1) or phase A"},)
+OPTIONAL_CHANNELS = (
+    {"id": "dir", "name": "DIR/DOWN/B", "desc": "DIR (type 0), DOWN (type 1) or phase B"},
+    {"id": "enable", "name": "ENABLE", "desc": "ENABLE (active high; invert=enable if low)"},
+    {"id": "c", "name": "C", "desc": "phase C"},
+    {"id": "d", "name": "D", "desc": "phase D"},
+    {"id": "e", "name": "E", "desc": "phase E"},
+)
+ANNOTATIONS = (
+    ("high", "STEP high time"),
+    ("low", "STEP low time"),
+    ("setup", "DIR setup"),
+    ("hold", "DIR hold"),
+    ("delay", "UP/DOWN switch delay"),
+    ("enable", "ENABLE setup"),
+    ("state", "Phase state held"),
+    ("fail", "Violation"),
+    ("indeterminate", "Indeterminate at this sample rate"),
+    ("position", "Position"),
+    ("rate", "Step rate"),
+    ("rule", "Summary"),
+    ("message", "Message"),
+)
+_CLASS = {name: k for k, (name, _) in enumerate(ANNOTATIONS)}
+ANNOTATION_ROWS = (
+    ("widths", "Pulse widths", (0, 1, 6)),
+    ("dir", "DIR and ENABLE timing", (2, 3, 4, 5)),
+    ("violations", "Violations", (7, 8)),
+    ("steps", "Position", (9,)),
+    ("rates", "Step rate", (10,)),
+    ("summary", "Summary", (11,)),
+    ("messages", "Messages", (12,)),
+)
+OPTIONS = (
+    {"id": "drive", "desc": "Drive id (wavecheck drives) or rule file", "default": ""},
+    {
+        "id": "type",
+        "desc": "LinuxCNC step type (0 step/dir, 1 up/down, 2-15 phases)",
+        "default": "drive",
+        "values": ("drive", *(str(n) for n in range(16))),
+    },
+    {"id": "user_table", "desc": "Type 15 states (1+3+2+0)", "default": ""},
+    {
+        "id": "active_edge",
+        "desc": "Active STEP edge",
+        "default": "drive",
+        "values": ("drive", "rising", "falling", "both"),
+    },
+    {"id": "invert", "desc": "Roles to invert (step dir enable)", "default": ""},
+    {
+        "id": "dir_forward",
+        "desc": "DIR level = forward",
+        "default": "low",
+        "values": ("low", "high"),
+    },
+    {
+        "id": "pulse_level",
+        "desc": "Generator pulse level",
+        "default": "high",
+        "values": ("high", "low"),
+    },
+    {"id": "limit", "desc": "Limits to override (step_high=5us dir_hold=20us)", "default": ""},
+    {"id": "margin", "desc": "Tighten every limit (2x, +500ns)", "default": ""},
+    {"id": "resolution", "desc": "Resolution (default: one sample)", "default": ""},
+    {
+        "id": "unit",
+        "desc": "Units shown",
+        "default": "auto",
+        "values": ("auto", "ns", "us", "ms", "samples"),
+    },
+    {
+        "id": "pause",
+        "desc": "Summary after a pause of (e.g. 200ms; empty: at the end)",
+        "default": "",
+    },
+)
+
+
+class _Unusable(Exception):
+    """The decoder cannot check (its message says why and what to do)."""
+
+
+def _install_record() -> dict[str, Any]:
+    """What ``wavecheck sigrok install`` recorded (paths, Python version), or {}."""
+    try:
+        with open(os.path.join(_HERE, "install.json"), encoding="utf-8") as fh:
+            data = json.load(fh)
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _wavecheck() -> Any:
+    """The adapter module of the real ``wavecheck`` package (imported once).
+
+    This decoder is ``sys.modules["wavecheck"]`` while libsigrokdecode loads it; the real package
+    takes the name over (libsigrokdecode keeps its own references to this module).
+    """
+    with _LOCK:
+        if "adapter" in _ADAPTER:
+            return _ADAPTER["adapter"]
+        record = _install_record()
+        import site
+
+        # numpy's BLAS would start a thread per core for nothing: the decoder uses no BLAS
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        paths = [p for p in record.get("paths", []) if isinstance(p, str)]
+        for p in reversed(paths):
+            if p not in sys.path:
+                sys.path.insert(0, p)
+        for p in paths:
+            site.addsitedir(p)  # runs .pth files (an editable install's finder)
+        mine = {
+            n: m for n, m in sys.modules.items() if n == "wavecheck" or n.startswith("wavecheck.")
+        }
+        ours = getattr(sys.modules.get("wavecheck"), "__file__", None) == os.path.join(
+            _HERE, "__init__.py"
+        )
+        if ours:
+            for name in mine:
+                del sys.modules[name]
+        try:
+            adapter = importlib.import_module("wavecheck.sigrok.adapter")
+        except Exception as err:
+            if ours:
+                for name in [
+                    n for n in sys.modules if n == "wavecheck" or n.startswith("wavecheck.")
+                ]:
+                    del sys.modules[name]
+                sys.modules.update(mine)
+            raise _Unusable(_import_help(err, record)) from None
+        _ADAPTER["adapter"] = adapter
+        return adapter
+
+
+def _import_help(err: Exception, record: dict[str, Any]) -> str:
+    here = "{}.{}".format(*sys.version_info[:2])
+    text = (
+        f"wavecheck decoder: cannot import wavecheck ({type(err).__name__}: {err}) "
+        f"in libsigrokdecode's Python {here}"
+    )
+    if not record:
+        return text + "; run 'wavecheck sigrok install' from the Python that has wavecheck"
+    made = record.get("python", "?")
+    if made != here:
+        return text + (
+            f"; it was installed from Python {made}, whose compiled modules (numpy) this Python "
+            f"cannot load: install wavecheck into a Python {here} environment and run "
+            "'wavecheck sigrok install' from it"
+        )
+    return text + f"; searched {record.get('paths')}: run 'wavecheck sigrok install' again"
+
+
+class Decoder(_Base):  # type: ignore[misc]
+    """STEP/DIR timing against a drive's datasheet (module docstring)."""
+
+    api_version = 3
+    id = "wavecheck"
+    name = "wavecheck"
+    longname = "Stepper STEP/DIR timing (wavecheck)"
+    desc = "STEP/DIR pulse widths, DIR setup/hold and step rate against a drive datasheet."
+    license = "mit"
+    inputs = ["logic"]
+    outputs: list[str] = []
+    tags = ["Embedded/industrial"]
+    channels = CHANNELS
+    optional_channels = OPTIONAL_CHANNELS
+    options = OPTIONS
+    annotations = ANNOTATIONS
+    annotation_rows = ANNOTATION_ROWS
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        self.samplerate = 0
+        self.out_ann: Any = None
+        self.put_any: Any = None
+
+    def metadata(self, key: int, value: int) -> None:
+        if srd is not None and key == srd.SRD_CONF_SAMPLERATE:
+            self.samplerate = int(value)
+
+    def start(self) -> None:
+        self.out_ann = self.register(srd.OUTPUT_ANN)
+
+    # -- output ----------------------------------------------------------------------------------
+    def _put(self, ss: int, es: int, cls: str, texts: list[str]) -> None:
+        self.put(min(ss, es), max(ss, es), self.out_ann, [_CLASS[cls], texts])
+
+    def _message(self, text: str, until: int | None = None) -> None:
+        """A message on the messages row, from sample 0 (to ``until``, else about a second)."""
+        span = until if until is not None else max(self.samplerate, 1_000_000)
+        self._put(0, span, "message", [text, text.split(":")[0]])
+
+    # -- decoding --------------------------------------------------------------------------------
+    def decode(self) -> None:
+        try:
+            adapter = _wavecheck()
+            from wavecheck.errors import WavecheckError
+            from wavecheck.sigrok.judge import Judge
+
+            assigned = [self.has_channel(k) for k in range(1 + len(OPTIONAL_CHANNELS))]
+            try:
+                check = adapter.open_check(self.options, self.samplerate, assigned)
+            except WavecheckError as err:
+                raise _Unusable(f"wavecheck decoder: {err}") from None
+        except _Unusable as err:
+            self._message(str(err))
+            sys.stderr.write(f"{err}\n")  # also where PulseView and sigrok-cli log
+            self._idle()
+            return
+        _Run(self, check, Judge(check.plan)).loop()
+
+    def _idle(self) -> None:
+        """Take the samples without looking at them (libsigrokdecode 0.5 needs a decoder to keep
+        waiting), until the input ends."""
+        try:
+            while True:
+                self.wait({"skip": 1 << 40})
+        except (EOFError, SystemError):
+            return
+
+
+class _Run:
+    """One pass over the input: the wait loop and the annotations."""
+
+    def __init__(self, pd: Decoder, check: Any, judge: Any) -> None:
+        self.pd = pd
+        self.check = check
+        self.judge = judge
+        self.plan = check.plan
+        self.chans = [k for k, role in enumerate(self.plan.roles) if role is not None]
+        self.classes = [_class_of(s.rule) for s in self.plan.rules]
+        self.labels = [_label_of(s.rule) for s in self.plan.rules]
+        self.last_step: int | None = None
+        self.steps = 0
+        self.counts: dict[str, int] = {}
+        self.tick = 0
+        self.texts: dict[int, str] = {}  # interval length (samples) → its text: lengths repeat
+        self.rates: dict[int, str] = {}
+
+    def _interval(self, w: int) -> str:
+        text = self.texts.get(w)
+        if text is None:
+            if len(self.texts) > 1 << 16:
+                self.texts.clear()
+            text = self.texts[w] = self.plan.interval(w)
+        return text
+
+    def _rate(self, w: int) -> str:
+        text = self.rates.get(w)
+        if text is None:
+            if len(self.rates) > 1 << 16:
+                self.rates.clear()
+            text = self.rates[w] = self.plan.rate(w)
+        return text
+
+    def loop(self) -> None:
+        pd, plan = self.pd, self.plan
+        pins = pd.wait()
+        raw = [pins[k] for k in self.chans]
+        self.judge.start(raw)
+        self.check.start(raw)
+        pause = self._pause()
+        edges = [{k: "e"} for k in self.chans]
+        conds = edges + [{"skip": pause}] if pause else edges
+        summarised = True
+        first = True
+        while True:
+            try:
+                pins = pd.wait(conds if pause and not summarised else edges)
+            except (EOFError, SystemError):  # libsigrokdecode ends the input (module doc)
+                break
+            t = pd.samplenum
+            if pause and not summarised and pd.matched[-1]:
+                self._summary(self.tick, t, final=False)  # over the pause
+                summarised = True
+                continue
+            if first:
+                first = False
+                for note in plan.notes:
+                    pd._message("wavecheck: " + note, until=t)
+            for out in self.judge.at(t, [pins[k] for k in self.chans]):
+                self._show(out)
+            self.check.edge(t, self.judge.changed)
+            summarised = False
+            self.tick = t
+        self._summary(0, self.tick, final=True)
+
+    def _pause(self) -> int:
+        options: Any = self.pd.options  # libsigrokdecode's dict of option values
+        text = str(options.get("pause", "")).strip()
+        if not text or self.plan.timebase is None or self.check.engine is None:
+            return 0
+        from wavecheck.units import parse_option
+
+        seconds = parse_option(text, "pause", "time")
+        return max(1, int(seconds / self.plan.timebase.tick_s))
+
+    def _show(self, out: tuple[int, int, int, int, int]) -> None:
+        kind = out[0]
+        plan, pd = self.plan, self.pd
+        if kind == 0:  # an interval: (rule, start, end, outcome)
+            _, k, start, end, outcome = out
+            spec = plan.rules[k]
+            w = end - start
+            measured = self._interval(w)
+            cls = self.classes[k]
+            if cls == "rate":
+                rate = self._rate(w)
+                pd._put(start, end, "rate", [rate, rate.split()[0]])
+            else:
+                pd._put(start, end, cls, [f"{self.labels[k]} {measured}", measured])
+            if outcome in (1, 2):  # FAIL, INDETERMINATE (wavecheck.checks.result)
+                self._violation(spec, start, end, w, outcome)
+        elif kind == 1:  # a step: (sample, direction, position)
+            _, t, direction, position, _ = out
+            self.steps += 1
+            since = t if self.last_step is None else self.last_step
+            self.last_step = t
+            if direction:
+                texts = [f"step {self.steps}, position {position:+d}", f"{position:+d}"]
+            else:
+                texts = [f"step {self.steps}, direction unknown", "?"]
+            pd._put(since, t, "position", texts)
+        else:  # a state sequence error: (rule, sample, state before, after)
+            _, k, t, before, after = out
+            rule = plan.rules[k].rule.id
+            self.counts[rule] = self.counts.get(rule, 0) + 1
+            pd._put(t, t, "fail", [f"{rule}: state {before} → {after}", rule, "!"])
+
+    def _violation(self, spec: Any, start: int, end: int, w: int, outcome: int) -> None:
+        """A failed interval (``check``'s words: rule, measured, limit, margin), or one this
+        resolution cannot decide."""
+        plan, rule = self.plan, spec.rule.id
+        measured, limit = self._interval(w), plan.limit(spec)
+        if outcome == 1:
+            self.counts[rule] = self.counts.get(rule, 0) + 1
+            margin = plan.margin(spec, w)
+            texts = [
+                f"{rule}: measured {measured}, limit {limit}, margin {margin}",
+                f"{rule} {measured} < {limit}",
+                rule,
+                "!",
+            ]
+            self.pd._put(start, end, "fail", texts)
+        else:
+            res = self.check.resolution()
+            texts = [
+                f"{rule}: measured {measured}, limit {limit}: indeterminate at a resolution of {res}",
+                f"{rule} {measured} ≈ {limit}?",
+                "?",
+            ]
+            self.pd._put(start, end, "indeterminate", texts)
+
+    def _summary(self, start: int, end: int, *, final: bool) -> None:
+        """The block engine's summary, over ``start``..``end`` (so far: over a pause)."""
+        for texts in self.check.summary(end + 1, final=final):
+            self.pd._put(start, end, "rule", texts)
+        engine = self.check.violations()
+        if final and engine and engine != {r: self.counts.get(r, 0) for r in engine}:
+            self.pd._message(
+                f"wavecheck decoder: the per-edge violations {self.counts} differ from the "
+                f"engine's {engine} (please report)",
+                until=end,
+            )
+
+
+def _class_of(rule: Any) -> str:
+    """The annotation class of a rule's intervals (from the rule table's check and events)."""
+    if rule.check == "width":
+        return "high" if rule.level == 1 else "low"
+    if rule.check == "period":
+        return "rate" if rule.ref == "step" else "state"
+    if rule.check == "setup":
+        return "enable" if rule.ref == "enable" else "setup"
+    return {"hold": "hold", "switch": "delay"}.get(rule.check, "fail")
+
+
+def _label_of(rule: Any) -> str:
+    return {
+        "high": "high",
+        "low": "low",
+        "state": "state",
+        "enable": "enable setup",
+        "setup": "setup",
+        "hold": "hold",
+        "delay": "delay",
+    }.get(_class_of(rule), rule.id)
