@@ -60,6 +60,7 @@ from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.machine import MachineReport
 from wavecheck.report.steps_csv import AxisSteps
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
+from wavecheck.sigrok.session import add_pulseview_argument, check_pulseview
 from wavecheck.stream.blocks import BlockSource, open_stream
 from wavecheck.stream.engine import DEFAULT_BLOCK_EDGES, NotStreamable, check_stream
 
@@ -124,6 +125,7 @@ def register(sub: Any) -> None:
         f"JSON default {DEFAULT_VIOLATION_CAP}); the total is always given",
     )
     add_report_arguments(p)
+    add_pulseview_argument(p)
     add_steps_arguments(p)
     p.add_argument(
         "--block-edges",
@@ -261,11 +263,17 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
         )
     else:
         sys.stdout.write(text)
+    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
+        from wavecheck.sigrok.session import write_pulseview
+
+        for line in write_pulseview(args, axis_reports(report)):
+            print(line, file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
     check_steps_arguments(args)
+    check_pulseview(args, len(expand_captures(args.capture)))
     if not args.steps_csv:
         return run_checks(args, build_report, write_outputs)
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]

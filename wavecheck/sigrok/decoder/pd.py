@@ -40,30 +40,33 @@ OPTIONAL_CHANNELS = (
     {"id": "d", "name": "D", "desc": "phase D"},
     {"id": "e", "name": "E", "desc": "phase E"},
 )
+#: Annotation classes. PulseView 0.4.2 colours a class by the hue of the decode signal (green
+#: for the first) + 20° per row + 55° per class index: this order makes a violation red and an
+#: indeterminate one orange, and nothing else red but the messages.
 ANNOTATIONS = (
     ("high", "STEP high time"),
     ("low", "STEP low time"),
     ("setup", "DIR setup"),
     ("hold", "DIR hold"),
-    ("delay", "UP/DOWN switch delay"),
+    ("rate", "Step rate"),
     ("enable", "ENABLE setup"),
     ("state", "Phase state held"),
+    ("delay", "UP/DOWN switch delay"),
+    ("position", "Position"),
+    ("message", "Message"),
     ("fail", "Violation"),
     ("indeterminate", "Indeterminate at this sample rate"),
-    ("position", "Position"),
-    ("rate", "Step rate"),
     ("rule", "Summary"),
-    ("message", "Message"),
 )
 _CLASS = {name: k for k, (name, _) in enumerate(ANNOTATIONS)}
 ANNOTATION_ROWS = (
     ("widths", "Pulse widths", (0, 1, 6)),
-    ("dir", "DIR and ENABLE timing", (2, 3, 4, 5)),
-    ("violations", "Violations", (7, 8)),
-    ("steps", "Position", (9,)),
-    ("rates", "Step rate", (10,)),
-    ("summary", "Summary", (11,)),
-    ("messages", "Messages", (12,)),
+    ("dir", "DIR and ENABLE timing", (2, 3, 5, 7)),
+    ("violations", "Violations", (10, 11)),
+    ("steps", "Position", (8,)),
+    ("rates", "Step rate", (4,)),
+    ("summary", "Summary", (12,)),
+    ("messages", "Messages", (9,)),
 )
 OPTIONS = (
     {"id": "drive", "desc": "Drive id (wavecheck drives) or rule file", "default": ""},
