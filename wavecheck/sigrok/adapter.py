@@ -62,14 +62,15 @@ __all__ = [
 #: An interval measured but not judged (the drive states no limit, or there is no sample rate).
 MEASURED = 3
 #: The decoder's channels in ``pd.py``'s order (the required one, then the optional ones) → the
-#: role each plays for a kind of step type (None: not used by that kind).
+#: role each plays for a kind of step type (None: not used by that kind). Two phases at most:
+#: every channel a decoder declares costs libsigrokdecode time at every sample.
 CHANNEL_ROLES: Mapping[StepKind, tuple[str | None, ...]] = {
-    "step-dir": ("step", "dir", "enable", None, None, None),
-    "up-down": ("up", "down", "enable", None, None, None),
-    "phases": ("phase-A", "phase-B", "enable", "phase-C", "phase-D", "phase-E"),
+    "step-dir": ("step", "dir", "enable"),
+    "up-down": ("up", "down", "enable"),
+    "phases": ("phase-A", "phase-B", "enable"),
 }
 #: The decoder's channel names (``pd.py``), for messages.
-CHANNEL_NAMES = ("STEP/UP/A", "DIR/DOWN/B", "ENABLE", "C", "D", "E")
+CHANNEL_NAMES = ("STEP/UP/A", "DIR/DOWN/B", "ENABLE")
 UNITS = ("auto", "ns", "us", "ms", "samples")
 _UNIT_NS = {"ns": 1, "us": 10**3, "ms": 10**6}
 #: Edges the decoder gathers before handing them to the block engine.
@@ -200,9 +201,16 @@ def _roles(st: StepType, assigned: Sequence[bool]) -> tuple[str | None, ...]:
         role if k < len(assigned) and assigned[k] else None
         for k, role in enumerate(CHANNEL_ROLES[st.kind])
     )
+    layout = CHANNEL_ROLES[st.kind]
     for role in st.outputs if st.kind != "step-dir" else ("step",):
+        if role not in layout:
+            raise UsageError(
+                f"step type {st.number} ({st.name}) has {len(st.outputs)} phases; the decoder "
+                "takes two (types 0, 1, 2 and two-phase user tables): check it with wavecheck "
+                "check"
+            )
         if role not in roles:
-            k = CHANNEL_ROLES[st.kind].index(role)
+            k = layout.index(role)
             raise UsageError(
                 f"step type {st.number} ({st.name}) needs its {role} on channel "
                 f"{CHANNEL_NAMES[k]}: assign it"

@@ -33,12 +33,11 @@ _LOCK = threading.Lock()
 _ADAPTER: dict[str, Any] = {}
 
 CHANNELS = ({"id": "step", "name": "STEP/UP/A", "desc": "STEP (type 0), UP (type 1) or phase A"},)
+#: As few as can be: libsigrokdecode 0.5.3 copies every declared channel's level at every sample,
+#: assigned or not, so each one costs time on long captures (hence no phases C to E).
 OPTIONAL_CHANNELS = (
     {"id": "dir", "name": "DIR/DOWN/B", "desc": "DIR (type 0), DOWN (type 1) or phase B"},
     {"id": "enable", "name": "ENABLE", "desc": "ENABLE (active high; invert=enable if low)"},
-    {"id": "c", "name": "C", "desc": "phase C"},
-    {"id": "d", "name": "D", "desc": "phase D"},
-    {"id": "e", "name": "E", "desc": "phase E"},
 )
 #: Annotation classes. PulseView 0.4.2 colours a class by the hue of the decode signal (green
 #: for the first) + 20° per row + 55° per class index: this order makes a violation red and an
@@ -274,24 +273,23 @@ class _Run:
         self.steps = 0
         self.counts: dict[str, int] = {}
         self.tick = 0
-        self.texts: dict[int, str] = {}  # interval length (samples) → its text: lengths repeat
-        self.rates: dict[int, str] = {}
+        self.texts: dict[tuple[int, int], list[str]] = {}  # (rule, samples) → texts: they repeat
+        self.ids = [_CLASS[c] for c in self.classes]
 
-    def _interval(self, w: int) -> str:
-        text = self.texts.get(w)
-        if text is None:
+    def _texts(self, k: int, w: int) -> list[str]:
+        """The texts of an interval of rule ``k``, ``w`` samples long (long to short)."""
+        texts = self.texts.get((k, w))
+        if texts is None:
             if len(self.texts) > 1 << 16:
                 self.texts.clear()
-            text = self.texts[w] = self.plan.interval(w)
-        return text
-
-    def _rate(self, w: int) -> str:
-        text = self.rates.get(w)
-        if text is None:
-            if len(self.rates) > 1 << 16:
-                self.rates.clear()
-            text = self.rates[w] = self.plan.rate(w)
-        return text
+            if self.classes[k] == "rate":
+                rate = self.plan.rate(w)
+                texts = [rate, rate.split()[0]]
+            else:
+                measured = self.plan.interval(w)
+                texts = [f"{self.labels[k]} {measured}", measured]
+            self.texts[(k, w)] = texts
+        return texts
 
     def loop(self) -> None:
         pd, plan = self.pd, self.plan
@@ -340,17 +338,13 @@ class _Run:
         plan, pd = self.plan, self.pd
         if kind == 0:  # an interval: (rule, start, end, outcome)
             _, k, start, end, outcome = out
-            spec = plan.rules[k]
-            w = end - start
-            measured = self._interval(w)
-            cls = self.classes[k]
-            if cls == "rate":
-                rate = self._rate(w)
-                pd._put(start, end, "rate", [rate, rate.split()[0]])
-            else:
-                pd._put(start, end, cls, [f"{self.labels[k]} {measured}", measured])
+            texts = self._texts(k, end - start)
+            if start <= end:
+                pd.put(start, end, pd.out_ann, [self.ids[k], texts])
+            else:  # a negative up/down switch delay (overlapping pulses)
+                pd.put(end, start, pd.out_ann, [self.ids[k], texts])
             if outcome in (1, 2):  # FAIL, INDETERMINATE (wavecheck.checks.result)
-                self._violation(spec, start, end, w, outcome)
+                self._violation(plan.rules[k], start, end, end - start, outcome)
         elif kind == 1:  # a step: (sample, direction, position)
             _, t, direction, position, _ = out
             self.steps += 1
@@ -371,7 +365,7 @@ class _Run:
         """A failed interval (``check``'s words: rule, measured, limit, margin), or one this
         resolution cannot decide."""
         plan, rule = self.plan, spec.rule.id
-        measured, limit = self._interval(w), plan.limit(spec)
+        measured, limit = plan.interval(w), plan.limit(spec)
         if outcome == 1:
             self.counts[rule] = self.counts.get(rule, 0) + 1
             margin = plan.margin(spec, w)
