@@ -272,7 +272,6 @@ class _Run:
         self.last_step: int | None = None
         self.steps = 0
         self.counts: dict[str, int] = {}
-        self.tick = 0
         self.texts: dict[tuple[int, int], list[str]] = {}  # (rule, samples) → texts: they repeat
         self.ids = [_CLASS[c] for c in self.classes]
 
@@ -292,36 +291,36 @@ class _Run:
         return texts
 
     def loop(self) -> None:
-        pd, plan = self.pd, self.plan
+        """Wait for an edge of any assigned channel (or, with ``pause``, that long without one),
+        judge and annotate it; the summary when the input ends."""
+        pd, judge, show, feed, chans = self.pd, self.judge, self._show, self.check.edge, self.chans
         pins = pd.wait()
-        raw = [pins[k] for k in self.chans]
-        self.judge.start(raw)
+        raw = [pins[k] for k in chans]
+        judge.start(raw)
         self.check.start(raw)
         pause = self._pause()
-        edges = [{k: "e"} for k in self.chans]
-        conds = edges + [{"skip": pause}] if pause else edges
-        summarised = True
-        first = True
-        while True:
-            try:
-                pins = pd.wait(conds if pause and not summarised else edges)
-            except (EOFError, SystemError):  # libsigrokdecode ends the input (module doc)
-                break
-            t = pd.samplenum
-            if pause and not summarised and pd.matched[-1]:
-                self._summary(self.tick, t, final=False)  # over the pause
-                summarised = True
-                continue
-            if first:
-                first = False
-                for note in plan.notes:
-                    pd._message("wavecheck: " + note, until=t)
-            for out in self.judge.at(t, [pins[k] for k in self.chans]):
-                self._show(out)
-            self.check.edge(t, self.judge.changed)
-            summarised = False
-            self.tick = t
-        self._summary(0, self.tick, final=True)
+        edges: list[dict[Any, Any]] = [{k: "e"} for k in chans]
+        waiting = edges + [{"skip": pause}] if pause else edges
+        conds, last = edges, 0
+        try:
+            while True:
+                pins = pd.wait(conds)
+                t = pd.samplenum
+                if conds is not edges and pd.matched[-1]:  # a pause: the summary so far
+                    self._summary(last, t, final=False)
+                    conds = edges
+                    continue
+                if last == 0:
+                    for note in self.plan.notes:
+                        pd._message("wavecheck: " + note, until=t)
+                for out in judge.at(t, [pins[k] for k in chans]):
+                    show(out)
+                feed(t, judge.changed)
+                conds, last = waiting, t
+        except (EOFError, SystemError) as end:  # libsigrokdecode ends the input (module doc)
+            if isinstance(end, SystemError) and "wait" not in str(end):
+                raise
+        self._summary(0, last, final=True)
 
     def _pause(self) -> int:
         options: Any = self.pd.options  # libsigrokdecode's dict of option values
