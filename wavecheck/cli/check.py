@@ -253,6 +253,11 @@ def kept_violations(args: argparse.Namespace) -> int:
 
 def write_outputs(args: argparse.Namespace, report: Checked) -> None:
     """Render ``report`` in ``--format`` to ``-o`` FILE (a one-line summary on stdout) or stdout."""
+    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
+        from wavecheck.sigrok.session import write_pulseview
+
+        for line in write_pulseview(args, axis_reports(report)):
+            print(line, file=sys.stderr)
     text = RENDERERS[args.format](report, args)
     if args.output:
         atomic_write(args.output, text)
@@ -263,11 +268,6 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
         )
     else:
         sys.stdout.write(text)
-    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
-        from wavecheck.sigrok.session import write_pulseview
-
-        for line in write_pulseview(args, axis_reports(report)):
-            print(line, file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:

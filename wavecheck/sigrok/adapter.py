@@ -132,7 +132,7 @@ class Plan:
         assert self.timebase is not None and spec.limit_ns is not None
         m = self.timebase.tick_ns * ticks - spec.limit_ns
         if self.unit == "samples":
-            return f"{m / self.timebase.tick_ns:+.4g} samples"
+            return f"{float(m / self.timebase.tick_ns):+.4g} samples"
         scale = _UNIT_NS.get(self.unit)
         return (
             format_ns(m, signed=True) if scale is None else f"{float(m / scale):+.4g} {self.unit}"

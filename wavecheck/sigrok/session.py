@@ -130,6 +130,20 @@ def _drive_option(report: Report) -> str:
     return drive.id if same else str(drive.path.resolve())
 
 
+def _resolution(report: Report, args: argparse.Namespace) -> str:
+    """The ``resolution`` option: empty when ``check`` used one sample (the decoder's default),
+    else what it used (``0`` for exact edges: a simulator's VCD, a ``.sr`` stepgen wrote)."""
+    given = getattr(args, "resolution", None)
+    if given:
+        return str(given)
+    ns = report.resolution_ns
+    if ns == report.capture.timebase.tick_ns:
+        return ""
+    if ns == 0:
+        return "0"
+    return f"{ns.numerator}ns" if ns.denominator == 1 else f"{float(ns)!r}ns"
+
+
 def stacked_from_report(report: Report, args: argparse.Namespace, ids: Sequence[str]) -> Stacked:
     """The decoder as ``check`` ran for one axis of ``report`` (``ids``: the decoder's channel
     ids in order)."""
@@ -152,7 +166,7 @@ def stacked_from_report(report: Report, args: argparse.Namespace, ids: Sequence[
         "pulse_level": getattr(args, "pulse_level", None) or "high",
         "limit": " ".join(getattr(args, "limit", None) or []),
         "margin": getattr(args, "margin", None) or "",
-        "resolution": getattr(args, "resolution", None) or "",
+        "resolution": _resolution(report, args),
         "pause": "100ms",
     }
     name = "wavecheck" if report.axis is None else f"wavecheck {report.axis}"
@@ -195,8 +209,8 @@ def write_pulseview(args: argparse.Namespace, reports: Sequence[Report]) -> list
     fmt = capture.format
     if fmt not in _OPENED:
         raise UsageError(
-            f"--pulseview: PulseView opens .sr and VCD files, not {fmt} "
-            f"(convert: sigrok-cli -i {capture.path} -o capture.sr)"
+            f"--pulseview: PulseView opens .sr and VCD files, not {fmt}: convert "
+            f"{capture.path} to .sr first (sigrok-cli -I FORMAT -i FILE -o capture.sr)"
         )
     ids = [c["id"] for c in (*CHANNELS, *OPTIONAL_CHANNELS)]
     atomic_write(

@@ -16,7 +16,14 @@ from wavecheck.sigrok.install import install
 
 _LINE = re.compile(r"^(\d+)-(\d+) wavecheck-1: (.*)$")
 #: sigrok-cli's exit code says little (../shared/reference/sigrok.md §7): these on stderr fail.
-STDERR_FAILURES = ("Traceback", "srd:", "No channel with name", "Required channel", "Error")
+STDERR_FAILURES = (
+    "Traceback",
+    "srd:",
+    "No channel with name",
+    "Required channel",
+    "Error",
+    "please report",  # the decoder's per-edge judge and the block engine disagree (pd.py)
+)
 
 
 @dataclass(frozen=True)

@@ -278,3 +278,64 @@ def test_boundary(run_decoder: RunDecoder, tmp_path: Path, resolution: str, expe
     assert rule["checked"] == 4
     assert rule["indeterminate"] == sum(v == "indeterminate" for v in expect.values())
     assert rule["violations"] == sum(v == "fail" for v in expect.values())
+
+
+# -- the summary row -----------------------------------------------------------------------------
+_RULE_LINE = re.compile(
+    r"^(\w+): (pass|fail|indeterminate|unchecked), (\d+) checked, (\d+) violation\(s\)"
+    r"(?:, (\d+) indeterminate.*?)?(?:, min margin (\S+ \S+))?$"
+)
+
+
+@pytest.mark.slow
+def test_summary_is_checks_table(run_decoder: RunDecoder) -> None:
+    """The summary row at the end of the input: per rule the verdict, intervals checked,
+    violations, indeterminate ones and the minimum margin of ``check --format json``."""
+    path = shared_capture("sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr")
+    argv = ["--drive", "gecko-g202", "--map", "step=3,dir=4", "--limit", "step_low=107.25us"]
+    doc = check_json(path, argv)
+    channels, options = _decoder_options(argv)
+    out = run_decoder(path, channels, options, rows="summary")
+    first, *lines = out.annotations
+    assert first.text.startswith(f"{doc['verdict'].upper()} against gecko-g202: ")
+    assert f"{doc['violations_total']} violation(s), {doc['steps']['count']} steps" in first.text
+    rules = {r["id"]: r for r in doc["rules"]}
+    assert [a.text.split(":")[0] for a in lines] == list(rules)
+    for ann in lines:
+        m = _RULE_LINE.match(ann.text)
+        assert m, ann.text
+        rule = rules[m.group(1)]
+        assert (m.group(2), int(m.group(3)), int(m.group(4))) == (
+            rule["verdict"], rule["checked"], rule["violations"])  # fmt: skip
+        assert int(m.group(5) or 0) == rule["indeterminate"]
+        margin = rule["min_margin_ns"]
+        assert m.group(6) == (None if margin is None else format_ns(Fraction(margin), signed=True))
+    assert any(r["indeterminate"] for r in doc["rules"])  # the case covers indeterminate too
+
+
+def test_pause_gives_a_summary_so_far(run_decoder: RunDecoder, tmp_path: Path) -> None:
+    """With ``pause=``, a summary of what came so far over each pause that long (PulseView never
+    signals the end of a capture); the last one at the end of the input as always."""
+    # 1 MHz: three 2-sample pulses 20 samples apart, 400 ms idle, then two more
+    step = [100, 102, 120, 122, 140, 142, 400_140, 400_142, 400_160, 400_162]
+    path = tmp_path / "pause.sr"
+    write_sr_edges(path, ["STEP"], [np.array(step, np.int64)], [0], 400_300, samplerate=1_000_000)
+    out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202", "pause": "100ms"},
+                      rows="summary")  # fmt: skip
+    heads = [a for a in out.annotations if "against gecko-g202" in a.text]
+    assert [(a.start, a.end) for a in heads] == [(142, 100_142), (0, 400_162)]
+    assert heads[0].text.startswith("so far: FAIL against gecko-g202: 3 violation(s), 3 steps")
+    assert heads[1].text.startswith("FAIL against gecko-g202: 5 violation(s), 5 steps")
+
+
+@pytest.mark.parametrize(
+    "unit, text",
+    [("auto", "high 2 us"), ("ns", "high 2000 ns"), ("us", "high 2 us"), ("ms", "high 0.002 ms"),
+     ("samples", "high 2 samples")],
+)  # fmt: skip
+def test_units_shown(run_decoder: RunDecoder, tmp_path: Path, unit: str, text: str) -> None:
+    path = tmp_path / "units.sr"
+    write_sr_edges(path, ["STEP"], [np.array([10, 12, 30, 32], np.int64)], [0], 50,
+                   samplerate=1_000_000)  # fmt: skip
+    out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202", "unit": unit}, rows="widths")
+    assert out.annotations[0].text == text

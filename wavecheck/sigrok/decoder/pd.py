@@ -149,12 +149,16 @@ def _wavecheck() -> Any:
         mine = {
             n: m for n, m in sys.modules.items() if n == "wavecheck" or n.startswith("wavecheck.")
         }
-        ours = getattr(sys.modules.get("wavecheck"), "__file__", None) == os.path.join(
-            _HERE, "__init__.py"
-        )
+        loaded = getattr(sys.modules.get("wavecheck"), "__file__", None) or ""
+        ours = os.path.realpath(loaded) == os.path.realpath(os.path.join(_HERE, "__init__.py"))
         if ours:
             for name in mine:
                 del sys.modules[name]
+        # this decoder's own folder (libsigrokdecode's decoder directory) would be found first
+        where = os.path.dirname(_HERE)
+        at = [i for i, p in enumerate(sys.path) if os.path.realpath(p) == os.path.realpath(where)]
+        for i in reversed(at):
+            del sys.path[i]
         try:
             adapter = importlib.import_module("wavecheck.sigrok.adapter")
         except Exception as err:
@@ -165,6 +169,9 @@ def _wavecheck() -> Any:
                     del sys.modules[name]
                 sys.modules.update(mine)
             raise _Unusable(_import_help(err, record)) from None
+        finally:
+            for i in at:
+                sys.path.insert(i, where)
         _ADAPTER["adapter"] = adapter
         return adapter
 
@@ -246,7 +253,13 @@ class Decoder(_Base):  # type: ignore[misc]
             sys.stderr.write(f"{err}\n")  # also where PulseView and sigrok-cli log
             self._idle()
             return
-        _Run(self, check, Judge(check.plan)).loop()
+        try:
+            _Run(self, check, Judge(check.plan)).loop()
+        except Exception as err:  # a bug: said on the Messages row, not a traceback per sample
+            text = f"wavecheck decoder: internal error {type(err).__name__}: {err} (please report)"
+            self._message(text)
+            sys.stderr.write(text + "\n")
+            self._idle()
 
     def _idle(self) -> None:
         """Take the samples without looking at them (libsigrokdecode 0.5 needs a decoder to keep
@@ -390,11 +403,12 @@ class _Run:
             self.pd._put(start, end, "rule", texts)
         engine = self.check.violations()
         if final and engine and engine != {r: self.counts.get(r, 0) for r in engine}:
-            self.pd._message(
+            text = (
                 f"wavecheck decoder: the per-edge violations {self.counts} differ from the "
-                f"engine's {engine} (please report)",
-                until=end,
+                f"engine's {engine} (please report)"
             )
+            self.pd._message(text, until=end)
+            sys.stderr.write(text + "\n")
 
 
 def _class_of(rule: Any) -> str:
