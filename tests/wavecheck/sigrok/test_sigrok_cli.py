@@ -339,3 +339,47 @@ def test_units_shown(run_decoder: RunDecoder, tmp_path: Path, unit: str, text: s
                    samplerate=1_000_000)  # fmt: skip
     out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202", "unit": unit}, rows="widths")
     assert out.annotations[0].text == text
+
+
+def test_a_vcd_read_by_sigrok(run_decoder: RunDecoder, tmp_path: Path) -> None:
+    """A VCD through sigrok-cli's own reader (``-I vcd:skip=0``: sample 0 is time 0, as for
+    wavecheck; one sample per timescale unit). A simulator's VCD has exact edges: ``check`` judges
+    it at resolution 0, and so does the decoder with ``resolution=0``."""
+    from tests.conftest import write_vcd
+
+    step = [100, 104, 109, 114, 119, 125, 140, 146]
+    vcd = write_vcd(tmp_path / "b.vcd", {"STEP": (0, step), "DIR": (0, [95, 105, 113, 125, 140])},
+                    timescale="1 us", end=200)  # fmt: skip
+    argv = ["--drive", "leadshine-dm542", "--map", "step=STEP,dir=DIR"]
+    for lim in ("step_high=5us", "step_low=5us", "dir_setup=5us", "dir_hold=5us"):
+        argv += ["--limit", lim]
+    doc = check_json(vcd, argv)
+    assert doc["capture"]["resolution_ns"] == 0
+    channels, options = _decoder_options([*argv, "--resolution", "0"])
+    decoded = run_decoder(vcd, channels, options, input_format="vcd:skip=0")
+    seen = _same(decoded, doc, 1_000_000)
+    assert {w for r, _, w in seen if r == "step_high"} == {4}
+
+
+@pytest.mark.parametrize(
+    "channels, options, says",
+    [
+        ({"step": "STEP"}, {"drive": "gecko-g20"}, "gecko-g202"),  # the library's suggestion
+        ({"step": "STEP"}, {"drive": "gecko-g202", "resolution": "5"}, "resolution 5: give a unit"),
+        ({"step": "STEP"}, {"drive": "gecko-g202", "invert": "dir"}, "invert dir: no channel"),
+        ({"step": "STEP"}, {"drive": "gecko-g202", "type": "1"}, "needs its down on channel"),
+        ({"step": "STEP"}, {"drive": "gecko-g202", "limit": "step_hi=5us"}, "step_hi=5us"),
+        ({"step": "STEP"}, {"type": "16"}, "step type 16 does not exist"),
+    ],
+)
+def test_bad_options_are_one_message(
+    run_decoder: RunDecoder, tmp_path: Path, channels: dict, options: dict, says: str  # type: ignore[type-arg]
+) -> None:
+    """A bad option is one line on the Messages row (and stderr), no traceback, nothing judged."""
+    path = tmp_path / "p.sr"
+    write_sr_edges(path, ["STEP", "DIR"], [np.array([10, 12, 30, 32], np.int64),
+                   np.array([], np.int64)], [0, 0], 50, samplerate=1_000_000)  # fmt: skip
+    out = run_decoder(path, channels, options, rows="messages:violations:widths")
+    (message,) = out.annotations
+    assert message.text.startswith("wavecheck decoder: ") and says in message.text
+    assert message.text in out.stderr
