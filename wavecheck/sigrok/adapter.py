@@ -49,6 +49,7 @@ from wavecheck.verdict import Verdict, overall_verdict
 
 __all__ = [
     "CHANNEL_ROLES",
+    "DECODER_API",
     "FAIL",
     "INDETERMINATE",
     "MEASURED",
@@ -59,6 +60,8 @@ __all__ = [
     "open_check",
 ]
 
+#: The interface the decoder (``pd.py``'s ``API``) expects of this module; change both together.
+DECODER_API = 1
 #: An interval measured but not judged (the drive states no limit, or there is no sample rate).
 MEASURED = 3
 #: The decoder's channels in ``pd.py``'s order (the required one, then the optional ones) → the
@@ -119,36 +122,33 @@ class Plan:
     drive: Drive | None
     notes: tuple[str, ...] = ()
 
-    def interval(self, ticks: int) -> str:
-        """``ticks`` samples as a duration in the chosen unit (``"9 us"``, ``"18 samples"``)."""
-        if self.timebase is None or self.unit == "samples":
-            return f"{ticks} samples"
-        ns = self.timebase.tick_ns * ticks
+    def duration(self, ns: Fraction, *, signed: bool = False) -> str:
+        """``ns`` in the chosen unit (``"9 us"``, ``"-11 us"``, ``"18 samples"``)."""
+        sign = "+" if signed else ""
+        if self.unit == "samples" and self.timebase is not None:
+            n = ns / self.timebase.tick_ns
+            text = f"{n.numerator:{sign}d}" if n.denominator == 1 else f"{float(n):{sign}.4g}"
+            return f"{text} samples"
         scale = _UNIT_NS.get(self.unit)
-        return format_ns(ns) if scale is None else f"{float(ns / scale):.4g} {self.unit}"
+        if scale is None:
+            return format_ns(ns, signed=signed)
+        return f"{float(ns / scale):{sign}.4g} {self.unit}"
+
+    def interval(self, ticks: int) -> str:
+        """``ticks`` samples as a duration (in samples when the sample rate is not known)."""
+        if self.timebase is None:
+            return f"{ticks} samples"
+        return self.duration(self.timebase.tick_ns * ticks)
 
     def margin(self, spec: RuleSpec, ticks: int) -> str:
-        """measured − limit, signed, in the chosen unit."""
+        """measured − limit, signed."""
         assert self.timebase is not None and spec.limit_ns is not None
-        m = self.timebase.tick_ns * ticks - spec.limit_ns
-        if self.unit == "samples":
-            return f"{float(m / self.timebase.tick_ns):+.4g} samples"
-        scale = _UNIT_NS.get(self.unit)
-        return (
-            format_ns(m, signed=True) if scale is None else f"{float(m / scale):+.4g} {self.unit}"
-        )
+        return self.duration(self.timebase.tick_ns * ticks - spec.limit_ns, signed=True)
 
     def limit(self, spec: RuleSpec) -> str:
-        """The rule's limit in the chosen unit."""
+        """The rule's limit."""
         assert spec.limit_ns is not None
-        if self.timebase is not None and self.unit == "samples":
-            return f"{float(spec.limit_ns / self.timebase.tick_ns):.4g} samples"
-        scale = _UNIT_NS.get(self.unit)
-        return (
-            format_ns(spec.limit_ns)
-            if scale is None
-            else (f"{float(spec.limit_ns / scale):.4g} {self.unit}")
-        )
+        return self.duration(spec.limit_ns)
 
     def rate(self, ticks: int) -> str:
         """The step rate of a step period of ``ticks`` samples (``"4.065 kHz"``)."""

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import wavecheck
-from tests.wavecheck.sigrok.conftest import RunDecoder, need
+from tests.wavecheck.sigrok.conftest import need
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.cli import main
 from wavecheck.sigrok.decoder import pd
@@ -105,7 +105,18 @@ def test_the_decoder_says_when_it_cannot_import_wavecheck(
     assert line.split(": ", 1)[1] in run.stderr
 
 
-def test_the_decoder_needs_wavecheck_only_when_it_runs(run_decoder: RunDecoder) -> None:
+def test_a_stale_installed_copy_says_so(tmp_path: Path) -> None:
+    need("sigrok-cli")
+    folder = install(tmp_path / "decoders").folder
+    text = (folder / "pd.py").read_text()
+    (folder / "pd.py").write_text(text.replace("\nAPI = 1\n", "\nAPI = 0\n"))
+    result = probe(Installed(folder, searched=False))
+    assert not result.ok
+    assert "this copy of the decoder does not match wavecheck" in result.text
+    assert "run 'wavecheck sigrok install' again" in result.text
+
+
+def test_the_decoder_needs_wavecheck_only_when_it_runs() -> None:
     """Loading the decoder (``sigrok-cli -L`` loads them all) imports nothing of wavecheck."""
     code = (
         "import sys, importlib.util; sys.modules['sigrokdecode'] = None\n"
@@ -115,4 +126,3 @@ def test_the_decoder_needs_wavecheck_only_when_it_runs(run_decoder: RunDecoder) 
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.stdout.strip() == "[]", run.stderr
-    del run_decoder

@@ -21,7 +21,7 @@ import pytest
 
 from tests.conftest import shared_capture
 from tests.wavecheck.sigrok.conftest import Decoded, RunDecoder
-from wavecheck.capture.model import Capture
+from tools.pulseview_shot import sampled_sr
 from wavecheck.capture.open import open_capture
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.units import format_ns
@@ -36,25 +36,6 @@ _CHANNEL = {"step": "step", "up": "step", "phase-A": "step", "dir": "dir", "down
             "phase-B": "dir", "enable": "enable", "phase-C": "c", "phase-D": "d", "phase-E": "e"}  # fmt: skip
 
 Seen = Counter[tuple[str, int, int]]
-
-
-def sampled_sr(capture: Capture, path: Path, rate: int) -> Path:
-    """``capture`` as a logic analyzer sampling at ``rate`` Hz sees it: an edge at time t shows
-    at the first sample at or after t (two edges of a channel in one sample cancel)."""
-    scale = capture.timebase.tick_s * rate
-    num, den = scale.numerator, scale.denominator
-    edges, initial = [], []
-    for c in capture.channels:
-        s = -((-(c.edges - capture.start) * num) // den)
-        u, n = np.unique(s, return_counts=True)
-        s = u[n % 2 == 1]
-        init = c.initial ^ int(len(s) > 0 and s[0] == 0)
-        edges.append(s[s > 0].astype(np.int64))
-        initial.append(init)
-    n_samples = int(-((-(capture.end - capture.start) * num) // den)) + 2
-    names = [c.name for c in capture.channels]
-    write_sr_edges(path, names, edges, initial, n_samples, samplerate=rate)
-    return path
 
 
 def check_json(capture: Path, argv: list[str]) -> dict:  # type: ignore[type-arg]
@@ -373,7 +354,11 @@ def test_a_vcd_read_by_sigrok(run_decoder: RunDecoder, tmp_path: Path) -> None:
     ],
 )
 def test_bad_options_are_one_message(
-    run_decoder: RunDecoder, tmp_path: Path, channels: dict, options: dict, says: str  # type: ignore[type-arg]
+    run_decoder: RunDecoder,
+    tmp_path: Path,
+    channels: dict,
+    options: dict,
+    says: str,  # type: ignore[type-arg]
 ) -> None:
     """A bad option is one line on the Messages row (and stderr), no traceback, nothing judged."""
     path = tmp_path / "p.sr"

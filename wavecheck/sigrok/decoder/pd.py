@@ -28,6 +28,9 @@ except ImportError:  # imported outside libsigrokdecode (tests, tools): a plain 
     srd = None
 
 _Base: Any = srd.Decoder if srd is not None else object
+#: What this copy of the decoder expects of :mod:`wavecheck.sigrok.adapter` (its ``DECODER_API``):
+#: an installed copy older or newer than the wavecheck it imports says so instead of failing.
+API = 1
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _LOCK = threading.Lock()
 _ADAPTER: dict[str, Any] = {}
@@ -172,6 +175,12 @@ def _wavecheck() -> Any:
         finally:
             for i in at:
                 sys.path.insert(i, where)
+        if getattr(adapter, "DECODER_API", None) != API:
+            raise _Unusable(
+                "wavecheck decoder: this copy of the decoder does not match wavecheck "
+                f"{getattr(sys.modules.get('wavecheck'), '__version__', '?')}: run "
+                "'wavecheck sigrok install' again"
+            )
         _ADAPTER["adapter"] = adapter
         return adapter
 
