@@ -227,7 +227,6 @@ class Decoder(_Base):  # type: ignore[misc]
     def reset(self) -> None:
         self.samplerate = 0
         self.out_ann: Any = None
-        self.put_any: Any = None
 
     def metadata(self, key: int, value: int) -> None:
         if srd is not None and key == srd.SRD_CONF_SAMPLERATE:
