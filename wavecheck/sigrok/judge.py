@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from wavecheck.sigrok.adapter import FAIL, Plan
+from wavecheck.sigrok.adapter import Plan
 
 __all__ = ["INTERVAL", "SEQUENCE", "STEP", "Judge"]
 
@@ -243,8 +243,3 @@ class Judge:
         for bit in (1, 2, 4, 8, 16):
             if events & bit:
                 last[bit] = t
-
-
-def is_violation(item: Out) -> bool:
-    """An interval that failed, or a sequence error."""
-    return item[0] == SEQUENCE or (item[0] == INTERVAL and item[4] == FAIL)

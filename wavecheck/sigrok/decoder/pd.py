@@ -283,6 +283,11 @@ class _Run:
     """One pass over the input: the wait loop and the annotations."""
 
     def __init__(self, pd: Decoder, check: Any, judge: Any) -> None:
+        from wavecheck.sigrok.adapter import FAIL, INDETERMINATE
+        from wavecheck.sigrok.judge import INTERVAL, STEP
+
+        self.kinds = (INTERVAL, STEP)
+        self.flagged = (FAIL, INDETERMINATE)
         self.pd = pd
         self.check = check
         self.judge = judge
@@ -356,16 +361,16 @@ class _Run:
     def _show(self, out: tuple[int, int, int, int, int]) -> None:
         kind = out[0]
         plan, pd = self.plan, self.pd
-        if kind == 0:  # an interval: (rule, start, end, outcome)
+        if kind == self.kinds[0]:  # an interval: (rule, start, end, outcome)
             _, k, start, end, outcome = out
             texts = self._texts(k, end - start)
             if start <= end:
                 pd.put(start, end, pd.out_ann, [self.ids[k], texts])
             else:  # a negative up/down switch delay (overlapping pulses)
                 pd.put(end, start, pd.out_ann, [self.ids[k], texts])
-            if outcome in (1, 2):  # FAIL, INDETERMINATE (wavecheck.checks.result)
+            if outcome in self.flagged:
                 self._violation(plan.rules[k], start, end, end - start, outcome)
-        elif kind == 1:  # a step: (sample, direction, position)
+        elif kind == self.kinds[1]:  # a step: (sample, direction, position)
             _, t, direction, position, _ = out
             self.steps += 1
             since = t if self.last_step is None else self.last_step
@@ -386,7 +391,7 @@ class _Run:
         resolution cannot decide."""
         plan, rule = self.plan, spec.rule.id
         measured, limit = plan.interval(w), plan.limit(spec)
-        if outcome == 1:
+        if outcome == self.flagged[0]:
             self.counts[rule] = self.counts.get(rule, 0) + 1
             margin = plan.margin(spec, w)
             texts = [
