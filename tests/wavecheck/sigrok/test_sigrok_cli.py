@@ -181,8 +181,8 @@ def test_golden_captures(
 # -- the real captures -------------------------------------------------------------------------
 REAL = [
     ("grbl_cnc/grbl_cnc_1.sr", 2_000_000,
-     ["--drive", "leadshine-dm542", "--map", "step=STEP (Y axis)", "--limit", "step_high=9.75us",
-      "--limit", "max_rate=1kHz"]),
+     ["--drive", "leadshine-dm542", "--map", "step=STEP (Y axis)", "--limit", "step_high=10.25us",
+      "--limit", "max_rate=4kHz"]),
     ("grbl_cnc/grbl_cnc_1.sr", 2_000_000,
      ["--drive", "gecko-g202", "--map", "step=STEP (Y axis),enable=EN",
       "--limit", "enable_setup=2s"]),
