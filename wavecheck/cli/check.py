@@ -273,7 +273,8 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
     check_steps_arguments(args)
-    check_pulseview(args, len(expand_captures(args.capture)))
+    if getattr(args, "pulseview", None):  # issue 28: one capture, one PulseView session
+        check_pulseview(args, len(expand_captures(args.capture)))
     if not args.steps_csv:
         return run_checks(args, build_report, write_outputs)
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]

@@ -189,7 +189,7 @@ def check_pulseview(args: argparse.Namespace, captures: int) -> None:
     """Refuse ``--pulseview`` for several captures (one session opens one capture)."""
     from wavecheck.errors import UsageError
 
-    if getattr(args, "pulseview", None) and captures != 1:
+    if captures != 1:
         raise UsageError(f"--pulseview opens one capture in PulseView; {captures} were given")
 
 
