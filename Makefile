@@ -14,13 +14,14 @@ $(VENV_STAMP): pyproject.toml
 	$(PY) -m compileall -q wavecheck stepgen tools  # an editable install compiles nothing: 0.5 s -> 0.2 s start-up (bench/README.md)
 	@touch $@
 
-# Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks),
-# chromium (the HTML report test), gtkwave + xvfb (the save-file test; gtkwave's fst2vcd reads
-# FST), iverilog + ghdl (the simulators whose VCD, FST and GHW dumps the format tests compare).
-# Installed when missing.
+# Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks,
+# the protocol decoder's tests), pulseview (the decoder drawn under Xvfb), chromium (the HTML
+# report test), gtkwave + xvfb (the save-file test; gtkwave's fst2vcd reads FST), iverilog + ghdl
+# (the simulators whose VCD, FST and GHW dumps the format tests compare). Installed when missing.
 system-deps:
 	@missing=""; \
 	command -v sigrok-cli >/dev/null || missing="$$missing sigrok-cli"; \
+	command -v pulseview  >/dev/null || missing="$$missing pulseview"; \
 	command -v chromium   >/dev/null || missing="$$missing chromium"; \
 	command -v gtkwave    >/dev/null || missing="$$missing gtkwave"; \
 	command -v xvfb-run   >/dev/null || missing="$$missing xvfb xauth"; \

@@ -37,6 +37,9 @@ Sections (goals of issues 18, 7 and 14 in brackets):
    (24 MHz × 8 channels with its default pattern; 200 kHz with its counter pattern) and gives
    the samples wavecheck can process per second of its CPU ÷ the arrival rate [≥ 2×: under half
    a core].
+9. The protocol decoder (issue 28): ``sigrok-cli -P wavecheck:…`` on the real grbl capture
+   (its STEP, as ``make demo`` checks it; then STEP and EN) against ``-P stepper_motor`` (STEP,
+   EN standing in for the DIR it requires) [the decoder's CPU time ≤ 2× stepper_motor's].
 
 Every command runs in its own process under ``/usr/bin/time -v`` (wall, CPU, max RSS); the
 competitors are interleaved run by run so that load from other users of the machine hits both
@@ -597,6 +600,49 @@ def bench_watch(quick: bool) -> dict[str, Any]:
     return {"command": sh(cmd), "cases": cases, "load": load}
 
 
+def bench_decoder(runs: int) -> dict[str, Any]:
+    """The wavecheck decoder through sigrok-cli against sigrok's own stepper_motor, on grbl."""
+    peer = ["sigrok-cli", "-i", str(GRBL), "-P", "stepper_motor:step=STEP (Y axis):dir=EN",
+            "-A", "stepper_motor=position"]  # fmt: skip
+    maps = {"STEP": "step=STEP (Y axis)", "STEP + EN": "step=STEP (Y axis):enable=EN"}
+    res: dict[str, Any] = {"peer": sh(peer), "rows": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([WAVECHECK, "sigrok", "install", "--dir", tmp, "--no-probe"], check=True,
+                       capture_output=True)  # fmt: skip
+        print(f"  (decoder installed in {tmp}: SIGROKDECODE_DIR)\n  $ {sh(peer)}")
+        for label, channels in maps.items():
+            ours = ["env", f"SIGROKDECODE_DIR={tmp}", "sigrok-cli", "-i", str(GRBL), "-P",
+                    f"wavecheck:{channels}:drive=leadshine-dm542", "-A", "wavecheck=violations"]  # fmt: skip
+            print(f"  $ {sh(ours)}")
+            oruns: list[dict[str, Any]] = []
+            pruns: list[dict[str, Any]] = []
+            loads = []
+            for _ in range(runs):
+                loads.append(load1())
+                oruns.append(timed(ours))
+                pruns.append(timed(peer))
+            bad = [
+                r["stderr"]
+                for r in oruns
+                if re.search(r"Traceback|srd:|wavecheck decoder", r["stderr"])
+            ]
+            ocpu = med(oruns, "user_s") + med(oruns, "sys_s")
+            pcpu = med(pruns, "user_s") + med(pruns, "sys_s")
+            ratio, wall = ocpu / pcpu, med(oruns, "wall_s") / med(pruns, "wall_s")
+            print(f"  wavecheck decoder ({label}) cpu {ocpu:.2f} s, wall {med(oruns, 'wall_s'):.2f} s; "
+                  f"stepper_motor cpu {pcpu:.2f} s, wall {med(pruns, 'wall_s'):.2f} s")  # fmt: skip
+            if bad:
+                print(f"  !! decoder stderr: {bad[0][:200]}")
+            ok = ratio <= 2.0 and not bad
+            figure(f"decoder via sigrok-cli, grbl ({label}) vs stepper_motor",
+                   f"{ratio:.2f}× its CPU ({ocpu:.2f} s; wall {wall:.2f}×)", "≤ 2× (CPU)", ok,
+                   f"stepper_motor {pcpu:.2f} s", max(loads))  # fmt: skip
+            res["rows"].append({"label": label, "command": sh(ours), "wavecheck": oruns,
+                                "stepper_motor": pruns, "cpu_ratio": ratio, "wall_ratio": wall,
+                                "errors": bad[:1], "target": ok})  # fmt: skip
+    return res
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -607,7 +653,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch",
+        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -615,7 +661,7 @@ def main() -> int:
     only = set(args.only.split(","))
     started = _dt.datetime.now(_dt.UTC)
     mach = machine()
-    print("wavecheck benchmarks (issues 7, 18 and 14)", started.strftime("%Y-%m-%d %H:%M UTC"))
+    print("wavecheck benchmarks (issues 7, 18, 14 and 28)", started.strftime("%Y-%m-%d %H:%M UTC"))
     print(
         f"machine: {mach['nproc']} CPUs ({mach['cpu']}), {mach['ram_gib']} GiB RAM, kernel {mach['kernel']}; "
         f"load average at start {' '.join(mach['loadavg_start'])}"
@@ -688,6 +734,10 @@ def main() -> int:
     if "watch" in only:
         print("\n== 8. live: wavecheck watch on sigrok's demo device ==")
         results["watch"] = bench_watch(args.quick)
+
+    if "decoder" in only:
+        print("\n== 9. the protocol decoder: sigrok-cli -P wavecheck vs -P stepper_motor ==")
+        results["decoder"] = bench_decoder(runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end

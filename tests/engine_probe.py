@@ -179,3 +179,41 @@ def run_check(
     )
     (report,) = machine.axes
     return FullReport(report, steps.events(), intervals)
+
+
+def decoded(capture: Capture, report: Report | FullReport) -> StepEvents:
+    """Every step of ``capture`` as the engine's one window decodes it for ``report``'s axis
+    (its mapping, inversions, step type, active edge and DIR level), sequence errors with their
+    states included."""
+    from wavecheck.engine.decode import decode
+    from wavecheck.engine.interface import build_interface
+
+    st = report.step_type
+    iface = build_interface(capture, report.mapping, report.inverted)
+    return decode(
+        iface,
+        st.number,
+        active_edge=report.active_edge,
+        forward_level=report.forward_level,
+        user_table=st.states if st.number == 15 else None,
+    )
+
+
+def every_interval(capture: Capture, **kw: Any) -> dict[str, Intervals]:
+    """Every complete, known interval of every rule of the step type, no drive: the engine as
+    ``wavecheck measure`` runs it (``kw``: :func:`options`' arguments but the drive)."""
+    intervals = _Collect()
+    opts = options("gecko-g202", **kw)
+    check_source(
+        MemorySource(capture),
+        CheckOptions(**{**vars_of(opts), "drive": {}}),
+        interval_sinks=lambda plan: intervals,
+    )
+    return {rule: intervals.of(rule) for rule in intervals.parts}
+
+
+def vars_of(options: CheckOptions) -> dict[str, Any]:
+    """The fields of an options object, by name."""
+    from dataclasses import fields
+
+    return {f.name: getattr(options, f.name) for f in fields(options)}

@@ -94,6 +94,7 @@ def _wheel_holds_the_packages_and_drives_not_the_tools(wheel: Path) -> None:
     names = set(zipfile.ZipFile(wheel).namelist())
     assert "wavecheck/_rules/gecko-g202.toml" in names
     assert {"wavecheck/py.typed", "stepgen/py.typed", "wavecheck/compare.py"} <= names
+    assert "wavecheck/sigrok/decoder/pd.py" in names  # the protocol decoder (issue 28)
     assert not [n for n in names if n.startswith(("tools/", "tests/", "bench/"))]
     assert "stepgen/story.py" not in names and "stepgen/golden.py" not in names
 
@@ -150,6 +151,15 @@ def _stepgen_simulate_then_check(venv: Path, outside: Path) -> None:
     assert any(line.startswith("dir_hold") and "9 us" in line for line in lines)
 
 
+def _sigrok_decoder_imports_the_installed_package(venv: Path, outside: Path) -> None:
+    """``wavecheck sigrok install`` from the wheel: libsigrokdecode's Python finds wavecheck and
+    numpy in this venv (its probe runs sigrok-cli with the decoder, when sigrok-cli is here)."""
+    proc = _must(_run([venv / "wavecheck", "sigrok", "install", "--dir", outside / "dec"], outside))
+    assert (outside / "dec/wavecheck/pd.py").is_file()
+    if shutil.which("sigrok-cli"):
+        assert "ok: sigrok-cli ran the decoder" in proc.stdout, proc.stdout
+
+
 def test_installed_wheel_runs_without_the_source_tree(tmp_path: Path) -> None:
     """One test (one build, one venv: under xdist, separate tests would each build their own)."""
     wheel = _build_wheel(tmp_path / "build")
@@ -163,3 +173,4 @@ def test_installed_wheel_runs_without_the_source_tree(tmp_path: Path) -> None:
     _drives_lists_the_library(venv, outside)
     _stepgen_plan(venv, outside)
     _stepgen_simulate_then_check(venv, outside)
+    _sigrok_decoder_imports_the_installed_package(venv, outside)

@@ -119,8 +119,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                             "wavecheck.crosscheck", "wavecheck.firmware")),
     ("report", ("wavecheck.report",)),
     ("entry points", ("wavecheck.api", "wavecheck.live", "wavecheck.cocotb",
-                      "wavecheck.pytest_plugin", "wavecheck.sigrok")),
-    ("cli", ("wavecheck.cli", "wavecheck.__main__", "wavecheck")),
+                      "wavecheck.pytest_plugin", "wavecheck.sigrok", "wavecheck")),
+    ("cli", ("wavecheck.cli", "wavecheck.__main__")),
     ("stepgen", ("stepgen",)),
 )  # fmt: skip
 

@@ -19,6 +19,7 @@ COMMANDS = (
     "wavecheck.cli.latency",
     "wavecheck.cli.follow",
     "wavecheck.cli.watch",
+    "wavecheck.cli.sigrok",
 )
 
 

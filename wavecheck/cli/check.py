@@ -41,6 +41,7 @@ from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
+from wavecheck.sigrok.session import add_pulseview_argument, check_pulseview
 
 __all__ = [
     "RENDERERS",
@@ -100,6 +101,7 @@ def register(sub: Any) -> None:
         f"JSON default {DEFAULT_VIOLATION_CAP}); the total is always given",
     )
     add_report_arguments(p)
+    add_pulseview_argument(p)
     add_steps_arguments(p)
     p.add_argument(
         "--block-edges",
@@ -155,6 +157,11 @@ def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = No
 
 def write_outputs(args: argparse.Namespace, report: Checked) -> None:
     """Render ``report`` in ``--format`` to ``-o`` FILE (a one-line summary on stdout) or stdout."""
+    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
+        from wavecheck.sigrok.session import write_pulseview
+
+        for line in write_pulseview(args, axis_reports(report)):
+            print(line, file=sys.stderr)
     text = RENDERERS[args.format](report, args)
     if args.output:
         atomic_write(args.output, text)
@@ -170,6 +177,8 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
     check_steps_arguments(args)
+    if getattr(args, "pulseview", None):  # issue 28: one capture, one PulseView session
+        check_pulseview(args, len(expand_captures(args.capture)))
     if not args.steps_csv:
         return run_checks(args, build_report, write_outputs)
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]

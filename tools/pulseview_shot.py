@@ -1,0 +1,198 @@
+"""Real PulseView under Xvfb with the wavecheck decoder: ``python -m tools.pulseview_shot``.
+
+A development tool run from a source checkout (not installed). :func:`screenshot` starts a
+private Xvfb server and PulseView 0.4.2 on it (``pulseview -c -s SESSION.pvs -i CAPTURE``, its
+settings in a temporary ``XDG_CONFIG_HOME``, the decoder from ``SIGROKDECODE_DIR``), waits until
+the window stops changing, and grabs it (Pillow's X11 grab). :func:`annotation_rows` finds the
+decode trace's annotation rows in a screenshot (for ``tests/wavecheck/sigrok/test_pulseview.py``).
+
+Run as a program it regenerates the README's picture, ``docs/pulseview.png``: the golden trace
+of LinuxCNC's stepgen driving a Gecko G202 with 11 us of latency (``captures/golden/
+g202-p20-worst-dirhold.vcd``, the seed's story), sampled at 1 MHz around its reversal, where the
+DIR hold is 9 us against the G202's 20 us.
+"""
+
+from __future__ import annotations
+
+import argparse
+import colorsys
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wavecheck.capture.edges import Capture
+from wavecheck.capture.open import open_capture
+from wavecheck.capture.srzip import write_sr_edges
+
+ROOT = Path(__file__).resolve().parent.parent
+PICTURE = ROOT / "docs" / "pulseview.png"
+GOLDEN = ROOT / "captures" / "golden" / "g202-p20-worst-dirhold.vcd"
+#: The window of the golden trace shown (ns): two steps and the reversal between them.
+WINDOW_NS = (484_970_000, 485_080_000)
+
+
+def sampled_sr(
+    capture: Capture, path: Path, rate: int, window: tuple[int, int] | None = None
+) -> Path:
+    """``capture`` (or its ``window`` of ticks) as a logic analyzer sampling at ``rate`` Hz sees
+    it: an edge at time t shows at the first sample at or after t (two edges of a channel in one
+    sample cancel); sample 0 is the window's start."""
+    lo, hi = window if window is not None else (capture.start, capture.end)
+    scale = capture.timebase.tick_s * rate
+    num, den = scale.numerator, scale.denominator
+    edges, initial = [], []
+    for c in capture.channels:
+        inside = c.edges[(c.edges >= lo) & (c.edges < hi)]
+        before = int(np.count_nonzero(c.edges < lo))
+        s = -((-(inside - lo) * num) // den)
+        u, n = np.unique(s, return_counts=True)
+        s = u[n % 2 == 1]
+        first = c.initial ^ (before & 1)
+        edges.append(s[s > 0].astype(np.int64))
+        initial.append(first ^ int(len(s) > 0 and s[0] == 0))
+    n_samples = int(-((-(hi - lo) * num) // den)) + 2
+    write_sr_edges(path, [c.name for c in capture.channels], edges, initial, n_samples,
+                   samplerate=rate)  # fmt: skip
+    return path
+
+
+def _xvfb(size: str) -> tuple[subprocess.Popen[bytes], str]:
+    """A private Xvfb server and its display name."""
+    read, write = os.pipe()
+    server = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write), "-screen", "0", f"{size}x24", "-nolisten", "tcp"],
+        pass_fds=(write,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write)
+    with os.fdopen(read) as fh:
+        number = fh.readline().strip()
+    if not number:
+        server.kill()
+        raise RuntimeError("Xvfb did not start")
+    return server, f":{number}"
+
+
+def screenshot(
+    capture: Path,
+    session: Path,
+    decoder_dir: Path,
+    *,
+    input_format: str | None = None,
+    timeout: float = 90.0,
+    size: str = "1280x720",
+) -> tuple[object, str]:
+    """PulseView's window showing ``capture`` with ``session`` (a PIL image, cropped to the
+    window), and PulseView's log."""
+    from PIL import ImageChops, ImageGrab
+
+    server, display = _xvfb(size)
+    with tempfile.TemporaryDirectory() as home:
+        env = dict(os.environ, DISPLAY=display, XDG_CONFIG_HOME=home,
+                   SIGROKDECODE_DIR=str(decoder_dir), QT_QPA_PLATFORM="xcb")  # fmt: skip
+        # -geometry: Qt's option for the first window (there is no window manager to size it)
+        cmd = ["pulseview", "-geometry", f"{size}+0+0", "-c", "-s", str(session)]
+        cmd += ["-I", input_format] if input_format else []
+        log = Path(home) / "pulseview.log"
+        with open(log, "wb") as out:
+            viewer = subprocess.Popen([*cmd, "-i", str(capture)], env=env, stdout=out,
+                                      stderr=subprocess.STDOUT)  # fmt: skip
+        try:
+            image = _settled(lambda: ImageGrab.grab(xdisplay=display), ImageChops, timeout)
+        finally:
+            viewer.terminate()
+            try:
+                viewer.wait(10)
+            except subprocess.TimeoutExpired:
+                viewer.kill()
+            server.terminate()
+            server.wait(10)
+        text = log.read_text(errors="replace")
+    box = image.getbbox()  # the window: the rest of the screen is black
+    return (image.crop(box) if box else image), text
+
+
+def _settled(grab, chops, timeout: float):  # type: ignore[no-untyped-def]
+    """The screen once it has not changed for two seconds (PulseView started, decoded, drawn)."""
+    start = time.monotonic()
+    last, since = None, time.monotonic()
+    while time.monotonic() - start < timeout:
+        time.sleep(0.5)
+        now = grab()
+        if last is None or chops.difference(now, last).getbbox() is not None:
+            last, since = now, time.monotonic()
+        elif time.monotonic() - since >= 2.0 and now.getbbox() is not None:
+            return now
+    return last
+
+
+def annotation_rows(image, left: float = 0.15) -> list[tuple[int, int, tuple[int, int, int]]]:  # type: ignore[no-untyped-def]
+    """The colored horizontal bands of a PulseView screenshot below its logic traces: (top,
+    bottom, typical color) of each, top to bottom. An annotation row is drawn as boxes of its
+    color; a line counts as colored where at least 1 % of its pixels right of ``left`` × width
+    are (saturation > 0.3)."""
+    rgb = np.asarray(image.convert("RGB"), dtype=np.float64) / 255
+    x0 = int(rgb.shape[1] * left)
+    part = rgb[:, x0:, :]
+    hi, lo = part.max(axis=2), part.min(axis=2)
+    sat = np.where(hi > 0, (hi - lo) / np.maximum(hi, 1e-9), 0)
+    colored = (sat > 0.3) & (hi > 0.3)
+    share = colored.mean(axis=1)
+    bands: list[tuple[int, int, tuple[int, int, int]]] = []
+    y, n = 0, len(share)
+    while y < n:
+        if share[y] < 0.01:
+            y += 1
+            continue
+        top = y
+        while y < n and share[y] >= 0.01:
+            y += 1
+        mask = colored[top:y]
+        pixels = part[top:y][mask]
+        r, g, b = (float(np.median(pixels[:, k])) for k in range(3))
+        h, _, _ = colorsys.rgb_to_hsv(r, g, b)
+        bands.append((top, y, (round(r * 255), round(g * 255), round(b * 255))))
+        del h
+    return bands
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-o", "--output", type=Path, default=PICTURE, help="the PNG to write")
+    args = ap.parse_args(argv)
+    for tool in ("pulseview", "Xvfb", "sigrok-cli"):
+        if shutil.which(tool) is None:
+            print(f"needs {tool} (make system-deps)", file=sys.stderr)
+            return 2
+    from wavecheck.sigrok.install import install
+
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        install(work / "decoders")
+        cap = open_capture(str(GOLDEN))
+        tick = cap.timebase.tick_ns
+        window = (int(WINDOW_NS[0] / tick), int(WINDOW_NS[1] / tick))
+        sr = sampled_sr(cap, work / "g202-reversal.sr", 1_000_000, window)
+        pvs = work / "g202.pvs"
+        check = [sys.executable, "-m", "wavecheck", "check", str(sr), "--drive", "gecko-g202",
+                 "--map", "step=step,dir=dir", "--pulseview", str(pvs)]  # fmt: skip
+        subprocess.run(check, check=False, capture_output=True)
+        image, _ = screenshot(sr, pvs, work / "decoders")
+    rows = annotation_rows(image)
+    if rows:  # down to the last annotation row, not the empty rest of the window
+        image = image.crop((0, 0, image.width, min(image.height, rows[-1][1] + 40)))  # type: ignore[attr-defined]
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    image.save(args.output, optimize=True)  # type: ignore[attr-defined]
+    print(f"wrote {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
