@@ -110,7 +110,7 @@ def build_options(
     step_type: Mapping[str | None, int] | None = None,
     forward_level: Mapping[str | None, int] | None = None,
     user_table: tuple[int, ...] | None = None,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     resolution: str | Fraction | None = None,
     limit: Iterable[str] = (),
@@ -157,7 +157,7 @@ def check(
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
     forward_level: int = 0,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
     ini: str | os.PathLike[str] | None = None,
@@ -181,7 +181,8 @@ def check(
         samplerate: sample rate for a file without one (``"12MHz"`` or exact Hz).
         input_format: force a reader (``"sr"``, ``"vcd"``, a sigrok-cli format).
         forward_level: DIR level that means forward (0 or 1).
-        pulse_level: level of the generator's step pulses at its output (1 high, 0 low).
+        pulse_level: level of the generator's step pulses at its output (1 high, 0 low;
+            None: as the waveform shows it, else high).
         active_edge: override the drive's active edge.
         user_table: the state table of step type 15.
         ini: a LinuxCNC INI file (BASE_PERIOD) for the ``config`` and ``latency_safe`` rates.
@@ -241,7 +242,7 @@ def check_axes(
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
     forward_level: int = 0,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
     ini: PathOrText | None = None,

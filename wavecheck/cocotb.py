@@ -131,7 +131,7 @@ class StepMonitor:
         invert: Iterable[str] = (),
         step_type: int | None = None,
         forward_level: int = 0,
-        pulse_level: int = 1,
+        pulse_level: int | None = None,
         active_edge: ActiveEdge | None = None,
         resolution: str | Fraction | None = None,
         user_table: tuple[int, ...] | None = None,

@@ -131,10 +131,13 @@ def _one_block(capture: Capture) -> EdgeBlock:
     return block
 
 
-def assemble(skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = None) -> Capture:
+def assemble(
+    skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = None, before: int = NEVER
+) -> Capture:
     """The capture that ``blocks`` of a source with ``skeleton`` make (its channels' edges, levels
     and unknown stretches); ``end``: its last tick (default the skeleton's, or the last edge seen
-    when that is later: a capture read only in part)."""
+    when that is later: a capture read only in part); ``before``: only what happened before that
+    tick (a first part that does not depend on how the blocks were cut)."""
     parts: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
     xz: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
     back: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
@@ -157,7 +160,8 @@ def assemble(skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = N
     empty = np.zeros(0, dtype=np.int64)
 
     def joined(arrays: list[EdgeArray]) -> EdgeArray:
-        return np.concatenate(arrays).astype(np.int64, copy=False) if arrays else empty.copy()
+        out = np.concatenate(arrays).astype(np.int64, copy=False) if arrays else empty.copy()
+        return out[: int(np.searchsorted(out, before, side="left"))] if before < NEVER else out
 
     chans = []
     for c in skeleton.channels:

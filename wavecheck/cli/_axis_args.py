@@ -98,10 +98,11 @@ def add_axis_arguments(p: Any, *, drive: bool = True) -> None:
     p.add_argument(
         "--pulse-level",
         choices=("high", "low"),
-        default="high",
-        help="level of the generator's step pulses at its output (default high, as LinuxCNC, "
-        "grbl, Marlin, Klipper and Smoothieware make them; --invert step says the drive sees "
-        "the other level)",
+        default=None,
+        help="level of the generator's step pulses at its output (default: as the waveform "
+        "shows it, where every pulse is shorter than every gap; else high, as LinuxCNC, grbl, "
+        "Marlin, Klipper and Smoothieware make them; --invert step says the drive sees the "
+        "other level)",
     )
     p.add_argument(
         "--active-edge",
@@ -127,8 +128,10 @@ def user_table(args: argparse.Namespace) -> tuple[int, ...] | None:
         ) from None
 
 
-def pulse_level(args: argparse.Namespace) -> int:
-    """``--pulse-level``: 1 high, 0 low."""
+def pulse_level(args: argparse.Namespace) -> int | None:
+    """``--pulse-level``: 1 high, 0 low, None not given."""
+    if args.pulse_level is None:
+        return None
     return 1 if args.pulse_level == "high" else 0
 
 

@@ -19,15 +19,16 @@ from collections.abc import Callable, Iterator, Sequence
 import numpy as np
 
 from wavecheck.capture.blocks import BlockSource, EdgeBlock, MemorySource, assemble
-from wavecheck.capture.edges import Capture, EdgeArray
+from wavecheck.capture.edges import NEVER, Capture, EdgeArray
 from wavecheck.engine.axis import AxisCheck
 from wavecheck.engine.interface import leaf_name
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport
-from wavecheck.engine.plan import AxisPlan, plan_axes, with_found
+from wavecheck.engine.plan import LEVEL_EDGES, AxisPlan, plan_axes, settle_level, with_found
 from wavecheck.engine.sinks import IntervalSink, StepSink, TimerSample
 from wavecheck.errors import UsageError
+from wavecheck.units import format_time
 
 __all__ = [
     "TIMER_STEPS",
@@ -243,41 +244,87 @@ def start(
     """The axes of ``source`` planned and ready to be fed, and the source's blocks to feed them.
 
     Without a mapping or role names, the roles are told from the waveforms of the first
-    :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read), which
-    then come first among the blocks."""
+    :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read); an
+    axis whose pulse level is not stated takes the one its pulse lines show
+    (:func:`wavecheck.engine.plan.settle_level`) in their first edges. The blocks read for
+    either come first among the blocks returned. What is decided from a first part depends on
+    the capture's edges only, never on how its reader cuts it into blocks."""
     skeleton = source.skeleton
-    blocks: Iterator[EdgeBlock]
+    read: list[EdgeBlock] = []
+    it: Iterator[EdgeBlock] | None = None
     waveforms = None
     if needs_waveforms(options, skeleton):
         source.want(range(len(skeleton.channels)))
         it = source.blocks()
-        read: list[EdgeBlock] = []
-        edges = 0
-        for block in it:
-            read.append(block)
-            edges += sum(len(e) for e in block.edges.values())
-            if edges >= options.infer_edges:
-                break
-        waveforms = assemble(skeleton, read)
+        _read_until(it, read, lambda edges: edges >= options.infer_edges)
+        before = _tick_of_edge(assemble(skeleton, read), options.infer_edges)
+        waveforms = assemble(skeleton, read, before=before)
         axes, found = axes_for(options, waveforms)
-        if edges >= options.infer_edges:
-            found = [f"{found[0]} (told from the first {edges} edges)"]
-        blocks = itertools.chain(read, it)
+        if before < NEVER:
+            at = format_time(skeleton.timebase.seconds(before))
+            found = [f"{found[0]} (told from the first {options.infer_edges} edges, to {at})"]
     else:
         axes, found = axes_for(options, skeleton)
-    machine = machine_for(
-        skeleton,
-        options,
-        axes,
-        found,
-        waveforms=waveforms,
-        step_sinks=step_sinks,
-        interval_sinks=interval_sinks,
+    plans = [with_found(p, found) for p in plan_axes(skeleton, list(axes), options, waveforms)]
+    open_level = [p for p in plans if p.level_open]
+    if open_level:
+        channels = {i for p in plans for i in p.channels}
+        if it is None:  # planned first: a bit of a vector is a channel of the source
+            source.want(channels)
+            it = source.blocks()
+        roles = [(p.interface.signals[r].index) for p in open_level
+                 for r in p.step_type.pulse_roles if r in p.interface.signals]  # fmt: skip
+        counts = dict.fromkeys(roles, 0)
+        for block in read:
+            for i in counts:
+                counts[i] += len(block.edges.get(i, ()))
+
+        def enough(edges: int) -> bool:
+            return edges >= options.infer_edges or min(counts.values()) >= LEVEL_EDGES
+
+        _read_until(it, read, enough, counts)
+        seen = assemble(skeleton, read)
+        before = _tick_of_edge(seen, options.infer_edges, channels)
+        plans = [settle_level(p, seen, before) for p in plans]
+    machine = MachineCheck(
+        skeleton, plans, options, step_sinks=step_sinks, interval_sinks=interval_sinks
     )
     source.want(machine.channels)
-    if waveforms is None:
-        blocks = source.blocks()  # after planning: a bit of a vector is a channel of the source
+    blocks = source.blocks() if it is None else itertools.chain(read, it)
     return machine, blocks
+
+
+def _read_until(
+    it: Iterator[EdgeBlock],
+    read: list[EdgeBlock],
+    done: Callable[[int], bool],
+    counts: dict[int, int] | None = None,
+) -> None:
+    """Read blocks of ``it`` into ``read`` until ``done(edges read so far)`` or the end;
+    ``counts``: channel → its edges so far, kept up to date."""
+    edges = sum(len(e) for b in read for e in b.edges.values())
+    if done(edges):
+        return
+    for block in it:
+        read.append(block)
+        for i, e in block.edges.items():
+            edges += len(e)
+            if counts is not None and i in counts:
+                counts[i] += len(e)
+        if done(edges):
+            return
+
+
+def _tick_of_edge(capture: Capture, n: int, channels: set[int] | None = None) -> int:
+    """The tick of the ``n``-th edge of ``capture`` (over ``channels``, default all), counted in
+    time order: what came before it does not depend on how blocks were cut; NEVER when there
+    are fewer."""
+    arrays = [c.edges for c in capture.channels if channels is None or c.index in channels]
+    total = sum(len(a) for a in arrays)
+    if total < n or not arrays:
+        return NEVER
+    ticks = np.concatenate(arrays)
+    return int(np.partition(ticks, n - 1)[n - 1]) + 1
 
 
 def check_source(
