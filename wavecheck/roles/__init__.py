@@ -44,7 +44,7 @@ took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
 from wavecheck.roles.infer import propose
-from wavecheck.roles.model import (
+from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,

@@ -15,10 +15,11 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.model import Capture, Channel
-from wavecheck.roles.dirs import DirFit, assign, dir_fit
+from wavecheck.roles.buses import BusFindings, find_buses
+from wavecheck.roles.dirs import DirFit, assign, at_pauses, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
-from wavecheck.roles.model import (
+from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,
@@ -74,6 +75,8 @@ class _Inference:
         self.dir_notes: dict[int, str] = {}  # DIR index -> how elimination decided
         self.turns: dict[int, set[int]] = {}  # pulse line -> lines it takes turns with
         self.unsure_steps: set[int] = set()  # pulse lines named in a DIR conflict
+        self.by_name: set[int] = set()  # pulse lines taken as STEP candidates by their names
+        self.bus = BusFindings({}, {}, {}, {})
 
     def _refs(self) -> dict[int, str]:
         refs: dict[int, str] = {}
@@ -117,17 +120,50 @@ class _Inference:
         movers = [
             c
             for c in chans
-            if self.looks[c.index].kind in ("pulses", "other") and c.index not in self.taken
+            if self.looks[c.index].kind not in ("constant", "serial") and c.index not in self.taken
         ]
-        pulse = [c for c in movers if self.looks[c.index].is_step_like]
+        changing = [c for c in chans if len(c.edges) and c.index not in self.taken]
+        clock_like = {c.index for c in changing if self.looks[c.index].clock_like}
+        starts = {
+            i: look.pulses.starts
+            for i, look in self.looks.items()
+            if look.pulses is not None and (look.is_step_like or look.step_by_name)
+        }
+        self.bus = find_buses(changing, max(self.cap.resolution_ticks, 0), clock_like, starts)
+        pulse = [c for c in movers if self._step_candidate(c)]
         pulse = self._demote(pulse)
         self.turns = self._takes_turns(pulse)
         in_pulse = {c.index for c in pulse}
-        dirs = self._dirs(pulse, [c for c in movers if c.index not in in_pulse])
+        others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
+        dirs = self._dirs(pulse, others)
         self._pulse_axes(pulse, dirs)
         self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
-        self._enables([c for c in movers if c.index not in self.taken])
+        self._enables(
+            [c for c in movers if c.index not in self.taken and c.index not in self.bus.data]
+        )
         return self._finish()
+
+    def _step_candidate(self, c: Channel) -> bool:
+        """A STEP, UP or DOWN candidate: a step train, or pulses the waveform cannot tell from
+        steps at one rate on a line named so; never a line the relations rule out."""
+        look = self.looks[c.index]
+        no = self.bus.no_step(c.index)
+        if no is not None:
+            if look.is_step_like or look.step_by_name:
+                self.why[c.index] = no
+            return False
+        if look.is_step_like:
+            return True
+        hint = self.hints[c.index]
+        if look.step_by_name and any(hint.fits(r) for r in ("step", "up", "down")):
+            self.by_name.add(c.index)
+            return True
+        return False
+
+    def _dir_candidate(self, c: Channel) -> bool:
+        """A DIR candidate: a changing line that is no bus data (a line that gates another may
+        still be the DIR of a third)."""
+        return c.index not in self.bus.data
 
     def _phase_axis(self, g: PhaseGroup) -> None:
         roles = [
@@ -331,7 +367,8 @@ class _Inference:
                 continue
             look = self.looks[s.index]
             assert look.pulses is not None
-            roles = [self.choice("step", s, look.evidence, active=look.pulses.level)]
+            basis: Basis = "name" if s.index in self.by_name else "waveform"
+            roles = [self.choice("step", s, look.evidence, basis, active=look.pulses.level)]
             fit = dirs.get(s.index)
             if fit is not None:
                 note = self.dir_notes.get(fit.d.index, "")
@@ -484,6 +521,9 @@ class _Inference:
                 continue
             active = 0 if served[0] else 1
             axes = [moving[k] for k in served[active]]
+            # an ENABLE changes where its axes stand still, never while one runs
+            if any(sum(at_pauses(e.edges, a.motion)) < len(e.edges) for a in axes):
+                continue
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
                 f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
@@ -572,7 +612,7 @@ class _Inference:
 def propose(capture: Capture) -> Proposal:
     """Propose axes and roles for ``capture``'s channels from their waveforms.
 
-    The proposal is :attr:`~wavecheck.roles.model.Proposal.unambiguous` when it may be used without
-    asking; otherwise :attr:`~wavecheck.roles.model.Proposal.ambiguous` lists the conflicts.
+    The proposal is :attr:`~wavecheck.roles.proposal.Proposal.unambiguous` when it may be used without
+    asking; otherwise :attr:`~wavecheck.roles.proposal.Proposal.ambiguous` lists the conflicts.
     """
     return _Inference(capture).run()

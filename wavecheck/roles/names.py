@@ -4,7 +4,8 @@ Names only help: they break ties between waveform candidates and name the axes; 
 decides. Matching is case-insensitive on the name's words (split at anything not a letter or
 digit, and between letters and digits):
 
-- STEP: ``step``, ``stp``, ``pul``, ``pulse``, ``clk``, ``clock``;
+- STEP: ``step``, ``stp``, ``pul``, ``pulse`` (not ``clk``: in a capture that is a clock far
+  more often than a drive's CLK input);
   DIR: ``dir``, ``direction``; ``cw``/``ccw`` fit a DIR or, on pulse lines, UP/DOWN;
   UP/DOWN: ``up``, ``down``, ``dn``; ENABLE: ``en``, ``ena``, ``enable``, ``enbl``;
   phases: ``phase``/``ph`` followed by a letter A..E (``phase-A``, ``PHB``).
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 __all__ = ["NameHint", "name_hint"]
 
 _KEYWORDS: dict[str, frozenset[str]] = {
-    **dict.fromkeys(("step", "stp", "pul", "pulse", "clk", "clock"), frozenset({"step"})),
+    **dict.fromkeys(("step", "stp", "pul", "pulse"), frozenset({"step"})),
     **dict.fromkeys(("dir", "direction"), frozenset({"dir"})),
     "cw": frozenset({"dir", "up"}),
     "ccw": frozenset({"dir", "down"}),
