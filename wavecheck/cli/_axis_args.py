@@ -10,6 +10,7 @@ inferred from the waveforms (:func:`wavecheck.roles.propose`) when that is unamb
 from __future__ import annotations
 
 import argparse
+import shlex
 from dataclasses import dataclass
 from typing import Any
 
@@ -145,10 +146,9 @@ def _forward(text: str) -> int:
 def roles_from_waveforms(args: argparse.Namespace, capture: Capture) -> bool:
     """Whether the roles must be told from the waveforms: no ``--map`` and no channel named
     after a role (``step``, ``up``, ``phase-A``, as the end of a hierarchical name)."""
-    named = ("step", "up", "phase-a")
-    return not args.map and not any(
-        c.name.rsplit(".", 1)[-1].strip().lower() in named for c in capture.channels
-    )
+    from wavecheck.roles.names import named_kind
+
+    return not args.map and named_kind([c.name for c in capture.channels]) is None
 
 
 def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
@@ -156,8 +156,9 @@ def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], 
 
     ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
     ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
-    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
-    lists the candidates and the ``--map`` line to copy.
+    (:func:`wavecheck.roles.propose`) when that is unambiguous. When it is not, a usage error:
+    a capture without step signals says what its lines look like instead (one line); an
+    ambiguous one lists the questions and candidates on the lines below the error.
     """
     if args.map:
         return parse_axes(args.map), []
@@ -166,15 +167,28 @@ def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], 
     from wavecheck.roles import propose
 
     proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = (
-            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
-            or "no STEP, UP/DOWN or phase channel found"
-        )
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+    if not proposal.axes and not proposal.ambiguous:
+        best = proposal.candidates[:1]
+        hint = f" (e.g. --map step={shlex.quote(best[0])})" if best else ""
         raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
+            f"{capture.path}: no step signal found: the lines look like {proposal.summary()}; "
+            f"give --map to check a line anyway{hint}"
+        )
+    if not proposal.unambiguous:
+        example = proposal.map_args() if proposal.axes else ""
+        if not example and proposal.candidates:
+            example = f"--map step={shlex.quote(proposal.candidates[0])}"
+        hint = f" (e.g. {example})" if example else ""
+        details = tuple(
+            line
+            for c in proposal.ambiguous
+            for line in (f"{c.question}:", *(f"  - {cand}" for cand in c.candidates))
+        )
+        n = len(proposal.ambiguous)
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms "
+            f"({n} question{'s' if n != 1 else ''} below); give --map{hint}",
+            details,
         )
     single = len(proposal.axes) == 1
     axes = [

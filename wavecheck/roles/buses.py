@@ -302,6 +302,10 @@ def find_buses(
             continue
         e = chans_by[ei]
         out.words[ei] = "chip select"
+        out.clocks.setdefault(
+            clock.index, f"a gated clock that {ei}={e.name!r} selects: clocks a bus"
+        )
+        out.words[clock.index] = "bus clock"
         for b in chans:
             if b.index in (ei, clock.index) or b.index in out.clocks:
                 continue

@@ -117,9 +117,14 @@ def test_golden_traces(trace: str, kind: str, step_type: int, mapping: dict[str,
 
 def test_golden_dir_decided_by_waveform_when_it_changes() -> None:
     for trace in ("g202-p20-worst-dirhold", "xylotex-dirsetup-zero"):
-        d = propose(open_capture(GOLDEN / f"{trace}.vcd")).axes[0].role("dir")
+        cap = open_capture(GOLDEN / f"{trace}.vcd")
+        # named step/dir: taken by name as check takes them, the waveform's fit in the evidence
+        d = propose(cap).axes[0].role("dir")
+        assert d is not None and d.basis == "name"
+        assert "; toggles 2 times, only between pulses of 'step'" in d.evidence
+        d = propose(_renamed(cap, ["s", "d"])).axes[0].role("dir")
         assert d is not None and d.basis == "waveform"
-        assert d.evidence.startswith("toggles 2 times, only between pulses of 'step'")
+        assert d.evidence.startswith("toggles 2 times, only between pulses of 's'")
 
 
 def _renamed(cap: Capture, names: list[str]) -> Capture:
@@ -197,9 +202,21 @@ def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
 
 def test_waveform_beats_the_name() -> None:
     step = pulses(_move(0, 19), 5 * US)
-    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    p = propose(capture({"X DIR": (0, step), "X STEP": (0, [1003 * US])}))
     s = p.axes[0].role("step")
-    assert s is not None and s.channel == "DIR" and "the waveform decides" in s.evidence
+    assert s is not None and s.channel == "X DIR" and "the waveform decides" in s.evidence
+
+
+def test_channels_named_after_their_roles_are_what_check_maps() -> None:
+    """Issue 26: a channel called ``step`` is the STEP ``check`` maps without --map
+    (engine.auto_map); the proposal is that mapping, with what the waveform says against it."""
+    step = pulses(_move(0, 19), 5 * US)
+    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
+    assert all(r.basis == "name" for r in p.axes[0].roles)
+    (note,) = p.axes[0].notes
+    assert note.startswith("step 1='STEP' is taken by its name, but its waveform says it is no ")
+    assert "check checks it as named" in note
 
 
 def _reversing_axis(
