@@ -43,7 +43,7 @@ Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x
 took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
-from wavecheck.roles.infer import propose
+from wavecheck.roles.infer import best_channel, propose
 from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
@@ -62,5 +62,6 @@ __all__ = [
     "RoleChoice",
     "SharedLine",
     "Unassigned",
+    "best_channel",
     "propose",
 ]

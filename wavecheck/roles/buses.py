@@ -11,7 +11,7 @@ same step timer changes twice within one period (its rising and falling edge).
 **Gate** (:func:`gate`): a line ``e`` gates a busier line ``b`` when every edge of ``b`` falls
 while ``e`` is at one level, most stretches of ``e`` at that level hold edges of ``b`` (at least two
 of them between two edges of ``e``), and ``e`` stays at the other level far longer than ``b``'s
-period. An ENABLE, a chip select, a
+pulses last. An ENABLE, a chip select, a
 latch or a frame line does this; a STEP cannot (its pulses are as short as the other lines').
 """
 
@@ -43,7 +43,8 @@ _DELAY_SPREAD = (16, 0.25, 0.125)  # … p10..p90 of their delays within this sh
 #   from this many changes on, else the last share (a few changes need a tighter lock)
 _STROBE_IDLE = 3.0  # a strobe falls where the clock's edges are this many periods apart
 _GATE_FILLED = 0.5  # share of e's active stretches holding edges of b
-_GATE_IDLE = 4.0  # e's idle stretches at least this many times b's period
+_GATE_IDLE = (20.0, 4.0)  # e's idle stretches at least this many times b's pulses (the
+#   second figure when b is a gated clock)
 _GATE_BUSIER = 2  # b has at least this many times the edges of e
 _CLOCK_SHARE = 0.02  # clocked changes, as a share of the clock's periods, for a bus clock
 _DATA_SHARE = 0.05  # … for data (a synchronous design's STEP changes far more rarely)
@@ -193,20 +194,21 @@ def confined(e: Channel, b: Channel) -> Gate | None:
     return Gate(e, b, level, filled, stretches)
 
 
-def gate(e: Channel, b: Channel) -> Gate | None:
-    """The evidence that ``e`` gates ``b`` (:func:`confined`, and ``e`` idles far longer than
-    ``b``'s period), or None."""
+def gate(e: Channel, b: Channel, clock: bool = False) -> Gate | None:
+    """The evidence that ``e`` gates ``b`` (:func:`confined`, and ``e`` idles 20 times as long
+    as ``b``'s pulses last, 4 times when ``b`` is a gated ``clock``), or None."""
     g = confined(e, b)
     if g is None:
         return None
     # the complete idle stretches (stretch j + 1 lies between ee[j] and ee[j + 1]) are long
-    # beside b's period (from one rising edge to the next)
+    # beside b's pulses (the median time b spends at its shorter level): a STEP's pulses are as
+    # short as another STEP's
     ee, be = e.edges, b.edges
     levels = e.initial ^ (np.arange(1, len(ee)) & 1)
     idle = np.diff(ee)[levels != g.level]
-    rising = be[_level_after(b, be) == 1]
-    period = float(np.median(np.diff(rising))) if len(rising) > 1 else 0.0
-    if len(idle) and float(np.median(idle)) < _GATE_IDLE * period:
+    d = np.diff(be)
+    pulse = min(float(np.median(d[0::2])), float(np.median(d[1::2]))) if len(d) > 1 else 0.0
+    if len(idle) and float(np.median(idle)) < _GATE_IDLE[clock] * pulse:
         return None
     return g
 
@@ -268,7 +270,7 @@ def find_buses(
                 out.words.setdefault(c.index, "bus clock")
                 if k.changes >= _DATA_SHARE * periods:
                     _data(out, d, k)
-            g = gate(c, d)
+            g = gate(c, d, d.index in clock_like)
             if g is not None:
                 out.gates.setdefault(c.index, g.evidence())
                 out.words.setdefault(c.index, "enable/select")

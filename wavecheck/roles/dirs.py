@@ -70,10 +70,11 @@ class DirFit:
         )
 
 
-def at_pauses(t: npt.NDArray[np.int64], starts: npt.NDArray[np.int64]) -> tuple[int, int]:
+def at_pauses(t: npt.NDArray[np.int64], starts: npt.NDArray[np.int64]) -> tuple[int, int, int]:
     """Where the changes at ticks ``t`` sit in a train of events at ``starts`` (pulse starts,
     phase changes): (at a pause: the interval across the change is 1.25× the intervals beside
-    it; before the first or after the last event)."""
+    it; before the first or after the last event; in full running: neither, with the interval
+    across within twice the train's 10th percentile interval)."""
     count = len(starts)
     a = np.searchsorted(starts, t, side="left")  # the change is between events a-1 and a
     outside = int(np.count_nonzero((a == 0) | (a == count)))
@@ -83,13 +84,17 @@ def at_pauses(t: npt.NDArray[np.int64], starts: npt.NDArray[np.int64]) -> tuple[
     before = np.where(inner >= 2, st[inner - 1] - st[np.maximum(inner - 2, 0)], 0)
     after = np.where(inner + 1 < count, st[np.minimum(inner + 1, count - 1)] - st[inner], 0)
     beside = np.maximum(before, after).astype(np.float64)
-    return int(np.count_nonzero(period >= _REVERSAL_GAP * beside)), outside
+    pause = period >= _REVERSAL_GAP * beside
+    fast = 2 * float(np.percentile(np.diff(st), 10)) if count > 1 else 0.0
+    running = int(np.count_nonzero(~pause & (period <= fast)))
+    return int(np.count_nonzero(pause)), outside, running
 
 
 def dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     """The fit of ``d`` as DIR of ``s`` (pulses ``p``), or None when a hard rule fails: an edge of
-    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, or pulses of
-    ``s`` at only one level of ``d``."""
+    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, pulses of
+    ``s`` at only one level of ``d``, or most changes (3 or more) where ``s`` runs at full rate
+    without slowing down (a motor stops to reverse)."""
     t = d.edges
     n = len(t)
     if n == 0 or p.count == 0:
@@ -108,7 +113,9 @@ def dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     lo, hi = int(counts[levels == 0].sum()), int(counts[levels == 1].sum())
     if lo == 0 or hi == 0:
         return None
-    at_rev, outside = at_pauses(t, p.starts)
+    at_rev, outside, running = at_pauses(t, p.starts)
+    if running >= 3 and running > n / 2:
+        return None  # it changes while s runs at full rate: no motor reverses so
     return DirFit(d, s, n, at_rev, outside, (lo, hi))
 
 

@@ -33,7 +33,7 @@ from wavecheck.roles.proposal import (
 )
 from wavecheck.roles.updown import UpDownFit, up_down
 
-__all__ = ["propose"]
+__all__ = ["best_channel", "propose"]
 
 _AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
 
@@ -137,7 +137,7 @@ class _Inference:
         self._pulse_axes(pulse, dirs)
         self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
         self._enables(
-            [c for c in movers if c.index not in self.taken and c.index not in self.bus.data]
+            [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
         )
         return self._finish()
 
@@ -223,10 +223,7 @@ class _Inference:
         """A STEP, UP or DOWN candidate: a step train, or pulses the waveform cannot tell from
         steps at one rate on a line named so; never a line the relations rule out."""
         look = self.looks[c.index]
-        no = self.bus.no_step(c.index)
-        if no is not None:
-            if look.is_step_like or look.step_by_name:
-                self.why[c.index] = no
+        if self.bus.no_step(c.index) is not None:
             return False
         if look.is_step_like:
             return True
@@ -235,6 +232,11 @@ class _Inference:
             self.by_name.add(c.index)
             return True
         return False
+
+    def _enable_candidate(self, c: Channel) -> bool:
+        """An ENABLE candidate: a changing line that is no bus clock or data (a bus's chip
+        select may be the ENABLE of an axis that moves while the bus idles)."""
+        return c.index not in self.bus.clocks and c.index not in self.bus.data
 
     def _dir_candidate(self, c: Channel) -> bool:
         """A DIR candidate: a changing line that is no bus data (a line that gates another may
@@ -598,7 +600,7 @@ class _Inference:
             active = 0 if served[0] else 1
             axes = [moving[k] for k in served[active]]
             # an ENABLE changes where its axes stand still, never while one runs
-            if any(sum(at_pauses(e.edges, a.motion)) < len(e.edges) for a in axes):
+            if any(sum(at_pauses(e.edges, a.motion)[:2]) < len(e.edges) for a in axes):
                 continue
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
@@ -737,3 +739,17 @@ def propose(capture: Capture) -> Proposal:
     asking; otherwise :attr:`~wavecheck.roles.proposal.Proposal.ambiguous` lists the conflicts.
     """
     return _Inference(capture).run()
+
+
+def best_channel(capture: Capture, role: str) -> str | None:
+    """The ``--map`` reference of the channel most like ``role`` for a hint: the one channel
+    whose name says ``role``, else for a pulse role the channel most like a STEP on its own
+    waveform (no relations between lines are looked at); None when there is none."""
+    inference = _Inference(capture)
+    named = [c for c in capture.channels if inference.hints[c.index].fits(role)]
+    if len(named) == 1:
+        return inference.refs[named[0].index]
+    if role in ("step", "up", "down"):
+        best = inference._candidates()
+        return inference.refs[best[0].index] if best else None
+    return None
