@@ -36,7 +36,8 @@ class WavecheckError(Exception):
 
     def __init__(self, message: str, details: tuple[str, ...] = ()) -> None:
         super().__init__(_one_line(message))
-        self.details = tuple(_one_line(d) for d in details)
+        # each detail one line, its indentation kept
+        self.details = tuple(d[: len(d) - len(d.lstrip(" "))] + _one_line(d) for d in details)
 
 
 class CaptureError(WavecheckError):

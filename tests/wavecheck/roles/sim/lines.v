@@ -1,12 +1,12 @@
 // Simulated lines for the role-inference tests (tests/wavecheck/roles/test_simulated.py): each
 // testbench, chosen with -DTB_<NAME>, drives the lines of one kind of design and dumps them to
-// `DUMPFILE. Times in ns; a 50 MHz clock `clk` runs in every design, and every line changes on
+// `DUMPFILE. Times in ns; a 1 MHz clock `clk` runs in every design, and every line changes on
 // one of its rising edges, as in a synchronous design.
 `timescale 1ns/1ps
 
 module clocked;
   reg clk = 0;
-  always #250 clk = ~clk;
+  always #500 clk = ~clk;
   task cycles(input integer n);
     begin
       repeat (n) @(posedge clk);
@@ -32,13 +32,13 @@ module tb;
     forever begin
       next;
       tx = 0;
-      c.cycles(208);
+      c.cycles(104);
       for (b = 0; b < 8; b = b + 1) begin
         tx = lfsr[b];
-        c.cycles(208);
+        c.cycles(104);
       end
       tx = 1;
-      c.cycles(208 + 50 * lfsr[3:0]);
+      c.cycles(104 + 25 * lfsr[3:0]);
     end
   end
   initial begin : i2c
@@ -115,7 +115,7 @@ module tb;
   initial begin
     $dumpfile(`DUMPFILE);
     $dumpvars(0, c.clk, tx, scl, sda, pwm, pwm_fixed, gclk, gen, q);
-    c.cycles(100000);
+    c.cycles(50000);
     $finish;
   end
 endmodule
@@ -135,16 +135,16 @@ module tb;
     integer i;
     begin
       n0 = d;
-      c.cycles(10);  // DIR setup 5 us
+      c.cycles(5);  // DIR setup 5 us
       for (i = 0; i < n; i = i + 1) begin
         v = $sqrt(2.0 * accel * (i + 1));
         if ($sqrt(2.0 * accel * (n - i)) < v) v = $sqrt(2.0 * accel * (n - i));
         if (v > top) v = top;
-        p = 2.0e6 / v;
+        p = 1.0e6 / v;
         n1 = 1;
-        c.cycles(4);
+        c.cycles(2);
         n1 = 0;
-        c.cycles($rtoi(p) - 4);
+        c.cycles($rtoi(p) - 2);
       end
     end
   endtask
@@ -174,16 +174,16 @@ module tb;
     $dumpvars(0, c.clk, n0, n1, n2);
 `endif
     c.cycles(500);
-    for (k = 0; k < 6; k = k + 1) begin
+    for (k = 0; k < 4; k = k + 1) begin
 `ifdef WITH_SPI
       repeat (12) spi_byte;
 `endif
       n2 = 0;  // ENABLE (active low) on
-      c.cycles(40);
+      c.cycles(20);
       move(40 + 37 * k, k % 2, 4000.0 + 1500.0 * k, 2.0e5);
-      c.cycles(80);
+      c.cycles(40);
       n2 = 1;
-      c.cycles(800);
+      c.cycles(400);
     end
     $finish;
   end
