@@ -735,8 +735,9 @@ class _Inference:
 def propose(capture: Capture) -> Proposal:
     """Propose axes and roles for ``capture``'s channels from their waveforms.
 
-    The proposal is :attr:`~wavecheck.roles.proposal.Proposal.unambiguous` when it may be used without
-    asking; otherwise :attr:`~wavecheck.roles.proposal.Proposal.ambiguous` lists the conflicts.
+    The proposal is :attr:`~wavecheck.roles.proposal.Proposal.unambiguous` when it may be used
+    without asking; otherwise :attr:`~wavecheck.roles.proposal.Proposal.ambiguous` lists the
+    conflicts.
     """
     return _Inference(capture).run()
 
