@@ -37,6 +37,7 @@ __all__ = [
 
 I64 = npt.NDArray[np.int64]
 
+_SAMPLE = 1 << 16  # changes of d looked at (the first ones)
 _MIN_CLOCKED = 8  # changes of d inside c's runs needed as evidence (2 once c is a bus clock) …
 _SAME_EDGE = 0.9  # … this share of them after the same edge of c …
 _DELAY_SPREAD = (16, 0.25, 0.125)  # … p10..p90 of their delays within this share of c's period
@@ -48,6 +49,12 @@ _GATE_IDLE = (20.0, 4.0)  # e's idle stretches at least this many times b's puls
 _GATE_BUSIER = 2  # b has at least this many times the edges of e
 _CLOCK_SHARE = 0.02  # clocked changes, as a share of the clock's periods, for a bus clock
 _DATA_SHARE = 0.05  # … for data (a synchronous design's STEP changes far more rarely)
+
+
+def _period(ch: Channel) -> float:
+    """Median time from one rising edge of ``ch`` to the next (over its first edges)."""
+    rising = ch.edges[: 2 * _SAMPLE][ch.initial :: 2]  # level after edge i: initial ^ (i + 1) & 1
+    return float(np.median(np.diff(rising))) if len(rising) > 1 else 0.0
 
 
 def _level_after(ch: Channel, t: I64) -> I64:
@@ -63,6 +70,7 @@ class Clocked:
     d: Channel
     c: Channel
     changes: int  # changes of d inside c's runs
+    share: float  # … per period of c over the time looked at
     edge: str  # "rising", "falling", or "rising and falling" (changes at the clock's edges)
 
     def evidence(self) -> str:
@@ -78,13 +86,12 @@ def clocked_data(
 ) -> Clocked | None:
     """The evidence that ``d`` is data clocked by ``c`` (``least`` changes of ``d`` at least),
     or None (``resolution``: the capture's, in ticks)."""
-    ce, de = c.edges, d.edges
+    ce, de = c.edges, d.edges[:_SAMPLE]  # the first changes of d tell enough
     if len(ce) < 2 * least or len(de) < least:
         return None
-    rising = ce[_level_after(c, ce) == 1]
-    if len(rising) < 2:
+    period = _period(c)
+    if period <= 0:
         return None
-    period = float(np.median(np.diff(rising)))
     i = np.searchsorted(ce, de, side="right")
     ok = (i >= 1) & (i < len(ce))
     i = i[ok]
@@ -119,7 +126,8 @@ def clocked_data(
         owners = i[same]
         if np.count_nonzero(owners[1:] == owners[:-1]) > (1 - _SAME_EDGE) * n:
             return None
-        return Clocked(d, c, n, name)
+        spanned = np.searchsorted(ce, de[-1]) - np.searchsorted(ce, de[0])
+        return Clocked(d, c, n, n / max(spanned / 2, 1), name)
     return None
 
 
@@ -131,10 +139,9 @@ def strobe(starts: I64, c: Channel, resolution: int = 0) -> int | None:
     ce = c.edges
     if len(starts) < _MIN_CLOCKED or len(ce) < 2 * _MIN_CLOCKED:
         return None
-    rising = ce[_level_after(c, ce) == 1]
-    if len(rising) < 2:
+    period = _period(c)
+    if period <= 0:
         return None
-    period = float(np.median(np.diff(rising)))
     i = np.searchsorted(ce, starts, side="right")
     if np.any(i == 0):
         return None
@@ -175,10 +182,10 @@ def confined(e: Channel, b: Channel) -> Gate | None:
     ee, be = e.edges, b.edges
     if len(ee) == 0 or len(be) < 8 or len(be) < _GATE_BUSIER * len(ee):
         return None
-    lv = _level_after(e, be)
-    level = int(lv[0])
-    if np.any(lv != level):
-        return None
+    level = int(_level_after(e, be[:1])[0])
+    for part in (be[:_SAMPLE], be):  # most lines fail on their first changes, cheaply
+        if np.any(_level_after(e, part) != level):
+            return None
     # stretches of e: k = 0 before its first edge … len(ee) after its last; level alternates
     k = np.searchsorted(ee, be, side="right")
     held = np.bincount(k, minlength=len(ee) + 1) > 0
@@ -260,15 +267,14 @@ def find_buses(
     gated_level: dict[tuple[int, int], int] = {}
     chans_by = {c.index: c for c in chans}
     for c in chans:
-        periods = len(c.edges) / 2
         for d in chans:
             if d is c:
                 continue
             k = clocked_data(d, c, resolution)
-            if k is not None and k.changes >= _CLOCK_SHARE * periods:
+            if k is not None and k.share >= _CLOCK_SHARE:
                 out.clocks.setdefault(c.index, f"clocks a bus: {k.evidence()}")
                 out.words.setdefault(c.index, "bus clock")
-                if k.changes >= _DATA_SHARE * periods:
+                if k.share >= _DATA_SHARE:
                     _data(out, d, k)
             g = gate(c, d, d.index in clock_like)
             if g is not None:
@@ -283,7 +289,7 @@ def find_buses(
         for d in chans:
             if d is not c and d.index not in out.data and d.index not in out.clocks:
                 k = clocked_data(d, c, resolution, least=2)
-                if k is not None and k.changes >= _DATA_SHARE * len(c.edges) / 2:
+                if k is not None and k.share >= _DATA_SHARE:
                     _data(out, d, k)
     for li, st in starts.items():
         for c in chans:
