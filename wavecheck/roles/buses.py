@@ -47,6 +47,7 @@ _GATE_FILLED = 0.5  # share of e's active stretches holding edges of b
 _GATE_IDLE = (20.0, 4.0)  # e's idle stretches at least this many times b's pulses (the
 #   second figure when b is a gated clock)
 _GATE_BUSIER = 2  # b has at least this many times the edges of e
+_MOST_LINES = 64  # lines whose pairs are looked at, the busiest
 _CLOCK_SHARE = 0.02  # clocked changes, as a share of the clock's periods, for a bus clock
 _DATA_SHARE = 0.05  # … for data (a synchronous design's STEP changes far more rarely)
 
@@ -254,7 +255,8 @@ def find_buses(
     chans: list[Channel], resolution: int, clock_like: set[int], starts: dict[int, I64]
 ) -> BusFindings:
     """Clocked data and gates among ``chans`` (changing lines; ``resolution`` in ticks;
-    ``clock_like``: the indices of lines that look like a clock or a gated clock on their own).
+    ``clock_like``: the indices of lines that look like a clock or a gated clock on their own),
+    among the 64 busiest lines that change twice or more.
 
     A line is a bus clock when some line changes in step with it in 2 % of its periods or more,
     and that line is its data when it changes in 5 % or more: every output of a synchronous
@@ -263,6 +265,9 @@ def find_buses(
     pulses (``starts``: pulse starts by channel index) that follow the bursts of a bus clock at
     one delay are its strobe."""
     out = BusFindings({}, {}, {}, {})
+    # pairs of lines that change twice or more; of a dump with thousands of signals, the busiest
+    busy = sorted((c for c in chans if len(c.edges) >= 2), key=lambda c: -len(c.edges))
+    chans = sorted(busy[:_MOST_LINES], key=lambda c: c.index)
     gated: dict[int, list[Channel]] = {}
     gated_level: dict[tuple[int, int], int] = {}
     chans_by = {c.index: c for c in chans}

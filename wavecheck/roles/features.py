@@ -1,4 +1,6 @@
-"""What one channel's edges look like on their own: unchanging, a serial line, or a pulse train.
+"""What one channel's edges look like on their own: unchanging, a serial line, a pulse train (a
+step train, a clock, PWM, periodic pulses, bursts at one rate, coded pulses: their rates are
+told apart in :mod:`wavecheck.roles.rates`), or other.
 
 Everything here is vectorised over a channel's edge array (a few ``numpy`` passes, no Python loop
 per edge), so a channel of ten million edges costs a few hundred milliseconds.
@@ -226,9 +228,8 @@ def _shape_evidence(cap: Capture, kind: str, p: Pulses, t: Timing) -> str:
             "without acceleration (a STEP only when named so)"
         )
     return (
-        f"coded pulses: {p.count:,} pulses whose period jumps by more than 1.6x between "
-        f"neighbours {t.jumps:.0%} of the time: no motor's rate changes so fast (a STEP only "
-        "when named so)"
+        f"coded pulses: {p.count:,} pulses, {t.coded_why()}: no motor's rate changes so fast "
+        "(a STEP only when named so)"
     )
 
 

@@ -10,13 +10,19 @@ little from one step to the next. The pulse trains of other protocols do not:
   pauses: the waveform cannot tell it from steps at one constant speed;
 - **bursts at one rate** (a gated clock: SPI, I2C, a bit-banged bus) start and stop at their
   full rate, with no speeding up or slowing down around the pauses;
-- **coded** pulses (IR remotes, pulse-distance codes, strobes) jump between periods 1.6× or more
-  apart from one pulse to the next, which no motor follows.
+- **coded** pulses (IR remotes, pulse-distance codes, SENT, Miller) change their period from one
+  pulse to the next by more than a motor can: where the line runs fastest, a motor speeding up
+  from rest at constant acceleration changes its period by 2.41×, then 1.30×, 1.19× …, so a
+  jump is a change by 1.35× or more (at 10 % of neighbouring periods; 5 % when the pulse widths
+  are exact, as a timer makes them, so the periods' changes are no timing jitter), or one there
+  and back (at 5 % of three neighbours); and lines that run a pulse or two at a time between
+  pauses are stop-and-go, not moves. The first and last period of a run, from and to rest,
+  never count.
 
 A quantised step generator (LinuxCNC's stepgen, a firmware's step timer) alternates between
-neighbouring whole numbers of its base period: 2 and 3 periods at most differ by 1.5×, so a jump
-is more than 1.6×. The rules look at the periods between pulse starts, in ticks, with a few
-``numpy`` passes.
+neighbouring whole numbers of its base period, 2 and 3 periods at its top rate (1.5×): a change
+by no more than 1.15 pulse widths is one tick of it (its pulses last a tick at least), no jump.
+The rules look at the periods between pulse starts, in ticks, with a few ``numpy`` passes.
 """
 
 from __future__ import annotations
@@ -60,10 +66,9 @@ class Timing:
         ramps: runs that speed up after a pause or slow down before one.
         runs: runs of three periods or more.
         jumps: share of consecutive periods in a run, the shorter fast (within twice the 10th
-            percentile), whose ratio exceeds 1.6.
-        zigzags: share of three consecutive periods in a run, where fast, that jump there and back
-            (each ratio above 1.6, or above 1.4 with a difference of more than 1.5 pulse
+            percentile), that jump (a ratio above 1.35 and a difference above 1.15 pulse
             widths).
+        zigzags: share of three such consecutive periods that jump there and back.
         duty: median pulse width / :attr:`period`.
         width_spread: (p95 - p5) of the pulse widths / their median.
     """
@@ -87,13 +92,25 @@ class Timing:
     @property
     def coded(self) -> bool:
         """The period jumps between neighbours, or runs are a pulse or two long: no motor's."""
+        return bool(self.coded_why())
+
+    def coded_why(self) -> str:
+        """Why the pulses are coded, in words (empty when they are not)."""
         if self.periods < _MANY:
-            return False
-        per_run = (self.periods - self.pauses) / (self.pauses + 1)
+            return ""
         # with exact widths the periods' jumps are no timing jitter: the rate itself jumps
         exact = self.width_spread <= _EXACT_WIDTHS
-        jumps = _JUMPS_EXACT if exact else _JUMPS
-        return self.jumps >= jumps or self.zigzags >= _ZIGZAGS or per_run < _SHORT_RUNS
+        if self.jumps >= (_JUMPS_EXACT if exact else _JUMPS):
+            return (
+                f"{self.jumps:.0%} of neighbouring periods where it runs fastest differ by 1.35x "
+                "or more"
+            )
+        if self.zigzags >= _ZIGZAGS:
+            return f"its period jumps there and back in {self.zigzags:.0%} of three neighbours"
+        per_run = (self.periods - self.pauses) / (self.pauses + 1)
+        if per_run < _SHORT_RUNS:
+            return f"it runs {per_run:.1f} periods at a time between pauses"
+        return ""
 
     def shape(self, resolution: int) -> str:
         """``"coded"``, ``"pwm"``, ``"clock"``, ``"periodic"``, ``"bursts"`` or ``"steps"``
