@@ -181,6 +181,8 @@ class _Inference:
             look = self.looks[c.index]
             against = self._against(c, role)
             evidence = f"named {c.name!r}; its waveform: {look.evidence}"
+            if c.index in self.why:  # goes x/z: its unknown stretches are left out of the checks
+                evidence += f"; {self.why.pop(c.index)}"
             step = self.looks[found[0][1].index].pulses
             if role == "dir" and step is not None:
                 fit = dir_fit(c, found[0][1], step)
