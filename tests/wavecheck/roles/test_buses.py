@@ -10,7 +10,7 @@ from wavecheck.capture.model import Channel
 from wavecheck.roles import propose
 from wavecheck.roles.buses import clocked_data, find_buses, gate, strobe
 
-from ..waves import capture, pulses
+from ..waves import capture, move, pulses
 
 RNG = np.random.default_rng(2026)
 
@@ -61,15 +61,10 @@ def test_spi_lines() -> None:
     )
 
 
-def _steps(n: int, t0: int, period: int = 20_000) -> list[int]:
-    ramp = np.minimum(np.minimum(np.arange(n) + 1, n - np.arange(n)), 6)
-    return (t0 + np.cumsum(period * 2 / np.sqrt(ramp))).astype(np.int64).tolist()
-
-
 def test_two_steps_on_one_step_timer_are_not_a_bus() -> None:
     """A diagonal move: the Y pulses start and end with X pulses (one step timer): Y follows
     X's rising and falling edges, so it is no data clocked by one edge of X."""
-    xs = _steps(400, 1000)
+    xs = move(1000, 400, 40_000)
     ys = xs[::2]
     x, y = _ch("X", pulses(xs, 2000)), _ch("Y", pulses(ys, 2000))
     assert clocked_data(y, x) is None and clocked_data(x, y) is None
@@ -80,7 +75,7 @@ def test_two_steps_on_one_step_timer_are_not_a_bus() -> None:
 def test_a_synchronous_designs_step_changes_on_its_clock_but_is_no_data() -> None:
     """An FPGA step generator: STEP and DIR change on the rising edge of a 50 MHz clock, but in
     far fewer than 5 % of its periods: data of no bus, and the clock is never a STEP."""
-    starts = [(s // 20) * 20 for s in _steps(300, 10_000)]
+    starts = [(s // 20) * 20 for s in move(10_000, 300, 40_000)]
     clk = list(range(0, starts[-1] + 100_000, 10))
     cap = capture(
         {"c0": (0, clk), "c1": (0, pulses(starts, 2000)), "c2": (0, [starts[150] + 7000])}
@@ -100,10 +95,10 @@ def test_enable_gates_the_steps_and_is_never_a_step() -> None:
     en: list[int] = []
     t = 1_000_000
     for _ in range(7):
-        move = _steps(300, t + 30_000_000, period=200_000)
-        steps += move
-        en += [t, move[-1] + 25_000_000]
-        t = move[-1] + 2_300_000_000
+        starts = move(t + 30_000_000, 300, 400_000)
+        steps += starts
+        en += [t, starts[-1] + 25_000_000]
+        t = starts[-1] + 2_300_000_000
     e, s = _ch("EN", en), _ch("STEP", pulses(steps, 10_000))
     g = gate(e, s)
     assert g is not None and g.level == 1 and g.filled == 7

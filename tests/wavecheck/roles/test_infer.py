@@ -21,7 +21,7 @@ from wavecheck.roles import Proposal, propose
 from wavecheck.roles.dirs import DirFit, assign
 from wavecheck.roles.names import name_hint
 
-from ..waves import capture, pulses
+from ..waves import capture, pulses, renamed
 
 GOLDEN = Path(__file__).resolve().parents[3] / "captures" / "golden"
 US = 1000  # ticks (ns) per µs
@@ -122,26 +122,9 @@ def test_golden_dir_decided_by_waveform_when_it_changes() -> None:
         d = propose(cap).axes[0].role("dir")
         assert d is not None and d.basis == "name"
         assert "; toggles 2 times, only between pulses of 'step'" in d.evidence
-        d = propose(_renamed(cap, ["s", "d"])).axes[0].role("dir")
+        d = propose(renamed(cap, ["s", "d"])).axes[0].role("dir")
         assert d is not None and d.basis == "waveform"
         assert d.evidence.startswith("toggles 2 times, only between pulses of 's'")
-
-
-def _renamed(cap: Capture, names: list[str]) -> Capture:
-    chans = [
-        Channel(name=n, index=c.index, initial=c.initial, edges=c.edges)
-        for n, c in zip(names, cap.channels, strict=True)
-    ]
-    return Capture(
-        cap.path,
-        cap.format,
-        cap.timebase,
-        cap.resolution_ticks,
-        cap.samplerate_hz,
-        cap.start,
-        cap.end,
-        chans,
-    )
 
 
 @pytest.mark.parametrize(
@@ -157,7 +140,7 @@ def _renamed(cap: Capture, names: list[str]) -> Capture:
 def test_golden_traces_with_neutral_names(trace: str) -> None:
     cap = open_capture(GOLDEN / f"{trace}.vcd")
     named = propose(cap).axes[0]
-    neutral = propose(_renamed(cap, [f"D{c.index}" for c in cap.channels]))
+    neutral = propose(renamed(cap, [f"D{c.index}" for c in cap.channels]))
     assert neutral.unambiguous, neutral.text()
     axis = neutral.axes[0]
     assert (axis.kind, axis.step_type) == (named.kind, named.step_type)

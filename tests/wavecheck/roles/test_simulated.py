@@ -14,9 +14,10 @@ from pathlib import Path
 import pytest
 
 from stepgen.cli import main as stepgen_main
-from wavecheck.capture.model import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.roles import Proposal, propose
+
+from ..waves import renamed
 
 SIM = Path(__file__).parent / "sim"
 
@@ -92,23 +93,6 @@ def test_ghdl_step_generator_beside_a_uart(
     assert (looks["l0"], looks["l2"]) == ("serial line", "clock")
 
 
-def _neutral(cap: Capture) -> Capture:
-    chans = [
-        Channel(name=f"D{c.index}", index=c.index, initial=c.initial, edges=c.edges)
-        for c in cap.channels
-    ]
-    return Capture(
-        cap.path,
-        cap.format,
-        cap.timebase,
-        cap.resolution_ticks,
-        cap.samplerate_hz,
-        cap.start,
-        cap.end,
-        chans,
-    )
-
-
 @pytest.mark.parametrize(
     ("args", "roles"),
     [
@@ -140,7 +124,8 @@ def test_linuxcnc_stepgen_with_neutral_names(
     base = ["--base-period", "25us", "--position-scale", "1000"]
     out = tmp_path / "run.vcd"
     assert stepgen_main(["simulate", *base, *args, "-q", "-o", str(out)]) == 0
-    p = propose(_neutral(open_capture(out)))
+    cap = open_capture(out)
+    p = propose(renamed(cap, [f"D{c.index}" for c in cap.channels]))
     assert p.unambiguous, p.text()
     got = _roles(p)
     if "phase-A" in roles:  # which output is phase-A the waveform does not tell

@@ -10,11 +10,12 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from tests.conftest import shared_capture, write_vcd
 from wavecheck.cli import main
+
+from ..waves import move, pulses
 
 SIM = Path(__file__).parent / "sim"
 US = 1000  # ticks (ns) per µs
@@ -24,17 +25,6 @@ def _run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]
     code = main(list(args))
     out, err = capsys.readouterr()
     return code, out, err
-
-
-def _move(t0: int, n: int, period: int) -> list[int]:
-    """Pulse starts of a move from rest to rest at constant acceleration (periods shrinking as
-    the square root of the steps taken, over six steps)."""
-    ramp = np.minimum(np.minimum(np.arange(n) + 1, n - np.arange(n)), 6)
-    return (t0 + np.cumsum(period * np.sqrt(6 / ramp))).astype(np.int64).tolist()
-
-
-def _pulses(starts: list[int], width: int) -> list[int]:
-    return [t for s in starts for t in (s, s + width)]
 
 
 def test_an_enable_around_like_moves_is_no_axis(
@@ -47,13 +37,13 @@ def test_an_enable_around_like_moves_is_no_axis(
     en: list[int] = []
     t = 1000 * US
     for _ in range(7):
-        move = _move(t + 30_000 * US, 800, 250 * US)
-        steps += move
-        en += [t, move[-1] + 25_000 * US]
-        t = move[-1] + 2_300_000 * US
+        starts = move(t + 30_000 * US, 800, 250 * US)
+        steps += starts
+        en += [t, starts[-1] + 25_000 * US]
+        t = starts[-1] + 2_300_000 * US
     path = write_vcd(
         tmp_path / "grbl-like.vcd",
-        {"EN": (0, en), "STEP (Y axis)": (0, _pulses(steps, 10 * US))},
+        {"EN": (0, en), "STEP (Y axis)": (0, pulses(steps, 10 * US))},
     )
     code, out, err = _run(capsys, "check", str(path), "--drive", "drv8825", "--format", "json")
     assert code == 0, err
@@ -162,7 +152,7 @@ def test_the_map_hint_names_the_best_candidate(
     code, _, err = _run(capsys, "check", str(grbl_sr), "--drive", "drv8825", "--map", "step=STP")
     assert code == 2 and "e.g. --map 'step=STEP (Y axis)')" in err, err
     clk = list(range(10, 400_000, 10))
-    steps = _pulses(_move(5000, 40, 4000), 2000)
+    steps = pulses(move(5000, 40, 4000), 2000)
     path = write_vcd(
         tmp_path / "t.vcd", {"clk": (0, clk), "x_step": (0, steps), "x_dir": (0, [3000])}
     )
@@ -175,12 +165,12 @@ def test_an_ambiguity_is_a_short_line_with_the_candidates_below(
 ) -> None:
     """Two STEP lines that pause at the same time, and one DIR change in that pause: which STEP
     it belongs to the waveform cannot tell. The error was one line of 700-2,000 characters."""
-    s = _move(0, 12, 100 * US) + _move(3000 * US, 12, 100 * US)
-    t = _move(50 * US, 11, 100 * US) + _move(3050 * US, 12, 100 * US)
+    s = move(0, 12, 100 * US) + move(3000 * US, 12, 100 * US)
+    t = move(50 * US, 11, 100 * US) + move(3050 * US, 12, 100 * US)
     change = s[11] + 400 * US
     path = write_vcd(
         tmp_path / "two.vcd",
-        {"a": (0, _pulses(s, 5 * US)), "b": (0, _pulses(t, 5 * US)), "c": (0, [change])},
+        {"a": (0, pulses(s, 5 * US)), "b": (0, pulses(t, 5 * US)), "c": (0, [change])},
     )
     code, _, err = _run(capsys, "check", str(path), "--drive", "drv8825")
     first, *below = err.splitlines()
@@ -196,9 +186,9 @@ def test_an_ambiguity_is_a_short_line_with_the_candidates_below(
 
 def test_map_names_match_in_any_case(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The README's ``--map step=STEP,dir=DIR`` on a VCD whose channels are ``step``/``dir``."""
-    steps = _move(10 * US, 30, 20 * US)
+    steps = move(10 * US, 30, 20 * US)
     path = write_vcd(
-        tmp_path / "run.vcd", {"step": (0, _pulses(steps, 2 * US)), "dir": (0, [5 * US])}
+        tmp_path / "run.vcd", {"step": (0, pulses(steps, 2 * US)), "dir": (0, [5 * US])}
     )
     code, out, err = _run(
         capsys, "check", str(path), "--drive", "drv8825", "--map", "step=STEP,dir=DIR"
