@@ -2,8 +2,8 @@
 
 Every error a user can cause (a bad file, a bad option, a bad rule file, a bad stepgen setting)
 is a :class:`WavecheckError`. The command-line tools print ``str(error)`` as one line (then its
-``details``, if any, one a line) and exit with :attr:`WavecheckError.exit_code` (2). Messages say what is wrong, show the value, and end
-with a hint in parentheses where one helps.
+``details``, if any, one a line) and exit with :attr:`WavecheckError.exit_code` (2). Messages say
+what is wrong, show the value, and end with a hint in parentheses where one helps.
 """
 
 from __future__ import annotations
