@@ -151,44 +151,20 @@ def _forward(text: str) -> int:
 def roles_from_waveforms(args: argparse.Namespace, capture: Capture) -> bool:
     """Whether the roles must be told from the waveforms: no ``--map`` and no channel named
     after a role (``step``, ``up``, ``phase-A``, as the end of a hierarchical name)."""
-    named = ("step", "up", "phase-a")
-    return not args.map and not any(
-        c.name.rsplit(".", 1)[-1].strip().lower() in named for c in capture.channels
-    )
+    from wavecheck.engine.run import names_give_roles
+
+    return not args.map and not names_give_roles(capture)
 
 
 def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
-    """The axes of the run and a note on how they were found.
+    """The axes of the run and a note on how they were found: ``--map`` as given; without it,
+    as the engine finds them on ``capture`` (:func:`wavecheck.engine.run.axes_for`: channels
+    named after their roles, else the waveforms, which ``capture`` then holds)."""
+    from wavecheck.engine.run import axes_for
 
-    ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
-    ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
-    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
-    lists the candidates and the ``--map`` line to copy.
-    """
     if args.map:
         return parse_axes(args.map), []
-    if not roles_from_waveforms(args, capture):
-        return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
-    from wavecheck.roles import propose
-
-    proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = (
-            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
-            or "no STEP, UP/DOWN or phase channel found"
-        )
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
-        raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
-        )
-    single = len(proposal.axes) == 1
-    axes = [
-        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
-        for a in proposal.axes
-    ]
-    found = f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}"
-    return axes, [found.rstrip()]
+    return axes_for(CheckOptions(), capture)
 
 
 def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun], list[str]]:

@@ -14,6 +14,7 @@ on one common periodic lattice (one thread or timer makes them), judged on each 
 from __future__ import annotations
 
 import itertools
+import shlex
 from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
@@ -50,13 +51,13 @@ TIMER_STEPS = 1 << 16
 StepSinks = Callable[[AxisPlan], Sequence[StepSink]]
 IntervalSinks = Callable[[AxisPlan], IntervalSink | None]
 
-_NAMED = ("step", "up", "phase-a")
-
 
 def names_give_roles(capture: Capture) -> bool:
     """Whether a channel is named after a pulse role (``step``, ``up``, ``phase-A``, as the
     last part of a hierarchical name): then roles are mapped by name, not told from waveforms."""
-    return any(leaf_name(c.name) in _NAMED for c in capture.channels)
+    from wavecheck.roles.names import named_kind
+
+    return named_kind([c.name for c in capture.channels]) is not None
 
 
 def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
@@ -64,21 +65,35 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
     how they were found.
 
     Raises:
-        UsageError: the waveforms do not settle the roles (the candidates and the ``--map``
-            line to copy are in the message).
+        UsageError: the waveforms do not settle the roles: a capture without step signals says
+            what its lines look like instead (one line); an ambiguous one lists the questions
+            and candidates on the lines below the error.
     """
     from wavecheck.roles import propose
 
     proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = (
-            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
-            or "no STEP, UP/DOWN or phase channel found"
-        )
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+    if not proposal.axes and not proposal.ambiguous:
+        best = proposal.candidates[:1]
+        hint = f" (e.g. --map step={shlex.quote(best[0])})" if best else ""
         raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
+            f"{capture.path}: no step signal found: the lines look like {proposal.summary()}; "
+            f"give --map to check a line anyway{hint}"
+        )
+    if not proposal.unambiguous:
+        example = proposal.map_args() if proposal.axes else ""
+        if not example and proposal.candidates:
+            example = f"--map step={shlex.quote(proposal.candidates[0])}"
+        hint = f" (e.g. {example})" if example else ""
+        details = tuple(
+            line
+            for c in proposal.ambiguous
+            for line in (f"{c.question}:", *(f"  - {cand}" for cand in c.candidates))
+        )
+        n = len(proposal.ambiguous)
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms "
+            f"({n} question{'s' if n != 1 else ''} below); give --map{hint}",
+            details,
         )
     single = len(proposal.axes) == 1
     axes = [
