@@ -50,6 +50,7 @@ from stepgen.model import InvocationRun
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc.steptypes import kind_of
+from wavecheck.linuxcnc.worstcase import end_events
 from wavecheck.rules import RULES as TABLE
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
@@ -193,56 +194,27 @@ def _offsets(
 
 
 def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.ndarray:
-    """Invocations that make the end events of ``rule``'s intervals (to run on time)."""
+    """Invocations that make the end events of ``rule``'s intervals (to run on time;
+    :func:`wavecheck.linuxcnc.worstcase.end_events`)."""
     t = run.toggles
     stype = run.config.step_type
     kind = kind_of(stype)
     if active_edge == "both":
         raise ConfigError("the worst-case latency model needs one active edge (rising or falling)")
-
-    def rising(pin: str) -> np.ndarray:
-        return t[pin][0::2]
-
-    def falling(pin: str) -> np.ndarray:
-        return t[pin][1::2]
-
-    def alternate(events: np.ndarray) -> np.ndarray:
-        return np.unique(events)[1::2]
-
+    if kind == "phases":
+        lines = run.pins
+    else:
+        lines = ("step",) if kind == "step-dir" else ("up", "down")
+    pulses = [(t[p][0::2], t[p][1::2]) for p in lines]  # pins start at 0: rise, fall, ...
+    dirs = t["dir"] if kind == "step-dir" else np.zeros(0, np.int64)
+    out = end_events(rule, kind, pulses, dirs, active_rising=active_edge == "rising")
+    if out is not None:
+        return out
     if kind == "phases":
         # a phase type's steps are its state changes: step_period measures the same intervals
-        if rule not in ("state_hold", "step_period"):
-            raise ConfigError(
-                f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
-            )
-        return alternate(np.concatenate([t[p] for p in run.pins]))
-    lines = ("step",) if kind == "step-dir" else ("up", "down")
-    rises = np.unique(np.concatenate([rising(p) for p in lines]))
-    falls = np.unique(np.concatenate([falling(p) for p in lines]))
-    active = rises if active_edge == "rising" else falls
-    if rule == "step_high":
-        return falls
-    if rule == "step_low":
-        return rises
-    if rule == "step_period":
-        return alternate(active)
-    if kind == "step-dir" and rule == "dir_hold":
-        return t["dir"]
-    if kind == "step-dir" and rule == "dir_setup":
-        changes = t["dir"]
-        pos = np.searchsorted(active, changes, side="left")  # first active edge at/after a change
-        pos = pos[pos < len(active)]
-        return np.unique(active[pos])
-    if kind == "up-down" and rule == "dir_delay":
-        # ends at the active edge of the first pulse on the other line
-        pick = rising if active_edge == "rising" else falling
-        up, down = pick("up"), pick("down")
-        lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
-        at = np.concatenate([up, down])
-        order = np.argsort(at, kind="stable")
-        at, lab = at[order], lab[order]
-        switch = np.flatnonzero(lab[1:] != lab[:-1]) + 1
-        return at[switch]
+        raise ConfigError(
+            f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
+        )
     raise ConfigError(f"rule {rule!r} does not apply to step type {stype}")
 
 

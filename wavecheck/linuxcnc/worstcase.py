@@ -1,0 +1,87 @@
+"""LinuxCNC's worst case for one timing rule: which make-pulses invocations run on time.
+
+``stepgen simulate --latency worst:J:RULE`` (:mod:`stepgen.latency`) runs every invocation J late
+except those that make an *end* event of RULE's intervals, so that each interval lasts n·P − J
+(the Stepper Tuning chapter's reasoning, ``stepgen-linuxcnc.md`` §9). ``wavecheck latency``
+(:mod:`wavecheck.lattice`) reads such a capture back by recognising that the on-time edges are
+exactly these events. Both call :func:`end_events`, on invocation indices or on edge times.
+
+End events by rule: ``step_high`` the falling edges of the pulse lines (STEP; UP and DOWN),
+``step_low`` their rising edges, ``step_period`` every second active edge (the interval starts
+and ends with one), ``dir_setup`` the first active edge at or after each DIR change,
+``dir_hold`` the DIR changes (type 0), ``dir_delay`` the first active edge on the other line at
+each switch between UP and DOWN (type 1), ``state_hold`` (and ``step_period``) every second
+state change of a phase type.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from wavecheck.linuxcnc.steptypes import StepKind
+
+__all__ = ["PHASE_RULES", "WORST_RULES", "end_events"]
+
+Ints = npt.NDArray[np.int64]
+
+#: Every rule :func:`end_events` knows.
+WORST_RULES = (
+    "step_high", "step_low", "step_period", "dir_setup", "dir_hold", "dir_delay", "state_hold"
+)  # fmt: skip
+#: The rules whose worst case a phase type has (its steps are its state changes).
+PHASE_RULES = ("state_hold", "step_period")
+
+
+def _alternate(events: Ints, parity: int) -> Ints:
+    return np.unique(events)[1 - parity :: 2]
+
+
+def end_events(
+    rule: str,
+    kind: StepKind,
+    pulses: Sequence[tuple[Ints, Ints]],
+    dir_changes: Ints,
+    active_rising: bool = True,
+    parity: int = 0,
+) -> Ints | None:
+    """The end events of ``rule``'s intervals (sorted, unique), or None when the rule does not
+    apply to ``kind``.
+
+    Args:
+        pulses: (rising, falling) events of each pulse line: STEP; UP then DOWN; for a phase
+            type, one entry per phase output (only their union, the state changes, counts).
+        dir_changes: the DIR changes (type 0; empty otherwise).
+        active_rising: the drive's active STEP edge is the rising one (else the falling one).
+        parity: for the rules that take every second event, 0 takes the second, fourth, …
+            (as the model does), 1 the first, third, … (a capture that starts mid-run).
+    """
+    if kind == "phases":
+        if rule not in PHASE_RULES:
+            return None
+        changes = [e for r, f in pulses for e in (r, f)]
+        return _alternate(np.concatenate(changes) if changes else np.zeros(0, np.int64), parity)
+    rises = np.unique(np.concatenate([r for r, _ in pulses]))
+    falls = np.unique(np.concatenate([f for _, f in pulses]))
+    active = rises if active_rising else falls
+    if rule == "step_high":
+        return falls
+    if rule == "step_low":
+        return rises
+    if rule == "step_period":
+        return _alternate(active, parity)
+    if kind == "step-dir" and rule == "dir_hold":
+        return np.unique(dir_changes)
+    if kind == "step-dir" and rule == "dir_setup":
+        pos = np.searchsorted(active, dir_changes, side="left")  # first active edge at/after
+        return np.unique(active[pos[pos < len(active)]])
+    if kind == "up-down" and rule == "dir_delay":
+        up, down = (r if active_rising else f for r, f in pulses[:2])
+        lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
+        at = np.concatenate([up, down])
+        order = np.argsort(at, kind="stable")
+        at, lab = at[order], lab[order]
+        return at[np.flatnonzero(lab[1:] != lab[:-1]) + 1]
+    return None
