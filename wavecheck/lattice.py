@@ -56,6 +56,7 @@ never below the true one.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -65,7 +66,7 @@ import numpy.typing as npt
 from wavecheck.capture.model import Capture
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.steptypes import StepKind
-from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
+from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events, union
 from wavecheck.progress import ProgressCallback, no_progress
 
 __all__ = [
@@ -96,7 +97,7 @@ MIN_PERIOD_SAMPLES = 8
 MAX_PERIOD_NS = 1_000_000
 #: Edges the comb search looks at (the densest stretch of the capture).
 WINDOW_EDGES = 1 << 14
-#: Edges the comb's period is refined on (exact harmonic sums about the FFT's peak).
+#: Edges the comb search looks at, and refines its periods on (exact harmonic sums).
 COMB_EDGES = 2048
 #: Edges of the first window P is refined on: enough that the widest empty arc of their phases
 #: is the lattice's even when lateness spans 95 % of the period.
@@ -126,17 +127,29 @@ def simplest_between(lo: Fraction, hi: Fraction) -> Fraction:
 # Edge kinds: which channel changed, in which direction (and the worst-case rules' end events)
 
 
-@dataclass(frozen=True)
+Signatures = tuple[tuple[str, Ints], ...]
+
+
+@dataclass
 class EdgeKinds:
     """What changed at each edge time: ``bits`` has bit 2c (channel c fell) and 2c + 1 (rose).
 
-    ``signatures``: for each of LinuxCNC's worst-case rules that could apply, the edge times at
-    which ``worst:J:RULE`` runs the thread on time (its intervals' end events), by rule name.
+    ``signatures`` (computed by ``source`` when first needed): for each of LinuxCNC's
+    worst-case rules that could apply, the edge times at which ``worst:J:RULE`` runs the thread
+    on time (its intervals' end events), by rule name.
     """
 
     names: tuple[str, ...]
     bits: Ints
-    signatures: tuple[tuple[str, Ints], ...] = ()
+    source: Callable[[], Signatures] | None = None
+    _signatures: Signatures | None = field(default=None, repr=False)
+
+    @property
+    def signatures(self) -> Signatures:
+        """The rules' end events (see the class docstring)."""
+        if self._signatures is None:
+            self._signatures = self.source() if self.source is not None else ()
+        return self._signatures
 
     def label(self, kind: int) -> str:
         """``"step rising"`` for kind 2c + 1."""
@@ -155,64 +168,61 @@ def _densest(times: Ints, span: int) -> tuple[int, int]:
 
 
 def _coarse(times: Ints, pmin: float, pmax: float) -> list[float]:
-    """Candidate periods (ticks, floats), best first, from the comb of the densest stretch."""
+    """Candidate periods (ticks, floats), best first, from the comb of the densest stretch
+    (at most :data:`COMB_EDGES` edges and 2^15 of the shortest periods)."""
     bw = max(1, int(pmin // 32))  # bins fine enough for 16 harmonics of the shortest period
-    i, j = _densest(times, bw * (1 << 21))
-    j = min(j, i + WINDOW_EDGES)
+    i, j = _densest(times, bw * (1 << 20))
+    j = min(j, i + COMB_EDGES)
     w = times[i:j] - times[i]
     if len(w) < MIN_EDGES or w[-1] < 2 * pmin:
         return []
     m = 1 << max(10, int(w[-1] // bw + 1).bit_length())
     hist = np.bincount(w // bw, minlength=m).astype(np.float64)
-    power = np.abs(np.fft.rfft(hist)) ** 2 / len(w)
+    power = np.abs(np.fft.rfft(hist)) ** 2 / len(w)  # the noise: exponential, mean 1
     length = m * bw  # frequency index f ↔ period length / f
-    half = len(power) - 1
-    flo, fhi = max(2.0, length / pmax), min(length / pmin, half / 2)
+    flo, fhi = max(2, math.ceil(length / pmax)), int(min(length / pmin, (len(power) - 17) / 16))
     if fhi <= flo:
         return []
-    # summed power of the first 8 harmonics of every fundamental on a grid of 1/16 bin
-    f0 = np.arange(flo, fhi, 1 / 16)
-    z = np.zeros(len(f0))
-    for c in range(0, len(f0), 1 << 16):
-        f = f0[c : c + (1 << 16), None] * np.arange(1, 9)[None, :]
-        ok = f < half - 1
-        f = np.where(ok, f, 0.0)
-        got = np.maximum(power[f.astype(np.int64)], power[f.astype(np.int64) + 1])
-        n_h = np.maximum(ok.sum(axis=1), 1)
-        z[c : c + (1 << 16)] = ((got * ok).sum(axis=1) - 1.5 * n_h) / np.sqrt(n_h)
-    top = np.flatnonzero((z[1:-1] >= z[:-2]) & (z[1:-1] >= z[2:])) + 1
-    order = top[np.argsort(-z[top], kind="stable")]
+    # summed power of harmonics 1..16 of each fundamental f..f+1: harmonic h lies in bins
+    # h·f .. h·f + h − 1, of which the largest counts (less the noise's expected largest)
+    f = np.arange(flo, fhi + 1)
+    z = np.zeros(len(f))
+    for h in range(1, 17):
+        top = power[h * f[:, None] + np.arange(h)[None, :]].max(axis=1)
+        z += top - sum(1 / i for i in range(1, h + 1))
+    peaks = np.flatnonzero((z[1:-1] >= z[:-2]) & (z[1:-1] >= z[2:])) + 1
+    order = peaks[np.argsort(-z[peaks], kind="stable")]
     if not len(order):
         return []
     # a punctual lattice at P puts full power on every harmonic, so P/m scores as well as P:
     # the longest period whose comb scores nearly as well as the best's is first
     best = int(order[0])
     picked: list[float] = []
-    for m in range(16, 1, -1):
-        g = int(round((f0[best] / m - flo) * 16))
-        if g >= 2 and z[max(0, g - 2) : g + 3].max() >= 0.85 * z[best]:
-            picked.append(float(f0[max(0, g - 2) + int(np.argmax(z[max(0, g - 2) : g + 3]))]))
+    for k in range(16, 1, -1):
+        g = int(round((f[best] + 0.5) / k)) - flo
+        if 1 <= g < len(z) - 1 and z[g - 1 : g + 2].max() >= 0.85 * z[best]:
+            picked.append(float(f[g - 1 + int(np.argmax(z[g - 1 : g + 2]))]) + 0.5)
             break
-    for k in order:  # the best few, each at least a bin from the others
-        if all(abs(f0[k] - g) > 1 for g in picked):
-            picked.append(float(f0[k]))
-        if len(picked) == 4:
+    for k in order:  # then the best few, each at least two bins from the others
+        if all(abs(f[k] + 0.5 - g) > 2 for g in picked):
+            picked.append(float(f[k]) + 0.5)
+        if len(picked) == 3:
             break
     mid = len(w) // 2
     near = w[max(0, mid - COMB_EDGES // 2) : mid + COMB_EDGES // 2]
-    return [_refine_comb(near, length / f, 0.25 / f) for f in picked]
+    return [_refine_comb(near, length / g, 0.6 / g) for g in picked]
 
 
 def _refine_comb(t: Ints, p: float, width: float) -> float:
-    """``p`` refined to where the summed power of the first 16 harmonics of edge times ``t``
-    peaks, within ±``width`` (relative), in two passes of 33 periods (the second 8× finer)."""
+    """``p`` refined to where the summed power of the first 12 harmonics of edge times ``t``
+    peaks, within ±``width`` (relative), in two passes of 25 periods (the second 8× finer)."""
     rel = (t - t[len(t) // 2]).astype(np.float64)
     for w in (width, width / 8):
-        grid = p * (1 + np.linspace(-w, w, 33))
+        grid = p * (1 + np.linspace(-w, w, 25))
         z = np.exp(2j * np.pi * rel[None, :] / grid[:, None])
         zh = np.ones_like(z)
         total = np.zeros(len(grid))
-        for _ in range(16):  # harmonics 1..16
+        for _ in range(12):  # harmonics 1..12
             zh *= z
             total += np.abs(zh.sum(axis=1)) ** 2
         p = float(grid[int(np.argmax(total))])
@@ -253,26 +263,37 @@ def _lower_hull(x: Floats, y: Floats) -> list[int]:
 
 
 def _floor_line(k: Ints, r: Floats, labels: Ints, q: float) -> tuple[float, float]:
-    """Slope of the floor of residuals ``r`` against invocation ``k`` (each phase cluster's own
-    lowest residual taken off first), and how far P could be off (ticks).
+    """Slope of the floor of residuals ``r`` against invocation ``k``, and how far P could be
+    off (ticks): each phase cluster's own floor (:func:`_cluster_floor`; a worst-case pattern
+    has two), the most certain ones weighted most."""
+    num = den = 0.0
+    for c in range(int(labels.max()) + 1):  # a few clusters: gaps of 2 % of the period
+        sel = labels == c
+        if np.count_nonzero(sel) < 2:
+            continue
+        slope, err = _cluster_floor(k[sel], r[sel], q)
+        if math.isfinite(err) and err > 0:
+            num, den = num + slope / err**2, den + 1 / err**2
+    if not den:
+        return 0.0, math.inf
+    return num / den, 1 / math.sqrt(den)
 
-    The floor: the line under every edge with the least mean lateness (lateness is never
-    negative, so the true line is under them too), i.e. the edge of the lower convex hull over
-    the mean invocation. The hull is taken over the lowest edge of each of up to 256 stretches
-    of ``k``; P could be off by twice (a sample + how far the stretches' lowest edges stay
-    above the line) over the span.
-    """
-    low = np.full(int(labels.max()) + 1, np.inf)
-    np.minimum.at(low, labels, r)
-    r = r - low[labels]
+
+def _cluster_floor(k: Ints, r: Floats, q: float) -> tuple[float, float]:
+    """The floor of one phase cluster: the line under every edge with the least mean lateness
+    (lateness is never negative, so the true line is under them too), i.e. the edge of the
+    lower convex hull over the mean invocation. The hull is taken over the lowest edge of each
+    of up to 64 stretches of ``k``; P could be off by twice (a sample + how far the stretches'
+    lowest edges stay above the line) over the span."""
     span = int(k[-1] - k[0])
     if span < 2:
         return 0.0, math.inf
-    nblocks = int(max(2, min(256, len(k) // 4, span)))
+    nblocks = int(max(2, min(64, len(k) // 4, span)))
     block = ((k - k[0]) * nblocks // (span + 1)).astype(np.int64)
     first = np.flatnonzero(np.diff(np.concatenate([[-1], block])))
-    order = np.lexsort((r, block))
-    at = order[np.searchsorted(block[order], block[first])]  # each stretch's lowest edge
+    mins = np.minimum.reduceat(r, first)
+    low_at = np.flatnonzero(r == np.repeat(mins, np.diff(np.append(first, len(r)))))
+    at = low_at[np.searchsorted(low_at, first)]  # each stretch's lowest edge
     kb, rb = k[at].astype(np.float64), r[at]
     hull = _lower_hull(kb, rb)
     if len(hull) < 2:
@@ -308,7 +329,9 @@ def _grow(
         r = rel - cut - k * p
         slope, err_k = _floor_line(k, r, _cluster_labels(r, p, q), q)
         if math.isfinite(err_k) and abs(slope) < 0.01 * p:
-            p, err = p + slope, err_k
+            if abs(slope) > err_k:  # a correction beyond what the floor's noise allows
+                p += slope
+            err = err_k
         progress(j - i, n)
         if i == 0 and j == n:
             return p, err
@@ -358,12 +381,12 @@ class _Fold:
     """The edges folded at an exact period ``a/b`` ticks: phases, and for every anchor (in bins
     of ``w`` units) the collisions and mean lateness of the reading it makes."""
 
-    def __init__(self, times: Ints, period: Fraction, res: int) -> None:
+    def __init__(self, times: Ints, period: Fraction, res: int, bins: int = 1 << 20) -> None:
         self.period = period
         self.a, self.b = period.numerator, period.denominator
         self.units = (times - times[0]) * self.b
         self.x = np.mod(self.units, self.a)
-        self.w = max(1, -(-self.a // (1 << 20)))
+        self.w = max(1, -(-self.a // bins))
         self.nb = -(-self.a // self.w)
         self.q = max(res, 1) * self.b  # one sample in units
         self.bins = self.x // self.w
@@ -449,7 +472,8 @@ def _kind_dependence(fold: _Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
     sub-sample offsets of a lattice that is not a whole number of samples are not a difference.
     """
     nbk = int(max(8, min(4096, fold.a // (2 * fold.q))))
-    present = [c for c in range(64) if np.any((kinds.bits >> c) & 1)] if len(kinds.bits) else []
+    seen = int(np.bitwise_or.reduce(kinds.bits)) if len(kinds.bits) else 0
+    present = [c for c in range(64) if seen >> c & 1]
     if len(present) < 2:
         return None
     best: tuple[int, float] | None = None
@@ -508,15 +532,24 @@ class _Eval:
         return min((r.collisions for r in self.readings), default=self.fold.n)
 
 
-def _evaluate(times: Ints, period: Fraction, res: int, kinds: EdgeKinds | None) -> _Eval:
-    """Read the lattice at ``period`` (exact ticks): see step 3 of the module docstring."""
-    fold = _Fold(times, period, res)
+def _evaluate(
+    times: Ints,
+    period: Fraction,
+    res: int,
+    kinds: EdgeKinds | None,
+    bins: int = 1 << 20,
+    judge: bool = True,
+) -> _Eval:
+    """Read the lattice at ``period`` (exact ticks), its phases in at most ``bins`` bins: see
+    step 3 of the module docstring. ``judge`` False skips the test of latency depending on the
+    pin (a quick look at a candidate: the chosen period is judged)."""
+    fold = _Fold(times, period, res, bins)
     coll = fold.collisions()
     worst = _worst(times, fold, coll, kinds) if kinds is not None else []
     if worst:
         ev = _Eval(fold, worst)
     else:
-        dep = _kind_dependence(fold, kinds) if kinds is not None else None
+        dep = _kind_dependence(fold, kinds) if kinds is not None and judge else None
         ev = _Eval(fold, _natural(fold, coll)) if dep is None else _dependent(fold, kinds, dep)
     if ev.readings:
         ev.slots = fold.lateness(ev.readings[0].anchor)[0]
@@ -597,23 +630,26 @@ def _dependent(fold: _Fold, kinds: EdgeKinds, dep: tuple[int, float]) -> _Eval:
     return _Eval(fold, [], refused=why)
 
 
-def _locked(ev: _Eval, m: int) -> bool:
+def _locked(ev: _Eval, m: int, sample: slice) -> bool:
     """Whether P's edges keep to residues of k mod m as their spacing varies, which a thread
     at P would not (its step rate changes move them), so the thread may be at m·P: 99 % of
     them on one residue, nine in ten with the others single edges between them
-    (:func:`_spiked`), or 99 % on two residues each within two samples of one lateness."""
-    res = np.mod(ev.slots, m)
+    (:func:`_spiked`), or 99 % on two residues each within two samples of one lateness. Judged
+    on the edges ``sample`` (a bounded stretch)."""
+    slots = ev.slots[sample]
+    res = np.mod(slots, m)
     counts = np.bincount(res, minlength=m)
     order = np.argsort(-counts, kind="stable")
     n = len(res)
     main = res == order[0]
-    if len(np.unique(np.diff(ev.slots[main]))) < 2:
+    d = np.diff(slots[main])
+    if not len(d) or bool(np.all(d == d[0])):
         return False  # a fixed pattern: no evidence either way
-    if counts[order[0]] >= 0.99 * n or _spiked(ev, m):
+    if counts[order[0]] >= 0.99 * n or _spiked(ev, m, sample):
         return True
     if counts[order[:2]].sum() >= 0.99 * n:
         fold = ev.fold
-        lat = fold.lateness(ev.readings[0].anchor)[1]
+        lat = fold.units[sample] - ev.readings[0].anchor - slots * fold.a
         for r in order[:2]:
             lo, hi = np.percentile(lat[res == r], [0.5, 99.5])
             if hi - lo > 2 * fold.q:
@@ -622,11 +658,11 @@ def _locked(ev: _Eval, m: int) -> bool:
     return False
 
 
-def _spiked(ev: _Eval, m: int) -> bool:
-    """Nine edges in ten on one residue of k mod m, and the others single edges between two
-    of them (late invocations of a thread at m·P, not a change of step rate, which moves a
-    run of steps)."""
-    res = np.mod(ev.slots, m)
+def _spiked(ev: _Eval, m: int, sample: slice) -> bool:
+    """Nine edges in ten of ``sample`` on one residue of k mod m, and the others single edges
+    between two of them (late invocations of a thread at m·P, not a change of step rate,
+    which moves a run of steps)."""
+    res = np.mod(ev.slots[sample], m)
     counts = np.bincount(res, minlength=m)
     top = int(np.argmax(counts))
     n = len(res)
@@ -644,10 +680,12 @@ def _window_kinds(kinds: EdgeKinds | None, times: Ints, i: int, j: int) -> EdgeK
     if kinds is None:
         return None
     lo, hi = times[i], times[j - 1]
-    sig = tuple(
-        (rule, e[(e >= lo) & (e <= hi)]) for rule, e in kinds.signatures
-    )  # fmt: skip
-    return EdgeKinds(kinds.names, kinds.bits[i:j], sig)
+    whole = kinds
+
+    def source() -> Signatures:
+        return tuple((rule, e[(e >= lo) & (e <= hi)]) for rule, e in whole.signatures)
+
+    return EdgeKinds(kinds.names, kinds.bits[i:j], source)
 
 
 def _spread(ev: _Eval) -> float | None:
@@ -679,7 +717,7 @@ def _down(
     def tries(periods: list[float]) -> list[tuple[int, float, float, bool]]:
         out = []
         for p in periods:
-            e = _evaluate(times, Fraction(p).limit_denominator(1 << 20), res, kinds)
+            e = _evaluate(times, Fraction(p).limit_denominator(1 << 20), res, kinds, 1 << 14, False)
             spread = _spread(e)
             if spread is not None:
                 out.append((e.collisions, spread, p, bool(e.readings[0].rule)))
@@ -693,9 +731,14 @@ def _down(
         least = min(t[1] for t in ok)
         return max(t[2] for t in ok if t[1] <= least + q / 2)
 
-    subs = [p0 / m for p0 in coarse for m in range(1, 9) if m == 1 or p0 / m >= pmin]
-    grown = [_grow(times, p, len(times) // 2, q, no_progress, 0.0) for p in subs]
-    tried = tries([float(_exact(p, err, times)) for p, err in grown if p > 0])
+    subs: list[float] = []
+    for p0 in coarse:
+        p, err = _grow(times, p0, len(times) // 2, q, no_progress, 0.0)
+        exact = float(_exact(p, err, times))
+        for m in range(1, 9):
+            if exact / m >= pmin and all(abs(exact / m - s) > 1e-4 * s for s in subs):
+                subs.append(exact / m)
+    tried = tries(subs)
     if not tried:
         return None
     p1 = best(tried)
@@ -708,7 +751,7 @@ def _mean(ev: _Eval) -> float:
     return float(fold.lateness(ev.readings[0].anchor)[1].mean()) / fold.b
 
 
-def _reads_as_well(ev: _Eval, big: _Eval, m: int) -> bool:
+def _reads_as_well(ev: _Eval, big: _Eval, m: int, sample: slice) -> bool:
     """Whether the lattice at m·P (``big``) explains the edges as well as P's (``ev``): no
     more double writes, and the same mean lateness (within half a sample), or P's off-residue
     edges single spikes, or both worst-case patterns (P's possibly punctual)."""
@@ -717,14 +760,14 @@ def _reads_as_well(ev: _Eval, big: _Eval, m: int) -> bool:
     q = max(ev.fold.q // ev.fold.b, 1)
     if _mean(big) <= _mean(ev) + q / 2:
         return True
-    if _spiked(ev, m):
+    if _spiked(ev, m, sample):
         return True
     punctual = ev.readings[0].max_lateness <= 2 * q
     return bool(big.readings[0].rule) and (bool(ev.readings[0].rule) or punctual)
 
 
 def _up(
-    times: Ints, period: Fraction, res: int, kinds: EdgeKinds | None, pmax: float
+    times: Ints, period: Fraction, res: int, kinds: EdgeKinds | None, pmax: float, sample: slice
 ) -> tuple[_Eval, list[tuple[Fraction, Reading]]]:
     """The thread at ``period`` or a multiple: while one (the least m ≤ 16 first) is
     :func:`_locked` and reads as well (:func:`_reads_as_well`), move up to it."""
@@ -735,10 +778,10 @@ def _up(
         for m in range(2, 17):
             if float(period) * m > pmax:
                 break
-            if not _locked(ev, m):
+            if not _locked(ev, m, sample):
                 continue
             big = _evaluate(times, period * m, res, kinds)
-            if _reads_as_well(ev, big, m):
+            if _reads_as_well(ev, big, m, sample):
                 ev, period, moved = big, period * m, True
                 break
     return ev, []
@@ -1000,7 +1043,8 @@ def _significance(
     most trials · n · P(Binomial(n, f) ≥ m), bounded by Chernoff, exp(−n·KL(m/n ‖ f)); taken
     for the arc of every edge and for that of 99 % of them (spikes). A worst-case pattern puts
     the edges on a few points: for K arcs (cut at the K widest gaps, each arc a sample longer)
-    covering a fraction f, at most trials · n^(2K) · f^n. The smallest of these counts.
+    covering a fraction f, the first edge of each arc falls anywhere and the others within
+    theirs: at most trials · n^K · f^(n − K). The smallest of these counts.
     """
     n = len(lat)
     rank = max(1, math.ceil(0.99 * n))
@@ -1016,13 +1060,13 @@ def _significance(
             continue
         kl = a * math.log(a / f) + ((1 - a) * math.log((1 - a) / (1 - f)) if a < 1 else 0.0)
         best = min(best, trials - n * kl / math.log(10))
-    values = np.unique(lat)
+    values = union(lat)
     a_units = float(period) * b
     gaps = np.sort(np.diff(np.append(values, values[0] + a_units)))[::-1][:8]
     for k in range(1, len(gaps) + 1):
         f = min(1.0, 1.0 - float(gaps[:k].sum()) / a_units + k * q * b / a_units)
-        if 0 < f < 1:
-            best = min(best, trials + 2 * k * math.log10(n) + n * math.log10(f))
+        if 0 < f < 1 and n > k:
+            best = min(best, trials + k * math.log10(n) + (n - k) * math.log10(f))
     return p99, in_arc, f99, best
 
 
@@ -1068,7 +1112,7 @@ def _infer(
     )
     if not pmin <= p <= pmax:
         return None, [], 0.0, f"the best period, {p:.6g} ticks, is outside {pmin:.6g}-{pmax:.6g}"
-    ev, others = _up(times, _exact(p, err, times), res, kinds, pmax)
+    ev, others = _up(times, _exact(p, err, times), res, kinds, pmax, slice(i, j))
     if ev.readings:
         return ev, others, err, ""
     return None, [], 0.0, ev.refused
@@ -1265,7 +1309,7 @@ def _merge(capture: Capture, names: list[str]) -> tuple[Ints, Ints, Ints, dict[s
     return times.astype(np.int64), mask, kinds, counts
 
 
-def _signatures(capture: Capture, roles: dict[str, str]) -> tuple[tuple[str, Ints], ...]:
+def _signatures(capture: Capture, roles: dict[str, str]) -> Signatures:
     """The end events of every worst-case rule that applies to the mapped roles (both active
     edges, both parities of the every-second rules)."""
 
@@ -1322,7 +1366,7 @@ def analyse(
         raise UsageError(f"{capture.path}: {len(names)} channels to read; at most 30")
     times, mask, bits, counts = _merge(capture, names)
     named = {r: capture.channel(c).name for r, c in (roles or {}).items()}
-    kinds = EdgeKinds(tuple(names), bits, _signatures(capture, named))
+    kinds = EdgeKinds(tuple(names), bits, lambda: _signatures(capture, named))
     return analyse_times(
         times,
         tick_ns=capture.timebase.tick_ns,

@@ -23,7 +23,7 @@ import numpy.typing as npt
 
 from wavecheck.linuxcnc.steptypes import StepKind
 
-__all__ = ["PHASE_RULES", "WORST_RULES", "end_events"]
+__all__ = ["PHASE_RULES", "WORST_RULES", "end_events", "union"]
 
 Ints = npt.NDArray[np.int64]
 
@@ -35,8 +35,15 @@ WORST_RULES = (
 PHASE_RULES = ("state_hold", "step_period")
 
 
+def union(*arrays: Ints) -> Ints:
+    """The sorted distinct values of ``arrays`` (sort-based: numpy's hashing ``unique`` is far
+    slower on a million sorted integers)."""
+    a = np.sort(np.concatenate(arrays)) if arrays else np.zeros(0, np.int64)
+    return a[np.concatenate([[True], a[1:] != a[:-1]])] if len(a) else a
+
+
 def _alternate(events: Ints, parity: int) -> Ints:
-    return np.unique(events)[1 - parity :: 2]
+    return union(events)[1 - parity :: 2]
 
 
 def end_events(
@@ -63,8 +70,8 @@ def end_events(
             return None
         changes = [e for r, f in pulses for e in (r, f)]
         return _alternate(np.concatenate(changes) if changes else np.zeros(0, np.int64), parity)
-    rises = np.unique(np.concatenate([r for r, _ in pulses]))
-    falls = np.unique(np.concatenate([f for _, f in pulses]))
+    rises = union(*[r for r, _ in pulses])
+    falls = union(*[f for _, f in pulses])
     active = rises if active_rising else falls
     if rule == "step_high":
         return falls
@@ -73,10 +80,10 @@ def end_events(
     if rule == "step_period":
         return _alternate(active, parity)
     if kind == "step-dir" and rule == "dir_hold":
-        return np.unique(dir_changes)
+        return union(dir_changes)
     if kind == "step-dir" and rule == "dir_setup":
         pos = np.searchsorted(active, dir_changes, side="left")  # first active edge at/after
-        return np.unique(active[pos[pos < len(active)]])
+        return union(active[pos[pos < len(active)]])
     if kind == "up-down" and rule == "dir_delay":
         up, down = (r if active_rising else f for r, f in pulses[:2])
         lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
