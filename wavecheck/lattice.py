@@ -68,6 +68,7 @@ from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.steptypes import StepKind
 from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events, union
 from wavecheck.progress import ProgressCallback, no_progress
+from wavecheck.units import format_ns
 
 __all__ = [
     "MAX_PERIOD_NS",
@@ -83,6 +84,7 @@ __all__ = [
     "Spike",
     "analyse",
     "analyse_times",
+    "common_period",
     "simplest_between",
 ]
 
@@ -167,10 +169,13 @@ def _densest(times: Ints, span: int) -> tuple[int, int]:
     return i, int(ends[i])
 
 
-def _coarse(times: Ints, pmin: float, pmax: float) -> list[float]:
-    """Candidate periods (ticks, floats), best first, from the comb of the densest stretch
-    (at most :data:`COMB_EDGES` edges and 2^15 of the shortest periods)."""
-    bw = max(1, int(pmin // 32))  # bins fine enough for 16 harmonics of the shortest period
+def _coarse(
+    times: Ints, pmin: float, pmax: float, harmonics: int = 16, keep: int = 3
+) -> list[float]:
+    """Up to ``keep`` candidate periods (ticks, floats), best first, from the comb of the
+    densest stretch (at most :data:`COMB_EDGES` edges and 2^15 of the shortest periods), each
+    scored by its first ``harmonics`` harmonics."""
+    bw = max(1, int(pmin // (2 * harmonics)))  # bins fine enough for the shortest period's
     i, j = _densest(times, bw * (1 << 20))
     j = min(j, i + COMB_EDGES)
     w = times[i:j] - times[i]
@@ -180,14 +185,16 @@ def _coarse(times: Ints, pmin: float, pmax: float) -> list[float]:
     hist = np.bincount(w // bw, minlength=m).astype(np.float64)
     power = np.abs(np.fft.rfft(hist)) ** 2 / len(w)  # the noise: exponential, mean 1
     length = m * bw  # frequency index f ↔ period length / f
-    flo, fhi = max(2, math.ceil(length / pmax)), int(min(length / pmin, (len(power) - 17) / 16))
+    h_top = harmonics
+    flo = max(2, math.ceil(length / pmax))
+    fhi = int(min(length / pmin, (len(power) - h_top - 1) / h_top))
     if fhi <= flo:
         return []
-    # summed power of harmonics 1..16 of each fundamental f..f+1: harmonic h lies in bins
+    # summed power of the harmonics h of each fundamental f..f+1: harmonic h lies in bins
     # h·f .. h·f + h − 1, of which the largest counts (less the noise's expected largest)
     f = np.arange(flo, fhi + 1)
     z = np.zeros(len(f))
-    for h in range(1, 17):
+    for h in range(1, h_top + 1):
         top = power[h * f[:, None] + np.arange(h)[None, :]].max(axis=1)
         z += top - sum(1 / i for i in range(1, h + 1))
     peaks = np.flatnonzero((z[1:-1] >= z[:-2]) & (z[1:-1] >= z[2:])) + 1
@@ -206,11 +213,11 @@ def _coarse(times: Ints, pmin: float, pmax: float) -> list[float]:
     for k in order:  # then the best few, each at least two bins from the others
         if all(abs(f[k] + 0.5 - g) > 2 for g in picked):
             picked.append(float(f[k]) + 0.5)
-        if len(picked) == 3:
+        if len(picked) >= keep:
             break
     mid = len(w) // 2
     near = w[max(0, mid - COMB_EDGES // 2) : mid + COMB_EDGES // 2]
-    return [_refine_comb(near, length / g, 0.6 / g) for g in picked]
+    return [_refine_comb(near, length / g, 0.6 / g) for g in picked[:keep]]
 
 
 def _refine_comb(t: Ints, p: float, width: float) -> float:
@@ -556,6 +563,12 @@ def _evaluate(
     return ev
 
 
+def _allowance(n: int) -> int:
+    """Double writes a reading may have beyond the fewest and still count as feasible: a few
+    catch-up runs (invocations a period or more late) make them under any reading."""
+    return max(2, n // 100)
+
+
 def _natural(fold: _Fold, coll: Ints) -> list[Reading]:
     """Readings of latency that does not depend on the pin: the feasible anchor (fewest
     collisions) among the cluster starts after wide gaps with the least mean lateness (most
@@ -567,12 +580,14 @@ def _natural(fold: _Fold, coll: Ints) -> list[Reading]:
     the bulk: late by nearly P, or is the bulk late by a sample or two? The capture cannot
     tell; the larger is the one to plan from)."""
     cands = fold.candidate_bins()
-    cands = cands[coll[cands] == coll[cands].min()]
+    cands = cands[coll[cands] <= coll[cands].min() + _allowance(fold.n)]
     mean = fold.mean_bins()[cands]
     chosen = fold.reading(int(cands[int(np.argmin(mean))]), coll)
     out = [chosen]
     width = max(1, fold.q // fold.w)  # bins per sample
-    dense = np.convolve(np.concatenate([fold.hist, fold.hist[: width - 1]]), np.ones(width), "valid")
+    dense = np.convolve(
+        np.concatenate([fold.hist, fold.hist[: width - 1]]), np.ones(width), "valid"
+    )
     top = int(np.argmax(dense))
     before = np.arange(top - 2 * width, top) % fold.nb
     if dense[top] >= fold.n / 2 and 3 * fold.hist[before].sum() < dense[top]:
@@ -601,7 +616,7 @@ def _worst(times: Ints, fold: _Fold, coll: Ints, kinds: EdgeKinds | None) -> lis
     readings = [fold.reading(int(s), coll) for s in starts]
     least = min((r.collisions for r in readings), default=0)
     for r, width in zip(readings, widths, strict=True):
-        if r.collisions > least:
+        if r.collisions > least + _allowance(fold.n):
             continue
         _, lat = fold.lateness(r.anchor)
         rule = _rule_of(times, lat < width, kinds)
@@ -612,10 +627,9 @@ def _worst(times: Ints, fold: _Fold, coll: Ints, kinds: EdgeKinds | None) -> lis
 
 def _dependent(fold: _Fold, kinds: EdgeKinds, dep: tuple[int, float]) -> _Eval:
     """Lateness that depends on the pin and is no worst case: no thread's latency."""
-    period = float(fold.period)
     if len(_two_point(fold)[0]):
         why = (
-            f"every edge is on one of two exact offsets from a {period:.6g}-tick lattice, set "
+            "every edge is on one of two exact offsets from a {period} lattice, set "
             "by which pin changed, and the on-time edges are no rule's end events: a hardware "
             "step timer, not a thread's latency"
         )
@@ -623,7 +637,7 @@ def _dependent(fold: _Fold, kinds: EdgeKinds, dep: tuple[int, float]) -> _Eval:
         kind, v = dep
         why = (
             f"the phase of the {kinds.label(kind)} edges differs from the other edges' "
-            f"(Kuiper V = {v:.2f}) on the best lattice ({period:.6g} ticks): a thread's "
+            f"(Kuiper V = {v:.2f}) on the best lattice ({{period}}): a thread's "
             "latency does not depend on which pin it changes (a step timer with its own pulse "
             "timer, or pins written at different times)"
         )
@@ -688,16 +702,24 @@ def _window_kinds(kinds: EdgeKinds | None, times: Ints, i: int, j: int) -> EdgeK
     return EdgeKinds(kinds.names, kinds.bits[i:j], source)
 
 
-def _spread(ev: _Eval) -> float | None:
-    """The mean lateness (ticks) of ``ev``'s first reading, None when it has none or its
-    lattice is no better than chance."""
+def _spread(ev: _Eval) -> tuple[float, float] | None:
+    """The mean and the 99th percentile lateness (ticks) of ``ev``'s first reading, None when
+    it has none or its lattice is no better than chance."""
     if not ev.readings:
         return None
     fold = ev.fold
     lat = fold.lateness(ev.readings[0].anchor)[1]
     span = int(ev.slots.max() - ev.slots.min()) if len(ev.slots) else 1
-    _, _, _, chance = _significance(lat, fold.b, fold.q // fold.b, fold.period, span)
-    return float(lat.mean()) / fold.b if chance <= MAX_LOG10_CHANCE else None
+    p99, _, _, chance = _significance(lat, fold.b, fold.q // fold.b, fold.period, span)
+    if chance > MAX_LOG10_CHANCE:
+        return None
+    return float(lat.mean()) / fold.b, p99 / fold.b
+
+
+def _alike(a: tuple[float, float], b: tuple[float, float], q: float) -> bool:
+    """Two lattices read with the same lateness: mean or 99th percentile within half a sample
+    (a few outlying edges move the mean, frequent ones the percentile)."""
+    return abs(a[0] - b[0]) <= q / 2 or abs(a[1] - b[1]) <= q / 2
 
 
 def _down(
@@ -714,7 +736,7 @@ def _down(
     """
     q = float(max(res, 1))
 
-    def tries(periods: list[float]) -> list[tuple[int, float, float, bool]]:
+    def tries(periods: list[float]) -> list[tuple[int, tuple[float, float], float, bool]]:
         out = []
         for p in periods:
             e = _evaluate(times, Fraction(p).limit_denominator(1 << 20), res, kinds, 1 << 14, False)
@@ -723,13 +745,13 @@ def _down(
                 out.append((e.collisions, spread, p, bool(e.readings[0].rule)))
         return out
 
-    def best(tried: list[tuple[int, float, float, bool]]) -> float:
+    def best(tried: list[tuple[int, tuple[float, float], float, bool]]) -> float:
         fewest = min(t[0] for t in tried)
-        ok = [t for t in tried if t[0] <= fewest + max(2, len(times) // 1000)]
+        ok = [t for t in tried if t[0] <= fewest + _allowance(len(times))]
         if any(t[3] for t in ok):
             return max(t[2] for t in ok if t[3])
-        least = min(t[1] for t in ok)
-        return max(t[2] for t in ok if t[1] <= least + q / 2)
+        least = min(ok, key=lambda t: t[1][0])[1]
+        return max(t[2] for t in ok if _alike(t[1], least, q))
 
     subs: list[float] = []
     for p0 in coarse:
@@ -745,20 +767,15 @@ def _down(
     return best(tried + tries([p1 * m for m in range(2, 9) if p1 * m <= pmax]))
 
 
-def _mean(ev: _Eval) -> float:
-    """Mean lateness (ticks) of ``ev``'s first reading."""
-    fold = ev.fold
-    return float(fold.lateness(ev.readings[0].anchor)[1].mean()) / fold.b
-
-
 def _reads_as_well(ev: _Eval, big: _Eval, m: int, sample: slice) -> bool:
     """Whether the lattice at m·P (``big``) explains the edges as well as P's (``ev``): no
-    more double writes, and the same mean lateness (within half a sample), or P's off-residue
+    more double writes, and the same lateness (:func:`_alike`), or P's off-residue
     edges single spikes, or both worst-case patterns (P's possibly punctual)."""
     if not big.readings or big.collisions > ev.collisions:
         return False
     q = max(ev.fold.q // ev.fold.b, 1)
-    if _mean(big) <= _mean(ev) + q / 2:
+    mine, theirs = _spread(ev), _spread(big)
+    if mine is not None and theirs is not None and _alike(theirs, mine, q):
         return True
     if _spiked(ev, m, sample):
         return True
@@ -1096,26 +1113,55 @@ def _not_lattice(why: str) -> str:
 def _infer(
     times: Ints, res: int, kinds: EdgeKinds | None, pmin: float, pmax: float,
     progress: ProgressCallback,
-) -> tuple[_Eval | None, list[tuple[Fraction, Reading]], float, str]:  # fmt: skip
+) -> tuple[_Eval | None, list[tuple[Fraction, Reading]], float, str, Fraction]:  # fmt: skip
     """Search, refine and read the lattice: (evaluation, other readings, standard error of P,
-    why not when none fits)."""
+    why not when none fits (``{period}``: the period tried), that period in ticks). Catch-up runs (:func:`_bursts`) are left out of the search and read
+    with the rest."""
+    burst = _bursts(times, pmin)
+    if burst.any():
+        every, times = times, times[~burst]
+        whole, kinds = (
+            kinds,
+            None if kinds is None else EdgeKinds(kinds.names, kinds.bits[~burst], kinds.source),
+        )
+    if len(times) < MIN_EDGES:
+        return None, [], 0.0, "too few edges outside catch-up runs", Fraction(0)
     coarse = _coarse(times, pmin, pmax)
     if not coarse:
-        return None, [], 0.0, "no periodic comb in the edges' timing"
+        return None, [], 0.0, "no periodic comb in the edges' timing", Fraction(0)
     i, j = _densest(times, int(64 * WINDOW_EDGES * max(coarse)))
     j = min(j, i + WINDOW_EDGES)
     p1 = _down(times[i:j], coarse, res, _window_kinds(kinds, times, i, j), pmin, pmax)
     if p1 is None:
-        return None, [], 0.0, "no lattice near the edges' strongest combs is better than chance"
+        return (
+            None, [], 0.0, "no lattice near the edges' strongest combs is better than chance",
+            Fraction(0),
+        )  # fmt: skip
     p, err = _grow(
         times, p1, (i + j) // 2, float(max(res, 1)), progress, float(times[j - 1] - times[i])
     )
     if not pmin <= p <= pmax:
-        return None, [], 0.0, f"the best period, {p:.6g} ticks, is outside {pmin:.6g}-{pmax:.6g}"
+        return (
+            None, [], 0.0, "the best period, {period}, is outside the base thread's range",
+            Fraction(p).limit_denominator(10**6),
+        )  # fmt: skip
     ev, others = _up(times, _exact(p, err, times), res, kinds, pmax, slice(i, j))
+    if ev.readings and burst.any():
+        ev = _evaluate(every, ev.fold.period, res, whole)
     if ev.readings:
-        return ev, others, err, ""
-    return None, [], 0.0, ev.refused
+        return ev, others, err, "", ev.fold.period
+    return None, [], 0.0, ev.refused, ev.fold.period
+
+
+def _bursts(times: Ints, pmin: float) -> npt.NDArray[np.bool_]:
+    """Edges of catch-up runs: three distinct edge times within the shortest period, which a
+    thread less than a period late cannot make (invocations k and k + 2 are more than P apart
+    when each is less than P late), but one catching up after a longer delay does."""
+    out = np.zeros(len(times), bool)
+    if len(times) >= 3:
+        at = np.flatnonzero(times[2:] - times[:-2] < pmin)
+        out[at] = out[at + 1] = out[at + 2] = True
+    return out
 
 
 def analyse_times(
@@ -1170,9 +1216,9 @@ def analyse_times(
             float(times[j - 1] - times[i]) / 8,
         )  # fmt: skip
     else:
-        found, others, err, why = _infer(times, res_ticks, kinds, pmin, pmax, progress)
+        found, others, err, why, p_ticks = _infer(times, res_ticks, kinds, pmin, pmax, progress)
         if found is None:
-            report.reason = _not_lattice(why)
+            report.reason = _not_lattice(why.format(period=format_ns(p_ticks * tick_ns)))
             return report
         ev, env = found, float(found.fold.period)
     return _fill(report, times, mask, ev, others, given, env, err, res_ticks, pmin)
@@ -1214,7 +1260,9 @@ def _fill(
     report.phase_ns = fit.phase * tick
     bad = []
     if not given and float(fold.period) < pmin:
-        bad.append(f"its period would be {float(report.period_ns):.4g} ns, shorter than a base thread runs")
+        bad.append(
+            f"its period would be {float(report.period_ns):.4g} ns, shorter than a base thread runs"
+        )
     if chance > MAX_LOG10_CHANCE:
         bad.append(
             f"the fit could be chance (10^{chance:.1f}: {in_arc} edges within {f:.0%} of "
@@ -1222,7 +1270,7 @@ def _fill(
             "close to a period)"
         )
     collisions = reading.collisions
-    if collisions > max(2, len(times) // 100):
+    if collisions > _allowance(len(times)) + int(np.count_nonzero(_bursts(times, pmin))):
         bad.append(
             f"{collisions} times two distinct edge times fall into one period "
             f"({float(report.period_ns):.6g} ns), which a thread's one write per run cannot make"
@@ -1239,12 +1287,12 @@ def _fill(
     report.times, report.channel_mask = times, mask
     report.lattice = not bad
     report.rule = reading.rule
-    report.reason = (
-        "edges lie on a periodic lattice: a software base thread" if not bad else bad[0]
-    )
+    report.reason = "edges lie on a periodic lattice: a software base thread" if not bad else bad[0]
     if moved:
         first = int(times[int(np.argmax(k != fold.lateness(reading.anchor)[0]))])
-        report.catch_up = CatchUp(moved, Fraction(first) * tick, Fraction(int(lat.max()), fold.b) * tick)
+        report.catch_up = CatchUp(
+            moved, Fraction(first) * tick, Fraction(int(lat.max()), fold.b) * tick
+        )
         report.notes.append(
             f"{collisions} times two distinct edge times fall into one period (first at "
             f"{first * float(tick) * 1e-9:.9g} s): invocations a whole period or more late, the "
@@ -1309,6 +1357,35 @@ def _merge(capture: Capture, names: list[str]) -> tuple[Ints, Ints, Ints, dict[s
     return times.astype(np.int64), mask, kinds, counts
 
 
+def common_period(
+    times: Ints, tick_ns: Fraction, resolution_ns: Fraction
+) -> tuple[Fraction | None, str]:
+    """Whether edge ``times`` (ticks, sorted, unique: the steps of several axes) lie on one
+    periodic lattice, one timer's or thread's, as cheaply as that can be told: the comb's best
+    period (8 harmonics), refined, and the chance of its fit. (P in ns or None, why not.)
+    The edges of one timer interrupt may be written one after another, so two write times in a
+    period do not refuse it; the period may be the thread's or a multiple or submultiple."""
+    res = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
+    if len(times) < MIN_EDGES:
+        return None, f"too few steps ({len(times)})"
+    pmin, pmax = _limits(tick_ns, res)
+    coarse = _coarse(times, pmin, pmax, harmonics=8, keep=1)
+    if not coarse:
+        return None, "no periodic comb in the steps' timing"
+    i, j = _densest(times, int(64 * WINDOW_EDGES * coarse[0]))
+    p, err = _grow(times, coarse[0], (i + j) // 2, float(max(res, 1)), no_progress, 0.0)
+    if not pmin <= p <= pmax:
+        return None, "no base-thread period fits"
+    ev = _evaluate(times, _exact(p, err, times), res, None, 1 << 14, False)
+    fold = ev.fold
+    lat = fold.lateness(ev.readings[0].anchor)[1]
+    span = int(ev.slots.max() - ev.slots.min()) if len(ev.slots) else 1
+    _, _, f, chance = _significance(lat, fold.b, max(res, 1), fold.period, span)
+    if chance > MAX_LOG10_CHANCE:
+        return None, f"the best lattice could be chance (10^{chance:.1f})"
+    return fold.period * tick_ns, ""
+
+
 def _signatures(capture: Capture, roles: dict[str, str]) -> Signatures:
     """The end events of every worst-case rule that applies to the mapped roles (both active
     edges, both parities of the every-second rules)."""
@@ -1335,8 +1412,10 @@ def _signatures(capture: Capture, roles: dict[str, str]) -> Signatures:
         for active in (True, False):
             for parity in (0, 1):
                 ends = end_events(rule, kind, lines, dirs, active, parity)
-                if ends is not None and len(ends) and not any(
-                    r == rule and np.array_equal(e, ends) for r, e in out
+                if (
+                    ends is not None
+                    and len(ends)
+                    and not any(r == rule and np.array_equal(e, ends) for r, e in out)
                 ):
                     out.append((rule, ends))
     return tuple(out)

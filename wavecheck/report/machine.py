@@ -7,15 +7,13 @@ The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and li
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
 Cross-axis facts: the step counts side by side and whether the axes' step edges lie on one common
-periodic lattice (one base thread or timer: :mod:`wavecheck.latency`).
+periodic lattice (one base thread or timer: :mod:`wavecheck.lattice`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from wavecheck.capture.model import Capture
 from wavecheck.report.model import Report
@@ -55,28 +53,40 @@ class MachineReport:
         raise KeyError(name)
 
 
+#: Step times the common-timer note reads: the first of the axes' steps merged (a bound on its
+#: cost; a thread or timer that makes them all shows in any stretch of them).
+TIMER_TICKS = 1 << 14
+#: Fewest step times from which the note tells anything.
+TIMER_MIN = 64
+
+
 def common_timer(reports: list[Report]) -> str:
-    """One line: do the axes' steps lie on one common periodic lattice (one thread or timer)?"""
-    from wavecheck.latency import analyse_times
+    """One line: do the axes' steps lie on one common periodic lattice (one thread or timer)?
+
+    Read from the axes' step ticks (the first :data:`TIMER_TICKS` step times of them all) by
+    :func:`wavecheck.lattice.common_period`."""
+    from wavecheck.lattice import common_period
+    from wavecheck.linuxcnc.worstcase import union
 
     cap = reports[0].capture
     ticks = [r.events().ticks for r in reports if r.steps.count]
     if len(ticks) < 2:
         return "fewer than two axes step: no common timer to look for"
-    times = np.unique(np.concatenate(ticks))
-    found = analyse_times(
-        times,
-        tick_ns=cap.timebase.tick_ns,
-        resolution_ns=reports[0].resolution_ns,
-        path=cap.path,
-    )
-    if found.lattice and found.period_ns is not None:
+    times = union(*ticks)
+    if len(times) < TIMER_MIN:
         return (
-            f"the steps of every axis lie on one {float(found.period_ns) / 1000:g} us lattice: "
-            "one base thread or timer makes them"
+            f"too few steps ({len(times)} step times) to tell whether one common periodic "
+            "lattice (one thread or timer) makes them"
         )
-    why = found.reason.split(" (")[0]
-    return f"the axes' steps are not on one common periodic lattice ({why})"
+    sample = times[:TIMER_TICKS]
+    period, why = common_period(sample, cap.timebase.tick_ns, reports[0].resolution_ns)
+    bound = f" (from the first {len(sample)} step times)" if len(sample) < len(times) else ""
+    if period is not None:
+        return (
+            f"the steps of every axis lie on one common periodic lattice of "
+            f"{float(period) / 1000:.6g} us{bound}: one base thread or timer makes them"
+        )
+    return f"the axes' steps are not on one common periodic lattice ({why}){bound}"
 
 
 def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
