@@ -703,23 +703,26 @@ def _window_kinds(kinds: EdgeKinds | None, times: Ints, i: int, j: int) -> EdgeK
 
 
 def _spread(ev: _Eval) -> tuple[float, float] | None:
-    """The mean and the 99th percentile lateness (ticks) of ``ev``'s first reading, None when
-    it has none or its lattice is no better than chance."""
+    """The mean and the largest lateness (ticks) of ``ev``'s first reading, catch-up runs at its
+    period left out (three write times within a period: lateness of a period or more, seen
+    modulo P); None when it has none or its lattice is no better than chance."""
     if not ev.readings:
         return None
     fold = ev.fold
     lat = fold.lateness(ev.readings[0].anchor)[1]
     span = int(ev.slots.max() - ev.slots.min()) if len(ev.slots) else 1
-    p99, _, _, chance = _significance(lat, fold.b, fold.q // fold.b, fold.period, span)
+    _, _, _, chance = _significance(lat, fold.b, fold.q // fold.b, fold.period, span)
     if chance > MAX_LOG10_CHANCE:
         return None
-    return float(lat.mean()) / fold.b, p99 / fold.b
+    calm = lat[~_bursts(fold.units, fold.a)]
+    if not len(calm):
+        return None
+    return float(calm.mean()) / fold.b, float(calm.max()) / fold.b
 
 
 def _alike(a: tuple[float, float], b: tuple[float, float], q: float) -> bool:
-    """Two lattices read with the same lateness: mean or 99th percentile within half a sample
-    (a few outlying edges move the mean, frequent ones the percentile)."""
-    return abs(a[0] - b[0]) <= q / 2 or abs(a[1] - b[1]) <= q / 2
+    """Two lattices read with the same lateness: mean and maximum within half a sample."""
+    return abs(a[0] - b[0]) <= q / 2 and abs(a[1] - b[1]) <= q / 2
 
 
 def _down(
@@ -753,13 +756,14 @@ def _down(
         least = min(ok, key=lambda t: t[1][0])[1]
         return max(t[2] for t in ok if _alike(t[1], least, q))
 
+    # each submultiple refined on its own: a lattice at a multiple of the thread's period
+    # (its step pattern) does not fit well enough to refine P there
+    starts = [p0 / m for p0 in coarse for m in range(1, 9) if m == 1 or p0 / m >= pmin]
     subs: list[float] = []
-    for p0 in coarse:
-        p, err = _grow(times, p0, len(times) // 2, q, no_progress, 0.0)
-        exact = float(_exact(p, err, times))
-        for m in range(1, 9):
-            if exact / m >= pmin and all(abs(exact / m - s) > 1e-4 * s for s in subs):
-                subs.append(exact / m)
+    for p0 in sorted(starts, reverse=True):
+        if all(abs(p0 - s) > 1e-3 * s for s in subs):
+            p, err = _grow(times, p0, len(times) // 2, q, no_progress, 0.0)
+            subs.append(float(_exact(p, err, times)))
     tried = tries(subs)
     if not tried:
         return None
@@ -769,8 +773,9 @@ def _down(
 
 def _reads_as_well(ev: _Eval, big: _Eval, m: int, sample: slice) -> bool:
     """Whether the lattice at m·P (``big``) explains the edges as well as P's (``ev``): no
-    more double writes, and the same lateness (:func:`_alike`), or P's off-residue
-    edges single spikes, or both worst-case patterns (P's possibly punctual)."""
+    more double writes, and the same lateness (:func:`_alike`), or P's off-residue edges single
+    spikes, or a worst-case pattern at m·P (the on-time edges a rule's end events) where P's is
+    one too or punctual."""
     if not big.readings or big.collisions > ev.collisions:
         return False
     q = max(ev.fold.q // ev.fold.b, 1)

@@ -26,7 +26,6 @@ from wavecheck.engine import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.interface import mapped_channel_names
 from wavecheck.linuxcnc.steptypes import step_type
-from wavecheck.measure import default_type
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate, current
 from wavecheck.units import format_ns, json_number, time_ns
@@ -76,6 +75,8 @@ def channel_roles(capture: Capture, args: argparse.Namespace) -> tuple[list[str]
     Raises:
         UsageError: no step channel found, or the axis options do not fit the capture.
     """
+    from wavecheck.measure import default_type
+
     names: list[str] = []
     first: dict[str, str] = {}
     runs, _ = axis_runs(args, capture)

@@ -22,7 +22,7 @@ from stepgen.vcdout import write_vcd
 from wavecheck.capture.open import open_capture
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.cli import main as wavecheck_main
-from wavecheck.latency import analyse, analyse_times, simplest_between
+from wavecheck.lattice import analyse, analyse_times, simplest_between
 
 CAPTURES = (
     Path(__file__).resolve().parents[3] / "shared" / "captures" / "sigrok-dumps" / "stepper_motor"
