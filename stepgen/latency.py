@@ -50,8 +50,7 @@ from stepgen.model import InvocationRun
 from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc.steptypes import kind_of
-from wavecheck.linuxcnc.worstcase import end_events
-from wavecheck.rules import RULES as TABLE
+from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
 __all__ = [
@@ -64,11 +63,8 @@ __all__ = [
     "parse_latency",
 ]
 
-#: The rules ``worst:J:RULE`` can target: every interval rule whose intervals stepgen's own
-#: invocations end (not state_sequence, which has none, nor enable_setup: stepgen has no ENABLE).
-RULES: tuple[str, ...] = tuple(
-    r.id for r in TABLE if r.check != "sequence" and "enable" not in (r.ref, r.data)
-)
+#: The rules ``worst:J:RULE`` can target (:data:`wavecheck.linuxcnc.worstcase.WORST_RULES`).
+RULES: tuple[str, ...] = WORST_RULES
 DEFAULT_CATCHUP_NS = 1000
 
 

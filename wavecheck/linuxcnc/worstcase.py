@@ -22,15 +22,17 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.linuxcnc.steptypes import StepKind
+from wavecheck.rules import RULES as TABLE
 
 __all__ = ["PHASE_RULES", "WORST_RULES", "end_events", "union"]
 
 Ints = npt.NDArray[np.int64]
 
-#: Every rule :func:`end_events` knows.
-WORST_RULES = (
-    "step_high", "step_low", "step_period", "dir_setup", "dir_hold", "dir_delay", "state_hold"
-)  # fmt: skip
+#: The rules ``worst:J:RULE`` can target: every interval rule whose intervals stepgen's own
+#: invocations end (not state_sequence, which has none, nor enable_setup: stepgen has no ENABLE).
+WORST_RULES: tuple[str, ...] = tuple(
+    r.id for r in TABLE if r.check != "sequence" and "enable" not in (r.ref, r.data)
+)
 #: The rules whose worst case a phase type has (its steps are its state changes).
 PHASE_RULES = ("state_hold", "step_period")
 

@@ -83,8 +83,9 @@ def common_timer(reports: list[Report]) -> str:
     bound = f" (from the first {len(sample)} step times)" if len(sample) < len(times) else ""
     if period is not None:
         return (
-            f"the steps of every axis lie on one common periodic lattice of "
-            f"{float(period) / 1000:.6g} us{bound}: one base thread or timer makes them"
+            f"the steps of every axis lie on one common periodic lattice{bound}: one base "
+            f"thread or timer makes them (its period {float(period) / 1000:.6g} us or a whole "
+            "fraction of it)"
         )
     return f"the axes' steps are not on one common periodic lattice ({why}){bound}"
 
