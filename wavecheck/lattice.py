@@ -170,14 +170,20 @@ def _densest(times: Ints, span: int) -> tuple[int, int]:
 
 
 def _coarse(
-    times: Ints, pmin: float, pmax: float, harmonics: int = 16, keep: int = 3
+    times: Ints,
+    pmin: float,
+    pmax: float,
+    harmonics: int = 16,
+    keep: int = 3,
+    edges: int = COMB_EDGES,
+    bins: int = 1 << 20,
 ) -> list[float]:
     """Up to ``keep`` candidate periods (ticks, floats), best first, from the comb of the
-    densest stretch (at most :data:`COMB_EDGES` edges and 2^15 of the shortest periods), each
-    scored by its first ``harmonics`` harmonics."""
+    densest stretch (at most ``edges`` edges and ``bins`` FFT bins of 1/(2·``harmonics``) of
+    the shortest period), each scored by its first ``harmonics`` harmonics."""
     bw = max(1, int(pmin // (2 * harmonics)))  # bins fine enough for the shortest period's
-    i, j = _densest(times, bw * (1 << 20))
-    j = min(j, i + COMB_EDGES)
+    i, j = _densest(times, bw * bins)
+    j = min(j, i + edges)
     w = times[i:j] - times[i]
     if len(w) < MIN_EDGES or w[-1] < 2 * pmin:
         return []
@@ -215,9 +221,7 @@ def _coarse(
             picked.append(float(f[k]) + 0.5)
         if len(picked) >= keep:
             break
-    mid = len(w) // 2
-    near = w[max(0, mid - COMB_EDGES // 2) : mid + COMB_EDGES // 2]
-    return [_refine_comb(near, length / g, 0.6 / g) for g in picked[:keep]]
+    return [_refine_comb(w, length / g, 0.6 / g) for g in picked[:keep]]
 
 
 def _refine_comb(t: Ints, p: float, width: float) -> float:
@@ -488,7 +492,7 @@ def _kind_dependence(fold: _Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
     for offset in (0, fold.a // (2 * nbk)):
         bins = np.mod((fold.x + offset) * nbk // fold.a, nbk)
         hists = {c: np.bincount(bins[((kinds.bits >> c) & 1) == 1], minlength=nbk) for c in present}
-        total = sum(hists.values())
+        total = np.sum(list(hists.values()), axis=0)
         n_all = int(total.sum())
         for c, h in hists.items():
             n1 = int(h.sum())
@@ -557,7 +561,10 @@ def _evaluate(
         ev = _Eval(fold, worst)
     else:
         dep = _kind_dependence(fold, kinds) if kinds is not None and judge else None
-        ev = _Eval(fold, _natural(fold, coll)) if dep is None else _dependent(fold, kinds, dep)
+        if dep is None or kinds is None:
+            ev = _Eval(fold, _natural(fold, coll))
+        else:
+            ev = _dependent(fold, kinds, dep)
     if ev.readings:
         ev.slots = fold.lateness(ev.readings[0].anchor)[0]
     return ev
@@ -1374,7 +1381,7 @@ def common_period(
     if len(times) < MIN_EDGES:
         return None, f"too few steps ({len(times)})"
     pmin, pmax = _limits(tick_ns, res)
-    coarse = _coarse(times, pmin, pmax, harmonics=8, keep=1)
+    coarse = _coarse(times, pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
     if not coarse:
         return None, "no periodic comb in the steps' timing"
     i, j = _densest(times, int(64 * WINDOW_EDGES * coarse[0]))
