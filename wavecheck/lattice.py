@@ -5,51 +5,49 @@ pins only when the thread runs: invocation k is due at k·P and runs l_k ≥ 0 l
 and every pin it changes changes at that one moment, ``phase + k·P + l_k``. From the edge times
 of the mapped channels this module infers P, where lateness 0 lies, and each edge's lateness.
 
-The limit (stepgen reference §2.3 and [TWK] in ``stepgen-linuxcnc.md``): an interval stepgen
-makes n periods long lasts n·P − J when its first edge is J late and its last on time, so the
-shortest one, a STEP pulse of one period (steplen ≥ 1 period), lasts P − J. The thread still
+The limit (``stepgen-linuxcnc.md`` §2.3 and the Stepper Tuning chapter's n·P − J): an interval
+stepgen makes n periods long lasts n·P − J when its first edge is J late and its last on time,
+so the shortest, a STEP pulse of one period (steplen ≥ 1 period), lasts P − J. The thread still
 makes a pulse while J < P: the largest lateness it can show and still produce steps is just
-under one period, P − G where G is how long one invocation runs (the next cannot start before
-it ends). From J = P on, an invocation runs after the next was due, the thread catches up G
-apart and the pulse shrinks to G: this module supports lateness 0 … P − G and reports lateness
-of P or more only where the wire shows it (a catch-up run), as a lower bound.
+under one period, P − G, G being how long one invocation runs (the next cannot start before it
+ends). From J = P on, an invocation runs after the next was due and the thread catches up G
+apart (stepgen/latency.py). Lateness 0 … P − G is read; lateness of a period or more only where
+the wire shows it (two write times in one period: a catch-up run), as a lower bound.
 
 How (all times integer ticks, P exact):
 
-1. Period: a comb search. The edges of the densest stretch (at most :data:`WINDOW_EDGES`)
-   are binned and Fourier-transformed; a lattice puts power at every harmonic h/P whatever
-   the lateness (only its spread lowers the higher ones), so the candidates are the strongest
-   peaks' submultiples, scored by their summed harmonics (:func:`_coarse`).
-2. Growing windows (×4 from 64 periods, linear in edges): each window's edges are cut into
-   invocations in the middle of the largest empty arc of their phases, and P is re-fitted by
-   least squares with each phase cluster's own offset removed (:func:`_grow`). P is then the
-   simplest rational within 4 standard errors (a whole number of ticks when it is one; 25 µs
-   sampled at 3.3 MHz is 165/2 samples).
-3. Where lateness 0 lies (:class:`_Fold`): the facts of the model decide between readings
-   (anchors) of the same lattice. One invocation writes once, so two distinct edge times in one
-   period are impossible (each reading's count of them is computed for every anchor at once);
-   latency does not depend on which pin an invocation changes, so a reading in which it does
-   (Kuiper test per channel and edge direction) is not a thread's latency, except LinuxCNC's
-   worst case ``worst:J:RULE`` (stepgen/latency.py), where the invocations ending RULE's
-   intervals run on time and all others exactly J late: two exact lateness values, the on-time
-   edges being exactly RULE's end events. Natural latency: the feasible anchor with the least
-   mean lateness (most invocations run almost on time). Worst-case pattern: the anchor whose
-   on-time edges are a rule's end events; when both are (J and P − J fit), both readings are
-   reported and the larger is the one to plan from.
-4. The thread, not its pattern: a lattice at P/m on which every edge sits on one residue of
-   k mod m is a thread at P (the edges fit P with the same lateness); a lattice on which a pin
-   changes twice in one period is a pattern of a thread at P/m (:func:`_family`).
+1. Comb search (:func:`_coarse`): the densest stretch of edges is binned and Fourier-transformed;
+   a lattice puts power at every harmonic h/P whatever the lateness (its spread only lowers the
+   higher ones), so each fundamental is scored by its harmonics' summed power, refined on exact
+   harmonic sums.
+2. The family (:func:`_down`, :func:`_up`): the thread may be the comb's period, a fraction of it
+   (a stepgen at its maximum rate uses every second invocation: a lattice at 2P fits, its other
+   edges a period late) or a multiple (a lattice at P/m fits P's edges with the same lateness
+   while that is below P/m). Taken: the period that reads the edges with the fewest double
+   writes and the least lateness, the longest among those reading them alike; a worst-case
+   pattern (below) the longest that shows it; a multiple m·P when the edges keep to residues of
+   k mod m as their spacing varies, which a thread at P would not.
+3. P refined (:func:`_grow`) over windows growing ×4, on the floor of each phase cluster's
+   lateness (never negative, many invocations nearly on time), then the simplest rational within
+   its uncertainty (a whole number of ticks when it is one; 25 µs sampled at 3.3 MHz is 165/2).
+4. Where lateness 0 lies (:class:`_Fold`, :func:`_evaluate`), decided by the model's facts: one
+   invocation writes once, so two distinct edge times in one period are impossible (counted for
+   every anchor at once); latency does not depend on which pin an invocation changes, so a
+   reading in which it does (Kuiper test per channel and direction) is no thread's latency,
+   except LinuxCNC's worst case ``worst:J:RULE``: two exact lateness values, the on-time edges
+   exactly RULE's end events (:mod:`wavecheck.linuxcnc.worstcase`). Natural latency: the feasible
+   anchor with the least mean lateness. When the capture cannot tell two readings apart (J or
+   P − J; a few edges a sample before the bulk), both are kept, the larger first: plan from it.
 
-"Not a lattice" is a statistical statement: under the hypothesis that edges are timed by
-something else (a hardware timer, grbl's and Smoothieware's step interrupts, a step generator
-chip), the phase of each edge modulo any P is spread over the whole period. With n edges of
-which m lie within an arc of a fraction f of P, the chance of that is about
-``trials · n · f^(m − 1)`` (trials: the periods one could have tried, span × 10). The capture is
-lattice-timed only if that chance is below 10⁻⁶, P ≥ 5 µs (latency-histogram's shortest
---base) and ≥ 8 samples, P ≤ 1 ms, and there are at least :data:`MIN_EDGES` edges.
+"Not a lattice" is a statistical statement: for n edges of which m lie within an arc of a fraction
+f of P (or within K arcs of total fraction f), the chance that edges timed by anything else
+(a hardware timer, grbl's and Smoothieware's step interrupts) fit as well is bounded
+(:func:`_significance`); the capture is lattice-timed only if that is below 10⁻⁶, P lies in
+5 µs (latency-histogram's shortest --base) … 1 ms and is at least 8 samples, and there are at
+least :data:`MIN_EDGES` edges; the worst lateness is established from :data:`ESTABLISH_EDGES`.
 
-Every edge is seen up to one sample period T late and lateness 0 is itself an edge, so each
-lateness is exact to ± T; the maximum is also given as an upper bound (measured + T) that is
+Every edge is seen up to one sample late and lateness 0 is itself an edge, so each lateness is
+exact to ± one sample; the maximum also comes as an upper bound (measured + one sample) that is
 never below the true one.
 """
 
@@ -72,6 +70,7 @@ from wavecheck.units import format_ns
 
 __all__ = [
     "MAX_PERIOD_NS",
+    "ESTABLISH_EDGES",
     "MIN_EDGES",
     "MIN_PERIOD_NS",
     "WINDOW_EDGES",
@@ -90,6 +89,10 @@ __all__ = [
 
 #: Fewest distinct edge times from which a period is inferred.
 MIN_EDGES = 8
+#: Fewest distinct edge times from which the worst lateness counts as established (fewer show
+#: a lattice, but lattices at multiples or fractions of P may fit them as well, and a handful
+#: of invocations says little of a machine's worst latency).
+ESTABLISH_EDGES = 64
 #: Largest chance (log10) that edges not made by a periodic thread fit as well.
 MAX_LOG10_CHANCE = -6.0
 #: Shortest base period considered (ns; latency-histogram refuses a --base below 5 us), and in
@@ -913,8 +916,9 @@ class LatencyReport:
 
     @property
     def established(self) -> bool:
-        """The worst lateness is known (lattice found and no lateness of a period or more)."""
-        return self.lattice and self.catch_up is None and len(self.lateness_num) > 0
+        """The worst lateness is known: a lattice, no lateness of a period or more, and at least
+        :data:`ESTABLISH_EDGES` edge times."""
+        return self.lattice and self.catch_up is None and len(self.lateness_num) >= ESTABLISH_EDGES
 
     # -- exact figures ----------------------------------------------------------------------
     def lateness_ns_at(self, i: int) -> Fraction:
@@ -1335,6 +1339,12 @@ def _fill(
         report.notes.append(
             f"the edges' own period is {env * float(tick):.9g} ns ({drift:+.3g} ppm from the "
             "given one): a different period or the analyzer's clock"
+        )
+    if len(times) < ESTABLISH_EDGES:
+        report.notes.append(
+            f"only {len(times)} edge times: lattices at multiples or fractions of P may fit them "
+            "as well, and so few invocations say little of the machine's worst latency (not "
+            f"established: {ESTABLISH_EDGES} or more are needed)"
         )
     if fold.period.denominator != 1:
         report.notes.append(f"P is not a whole number of samples: {fold.period} samples")

@@ -124,11 +124,17 @@ def read_capture_latency(path: str | Path) -> tuple[int, str]:
             or they show lateness of a period or more (only a lower bound).
     """
     from wavecheck.cli.latency import latency_of
+    from wavecheck.lattice import ESTABLISH_EDGES
 
     report = latency_of(str(path))
     worst = report.max_lateness_bound_ns
     if not report.lattice or worst is None:
         raise ConfigError(f"{path}: no latency to plan from: {report.reason}")
+    if len(report.lateness_num) < ESTABLISH_EDGES:
+        raise ConfigError(
+            f"{path}: no latency to plan from: only {len(report.lateness_num)} edge times (at "
+            f"least {ESTABLISH_EDGES} are needed to establish a worst lateness); give --latency"
+        )
     if report.catch_up is not None:
         raise ConfigError(
             f"{path}: no latency to plan from: invocations a period or more late (at least "

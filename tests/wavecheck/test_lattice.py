@@ -324,6 +324,7 @@ def test_golden_worst_case_traces(path: str, period: int, lateness: int, rule: s
     r = analyse(open_capture(ROOT / path), ["step", "dir"], roles={"step": "step", "dir": "dir"})
     assert r.lattice and r.period_ns == period and r.max_lateness_ns == lateness
     assert r.rule == rule and not r.candidates
+    assert not r.established  # ten edges: a lattice, but no machine's worst latency
 
 
 @pytest.mark.parametrize(

@@ -148,6 +148,10 @@ def render_text(r: LatencyReport, source: str = "") -> str:
         "  edges per channel: " + ", ".join(f"{c} {n}" for c, n in r.edges_per_channel.items())
     )
     lines.append(f"  {r.reason}")
+    if r.lattice and not r.established:
+        lines.append(
+            "  the worst lateness is not established (see the notes): plan from no figure here"
+        )
     if r.fit is None or not len(r.lateness_num):
         lines.append("  no lateness figures: base-thread latency cannot be read from this capture")
         return "\n".join(lines) + "\n"
