@@ -389,7 +389,6 @@ def analyse_times(
         )
         return report
     pmin, pmax = limits(tick_ns, res_ticks)
-    others: list[tuple[Fraction, Reading]] = []
     if period_ns is not None:
         period = Fraction(period_ns) / tick_ns
         ev = evaluate(times, period, res_ticks, kinds)
@@ -402,17 +401,17 @@ def analyse_times(
             float(times[j - 1] - times[i]) / 8,
         )  # fmt: skip
     else:
-        found, others, err, why, p_ticks = infer(times, res_ticks, kinds, pmin, pmax, progress)
+        found, err, why, p_ticks = infer(times, res_ticks, kinds, pmin, pmax, progress)
         if found is None:
             report.reason = _not_lattice(why.format(period=format_ns(p_ticks * tick_ns)))
             return report
         ev, env = found, float(found.fold.period)
-    return _fill(report, times, mask, ev, others, given, env, err, res_ticks, pmin)
+    return _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
 
 
 def _fill(
     report: LatencyReport, times: Ints, mask: Ints, ev: Evaluation,
-    others: list[tuple[Fraction, Reading]], given: bool, env: float, err: float, res: int,
+    given: bool, env: float, err: float, res: int,
     pmin: float,
 ) -> LatencyReport:  # fmt: skip
     """The report's figures from the reading with the largest lateness (the one to plan from);
@@ -492,13 +491,7 @@ def _fill(
             "timer with a fixed pulse length, which the wire cannot tell apart)"
         )
     for r in readings[1:]:
-        report.candidates.append(
-            Candidate(fold.period * tick, r.max_lateness * tick, _how(r, "the same lattice"))
-        )
-    for period, r in others:
-        report.candidates.append(
-            Candidate(period * tick, r.max_lateness * tick, _how(r, "another period"))
-        )
+        report.candidates.append(Candidate(fold.period * tick, r.max_lateness * tick, _how(r)))
     if report.candidates:
         report.notes.append(
             "the capture cannot tell these readings apart; the figures are those of the one "
@@ -521,8 +514,11 @@ def _fill(
     return report
 
 
-def _how(r: Reading, where: str) -> str:
-    return f"{where}, lateness 0 elsewhere" + (f" (worst case of {r.rule})" if r.rule else "")
+def _how(r: Reading) -> str:
+    """How another reading of the same lattice differs."""
+    return "lateness 0 elsewhere on the same lattice" + (
+        f" (worst case of {r.rule})" if r.rule else ""
+    )
 
 
 def _merge(capture: Capture, names: list[str]) -> tuple[Ints, Ints, Ints, dict[str, int]]:

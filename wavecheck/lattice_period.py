@@ -21,7 +21,6 @@ from wavecheck.lattice_read import (
     Evaluation,
     Floats,
     Ints,
-    Reading,
     Signatures,
     allowance,
     bursts,
@@ -428,7 +427,7 @@ def _reads_as_well(ev: Evaluation, big: Evaluation, m: int, sample: slice) -> bo
 
 def _up(
     times: Ints, period: Fraction, res: int, kinds: EdgeKinds | None, pmax: float, sample: slice
-) -> tuple[Evaluation, list[tuple[Fraction, Reading]]]:
+) -> Evaluation:
     """The thread at ``period`` or a multiple: while one (the least m ≤ 16 first) is
     :func:`_locked` and reads as well (:func:`_reads_as_well`), move up to it."""
     ev = evaluate(times, period, res, kinds)
@@ -444,7 +443,7 @@ def _up(
             if _reads_as_well(ev, big, m, sample):
                 ev, period, moved = big, period * m, True
                 break
-    return ev, []
+    return ev
 
 
 def exact(p: float, err: float, times: Ints) -> Fraction:
@@ -470,12 +469,18 @@ def limits(tick_ns: Fraction, res_ticks: int) -> tuple[float, float]:
 def infer(
     times: Ints, res: int, kinds: EdgeKinds | None, pmin: float, pmax: float,
     progress: ProgressCallback,
-) -> tuple[Evaluation | None, list[tuple[Fraction, Reading]], float, str, Fraction]:  # fmt: skip
-    """Search, refine and read the lattice: (evaluation, other readings, standard error of P,
+) -> tuple[Evaluation | None, float, str, Fraction]:  # fmt: skip
+    """Search, refine and read the lattice: (evaluation, uncertainty of P in ticks,
     why not when none fits (``{period}``: the period tried), that period in ticks). Catch-up
     runs (:func:`~wavecheck.lattice_read.bursts`) are left out of the search and read
     with the rest."""
     burst = bursts(times, pmin)
+    if np.count_nonzero(burst) * 2 > len(times):
+        return (
+            None, 0.0,
+            "most edges come three within the shortest base period ({period}): faster than a "
+            "base thread writes", Fraction(pmin).limit_denominator(10**6),
+        )  # fmt: skip
     if burst.any():
         every, times = times, times[~burst]
         whole, kinds = (
@@ -483,16 +488,16 @@ def infer(
             None if kinds is None else EdgeKinds(kinds.names, kinds.bits[~burst], kinds.source),
         )
     if len(times) < MIN_EDGES:
-        return None, [], 0.0, "too few edges outside catch-up runs", Fraction(0)
+        return None, 0.0, "too few edges outside catch-up runs", Fraction(0)
     combs = coarse(times, pmin, pmax)
     if not combs:
-        return None, [], 0.0, "no periodic comb in the edges' timing", Fraction(0)
+        return None, 0.0, "no periodic comb in the edges' timing", Fraction(0)
     i, j = densest(times, int(64 * WINDOW_EDGES * max(combs)))
     j = min(j, i + WINDOW_EDGES)
     p1 = _down(times[i:j], combs, res, _window_kinds(kinds, times, i, j), pmin, pmax)
     if p1 is None:
         return (
-            None, [], 0.0, "no lattice near the edges' strongest combs is better than chance",
+            None, 0.0, "no lattice near the edges' strongest combs is better than chance",
             Fraction(0),
         )  # fmt: skip
     p, err = grow(
@@ -500,12 +505,12 @@ def infer(
     )
     if not pmin <= p <= pmax:
         return (
-            None, [], 0.0, "the best period, {period}, is outside the base thread's range",
+            None, 0.0, "the best period, {period}, is outside the base thread's range",
             Fraction(p).limit_denominator(10**6),
         )  # fmt: skip
-    ev, others = _up(times, exact(p, err, times), res, kinds, pmax, slice(i, j))
+    ev = _up(times, exact(p, err, times), res, kinds, pmax, slice(i, j))
     if ev.readings and burst.any():
         ev = evaluate(every, ev.fold.period, res, whole)
     if ev.readings:
-        return ev, others, err, "", ev.fold.period
-    return None, [], 0.0, ev.refused, ev.fold.period
+        return ev, err, "", ev.fold.period
+    return None, 0.0, ev.refused, ev.fold.period

@@ -254,7 +254,6 @@ class Evaluation:
     fold: Fold
     readings: list[Reading]
     refused: str = ""
-    note: str = ""
     slots: Ints = field(default_factory=lambda: np.zeros(0, np.int64))
 
     @property
