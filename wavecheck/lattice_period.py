@@ -379,7 +379,8 @@ def _down(
     def tries(periods: list[float]) -> list[tuple[int, tuple[float, float], float, bool]]:
         out = []
         for p in periods:
-            e = evaluate(times, Fraction(p).limit_denominator(1 << 20), res, kinds, 1 << 14, False)
+            bmax = max(1, min(1 << 20, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4))
+            e = evaluate(times, Fraction(p).limit_denominator(bmax), res, kinds, 1 << 14, False)
             spread = _spread(e)
             if spread is not None:
                 out.append((e.collisions, spread, p, bool(e.readings[0].rule)))
