@@ -11,6 +11,10 @@
   layout (``#t`` then one change per line, scoped names) or sigrok's (changes on the timestamp
   line). Text is formatted with numpy, one block of events at a time.
 * :func:`gen_edges` — 10 M edges (STEP and DIR) as arrays, for the check engine alone.
+* :func:`gen_stepgen_vcd` — issue 25's capture: LinuxCNC's stepgen (the model, ``stepgen
+  simulate``) at a 25 µs base period under ``uniform:11us`` latency, three 40-unit moves at
+  the maximum step rate (20 k steps/s): 1.2 M edges, 31 MB of VCD; the truth is P and the worst
+  lateness of the invocations that made an edge.
 
 Each generator also writes ``<file>.truth.json`` with the counts a reader must find. Run
 ``python bench/gen.py --help``; ``bench/run.py`` calls these when a file is missing.
@@ -344,6 +348,34 @@ def gen_edges(path: Path, *, nedges: int = 10_000_000, seed: int = 3) -> dict[st
 
 # ---------------------------------------------------------------------------------------------
 
+
+def gen_stepgen_vcd(path: Path) -> dict[str, object]:
+    """Issue 25's capture (module docstring) and its truth."""
+    from stepgen.model import StepgenConfig
+    from stepgen.motion import Motion, parse_moves
+    from stepgen.simulate import n_periods_for, simulate
+    from stepgen.vcdout import write_vcd
+
+    cfg = StepgenConfig(
+        base_period_ns=25_000, position_scale=5000, maxvel=3.9, maxaccel=100,
+        thread_order="pulses-first",  # as `stepgen simulate` runs two threads
+    )  # fmt: skip
+    motion = Motion("moves", segments=parse_moves("40, pause 100ms, 0, pause 100ms, 40", 3.9, 100))
+    duration = int((motion.natural_duration_s or 1.0) * 1e9)
+    trace = simulate(cfg, motion, "uniform:11us", n_periods=n_periods_for(cfg, duration), seed=1)
+    write_vcd(trace, path)
+    idx = np.unique(np.concatenate([trace.run.toggles[p] for p in trace.pins]))
+    t = np.unique(np.concatenate([trace.edges[p] for p in trace.pins]))
+    late = t - idx * cfg.base_period_ns
+    truth = {
+        "base_period_ns": cfg.base_period_ns,
+        "max_lateness_ns": int(late.max() - late.min()),
+        "edges": int(sum(len(e) for e in trace.edges.values())),
+    }
+    path.with_suffix(".truth.json").write_text(json.dumps(truth) + "\n")
+    return truth
+
+
 FILES = {
     "sr1g": ("stepdir_1G.sr", lambda p: gen_sr(p)),
     "sr100m": ("stepdir_100M.sr", lambda p: gen_sr(p, nsamples=100_000_000, seed=8)),
@@ -361,6 +393,7 @@ FILES = {
     "vcd_sim_100m": ("steps_100M_sim.vcd", lambda p: gen_vcd(p, nchanges=100_000_000)),
     "edges": ("edges_10M.npz", lambda p: gen_edges(p)),
     "edges_1m": ("edges_1M.npz", lambda p: gen_edges(p, nedges=1_000_000)),
+    "latency": ("stepgen_25us_uniform11us.vcd", lambda p: gen_stepgen_vcd(p)),
 }
 
 

@@ -33,6 +33,10 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 7. Standard input (issue 14): ``bench/stdin_pipe.py`` (grbl's raw samples through a pipe into
    ``wavecheck check -``) against the arrival rate of sigrok's demo driver, 24 MHz × 8 channels
    = 24 MB/s [CPU throughput ≥ 2×: under half a core]; peer: ``check grbl.sr``.
+9. Latency (issue 25): ``wavecheck latency`` of a 1.2 M-edge stepgen capture (25 µs, uniform
+   11 µs) against ``wavecheck check`` of the same file [CPU ≤ 3×; P and the worst lateness as
+   generated]; the several-axes check of the real Smoothieware capture, two axes against one
+   [CPU ≤ 1.2×: the common-timer note is cheap].
 8. Live (issue 14): ``bench/watch_keepup.py`` runs ``wavecheck watch`` on sigrok's demo device
    (24 MHz × 8 channels with its default pattern; 200 kHz with its counter pattern) and gives
    the samples wavecheck can process per second of its CPU ÷ the arrival rate [≥ 2×: under half
@@ -643,6 +647,79 @@ def bench_decoder(runs: int) -> dict[str, Any]:
     return res
 
 
+SMOOTHIE = (
+    ROOT.parent / "shared/captures/sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"
+)
+
+
+def _cpu(t: dict[str, Any]) -> float:
+    return float(t["user_s"] + t["sys_s"])
+
+
+def _pair(
+    a: list[str], b: list[str], runs: int
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]], float]:
+    """Run ``a`` and ``b`` interleaved ``runs`` times (a's stdout kept); their runs, the load."""
+    ra: list[dict[str, Any]] = []
+    rb: list[dict[str, Any]] = []
+    loads = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(runs):
+            loads.append(load1())
+            ra.append(timed(a, f"{tmp}/a.out"))
+            rb.append(timed(b))
+            ra[-1]["out"] = Path(f"{tmp}/a.out").read_text()
+    return ra, rb, max(loads)
+
+
+def bench_latency(runs: int) -> dict[str, Any]:
+    """Issue 25's rows (section 9 of the module docstring)."""
+    out: dict[str, Any] = {}
+    path = ensure("latency")
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    lat = [WAVECHECK, "latency", "-q", str(path), "--format", "json"]
+    chk = [WAVECHECK, "check", "-q", str(path), "--drive", "gecko-g202"]
+    print(f"  $ {sh(lat)}\n  $ {sh(chk)}")
+    ra, rb, load = _pair(lat, chk, runs)
+    doc = json.loads(ra[-1]["out"])
+    right = (
+        doc["base_period_ns"] == truth["base_period_ns"]
+        and abs(doc["lateness_ns"]["max"] - truth["max_lateness_ns"]) <= 1
+    )
+    cl, cc = statistics.median(map(_cpu, ra)), statistics.median(map(_cpu, rb))
+    print(f"  {truth['edges']} edges: latency {cl:.2f} s CPU (P = {doc['base_period_ns']} ns, max "
+          f"{doc['lateness_ns']['max']} ns; truth {truth['max_lateness_ns']} ns), check "
+          f"{cc:.2f} s CPU; medians of {runs}")  # fmt: skip
+    ratio = cl / cc
+    figure(f"`latency` vs `check` CPU, {truth['edges'] / 1e6:.1f} M edges",
+           f"{ratio:.2f}× ({cl:.2f} s; P and max lateness {'right' if right else 'WRONG'})",
+           "≤ 3×", ratio <= 3 and right, f"check {cc:.2f} s", load)  # fmt: skip
+    out["latency_vs_check"] = {"ratio": ratio, "latency": ra, "check": rb, "right": right}
+    if SMOOTHIE.exists():
+        one = [
+            WAVECHECK,
+            "check",
+            "-q",
+            str(SMOOTHIE),
+            "--drive",
+            "gecko-g202",
+            "--map",
+            "step=5,dir=6",
+        ]
+        two = [WAVECHECK, "check", "-q", str(SMOOTHIE), "--drive", "gecko-g202",
+               "--map", "x.step=5,x.dir=6", "--map", "y.step=3,y.dir=4"]  # fmt: skip
+        print(f"  $ {sh(two)}\n  $ {sh(one)}")
+        rt, ro, load = _pair(two, one, max(runs, 5))
+        ct, co = statistics.median(map(_cpu, rt)), statistics.median(map(_cpu, ro))
+        ratio = ct / co
+        note = next((ln for ln in rt[-1]["out"].splitlines() if "common periodic" in ln), "")
+        print(f"  two axes {ct:.3f} s CPU, one axis {co:.3f} s; {note.strip()}")
+        figure("Smoothieware check, two axes vs one (common-timer note)", f"{ratio:.2f}× ({ct:.2f} s)",
+               "≤ 1.2×", ratio <= 1.2, f"one axis {co:.2f} s", load)  # fmt: skip
+        out["two_axes_vs_one"] = {"ratio": ratio, "two": rt, "one": ro}
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -653,7 +730,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder",
+        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder,latency",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -738,6 +815,9 @@ def main() -> int:
     if "decoder" in only:
         print("\n== 9. the protocol decoder: sigrok-cli -P wavecheck vs -P stepper_motor ==")
         results["decoder"] = bench_decoder(runs)
+    if "latency" in only:
+        print("\n== 10. latency: the base-thread lattice, and the common-timer note ==")
+        results["latency"] = bench_latency(runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end

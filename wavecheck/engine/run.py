@@ -7,8 +7,8 @@ then checked like the rest), plans each axis on the source's skeleton
 (:mod:`wavecheck.engine.plan`), feeds every block to every axis (:mod:`wavecheck.engine.axis`) and
 returns a :class:`~wavecheck.engine.outcome.MachineReport`. A capture already in memory is a
 source of one block (:func:`check_capture`). With several axes, a note says whether their steps lie
-on one common periodic lattice (one thread or timer makes them), judged on each axis's first
-:data:`TIMER_STEPS` steps.
+on one common periodic lattice (one thread or timer makes them), judged on the first
+:data:`TIMER_TICKS` step times of them all.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from __future__ import annotations
 import itertools
 import shlex
 from collections.abc import Callable, Iterator, Sequence
+from fractions import Fraction
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from wavecheck.errors import UsageError
 from wavecheck.units import format_time
 
 __all__ = [
-    "TIMER_STEPS",
+    "TIMER_TICKS",
     "MachineCheck",
     "axes_from_waveforms",
     "check_capture",
@@ -45,8 +46,11 @@ __all__ = [
     "start",
 ]
 
-#: Steps per axis the several-axes common-timer note looks at (the first ones).
-TIMER_STEPS = 1 << 16
+#: Step times the several-axes common-timer note reads: the first of the axes' steps merged (a
+#: bound on its cost; a thread or timer that makes them all shows in any stretch of them).
+TIMER_TICKS = 1 << 14
+#: Fewest step times from which the note tells anything.
+TIMER_MIN = 64
 
 StepSinks = Callable[[AxisPlan], Sequence[StepSink]]
 IntervalSinks = Callable[[AxisPlan], IntervalSink | None]
@@ -104,28 +108,32 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
     return axes, [found.rstrip()]
 
 
-def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: object) -> str:
-    """One line: do the axes' steps (``ticks``, one array per axis) lie on one common periodic
-    lattice (one thread or timer)?"""
-    from fractions import Fraction
-
-    from wavecheck.latency import analyse_times
+def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: Fraction) -> str:
+    """One line: do the axes' steps (``ticks``, one array per axis, each the axis's first steps)
+    lie on one common periodic lattice (one thread or timer)? Read from the first
+    :data:`TIMER_TICKS` step times of them all by :func:`wavecheck.lattice.common_period`."""
+    from wavecheck.lattice import common_period
+    from wavecheck.linuxcnc.worstcase import union
 
     stepping = [t for t in ticks if len(t)]
     if len(stepping) < 2:
         return "fewer than two axes step: no common timer to look for"
-    times = np.unique(np.concatenate(stepping))
-    assert isinstance(resolution_ns, Fraction)
-    found = analyse_times(
-        times, tick_ns=capture.timebase.tick_ns, resolution_ns=resolution_ns, path=capture.path
-    )
-    if found.lattice and found.period_ns is not None:
+    times = union(*stepping)
+    if len(times) < TIMER_MIN:
         return (
-            f"the steps of every axis lie on one {float(found.period_ns) / 1000:g} us lattice: "
-            "one base thread or timer makes them"
+            f"too few steps ({len(times)} step times) to tell whether one common periodic "
+            "lattice (one thread or timer) makes them"
         )
-    why = found.reason.split(" (")[0]
-    return f"the axes' steps are not on one common periodic lattice ({why})"
+    sample = times[:TIMER_TICKS]
+    period, why = common_period(sample, capture.timebase.tick_ns, resolution_ns)
+    bound = f" (from the first {len(sample)} step times)" if len(sample) < len(times) else ""
+    if period is not None:
+        return (
+            f"the steps of every axis lie on one common periodic lattice{bound}: one base "
+            f"thread or timer makes them (its period {float(period) / 1000:.6g} us or a whole "
+            "fraction of it)"
+        )
+    return f"the axes' steps are not on one common periodic lattice ({why}){bound}"
 
 
 class MachineCheck:
@@ -151,7 +159,7 @@ class MachineCheck:
         self.options = options
         self.block_edges = options.block_edges
         several = len(plans) > 1 or (len(plans) == 1 and plans[0].name is not None)
-        self.timers = [TimerSample(TIMER_STEPS) for _ in plans] if several else []
+        self.timers = [TimerSample(TIMER_TICKS) for _ in plans] if several else []
         self.axes = [
             AxisCheck(
                 p,
@@ -199,10 +207,7 @@ class MachineCheck:
         notes = []
         if self.timers:
             res = reports[0].resolution_ns if reports else capture.resolution_ns
-            note = common_timer([t.ticks for t in self.timers], capture, res)
-            if any(t.seen > t.kept for t in self.timers):
-                note += f" (judged on each axis's first {TIMER_STEPS} steps)"
-            notes.append(note)
+            notes.append(common_timer([t.ticks for t in self.timers], capture, res))
         return MachineReport(capture, reports, notes)
 
 
