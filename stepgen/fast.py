@@ -25,6 +25,7 @@ only the last step's invocation is needed, and only when an exact chunk follows.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -53,25 +54,14 @@ _DESC = 9  #: numbers describing a chunk for pass 2
 _Pending = tuple[int, int, int, int, int, int, int, int, tuple[int, int, int]]
 
 
-def _series(i: int, a0: int, sgn: int, d_eff: int, span: int) -> int:
-    """Sum of addval over the first ``i`` periods of a ramp chunk (see module docstring)."""
-    if d_eff == 0:
-        return i * a0
-    full = span // d_eff  # periods with a whole deltalim step; afterwards addval == target
-    j = i if i < full else full
-    total = i * a0 + sgn * d_eff * (j * (j + 1) // 2)
-    if i > full:
-        total += sgn * span * (i - full)
-    return total
-
-
 def _last_step(p: _Pending) -> int:
     """Invocation index of the last step of a pending fast chunk (binary search, O(log m))."""
     k0, m, accum0, a0, sgn, d_eff, span, count_end, _ = p
+    full = span // d_eff if d_eff else 0
     lo, hi = 1, m  # first i with count(i) == count_end; exists because the count changed
     while lo < hi:
         mid = (lo + hi) // 2
-        if (accum0 + _series(mid, a0, sgn, d_eff, span)) >> PICKOFF == count_end:
+        if (accum0 + int(_addval_sum(mid, a0, sgn, d_eff, span, full))) >> PICKOFF == count_end:
             hi = mid
         else:
             lo = mid + 1
@@ -131,7 +121,7 @@ def run_fast(
     pos_mode = ch.pos_mode
     cycle = max(kind.cycle, 1)
     phased = kind.kind == "phases"
-    append = desc.extend
+    describe = desc.extend
     steady = False
 
     # the channel state, as locals (synced with ``ch`` around reference calls)
@@ -249,7 +239,7 @@ def run_fast(
             and (curr_dir == (1 if cls else -1) or (a0 == 0 and a_end == 0))
         ):
             step_len = ch.step_len
-            append((k0, m, a0, sgn, d_eff, span, curr_dir, step_len, accum))
+            describe((k0, m, a0, sgn, d_eff, span, curr_dir, step_len, accum))
             accum1 = accum + total
             count1 = accum1 >> PICKOFF
             delta = count1 - (accum >> PICKOFF)
@@ -266,7 +256,7 @@ def run_fast(
             addval = a_end
             continue
         # exact chunk: make the timers concrete, then run the reference make-pulses
-        append((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum))
+        describe((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum))
         if pending is not None:
             t_ref = _last_step(pending)
             t_vals = pending[8]
@@ -309,11 +299,9 @@ def run_fast(
     return run
 
 
-def _addval_sum(
-    i: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, span: np.ndarray,
-    full: np.ndarray,
-) -> np.ndarray:  # fmt: skip
-    """:func:`_series` over arrays (int64): the sum of addval over the first ``i`` periods."""
+def _addval_sum(i: Any, a0: Any, sgn: Any, d: Any, span: Any, full: Any) -> Any:
+    """The sum of addval over the first ``i`` periods of a chunk (see the module docstring;
+    ``full`` = span // d, 0 when d is 0), on numbers or int64 arrays."""
     j = np.minimum(i, full)
     return i * a0 + sgn * (d * (j * (j + 1) // 2) + span * np.maximum(i - full, 0))
 
