@@ -42,23 +42,27 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stepgen.latencyfiles import check_latency_path, read_histogram
 from stepgen.model import InvocationRun
-from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.steptypes import kind_of
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
+if TYPE_CHECKING:
+    from wavecheck.drives.model import ActiveEdge
+
 __all__ = [
     "DEFAULT_CATCHUP_NS",
     "RULES",
     "LatencyModel",
+    "Clock",
     "catchup_for",
     "describe",
+    "invocation_clock",
     "invocation_times",
     "parse_latency",
 ]
@@ -134,6 +138,8 @@ def parse_latency(text: str) -> LatencyModel:
             raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
         return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)
     if kind == "histogram" and rest:
+        from stepgen.latencyfiles import check_latency_path  # only for latency files
+
         try:
             check_latency_path(rest)
         except ConfigError as err:
@@ -173,6 +179,8 @@ def _offsets(
         out[k[k < n]] = model.j_ns
         return out
     if model.kind == "histogram":
+        from stepgen.latencyfiles import read_histogram
+
         hist = read_histogram(model.path)
         rng = np.random.default_rng(seed)
         if hist.half_normal is not None:
@@ -272,11 +280,52 @@ def invocation_times(
     offs = _offsets(model, run, seed, active_edge)
     if offs is None:
         return None
-    base = run.config.base_period_ns
-    k = np.arange(run.n_periods, dtype=np.int64)
+    return _caught_up(offs, run.config.base_period_ns, catchup_ns)
+
+
+def _caught_up(offs: np.ndarray, base: int, catchup_ns: int) -> np.ndarray:
+    """t_k = max(k·P + l_k, t_{k−1} + G) for every k."""
+    k = np.arange(len(offs), dtype=np.int64)
     due = k * base + offs
     # t_k = max(due_k, t_{k-1} + G)  ⇔  t_k − k·G = running max of (due_k − k·G)
     return np.maximum.accumulate(due - k * catchup_ns) + k * catchup_ns
+
+
+@dataclass(frozen=True)
+class Clock:
+    """When the invocations of a run happen: :meth:`at` gives t_k (ns) for indices k.
+
+    When no latency exceeds P − G no invocation is held back by the one before (t_k = k·P + l_k:
+    see the module docstring), so only the offsets are kept and t_k is computed for the indices
+    asked for; otherwise every t_k (:func:`invocation_times`)."""
+
+    base_ns: int
+    offsets: np.ndarray | None = None  #: l_k, when t_k = k·P + l_k
+    times: np.ndarray | None = None  #: every t_k otherwise
+
+    def at(self, k: np.ndarray) -> np.ndarray:
+        """t_k (int64 ns) of the invocation indices ``k``."""
+        if self.times is not None:
+            return self.times[k]
+        t = np.asarray(k, dtype=np.int64) * self.base_ns
+        return t if self.offsets is None else t + self.offsets[k]
+
+
+def invocation_clock(
+    model: LatencyModel,
+    run: InvocationRun,
+    seed: int | None = None,
+    active_edge: ActiveEdge = "rising",
+    catchup_ns: int | None = None,
+) -> Clock:
+    """:func:`invocation_times` as a :class:`Clock` (the same times; arguments and errors as
+    there), without the per-invocation arrays when no catch-up can act."""
+    base = run.config.base_period_ns
+    catchup_ns, _ = catchup_for(model, base, catchup_ns)
+    offs = _offsets(model, run, seed, active_edge)
+    if offs is None or not len(offs) or int(offs.max()) <= base - catchup_ns:
+        return Clock(base, offsets=offs)
+    return Clock(base, times=_caught_up(offs, base, catchup_ns))
 
 
 def describe(model: LatencyModel, base_ns: int) -> str:
