@@ -1,14 +1,14 @@
-"""Mergeable results of the streamed engine: one rule's figures and the step counts, in bounded
-memory, merged window by window to exactly the whole-capture figures.
+"""The one result type per rule and the step counts, merged window by window, in bounded memory:
+the same figures whatever the windows (tests/wavecheck/engine hold one window against many).
 
-:class:`RuleResult` satisfies :class:`wavecheck.engine.verdicts.RuleOutcome` (what every renderer
-reads): counts (checked, violations, indeterminate, unknown), the shortest and longest interval
-and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
-the figures that decide ``decide_samplerate_hz``, and a fixed-bin
-:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval (the
-whole-capture :class:`~wavecheck.engine.verdicts.RuleResult` does): ``--plot``, ``--gtkw`` and
-``--html`` draw a streamed report from these summaries and the signal windows kept around the worst
-places (:mod:`wavecheck.engine.windows`); ``--steps-csv`` and ``--firmware`` read the capture whole.
+:class:`RuleResult` is what every renderer reads: counts (checked, violations, indeterminate,
+unknown), the shortest and longest interval and where the shortest is, the worst ``keep``
+violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and
+a fixed-bin :class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
+(each window's :class:`~wavecheck.engine.verdicts.Judged` is merged and dropped); the pictures
+draw from these results and the signal windows kept around the worst places
+(:mod:`wavecheck.engine.windows`); whatever needs every step or interval is a sink
+(:mod:`wavecheck.engine.sinks`).
 """
 
 from __future__ import annotations
@@ -40,16 +40,16 @@ UNKNOWN_KEPT = 100
 #: Violations of one window handed to :attr:`RuleResult.fresh`.
 FRESH_KEPT = 64
 
-_Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the whole path's order
+_Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the intervals' order
 
 
 @dataclass
 class RuleResult:
     """One rule's results merged window by window (see the module docstring).
 
-    ``order_by_end``: the whole-capture path lists this rule's intervals by their end event
-    (``dir_hold``: by DIR change; ``dir_delay``: by the pulse after the switch), not by start;
-    ties (same length) are broken in that order, as :meth:`RuleResult.worst_violations` does.
+    ``order_by_end``: this rule's intervals are listed by their end event (``dir_hold``: by DIR
+    change; ``dir_delay``: by the pulse after the switch; :attr:`wavecheck.rules.Rule.listed_by_end`),
+    not by start; ties (same length) are broken in that order.
     """
 
     rule: str
@@ -121,7 +121,7 @@ class RuleResult:
             self._add_worst(part, w, a, b, lo)
 
     def _shortest(self, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int) -> None:
-        """Keep the shortest interval (``lo`` ticks), ties broken as the whole path."""
+        """Keep the shortest interval (``lo`` ticks), ties broken in the intervals' order."""
         if self._best is not None and (
             lo > self._best[0] or lo == self._best[0] and a.min() > self._best[1]
         ):

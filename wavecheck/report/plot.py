@@ -413,7 +413,7 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
 
 def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figure:
     """The report's figure: timing diagrams, the motion panel (position and step rate, when
-    there are steps: every step, or a streamed report's thinned trace), then histograms."""
+    there are steps, from the step trace), then histograms."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
