@@ -3,8 +3,9 @@ the same figures whatever the windows (tests/wavecheck/engine hold one window ag
 
 :class:`RuleResult` is what every renderer reads: counts (checked, violations, indeterminate,
 unknown), the shortest and longest interval and where the shortest is, the worst ``keep``
-violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and
-a fixed-bin :class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
+violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and,
+when pictures are asked for (``binned``), a fixed-bin
+:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
 (each window's :class:`~wavecheck.engine.verdicts.Judged` is merged and dropped); the pictures
 draw from these results and the signal windows kept around the worst places
 (:mod:`wavecheck.engine.windows`); whatever needs every step or interval is a sink
@@ -49,7 +50,8 @@ class RuleResult:
 
     ``order_by_end``: this rule's intervals are listed by their end event (``dir_hold``: by DIR
     change; ``dir_delay``: by the pulse after the switch; :attr:`wavecheck.rules.Rule.listed_by_end`),
-    not by start; ties (same length) are broken in that order.
+    not by start; ties (same length) are broken in that order. ``binned``: keep the measured
+    lengths' :meth:`histogram` (only a picture draws it).
     """
 
     rule: str
@@ -59,6 +61,7 @@ class RuleResult:
     resolution_ns: Fraction
     keep: int = 1000
     order_by_end: bool = False
+    binned: bool = True
     checked: int = 0
     fails: int = 0
     indet: int = 0
@@ -108,7 +111,8 @@ class RuleResult:
         lo, hi = iv.bounds
         self._shortest(w, a, b, lo)
         self._longest = hi if self._longest is None else max(self._longest, hi)
-        self._hist = self._hist + Histogram.of(w, (lo, hi))
+        if self.binned:
+            self._hist = self._hist + Histogram.of(w, (lo, hi))
         if indet:
             ind = part.outcome == INDETERMINATE
             below, above, exact = decide_parts(self.limit_ns, self.timebase, w[ind])
@@ -279,9 +283,9 @@ class RuleResult:
             )
         return out
 
-    def histogram(self) -> Histogram:
-        """The measured intervals in fixed bins."""
-        return self._hist
+    def histogram(self) -> Histogram | None:
+        """The measured intervals in fixed bins (None: not ``binned``, no picture was asked for)."""
+        return self._hist if self.binned else None
 
 
 @dataclass
