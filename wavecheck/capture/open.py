@@ -23,7 +23,15 @@ from wavecheck.capture.model import Capture
 from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
 from wavecheck.errors import CaptureError, UsageError
 
-__all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture"]
+__all__ = [
+    "STDIN",
+    "detect_format",
+    "format_of",
+    "ghw_timescale",
+    "is_stream",
+    "open_capture",
+    "path_argument",
+]
 
 _ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
 _BY_EXTENSION = {
@@ -292,13 +300,19 @@ def open_capture(
 
         return read_saleae_csv(path, samplerate=samplerate, resolution_s=resolution_s)
     if name in ("fst", "ghw"):
-        if options:
-            raise UsageError(f"--input-format {fmt!r}: {name} takes no options")
+        if options and name == "fst":
+            raise UsageError(f"--input-format {fmt!r}: fst takes no options")
         from wavecheck.capture.wellen import read_fst, read_wellen
 
         if name == "fst":
             return read_fst(path, samplerate=samplerate, resolution_s=resolution_s)
-        return read_wellen(path, kind="ghw", samplerate=samplerate, resolution_s=resolution_s)
+        return read_wellen(
+            path,
+            kind="ghw",
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            timescale=ghw_timescale(fmt),
+        )
     if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 
@@ -308,6 +322,37 @@ def open_capture(
     return read_with_sigrok(
         path, fmt, samplerate=samplerate, resolution_s=resolution_s, require_time=require_time
     )
+
+
+def ghw_timescale(fmt: str) -> Fraction | None:
+    """The tick of a GHW file from ``--input-format ghw:timescale=1ps`` (None: not given).
+
+    Raises:
+        UsageError: another option, or a timescale that is not a positive time.
+    """
+    from wavecheck.units import parse_option
+
+    _, _, options = fmt.partition(":")
+    value = None
+    for item in filter(None, options.split(":")):
+        key, eq, text = item.partition("=")
+        if key.strip() != "timescale" or not eq:
+            raise UsageError(
+                f"--input-format {fmt!r}: ghw takes one option, timescale=TIME (e.g. "
+                "ghw:timescale=1ps: GHDL's --time-resolution of the run)"
+            )
+        value = parse_option(text.strip(), "--input-format ghw:timescale", "time")
+        if value <= 0:
+            raise UsageError(f"--input-format {fmt!r}: the timescale must be positive")
+    return value
+
+
+def path_argument(path: str | os.PathLike[str]) -> str:
+    """``path`` as an argument of another program (fst2vcd, sigrok-cli): a relative path that
+    starts with ``-`` gets ``./`` so that it is never read as an option (``-fother.fst`` is
+    fst2vcd's ``-f other.fst``)."""
+    text = os.fspath(path)
+    return f"./{text}" if text.startswith("-") else text
 
 
 def detect_path_exists(path: str | os.PathLike[str]) -> None:
