@@ -276,7 +276,13 @@ def _side_outputs(
             from wavecheck.report.gtkw import write_gtkw
 
             target = _per_capture(args.gtkw, _tagged(r), k, gstems) if several else args.gtkw
-            write_gtkw(r, target)
+            vcd = write_gtkw(r, target)
+            if vcd is not None and vcd.name != f"{Path(target).stem}.vcd":
+                print(  # the usual name holds a file wavecheck did not write: kept
+                    f"wavecheck: {Path(target).stem}.vcd is not wavecheck's (kept): {target}: its "
+                    f"signals are in {vcd}",
+                    file=sys.stderr,
+                )
     if args.html:
         from wavecheck.report.html import write_html
 
