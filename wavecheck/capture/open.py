@@ -8,6 +8,7 @@ sigrok-cli to a temporary ``.sr`` first.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import shutil
@@ -155,6 +156,22 @@ def _read_head(f: BinaryIO, size: int) -> bytes:
     return b"".join(parts)
 
 
+def _say_waiting(path: str | os.PathLike[str]) -> None:
+    """On a terminal, say that a FIFO (which blocks until a writer opens it) or a terminal's
+    standard input is waited for; Ctrl-C ends the wait (KeyboardInterrupt, exit 130)."""
+    if not sys.stderr.isatty():
+        return
+    if str(path) == STDIN:
+        if sys.stdin.isatty():
+            print("wavecheck: reading the capture from standard input (a terminal: pipe a "
+                  "file in; Ctrl-C to stop)", file=sys.stderr, flush=True)  # fmt: skip
+        return
+    with contextlib.suppress(OSError):
+        if stat.S_ISFIFO(os.stat(path).st_mode):
+            print(f"wavecheck: waiting for data on FIFO {path} (Ctrl-C to stop)",
+                  file=sys.stderr, flush=True)  # fmt: skip
+
+
 def _open_stream(
     path: str | os.PathLike[str],
     *,
@@ -173,6 +190,7 @@ def _open_stream(
     is named ``<stdin>``).
     """
     name = "<stdin>" if str(path) == STDIN else str(path)
+    _say_waiting(path)
     try:
         f: BinaryIO = sys.stdin.buffer if str(path) == STDIN else open(path, "rb")
     except OSError as err:
