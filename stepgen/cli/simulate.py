@@ -37,7 +37,7 @@ from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import atomic_write, output_file
-from wavecheck.progress import activate
+from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.units import BASE_PERIOD, Plausible, number_option, option_ns, shorten
 
 __all__ = ["build_config", "build_motion", "register", "run"]
@@ -163,7 +163,7 @@ def register(sub: Any) -> None:
         default="fast",
         help="fast (default) or the plain per-period loop",
     )
-    o.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    o.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     add_servo_loop_arguments(p)  # --pid: the closed loop (stepgen.cli.servo)
     add_simulate_arguments(p)  # --ini/--hal/--channel fill the options left at their defaults
     p.set_defaults(func=run)

@@ -35,7 +35,7 @@ from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, output_file
-from wavecheck.progress import activate
+from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.model import Report
@@ -86,7 +86,7 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "-q",
         "--quiet",
         action="store_true",
-        help="no progress bar (it is off anyway when stderr is not a terminal)",
+        help=QUIET_HELP,
     )
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)
@@ -439,9 +439,9 @@ def run_checks(
         return report.exit_code
     jobs = _jobs(args, len(paths))
     stream = (
-        sys.stdout
-        if args.output
-        else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+        None
+        if args.quiet
+        else (sys.stdout if args.output else (sys.stderr if sys.stderr.isatty() else None))
     )
     done: list[_Outcome | None] = [None] * len(paths)
     for outcome in _outcomes(args, build_report, paths, jobs):
@@ -487,7 +487,8 @@ def _write_many(args: argparse.Namespace, outcomes: list[_Outcome], code: int) -
         text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
     if args.output:
         atomic_write(args.output, text)
-        print(f"report written to {args.output}")
+        if not args.quiet:
+            print(f"report written to {args.output}")
     else:
         sys.stdout.write(text)
 

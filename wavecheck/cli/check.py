@@ -254,6 +254,8 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
     text = RENDERERS[args.format](report, args)
     if args.output:
         atomic_write(args.output, text)
+        if getattr(args, "quiet", False):  # -q: the report file only
+            return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
             f"{report.verdict}: {report.total_violations} violation(s), {steps} steps; "
