@@ -32,6 +32,7 @@ from wavecheck.stream.engine import MachineStream
 
 if TYPE_CHECKING:
     from wavecheck.live.learn import RoleLearner
+from wavecheck.live import START_GRACE
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 __all__ = ["register", "run"]
@@ -42,6 +43,8 @@ DEFAULT_MAX_SNIPPETS = 100
 MAX_LEARN_BYTES = 256 << 20
 #: Edges a live check gathers at most before checking them (it also checks every 0.25 s).
 LIVE_BLOCK_EDGES = 1 << 16
+#: Time kept before and after each violation in a snippet, unless --snippet-window says.
+DEFAULT_SNIPPET_WINDOW = "5ms"
 
 
 def register(sub: Any) -> None:
@@ -104,7 +107,12 @@ def register(sub: Any) -> None:
         "256 MiB of samples are kept)",
     )
     end = p.add_argument_group("when to stop")
-    end.add_argument("--time", metavar="TIME", help="watch this long (10m, 30s), exactly")
+    end.add_argument(
+        "--time",
+        metavar="TIME",
+        help="watch this long (10m, 30s), exactly that many samples; if they have not all "
+        f"arrived {START_GRACE:g} s after that (a stalled analyzer), the watch ends, exit 2",
+    )
     end.add_argument(
         "--stop-on-fail", action="store_true", help="stop at the first violation found"
     )
@@ -116,9 +124,9 @@ def register(sub: Any) -> None:
     )
     keep.add_argument(
         "--snippet-window",
-        default="5ms",
         metavar="TIME",
-        help="samples kept before and after each violation in a snippet (default 5ms)",
+        help="samples kept before and after each violation in a snippet (at least this long, "
+        f"whole samples; default {DEFAULT_SNIPPET_WINDOW})",
     )
     keep.add_argument(
         "--max-snippets",
@@ -149,13 +157,19 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _time_samples(text: str | None, rate: Fraction, option: str) -> int | None:
+def _time_samples(
+    text: str | None, rate: Fraction, option: str, *, round_up: bool = False
+) -> int | None:
+    """``option``'s time as a number of samples at ``rate``: exact, or (``round_up``) the
+    smallest whole number of samples that long."""
     if text is None:
         return None
     seconds = parse_option(text, option, "time")
     if seconds <= 0:
         raise UsageError(f"{option} {text}: must be positive")
     n = seconds * rate
+    if round_up:
+        return -(-n.numerator // n.denominator)
     if n.denominator != 1:
         raise UsageError(
             f"{option} {text}: not a whole number of samples at {format_frequency(rate)} "
@@ -212,7 +226,12 @@ def run(args: argparse.Namespace) -> int:
             )
         names = wanted
     limit = _time_samples(args.time, rate, "--time")
-    window = _time_samples(args.snippet_window, rate, "--snippet-window") or 0
+    window = (
+        _time_samples(
+            args.snippet_window or DEFAULT_SNIPPET_WINDOW, rate, "--snippet-window", round_up=True
+        )
+        or 0
+    )
     label = f"sigrok-cli -d {args.driver} at {format_frequency(rate)} (live)"
     scanner = SampleBlocks(label, len(names), rate, names)
     found: list[str] = []
@@ -247,7 +266,7 @@ def run(args: argparse.Namespace) -> int:
 
     checker: MachineStream | RoleLearner
     if roles_from_waveforms(args, scanner.skeleton):
-        learn = _time_samples(args.learn, rate, "--learn") or 1
+        learn = _time_samples(args.learn, rate, "--learn", round_up=True) or 1
         checker = RoleLearner(scanner, decide, min(learn, MAX_LEARN_BYTES // scanner.unitsize))
     else:
         checker = start(scanner.skeleton)
