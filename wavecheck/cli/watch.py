@@ -27,13 +27,13 @@ from wavecheck.cli.check import (
 from wavecheck.cli.config import add_tuning_arguments
 from wavecheck.engine import check_machine
 from wavecheck.errors import DeviceError, UsageError
+from wavecheck.live import START_GRACE
 from wavecheck.output import output_file
 from wavecheck.stream.engine import MachineStream
+from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 if TYPE_CHECKING:
     from wavecheck.live.learn import RoleLearner
-from wavecheck.live import START_GRACE
-from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 __all__ = ["register", "run"]
 
@@ -195,8 +195,9 @@ def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck watch``; returns the exit code."""
     # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
     from wavecheck.capture.binary import SampleBlocks
-    from wavecheck.capture.srzip import SrRecorder, sr_metadata
+    from wavecheck.capture.srzip import sr_metadata
     from wavecheck.live.learn import RoleLearner
+    from wavecheck.live.record import CHECKPOINT_SECONDS, SrRecorder
     from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
     from wavecheck.live.snippets import SampleRing, Snippets
     from wavecheck.live.watch import Watch
@@ -285,6 +286,13 @@ def run(args: argparse.Namespace) -> int:
         group=args.channel_group,
     )
     recorder = SrRecorder(args.save, meta, scanner.unitsize) if args.save else None
+    if recorder is not None and recorder.replaces is not None:
+        print(
+            f"wavecheck: recording to {recorder.path} (complete every {CHECKPOINT_SECONDS:g} s; "
+            f"it replaces {recorder.replaces} when the watch ends)",
+            file=sys.stderr,
+            flush=True,
+        )
     status = _status(args.status)
     watch = Watch(
         Acquisition(command, continuous=limit is None),

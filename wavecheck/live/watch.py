@@ -32,10 +32,10 @@ from fractions import Fraction
 from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
-from wavecheck.capture.srzip import SrRecorder
 from wavecheck.errors import DeviceError
 from wavecheck.live import START_GRACE
 from wavecheck.live.learn import RoleLearner
+from wavecheck.live.record import SrRecorder
 from wavecheck.live.sigrok import EXIT_GRACE, STOP_GRACE, Acquisition
 from wavecheck.live.snippets import Snippets
 from wavecheck.report.machine import MachineReport
@@ -219,6 +219,8 @@ class Watch:
                 if data == b"":
                     break
                 now = time.monotonic()
+                if self.recorder is not None:
+                    self.recorder.tick()  # a checkpoint is due also when nothing comes
                 if data:
                     quiet_since = now
                     if asked is not None and taken + len(data) > asked:  # beyond --samples

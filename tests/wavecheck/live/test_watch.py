@@ -11,6 +11,7 @@ A capture of the same pattern to a file (``sigrok-cli --samples N -o X.sr``) is 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -180,3 +181,42 @@ def test_the_readme_watch_block_runs_as_written(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr
     assert "steps:   25000" in run.stdout  # 2 s at 200 kHz: (400000 + 7) // 16 rising edges of D3
     assert (tmp_path / "demo.sr").is_file() and (tmp_path / "snippets").is_dir()
+
+
+def test_save_is_readable_after_the_watcher_is_killed(tmp_path: Path) -> None:
+    """Issue 27: ``--save`` was a hidden temporary file renamed at the end, so a watch killed
+    after an hour left nothing. Killed with SIGKILL (no handler runs), the file is a complete
+    ``.sr`` holding all but at most the last checkpoint interval of what had been checked."""
+    import re
+
+    from wavecheck.capture.open import open_capture
+    from wavecheck.live.record import CHECKPOINT_SECONDS
+
+    proc = _start("--save", "kept.sr", cwd=tmp_path)
+    assert proc.stderr is not None
+    seen = 0
+    deadline = time.monotonic() + 60
+    while seen < 3 * RATE and time.monotonic() < deadline:
+        m = re.search(r"([\d,]+) samples", proc.stderr.readline())
+        if m:
+            seen = int(m.group(1).replace(",", ""))
+    children = subprocess.run(
+        ["pgrep", "-P", str(proc.pid)], capture_output=True, text=True
+    ).stdout.split()
+    proc.kill()
+    proc.communicate(timeout=30)
+    for pid in children:  # sigrok-cli sees its input end and stops; make sure
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(int(pid), signal.SIGKILL)
+    assert seen >= 3 * RATE
+    kept = tmp_path / "kept.sr"
+    with zipfile.ZipFile(kept) as z:
+        assert z.testzip() is None
+        stored = sum(i.file_size for i in z.infolist() if i.filename.startswith("logic-1-"))
+    assert seen - (CHECKPOINT_SECONDS + 0.5) * RATE <= stored
+    shown = subprocess.run(["sigrok-cli", "-i", str(kept), "--show"], capture_output=True,
+                           text=True, check=True).stdout  # fmt: skip
+    assert f"Logic sample count: {stored}" in shown  # libsigrok (PulseView) reads it whole
+    cap = open_capture(kept)
+    d3 = next(c for c in cap.channels if c.name == "D3")
+    assert (len(d3.edges) + 1) // 2 == (stored + 7) // 16  # every pulse of the counter's D3
