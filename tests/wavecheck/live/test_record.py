@@ -82,3 +82,27 @@ def test_member_size_is_bounded(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
     with zipfile.ZipFile(tmp_path / "k.sr") as z:
         sizes = [i.file_size for i in z.infolist() if i.filename.startswith("logic-1-")]
     assert sum(sizes) == 400 and max(sizes) <= 64 + 40
+
+
+def test_what_arrived_reads_back_edge_for_edge(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import numpy as np
+
+    from wavecheck.capture.sr import read_sr
+
+    monkeypatch.setattr(record, "MAX_MEMBER_BYTES", 4096)
+    rng = np.random.default_rng(5)
+    raw = np.bitwise_xor.accumulate((rng.random(10_000) < 0.05).astype(np.uint8) * 0x05)
+    target = tmp_path / "live.sr"
+    rec = SrRecorder(target, sr_metadata(["STEP", "DIR", "EN"], samplerate=1000000), 1)
+    data = raw.tobytes()
+    for a in range(0, len(data), 777):
+        rec.add(data[a : a + 777])
+    rec.close()
+    members = [n for n in zipfile.ZipFile(target).namelist() if n.startswith("logic-1-")]
+    assert len(members) == 3  # two of 4,662 bytes (whole pieces past 4096), the rest
+    got = read_sr(target)
+    bit0 = (raw & 1).astype(np.int8)
+    assert got.end == 10_000
+    assert got.channels[0].edges.tolist() == (np.flatnonzero(np.diff(bit0)) + 1).tolist()
