@@ -199,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
     from wavecheck.live.learn import RoleLearner
     from wavecheck.live.record import CHECKPOINT_SECONDS, SrRecorder
     from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
-    from wavecheck.live.snippets import SampleRing, Snippets
+    from wavecheck.live.snippets import SampleRing, Snippets, replay_arguments
     from wavecheck.live.watch import Watch
 
     if args.max_violations is not None and args.max_violations < 0:
@@ -236,6 +236,7 @@ def run(args: argparse.Namespace) -> int:
     label = f"sigrok-cli -d {args.driver} at {format_frequency(rate)} (live)"
     scanner = SampleBlocks(label, len(names), rate, names)
     found: list[str] = []
+    snippets = None
 
     def start(capture: Capture) -> MachineStream:
         """The streamed check of ``args``' axes (roles resolved against ``capture``)."""
@@ -244,6 +245,10 @@ def run(args: argparse.Namespace) -> int:
         template = check_machine(
             scanner.skeleton, setup.axes, setup.drives, setup.resolution, **setup.options
         )
+        if snippets is not None:  # each snippet says how to check it again
+            snippets.check = replay_arguments(
+                args, template, names, setup.options["forward_levels"]
+            )
         return MachineStream(
             template,
             setup.drives,
@@ -265,6 +270,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wavecheck: {found[0]}", file=sys.stderr, flush=True)
         return machine
 
+    if args.snippets:
+        ring = SampleRing(scanner.unitsize, 2 * window + int(rate) * 2)
+        snippets = Snippets(Path(args.snippets), ring, names, rate, window, args.max_snippets)
     checker: MachineStream | RoleLearner
     if roles_from_waveforms(args, scanner.skeleton):
         learn = _time_samples(args.learn, rate, "--learn", round_up=True) or 1
@@ -272,10 +280,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         checker = start(scanner.skeleton)
     meta = sr_metadata(names, samplerate=int(rate), unitsize=scanner.unitsize, total_analog=0)
-    snippets = None
-    if args.snippets:
-        ring = SampleRing(scanner.unitsize, 2 * window + int(rate) * 2)
-        snippets = Snippets(Path(args.snippets), ring, names, rate, window, args.max_snippets)
     command = acquisition_command(
         program,
         args.driver,
@@ -322,8 +326,7 @@ def run(args: argparse.Namespace) -> int:
         f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended}); "
         f"wavecheck used {result.cpu_s:.2f} s of processor time "
         f"({100 * result.cpu_s / max(result.wall_s, 1e-9):.0f} % of one core)"
-        + (f"; {len(result.snippets)} snippet(s) in {args.snippets}" if snippets else "")
-        + (f", {snippets.left_out} more not written" if snippets and snippets.left_out else ""),
+        + (f"; {result.snippet_summary}" if result.snippet_summary else ""),
         file=sys.stderr,
     )
     if result.failure is not None:

@@ -61,6 +61,9 @@ class WatchResult:
         samples: samples checked.
         wall_s: seconds from start to end.
         cpu_s: processor seconds wavecheck spent (sigrok-cli's not counted).
+        snippets: the snippet files written.
+        snippet_summary: violations seen against snippets written, and why
+            (:meth:`~wavecheck.live.snippets.Snippets.summary`; empty without ``--snippets``).
     """
 
     report: MachineReport
@@ -70,6 +73,7 @@ class WatchResult:
     wall_s: float
     cpu_s: float
     snippets: list[str] = field(default_factory=list)
+    snippet_summary: str = ""
 
 
 def status_line(machine: MachineStream, samples: int, rate: Fraction, wall_s: float) -> str:
@@ -262,10 +266,15 @@ class Watch:
             self.scanner.notes.append(
                 f"the stream ended inside a sample ({self.scanner.partial} byte(s)): dropped"
             )
+        summary = ""
         if self.snippets is not None:
             self.snippets.due(n, final=True)
+            seen = sum(s.fails for a in self.machine.axes for s in a.summaries)
+            summary = self.snippets.summary(seen)
         capture = self.scanner.capture()
         capture.notes += self.notes
+        if summary:
+            capture.notes.append(summary)
         if self.why == "interrupted":
             capture.notes.append(
                 f"watch interrupted after {format_time(Fraction(n) / self.scanner.rate)}: "
@@ -281,4 +290,5 @@ class Watch:
             time.monotonic() - t_start,
             time.process_time() - cpu_start,
             [str(p) for p in self.snippets.written] if self.snippets else [],
+            summary,
         )

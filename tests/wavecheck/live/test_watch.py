@@ -139,11 +139,20 @@ def test_stop_on_fail_and_snippets_around_each_violation(tmp_path: Path) -> None
     assert {r["id"]: r["min_margin_ns"] for r in report["rules"]}["dir_setup"] == -20_000
     snippets = sorted((tmp_path / "snips").iterdir())
     assert len(snippets) == 3
+    # the report says how many violations were seen, and why most have no snippet of their own
+    seen = sum(r["violations"] for r in report["rules"])
+    summary = f"snippets: 3 file(s) in snips for {seen} violation(s) seen ("
+    assert summary in run.stderr and summary in json.dumps(report)
+    assert "beyond --max-snippets 3" in run.stderr
     for snip in snippets:
         meta = zipfile.ZipFile(snip).read("metadata").decode()
         first = int(meta.split("first_sample=")[1].split()[0])
-        check = json.loads(_wavecheck("check", str(snip), *CHECK, "--limit", "dir_setup=60us",
+        # issue 27: the snippet carries its drive, map and step type: no options needed
+        check = json.loads(_wavecheck("check", str(snip), "--format", "json",
+                                      cwd=tmp_path).stdout)  # fmt: skip
+        given = json.loads(_wavecheck("check", str(snip), *CHECK, "--limit", "dir_setup=60us",
                                       "--format", "json", cwd=tmp_path).stdout)  # fmt: skip
+        assert check == given
         v = check["violations"][0]
         assert v["rule"] == "dir_setup" and v["margin_ns"] == -20_000
         # the name is the violation's time in the watched stream
@@ -220,3 +229,28 @@ def test_save_is_readable_after_the_watcher_is_killed(tmp_path: Path) -> None:
     cap = open_capture(kept)
     d3 = next(c for c in cap.channels if c.name == "D3")
     assert (len(d3.edges) + 1) // 2 == (stored + 7) // 16  # every pulse of the counter's D3
+
+
+def test_a_snippet_repeats_the_check_of_several_axes_without_options(tmp_path: Path) -> None:
+    """Two axes, an inverted DIR, a DIR sense, a shared ENABLE, a drive file and limits: the
+    check of a snippet without options equals the check with all of them (issue 27)."""
+    drive = tmp_path / "mine.toml"
+    drive.write_text((Path(__file__).resolve().parents[3] / "rules" / "drv8825.toml").read_text())
+    opts = ["--drive", "x=drv8825", "--drive", f"y={drive}", "--map",
+            "x.step=D3,x.dir=D6", "--map", "y.step=D2,y.dir=D5", "--map", "enable=D7",
+            "--invert", "y.dir", "--dir-forward", "y=high", "--type", "x=0",
+            "--limit", "dir_setup=60us", "--margin", "+100ns"]  # fmt: skip
+    run = _wavecheck("watch", *DEMO, *opts, "--time", "50ms", "--snippets", "snips",
+                     "--max-snippets", "2", "--format", "json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 1, run.stderr
+    snips = sorted((tmp_path / "snips").iterdir())
+    assert snips
+    for snip in snips:
+        bare = _wavecheck("check", str(snip), "--format", "json", cwd=tmp_path)
+        full = _wavecheck("check", str(snip), *opts, "--format", "json", cwd=tmp_path)
+        assert bare.returncode == full.returncode == 1, bare.stderr
+        assert json.loads(bare.stdout) == json.loads(full.stdout)
+        assert "checked with the options it carries" in bare.stderr
+    # a capture that carries none still needs --drive, in one line
+    plain = _wavecheck("check", str(tmp_path / "mine.toml"), cwd=tmp_path)
+    assert plain.returncode == 2 and "--drive" in plain.stderr
