@@ -64,7 +64,7 @@ def read_saleae_csv(
     Raises:
         CaptureError: not such an export, a bad row, or times not on a common sample grid.
     """
-    with open(path, encoding="utf-8-sig", newline="") as f:
+    with open(path, encoding="utf-8-sig", errors="replace", newline="") as f:
         header = f.readline(_MAX_HEADER)
         names = [n.strip() for n in header.rstrip("\r\n").split(",")]
         if len(names) < 2 or names[0] != "Time [s]":

@@ -17,7 +17,9 @@ come from the vector's value changes, read again from the file with pywellen.
 from __future__ import annotations
 
 import contextlib
+import io
 import os
+import select
 import shutil
 import subprocess
 import sys
@@ -283,6 +285,49 @@ def ghw_timebase(timescale: Fraction | None) -> tuple[Timebase, str]:
     )
 
 
+#: Seconds fst2vcd may go without output before it is taken as hung (a corrupt FST can make
+#: GTKWave 3.3's fst2vcd loop forever without output).
+FST2VCD_STALL_SECONDS = 10.0
+#: fst2vcd's output may be at most this many times the FST file (plus 64 MiB): a real FST is
+#: 5-50 times smaller than its VCD; a corrupt one could make fst2vcd write forever.
+FST2VCD_MAX_EXPANSION = 4096
+
+
+class _Watched(io.RawIOBase):
+    """fst2vcd's standard output for the VCD reader, with bounds: no output for
+    :data:`FST2VCD_STALL_SECONDS`, or more than ``limit`` bytes, kills it (a CaptureError)."""
+
+    def __init__(self, path: str | os.PathLike[str], proc: subprocess.Popen[bytes], limit: int):
+        super().__init__()
+        assert proc.stdout is not None
+        self.path = path
+        self.proc = proc
+        self.fd = proc.stdout.fileno()
+        self.left = limit
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        if not select.select([self.fd], [], [], FST2VCD_STALL_SECONDS)[0]:
+            self.proc.kill()
+            raise CaptureError(
+                self.path, None, f"fst2vcd gave nothing for {FST2VCD_STALL_SECONDS:g} s (a "
+                "corrupt FST file?): stopped",
+            )  # fmt: skip
+        data = os.read(self.fd, min(len(buffer), 1 << 20))
+        self.left -= len(data)
+        if self.left < 0:
+            self.proc.kill()
+            raise CaptureError(
+                self.path,
+                None,
+                "fst2vcd's output grows beyond any FST's (a corrupt file?): stopped",
+            )
+        memoryview(buffer).cast("B")[: len(data)] = data
+        return len(data)
+
+
 def read_fst(
     path: str | os.PathLike[str],
     *,
@@ -290,7 +335,8 @@ def read_fst(
     resolution_s: Fraction | None = None,
 ) -> Capture:
     """Read an FST file: GTKWave's ``fst2vcd`` streamed into the VCD reader, or pywellen when
-    ``fst2vcd`` is not installed (slower per value change, same result).
+    ``fst2vcd`` is not installed (slower per value change, same result). fst2vcd is bounded
+    (:class:`_Watched`): it is stopped when it stalls or writes beyond any FST's expansion.
 
     Raises:
         CaptureError: the file cannot be read as FST.
@@ -300,24 +346,32 @@ def read_fst(
         return read_wellen(path, kind="fst", samplerate=samplerate, resolution_s=resolution_s)
     from wavecheck.capture.vcd import read_vcd
 
-    with subprocess.Popen(
-        [tool, path_argument(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    ) as proc:
+    try:
+        limit = FST2VCD_MAX_EXPANSION * os.path.getsize(path) + (64 << 20)
+    except OSError as err:
+        raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+    with (
+        tempfile.TemporaryFile() as errors,
+        subprocess.Popen(
+            [tool, path_argument(path)], stdout=subprocess.PIPE, stderr=errors
+        ) as proc,
+    ):
         assert proc.stdout is not None
+        source = io.BufferedReader(_Watched(path, proc, limit), buffer_size=1 << 20)
         try:
             cap = read_vcd(
-                path,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                source=cast(BinaryIO, proc.stdout),
-            )
+                path, samplerate=samplerate, resolution_s=resolution_s,
+                source=cast(BinaryIO, source),
+            )  # fmt: skip
         except CaptureError as err:
             proc.kill()
             raise CaptureError(path, None, f"not a readable FST file ({err.msg})") from None
         finally:
             proc.stdout.close()
-        err_text = proc.stderr.read().decode("utf-8", "replace").strip() if proc.stderr else ""
-        if proc.wait() != 0:
+        status = proc.wait()
+        errors.seek(0)
+        err_text = errors.read(4096).decode("utf-8", "replace").strip()
+        if status != 0:
             raise CaptureError(path, None, f"fst2vcd cannot read it: {err_text[:200]}")
     cap.format = "fst"
     cap.bit_source = str(path)
