@@ -56,3 +56,28 @@ def test_sigrok_cli_reads_the_file_named(tmp_path: Path, monkeypatch: pytest.Mon
     convert("-ochanged.csv", "-i.sr", input_format="csv:header=yes:samplerate=1000000")
     assert Path("-i.sr").stat().st_size > 0 and not Path("changed.csv").exists()
     assert [len(c.edges) for c in open_capture("-i.sr").channels] == [3, 1]
+
+
+@pytest.mark.skipif(
+    not (shutil.which("vcd2fst") and shutil.which("fst2vcd")), reason="needs gtkwave"
+)
+def test_a_cut_short_fst_does_not_hang_fst2vcd(tmp_path: Path) -> None:
+    """GTKWave 3.3's fst2vcd loops forever, writing nothing, on an FST cut short by one byte
+    (issue 27's fuzz run): the read stops after FST2VCD_STALL_SECONDS, one line, exit 2."""
+    import sys
+    import time
+
+    from tests.reliability.seeds import fst_seeds
+    from wavecheck.capture.wellen import FST2VCD_STALL_SECONDS
+
+    seed = fst_seeds()[0]
+    cut = tmp_path / "cut.fst"
+    cut.write_bytes(seed[:-1])
+    start = time.monotonic()
+    proc = subprocess.run(
+        [sys.executable, "-m", "wavecheck", "info", str(cut)],
+        capture_output=True, text=True, timeout=FST2VCD_STALL_SECONDS + 60, cwd=tmp_path,
+    )  # fmt: skip
+    assert time.monotonic() - start < FST2VCD_STALL_SECONDS + 60
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert str(cut) in proc.stderr
