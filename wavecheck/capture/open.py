@@ -428,9 +428,9 @@ def open_source(
     channel_names: Sequence[str] | None = None,
     chunk_bytes: int | None = None,
 ) -> BlockSource:
-    """A block source for any capture (as :func:`open_capture` reads it): ``.sr`` and VCD files,
-    and a VCD on standard input or a pipe, are read block by block in bounded memory; every
-    other input is read whole first and given as one block
+    """A block source for any capture (as :func:`open_capture` reads it): ``.sr``, VCD and timed
+    raw binary samples, from a file or from standard input or a pipe, are read block by block in
+    bounded memory; every other input is read whole first and given as one block
     (:class:`~wavecheck.capture.blocks.MemorySource`).
 
     Raises:
@@ -469,6 +469,21 @@ def open_source(
             resolution_s=resolution_s,
             chunk_bytes=chunk_bytes or VCD_CHUNK,
         )
+    if fmt.split(":", 1)[0] == "binary" and input_format:
+        from wavecheck.capture.binary import binary_blocks
+
+        detect_path_exists(path)
+        raw = binary_blocks(
+            path,
+            input_format.strip(),
+            name=str(path),
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            channel_names=channel_names,
+            chunk_bytes=chunk_bytes,
+        )
+        if raw is not None:
+            return raw
     from wavecheck.capture.blocks import MemorySource
 
     whole = open_capture(
@@ -491,8 +506,9 @@ def _stream_source(
     channel_names: Sequence[str] | None,
     chunk_bytes: int | None,
 ) -> BlockSource:
-    """The block source of standard input or a pipe: a VCD read block by block from the stream
-    (never held whole); any other format read whole (:func:`_read_stream`), one block."""
+    """The block source of standard input or a pipe: a VCD or timed raw samples read block by
+    block from the stream (never held whole); any other format read whole
+    (:func:`_read_stream`), one block."""
     from wavecheck.capture.blocks import MemorySource
 
     if sniffed.kind == "vcd" and ":" not in sniffed.fmt:
@@ -510,6 +526,24 @@ def _stream_source(
         except BaseException:
             sniffed.close()
             raise
+    if sniffed.kind == "binary":
+        from wavecheck.capture.binary import binary_blocks
+
+        try:
+            raw = binary_blocks(
+                sniffed.stream,
+                sniffed.fmt,
+                name=sniffed.name,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                channel_names=channel_names,
+                chunk_bytes=chunk_bytes,
+            )
+        except BaseException:
+            sniffed.close()
+            raise
+        if raw is not None:
+            return raw
     return MemorySource(
         _read_stream(
             sniffed,
