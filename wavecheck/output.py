@@ -21,7 +21,6 @@ import errno
 import os
 import stat
 import sys
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import NamedTuple
@@ -152,6 +151,8 @@ def _check_folder(folder: Path, probe: bool) -> None:
     if not folder.is_dir():
         raise _Refused(f"{str(folder)!r} is not a folder")
     if probe:
+        import tempfile  # here, not at start-up: most commands write nothing
+
         try:
             fd, tmp = tempfile.mkstemp(prefix=".wavecheck-probe.", dir=folder)
         except OSError as err:
@@ -235,6 +236,8 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     if t.in_place:
         yield t.path
         return
+    import tempfile  # here, not at start-up: most commands write nothing
+
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{t.path.name}.", suffix=".tmp", dir=t.path.parent)
     except OSError as err:
