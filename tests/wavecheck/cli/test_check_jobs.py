@@ -5,15 +5,22 @@ N, only what the outputs need kept per capture, and each drive file parsed once 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import gc
 import json
+import weakref
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from tests.conftest import write_vcd
 from wavecheck.cli import _reports, main
 from wavecheck.drives import library
+from wavecheck.report import plot
+from wavecheck.report.html import render_html
+from wavecheck.report.junit import Unreadable, render_junit
 
 US = 1000
 
@@ -107,7 +114,66 @@ def test_workers_send_back_no_reports(tmp_path: Path, capsys: pytest.CaptureFixt
     args = _parse(["check", *paths, *ARGS, "--format", "json"])
     outcomes = list(_reports._outcomes(args, build_report, paths, 2))
     assert sorted(o.index for o in outcomes) == [0, 1, 2, 3]
-    assert all(o.report is None and isinstance(o.piece, str) for o in outcomes)
+    assert all(isinstance(o.piece, str) for o in outcomes)
+    assert [f.name for f in dataclasses.fields(_reports._Outcome)] == [
+        "index", "path", "summary", "code", "verdict", "piece", "counts", "error",
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize("side", [[], ["--plot", "p.png", "--gtkw", "g.gtkw", "--html", "r.html"]])
+def test_no_report_outlives_its_capture(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    side: list[str],
+) -> None:
+    """In this process too (``-j 1``, and the side outputs, which run here): when a capture is
+    checked, no report of an earlier one is still alive: memory stays flat in the captures."""
+    from wavecheck.cli import check
+
+    monkeypatch.setattr(plot, "render_png", lambda r: b"\x89PNG " + r.capture.path.encode())
+    alive: list[weakref.ref[Any]] = []
+    build = check.build_report
+
+    def watched(args: argparse.Namespace, path: str) -> Any:
+        gc.collect()
+        assert [r for r in alive if r() is not None] == []
+        checked = build(args, path)
+        alive.append(weakref.ref(checked))
+        return checked
+
+    monkeypatch.setattr(check, "build_report", watched)
+    _runs(tmp_path, 4)
+    monkeypatch.chdir(tmp_path)
+    code = main(["check", str(tmp_path / "*.vcd"), *ARGS, "-j", "1", *side])
+    capsys.readouterr()
+    assert code == 1 and len(alive) == 4
+    if side:
+        assert sorted(f.name for f in tmp_path.glob("p-*.png")) == [f"p-r{k}.png" for k in range(4)]
+        assert len(list(tmp_path.glob("g-r*.gtkw"))) == 4
+
+
+def test_several_documents_equal_the_renderers_of_all_reports(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The JUnit document and the HTML page of several captures, joined capture by capture from
+    pieces, are what the renderers give for all the reports at once."""
+    monkeypatch.setattr(plot, "render_png", lambda r: b"\x89PNG " + r.capture.path.encode())
+    paths = [str(p) for p in _runs(tmp_path, 3)]
+    (tmp_path / "r9.vcd").write_text("")
+    page = tmp_path / "r.html"
+    argv = ["check", str(tmp_path / "r*.vcd"), *ARGS, "--format", "junit", "--html", str(page)]
+    assert main(argv) == 2
+    junit_doc = capsys.readouterr().out
+    args = _parse(["check", *paths, *ARGS])
+    from wavecheck.cli.check import build_report
+
+    reports = [build_report(args, p) for p in paths]
+    bad = str(tmp_path / "r9.vcd")
+    assert junit_doc == render_junit(reports, [Unreadable(bad, f"{bad}: the file is empty")])
+    pngs = [plot.render_png(r) for r in reports]
+    want = render_html(reports, errors=[f"{bad}: the file is empty"], pngs=pngs)
+    assert page.read_text() == want
 
 
 def _parse(argv: list[str]) -> argparse.Namespace:
