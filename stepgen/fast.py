@@ -28,7 +28,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from wavecheck.steptypes import StepType
 
 from stepgen.model import (
     ONE_STEP,
@@ -44,6 +43,7 @@ from stepgen.model import (
     update_schedule,
 )
 from wavecheck.progress import current
+from wavecheck.steptypes import StepType
 
 __all__ = ["run_fast"]
 

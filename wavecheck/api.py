@@ -167,6 +167,8 @@ def check(
     limit: Iterable[str] = (),
     margin: str | None = None,
     pictures: bool = False,
+    keep_violations: int = DEFAULT_KEEP,
+    block_edges: int = DEFAULT_BLOCK_EDGES,
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
 
@@ -194,6 +196,8 @@ def check(
         margin: ``"2x"`` or ``"+500ns"`` tightening every figure (``--margin``).
         pictures: keep what :func:`wavecheck.report.plot.render_plot` and the HTML/GTKWave
             outputs draw (signal windows around the worst places, a thinned step trace).
+        keep_violations: the worst violations kept per rule (the counts are exact).
+        block_edges: edges gathered before a window is checked (memory follows it).
 
     Raises:
         WavecheckError: unreadable capture or rule file, unknown channel, bad option.
@@ -220,6 +224,8 @@ def check(
         channel=channel,
         latency=latency,
         pictures=pictures,
+        keep_violations=keep_violations,
+        block_edges=block_edges,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)
     if len(machine.axes) != 1 or machine.axes[0].axis is not None:
@@ -252,6 +258,8 @@ def check_axes(
     limit: Iterable[str] = (),
     margin: str | None = None,
     pictures: bool = False,
+    keep_violations: int = DEFAULT_KEEP,
+    block_edges: int = DEFAULT_BLOCK_EDGES,
 ) -> MachineReport:
     """Check every axis of a capture, read once, each against its drive (``wavecheck check
     --map x.step=5,x.dir=6 --map y.step=3,y.dir=4``); the report has one
@@ -265,7 +273,8 @@ def check_axes(
         map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
         invert, step_type, forward_level: for every axis that does not give its own.
         resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
-            channel, latency, limit, margin, pictures: as :func:`check`, for every axis.
+            channel, latency, limit, margin, pictures, keep_violations, block_edges: as
+            :func:`check`, for every axis.
 
     Raises:
         WavecheckError: an axis without a drive, a bad axis name or mapping (a channel in two
@@ -311,5 +320,7 @@ def check_axes(
         channel=channel,
         latency=latency,
         pictures=pictures,
+        keep_violations=keep_violations,
+        block_edges=block_edges,
     )
     return check_source(_source(capture, samplerate, input_format), options)

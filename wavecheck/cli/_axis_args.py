@@ -13,6 +13,7 @@ import argparse
 from dataclasses import dataclass
 from typing import Any
 
+from wavecheck.capture.blocks import WHOLE
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import Drive
 from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert, split_per_axis
@@ -22,6 +23,7 @@ from wavecheck.errors import UsageError
 __all__ = [
     "AxisRun",
     "add_axis_arguments",
+    "add_engine_arguments",
     "axes_of",
     "axis_runs",
     "check_options",
@@ -202,6 +204,24 @@ def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun]
     return runs, found
 
 
+def add_engine_arguments(p: Any) -> None:
+    """Add ``--block-edges`` and ``--no-stream`` (how much the engine checks at a time)."""
+    p.add_argument(
+        "--block-edges",
+        type=int,
+        default=None,
+        metavar="N",
+        help="check about N edges at a time (memory follows N, not the capture's length; "
+        f"default {DEFAULT_BLOCK_EDGES}); the results do not depend on it",
+    )
+    p.add_argument(
+        "--no-stream",
+        action="store_true",
+        help="check the whole capture as one window (the same engine with one block: memory "
+        "follows the capture; the results are the same)",
+    )
+
+
 def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> CheckOptions:
     """The options object (:class:`~wavecheck.engine.options.CheckOptions`) of the mapping,
     capture, rule and configuration options of ``args``; built once and kept on ``args``.
@@ -232,7 +252,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         axis: _forward(text)
         for axis, text in split_per_axis(args.dir_forward, "--dir-forward").items()
     }
-    block = getattr(args, "block_edges", None)
+    block = WHOLE if getattr(args, "no_stream", False) else getattr(args, "block_edges", None)
     options = CheckOptions(
         drive=drives,
         axes=tuple(parse_axes(args.map)) if args.map else (),

@@ -38,7 +38,7 @@ from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, output_file
-from wavecheck.progress import activate
+from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
@@ -47,6 +47,7 @@ from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
     "add_report_arguments",
+    "add_stepgen_arguments",
     "expand_captures",
     "latency_ns",
     "render_json_report",
@@ -88,8 +89,15 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "-q",
         "--quiet",
         action="store_true",
-        help="no progress bar (it is off anyway when stderr is not a terminal)",
+        help=QUIET_HELP,
     )
+    add_stepgen_arguments(p)
+
+
+def add_stepgen_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the LinuxCNC stepgen configuration options (``--ini``, ``--hal``, ``--channel``,
+    ``--base-period``, ``--steplen`` …, ``--latency``) for the ``config``/``latency_safe``
+    rates."""
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)
     for name, what in _CONFIG_OPTIONS.items():
@@ -312,8 +320,8 @@ class _SideOutputs:
             if args.gtkw:
                 from wavecheck.report.gtkw import write_gtkw
 
-                target = _per_capture(args.gtkw, _tagged(r), self._gstems) if several else None
-                write_gtkw(r, target or args.gtkw)
+                gtkw = _per_capture(args.gtkw, _tagged(r), self._gstems) if several else args.gtkw
+                _gtkw_written(gtkw, write_gtkw(r, gtkw))
             if self._sections is not None:
                 from wavecheck.report.html import PageRow, html_section
 
@@ -342,6 +350,17 @@ class _SideOutputs:
             )
         finally:
             spool.close()
+
+
+def _gtkw_written(target: str, vcd: Path | None) -> None:
+    """Say so when the GTKWave file's signals went to another VCD than ``STEM.vcd`` (that name
+    holds a file wavecheck did not write, which is kept)."""
+    if vcd is not None and vcd.name != f"{Path(target).stem}.vcd":
+        print(
+            f"wavecheck: {Path(target).stem}.vcd is not wavecheck's (kept): {target}: its "
+            f"signals are in {vcd}",
+            file=sys.stderr,
+        )
 
 
 def _jobs(args: argparse.Namespace, count: int) -> int:
@@ -494,9 +513,9 @@ def run_checks(
         return report.exit_code
     jobs = _jobs(args, len(paths))
     stream = (
-        sys.stdout
-        if args.output
-        else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+        None
+        if args.quiet
+        else (sys.stdout if args.output else (sys.stderr if sys.stderr.isatty() else None))
     )
     side = _SideOutputs(args, several=True)
     done: list[_Outcome | None] = [None] * len(paths)
@@ -528,7 +547,8 @@ def _write_many(
     pieces = _document(args, outcomes, spool, code)
     if args.output:
         atomic_write(args.output, pieces)
-        print(f"report written to {args.output}")
+        if not args.quiet:
+            print(f"report written to {args.output}")
     else:
         for piece in pieces:
             sys.stdout.write(piece)

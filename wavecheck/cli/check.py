@@ -11,12 +11,12 @@ files) can be added as options handled in :func:`write_outputs`.
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from collections.abc import Callable
 from typing import Any
 
-from wavecheck.capture.blocks import WHOLE
-from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
@@ -78,10 +78,11 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--drive",
         action="append",
-        required=True,
         metavar="ID|FILE|AXIS=ID",
         help="drive id from rules/ or a TOML file; AXIS=ID gives one axis its own drive "
-        "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542)",
+        "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542). Required, except for "
+        "a snippet written by wavecheck watch --snippets: it carries its drive, map and step "
+        "type, and options given here override them",
     )
     add_axis_arguments(p)
     add_tuning_arguments(p)
@@ -102,20 +103,7 @@ def register(sub: Any) -> None:
     add_report_arguments(p)
     add_pulseview_argument(p)
     add_steps_arguments(p)
-    p.add_argument(
-        "--block-edges",
-        type=int,
-        default=None,
-        metavar="N",
-        help="check about N edges at a time (memory follows N, not the capture's length; "
-        "default 262144)",
-    )
-    p.add_argument(
-        "--no-stream",
-        action="store_true",
-        help="check the whole capture as one window (the same engine with one block: memory "
-        "follows the capture; the results are the same)",
-    )
+    add_engine_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -134,8 +122,6 @@ def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = No
     steps to ``steps_csv`` as they are decoded)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    if args.no_stream:
-        args.block_edges = WHOLE
     options = check_options(args)
     source = source_from_args(args, path)
     if steps_csv is None:
@@ -164,6 +150,8 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
     text = RENDERERS[args.format](report, args)
     if args.output:
         atomic_write(args.output, text)
+        if getattr(args, "quiet", False):  # -q: the report file only
+            return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
             f"{report.verdict}: {report.total_violations} violation(s), {steps} steps; "
@@ -173,8 +161,52 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
         sys.stdout.write(text)
 
 
+class _Refusing(argparse.ArgumentParser):
+    """A parser whose errors are UsageErrors (for the options a snippet carries)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise UsageError(message)
+
+
+def _stored_settings(args: argparse.Namespace) -> None:
+    """Without ``--drive``: take the options the captures carry (snippets of ``wavecheck watch
+    --snippets``; :func:`wavecheck.live.snippets.stored_arguments`) where none was given.
+
+    Raises:
+        UsageError: a capture carries none, or they carry different ones.
+    """
+    from wavecheck.live.snippets import stored_arguments
+
+    patterns = args.capture if isinstance(args.capture, list) else [args.capture]
+    paths = expand_captures(patterns)
+    found = {tuple(stored_arguments(p) or ()) for p in paths}
+    stored = next(iter(found)) if len(found) == 1 else ()
+    if not stored:
+        raise UsageError(
+            "the following arguments are required: --drive (only a snippet written by "
+            "wavecheck watch --snippets carries its own"
+            + (", and these captures carry different ones)" if len(found) > 1 else ")")
+        )
+    parser = _Refusing(prog="wavecheck")
+    sub = parser.add_subparsers(parser_class=_Refusing)
+    register(sub)
+    try:
+        given = parser.parse_args(["check", paths[0], *stored])
+    except UsageError as err:
+        raise UsageError(f"{paths[0]}: the check options it carries: {err}") from None
+    for key, value in vars(given).items():  # an option given on the command line wins
+        if key != "capture" and getattr(args, key, None) == sub.choices["check"].get_default(key):
+            setattr(args, key, value)
+    print(
+        f"wavecheck: {paths[0]}: checked with the options it carries: {shlex.join(stored)}",
+        file=sys.stderr,
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
+    if not args.drive:
+        _stored_settings(args)
     check_steps_arguments(args)
     if getattr(args, "pulseview", None):  # issue 28: one capture, one PulseView session
         check_pulseview(args, len(expand_captures(args.capture)))

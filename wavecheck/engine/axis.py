@@ -110,6 +110,7 @@ class AxisCheck:
                 plan.resolution_ns,
                 keep=keep_violations,
                 order_by_end=r.listed_by_end,
+                binned=pictures,
             )
             for r in plan.rules
             if r.id in plan.limits or r.check == "sequence"

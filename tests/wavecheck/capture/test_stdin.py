@@ -16,7 +16,9 @@ import pytest
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import open_capture
+from wavecheck.capture.blocks import assemble
+from wavecheck.capture.open import open_capture, open_source
+from wavecheck.capture.vcd.reader import VcdBlocks
 
 REPO = Path(__file__).resolve().parents[3]
 
@@ -118,3 +120,62 @@ def test_open_capture_reads_a_fifo(tmp_path: Path) -> None:
     assert cap.path == str(fifo)
     for a, b in zip(cap.channels, ref.channels, strict=True):
         assert a.edges.tolist() == b.edges.tolist()
+
+
+def test_a_vcd_on_a_pipe_is_read_block_by_block(tmp_path: Path) -> None:
+    """One engine (issue 23): a VCD on a pipe is a block source read from the stream, never held
+    whole (its blocks are as small as the chunk asked), and its edges are the file's."""
+    import threading
+
+    src = _big_vcd(tmp_path)
+    fifo = tmp_path / "pipe.vcd"
+    os.mkfifo(fifo)
+    writer = threading.Thread(target=lambda: fifo.write_bytes(src.read_bytes()), daemon=True)
+    writer.start()
+    source = open_source(fifo, chunk_bytes=1024)
+    assert isinstance(source, VcdBlocks)
+    blocks = list(source.blocks())
+    writer.join(timeout=30)
+    assert len(blocks) > 10  # about 3 edges per 1 KB of text: many blocks
+    got = assemble(source.capture(), blocks)
+    ref = open_capture(src)
+    for a, b in zip(got.channels, ref.channels, strict=True):
+        assert a.edges.tolist() == b.edges.tolist()
+
+
+@pytest.mark.parametrize("command", [["info"], ["check", "--drive", "gecko-g202"]])
+def test_a_fifo_without_a_writer_says_so_and_ends_on_ctrl_c(
+    tmp_path: Path, command: list[str]
+) -> None:
+    """Issue 27: a FIFO nobody writes to blocked silently. On a terminal the wait is said, and
+    Ctrl-C (SIGINT) ends it at once: exit 130, one line."""
+    import pty
+    import select
+    import signal
+    import time
+
+    fifo = tmp_path / "capture.fifo"
+    os.mkfifo(fifo)
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "wavecheck", command[0], str(fifo), *command[1:]],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave, cwd=REPO,
+    )  # fmt: skip
+    os.close(slave)
+    seen = b""
+    deadline = time.monotonic() + 60
+    while b"waiting for data on FIFO" not in seen and time.monotonic() < deadline:
+        if select.select([master], [], [], 1.0)[0]:
+            seen += os.read(master, 4096)
+    assert f"waiting for data on FIFO {fifo}".encode() in seen, seen
+    assert proc.poll() is None  # still waiting: nothing was made up
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=10) == 130
+    rest = b""
+    while select.select([master], [], [], 0.5)[0]:
+        try:
+            rest += os.read(master, 4096)
+        except OSError:
+            break
+    os.close(master)
+    assert [ln for ln in rest.decode().splitlines() if ln.strip()] == ["wavecheck: interrupted"]
