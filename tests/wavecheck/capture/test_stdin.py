@@ -15,8 +15,8 @@ import pytest
 
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
-from wavecheck.capture.edges import Capture
 from wavecheck.capture.blocks import assemble
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.vcd.reader import VcdBlocks
 
