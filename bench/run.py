@@ -25,6 +25,12 @@ Sections (goals of issues 18, 7 and 14 in brackets):
    writing the same trace.
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
    of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
+   Issue 29: ``--help`` and ``drives`` against the numpy import [CPU ≤ 0.5×: no numpy, no
+   subcommand module but the one run].
+5b. Many small captures (issue 29, section ``many``): ``check 'many1000/*.vcd' -j 2`` against
+   ``-j 1`` (``bench/many_files.py``'s 1000 VCDs of 200 steps, JSON to ``-o``, checked whole
+   and in input order) [wall ≥ 1.8× faster]; peak RSS of ``-j 1`` on 1000 files against 100
+   [≤ 1.1×: flat in the number of files]. ``--quick``: 200 and 20 files.
 6. Bounded memory (issue 14): peak RSS of ``wavecheck check`` streamed (the default) on the
    generated 8 G-sample ``.sr`` (13 M edges) [≤ 100 MB] and a 50 M-change VCD [≤ 150 MB], then
    on captures twice as long (16 G samples, 100 M changes) [peak ≤ 1.1× the base's]; peer: the
@@ -565,8 +571,81 @@ def bench_startup(runs: int) -> dict[str, Any]:
     peer = f"numpy import {floor:.2f} s; sigrok-cli --version {sigrok:.2f} s"
     for k in list(cmds)[:3]:
         figure(f"start-up: {k}", f"{best[k]:.2f} s cpu", "≤ 0.25 s", best[k] <= 0.25, peer, load)
-    return {"cpu_s": best, "runs": times, "load": load,
+    ratios = {k: best[k] / floor for k in list(cmds)[:2]}  # issue 29: no numpy, one subcommand
+    for k, ratio in ratios.items():
+        figure(f"start-up: {k} vs `import numpy` (CPU)", f"{ratio:.2f}× ({best[k]:.3f} s)",
+               f"≤ {STARTUP_RATIO}×", ratio <= STARTUP_RATIO,
+               f"python -c 'import numpy' {floor:.3f} s", load)  # fmt: skip
+    return {"cpu_s": best, "runs": times, "load": load, "ratios": ratios,
             "target": all(best[k] <= 0.25 for k in list(cmds)[:3])}  # fmt: skip
+
+
+#: Issue 29: ``--help`` and ``drives`` against the numpy import, CPU (they import no numpy).
+STARTUP_RATIO = 0.5
+#: Issue 29: 1000 small VCDs, wall of ``-j 1`` ÷ wall of ``-j 2``.
+MANY_SPEEDUP = 1.8
+#: Issue 29: peak RSS of ``-j 1`` on ten times the files, at most this factor (flat).
+MANY_RSS_RATIO = 1.1
+
+
+def _many_cmd(folder: Path, jobs: int, out: str) -> list[str]:
+    return [WAVECHECK, "check", str(folder / "*.vcd"), "--drive", "gecko-g202",
+            "--map", "step=STEP,dir=DIR", "-j", str(jobs), "--format", "json", "-o", out]  # fmt: skip
+
+
+def _rss_run(cmd: list[str], out: str) -> dict[str, Any]:
+    """One run of ``cmd`` under ``/usr/bin/time -v`` (exit 0 or 1 expected), stdout to ``out``."""
+    r = timed(cmd, out)
+    if r["rc"] not in (0, 1):
+        raise SystemExit(f"{sh(cmd)}: exit {r['rc']}: {r['stderr'][-300:]}")
+    return r
+
+
+def _many_run(folder: Path, jobs: int, count: int, out: str) -> dict[str, Any]:
+    """One timed ``check`` of the ``count`` VCDs of ``folder``; the report checked whole."""
+    r = _rss_run(_many_cmd(folder, jobs, out), os.devnull)
+    paths = [c["capture"]["path"] for c in json.loads(Path(out).read_text())["reports"]]
+    if paths != sorted(str(p) for p in folder.glob("*.vcd")) or len(paths) != count:
+        raise SystemExit(f"{sh(_many_cmd(folder, jobs, out))}: reports missing or out of order")
+    return r
+
+
+def bench_many(quick: bool, runs: int) -> dict[str, Any]:
+    """Issue 29: many small VCDs (``bench/many_files.py``'s) in one ``check`` call: wall of
+    ``-j 2`` against ``-j 1`` on 1000 files, and peak RSS of ``-j 1`` on 100 against 1000."""
+    from bench.many_files import make_files
+
+    small, big = (20, 200) if quick else (100, 1000)
+    folders = {n: ROOT / "bench" / "data" / f"many{n}" for n in (small, big)}
+    for n, folder in folders.items():
+        make_files(folder, n)
+    for jobs in (1, 2):
+        print(f"  $ {sh(_many_cmd(folders[big], jobs, 'REPORT.json'))}")
+    print(f"  $ {sh(_many_cmd(folders[small], 1, 'REPORT.json'))}")
+    rows: dict[str, list[dict[str, Any]]] = {"j1": [], "j2": [], "j1_small": []}
+    loads = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = f"{tmp}/report.json"
+        for _ in range(runs):
+            loads.append(load1())
+            rows["j1"].append(_many_run(folders[big], 1, big, out))
+            rows["j2"].append(_many_run(folders[big], 2, big, out))
+            rows["j1_small"].append(_many_run(folders[small], 1, small, out))
+    load = max(loads)
+    w1, w2 = med(rows["j1"], "wall_s"), med(rows["j2"], "wall_s")
+    c1, c2 = (med(rows[k], "user_s") + med(rows[k], "sys_s") for k in ("j1", "j2"))
+    speedup = w1 / w2
+    figure(f"{big} small VCDs, `-j 2` vs `-j 1` (wall)", f"{speedup:.2f}× ({w2:.2f} s)",
+           f"≥ {MANY_SPEEDUP}×", speedup >= MANY_SPEEDUP,
+           f"-j 1 {w1:.2f} s wall ({c1:.2f} s cpu); -j 2 {c2:.2f} s cpu", load)  # fmt: skip
+    rss_big = max(r["max_rss_mb"] for r in rows["j1"])
+    rss_small = max(r["max_rss_mb"] for r in rows["j1_small"])
+    grow = rss_big / rss_small
+    figure(f"peak RSS `-j 1`, {big} vs {small} small VCDs", f"{grow:.2f}× ({rss_big:.1f} MB)",
+           f"flat: ≤ {MANY_RSS_RATIO}×", grow <= MANY_RSS_RATIO,
+           f"{small} files {rss_small:.1f} MB", load)  # fmt: skip
+    return {"runs": rows, "load": load, "speedup": speedup, "rss_ratio": grow,
+            "files": [small, big]}  # fmt: skip
 
 
 #: Issue 14's bounded-memory cases: (label, base key, doubled key, map, peak RSS goal MB).
@@ -886,7 +965,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder,latency,crosscheck,one_engine",
+        default="sr,vcd,checks,stepgen,startup,many,memory,stdin,watch,decoder,latency,crosscheck,one_engine",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -961,6 +1040,10 @@ def main() -> int:
     if "startup" in only:
         print("\n== 5. start-up ==")
         results["startup"] = bench_startup(runs)
+
+    if "many" in only:
+        print("\n== 5b. many small VCDs in one check: -j 2 vs -j 1, memory in the files ==")
+        results["many"] = bench_many(args.quick, runs)
 
     if "memory" in only:
         print("\n== 6. bounded memory: every option of check on a capture and one twice as long ==")

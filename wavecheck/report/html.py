@@ -18,7 +18,8 @@ from __future__ import annotations
 import base64
 import html
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.drives.model import MARK_LEGEND
@@ -29,7 +30,7 @@ from wavecheck.report.groups import group_violations
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import overall_verdict
 
-__all__ = ["render_html", "write_html"]
+__all__ = ["PageRow", "html_page", "html_section", "render_html", "write_html"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:2rem auto;
@@ -191,12 +192,13 @@ def _rates_table(report: Report) -> str:
     return f'<table class="rates"><tr><th>max step rate</th><th>rate</th><th>meaning</th></tr>{body}</table>'
 
 
-def _section(
+def html_section(
     report: Report,
     index: int,
     png: bytes | None,
     max_violations: int,
 ) -> str:
+    """The page's section of ``report``, the ``index``-th (from 1), with its figure ``png``."""
     cap = report.capture
     res = "exact" if report.resolution_ns == 0 else _ns(report.resolution_ns)
     mapping = ", ".join(f"{role} = {ch!r}" for role, ch in report.mapping.items())
@@ -267,9 +269,6 @@ def render_html(
         title: the page title.
         pngs: figures already rendered (one per report; None entries are rendered here).
     """
-    verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
-    if errors:
-        verdict = "error"
     given = list(pngs) if pngs is not None else [None] * len(reports)
     figures: list[bytes | None] = []
     for r, png in zip(reports, given, strict=True):
@@ -278,14 +277,57 @@ def render_html(
 
             png = render_png(r)
         figures.append(png if plots else None)
+    sections = (
+        html_section(r, k, png, max_violations)
+        for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1)
+    )
+    rows = [PageRow.of(r) for r in reports]
+    return "".join(html_page(rows, sections, errors=errors, title=title))
+
+
+@dataclass(frozen=True)
+class PageRow:
+    """A report's row in the page's summary table: all the page needs of a report besides its
+    section (so a page of many captures can be written section by section)."""
+
+    path: str
+    drive: str
+    verdict: str
+    violations: int
+    steps: int
+
+    @classmethod
+    def of(cls, report: Report) -> PageRow:
+        """The row of ``report``."""
+        return cls(
+            report.capture.path,
+            report.drive.id,
+            report.verdict,
+            report.total_violations,
+            report.steps.count,
+        )
+
+
+def html_page(
+    rows: Sequence[PageRow],
+    sections: Iterable[str],
+    *,
+    errors: Sequence[str] = (),
+    title: str = "wavecheck report",
+) -> Iterator[str]:
+    """The page in pieces: its head and summary of ``rows`` (and ``errors``), then each of
+    ``sections`` (:func:`html_section`, one per row, in the same order), then its foot."""
+    verdict: str = overall_verdict([r.verdict for r in rows]) if rows else "unchecked"
+    if errors:
+        verdict = "error"
     summary_rows = "".join(
-        f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td><td>{_e(r.drive.id)}</td>'
-        f'<td>{_badge(r.verdict)}</td><td class="num">{r.total_violations:,}</td>'
-        f'<td class="num">{r.steps.count:,}</td></tr>'
-        for k, r in enumerate(reports, 1)
+        f'<tr><td><a href="#capture-{k}">{_e(r.path)}</a></td><td>{_e(r.drive)}</td>'
+        f'<td>{_badge(r.verdict)}</td><td class="num">{r.violations:,}</td>'
+        f'<td class="num">{r.steps:,}</td></tr>'
+        for k, r in enumerate(rows, 1)
     )
     error_rows = "".join(f"<li>{_e(e)}</li>" for e in errors)
-    body = [
+    head = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
@@ -295,22 +337,22 @@ def render_html(
         f'<p>Overall verdict: <span id="verdict" class="verdict v-{_e(verdict)}">'
         f"{_e(verdict.upper())}</span></p>",
     ]
-    if len(reports) > 1 or errors:
-        body.append(
+    if len(rows) > 1 or errors:
+        head.append(
             '<table class="summary"><tr><th>capture</th><th>drive</th><th>verdict</th>'
             f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
         )
     if errors:
-        body.append(
+        head.append(
             f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>'
         )
-    for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
-        body.append(_section(r, k, png, max_violations))
-    body.append(
+    yield "".join(line + "\n" for line in head)
+    for section in sections:
+        yield section + "\n"
+    yield (
         '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
-        "limit (negative = violation).</p></body></html>"
+        "limit (negative = violation).</p></body></html>\n"
     )
-    return "\n".join(body) + "\n"
 
 
 def write_html(reports: Sequence[Report], path: str | os.PathLike[str], **kwargs: object) -> None:
