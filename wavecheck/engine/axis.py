@@ -12,9 +12,9 @@ pulse likewise by their tick. A capture already in memory is one block: one wind
 The context ``c0`` of the next window is the earliest tick an interval not yet complete may start
 from; what each rule holds back is declared in the rule table (:attr:`wavecheck.rules.Rule.holds`):
 
-- ``edges``: the last edge of each channel (``step_high``/``step_low``, ``state_hold``, the phase
-  state; and so an up/down pulse not yet ended, and an ENABLE rise still active, for
-  ``dir_delay`` and ``enable_setup``);
+- ``edges``: the last edge of each pulse line (``step_high``/``step_low``, ``state_hold``, the
+  phase state; and so an up/down pulse not yet ended, for ``dir_delay``), and of any other line
+  (ENABLE, DIR) while no step has followed it (``enable_setup``);
 - ``step``: the last step (``step_period``, the observed step rate; ``dir_hold`` and
   ``dir_setup``: the last active edge, DIR changes after it wait for the next one; ``dir_delay``:
   the last pulse on either line, whose end starts the next switch);
@@ -311,9 +311,18 @@ class AxisCheck:
     def _context(self, iface: StepInterface, steps: StepEvents) -> int:
         """The earliest tick the next window needs (module docstring), from this window."""
         holds = {h for r in self.plan.rules for h in r.holds}
-        anchors = [int(s.edges[-1]) for s in iface.signals.values() if len(s.edges)]
-        if len(steps.ticks):
-            anchors.append(int(steps.ticks[-1]))
+        last_step = int(steps.ticks[-1]) if len(steps.ticks) else None
+        pulse = set(self.st.pulse_roles)
+        # the last edge of a line that is no pulse line (DIR, ENABLE) starts an interval only
+        # until a step follows it: after that it is not held (an ENABLE that rose once would
+        # else hold the whole capture)
+        anchors = [
+            int(s.edges[-1])
+            for role, s in iface.signals.items()
+            if len(s.edges) and (role in pulse or last_step is None or last_step < s.edges[-1])
+        ]
+        if last_step is not None:
+            anchors.append(last_step)
         step_sig, dir_sig = iface.get("step"), iface.get("dir")
         if "unstepped_dir" in holds and step_sig is not None and dir_sig is not None:
             if len(active_edges(step_sig, self.plan.active_edge)) == 0 and len(dir_sig.edges):

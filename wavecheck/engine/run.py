@@ -310,8 +310,16 @@ def start(
         skeleton, plans, options, step_sinks=step_sinks, interval_sinks=interval_sinks
     )
     source.want(machine.channels)
-    blocks = source.blocks() if it is None else itertools.chain(read, it)
+    blocks = source.blocks() if it is None else itertools.chain(_handed_on(read), it)
     return machine, blocks
+
+
+def _handed_on(read: list[EdgeBlock]) -> Iterator[EdgeBlock]:
+    """The blocks of ``read``, each let go of once handed on (the first part read to tell the
+    roles is not held while the rest of the capture is checked)."""
+    read.reverse()
+    while read:
+        yield read.pop()
 
 
 def _read_until(
