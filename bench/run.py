@@ -671,7 +671,9 @@ def _truth_steps(path: Path) -> int:
 GRBL_SETTINGS = ROOT / "captures/firmware/grbl/settings.md"
 
 
-def _memory_variants(path: Path, mapping: str, tmp: str) -> dict[str, tuple[list[str], str]]:
+def _memory_variants(
+    path: Path, mapping: str, enable: str | None, tmp: str
+) -> dict[str, tuple[list[str], str]]:
     """The ways of checking ``path`` whose peak RSS must not follow the capture's length (issue
     23: every option on the one engine): name → (argv, shell text)."""
     base = [WAVECHECK, "check", str(path), "--drive", "gecko-g202"]
@@ -680,10 +682,11 @@ def _memory_variants(path: Path, mapping: str, tmp: str) -> dict[str, tuple[list
         "plain": mapped,
         "--steps-csv": [*mapped, "--steps-csv", f"{tmp}/steps.csv"],
         "--firmware": [*mapped, "--firmware", str(GRBL_SETTINGS)],
+        "ENABLE mapped": [*base, "--map", f"{mapping},enable={enable}"] if enable else None,
         "no --map": base,
         "--no-stream (one block: the peer)": [*mapped, "--no-stream"],
     }
-    argv = {k: (v, sh(v)) for k, v in out.items()}
+    argv = {k: (v, sh(v)) for k, v in out.items() if v is not None}
     if path.suffix == ".sr":  # raw samples through a pipe, as a logic analyzer's tool gives them
         meta = configparser.ConfigParser()
         with zipfile.ZipFile(path) as z:
@@ -716,7 +719,7 @@ def bench_memory(quick: bool, runs: int) -> dict[str, Any]:
             path = ensure(key)
             print(f"\n- {path.name} ({path.stat().st_size / 1e6:.0f} MB)")
             with tempfile.TemporaryDirectory() as tmp:
-                variants = _memory_variants(path, mapping, tmp)
+                variants = _memory_variants(path, mapping, "EN" if kind == "sr" else None, tmp)
                 got: dict[str, list[dict[str, Any]]] = {v: [] for v in variants}
                 loads = []
                 for _ in range(runs):  # interleaved
