@@ -222,7 +222,17 @@ def axes_for(options: CheckOptions, capture: Capture) -> tuple[list[AxisMap], li
     if options.axes:
         return list(options.axes), []
     if names_give_roles(capture):
-        return [AxisMap(None, {})], []
+        from wavecheck.roles.names import axes_by_scope
+
+        scoped = axes_by_scope([c.name for c in capture.channels])
+        if scoped is None:
+            return [AxisMap(None, {})], []
+        args = " ".join(
+            "--map " + ",".join(f"{name}.{role}={shlex.quote(ch)}" for role, ch in roles.items())
+            for name, roles in scoped
+        )
+        found = f"channels mapped by their names, one axis per scope: {args}"
+        return [AxisMap(name, roles) for name, roles in scoped], [found]
     return axes_from_waveforms(capture)
 
 

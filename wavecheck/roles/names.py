@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["NAMED_KINDS", "NameHint", "leaf", "name_hint", "named_kind"]
+__all__ = ["NAMED_KINDS", "NameHint", "axes_by_scope", "leaf", "name_hint", "named_kind"]
 
 _KEYWORDS: dict[str, frozenset[str]] = {
     **dict.fromkeys(("step", "stp", "pul", "pulse"), frozenset({"step"})),
@@ -111,3 +111,37 @@ def named_kind(names: list[str]) -> str | None:
     first in this order), else None: then ``check`` maps the channels by their names."""
     leaves = {leaf(n) for n in names}
     return next((k for k in NAMED_KINDS if k in leaves), None)
+
+
+def axes_by_scope(names: list[str]) -> list[tuple[str, dict[str, str]]] | None:
+    """Axes told by the scopes of hierarchical names, when several channels are named after the
+    same pulse role (``top.axis_x.step``, ``top.axis_y.step``): one axis per scope holding one,
+    named after the scope (its axis letter, ``axis_x`` → ``x``, else its last part), with the
+    roles its channels are named after. None when the names do not settle it that way (one such
+    channel, two in one scope, no scope, or two scopes that would give one name)."""
+    kind = named_kind(names)
+    if kind is None:
+        return None
+    pulse = [n for n in names if leaf(n) == kind]
+    if len(pulse) < 2 or any("." not in n for n in pulse):
+        return None
+    scopes = [n.strip().rsplit(".", 1)[0] for n in pulse]
+    if len(set(scopes)) != len(scopes):
+        return None
+    roles = NAMED_KINDS[kind][1]
+    axes: list[tuple[str, dict[str, str]]] = []
+    for scope in scopes:
+        last = scope.rsplit(".", 1)[-1]
+        words = [w for w in _words(last) if w not in _NOISE]
+        hint = name_hint(last + ".step").axis
+        name = hint if hint is not None and words == [hint] else last.strip().lower()
+        mapping = {
+            role: n
+            for role in roles
+            for n in names
+            if "." in n and n.strip().rsplit(".", 1)[0] == scope and leaf(n) == role.lower()
+        }
+        axes.append((name, mapping))
+    if len({a for a, _ in axes}) != len(axes):
+        return None
+    return axes
