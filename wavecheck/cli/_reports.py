@@ -31,12 +31,14 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from wavecheck.cli._axis_args import required
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import activate
+from wavecheck.report.claims import exit_code, requirement_line, unchecked
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
@@ -194,15 +196,15 @@ def render_text_report(report: Checked, args: argparse.Namespace) -> str:
     """The text report (``--max-violations`` listed)."""
     cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
-        return render_machine_text(report, cap)
-    return render_text(report, cap)
+        return render_machine_text(report, cap, required(args))
+    return render_text(report, cap, required(args))
 
 
 def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
     cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
-        return machine_dict(report, cap)
-    return report_dict(report, cap)
+        return machine_dict(report, cap, required(args))
+    return report_dict(report, cap, required(args))
 
 
 def render_json_report(report: Checked, args: argparse.Namespace) -> str:
@@ -214,17 +216,20 @@ def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
     """JUnit XML of one capture (a testsuite per axis)."""
     from wavecheck.report.junit import render_junit
 
-    return render_junit(axis_reports(report))
+    return render_junit(axis_reports(report), require=required(args))
 
 
 # -- several captures --------------------------------------------------------------------------------
-def summary_line(checked: Checked) -> str:
-    """One line: verdict, capture, violations, steps (per axis) and the worst rule."""
+def summary_line(checked: Checked, require: tuple[str, ...] = ()) -> str:
+    """One line: verdict, capture, violations, steps (per axis), the worst rule, the rules not
+    checked and why, and the required rules not decided (``--require``)."""
+    said = [f"{', '.join(r)} not checked: {why}" for why, r in unchecked(checked).items()]
+    tail = "".join(f"; {x}" for x in [*said, requirement_line(checked, require)] if x)
     if isinstance(checked, MachineReport):
         steps = ", ".join(f"{r.axis} {r.steps.count}" for r in checked.axes)
         return (
             f"{checked.verdict.upper():<13} {checked.capture.path}: {checked.total_violations} "
-            f"violation(s), steps {steps}"
+            f"violation(s), steps {steps}{tail}"
         )
     report = checked
     worst = ""
@@ -235,7 +240,7 @@ def summary_line(checked: Checked) -> str:
         worst = f"; closest {rule} {sign}{format_time(m / 10**9)}"
     return (
         f"{report.verdict.upper():<13} {report.capture.path}: {report.total_violations} "
-        f"violation(s), {report.steps.count} steps{worst}"
+        f"violation(s), {report.steps.count} steps{worst}{tail}"
     )
 
 
@@ -288,6 +293,7 @@ def _side_outputs(
             max_violations=DEFAULT_TEXT_VIOLATIONS
             if args.max_violations is None
             else args.max_violations,
+            require=required(args),
         )
 
 
@@ -343,7 +349,7 @@ def _piece(args: argparse.Namespace, checked: Checked) -> Any:
     if args.format == "junit":
         from wavecheck.report.junit import render_junit
 
-        return render_junit(axis_reports(checked))
+        return render_junit(axis_reports(checked), require=required(args))
     return render_text_report(checked, args)
 
 
@@ -361,8 +367,8 @@ def _check_one(index: int, path: str) -> _Outcome:
     return _Outcome(
         index,
         path,
-        summary_line(checked),
-        checked.exit_code,
+        summary_line(checked, required(args)),
+        exit_code(checked, required(args)),
         checked.verdict,
         _piece(args, checked),
         report=checked if keep else None,
@@ -430,7 +436,7 @@ def run_checks(
             report = build_report(args, paths[0])
         write_outputs(args, report)
         _side_outputs(args, [report], [])
-        return report.exit_code
+        return exit_code(report, required(args))
     jobs = _jobs(args, len(paths))
     stream = (
         sys.stdout

@@ -1,7 +1,8 @@
 """``wavecheck check CAPTURE --drive ID|FILE``: check every edge against a drive's datasheet.
 
-Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 2
-unusable input or usage (one line, no traceback).
+Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 4 a
+rule ``--require`` asks for was not decided (unchecked or indeterminate), 2 unusable input or
+usage (one line, no traceback).
 
 The command is a thin layer: options → :func:`wavecheck.engine.run.check_source` → a renderer. New
 outputs register in :data:`RENDERERS` (``--format``); extra side outputs (plots, HTML, GTKWave
@@ -16,7 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
-from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._axis_args import add_axis_arguments, check_options, required
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
@@ -67,7 +68,8 @@ def register(sub: Any) -> None:
         "check",
         help="check every edge of a capture against a drive's timing rules",
         description="Check every STEP/DIR edge of CAPTURE against a drive's datasheet timing. "
-        "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 2 unusable input.",
+        "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 4 a rule --require asks for was "
+        "not decided, 2 unusable input.",
     )
     p.add_argument(
         "capture",
@@ -164,12 +166,17 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
             print(line, file=sys.stderr)
     text = RENDERERS[args.format](report, args)
     if args.output:
+        from wavecheck.report.claims import requirement_line, verdict_line
+
         atomic_write(args.output, text)
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
-            f"{report.verdict}: {report.total_violations} violation(s), {steps} steps; "
+            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
             f"report written to {args.output}"
         )
+        missing = requirement_line(report, required(args))
+        if missing:
+            print(missing)
     else:
         sys.stdout.write(text)
 

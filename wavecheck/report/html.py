@@ -6,7 +6,10 @@ it shows the verdict, what was checked, the rule table, the worst violations, th
 rates, the notes and the plots (:mod:`wavecheck.report.plot`).
 
 Element ids for tools and tests: ``verdict`` (the overall verdict), per capture a ``section``
-with class ``capture`` and ``data-verdict``, tables with class ``rules``, ``violations``, ``rates``,
+with class ``capture`` and ``data-verdict`` whose ``p.verdict-line`` names the rules not checked
+and why (and ``p.required`` the rules ``--require`` asks for that were not decided), a
+``summary`` table (several captures or axes; an ``axis`` column when there are axes), tables
+with class ``rules``, ``violations``, ``rates``,
 and a ``dl`` with class ``sources`` (``id="sources-N"``; each key's ``dt`` has ``id="src-N-KEY"``)
 listing the full references the rule table's "source" column cites. A limit whose figure is
 uncertain or a firmware default carries its mark (``100 ns?``); identical violations are one row
@@ -24,6 +27,7 @@ from fractions import Fraction
 from wavecheck.drives.model import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.output import atomic_write
+from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import group_violations
 from wavecheck.units import format_ns, format_rate, format_time
@@ -46,6 +50,7 @@ dl{display:grid;grid-template-columns:max-content auto;gap:.1rem 1rem;margin:.4r
 dt{font-weight:600}dd{margin:0}.note{color:#555;font-size:.9rem}
 img{max-width:100%;border:1px solid #eee}
 .summary td:first-child{font-family:ui-monospace,monospace}
+.verdict-line{font-weight:600}.required{color:#c0392b;font-weight:600}
 """
 
 
@@ -181,8 +186,14 @@ def _rates_table(report: Report) -> str:
         if cfg.latency_ns is not None:
             assumed += f", J = {_ns(cfg.latency_ns)}"
         rows.append(("config", cfg.config, f"stepgen's own clamp ({assumed})"))
+        why = "" if cfg.latency_safe is not None else "; ".join(cfg.notes)
         rows.append(
-            ("latency_safe", cfg.latency_safe, f"meets the drive under worst latency ({assumed})")
+            (
+                "latency_safe",
+                cfg.latency_safe,
+                f"meets the drive under worst latency ({assumed})"
+                + (f"; none: {why}" if why else ""),
+            )
         )
     body = "".join(
         f'<tr><td>{_e(k)}</td><td class="num">{_hz(v)}</td><td class="note">{_e(what)}</td></tr>'
@@ -191,11 +202,19 @@ def _rates_table(report: Report) -> str:
     return f'<table class="rates"><tr><th>max step rate</th><th>rate</th><th>meaning</th></tr>{body}</table>'
 
 
+def _verdict_lines(report: Report, require: Sequence[str]) -> list[str]:
+    """The verdict line (rules not checked and why) and the required rules not decided."""
+    out = [f'<p class="verdict-line">Verdict: {_e(claims.verdict_line(report))}</p>']
+    line = claims.requirement_line(report, require)
+    return out + ([f'<p class="required">{_e(line)}</p>'] if line else [])
+
+
 def _section(
     report: Report,
     index: int,
     png: bytes | None,
     max_violations: int,
+    require: Sequence[str] = (),
 ) -> str:
     cap = report.capture
     res = "exact" if report.resolution_ns == 0 else _ns(report.resolution_ns)
@@ -210,6 +229,7 @@ def _section(
         f"<h2>{_badge(report.verdict)} {_e(cap.path)}"
         + (f" — axis {_e(report.axis)}" if report.axis is not None else "")
         + "</h2>",
+        *_verdict_lines(report, require),
         "<dl>",
         f"<dt>drive</dt><dd>{_e(report.drive.id)} — {_e(report.drive.name)} "
         f"(steps on the {_e(report.active_edge)}{_e(edge_mark)} edge)</dd>",
@@ -247,6 +267,13 @@ def _section(
     return "\n".join(parts)
 
 
+def _qualifier(report: Report) -> str:
+    """The rules not checked and why, beside a summary row's badge."""
+    line = claims.verdict_line(report)
+    rest = line[len(report.verdict) :].strip()
+    return f' <span class="note">{_e(rest)}</span>' if rest else ""
+
+
 def render_html(
     reports: Sequence[Report],
     *,
@@ -255,6 +282,7 @@ def render_html(
     errors: Sequence[str] = (),
     title: str = "wavecheck report",
     pngs: Sequence[bytes | None] | None = None,
+    require: Sequence[str] = (),
 ) -> str:
     """The page for ``reports`` (one section each).
 
@@ -266,6 +294,7 @@ def render_html(
             overall verdict ``error``).
         title: the page title.
         pngs: figures already rendered (one per report; None entries are rendered here).
+        require: the rules ``--require`` asks to be decided.
     """
     verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
     if errors:
@@ -278,10 +307,12 @@ def render_html(
 
             png = render_png(r)
         figures.append(png if plots else None)
+    axes = any(r.axis is not None for r in reports)
     summary_rows = "".join(
-        f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td><td>{_e(r.drive.id)}</td>'
-        f'<td>{_badge(r.verdict)}</td><td class="num">{r.total_violations:,}</td>'
-        f'<td class="num">{r.steps.count:,}</td></tr>'
+        f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td>'
+        + (f"<td>{_e('' if r.axis is None else r.axis)}</td>" if axes else "")
+        + f"<td>{_e(r.drive.id)}</td><td>{_badge(r.verdict)}{_qualifier(r)}</td>"
+        f'<td class="num">{r.total_violations:,}</td><td class="num">{r.steps.count:,}</td></tr>'
         for k, r in enumerate(reports, 1)
     )
     error_rows = "".join(f"<li>{_e(e)}</li>" for e in errors)
@@ -295,9 +326,15 @@ def render_html(
         f'<p>Overall verdict: <span id="verdict" class="verdict v-{_e(verdict)}">'
         f"{_e(verdict.upper())}</span></p>",
     ]
+    for r in reports:
+        line = claims.requirement_line(r, require)
+        if line and len(reports) > 1:
+            line = f"{r.capture.path}" + (f" axis {r.axis}" if r.axis else "") + f": {line}"
+        body += [f'<p class="required">{_e(line)}</p>'] if line else []
     if len(reports) > 1 or errors:
+        axis_head = "<th>axis</th>" if axes else ""
         body.append(
-            '<table class="summary"><tr><th>capture</th><th>drive</th><th>verdict</th>'
+            f'<table class="summary"><tr><th>capture</th>{axis_head}<th>drive</th><th>verdict</th>'
             f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
         )
     if errors:
@@ -305,7 +342,7 @@ def render_html(
             f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>'
         )
     for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
-        body.append(_section(r, k, png, max_violations))
+        body.append(_section(r, k, png, max_violations, require))
     body.append(
         '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
         "limit (negative = violation).</p></body></html>"
