@@ -210,7 +210,8 @@ def unmet_requirements(statuses: Sequence[RuleStatus], require: Sequence[str]) -
 
 def required_line(unmet: Sequence[Unmet], statuses: Sequence[RuleStatus] = ()) -> str:
     """One line saying which required rules were not decided and why, grouped by why: ``required
-    but not decided (exit 4): dir_setup, dir_hold not checked: no DIR channel``; empty when none.
+    but not decided: dir_setup, dir_hold not checked: no DIR channel``; empty when none (the run
+    exits 4 unless a rule failed: :func:`required_exit_code`).
     A rule not decided on every axis of ``statuses`` for one reason is named alone."""
     if not unmet:
         return ""
@@ -220,7 +221,7 @@ def required_line(unmet: Sequence[Unmet], statuses: Sequence[RuleStatus] = ()) -
         groups.setdefault((said, u.why), {}).setdefault(u.rule, []).append(u.axis)
     axes = len(_axes(statuses)) if statuses else 0
     parts = [f"{', '.join(_named(on, axes))} {said}: {why}" for (said, why), on in groups.items()]
-    return f"required but not decided (exit {EXIT_REQUIRED}): {'; '.join(parts)}"
+    return f"required but not decided: {'; '.join(parts)}"
 
 
 def required_exit_code(code: int, unmet: Sequence[Unmet]) -> int:

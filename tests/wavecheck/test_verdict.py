@@ -89,7 +89,7 @@ def test_unmet_requirements(require: tuple[str, ...], expected: list[tuple[str, 
 def test_required_line_and_exit_code() -> None:
     unmet = unmet_requirements(_axis(None), ("all",))
     assert required_line(unmet) == (
-        "required but not decided (exit 4): step_low indeterminate: "
+        "required but not decided: step_low indeterminate: "
         "3 interval(s) within one sample; dir_setup, dir_hold not checked: no DIR channel"
     )
     assert required_line(()) == ""

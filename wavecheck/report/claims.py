@@ -124,7 +124,7 @@ def unmet(checked: Checked, require: Sequence[str]) -> tuple[Unmet, ...]:
 
 
 def requirement_line(checked: Checked, require: Sequence[str]) -> str:
-    """``required but not decided (exit 4): …`` for the required rules ``checked`` did not
+    """``required but not decided: …`` for the required rules ``checked`` did not
     decide; empty when there are none."""
     return required_line(unmet(checked, require), statuses(checked))
 

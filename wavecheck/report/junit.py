@@ -34,7 +34,7 @@ from wavecheck.engine.results import RuleResult
 from wavecheck.engine.verdicts import Violation
 from wavecheck.report import claims
 from wavecheck.units import format_frequency, format_ns
-from wavecheck.verdict import EXIT_REQUIRED, Unmet
+from wavecheck.verdict import Unmet
 
 __all__ = ["Unreadable", "classname", "render_junit", "required_failure"]
 
@@ -76,7 +76,7 @@ def required_failure(case: ET.Element, u: Unmet) -> str:
     ET.SubElement(
         case,
         "failure",
-        message=f"required but {said}: {u.why} (exit {EXIT_REQUIRED})",
+        message=f"required but {said}: {u.why}",
         type="required",
     )
     return "failure"

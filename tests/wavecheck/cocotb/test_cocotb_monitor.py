@@ -113,7 +113,7 @@ def test_a_required_rule_not_checked_fails_the_test(tmp_path: Path) -> None:
     assert failure is not None, ET.tostring(case)
     assert failure.get("type") == "RequirementError"
     assert (failure.get("message") or "").endswith(
-        "required but not decided (exit 4): enable_setup not checked: no ENABLE channel"
+        "required but not decided: enable_setup not checked: no ENABLE channel"
     )
     assert _sim_stop_ns(case) == END_NS  # at finish(), after the whole run
 
