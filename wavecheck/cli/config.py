@@ -44,6 +44,7 @@ if TYPE_CHECKING:  # imported where used: only with a firmware configuration
 
 __all__ = [
     "add_firmware_arguments",
+    "add_limit_arguments",
     "add_tuning_arguments",
     "check_firmware",
     "register",
@@ -51,9 +52,9 @@ __all__ = [
 ]
 
 
-def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
-    """``--limit RULE=VALUE`` (repeatable), ``--margin 2x|+500ns`` and ``--require RULES|all``
-    (the rules judged, their figures, and which must be decided)."""
+def add_limit_arguments(p: argparse.ArgumentParser) -> None:
+    """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``: the drive's figures as
+    the user changes them (:func:`wavecheck.drives.tune.tune_drive`; ``stepgen plan`` too)."""
     p.add_argument(
         "--limit",
         action="append",
@@ -68,6 +69,11 @@ def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
         help="tighten every datasheet figure: a factor (2x, as StepConf advises for 3.3 V "
         "parallel ports) or an added time (+500ns); --limit figures are taken as given",
     )
+
+
+def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
+    """:func:`add_limit_arguments` and ``--require RULES|all`` (which rules must be decided)."""
+    add_limit_arguments(p)
     p.add_argument(
         "--require",
         action="append",
