@@ -41,7 +41,7 @@ from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
-from wavecheck.output import atomic_path, output_file
+from wavecheck.output import atomic_path, figure_file, figure_format
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 __all__ = ["add_servo_loop_arguments", "run_servo_loop"]
@@ -66,7 +66,11 @@ def add_servo_loop_arguments(parser: Any) -> None:
     g.add_argument(
         "--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
     )
-    g.add_argument("--plot", type=output_file, help="PNG: command, feedback, following error")
+    g.add_argument(
+        "--plot",
+        type=figure_file,
+        help="command, feedback, following error (PNG; .jpg, .svg or .pdf by the file's name)",
+    )
     add_servo_arguments(parser.add_argument_group("servo plant (--pid --plant servo)"))
 
 
@@ -268,5 +272,5 @@ def _plot(r: LoopResult, path: str) -> None:
     a2.set_ylabel("following error")
     a2.set_xlabel("time (ms)")
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
+        fig.savefig(tmp, format=figure_format(path), dpi=100)
     plt.close(fig)

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 from wavecheck import __version__
 from wavecheck.errors import WavecheckError
-from wavecheck.output import check_outputs, output_file, protect_inputs
+from wavecheck.output import OUTPUT_TYPES, check_outputs, protect_inputs
 from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
 __all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "run_cli"]
@@ -76,7 +76,7 @@ def _files(
             continue
         name = action.option_strings[0] if action.option_strings else action.dest
         value = getattr(args, action.dest, None)
-        if action.type is output_file:
+        if action.type in OUTPUT_TYPES:
             outputs[name] = value
             continue
         if action.type not in (None, str):

@@ -36,7 +36,7 @@ from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import activate
 from wavecheck.report.claims import exit_code, requirement_line, unchecked
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
@@ -62,7 +62,10 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
     out = p.add_argument_group("reports")  # output_file: checked before any work (wavecheck.output)
     out.add_argument(
-        "--plot", type=output_file, metavar="FILE.png", help="timing diagrams and histograms (PNG)"
+        "--plot",
+        type=figure_file,
+        metavar="FILE.png",
+        help="timing diagrams and histograms (PNG; .jpg, .svg or .pdf by the file's name)",
     )
     out.add_argument(
         "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
@@ -274,8 +277,11 @@ def _side_outputs(
             from wavecheck.report.plot import render_png
 
             target = _per_capture(args.plot, _tagged(r), k, stems) if several else args.plot
-            png = render_png(r)
-            atomic_write(target, png)
+            fmt = figure_format(target)
+            png = render_png(r) if fmt == "png" or args.html else None
+            atomic_write(
+                target, png if png is not None and fmt == "png" else render_png(r, fmt=fmt)
+            )
         pngs.append(png)  # rendered once, embedded in the HTML page too
         if args.gtkw:
             from wavecheck.report.gtkw import write_gtkw
