@@ -229,7 +229,8 @@ def report(
         print(f"pid: {gains_text(gains)}{origin}")
         if r.diverged:
             print(f"the loop diverged: stopped after {r.n} servo periods ({r.t_s[-1]:.6g} s)")
-        print(f"following error: max {worst:.6g} units at {at:.6g} s ({r.n} servo periods)")
+        run = f"{r.n * r.servo_ns * 1e-9:.6g} s ({r.n} servo periods of {r.servo_ns * 1e-6:g} ms)"
+        print(f"following error: max {worst:.6g} units at {at:.6g} s, in a run of {run}")
         print(
             f"following-error check {verdict}: limit max(FERROR {check.ferror_limit:g}·|v|/"
             f"{check.max_velocity:g}, MIN_FERROR {check.min_ferror:g}); worst |ferror|/limit "

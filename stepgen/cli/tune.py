@@ -1,6 +1,6 @@
 """``stepgen tune``: the integrator's manual PID tuning method, run on a model plant.
 
-I = D = 0, raise P until the loop sustains oscillation (ultimate gain Ku, period Pu), P = Ku/2,
+I = D = 0, raise P until the loop oscillates (ultimate gain Ku, period Pu), P = Ku/2,
 raise I until the offset is corrected within --settle (stopping before instability), then D
 while it reduces the overshoot. Prints each stage's step response and the final gains as
 [JOINT_n] INI lines and the setp lines that read them; for a velocity-mode stepgen also the
