@@ -73,6 +73,19 @@ def test_axes_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert {a["name"]: a["verdict"] for a in data["axes"]} == {"x": "fail", "y": "pass"}
 
 
+def test_require_block(capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
+    """The Verdicts section's --require example: exit 4 and the line saying why (issue 26)."""
+    monkeypatch.chdir(REPO)
+    (line,) = _block("require").strip().splitlines()
+    assert main(shlex.split(line)[1:]) == 4
+    first, second = capsys.readouterr().out.splitlines()[:2]
+    assert first == (
+        "verdict: PASS (dir_setup, dir_hold not checked: no DIR channel; "
+        "enable_setup not checked: drive drv8825 states no figure)"
+    )
+    assert second == "required but not decided: dir_setup, dir_hold not checked: no DIR channel"
+
+
 def test_rule_file_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The README's own rule file, as written (issue 26: the documented top-level form was
     refused), used by --drive; the other figures stay the G202's."""
