@@ -39,6 +39,7 @@ __all__ = [
     "required_exit_code",
     "required_line",
     "unchecked_by_reason",
+    "unchecked_phrase",
     "unmet_requirements",
     "verdict_of_exit",
     "worst_exit_code",
@@ -98,9 +99,15 @@ def qualified_verdict(
     :func:`unchecked_by_reason` gives them), so a PASS never hides an unchecked rule:
     ``PASS (dir_setup, dir_hold not checked: no DIR channel)``. ``lead`` opens the parenthesis
     (``FAIL (2 axes; y.dir_hold not checked: no DIR channel)``)."""
-    parts = [lead] if lead else []
-    parts += [f"{', '.join(rules)} not checked: {why}" for why, rules in unchecked.items() if rules]
-    return verdict.upper() + (f" ({'; '.join(parts)})" if parts else "")
+    said = "; ".join(x for x in (lead, unchecked_phrase(unchecked)) if x)
+    return verdict.upper() + (f" ({said})" if said else "")
+
+
+def unchecked_phrase(unchecked: Mapping[str, Sequence[str]]) -> str:
+    """``dir_setup, dir_hold not checked: no DIR channel; …`` ("" when every rule was checked)."""
+    return "; ".join(
+        f"{', '.join(rules)} not checked: {why}" for why, rules in unchecked.items() if rules
+    )
 
 
 @dataclass(frozen=True)

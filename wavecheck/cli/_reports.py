@@ -38,7 +38,7 @@ from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import activate
-from wavecheck.report.claims import exit_code, requirement_line, unchecked
+from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
@@ -226,8 +226,9 @@ def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
 def summary_line(checked: Checked, require: tuple[str, ...] = ()) -> str:
     """One line: verdict, capture, violations, steps (per axis), the worst rule, the rules not
     checked and why, and the required rules not decided (``--require``)."""
-    said = [f"{', '.join(r)} not checked: {why}" for why, r in unchecked(checked).items()]
-    tail = "".join(f"; {x}" for x in [*said, requirement_line(checked, require)] if x)
+    tail = "".join(
+        f"; {x}" for x in (not_checked(checked), requirement_line(checked, require)) if x
+    )
     if isinstance(checked, MachineReport):
         steps = ", ".join(f"{r.axis} {r.steps.count}" for r in checked.axes)
         return (

@@ -29,11 +29,13 @@ from wavecheck.verdict import (
     required_exit_code,
     required_line,
     unchecked_by_reason,
+    unchecked_phrase,
     unmet_requirements,
 )
 
 __all__ = [
     "exit_code",
+    "not_checked",
     "requirement_line",
     "rule_statuses",
     "statuses",
@@ -108,6 +110,12 @@ def unchecked(checked: Checked) -> dict[str, tuple[str, ...]]:
     """Why → the rules of ``checked`` not checked for that reason (``AXIS.RULE`` for a rule not
     checked on every axis)."""
     return unchecked_by_reason(statuses(checked))
+
+
+def not_checked(checked: Checked) -> str:
+    """``dir_setup, dir_hold not checked: no DIR channel; …``: what the verdict line adds to
+    the verdict ("" when every rule was checked)."""
+    return unchecked_phrase(unchecked(checked))
 
 
 def verdict_line(checked: Checked) -> str:

@@ -269,9 +269,8 @@ def _section(
 
 def _qualifier(report: Report) -> str:
     """The rules not checked and why, beside a summary row's badge."""
-    line = claims.verdict_line(report)
-    rest = line[len(report.verdict) :].strip()
-    return f' <span class="note">{_e(rest)}</span>' if rest else ""
+    said = claims.not_checked(report)
+    return f' <span class="note">({_e(said)})</span>' if said else ""
 
 
 def render_html(

@@ -39,7 +39,7 @@ import numpy.typing as npt
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.output import atomic_write, figure_format
-from wavecheck.report.claims import verdict_line
+from wavecheck.report.claims import not_checked
 from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
@@ -434,11 +434,11 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
     fig = Figure(figsize=(11, sum(heights) + 1.0), dpi=dpi, layout="constrained")
     verdict = report.verdict.upper()
     vcolor = {"FAIL": _FAIL_COLOR, "PASS": _PASS_COLOR}.get(verdict, _INDET_COLOR)
-    not_checked = verdict_line(report)[len(verdict) :].strip()  # "(dir_setup … not checked: …)"
+    said = not_checked(report)  # "dir_setup, dir_hold not checked: no DIR channel; …"
     fig.suptitle(
         f"{verdict} — {os.path.basename(report.capture.path)} vs {report.drive.id} "
         f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)"
-        + "".join(f"\n{line}" for line in textwrap.wrap(not_checked, 110)),
+        + "".join(f"\n{line}" for line in textwrap.wrap(f"({said})" if said else "", 110)),
         fontsize=12,
         color=vcolor,
         fontweight="bold",
