@@ -703,9 +703,8 @@ class RuleItem(pytest.Item):
         spec = self.spec if self.axis is None else self.axis
         for u in unmet(report, spec.require):
             if u.rule == self.rule:
-                said = "not checked" if u.verdict == "unchecked" else "indeterminate"
                 raise WavecheckFailure(
-                    f"{self._where}: {self.rule} is required but {said}: {u.why}"
+                    f"{self._where}: {self.rule} is required but {u.said}: {u.why}"
                 )
         if r.verdict == "unchecked":
             from wavecheck.report.claims import rule_statuses

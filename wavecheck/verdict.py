@@ -194,6 +194,11 @@ class Unmet:
     why: str
     axis: str | None = None
 
+    @property
+    def said(self) -> str:
+        """``not checked`` or ``indeterminate``, as the reports say it."""
+        return "not checked" if self.verdict == "unchecked" else "indeterminate"
+
 
 def unmet_requirements(statuses: Sequence[RuleStatus], require: Sequence[str]) -> tuple[Unmet, ...]:
     """The required rules (``require``: rule ids and/or ``all``) of each axis that are unchecked
@@ -224,8 +229,7 @@ def required_line(unmet: Sequence[Unmet], statuses: Sequence[RuleStatus] = ()) -
         return ""
     groups: dict[tuple[str, str], dict[str, list[str | None]]] = {}
     for u in unmet:
-        said = "not checked" if u.verdict == "unchecked" else "indeterminate"
-        groups.setdefault((said, u.why), {}).setdefault(u.rule, []).append(u.axis)
+        groups.setdefault((u.said, u.why), {}).setdefault(u.rule, []).append(u.axis)
     axes = len(_axes(statuses)) if statuses else 0
     parts = [f"{', '.join(_named(on, axes))} {said}: {why}" for (said, why), on in groups.items()]
     return f"required but not decided: {'; '.join(parts)}"

@@ -1,7 +1,8 @@
 """Shared command-line plumbing: subcommand dispatch, ``--version``, the output checks and the
 one-line error contract.
 
-Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 2 unusable input or usage.
+Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 4 a rule ``--require`` asks
+for was not decided, 2 unusable input or usage (:mod:`wavecheck.verdict`).
 
 Every output option is declared with ``type=``:func:`wavecheck.output.output_file`; before a
 command runs, each one is checked (:func:`wavecheck.output.check_outputs`) against the command's

@@ -8,7 +8,8 @@ hm2 stepgen, decided by what its HALFILEs load). The
 format is detected by content (``--firmware-format`` forces it). For every axis and every rule:
 the generator's guaranteed figure, the drive's limit, the margin, pass/fail, the max step rate the
 pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 something cannot be
-proven from the configuration (measure it), 2 unusable input.
+proven from the configuration (measure it), 4 a rule ``--require`` asks for was not decided, 2
+unusable input.
 
 Also here: the options ``check`` shares (``--firmware``, ``--firmware-axis``, ``--limit``,
 ``--margin``) and :func:`check_firmware`, which ``check --firmware`` runs on each report and

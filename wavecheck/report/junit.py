@@ -72,11 +72,10 @@ def _describe(v: Violation) -> str:
 
 def required_failure(case: ET.Element, u: Unmet) -> str:
     """Mark ``case`` as a required rule that was not decided (``--require``)."""
-    said = "not checked" if u.verdict == "unchecked" else "indeterminate"
     ET.SubElement(
         case,
         "failure",
-        message=f"required but {said}: {u.why}",
+        message=f"required but {u.said}: {u.why}",
         type="required",
     )
     return "failure"
