@@ -11,6 +11,12 @@
   layout (``#t`` then one change per line, scoped names) or sigrok's (changes on the timestamp
   line). Text is formatted with numpy, one block of events at a time.
 * :func:`gen_edges` — 10 M edges (STEP and DIR) as arrays, for the check engine alone.
+* :func:`gen_stepgen_vcd` — issue 25's capture: LinuxCNC's stepgen (the model, ``stepgen
+  simulate``) at a 25 µs base period under ``uniform:11us`` latency, three 40-unit moves at
+  the maximum step rate (20 k steps/s): 1.2 M edges, 31 MB of VCD; the truth is P and the worst
+  lateness of the invocations that made an edge.
+* :func:`gen_command` — a ``stepgen simulate --command`` CSV (a sine, a row a millisecond).
+* :func:`gen_stepgen_sr` — a stepgen ``.sr`` of a sine-following axis (the cross-check's input).
 
 Each generator also writes ``<file>.truth.json`` with the counts a reader must find. Run
 ``python bench/gen.py --help``; ``bench/run.py`` calls these when a file is missing.
@@ -342,7 +348,68 @@ def gen_edges(path: Path, *, nedges: int = 10_000_000, seed: int = 3) -> dict[st
     return truth
 
 
+def gen_command(path: Path, *, seconds: float = 20.0, amplitude: float = 10.0) -> dict[str, object]:
+    """A ``stepgen simulate --command`` CSV: ``amplitude·sin(t)`` units, a row every 1 ms (as
+    ``bench/stepgen_vcd.py``'s motion)."""
+    t = np.arange(round(seconds * 1000) + 2) * 1e-3
+    rows = [
+        f"{a:.3f},{v!r}" for a, v in zip(t.tolist(), (amplitude * np.sin(t)).tolist(), strict=True)
+    ]
+    path.write_text("time_s,value\n" + "\n".join(rows) + "\n")
+    truth = {"rows": len(rows), "seconds": seconds, "amplitude": amplitude}
+    path.with_suffix(".truth.json").write_text(json.dumps(truth, indent=1) + "\n")
+    return truth
+
+
+def gen_stepgen_sr(path: Path, *, seconds: float) -> dict[str, object]:
+    """A ``.sr`` from stepgen (25 µs base period, no latency: 40 kHz), position mode following
+    15·sin(t) units at 1000 steps/unit, 20 kHz at most: ~9600 steps a second, DIR reversing every
+    π s (the cross-check's input: ~575 k steps a minute)."""
+    from stepgen.model import StepgenConfig
+    from stepgen.motion import Motion
+    from stepgen.simulate import simulate
+    from stepgen.vcdout import write_sr as write_trace_sr
+
+    cfg = StepgenConfig(base_period_ns=25_000, servo_period_ns=1_000_000, position_scale=1000,
+                        maxvel=20, maxaccel=200, thread_order="pulses-first")  # fmt: skip
+    t = np.arange(round(seconds * 1000) + 2) * 1e-3
+    trace = simulate(cfg, Motion("csv", csv_times=t, csv_values=15 * np.sin(t)),
+                     n_periods=round(seconds * 40_000))  # fmt: skip
+    write_trace_sr(trace, path)
+    truth = {"steps": trace.steps, "seconds": seconds, "dir_edges": len(trace.edges["dir"])}
+    path.with_suffix(".truth.json").write_text(json.dumps(truth, indent=1) + "\n")
+    return truth
+
+
 # ---------------------------------------------------------------------------------------------
+
+
+def gen_stepgen_vcd(path: Path) -> dict[str, object]:
+    """Issue 25's capture (module docstring) and its truth."""
+    from stepgen.model import StepgenConfig
+    from stepgen.motion import Motion, parse_moves
+    from stepgen.simulate import n_periods_for, simulate
+    from stepgen.vcdout import write_vcd
+
+    cfg = StepgenConfig(
+        base_period_ns=25_000, position_scale=5000, maxvel=3.9, maxaccel=100,
+        thread_order="pulses-first",  # as `stepgen simulate` runs two threads
+    )  # fmt: skip
+    motion = Motion("moves", segments=parse_moves("40, pause 100ms, 0, pause 100ms, 40", 3.9, 100))
+    duration = int((motion.natural_duration_s or 1.0) * 1e9)
+    trace = simulate(cfg, motion, "uniform:11us", n_periods=n_periods_for(cfg, duration), seed=1)
+    write_vcd(trace, path)
+    idx = np.unique(np.concatenate([trace.run.toggles[p] for p in trace.pins]))
+    t = np.unique(np.concatenate([trace.edges[p] for p in trace.pins]))
+    late = t - idx * cfg.base_period_ns
+    truth = {
+        "base_period_ns": cfg.base_period_ns,
+        "max_lateness_ns": int(late.max() - late.min()),
+        "edges": int(sum(len(e) for e in trace.edges.values())),
+    }
+    path.with_suffix(".truth.json").write_text(json.dumps(truth) + "\n")
+    return truth
+
 
 FILES = {
     "sr1g": ("stepdir_1G.sr", lambda p: gen_sr(p)),
@@ -361,6 +428,13 @@ FILES = {
     "vcd_sim_100m": ("steps_100M_sim.vcd", lambda p: gen_vcd(p, nchanges=100_000_000)),
     "edges": ("edges_10M.npz", lambda p: gen_edges(p)),
     "edges_1m": ("edges_1M.npz", lambda p: gen_edges(p, nedges=1_000_000)),
+    "latency": ("stepgen_25us_uniform11us.vcd", lambda p: gen_stepgen_vcd(p)),
+    # issue 29: stepgen's --command input (20 s), the cross-check's 575 k / 1.15 M steps
+    "cmd20s": ("sine_20s.csv", lambda p: gen_command(p)),
+    "cmd2s": ("sine_2s.csv", lambda p: gen_command(p, seconds=2.0)),
+    "xc600k": ("stepgen_575k.sr", lambda p: gen_stepgen_sr(p, seconds=60)),
+    "xc1200k": ("stepgen_1150k.sr", lambda p: gen_stepgen_sr(p, seconds=120)),
+    "xc60k": ("stepgen_57k.sr", lambda p: gen_stepgen_sr(p, seconds=6)),
 }
 
 

@@ -33,6 +33,10 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 7. Standard input (issue 14): ``bench/stdin_pipe.py`` (grbl's raw samples through a pipe into
    ``wavecheck check -``) against the arrival rate of sigrok's demo driver, 24 MHz × 8 channels
    = 24 MB/s [CPU throughput ≥ 2×: under half a core]; peer: ``check grbl.sr``.
+9. Latency (issue 25): ``wavecheck latency`` of a 1.2 M-edge stepgen capture (25 µs, uniform
+   11 µs) against ``wavecheck check`` of the same file [CPU ≤ 3×; P and the worst lateness as
+   generated]; the several-axes check of the real Smoothieware capture, two axes against one
+   [CPU ≤ 1.2×: the common-timer note is cheap].
 8. Live (issue 14): ``bench/watch_keepup.py`` runs ``wavecheck watch`` on sigrok's demo device
    (24 MHz × 8 channels with its default pattern; 200 kHz with its counter pattern) and gives
    the samples wavecheck can process per second of its CPU ÷ the arrival rate [≥ 2×: under half
@@ -416,6 +420,122 @@ def bench_stepgen(quick: bool, runs: int) -> dict[str, Any]:
     return res
 
 
+def bench_sr_floor(label: str, path: Path, runs: int) -> dict[str, Any]:
+    """``bench/sr_floor.py``: ``read_sr`` against inflate + CRC + word scan (issue 29)."""
+    cmd = [PY, str(HERE / "sr_floor.py"), str(path), "--repeat", str(max(5, runs))]
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    res, load = got[0][-1], got[1]
+    res.update(command=sh(cmd), load=load)
+    floor_s, read_s = res["cpu_s"]["floor"], res["cpu_s"]["read_sr"]
+    print(f"  {res['samples'] / 1e6:.1f} M samples, {res['edges']} edges: read_sr {read_s:.3f} s, "
+          f"floor {floor_s:.3f} s of CPU (best of {max(5, runs)}, interleaved)")  # fmt: skip
+    ok = res["ratio"] <= SR_FLOOR_GOAL
+    figure(f".sr read {label} vs its numpy floor (CPU)", f"{res['ratio']:.2f}× ({read_s:.3f} s)",
+           f"≤ {SR_FLOOR_GOAL}×", ok, f"floor (inflate + CRC-32 + word scan) {floor_s:.3f} s",
+           load)  # fmt: skip
+    res["target"] = ok
+    return res
+
+
+#: issue 29's goals
+SR_FLOOR_GOAL = 1.15
+STEPGEN_CLI_GOAL = 100
+CROSSCHECK_GOAL = 2.0
+CROSSCHECK_RSS_GOAL = 1.1  # "memory flat": twice the steps, at most this much more peak RSS
+
+
+def bench_stepgen_cli(quick: bool, runs: int) -> dict[str, Any]:
+    """``stepgen simulate --command … --latency uniform:10us -o OUT.vcd`` as a process, against
+    ``import numpy`` and the in-process stages (``bench/stepgen_cli.py``)."""
+    from bench.stepgen_cli import OPTIONS
+
+    key, seconds = ("cmd2s", 2) if quick else ("cmd20s", 20)
+    csv = ensure(key)
+    stepgen = str(Path(PY).with_name("stepgen"))
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [stepgen, "simulate", "--command", str(csv), *OPTIONS, "--duration", f"{seconds}s",
+               "-o", f"{tmp}/out.vcd", "-q"]  # fmt: skip
+        floor_cmd = [PY, "-c", "import numpy"]
+        print(f"  $ {sh(cmd)}\n  $ {sh(floor_cmd)}")
+        loads, cpu, floor = [], [], []
+        for _ in range(max(5, runs)):
+            loads.append(load1())
+            t = timed(cmd)
+            if t["rc"]:
+                raise SystemExit(f"{sh(cmd)}: exit {t['rc']}: {t['stderr'][-300:]}")
+            cpu.append(t["user_s"] + t["sys_s"])
+            f = timed(floor_cmd)
+            floor.append(f["user_s"] + f["sys_s"])
+    got = run_script([PY, str(HERE / "stepgen_cli.py"), str(csv), "--seconds", str(seconds)])
+    stages = {} if isinstance(got, dict) else got[0][-1]["cpu_s"]
+    best, numpy_s = min(cpu), min(floor)
+    pass1 = stages.get("pass 1 (floor)", 0.0)
+    x = seconds / best
+    print(f"  whole process {best:.2f} s CPU (runs {min(cpu):.2f}–{max(cpu):.2f}); import numpy "
+          f"{numpy_s:.2f} s; in one process: "
+          + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in stages.items()))  # fmt: skip
+    ok = x >= STEPGEN_CLI_GOAL
+    figure("`stepgen simulate --command` + uniform latency + VCD, whole process",
+           f"{x:.0f}× real time ({best:.2f} s cpu for {seconds} s)", f"≥ {STEPGEN_CLI_GOAL}×", ok,
+           f"import numpy {numpy_s:.2f} s; floor numpy + pass 1 {numpy_s + pass1:.2f} s = "
+           f"{seconds / (numpy_s + pass1):.0f}×", max(loads))  # fmt: skip
+    return {"command": sh(cmd), "cpu_s": cpu, "numpy_s": floor, "stages": stages,
+            "realtime": x, "load": max(loads), "target": ok}  # fmt: skip
+
+
+def bench_crosscheck(quick: bool, runs: int) -> dict[str, Any]:
+    """``wavecheck crosscheck`` against sigrok-cli's own decode of the same ``.sr`` (CPU, child
+    processes included), and its peak RSS on a capture with twice the steps (issue 29)."""
+    keys = ("xc60k", "xc600k") if quick else ("xc600k", "xc1200k")
+    out: dict[str, Any] = {}
+    for key in keys:
+        path = ensure(key)
+        steps = json.loads(path.with_suffix(".truth.json").read_text())["steps"]
+        wc = [WAVECHECK, "crosscheck", str(path), "--map", "step=step,dir=dir"]
+        sg = ["sigrok-cli", "-i", str(path), "-P", "stepper_motor:step=step:dir=dir",
+              "-P", "counter:data=step:data_edge=rising",
+              "-A", "stepper_motor=position,counter=edge_count", "--protocol-decoder-samplenum"]  # fmt: skip
+        # the whole-capture engine's memory on the same file: its edges and decode
+        whole = [WAVECHECK, "check", str(path), "--drive", "gecko-g202", "--map",
+                 "step=step,dir=dir", "--no-stream"]  # fmt: skip
+        print(f"\n- {path.name} ({steps} steps)\n  $ {sh(wc)}\n  $ {sh(sg)}\n  $ {sh(whole)}")
+        loads, wr, sr_ = [], [], []
+        with tempfile.TemporaryDirectory() as tmp:
+            for _ in range(runs):
+                loads.append(load1())
+                wr.append(timed(wc, f"{tmp}/wc.txt"))
+                sr_.append(timed(sg, f"{tmp}/sg.txt"))
+            agree = Path(f"{tmp}/wc.txt").read_text().startswith("crosscheck: AGREE")
+            whole_rss = timed(whole, f"{tmp}/check.txt")["max_rss_mb"]
+        cpu = lambda rs: min(r["user_s"] + r["sys_s"] for r in rs)  # noqa: E731
+        row = {"steps": steps, "wavecheck": wr, "sigrok": sr_, "agree": agree,
+               "cpu_s": cpu(wr), "sigrok_cpu_s": cpu(sr_), "rss_mb": max(r["max_rss_mb"] for r in wr),
+               "sigrok_rss_mb": max(r["max_rss_mb"] for r in sr_), "load": max(loads),
+               "check_no_stream_rss_mb": whole_rss}  # fmt: skip
+        print(f"  crosscheck {row['cpu_s']:.2f} s CPU, {row['rss_mb']:.0f} MB ({'AGREE' if agree else 'DISAGREE'}); "
+              f"sigrok-cli alone {row['sigrok_cpu_s']:.2f} s, {row['sigrok_rss_mb']:.0f} MB")  # fmt: skip
+        out[key] = row
+    base, double = (out[k] for k in keys)
+    ratio = base["cpu_s"] / base["sigrok_cpu_s"]
+    ok = ratio <= CROSSCHECK_GOAL and base["agree"]
+    figure(f"`crosscheck` {base['steps'] // 1000} k steps vs sigrok-cli's decode (CPU)",
+           f"{ratio:.2f}× ({base['cpu_s']:.2f} s cpu; {'agree' if base['agree'] else 'DISAGREE'})",
+           f"≤ {CROSSCHECK_GOAL:g}×", ok, f"sigrok-cli {base['sigrok_cpu_s']:.2f} s cpu",
+           base["load"])  # fmt: skip
+    growth = double["rss_mb"] / base["rss_mb"]
+    ok_rss = growth <= CROSSCHECK_RSS_GOAL
+    more = double["steps"] / base["steps"]
+    figure(f"`crosscheck` peak RSS, {double['steps'] // 1000} k steps ({more:.0f}× the steps)",
+           f"{growth:.2f}× ({base['rss_mb']:.0f} → {double['rss_mb']:.0f} MB)",
+           f"flat: ≤ {CROSSCHECK_RSS_GOAL}×", ok_rss,
+           f"`check --no-stream` {base['check_no_stream_rss_mb']:.0f} → "
+           f"{double['check_no_stream_rss_mb']:.0f} MB; sigrok-cli {base['sigrok_rss_mb']:.0f} → "
+           f"{double['sigrok_rss_mb']:.0f} MB", double["load"])  # fmt: skip
+    return {"rows": out, "ratio": ratio, "rss_growth": growth, "target": ok and ok_rss}
+
+
 TINY_VCD = ROOT / "captures/golden/g202-p16-dirhold2-worst.vcd"
 
 
@@ -643,6 +763,79 @@ def bench_decoder(runs: int) -> dict[str, Any]:
     return res
 
 
+SMOOTHIE = (
+    ROOT.parent / "shared/captures/sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"
+)
+
+
+def _cpu(t: dict[str, Any]) -> float:
+    return float(t["user_s"] + t["sys_s"])
+
+
+def _pair(
+    a: list[str], b: list[str], runs: int
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]], float]:
+    """Run ``a`` and ``b`` interleaved ``runs`` times (a's stdout kept); their runs, the load."""
+    ra: list[dict[str, Any]] = []
+    rb: list[dict[str, Any]] = []
+    loads = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(runs):
+            loads.append(load1())
+            ra.append(timed(a, f"{tmp}/a.out"))
+            rb.append(timed(b))
+            ra[-1]["out"] = Path(f"{tmp}/a.out").read_text()
+    return ra, rb, max(loads)
+
+
+def bench_latency(runs: int) -> dict[str, Any]:
+    """Issue 25's rows (section 9 of the module docstring)."""
+    out: dict[str, Any] = {}
+    path = ensure("latency")
+    truth = json.loads(path.with_suffix(".truth.json").read_text())
+    lat = [WAVECHECK, "latency", "-q", str(path), "--format", "json"]
+    chk = [WAVECHECK, "check", "-q", str(path), "--drive", "gecko-g202"]
+    print(f"  $ {sh(lat)}\n  $ {sh(chk)}")
+    ra, rb, load = _pair(lat, chk, runs)
+    doc = json.loads(ra[-1]["out"])
+    right = (
+        doc["base_period_ns"] == truth["base_period_ns"]
+        and abs(doc["lateness_ns"]["max"] - truth["max_lateness_ns"]) <= 1
+    )
+    cl, cc = statistics.median(map(_cpu, ra)), statistics.median(map(_cpu, rb))
+    print(f"  {truth['edges']} edges: latency {cl:.2f} s CPU (P = {doc['base_period_ns']} ns, max "
+          f"{doc['lateness_ns']['max']} ns; truth {truth['max_lateness_ns']} ns), check "
+          f"{cc:.2f} s CPU; medians of {runs}")  # fmt: skip
+    ratio = cl / cc
+    figure(f"`latency` vs `check` CPU, {truth['edges'] / 1e6:.1f} M edges",
+           f"{ratio:.2f}× ({cl:.2f} s; P and max lateness {'right' if right else 'WRONG'})",
+           "≤ 3×", ratio <= 3 and right, f"check {cc:.2f} s", load)  # fmt: skip
+    out["latency_vs_check"] = {"ratio": ratio, "latency": ra, "check": rb, "right": right}
+    if SMOOTHIE.exists():
+        one = [
+            WAVECHECK,
+            "check",
+            "-q",
+            str(SMOOTHIE),
+            "--drive",
+            "gecko-g202",
+            "--map",
+            "step=5,dir=6",
+        ]
+        two = [WAVECHECK, "check", "-q", str(SMOOTHIE), "--drive", "gecko-g202",
+               "--map", "x.step=5,x.dir=6", "--map", "y.step=3,y.dir=4"]  # fmt: skip
+        print(f"  $ {sh(two)}\n  $ {sh(one)}")
+        rt, ro, load = _pair(two, one, max(runs, 5))
+        ct, co = statistics.median(map(_cpu, rt)), statistics.median(map(_cpu, ro))
+        ratio = ct / co
+        note = next((ln for ln in rt[-1]["out"].splitlines() if "common periodic" in ln), "")
+        print(f"  two axes {ct:.3f} s CPU, one axis {co:.3f} s; {note.strip()}")
+        figure("Smoothieware check, two axes vs one (common-timer note)", f"{ratio:.2f}× ({ct:.2f} s)",
+               "≤ 1.2×", ratio <= 1.2, f"one axis {co:.2f} s", load)  # fmt: skip
+        out["two_axes_vs_one"] = {"ratio": ratio, "two": rt, "one": ro}
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
@@ -653,11 +846,13 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder",
+        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder,latency,crosscheck",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
     runs = args.runs or (1 if args.quick else 3)
+    # bytecode as `make setup` leaves it: an edited module without it recompiles at every start
+    subprocess.run([PY, "-m", "compileall", "-q", "wavecheck", "stepgen"], cwd=ROOT, check=True)
     only = set(args.only.split(","))
     started = _dt.datetime.now(_dt.UTC)
     mach = machine()
@@ -689,6 +884,8 @@ def main() -> int:
         )
         print("\n- the edge scan alone, on grbl_cnc_1.sr's samples")
         results["sr_scan"] = bench_sr_scan(GRBL, runs)
+        print("\n- read_sr against its numpy floor (issue 29), grbl_cnc_1.sr")
+        results["sr_floor"] = [bench_sr_floor("grbl", GRBL, runs)]
         key = "sr100m" if args.quick else "sr1g"
         path = ensure(key)
         truth = json.loads(path.with_suffix(".truth.json").read_text())
@@ -699,6 +896,8 @@ def main() -> int:
         results["sr"].append(
             bench_sr(key, path, "X_STEP", "X_DIR", "gecko-g202", runs, truth["axes"]["X"]["steps"])
         )
+        print(f"\n- read_sr against its numpy floor (issue 29), {path.name}")
+        results["sr_floor"].append(bench_sr_floor(key, path, runs))
 
     if "vcd" in only:
         print("\n== 2. VCD read into arrays: wavecheck vs pywellen vs vcdvcd ==")
@@ -716,6 +915,8 @@ def main() -> int:
     if "stepgen" in only:
         print("\n== 4. stepgen simulate with a VCD out, end to end ==")
         results["stepgen"] = bench_stepgen(args.quick, runs)
+        print("\n- the command line, as a process (issue 29)")
+        results["stepgen_cli"] = bench_stepgen_cli(args.quick, runs)
 
     if "startup" in only:
         print("\n== 5. start-up ==")
@@ -738,6 +939,12 @@ def main() -> int:
     if "decoder" in only:
         print("\n== 9. the protocol decoder: sigrok-cli -P wavecheck vs -P stepper_motor ==")
         results["decoder"] = bench_decoder(runs)
+    if "latency" in only:
+        print("\n== 10. latency: the base-thread lattice, and the common-timer note ==")
+        results["latency"] = bench_latency(runs)
+    if "crosscheck" in only:
+        print("\n== 11. crosscheck against sigrok-cli's own decode ==")
+        results["crosscheck"] = bench_crosscheck(args.quick, runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end

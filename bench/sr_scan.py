@@ -7,7 +7,7 @@ over all blocks and checks that they give the same edges. Prints one JSON line.
 The old scan (issue 7): per byte column, XOR each sample with the one before into a reused
 buffer, then ``flatnonzero`` on ``uint64`` words and inside the non-zero words. The new one
 compares 8-byte words with the same bytes one sample earlier (an unaligned view) and XORs only
-inside the differing words (``wavecheck.capture.sr._changed_bytes``).
+inside the differing words (``wavecheck.capture.sr._changed_words``).
 """
 
 from __future__ import annotations

@@ -7,9 +7,11 @@ Between two update-freq calls the base thread's behaviour is deterministic. In t
 * addval in the i-th period of the chunk is ``a0 + sgn·min(i·deltalim, |target − a0|)``
   (a jump straight to the target when deltalim is 0), so the accumulator at the chunk's end is
   an arithmetic series (pass 1, pure Python integers, O(1) per servo period);
-* ``accum`` is a cumulative sum, a step is a change of bit 28 (the same XOR test as the C),
-  STEP is high for ceil(steplen/P) periods from each step (timer1), DIR is constant, and the
-  phase state is a running sum of ±1 per step (pass 2, numpy over ~1 M periods at a time).
+* ``accum`` moves one way by at most one step a period, so a step is where ``accum`` first
+  reaches the next multiple of 2^28 (the same bit-28 change as the C): pass 2 solves the
+  series for it, for every step at once with numpy, and works from the steps, never period by
+  period: STEP is high for ceil(steplen/P) periods from each step (timer1), DIR is constant,
+  and the phase state moves by ±1 at each step.
 
 Every other servo period ("exact chunk": a reversal, a hold, a timer interaction at the start,
 the first steps) is run through the reference make-pulses of :mod:`stepgen.model`, one period
@@ -23,7 +25,7 @@ only the last step's invocation is needed, and only when an exact chunk follows.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,49 +43,29 @@ from stepgen.model import (
     update_schedule,
 )
 from wavecheck.progress import current
+from wavecheck.steptypes import StepType
 
 __all__ = ["run_fast"]
 
-BLOCK_PERIODS = 1 << 20  #: pass 2 works on about this many base periods at a time
+_DESC = 9  #: numbers describing a chunk for pass 2
 
-
-@dataclass
-class _Pending:
-    """A fast chunk that stepped: where its last step is can be computed when needed."""
-
-    k0: int
-    m: int
-    accum0: int
-    a0: int
-    sgn: int
-    d_eff: int
-    span: int
-    count_end: int
-    loads: tuple[int, int, int]
-
-
-def _series(i: int, a0: int, sgn: int, d_eff: int, span: int) -> int:
-    """Sum of addval over the first ``i`` periods of a ramp chunk (see module docstring)."""
-    if d_eff == 0:
-        return i * a0
-    full = span // d_eff  # periods with a whole deltalim step; afterwards addval == target
-    j = i if i < full else full
-    total = i * a0 + sgn * d_eff * (j * (j + 1) // 2)
-    if i > full:
-        total += sgn * span * (i - full)
-    return total
+#: A fast chunk that stepped, whose last step is found only when an exact chunk follows:
+#: (k0, m, accum0, a0, sgn, d_eff, span, counts at its end, (timer1, timer2, timer3) loads).
+_Pending = tuple[int, int, int, int, int, int, int, int, tuple[int, int, int]]
 
 
 def _last_step(p: _Pending) -> int:
     """Invocation index of the last step of a pending fast chunk (binary search, O(log m))."""
-    lo, hi = 1, p.m  # first i with count(i) == count_end; exists because the count changed
+    k0, m, accum0, a0, sgn, d_eff, span, count_end, _ = p
+    full = span // d_eff if d_eff else 0
+    lo, hi = 1, m  # first i with count(i) == count_end; exists because the count changed
     while lo < hi:
         mid = (lo + hi) // 2
-        if (p.accum0 + _series(mid, p.a0, p.sgn, p.d_eff, p.span)) >> PICKOFF == p.count_end:
+        if (accum0 + int(_addval_sum(mid, a0, sgn, d_eff, span, full))) >> PICKOFF == count_end:
             hi = mid
         else:
             lo = mid + 1
-    return p.k0 + lo - 1
+    return k0 + lo - 1
 
 
 def _steady(comp: Component, ch: Channel, base: int, servo: int) -> bool:
@@ -105,7 +87,6 @@ def run_fast(
     config: StepgenConfig,
     commands: Sequence[float] | np.ndarray,
     n_periods: int,
-    block_periods: int = BLOCK_PERIODS,
 ) -> InvocationRun:
     """Same contract and result as :func:`stepgen.model.run_reference`, much faster.
 
@@ -126,8 +107,9 @@ def run_fast(
     bounds = ([0] if (not schedule or schedule[0] != 0) else []) + schedule + [n_periods]
     first_update_at = 0 if schedule and schedule[0] == 0 else 1
 
-    # per-chunk descriptors for pass 2: (k0, m, a0, sgn, d_eff, span, dir, step_len, accum0, state0)
-    desc: list[tuple[int, int, int, int, int, int, int, int, int, int]] = []
+    # per-chunk descriptors for pass 2, _DESC numbers each: k0, m, a0, sgn, d_eff, span, dir,
+    # step_len, accum0
+    desc: list[int] = []
     exact: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     # lazy timers: values after invocation t_ref, or a pending fast chunk
@@ -139,7 +121,7 @@ def run_fast(
     pos_mode = ch.pos_mode
     cycle = max(kind.cycle, 1)
     phased = kind.kind == "phases"
-    append = desc.append
+    describe = desc.extend
     steady = False
 
     # the channel state, as locals (synced with ``ch`` around reference calls)
@@ -257,34 +239,27 @@ def run_fast(
             and (curr_dir == (1 if cls else -1) or (a0 == 0 and a_end == 0))
         ):
             step_len = ch.step_len
-            append((k0, m, a0, sgn, d_eff, span, curr_dir, step_len, accum, state))
+            describe((k0, m, a0, sgn, d_eff, span, curr_dir, step_len, accum))
             accum1 = accum + total
             count1 = accum1 >> PICKOFF
             delta = count1 - (accum >> PICKOFF)
             if delta:
                 steps_total += delta if delta > 0 else -delta
                 hold = step_len + ch.dir_hold_dly
-                pending = _Pending(
-                    k0,
-                    m,
-                    accum,
-                    a0,
-                    sgn,
-                    d_eff,
-                    span,
-                    count1,
+                pending = (
+                    k0, m, accum, a0, sgn, d_eff, span, count1,
                     (step_len, hold, hold + ch.dir_setup),
-                )
+                )  # fmt: skip
                 if phased:
                     state = (state + delta) % cycle
             accum = accum1
             addval = a_end
             continue
         # exact chunk: make the timers concrete, then run the reference make-pulses
-        append((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum, state))
+        describe((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum))
         if pending is not None:
             t_ref = _last_step(pending)
-            t_vals = pending.loads
+            t_vals = pending[8]
             pending = None
         elapsed = (k0 - 1 - t_ref) * base
         ch.timer1 = max(t_vals[0] - elapsed, 0)
@@ -300,16 +275,14 @@ def run_fast(
                 steps_total += 1
             inc[i] = ch.accum - before
             dirs[i] = ch.curr_dir
-        exact[len(desc) - 1] = (inc, dirs)
+        exact[len(desc) // _DESC - 1] = (inc, dirs)
         accum, addval, curr_dir, state = ch.accum, ch.addval, ch.curr_dir, ch.state
         # timers after this chunk, relative to its last invocation
         t_vals = (ch.timer1, ch.timer2, ch.timer3)
         t_ref = k1 - 1
 
     to_ch()
-    toggles, counts_at, counts_val = _pass2(
-        kind.number, kind.outputs, kind.states, cycle, base, block_periods, desc, exact
-    )
+    toggles, counts_at, counts_val = _pass2(kind, base, n_periods, desc, exact)
     run = InvocationRun(
         config=config,
         n_periods=n_periods,
@@ -318,7 +291,7 @@ def run_fast(
         counts_at=counts_at,
         counts_val=counts_val,
         steps=steps_total,
-        fast_chunks=len(desc) - len(exact),
+        fast_chunks=len(desc) // _DESC - len(exact),
         exact_chunks=len(exact),
     )
     run.final = final_state(comp)
@@ -326,105 +299,160 @@ def run_fast(
     return run
 
 
+def _addval_sum(i: Any, a0: Any, sgn: Any, d: Any, span: Any, full: Any) -> Any:
+    """The sum of addval over the first ``i`` periods of a chunk (see the module docstring;
+    ``full`` = span // d, 0 when d is 0), on numbers or int64 arrays."""
+    j = np.minimum(i, full)
+    return i * a0 + sgn * (d * (j * (j + 1) // 2) + span * np.maximum(i - full, 0))
+
+
+def _fast_steps(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The steps of the fast chunks ``cols`` (descriptor columns): their invocation indices, the
+    chunk of each, and ``counts`` after each.
+
+    In a fast chunk the accumulator moves one way by at most one step a period, so ``counts``
+    passes each value between its values at the chunk's ends once: count c is reached at the
+    first period i with accum0 + S(i) >= c·2^28 (counting up; below (c + 1)·2^28 counting down),
+    S the closed-form sum of addval (a quadratic, then linear, in i). A float root gives i; it
+    is kept where the exact integer test confirms it, else found by binary search."""
+    k0, m, a0, sgn, d, span, _, _, acc0 = cols
+    full = np.where(d != 0, span // np.where(d != 0, d, 1), 0)
+    c0 = acc0 >> PICKOFF
+    c1 = (acc0 + _addval_sum(m, a0, sgn, d, span, full)) >> PICKOFF
+    n = np.abs(c1 - c0)
+    chunk = np.repeat(np.arange(len(n)), n)
+    r = np.arange(1, len(chunk) + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n within a chunk
+    q = np.sign(c1 - c0)[chunk]
+    count = c0[chunk] + q * r
+    # q·S(i) >= need: counting up accum >= c·2^28; down −accum >= 1 − (c + 1)·2^28
+    need = np.where(q > 0, count << PICKOFF, 1 - ((count + 1) << PICKOFF)) - q * acc0[chunk]
+    ch = (a0, sgn, d, span, full)
+    a0, sgn, d, span, full = (x[chunk] for x in ch)
+    mm = m[chunk]
+
+    def reached(i: np.ndarray, sel: slice | np.ndarray = slice(None)) -> np.ndarray:
+        s = _addval_sum(i, a0[sel], sgn[sel], d[sel], span[sel], full[sel])
+        return np.asarray(q[sel] * s >= need[sel])
+
+    i = _float_root(q, a0, sgn, d, span, full, need)
+    guess = np.clip(np.nan_to_num(np.ceil(i), nan=1.0), 1, mm).astype(np.int64)
+    wrong = np.flatnonzero(~reached(guess) | ((guess > 1) & reached(guess - 1)))
+    if len(wrong):  # binary search where the float root missed
+        lo, hi = np.ones(len(wrong), dtype=np.int64), mm[wrong]
+        for _ in range(int(hi.max()).bit_length()):
+            mid = (lo + hi) >> 1
+            ok = reached(mid, wrong)
+            hi, lo = np.where(ok, mid, hi), np.where(ok, lo, mid + 1)
+        guess[wrong] = lo
+    return k0[chunk] + guess - 1, chunk, count
+
+
+def _float_root(
+    q: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, span: np.ndarray,
+    full: np.ndarray, need: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The real i with q·S(i) = need (see :func:`_fast_steps`), in floats: on the ramp
+    (h/2)·i² + (q·a0 + h/2)·i with h = q·sgn·d, after it linear at q·target a period."""
+    h = (q * sgn * d).astype(float)
+    b = q * a0 + h / 2
+    want = need.astype(float)
+    with np.errstate(all="ignore"):
+        i = 2 * want / (b + np.sqrt(np.maximum(b * b + 2 * h * want, 0.0)))
+        at_full = (q * _addval_sum(full, a0, sgn, d, span, full)).astype(float)
+        return np.where(i > full, full + (want - at_full) / (q * (a0 + sgn * span)), i)
+
+
+def _runs(starts: np.ndarray, ends: np.ndarray, n_periods: int) -> np.ndarray:
+    """Toggle indices of a pin that is high on the sorted, disjoint, non-empty periods
+    [starts[j], ends[j]) and low elsewhere (touching runs merge; toggles from ``n_periods`` on
+    are dropped)."""
+    apart = ends[:-1] != starts[1:]
+    rise = np.concatenate(([True], apart))
+    fall = np.concatenate((apart, [True])) & (ends < n_periods)
+    out = np.empty(2 * len(starts), dtype=np.int64)
+    out[0::2], out[1::2] = starts, ends
+    keep = np.empty(2 * len(starts), dtype=bool)
+    keep[0::2], keep[1::2] = rise, fall
+    return out[keep]
+
+
+def _changes(at: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Where a piecewise-constant series (``values[j]`` from ``at[j]`` on, 0 before) changes."""
+    prev = np.concatenate(([0], values[:-1]))
+    return at[values != prev]
+
+
 def _pass2(
-    step_type: int,
-    pins: tuple[str, ...],
-    lut: tuple[int, ...],
-    cycle: int,
+    kind: StepType,
     base: int,
-    block_periods: int,
-    desc: list[tuple[int, int, int, int, int, int, int, int, int, int]],
+    n_periods: int,
+    desc: list[int],
     exact: dict[int, tuple[np.ndarray, np.ndarray]],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """Per-period outputs from the chunk descriptors, a block of chunks at a time."""
-    cols = np.array(desc, dtype=np.int64).reshape(-1, 10).T if desc else np.zeros((10, 0), np.int64)
-    k0, m, a0, sgn, dd, span, dirs_c, lens, accum0s, state0s = cols
-    c_m = m.tolist()
-    nper_c = -(-lens // base)  # ceil(step_len / P): timer1 periods
-    lut_arr = np.asarray(lut if lut else (0,), dtype=np.int64)
+    """Each pin's toggles and the ``counts`` changes from the chunk descriptors, step by step.
 
-    tog_parts: dict[str, list[np.ndarray]] = {p: [] for p in pins}
-    cnt_at_parts: list[np.ndarray] = []
-    cnt_val_parts: list[np.ndarray] = []
-    prev_out = 0
-    prev_count = 0
-    last_step = -(1 << 62)  # global index of the most recent step
-    last_nper = 0
-    n_chunks = len(desc)
-    ci = 0
-    while ci < n_chunks:
-        cj = ci
-        total = 0
-        while cj < n_chunks and (total == 0 or total + c_m[cj] <= block_periods):
-            total += c_m[cj]
-            cj += 1
-        sl = slice(ci, cj)
-        mm = m[sl]
-        start = int(k0[ci])
-        offs = np.concatenate(([0], np.cumsum(mm)[:-1]))
-        rep = np.repeat(np.arange(cj - ci), mm)
-        i1 = np.arange(total, dtype=np.int64) - offs[rep] + 1
-        inc = a0[sl][rep] + sgn[sl][rep] * np.minimum(i1 * dd[sl][rep], span[sl][rep])
-        dirs = dirs_c[sl][rep]
-        for c in range(ci, cj):
-            if c in exact:
-                e_inc, e_dir = exact[c]
-                o = int(offs[c - ci])
-                inc[o : o + len(e_inc)] = e_inc
-                dirs[o : o + len(e_dir)] = e_dir
-        accum0 = int(accum0s[ci])
-        accum = np.cumsum(inc) + accum0
-        prev = np.empty_like(accum)
-        prev[0] = accum0
-        prev[1:] = accum[:-1]
-        step = ((accum ^ prev) & ONE_STEP) != 0
-        idx = np.arange(start, start + total, dtype=np.int64)
-        nper = nper_c[sl][rep]
-        outbits: np.ndarray
-        if step_type <= 1:
-            ls = np.maximum.accumulate(np.where(step, idx, -(1 << 62)))
-            has = ls > -(1 << 62)
-            ls_local = np.where(has, ls - start, 0)
-            np_at = np.where(has, nper[ls_local], last_nper)
-            ls = np.where(has, ls, last_step)
-            high = (idx - ls) < np_at
-            if step.any():
-                last_pos = int(np.flatnonzero(step)[-1])
-                last_step = start + last_pos
-                last_nper = int(nper[last_pos])
-            if step_type == 0:
-                outbits = high.astype(np.int64) | ((dirs < 0).astype(np.int64) << 1)
-            else:
-                neg = dirs < 0
-                outbits = (high & ~neg).astype(np.int64) | ((high & neg).astype(np.int64) << 1)
+    The steps of fast chunks come from :func:`_fast_steps`, those of exact chunks from their
+    per-period increments; then STEP is high for ceil(steplen/P) periods from each step (cut
+    short by the next step: timer1 restarts), DIR (type 0) follows the direction chunk by chunk,
+    up/down (type 1) carry each pulse on the line of the direction at its step (the direction
+    cannot change while timer2 ≥ timer1 runs), and a phase type's state moves by the direction
+    at each step."""
+    cols = np.fromiter(desc, dtype=np.int64, count=len(desc)).reshape(-1, _DESC).T
+    k0, dirs, lens, acc0 = cols[0], cols[6], cols[7], cols[8]
+    nper = -(-lens // base)  # ceil(step_len / P): the periods timer1 keeps STEP high
+    is_fast = np.ones(cols.shape[1], dtype=bool)
+    is_fast[list(exact)] = False
+    fast = np.flatnonzero(is_fast)
+    s_at, s_chunk, c_val = _fast_steps(cols[:, fast])
+    s_chunk = fast[s_chunk]
+    c_at = s_at
+    # the direction, chunk by chunk (exact chunks: period by period)
+    d_at, d_val = k0[fast], dirs[fast]
+    if exact:
+        parts: list[list[np.ndarray]] = [[s_at], [s_chunk], [c_at], [c_val], [d_at], [d_val]]
+        for ci, (inc, e_dir) in exact.items():
+            start = int(k0[ci])
+            accum = np.cumsum(inc) + acc0[ci]
+            prev = np.concatenate((acc0[ci : ci + 1], accum[:-1]))
+            steps = np.flatnonzero((accum ^ prev) & ONE_STEP)
+            counts = accum >> PICKOFF
+            moved = np.flatnonzero(counts != (prev >> PICKOFF))
+            for part, value in zip(parts, (
+                steps + start, np.full(len(steps), ci), moved + start, counts[moved],
+                np.arange(start, start + len(inc)), e_dir,
+            ), strict=True):  # fmt: skip
+                part.append(value)
+        s_at, s_chunk, c_at, c_val, d_at, d_val = (np.concatenate(p) for p in parts)
+        for at, rest in ((s_at, (s_chunk,)), (c_at, (c_val,)), (d_at, (d_val,))):
+            order = np.argsort(at, kind="stable")
+            at[:] = at[order]
+            for x in rest:
+                x[:] = x[order]
+    s_dir = dirs[s_chunk] if not exact else _at(d_at, d_val, s_at)
+    toggles: dict[str, np.ndarray] = {}
+    if kind.kind == "phases":
+        state = np.cumsum(s_dir) % max(kind.cycle, 1)
+        lut = np.asarray(kind.states, dtype=np.int64)
+        at = np.concatenate(([0], s_at)) if not len(s_at) or s_at[0] else s_at
+        bits = np.concatenate((lut[:1], lut[state])) if len(at) > len(s_at) else lut[state]
+        for b, pin in enumerate(kind.outputs):
+            toggles[pin] = _changes(at, (bits >> b) & 1)
+    else:
+        # STEP high from each step for nper periods or until the next step
+        ends = s_at + nper[s_chunk]
+        ends[:-1] = np.minimum(ends[:-1], s_at[1:])
+        high = ends > s_at
+        if kind.kind == "step-dir":
+            step, direction = kind.outputs
+            toggles[step] = _runs(s_at[high], ends[high], n_periods)
+            toggles[direction] = _changes(d_at, (d_val < 0).astype(np.int64))
         else:
-            state0 = int(state0s[ci])
-            state = (state0 + np.cumsum(np.where(step, dirs, 0))) % cycle
-            outbits = lut_arr[state]
-        oprev = np.empty_like(outbits)
-        oprev[0] = prev_out
-        oprev[1:] = outbits[:-1]
-        changed = outbits ^ oprev
-        for bit, pin in enumerate(pins):
-            tog_parts[pin].append(np.flatnonzero((changed >> bit) & 1) + start)
-        counts = accum >> PICKOFF
-        cprev = np.empty_like(counts)
-        cprev[0] = prev_count
-        cprev[1:] = counts[:-1]
-        at = np.flatnonzero(counts != cprev)
-        cnt_at_parts.append(at + start)
-        cnt_val_parts.append(counts[at])
-        prev_out = int(outbits[-1])
-        prev_count = int(counts[-1])
-        ci = cj
-    toggles = {
-        p: (np.concatenate(v).astype(np.int64) if v else np.zeros(0, np.int64))
-        for p, v in tog_parts.items()
-    }
-    counts_at = (
-        np.concatenate(cnt_at_parts).astype(np.int64) if cnt_at_parts else np.zeros(0, np.int64)
-    )
-    counts_val = (
-        np.concatenate(cnt_val_parts).astype(np.int64) if cnt_val_parts else np.zeros(0, np.int64)
-    )
-    return toggles, counts_at, counts_val
+            lines = (high & (s_dir >= 0), high & (s_dir < 0))
+            for pin, line in zip(kind.outputs, lines, strict=True):
+                toggles[pin] = _runs(s_at[line], ends[line], n_periods)
+    return toggles, c_at, c_val
+
+
+def _at(at: np.ndarray, values: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The piecewise-constant series (``values[j]`` from ``at[j]`` on) at the indices ``t``."""
+    return values[np.searchsorted(at, t, side="right") - 1]

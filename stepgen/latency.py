@@ -42,34 +42,33 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stepgen.latencyfiles import check_latency_path, read_histogram
 from stepgen.model import InvocationRun
-from wavecheck.drives.model import ActiveEdge
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.rules import RULE_IDS
-from wavecheck.rules import RULES as TABLE
-from wavecheck.rules import rule as table_rule
+from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.steptypes import kind_of
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
+
+if TYPE_CHECKING:
+    from wavecheck.drives.model import ActiveEdge
 
 __all__ = [
     "DEFAULT_CATCHUP_NS",
     "RULES",
     "LatencyModel",
+    "Clock",
     "catchup_for",
     "describe",
+    "invocation_clock",
     "invocation_times",
     "parse_latency",
 ]
 
-#: The rules ``worst:J:RULE`` can target: every interval rule whose intervals stepgen's own
-#: invocations end (not state_sequence, which has none, nor enable_setup: stepgen has no ENABLE).
-RULES: tuple[str, ...] = tuple(
-    r.id for r in TABLE if r.check != "sequence" and "enable" not in (r.ref, r.data)
-)
+#: The rules ``worst:J:RULE`` can target (:data:`wavecheck.linuxcnc.worstcase.WORST_RULES`).
+RULES: tuple[str, ...] = WORST_RULES
 DEFAULT_CATCHUP_NS = 1000
 
 
@@ -139,6 +138,8 @@ def parse_latency(text: str) -> LatencyModel:
             raise ConfigError(f"latency model {t!r}: EVERY must be > 0 (e.g. spike:300us@64s)")
         return LatencyModel("spike", t, j_ns=_ns(j, "J", t), every_ns=every_ns)
     if kind == "histogram" and rest:
+        from stepgen.latencyfiles import check_latency_path  # only for latency files
+
         try:
             check_latency_path(rest)
         except ConfigError as err:
@@ -178,6 +179,8 @@ def _offsets(
         out[k[k < n]] = model.j_ns
         return out
     if model.kind == "histogram":
+        from stepgen.latencyfiles import read_histogram
+
         hist = read_histogram(model.path)
         rng = np.random.default_rng(seed)
         if hist.half_normal is not None:
@@ -195,59 +198,28 @@ def _offsets(
 
 
 def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.ndarray:
-    """Invocations that make the end events of ``rule``'s intervals (to run on time)."""
+    """Invocations that make the end events of ``rule``'s intervals (to run on time;
+    :func:`wavecheck.linuxcnc.worstcase.end_events`)."""
     t = run.toggles
     stype = run.config.step_type
     kind = kind_of(stype)
     if active_edge == "both":
         raise ConfigError("the worst-case latency model needs one active edge (rising or falling)")
-
-    def rising(pin: str) -> np.ndarray:
-        return t[pin][0::2]
-
-    def falling(pin: str) -> np.ndarray:
-        return t[pin][1::2]
-
-    def alternate(events: np.ndarray) -> np.ndarray:
-        return np.unique(events)[1::2]
-
-    r = table_rule(rule) if rule in RULE_IDS else None
-    if r is None or kind not in r.kinds or r.check in ("sequence",) or r.ref == "enable":
-        usable = [
-            x.id for x in TABLE if kind in x.kinds and x.check != "sequence" and x.ref != "enable"
-        ]
+    if kind == "phases":
+        lines = run.pins
+    else:
+        lines = ("step",) if kind == "step-dir" else ("up", "down")
+    pulses = [(t[p][0::2], t[p][1::2]) for p in lines]  # pins start at 0: rise, fall, ...
+    dirs = t["dir"] if kind == "step-dir" else np.zeros(0, np.int64)
+    out = end_events(rule, kind, pulses, dirs, active_rising=active_edge == "rising")
+    if out is not None:
+        return out
+    if kind == "phases":
+        # a phase type's steps are its state changes: step_period measures the same intervals
         raise ConfigError(
-            f"rule {rule!r} does not apply to step type {stype} (use {', '.join(usable)})"
+            f"rule {rule!r} does not apply to step type {stype} (use state_hold or step_period)"
         )
-    # The table says which event closes each interval (wavecheck.rules): a width ends at the edge
-    # leaving its level; a period at every other of its events (alternate invocations late); a
-    # hold at its data event; a setup at the first data event after each reference event; a
-    # switch at the first active edge on the other line.
-    if kind == "phases":  # the steps are the state changes (step_period and state_hold alike)
-        return alternate(np.concatenate([t[p] for p in run.pins]))
-    lines = ("step",) if kind == "step-dir" else ("up", "down")
-    rises = np.unique(np.concatenate([rising(p) for p in lines]))
-    falls = np.unique(np.concatenate([falling(p) for p in lines]))
-    active = rises if active_edge == "rising" else falls
-    if r.check == "width":
-        return falls if r.level == 1 else rises
-    if r.check == "period":
-        return alternate(active)
-    if r.check == "hold":
-        return t["dir"]
-    if r.check == "setup":
-        pos = np.searchsorted(active, t["dir"], side="left")  # first active edge at/after
-        pos = pos[pos < len(active)]
-        return np.unique(active[pos])
-    # switch: the active edge of the first pulse on the other line
-    pick = rising if active_edge == "rising" else falling
-    up, down = pick("up"), pick("down")
-    lab = np.concatenate([np.zeros(len(up), np.int8), np.ones(len(down), np.int8)])
-    at = np.concatenate([up, down])
-    order = np.argsort(at, kind="stable")
-    at, lab = at[order], lab[order]
-    switch = np.flatnonzero(lab[1:] != lab[:-1]) + 1
-    return at[switch]
+    raise ConfigError(f"rule {rule!r} does not apply to step type {stype}")
 
 
 def catchup_for(
@@ -308,11 +280,52 @@ def invocation_times(
     offs = _offsets(model, run, seed, active_edge)
     if offs is None:
         return None
-    base = run.config.base_period_ns
-    k = np.arange(run.n_periods, dtype=np.int64)
+    return _caught_up(offs, run.config.base_period_ns, catchup_ns)
+
+
+def _caught_up(offs: np.ndarray, base: int, catchup_ns: int) -> np.ndarray:
+    """t_k = max(k·P + l_k, t_{k−1} + G) for every k."""
+    k = np.arange(len(offs), dtype=np.int64)
     due = k * base + offs
     # t_k = max(due_k, t_{k-1} + G)  ⇔  t_k − k·G = running max of (due_k − k·G)
     return np.maximum.accumulate(due - k * catchup_ns) + k * catchup_ns
+
+
+@dataclass(frozen=True)
+class Clock:
+    """When the invocations of a run happen: :meth:`at` gives t_k (ns) for indices k.
+
+    When no latency exceeds P − G no invocation is held back by the one before (t_k = k·P + l_k:
+    see the module docstring), so only the offsets are kept and t_k is computed for the indices
+    asked for; otherwise every t_k (:func:`invocation_times`)."""
+
+    base_ns: int
+    offsets: np.ndarray | None = None  #: l_k, when t_k = k·P + l_k
+    times: np.ndarray | None = None  #: every t_k otherwise
+
+    def at(self, k: np.ndarray) -> np.ndarray:
+        """t_k (int64 ns) of the invocation indices ``k``."""
+        if self.times is not None:
+            return self.times[k]
+        t = np.asarray(k, dtype=np.int64) * self.base_ns
+        return t if self.offsets is None else t + self.offsets[k]
+
+
+def invocation_clock(
+    model: LatencyModel,
+    run: InvocationRun,
+    seed: int | None = None,
+    active_edge: ActiveEdge = "rising",
+    catchup_ns: int | None = None,
+) -> Clock:
+    """:func:`invocation_times` as a :class:`Clock` (the same times; arguments and errors as
+    there), without the per-invocation arrays when no catch-up can act."""
+    base = run.config.base_period_ns
+    catchup_ns, _ = catchup_for(model, base, catchup_ns)
+    offs = _offsets(model, run, seed, active_edge)
+    if offs is None or not len(offs) or int(offs.max()) <= base - catchup_ns:
+        return Clock(base, offsets=offs)
+    return Clock(base, times=_caught_up(offs, base, catchup_ns))
 
 
 def describe(model: LatencyModel, base_ns: int) -> str:

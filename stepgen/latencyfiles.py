@@ -38,12 +38,11 @@ __all__ = [
     "LatencyHistogram",
     "check_latency_path",
     "read_histogram",
-    "read_capture_latency",
     "read_latency_file",
     "read_text",
 ]
 
-#: Suffixes of logic-analyzer captures (read by :func:`read_capture_latency`).
+#: Suffixes of logic-analyzer captures (read by ``stepgen plan --latency-from``).
 CAPTURE_SUFFIXES = (".sr", ".vcd")
 
 #: The most bytes a latency file may hold (see the module docstring for why 64 MiB).
@@ -261,33 +260,3 @@ def read_histogram(path: str | Path) -> LatencyHistogram:
     if weights.sum() <= 0:
         raise ConfigError(f"{path}: cyclictest histogram is empty")
     return LatencyHistogram(values, weights / weights.sum(), f"cyclictest histogram {path}")
-
-
-def read_capture_latency(path: str | Path) -> tuple[int, str]:
-    """The worst base-thread lateness (ns, rounded up) read from a capture's step pins by
-    :mod:`wavecheck.latency`, plus one sample period (each edge is seen up to a sample late),
-    and where it came from.
-
-    Raises:
-        ConfigError: the edges are not on a periodic lattice (hardware-timed stepping).
-    """
-    from wavecheck.capture.open import open_capture
-    from wavecheck.engine.plan import auto_map
-    from wavecheck.latency import analyse
-    from wavecheck.steptypes import step_type
-
-    capture = open_capture(path)
-    names: list[str] = []
-    for t in (0, 1, 2):
-        names += [n for r, n in auto_map(capture, step_type(t)).items() if r != "enable"]
-    report = analyse(capture, list(dict.fromkeys(names)))
-    worst = report.max_lateness_ns
-    if not report.lattice or worst is None:
-        raise ConfigError(f"{path}: {report.reason}")
-    total = worst + report.resolution_ns
-    ns = -(-total.numerator // total.denominator)
-    return ns, (
-        f"{path}: worst lateness of the base thread on the step pins, {float(worst):g} ns + one "
-        f"sample ({float(report.resolution_ns):g} ns), P = {float(report.period_ns or 0):g} ns "
-        "inferred from the capture"
-    )

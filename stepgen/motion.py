@@ -136,7 +136,61 @@ def parse_moves(spec: str, vel: float, accel: float) -> list[Segment]:
 
 
 def parse_command_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read ``time_s,value`` rows; returns (times, values) sorted by time."""
+    """Read ``time_s,value`` rows; returns (times, values) sorted by time.
+
+    A file of plain ``number,number`` lines (after an optional header) is parsed at once
+    (:func:`_parse_plain_lines`); anything else, and every error, goes through the row-by-row
+    reader :func:`_parse_rows`, which gives the same result and names the line of an error."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read command file ({err.strerror})") from None
+    fast = _parse_plain_lines(data)
+    return fast if fast is not None else _parse_rows(path)
+
+
+def _parse_plain_lines(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
+    """The rows of ``data`` when every line is two comma-separated fields without quotes (the
+    first may be a header) that give finite numbers with times in order, else None. Fields
+    are converted by ``float`` as in :func:`_parse_rows`, so the numbers are the same."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    if '"' in text or "#" in text:
+        return None
+    if "\r" in text:
+        text = text.replace("\r\n", "\n")
+        if "\r" in text:
+            return None
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    if not lines:
+        return None
+    first = lines[0].split(",")
+    try:
+        float(first[0]), float(first[1])
+    except (ValueError, IndexError):
+        if not "".join(first).strip():
+            return None  # a blank line: the row reader skips it
+        lines = lines[1:]  # the header
+    fields = ",".join(lines).split(",")
+    if len(fields) != 2 * len(lines) or any(line.count(",") != 1 for line in lines):
+        return None
+    try:
+        numbers = np.fromiter(map(float, fields), dtype=float, count=len(fields))
+    except ValueError:
+        return None
+    times, values = numbers[0::2], numbers[1::2]
+    if not len(times) or not np.isfinite(numbers).all() or (times[1:] < times[:-1]).any():
+        return None
+    return times, values
+
+
+def _parse_rows(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`parse_command_csv` row by row with the ``csv`` module (the plain reader)."""
     times: list[float] = []
     values: list[float] = []
     try:

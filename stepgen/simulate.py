@@ -17,20 +17,23 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from stepgen.fast import run_fast
 from stepgen.latency import (
-    ActiveEdge,
     LatencyModel,
     catchup_for,
-    invocation_times,
+    invocation_clock,
     parse_latency,
 )
 from stepgen.model import InvocationRun, StepgenConfig, run_reference, update_schedule
 from stepgen.motion import Motion
 from wavecheck.errors import ConfigError
+
+if TYPE_CHECKING:
+    from wavecheck.drives.model import ActiveEdge
 
 __all__ = ["Trace", "n_periods_for", "simulate", "trace_from_run"]
 
@@ -91,19 +94,17 @@ def trace_from_run(
     n_periods: int | None = None,
 ) -> Trace:
     """A :class:`Trace` of ``run``'s first ``n_periods`` base periods (default all), each
-    invocation timed by ``latency`` (:func:`~stepgen.latency.invocation_times`; catch-up time
+    invocation timed by ``latency`` (:func:`~stepgen.latency.invocation_clock`; catch-up time
     ``catchup_ns``): the edges and ``counts`` changes in ns, the end of the span, the run's
     warnings as notes. The one place a per-period run becomes edge times."""
     n = run.n_periods if n_periods is None else n_periods
-    times = invocation_times(
+    clock = invocation_clock(
         latency, run, seed=seed, active_edge=active_edge, catchup_ns=catchup_ns
     )
     base = run.config.base_period_ns
-
-    def at(idx: np.ndarray) -> np.ndarray:
-        return idx * base if times is None else times[idx]
-
-    last_t = (n - 1) * base if times is None else int(times[-1])
+    at = clock.at
+    on_time = clock.offsets is None and clock.times is None
+    last_t = (n - 1) * base if on_time else int(at(np.array([run.n_periods - 1]))[0])
     return Trace(
         config=run.config,
         latency=latency,

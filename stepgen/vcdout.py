@@ -25,7 +25,6 @@ from pathlib import Path
 import numpy as np
 
 from stepgen.simulate import Trace
-from wavecheck.capture.srzip import SR_CHUNK_BYTES, rate_text, write_sr_edges
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
@@ -33,7 +32,6 @@ from wavecheck.errors import ConfigError
 __all__ = ["DEFAULT_MAX_SAMPLES", "header_comment", "sr_sample_period_ns", "write_sr", "write_vcd"]
 
 DEFAULT_MAX_SAMPLES = 200_000_000
-SR_CHUNK = SR_CHUNK_BYTES
 #: How a stepgen .sr names the simulation its exact edges come from.
 SR_SOURCE = "stepgen, a model of LinuxCNC's stepgen"
 
@@ -91,6 +89,8 @@ def write_sr(
     Raises:
         ConfigError: more than ``max_samples`` samples would be needed (nothing is written).
     """
+    from wavecheck.capture.srzip import SR_CHUNK_BYTES, rate_text, write_sr_edges  # .sr only
+
     g = sr_sample_period_ns(trace)
     n_samples = trace.end_ns // g
     if n_samples > max_samples:
@@ -108,7 +108,7 @@ def write_sr(
         [0] * len(trace.pins),
         int(n_samples),
         samplerate=10**9 // g,
-        chunk_bytes=SR_CHUNK,
+        chunk_bytes=SR_CHUNK_BYTES,
         exact_source=SR_SOURCE,
     )
     return 10**9 // g, int(n_samples)

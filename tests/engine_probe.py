@@ -130,7 +130,7 @@ def options(
     user_table: tuple[int, ...] | None = None,
     stepgen: LinuxCNCConfig | None = None,
     latency_ns: Fraction | None = None,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     pictures: bool = False,
     block_edges: int = WHOLE,
 ) -> CheckOptions:

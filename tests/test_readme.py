@@ -149,3 +149,16 @@ def test_latency_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         argv = shlex.split(line)
         tool = main if argv[0] == "wavecheck" else stepgen_main
         assert tool(argv[1:]) == 0, line
+
+
+def test_latency_example_block(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The latency section's worked example: its figures are what the command prints (issue 25)."""
+    lines = _block("latency-example").strip().splitlines()
+    assert lines[0].startswith("$ wavecheck ")
+    monkeypatch.chdir(REPO)
+    assert main([*shlex.split(lines[0][2:])[1:], "-q"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    for line in lines[1:]:
+        assert line in out, line

@@ -111,7 +111,7 @@ def build_options(
     step_type: Mapping[str | None, int] | None = None,
     forward_level: Mapping[str | None, int] | None = None,
     user_table: tuple[int, ...] | None = None,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     resolution: str | Fraction | None = None,
     limit: Iterable[str] = (),
@@ -173,7 +173,7 @@ def check(
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
     forward_level: int = 0,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
     ini: str | os.PathLike[str] | None = None,
@@ -183,6 +183,8 @@ def check(
     limit: Iterable[str] = (),
     margin: str | None = None,
     pictures: bool = False,
+    keep_violations: int = DEFAULT_KEEP,
+    block_edges: int = DEFAULT_BLOCK_EDGES,
     require: str | Iterable[str] = (),
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
@@ -198,7 +200,8 @@ def check(
         samplerate: sample rate for a file without one (``"12MHz"`` or exact Hz).
         input_format: force a reader (``"sr"``, ``"vcd"``, a sigrok-cli format).
         forward_level: DIR level that means forward (0 or 1).
-        pulse_level: level of the generator's step pulses at its output (1 high, 0 low).
+        pulse_level: level of the generator's step pulses at its output (1 high, 0 low;
+            None: as the waveform shows it, else high).
         active_edge: override the drive's active edge.
         user_table: the state table of step type 15.
         ini: a LinuxCNC INI file (BASE_PERIOD) for the ``config`` and ``latency_safe`` rates.
@@ -210,6 +213,8 @@ def check(
         margin: ``"2x"`` or ``"+500ns"`` tightening every figure (``--margin``).
         pictures: keep what :func:`wavecheck.report.plot.render_plot` and the HTML/GTKWave
             outputs draw (signal windows around the worst places, a thinned step trace).
+        keep_violations: the worst violations kept per rule (the counts are exact).
+        block_edges: edges gathered before a window is checked (memory follows it).
         require: rules that must be decided (``"dir_setup,dir_hold"``, ``["all"]``: every rule
             the drive gives a figure for), as ``--require``.
 
@@ -240,6 +245,8 @@ def check(
         channel=channel,
         latency=latency,
         pictures=pictures,
+        keep_violations=keep_violations,
+        block_edges=block_edges,
         require=require,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)
@@ -264,7 +271,7 @@ def check_axes(
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
     forward_level: int = 0,
-    pulse_level: int = 1,
+    pulse_level: int | None = None,
     active_edge: ActiveEdge | None = None,
     user_table: tuple[int, ...] | None = None,
     ini: PathOrText | None = None,
@@ -274,6 +281,8 @@ def check_axes(
     limit: Iterable[str] = (),
     margin: str | None = None,
     pictures: bool = False,
+    keep_violations: int = DEFAULT_KEEP,
+    block_edges: int = DEFAULT_BLOCK_EDGES,
     require: str | Iterable[str] = (),
 ) -> MachineReport:
     """Check every axis of a capture, read once, each against its drive (``wavecheck check
@@ -288,7 +297,8 @@ def check_axes(
         map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
         invert, step_type, forward_level: for every axis that does not give its own.
         resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
-            channel, latency, limit, margin, pictures, require: as :func:`check`, for every axis.
+            channel, latency, limit, margin, pictures, keep_violations, block_edges, require: as
+            :func:`check`, for every axis.
 
     Raises:
         RequirementError: a rule of ``require`` is unchecked or indeterminate on an axis.
@@ -335,6 +345,8 @@ def check_axes(
         channel=channel,
         latency=latency,
         pictures=pictures,
+        keep_violations=keep_violations,
+        block_edges=block_edges,
         require=require,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)

@@ -104,8 +104,8 @@ class StepMonitor:
             ``"drive"`` in the same table. :meth:`finish` then returns a
             :class:`~wavecheck.report.machine.MachineReport`.
         invert, step_type, forward_level, pulse_level, active_edge, resolution, user_table,
-            limit, margin, ini, hal, channel, latency: as :func:`wavecheck.check` (for every
-            axis).
+            limit, margin, ini, hal, channel, latency, pictures: as :func:`wavecheck.check`
+            (for every axis).
         fail_on_violation: raise :class:`WavecheckViolation` as soon as a batch has a failed
             rule (failing the test at that simulation time), and in :meth:`finish`.
         require: rules that must be decided, as :func:`wavecheck.check`'s: :meth:`finish`
@@ -134,7 +134,7 @@ class StepMonitor:
         invert: Iterable[str] = (),
         step_type: int | None = None,
         forward_level: int = 0,
-        pulse_level: int = 1,
+        pulse_level: int | None = None,
         active_edge: ActiveEdge | None = None,
         resolution: str | Fraction | None = None,
         user_table: tuple[int, ...] | None = None,
@@ -144,6 +144,7 @@ class StepMonitor:
         hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
         channel: int = 0,
         latency: str | Fraction | None = None,
+        pictures: bool = False,
         require: str | Iterable[str] = (),
         fail_on_violation: bool = True,
         batch: int = DEFAULT_BATCH,
@@ -183,6 +184,7 @@ class StepMonitor:
             hal=hal,
             channel=channel,
             latency=latency,
+            pictures=pictures,
             keep_violations=keep_violations,
             block_edges=1,  # a window per batch: the batches are this monitor's
             require=require,

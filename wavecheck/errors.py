@@ -1,11 +1,12 @@
 """The one exception hierarchy of wavecheck and stepgen.
 
 Every error a user can cause (a bad file, a bad option, a bad rule file, a bad stepgen setting)
-is a :class:`WavecheckError`. The command-line tools print ``str(error)`` as one line and exit
-with :attr:`WavecheckError.exit_code` (2). Messages say what is wrong, show the value, and end
-with a hint in parentheses where one helps. :class:`RequirementError` is the one that is not
-about the input: a check from Python (:func:`wavecheck.check`, the cocotb monitor) whose
-``require=`` rules were not decided, exit code 4 as the command line's ``--require``.
+is a :class:`WavecheckError`. The command-line tools print ``str(error)`` as one line (then its
+``details``, if any, one a line) and exit with :attr:`WavecheckError.exit_code` (2). Messages say
+what is wrong, show the value, and end with a hint in parentheses where one helps.
+:class:`RequirementError` is the one that is not about the input: a check from Python
+(:func:`wavecheck.check`, the cocotb monitor) whose ``require=`` rules were not decided, exit code
+4 as the command line's ``--require``.
 """
 
 from __future__ import annotations
@@ -29,12 +30,18 @@ def _one_line(text: str) -> str:
 
 
 class WavecheckError(Exception):
-    """Base of every error caused by unusable input; the CLI exits with :attr:`exit_code`."""
+    """Base of every error caused by unusable input; the CLI exits with :attr:`exit_code`.
+
+    ``details``: lines the CLI prints below the one-line message (the candidates of an ambiguity,
+    one a line); ``str(error)`` stays the one line.
+    """
 
     exit_code = 2
 
-    def __init__(self, message: str) -> None:
+    def __init__(self, message: str, details: tuple[str, ...] = ()) -> None:
         super().__init__(_one_line(message))
+        # each detail one line, its indentation kept
+        self.details = tuple(d[: len(d) - len(d.lstrip(" "))] + _one_line(d) for d in details)
 
 
 class CaptureError(WavecheckError):

@@ -109,6 +109,11 @@ _KEYS = {
     "channel",
     "latency",
     "axes",
+    "user_step_type",
+    "pulse_level",
+    "active_edge",
+    "limit",
+    "margin",
     "require",
 }
 #: Keys of an axis table besides its roles.
@@ -177,6 +182,11 @@ class CaptureSpec:
     channel: int = 0
     latency: str | None = None
     axes: tuple[AxisSpec, ...] = ()
+    user_step_type: tuple[int, ...] | None = None
+    pulse_level: str | None = None
+    active_edge: str | None = None
+    limit: tuple[str, ...] = ()
+    margin: str | None = None
     require: tuple[str, ...] = ()
 
     def expected(self, rule: str) -> tuple[str, ...]:
@@ -364,8 +374,44 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
         channel=int(entry.get("channel", 0)),
         latency=None if entry.get("latency") is None else str(entry["latency"]),
         axes=axes,
+        user_step_type=_table_of(entry.get("user_step_type"), where),
+        pulse_level=_choice(entry, "pulse_level", ("high", "low"), where),
+        active_edge=_choice(entry, "active_edge", ("rising", "falling", "both"), where),
+        limit=_limits(entry.get("limit", []), where),
+        margin=None if entry.get("margin") is None else str(entry["margin"]),
         require=require,
     )
+
+
+def _table_of(raw: Any, where: str) -> tuple[int, ...] | None:
+    """``user_step_type``: a list of state values or ``"1,3,2,0"`` text (None when absent)."""
+    if raw is None:
+        return None
+    items = raw.split(",") if isinstance(raw, str) else raw
+    try:
+        return tuple(int(str(v).strip(), 0) for v in items)
+    except (TypeError, ValueError):
+        raise WavecheckConfigError(
+            f"{where}: 'user_step_type' must be a list of state values (e.g. [1, 3, 2, 0])"
+        ) from None
+
+
+def _choice(entry: Any, key: str, allowed: tuple[str, ...], where: str) -> str | None:
+    raw = entry.get(key)
+    if raw is None:
+        return None
+    if raw not in allowed:
+        raise WavecheckConfigError(f"{where}: {key!r} must be one of {', '.join(allowed)}")
+    return str(raw)
+
+
+def _limits(raw: Any, where: str) -> tuple[str, ...]:
+    """``limit``: a table ``{ step_high = "5us" }`` or a list of ``"RULE=T"`` texts."""
+    if isinstance(raw, dict):
+        return tuple(f"{k}={v}" for k, v in raw.items())
+    if isinstance(raw, list) and all(isinstance(v, str) for v in raw):
+        return tuple(raw)
+    raise WavecheckConfigError(f"{where}: 'limit' must be a table {{ rule = \"T\" }} or a list")
 
 
 def load_specs(path: Path) -> list[CaptureSpec]:
@@ -433,13 +479,7 @@ def _run(spec: CaptureSpec) -> Checked:
                 )
                 for a in spec.axes
             },
-            resolution=spec.resolution,
-            samplerate=spec.samplerate,
-            input_format=spec.input_format,
-            ini=spec.ini,
-            hal=spec.hal or None,
-            channel=spec.channel,
-            latency=spec.latency,
+            **_common(spec),
         )
     assert spec.drive is not None  # load_specs requires it without axes
     return check(
@@ -448,15 +488,27 @@ def _run(spec: CaptureSpec) -> Checked:
         map=spec.map,
         invert=spec.invert,
         step_type=spec.type,
-        resolution=spec.resolution,
-        samplerate=spec.samplerate,
-        input_format=spec.input_format,
         forward_level=1 if spec.dir_forward == "high" else 0,
-        ini=spec.ini,
-        hal=spec.hal or None,
-        channel=spec.channel,
-        latency=spec.latency,
+        **_common(spec),
     )
+
+
+def _common(spec: CaptureSpec) -> dict[str, Any]:
+    """The check arguments every axis of ``spec`` shares."""
+    return {
+        "resolution": spec.resolution,
+        "samplerate": spec.samplerate,
+        "input_format": spec.input_format,
+        "ini": spec.ini,
+        "hal": spec.hal or None,
+        "channel": spec.channel,
+        "latency": spec.latency,
+        "user_table": spec.user_step_type,
+        "pulse_level": None if spec.pulse_level is None else int(spec.pulse_level == "high"),
+        "active_edge": spec.active_edge,
+        "limit": spec.limit,
+        "margin": spec.margin,
+    }
 
 
 def _report(config_path: Path, spec: CaptureSpec) -> Checked:

@@ -79,9 +79,9 @@ class Rule:
     level: int | None = None
     """For ``width``: the level measured (1 high, 0 low)."""
     roles: tuple[str, ...] = ()
-    """Roles whose ``x`` stretch at the start of a capture makes an interval partial (not
-    measured); ``"pulse"`` stands for the step type's pulse roles, ``"phases"`` for its phase
-    outputs. Empty for rules that measure one signal's own edges."""
+    """Roles whose unknown (``x``/``z``) stretch an interval must not touch to be judged (it is
+    counted as unknown instead); ``"pulse"`` stands for the step type's pulse roles, ``"phases"``
+    for its phase outputs."""
 
     listed_by_end: bool = False
     """Equal intervals are listed in the order of their end event, not their start (the worst
@@ -99,6 +99,15 @@ class Rule:
         """The interval minimum in exact ns of a drive figure ``value`` (ns for a time figure;
         for ``max_rate``, Hz: the shortest period 1/value)."""
         return Fraction(10**9) / value if self.figure == "max_rate" else Fraction(value)
+
+    def event_roles(self, event: str, st: StepType) -> tuple[str, ...]:
+        """The roles whose edges make ``event`` (``"dir"``: dir; ``"active"``: step; the
+        others: every role of :attr:`roles`)."""
+        if event == "dir":
+            return ("dir",)
+        if event == "active":
+            return ("step",)
+        return self.roles_for(st)
 
     def roles_for(self, st: StepType) -> tuple[str, ...]:
         """:attr:`roles` with ``"pulse"``/``"phases"`` expanded for step type ``st``."""
@@ -123,6 +132,7 @@ RULES: tuple[Rule, ...] = (
         ref="pulse",
         data="pulse",
         level=1,
+        roles=("pulse",),
         holds=("edges",),
         plan=True,
     ),
@@ -135,6 +145,7 @@ RULES: tuple[Rule, ...] = (
         ref="pulse",
         data="pulse",
         level=0,
+        roles=("pulse",),
         holds=("edges",),
         plan=True,
     ),

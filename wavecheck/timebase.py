@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -52,7 +53,7 @@ class Timebase:
             )
         return cls(Fraction(magnitude) * Fraction(10) ** _TIMESCALE_UNITS[unit])
 
-    @property
+    @cached_property
     def tick_ns(self) -> Fraction:
         """One tick in exact nanoseconds."""
         return self.tick_s * 10**9

@@ -9,29 +9,18 @@ fill every option not given on the command line.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from stepgen.cli.tune import GAIN_OPTIONS
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.config import TIMING_PARAMS, LinuxCNCConfig, read_config
-from wavecheck.linuxcnc.pid import PidConfig, read_pid_config
+
+if TYPE_CHECKING:  # the readers are imported only when files are given
+    from wavecheck.linuxcnc.config import LinuxCNCConfig
+    from wavecheck.linuxcnc.pid import PidConfig
 
 __all__ = ["add_simulate_arguments", "apply_to_simulate_args"]
 
-#: simulate option dest → how a LinuxCNCConfig fills it.
-_SIMULATE_FIELDS = (
-    "base_period",
-    "servo_period",
-    "type",
-    "user_step_type",
-    "mode",
-    "position_scale",
-    "maxvel",
-    "maxaccel",
-    "thread_order",
-    *TIMING_PARAMS,
-)
 #: simulate's motion options: a command the files set fills one only when none is given.
 _MOTIONS = ("position", "velocity", "command", "move", "motion")
 #: pid pin → its ``--pid`` option's dest (``Pgain`` → ``pgain``).
@@ -59,11 +48,7 @@ def add_simulate_arguments(parser: Any) -> None:
         help="the pid instance (pid.0, pid.x; default: the one whose output drives the channel's "
         "velocity-cmd, else joint n's)",
     )
-    defaults = {
-        a.dest: a.default
-        for a in parser._actions
-        if a.dest in _SIMULATE_FIELDS  # noqa: SLF001
-    }
+    defaults = {a.dest: a.default for a in parser._actions}  # noqa: SLF001
     parser.set_defaults(_linuxcnc_defaults=defaults)
 
 
@@ -79,6 +64,8 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
     args._linuxcnc_ignored = []
     if not getattr(args, "ini", None) and not getattr(args, "hal", None):
         return None
+    from wavecheck.linuxcnc.config import TIMING_PARAMS, read_config
+
     cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
     defaults: dict[str, Any] = getattr(args, "_linuxcnc_defaults", {})
     values: dict[str, Any] = {
@@ -130,6 +117,8 @@ def _apply_pid(args: Any, cfg: LinuxCNCConfig) -> PidConfig | None:
     given on the command line wins) and drop the stepgen parser's "net … velocity-cmd ignored"
     line for the net pid's output drives (the closed loop honours it). Without ``--pid``: a
     note when the files close a loop around the channel."""
+    from wavecheck.linuxcnc.pid import read_pid_config
+
     hal = list(args.hal or [])
     kwargs: dict[str, Any] = {
         "channel": getattr(args, "channel", 0),

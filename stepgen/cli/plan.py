@@ -13,9 +13,13 @@ fix spelled out (README "Numbers and units"). A base period below 1 us is refuse
 below 100 ns warned about, as almost surely a unit slip. ``--latency`` also takes a file (any
 value not written as a number): cyclictest summary or ``-h`` histogram output,
 ``latency-histogram --nox`` output, or latency-test's one-number ``~/.latency`` (ns), each read
-in its own documented unit.
+in its own documented unit. ``--latency-from CAPTURE`` (or a capture given to ``--latency``)
+reads the worst lateness from the step pins (``wavecheck latency``, channels mapped as ``check``
+maps them) and plans from it plus one sample; it refuses when that lateness is not established
+(no lattice, or lateness of a period or more). When the capture cannot tell two readings apart,
+the larger is planned from.
 
-Exit codes: 0 a plan was made, 2 unusable input (one line on stderr).
+Exit codes: 0 a plan was made, 2 unusable input or no established latency (one line on stderr).
 """
 
 from __future__ import annotations
@@ -26,15 +30,15 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_capture_latency, read_latency_file
+from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
 from wavecheck.cli.config import add_limit_arguments
-from wavecheck.errors import UsageError, WavecheckError
+from wavecheck.errors import ConfigError, UsageError, WavecheckError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import BASE_PERIOD, LATENCY, Plausible, is_number, option_ns, shorten
 
-__all__ = ["parse_latency_arg", "parse_time_arg", "register", "run"]
+__all__ = ["parse_latency_arg", "parse_time_arg", "read_capture_latency", "register", "run"]
 
 _FORMATS = ("text", "json", "ini", "hal")
 
@@ -115,6 +119,50 @@ def parse_time_arg(
         UnitError: no unit, not a time, out of range, or implausible.
     """
     return option_ns(text, option, plausible, _warn), f"{option} {text}"
+
+
+def read_capture_latency(path: str | Path) -> tuple[int, str]:
+    """The worst base-thread lateness (ns, rounded up) of a capture's step pins plus one sample
+    period (every edge, lateness 0 included, is seen up to a sample late), and where it came
+    from (:mod:`wavecheck.lattice`; the larger reading when the capture cannot tell two apart).
+
+    Raises:
+        ConfigError: the lateness is not established: the edges are not on a periodic lattice,
+            or they show lateness of a period or more (only a lower bound).
+    """
+    from wavecheck.cli.latency import latency_of
+    from wavecheck.lattice import ESTABLISH_EDGES
+
+    report = latency_of(str(path))
+    worst = report.max_lateness_bound_ns
+    if not report.lattice or worst is None:
+        raise ConfigError(f"{path}: no latency to plan from: {report.reason}")
+    if len(report.lateness_num) < ESTABLISH_EDGES:
+        raise ConfigError(
+            f"{path}: no latency to plan from: only {len(report.lateness_num)} edge times (at "
+            f"least {ESTABLISH_EDGES} are needed to establish a worst lateness); give --latency"
+        )
+    if report.catch_up is not None:
+        raise ConfigError(
+            f"{path}: no latency to plan from: invocations a period or more late (at least "
+            f"{float(report.catch_up.at_least_ns):g} ns, first at "
+            f"{float(report.catch_up.first_ns) * 1e-9:.6g} s): only a lower bound is seen; "
+            "give --latency from latency-test"
+        )
+    ns = -(-worst.numerator // worst.denominator)
+    assert report.max_lateness_ns is not None
+    how = (
+        ""
+        if not report.candidates
+        else (
+            f"; the larger of {len(report.candidates) + 1} readings the capture cannot tell apart"
+        )
+    )
+    return ns, (
+        f"{path}: worst lateness of the base thread on the step pins, "
+        f"{float(report.max_lateness_ns):g} ns + one sample ({float(report.resolution_ns):g} ns), "
+        f"P = {float(report.period_ns or 0):g} ns inferred from the capture{how}"
+    )
 
 
 def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction, str]:

@@ -113,7 +113,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("linuxcnc", ("wavecheck.linuxcnc",)),
     ("capture", ("wavecheck.capture",)),
     ("roles", ("wavecheck.roles",)),
-    ("step times", ("wavecheck.latency", "wavecheck.lattice")),
+    ("step times", ("wavecheck.lattice",)),
     ("engine", ("wavecheck.engine",)),
     ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",
                             "wavecheck.crosscheck", "wavecheck.firmware")),

@@ -25,7 +25,7 @@ LAZY = (
     "wavecheck.firmware.grbl",
     "wavecheck.firmware.marlin",
     "wavecheck.firmware.capture",
-    "wavecheck.latency",
+    "wavecheck.lattice",
     "wavecheck.live",
     "cocotb",
     "wavecheck.report.html",

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from unittest import mock
+
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from stepgen import fast
 from stepgen.fast import run_fast
 from stepgen.model import InvocationRun, StepgenConfig, run_reference
 
@@ -81,9 +84,9 @@ def test_fast_equals_reference_with_small_blocks() -> None:
     )
     cmds = list(np.sin(np.arange(40) / 3) * 6)
     ref = run_reference(cfg, cmds, 40 * 40)
-    assert_same(ref, run_fast(cfg, cmds, 40 * 40, block_periods=7))
+    assert_same(ref, run_fast(cfg, cmds, 40 * 40))
     cfg2 = StepgenConfig(**{**cfg.__dict__, "step_type": 9})
-    assert_same(run_reference(cfg2, cmds, 1600), run_fast(cfg2, cmds, 1600, block_periods=40))
+    assert_same(run_reference(cfg2, cmds, 1600), run_fast(cfg2, cmds, 1600))
 
 
 def test_fast_uses_the_fast_path_in_steady_motion() -> None:
@@ -93,3 +96,47 @@ def test_fast_uses_the_fast_path_in_steady_motion() -> None:
     )
     run = run_fast(cfg, [5.0], 40 * 500)
     assert run.exact_chunks <= 3 < run.fast_chunks
+
+
+@st.composite
+def fast_chunks(draw):  # type: ignore[no-untyped-def]
+    """One fast chunk as pass 1 describes it: addval ramps from a0 toward target by deltalim and
+    stays in [−2^28, 2^28] on one side of 0; the accumulator anywhere in its 64-bit range."""
+    one = 1 << 28
+    sign = draw(st.sampled_from([1, -1]))
+    a0 = sign * draw(st.integers(0, one))
+    target = draw(st.integers(-(2 * one), 2 * one))
+    deltalim = draw(st.integers(0, one) | st.integers(0, 100))
+    m = draw(st.integers(1, 3000))
+    accum = draw(st.integers(-(1 << 60), 1 << 60) | st.integers(-(one * 8), one * 8))
+    sgn, span = (1, target - a0) if target >= a0 else (-1, a0 - target)
+    d_eff = deltalim if deltalim else span
+    adds = [a0 + sgn * min(i * d_eff, span) for i in range(1, m + 1)]
+    assume(all((a >= 0) == (a0 >= 0) and -one <= a <= one for a in adds))
+    return (7, m, a0, sgn, d_eff, span, 1, 1, accum), adds
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(fast_chunks(), min_size=1, max_size=4), st.sampled_from([None, 0.0, 1e9]))
+def test_fast_steps_are_where_counts_change(chunks, bad_root) -> None:  # type: ignore[no-untyped-def]
+    """The closed-form steps of pass 2 are the periods where accum >> 28 changes, period by
+    period. The float root is only a guess, checked exactly: with it wrong everywhere
+    (``bad_root``) the binary search finds the same steps."""
+    cols = np.array([c for c, _ in chunks], dtype=np.int64).T
+    if bad_root is None:
+        at, chunk, count = fast._fast_steps(cols)
+    else:
+        with mock.patch.object(fast, "_float_root", lambda *a: np.full(len(a[0]), bad_root)):
+            at, chunk, count = fast._fast_steps(cols)
+    want_at, want_chunk, want_count = [], [], []
+    for ci, (desc, adds) in enumerate(chunks):
+        accum = desc[8]
+        for i, a in enumerate(adds):
+            if (accum + a) >> 28 != accum >> 28:
+                want_at.append(desc[0] + i)
+                want_chunk.append(ci)
+                want_count.append((accum + a) >> 28)
+            accum += a
+    assert at.tolist() == want_at
+    assert chunk.tolist() == want_chunk
+    assert count.tolist() == want_count

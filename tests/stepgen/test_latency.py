@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stepgen.latency import invocation_times, parse_latency
+from stepgen.latency import invocation_clock, invocation_times, parse_latency
 from stepgen.latencyfiles import read_histogram, read_latency_file
 from stepgen.model import StepgenConfig
 from stepgen.motion import Motion, parse_moves
@@ -234,3 +234,22 @@ def test_worst_step_period_applies_to_phase_types() -> None:
     held = np.diff(changes)[0::2]  # late start, on-time end: n·P − J
     assert np.all(held % P == P - 11_000)
     assert held.min() == 2 * P - 11_000  # 30 kHz at P = 16 µs: a state every ~2 periods
+
+
+@pytest.mark.parametrize(
+    "latency",
+    ["none", "uniform:10us", "uniform:15500ns", "normal:2us,20us", "spike:300us@0.2s",
+     "worst:11us:step_high", "worst:15800ns:dir_hold"],
+)  # fmt: skip
+@pytest.mark.parametrize("catchup", [None, 100, 5000])
+def test_the_clock_gives_every_invocation_time(latency: str, catchup: int | None) -> None:
+    """The trace's clock (offsets only while no catch-up can act, else every t_k) gives the
+    times of :func:`invocation_times`, the plain definition, at every invocation."""
+    run = _trace("none").run
+    model = parse_latency(latency)
+    want = invocation_times(model, run, seed=3, catchup_ns=catchup)
+    clock = invocation_clock(model, run, seed=3, catchup_ns=catchup)
+    k = np.arange(run.n_periods)
+    got = clock.at(k)
+    np.testing.assert_array_equal(got, k * P if want is None else want)
+    assert clock.times is None or model.j_ns > P - (catchup or 1000)  # the short way when it can

@@ -38,6 +38,24 @@ def capture(
     )
 
 
+def renamed(cap: Capture, names: list[str]) -> Capture:
+    """``cap`` with its channels called ``names`` (in channel order)."""
+    chans = [
+        Channel(name=n, index=c.index, initial=c.initial, edges=c.edges)
+        for n, c in zip(names, cap.channels, strict=True)
+    ]
+    return Capture(
+        cap.path,
+        cap.format,
+        cap.timebase,
+        cap.resolution_ticks,
+        cap.samplerate_hz,
+        cap.start,
+        cap.end,
+        chans,
+    )
+
+
 def drive(
     active_edge: str = "rising",
     max_rate_hz: Fraction | int | None = None,
@@ -68,6 +86,15 @@ def g202() -> Drive:
         dir_setup=1000,
         dir_hold=20000,
     )
+
+
+def move(t0: int, n: int, period: int, ramp: int = 6) -> list[int]:
+    """Pulse starts of a move of ``n`` steps after ``t0``, from rest to rest: the rate grows as the
+    square root of the steps taken (as under constant acceleration) over ``ramp`` steps up to one
+    step per ``period`` ticks, and falls likewise before the end."""
+    k = np.arange(n)
+    steps = np.minimum(np.minimum(k + 1, n - k), ramp)
+    return (t0 + np.cumsum(period * np.sqrt(ramp / steps))).astype(np.int64).tolist()
 
 
 def pulses(starts: list[int], width: int) -> list[int]:

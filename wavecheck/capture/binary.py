@@ -224,7 +224,7 @@ def read_binary(
 
 class SampleBlocks:
     """Raw samples arriving piece by piece (a live analyzer's pipe), scanned into
-    :class:`~wavecheck.capture.blocks.EdgeBlock` s: the streamed engine's source for
+    :class:`~wavecheck.capture.blocks.EdgeBlock` s: the engine's source for
     ``wavecheck watch``. Tick n is sample n; the time base is the sample rate, exactly.
 
     :meth:`scan` takes any number of bytes (a sample split across two pieces is joined) and gives

@@ -1,11 +1,14 @@
-"""Edge blocks: what a streaming reader hands the streamed engine, a time slice at a time.
+"""Edge blocks: what every capture source hands the engine, a time slice at a time.
 
 A :class:`BlockSource` gives a capture's *skeleton* first (channel names and indices, time base,
 resolution: a :class:`~wavecheck.capture.edges.Capture` whose channels hold no edges), then
 :class:`EdgeBlock` s in time order, then the finished skeleton (start, end, notes, each channel's
-edge count). Readers: :func:`wavecheck.capture.sr.iter_sr_blocks` (``.sr``),
-:func:`wavecheck.capture.vcd.reader.iter_vcd_blocks` (VCD); :func:`capture_blocks` cuts a capture
-already in memory (the tests' way to get blocks of any size, down to one edge).
+edge count). Sources: :class:`wavecheck.capture.sr.SrBlocks` (``.sr``),
+:class:`wavecheck.capture.vcd.reader.VcdBlocks` (VCD, bits of vectors included),
+:class:`wavecheck.capture.binary.SampleBlocks` (raw samples, the live device); any capture in
+memory is a :class:`MemorySource` (one block, or cut into blocks of any size down to one edge:
+the tests' way); :func:`wavecheck.capture.open.open_source` picks one for a file. :func:`assemble`
+turns blocks back into a capture (the first part read to tell roles from the waveforms).
 """
 
 from __future__ import annotations
@@ -131,10 +134,13 @@ def _one_block(capture: Capture) -> EdgeBlock:
     return block
 
 
-def assemble(skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = None) -> Capture:
+def assemble(
+    skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = None, before: int = NEVER
+) -> Capture:
     """The capture that ``blocks`` of a source with ``skeleton`` make (its channels' edges, levels
     and unknown stretches); ``end``: its last tick (default the skeleton's, or the last edge seen
-    when that is later: a capture read only in part)."""
+    when that is later: a capture read only in part); ``before``: only what happened before that
+    tick (a first part that does not depend on how the blocks were cut)."""
     parts: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
     xz: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
     back: dict[int, list[EdgeArray]] = {c.index: [] for c in skeleton.channels}
@@ -157,7 +163,8 @@ def assemble(skeleton: Capture, blocks: Iterable[EdgeBlock], end: int | None = N
     empty = np.zeros(0, dtype=np.int64)
 
     def joined(arrays: list[EdgeArray]) -> EdgeArray:
-        return np.concatenate(arrays).astype(np.int64, copy=False) if arrays else empty.copy()
+        out = np.concatenate(arrays).astype(np.int64, copy=False) if arrays else empty.copy()
+        return out[: int(np.searchsorted(out, before, side="left"))] if before < NEVER else out
 
     chans = []
     for c in skeleton.channels:

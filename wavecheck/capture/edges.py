@@ -53,7 +53,7 @@ class Channel:
     never_known: bool = False
     counted: int | None = None
     """The number of edges when :attr:`edges` is not kept (a streamed capture: the edges went
-    by block by block; :mod:`wavecheck.stream`), else None."""
+    by block by block: :mod:`wavecheck.capture.blocks`), else None."""
 
     @property
     def edge_count(self) -> int:

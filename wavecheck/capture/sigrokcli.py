@@ -16,6 +16,7 @@ import tempfile
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
+from typing import BinaryIO
 
 from wavecheck.capture.edges import Capture
 from wavecheck.errors import CaptureError, UnitError
@@ -68,10 +69,12 @@ def run_sigrok(
     path: str | os.PathLike[str],
     timeout: float = _TIMEOUT_S,
     harmless: tuple[str, ...] = (),
+    stdout: BinaryIO | None = None,
 ) -> subprocess.CompletedProcess[str]:
     """Run ``sigrok-cli *args``; any failure (status, stderr pattern) is a CaptureError on ``path``.
 
-    Stderr lines containing one of ``harmless`` are not failures.
+    Stderr lines containing one of ``harmless`` are not failures. With ``stdout`` (a file open
+    for writing), the output goes there instead of into the result (large outputs).
     """
     exe = find_sigrok_cli()
     if exe is None:
@@ -83,7 +86,8 @@ def run_sigrok(
     try:
         proc = subprocess.run(
             [exe, *args],
-            capture_output=True,
+            stdout=subprocess.PIPE if stdout is None else stdout,
+            stderr=subprocess.PIPE,
             text=True,
             errors="replace",
             timeout=timeout,

@@ -14,8 +14,9 @@ Speed (measured with ``bench/run.py``; profile notes in ``bench/README.md``): in
 deflated chunks is most of the work, so members are inflated straight from the file with
 zlib-ng when it is installed (2–3× faster than the system zlib, CRC-32 included), bypassing
 ``ZipExtFile``'s buffering; the changed samples are found by comparing 8-byte words with the
-same bytes one sample earlier, and looking inside the differing words only (``_changed_bytes``:
-2.4× faster on grbl_cnc_1.sr than XOR + ``flatnonzero`` over every byte).
+same bytes one sample earlier, and looking inside the differing words only (``_changed_words``,
+each such word's XOR once) and the changed bits of all channels sorted out together
+(``_EdgeFinder._sparse``; bench/README.md).
 """
 
 from __future__ import annotations
@@ -74,7 +75,6 @@ _READ_COMPRESSED = 1 << 20  # compressed bytes read from the file at a time
 _READ_ERRORS: tuple[type[BaseException], ...] = (
     zipfile.BadZipFile, zlib.error, _zlib.error, EOFError, OSError
 )  # fmt: skip
-_BYTE_OFFSETS = np.arange(8, dtype=np.int64)
 _DIGITS = re.compile(r"[0-9]+")
 # zipfile refuses some corrupt or exotic headers with these rather than BadZipFile: encryption
 # (RuntimeError), flag bits 5/6, "version needed", unknown methods (NotImplementedError), a
@@ -398,7 +398,7 @@ class _EdgeFinder:
             for col, slots in self.columns.items():
                 for bit, slot in slots:
                     self.initial[slot] = (first[col] >> bit) & 1
-        else:
+        elif first != self.last:
             for col, slots in self.columns.items():
                 d0 = first[col] ^ self.last[col]
                 for bit, slot in slots:
@@ -411,32 +411,38 @@ class _EdgeFinder:
         if n == 1:
             return
         self._ne = ne = _grow(self._ne, (len(block) - us) // 8)
-        changed = _changed_bytes(block[: n * us], us, ne, DENSE_WORDS)
+        changed = _changed_words(block[: n * us], us, ne, DENSE_WORDS)
         if changed is None:  # dense: most samples change
             self._dense(block[: n * us], base)
-            return
-        at, xor = changed
-        if not len(at):
-            return
-        for col, slots in self.columns.items():
-            if us == 1:
-                dv, pos = xor, at + (base + 1)
-            else:
-                sel = at % us == col
-                if not sel.any():
-                    continue
-                dv, pos = xor[sel], at[sel] // us + (base + 1)
-            if len(slots) == 1 and not (dv & np.uint8(~(1 << slots[0][0]) & 0xFF)).any():
-                slot = slots[0][1]  # only this bit changes in the column
-                self._found(slot, pos if self.wanted[slot] else len(pos))
-                continue
-            for bit, slot in slots:
-                sel = (dv & np.uint8(1 << bit)) != 0
-                if self.wanted[slot]:
-                    if sel.any():
-                        self._found(slot, pos[sel])
-                else:
-                    self._found(slot, int(np.count_nonzero(sel)))
+        elif len(changed[0]):
+            self._sparse(*changed, base)
+
+    def _sparse(
+        self, word_at: npt.NDArray[np.int64], xor: npt.NDArray[np.uint64], base: int
+    ) -> None:
+        """:meth:`add` for the differing words of a block (:func:`_changed_words`): their
+        changed bytes (byte G of the block after its first sample is sample G // unitsize + 1
+        of it), then a bit matrix (bit of the sample × changed byte) whose set bits, in order,
+        are the changes grouped by bit with the samples ascending: a few numpy calls a block,
+        whatever the number of channels."""
+        xb = xor.view(np.uint8)  # each word's bytes in memory order
+        nz = np.flatnonzero(xb != 0)  # on bools: numpy's nonzero is slow on uint8
+        at, xb = word_at[nz >> 3] + (nz & 7), xb[nz]
+        us, n = self.unitsize, len(at)
+        bits = np.unpackbits(xb, bitorder="little").reshape(n, 8)
+        if us > 1:  # byte c of a sample holds bits 8c … 8c + 7
+            spread = np.zeros((n, us, 8), dtype=np.uint8)
+            spread[np.arange(n), at % us] = bits
+            bits, at = spread.reshape(n, 8 * us), at // us
+        bits = np.ascontiguousarray(bits.T)
+        hit = np.flatnonzero(bits.reshape(-1).view(bool))
+        ends = np.searchsorted(hit, np.arange(0, (8 * us + 1) * n, n)).tolist()
+        pos = at[hit % n]
+        pos += base + 1
+        for slot, bit in enumerate(self.bits):
+            lo, hi = ends[bit], ends[bit + 1]
+            if hi > lo:
+                self._found(slot, pos[lo:hi] if self.wanted[slot] else hi - lo)
 
     def _dense(self, block: npt.NDArray[np.uint8], base: int) -> None:
         """:meth:`add` where most samples change: the XOR of every byte with the one a sample
@@ -471,7 +477,7 @@ class _EdgeFinder:
 EdgeFinder = _EdgeFinder  # public: capture/binary.py scans raw samples with it
 
 
-#: The share of differing 8-byte words above which :func:`_changed_bytes` leaves the block to a
+#: The share of differing 8-byte words above which :func:`_changed_words` leaves the block to a
 #: plain XOR of every byte (positions of 8 bytes per differing word cost more than that).
 DENSE_WORDS = 0.25
 
@@ -481,40 +487,41 @@ def _grow(buf: npt.NDArray[np.bool_], size: int) -> npt.NDArray[np.bool_]:
     return buf if len(buf) >= size else np.empty(size, dtype=bool)
 
 
-def _changed_bytes(
+def _changed_words(
     block: npt.NDArray[np.uint8],
     step: int,
     scratch: npt.NDArray[np.bool_] | None = None,
     dense: float | None = None,
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.uint8]] | None:
-    """Where ``block[step:]`` differs from ``block[:-step]`` (the sample before): byte indexes
-    into ``block[step:]`` and the XOR there (non-zero), ascending.
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.uint64]] | None:
+    """Where ``block[step:]`` differs from ``block[:-step]`` (the sample before), by 8-byte
+    words: the index into ``block[step:]`` of each differing word's first byte (ascending), and
+    the XOR of the word, whose bytes in memory are the XOR of the bytes there (0 where equal).
 
     Changes are sparse (a few per thousand samples), so 8-byte words of the block are compared
     with the same bytes one sample earlier (an unaligned ``uint64`` view, no XOR written over
-    every byte), and only the bytes of differing words are looked at: ~3× faster than XOR +
-    ``flatnonzero`` over the bytes. ``scratch`` (≥ (len − step) // 8 bools) is reused if given.
-    None when more than the share ``dense`` (if given) of the words differ: then the caller XORs
-    every byte instead.
+    every byte); the last ``size % 8`` bytes make one more word, padded with 0. ``scratch``
+    (≥ (len − step) // 8 bools) is reused if given. None when more than the share ``dense``
+    (if given) of the words differ: then the caller XORs every byte instead.
     """
     size = len(block) - step
     if size <= 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint8)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint64)
     cur, prev = block[step:], block[:size]
     words = size // 8
     if scratch is None or len(scratch) < words:
         scratch = np.empty(words, dtype=bool)
     ne = scratch[:words]
-    np.not_equal(cur[: 8 * words].view(np.uint64), prev[: 8 * words].view(np.uint64), out=ne)
+    cur64, prev64 = cur[: 8 * words].view(np.uint64), prev[: 8 * words].view(np.uint64)
+    np.not_equal(cur64, prev64, out=ne)
     w = np.flatnonzero(ne)
     if dense is not None and len(w) > dense * words:
         return None
-    at = (w[:, None] * 8 + _BYTE_OFFSETS).ravel()
-    if 8 * words < size:  # the last few bytes, not a whole word
-        at = np.concatenate([at, np.arange(8 * words, size, dtype=np.int64)])
-    xor = cur[at] ^ prev[at]
-    keep = xor != 0
-    return at[keep], xor[keep]
+    at, xor = w << 3, np.bitwise_xor(cur64[w], prev64[w])
+    if 8 * words < size and cur[8 * words :].tobytes() != prev[8 * words :].tobytes():
+        last = np.bitwise_xor(cur[8 * words :], prev[8 * words :]).tobytes()
+        at = np.append(at, 8 * words)
+        xor = np.append(xor, np.frombuffer(last.ljust(8, b"\0"), dtype=np.uint64))
+    return at, xor
 
 
 def _member_blocks(

@@ -13,6 +13,7 @@ import argparse
 from dataclasses import dataclass
 from typing import Any
 
+from wavecheck.capture.blocks import WHOLE
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.model import Drive
 from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert, split_per_axis
@@ -22,6 +23,7 @@ from wavecheck.errors import UsageError
 __all__ = [
     "AxisRun",
     "add_axis_arguments",
+    "add_engine_arguments",
     "axes_of",
     "axis_runs",
     "check_options",
@@ -99,10 +101,11 @@ def add_axis_arguments(p: Any, *, drive: bool = True) -> None:
     p.add_argument(
         "--pulse-level",
         choices=("high", "low"),
-        default="high",
-        help="level of the generator's step pulses at its output (default high, as LinuxCNC, "
-        "grbl, Marlin, Klipper and Smoothieware make them; --invert step says the drive sees "
-        "the other level)",
+        default=None,
+        help="level of the generator's step pulses at its output (default: as the waveform "
+        "shows it, where every pulse is shorter than every gap; else high, as LinuxCNC, grbl, "
+        "Marlin, Klipper and Smoothieware make them; --invert step says the drive sees the "
+        "other level)",
     )
     p.add_argument(
         "--active-edge",
@@ -128,8 +131,10 @@ def user_table(args: argparse.Namespace) -> tuple[int, ...] | None:
         ) from None
 
 
-def pulse_level(args: argparse.Namespace) -> int:
-    """``--pulse-level``: 1 high, 0 low."""
+def pulse_level(args: argparse.Namespace) -> int | None:
+    """``--pulse-level``: 1 high, 0 low, None not given."""
+    if args.pulse_level is None:
+        return None
     return 1 if args.pulse_level == "high" else 0
 
 
@@ -149,44 +154,20 @@ def _forward(text: str) -> int:
 def roles_from_waveforms(args: argparse.Namespace, capture: Capture) -> bool:
     """Whether the roles must be told from the waveforms: no ``--map`` and no channel named
     after a role (``step``, ``up``, ``phase-A``, as the end of a hierarchical name)."""
-    named = ("step", "up", "phase-a")
-    return not args.map and not any(
-        c.name.rsplit(".", 1)[-1].strip().lower() in named for c in capture.channels
-    )
+    from wavecheck.engine.run import names_give_roles
+
+    return not args.map and not names_give_roles(capture)
 
 
 def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
-    """The axes of the run and a note on how they were found.
+    """The axes of the run and a note on how they were found: ``--map`` as given; without it,
+    as the engine finds them on ``capture`` (:func:`wavecheck.engine.run.axes_for`: channels
+    named after their roles, else the waveforms, which ``capture`` then holds)."""
+    from wavecheck.engine.run import axes_for
 
-    ``--map`` as given; without it, channels named after their roles (``step``, ``dir``,
-    ``stepgen.0.phase-A``) as before, else the roles inferred from the waveforms
-    (:func:`wavecheck.roles.propose`) when that is unambiguous; when it is not, a usage error
-    lists the candidates and the ``--map`` line to copy.
-    """
     if args.map:
         return parse_axes(args.map), []
-    if not roles_from_waveforms(args, capture):
-        return [AxisMap(None, {})], []  # named after their roles: engine.auto_map
-    from wavecheck.roles import propose
-
-    proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = (
-            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
-            or "no STEP, UP/DOWN or phase channel found"
-        )
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
-        raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
-        )
-    single = len(proposal.axes) == 1
-    axes = [
-        AxisMap(None if single else a.name, dict(a.mapping), a.step_type or None, a.inverted)
-        for a in proposal.axes
-    ]
-    found = f"channels mapped from their waveforms: {proposal.map_args()} {proposal.type_args()}"
-    return axes, [found.rstrip()]
+    return axes_for(CheckOptions(), capture)
 
 
 def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun], list[str]]:
@@ -224,6 +205,24 @@ def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun]
     return runs, found
 
 
+def add_engine_arguments(p: Any) -> None:
+    """Add ``--block-edges`` and ``--no-stream`` (how much the engine checks at a time)."""
+    p.add_argument(
+        "--block-edges",
+        type=int,
+        default=None,
+        metavar="N",
+        help="check about N edges at a time (memory follows N, not the capture's length; "
+        f"default {DEFAULT_BLOCK_EDGES}); the results do not depend on it",
+    )
+    p.add_argument(
+        "--no-stream",
+        action="store_true",
+        help="check the whole capture as one window (the same engine with one block: memory "
+        "follows the capture; the results are the same)",
+    )
+
+
 def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> CheckOptions:
     """The options object (:class:`~wavecheck.engine.options.CheckOptions`) of the mapping,
     capture, rule and configuration options of ``args``; built once and kept on ``args``.
@@ -254,7 +253,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         axis: _forward(text)
         for axis, text in split_per_axis(args.dir_forward, "--dir-forward").items()
     }
-    block = getattr(args, "block_edges", None)
+    block = WHOLE if getattr(args, "no_stream", False) else getattr(args, "block_edges", None)
     options = CheckOptions(
         drive=drives,
         axes=tuple(parse_axes(args.map)) if args.map else (),

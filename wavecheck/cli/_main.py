@@ -54,6 +54,8 @@ def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[
             return int(args.func(args))
     except WavecheckError as err:
         print(f"{prog}: error: {err}", file=sys.stderr)
+        for line in err.details:
+            print(f"  {line}", file=sys.stderr)
         return err.exit_code
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)

@@ -47,6 +47,7 @@ from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
     "add_report_arguments",
+    "add_stepgen_arguments",
     "expand_captures",
     "latency_ns",
     "render_json_report",
@@ -93,6 +94,13 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="no progress bar (it is off anyway when stderr is not a terminal)",
     )
+    add_stepgen_arguments(p)
+
+
+def add_stepgen_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the LinuxCNC stepgen configuration options (``--ini``, ``--hal``, ``--channel``,
+    ``--base-period``, ``--steplen`` …, ``--latency``) for the ``config``/``latency_safe``
+    rates."""
     cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
     add_file_arguments(cfg)
     for name, what in _CONFIG_OPTIONS.items():

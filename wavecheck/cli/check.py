@@ -16,8 +16,12 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from wavecheck.capture.blocks import WHOLE
-from wavecheck.cli._axis_args import add_axis_arguments, check_options, required
+from wavecheck.cli._axis_args import (
+    add_axis_arguments,
+    add_engine_arguments,
+    check_options,
+    required,
+)
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
@@ -105,20 +109,7 @@ def register(sub: Any) -> None:
     add_report_arguments(p)
     add_pulseview_argument(p)
     add_steps_arguments(p)
-    p.add_argument(
-        "--block-edges",
-        type=int,
-        default=None,
-        metavar="N",
-        help="check about N edges at a time (memory follows N, not the capture's length; "
-        "default 262144)",
-    )
-    p.add_argument(
-        "--no-stream",
-        action="store_true",
-        help="check the whole capture as one window (the same engine with one block: memory "
-        "follows the capture; the results are the same)",
-    )
+    add_engine_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -137,8 +128,6 @@ def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = No
     steps to ``steps_csv`` as they are decoded)."""
     if args.max_violations is not None and args.max_violations < 0:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    if args.no_stream:
-        args.block_edges = WHOLE
     options = check_options(args)
     source = source_from_args(args, path)
     if steps_csv is None:

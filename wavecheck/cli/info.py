@@ -144,6 +144,11 @@ def run(args: argparse.Namespace) -> int:
         print(info_text(cap, res_ns))
         if proposal is not None:
             print()
-            print("proposed roles (from the waveforms; names only help):")
+            print(
+                "roles (channels named after their roles, as check maps them without --map; "
+                "what the waveforms say of them):"
+                if proposal.named
+                else "proposed roles (from the waveforms; names only help):"
+            )
             print(proposal.text().rstrip("\n"))
     return 0

@@ -1,8 +1,11 @@
 """``wavecheck latency CAPTURE [--map ROLE=CH] [--base-period P | --ini F --hal F]``: base-thread
-latency measured on the step pins (see :mod:`wavecheck.latency`).
+latency measured on the step pins (see :mod:`wavecheck.lattice`).
 
-Exit codes: 0 the edges lie on a periodic lattice (lateness reported), 3 they do not
-(hardware-timed stepping, or too few edges), 2 unusable input.
+The channels are mapped as ``check`` maps them (``--map [AXIS.]ROLE=CH``, channels named after a
+role, else the roles inferred from the waveforms); every mapped channel of every axis is read,
+since one base thread drives them all. Exit codes: 0 the edges lie on a periodic lattice
+(lateness reported), 3 they do not (not a base thread's timing, or too few edges), 2 unusable
+input.
 """
 
 from __future__ import annotations
@@ -17,19 +20,18 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
+from wavecheck.cli._axis_args import add_axis_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.engine.interface import parse_map
-from wavecheck.engine.plan import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
-from wavecheck.steptypes import step_type
+from wavecheck.progress import activate, current
 from wavecheck.units import format_ns, json_number, time_ns
 from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
 
 if TYPE_CHECKING:  # imported where used: only `wavecheck latency` needs it
-    from wavecheck.latency import LatencyReport
+    from wavecheck.lattice import LatencyReport
 
-__all__ = ["capture_latency", "register", "render_json", "render_text", "run"]
+__all__ = ["capture_latency", "latency_of", "register", "render_json", "render_text", "run"]
 
 
 def register(sub: Any) -> None:
@@ -41,22 +43,14 @@ def register(sub: Any) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("capture", metavar="CAPTURE", help="the capture (.sr, .vcd, ...)")
-    p.add_argument(
-        "--map",
-        action="append",
-        default=[],
-        metavar="ROLE=CH",
-        help="channels the step generator drives (step=STEP,dir=3; repeatable); channels named "
-        "after a role are taken by default",
-    )
+    add_axis_arguments(p, drive=False)
     p.add_argument(
         "--also",
         action="append",
         default=[],
         metavar="CH",
-        help="another channel the same thread drives (another axis' STEP; repeatable)",
+        help="another channel the same thread drives (an output that is no axis' role; repeatable)",
     )
-    p.add_argument("--type", type=int, default=0, help="LinuxCNC step type (roles to look for)")
     p.add_argument("--base-period", metavar="P", help="use this base period (e.g. 25us)")
     p.add_argument("--ini", metavar="FILE", help="LinuxCNC INI: [EMCMOT]BASE_PERIOD")
     p.add_argument("--hal", action="append", default=[], metavar="FILE", help="LinuxCNC HAL file")
@@ -70,21 +64,37 @@ def register(sub: Any) -> None:
         help="histogram + lateness over time (PNG; .jpg, .svg or .pdf by the file's name)",
     )
     p.add_argument("--html", type=output_file, metavar="FILE.html", help="a self-contained page")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
-def _channels(capture: Capture, args: argparse.Namespace) -> list[str]:
-    mapping = auto_map(capture, step_type(args.type))
-    mapping.pop("enable", None)
-    mapping.update(parse_map(args.map))
-    mapping.pop("enable", None)
-    names = list(mapping.values()) + list(args.also)
+def channel_roles(capture: Capture, args: argparse.Namespace) -> tuple[list[str], dict[str, str]]:
+    """Every channel the axes of ``args`` map (as ``check`` maps them: the engine's planning,
+    :func:`wavecheck.engine.run.axes_for` and :func:`wavecheck.engine.plan.plan_axes`; ENABLE
+    left out), and role → channel of the first axis (the roles the worst-case patterns are told
+    by).
+
+    Raises:
+        UsageError: no step channel found, or the axis options do not fit the capture.
+    """
+    from wavecheck.engine.plan import plan_axes
+    from wavecheck.engine.run import axes_for
+
+    options = check_options(args, with_drive=False)
+    axes, _ = axes_for(options, capture)
+    names: list[str] = []
+    first: dict[str, str] = {}
+    for plan in plan_axes(capture, axes, options, capture):
+        roles = {r: s.channel for r, s in plan.interface.signals.items() if r != "enable"}
+        names += list(roles.values())
+        first = first or roles
+    names += list(args.also)
     if not names:
         raise UsageError(
             f"{capture.path}: no step channel found (map them: --map step=CH,dir=CH; channels: "
             f"{', '.join(repr(c.name) for c in capture.channels)})"
         )
-    return names
+    return list(dict.fromkeys(names)), first
 
 
 def _period_ns(args: argparse.Namespace) -> tuple[Fraction | None, str]:
@@ -107,11 +117,22 @@ def _period_ns(args: argparse.Namespace) -> tuple[Fraction | None, str]:
 
 def capture_latency(args: argparse.Namespace, path: str) -> LatencyReport:
     """Open ``path`` and analyse it with the options in ``args``."""
-    from wavecheck.latency import analyse
+    from wavecheck.lattice import analyse
 
-    capture = capture_from_args(args, path)
+    with activate(f"reading {path}", quiet=getattr(args, "quiet", False), unit="bytes"):
+        capture = capture_from_args(args, path)
     period, _ = _period_ns(args)
-    return analyse(capture, _channels(capture, args), period)
+    names, roles = channel_roles(capture, args)
+    with activate("finding the lattice", quiet=getattr(args, "quiet", False), unit="edges"):
+        return analyse(capture, names, period, roles, progress=current())
+
+
+def latency_of(path: str) -> LatencyReport:
+    """What ``wavecheck latency PATH`` finds with no options: the channels mapped as ``check``
+    maps them, P inferred (``stepgen plan --latency-from``)."""
+    parser = argparse.ArgumentParser(prog="wavecheck")
+    register(parser.add_subparsers())
+    return capture_latency(parser.parse_args(["latency", "-q", "--", str(path)]), str(path))
 
 
 def _ns(v: Fraction | None) -> str:
@@ -126,6 +147,10 @@ def render_text(r: LatencyReport, source: str = "") -> str:
         "  edges per channel: " + ", ".join(f"{c} {n}" for c, n in r.edges_per_channel.items())
     )
     lines.append(f"  {r.reason}")
+    if r.lattice and not r.established:
+        lines.append(
+            "  the worst lateness is not established (see the notes): plan from no figure here"
+        )
     if r.fit is None or not len(r.lateness_num):
         lines.append("  no lateness figures: base-thread latency cannot be read from this capture")
         return "\n".join(lines) + "\n"
@@ -137,7 +162,8 @@ def render_text(r: LatencyReport, source: str = "") -> str:
     )
     lines.append(
         f"  lattice phase {_ns(r.phase_ns)} (the earliest edge is on time), "
-        f"{fit.span_periods} periods spanned; chance of a fit this good without a thread 10^{fit.log10_chance:.0f}"
+        f"{fit.span_periods} periods spanned; chance of a fit this good without a thread "
+        f"10^{fit.log10_chance:.0f}"
     )
     lines.append(
         f"  resolution: every figure below is exact to ± {_ns(res) if res else '0 (exact VCD)'}"
@@ -145,7 +171,17 @@ def render_text(r: LatencyReport, source: str = "") -> str:
     lines.append("  lateness (edge time − (phase + k·P)):")
     for q in (50, 90, 99, 99.9):
         lines.append(f"    p{q:<5g} {_ns(r.percentile_ns(q))}")
-    lines.append(f"    max    {_ns(r.max_lateness_ns)}")
+    bound = r.max_lateness_bound_ns
+    lines.append(
+        f"    max    {_ns(r.max_lateness_ns)}"
+        + (f" (at most {_ns(bound)}: plus one sample)" if res else "")
+        + ("" if r.catch_up is None else " — at least: see the catch-up note")
+    )
+    for c in r.candidates:
+        lines.append(
+            f"    or     {_ns(c.max_lateness_ns)} with P = {_ns(c.period_ns)} ({c.how}): the "
+            "capture cannot tell; plan from the larger"
+        )
     worst = r.worst()
     if worst:
         lines.append(f"  worst lateness at {float(worst[0]) * 1e-9:.9g} s on {', '.join(worst[1])}")
@@ -182,7 +218,11 @@ def render_text(r: LatencyReport, source: str = "") -> str:
             )
     for note in r.notes:
         lines.append(f"  note: {note}")
-    lines.append("  lateness of P or more (a spike longer than the period) is seen modulo P")
+    lines.append(
+        "  limits: lateness up to just under P is read (a thread later than that still makes "
+        "pulses only G long); a period or more late shows only where two write times fall into "
+        "one period (then as a lower bound), else modulo P"
+    )
     return "\n".join(lines) + "\n"
 
 
@@ -193,6 +233,7 @@ def render_json(r: LatencyReport, source: str = "") -> str:
         "channels": dict(r.edges_per_channel),
         "edge_times": r.n_edges,
         "lattice": r.lattice,
+        "established": r.established,
         "reason": r.reason,
         "resolution_ns": json_number(r.resolution_ns),
         "notes": r.notes,
@@ -215,6 +256,23 @@ def render_json(r: LatencyReport, source: str = "") -> str:
                     "min": 0,
                     **{f"p{q:g}": json_number(r.percentile_ns(q)) for q in (50, 90, 99, 99.9)},
                     "max": json_number(r.max_lateness_ns),
+                    "max_bound": json_number(r.max_lateness_bound_ns),
+                },
+                "candidates": [
+                    {
+                        "base_period_ns": json_number(c.period_ns),
+                        "max_lateness_ns": json_number(c.max_lateness_ns),
+                        "how": c.how,
+                    }
+                    for c in r.candidates
+                ],
+                "worst_case_rule": r.rule or None,
+                "catch_up": None
+                if r.catch_up is None
+                else {
+                    "edges": r.catch_up.edges,
+                    "first_s": float(r.catch_up.first_ns) * 1e-9,
+                    "at_least_ns": json_number(r.catch_up.at_least_ns),
                 },
                 "worst": {"time_s": float(worst[0]) * 1e-9, "channels": list(worst[1])}
                 if worst

@@ -19,7 +19,7 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
-from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
 from wavecheck.cli.config import add_firmware_arguments, check_firmware
@@ -67,6 +67,7 @@ def register(sub: Any) -> None:
         "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
     )
     add_steps_arguments(p)
+    add_engine_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._reports import add_stepgen_arguments
 from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
 from wavecheck.cli.config import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
@@ -90,6 +91,12 @@ def register(sub: Any) -> None:
     )
     add_axis_arguments(p)
     add_tuning_arguments(p)
+    add_stepgen_arguments(p)
+    p.add_argument(
+        "--resolution",
+        metavar="TIME",
+        help="time resolution the verdicts assume, with its unit (default: one sample period)",
+    )
     p.add_argument(
         "--learn",
         default="5s",

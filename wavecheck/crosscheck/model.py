@@ -78,10 +78,10 @@ def compare(
         sigrok_input=sigrok_input.description,
         downsample=ds,
         wavecheck_steps=steps.count,
-        sigrok_count=counts[-1] if counts else 0,
+        sigrok_count=int(counts[-1]) if len(counts) else 0,
         rising_steps=rising.count,
         sigrok_position_lines=len(positions),
-        sigrok_last_position=positions[-1][2] if positions else None,
+        sigrok_last_position=int(positions[-1, 2]) if len(positions) else None,
         expected_last_position=None,
         wavecheck_final_position=steps.final_position,
         final_sigrok_polarity=None,
@@ -92,7 +92,7 @@ def compare(
             f"step count: sigrok counter {res.sigrok_count}, wavecheck {steps.count} "
             f"({active_edge} edges of {step_sig.channel!r})"
         )
-    if counts and counts != list(range(1, len(counts) + 1)):
+    if len(counts) and not np.array_equal(counts, np.arange(1, len(counts) + 1)):
         res.disagreements.append("sigrok counter did not count 1, 2, 3, … (a reset or a gap)")
     if dir_sig is None:
         res.explanations.append("no DIR mapped: only step counts are compared (no positions)")
@@ -123,9 +123,7 @@ def compare(
             f"should give {want_lines}"
         )
     else:
-        got_ss = np.array([p[0] for p in positions], dtype=np.int64)
-        got_es = np.array([p[1] for p in positions], dtype=np.int64)
-        got_pos = np.array([p[2] for p in positions], dtype=np.int64)
+        got_ss, got_es, got_pos = positions.T
         bad_edges = np.flatnonzero((got_ss != samples[:-1]) | (got_es != samples[1:]))
         if len(bad_edges):
             i = int(bad_edges[0])

@@ -70,7 +70,12 @@ def crosscheck(
             capture, names, edges, Path(tmp), downsample=downsample, input_format=input_format
         )
         out = run_decoders(
-            sr.path, sr.channels[0], sr.channels[1] if dir_sig else None, active_edge, capture.path
+            sr.path,
+            sr.channels[0],
+            sr.channels[1] if dir_sig else None,
+            active_edge,
+            capture.path,
+            Path(tmp),
         )
     return compare(
         capture.path,

@@ -7,11 +7,16 @@ the mapped 1-bit wires (sigrok's VCD input aborts on vectors, ``../shared/refere
 between any two STEP/DIR edges, so no pulse or DIR/STEP order is lost (§7: "downsampling drops
 pulses"). Other formats are converted again by sigrok-cli. sigrok-cli's exit status is not
 trusted (stderr is checked, see :mod:`wavecheck.capture.sigrokcli`).
+
+Output: a line per step and decoder (~80 bytes a step), written to a file and read back a block
+at a time, with numpy where the block holds only the two decoders' usual lines
+(:func:`parse_annotation_file`; :func:`parse_annotations` is the plain line reader).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -29,6 +34,7 @@ __all__ = [
     "MAX_SAMPLES",
     "DecoderOutput",
     "SigrokInput",
+    "parse_annotation_file",
     "parse_annotations",
     "pick_downsample",
     "prepare_input",
@@ -60,13 +66,21 @@ class SigrokInput:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DecoderOutput:
-    """What the decoders printed: ``counter`` values, ``stepper_motor`` (start sample, end
-    sample, position) lines."""
+    """What the decoders printed: ``counter`` values (int64), ``stepper_motor`` lines as rows
+    (start sample, end sample, position) of an (n, 3) int64 array."""
 
-    counts: list[int]
-    positions: list[tuple[int, int, int]]
+    counts: np.ndarray
+    positions: np.ndarray
+
+    @classmethod
+    def of(cls, counts: Sequence[int], positions: Sequence[tuple[int, int, int]]) -> DecoderOutput:
+        """From lists (as printed)."""
+        return cls(
+            np.array(counts, dtype=np.int64),
+            np.array(positions, dtype=np.int64).reshape(-1, 3),
+        )
 
 
 def _sigrok_name(name: str, path: str) -> str:
@@ -188,9 +202,13 @@ def prepare_input(
 
 
 def run_decoders(
-    sr: str, step: str, dir_: str | None, edge: ActiveEdge, path: str
+    sr: str, step: str, dir_: str | None, edge: ActiveEdge, path: str, tmp: Path
 ) -> DecoderOutput:
     """One sigrok-cli run of ``counter`` (on ``edge``) and, with a DIR, ``stepper_motor``.
+
+    Their annotations (a line per step and decoder: ~80 bytes a step) go to a file in ``tmp``,
+    read back a block at a time (:func:`parse_annotation_file`), so memory does not grow with
+    them.
 
     Raises:
         UsageError: ``edge`` is ``both`` (sigrok's counter counts one edge).
@@ -207,15 +225,20 @@ def run_decoders(
     args += ["-P", f"counter:data={step}:data_edge={counter_edge}"]
     ann.append("counter=edge_count")
     args += ["-A", ",".join(ann), "--protocol-decoder-samplenum"]
-    return parse_annotations(run_sigrok(args, path=path).stdout, path)
+    out = tmp / "annotations.txt"
+    with open(out, "wb") as fh:
+        run_sigrok(args, path=path, stdout=fh)
+    return parse_annotation_file(out, path)
 
 
 def parse_annotations(out: str, path: str) -> DecoderOutput:
     """The ``counter`` values and ``stepper_motor`` positions in sigrok-cli's output
     (``--protocol-decoder-samplenum`` lines ``SS-ES decoder-N: text``); other lines are ignored.
+    The plain reader, line by line; :func:`parse_annotation_file` gives the same faster.
 
     Raises:
-        CaptureError: a ``stepper_motor`` line that is not ``N steps``.
+        CaptureError: a ``stepper_motor`` line that is not ``N steps``, a ``counter`` line that
+            is not a number, a number beyond 64 bits.
     """
     counts: list[int] = []
     positions: list[tuple[int, int, int]] = []
@@ -225,10 +248,124 @@ def parse_annotations(out: str, path: str) -> DecoderOutput:
             continue
         ss, es, pd, text = int(m.group(1)), int(m.group(2)), m.group(3), m.group(4)
         if pd == "counter":
-            counts.append(int(text))
+            try:
+                numbers = [int(text)]
+            except ValueError:
+                raise CaptureError(
+                    path, "sigrok-cli", f"unexpected counter line {line!r}"
+                ) from None
+            counts.append(numbers[0])
         elif pd == "stepper_motor":
             pm = re.fullmatch(r"(-?\d+) steps", text.strip())
             if pm is None:
                 raise CaptureError(path, "sigrok-cli", f"unexpected stepper_motor line {line!r}")
-            positions.append((ss, es, int(pm.group(1))))
-    return DecoderOutput(counts, positions)
+            numbers = [ss, es, int(pm.group(1))]
+            positions.append((ss, es, numbers[2]))
+        else:
+            continue
+        if any(not -(2**63) <= x < 2**63 for x in numbers):
+            raise CaptureError(path, "sigrok-cli", f"number out of range in line {line!r}")
+    return DecoderOutput.of(counts, positions)
+
+
+#: Bytes of sigrok-cli's annotations read at a time.
+READ_BYTES = 1 << 20
+
+
+def parse_annotation_file(file: Path, path: str, block: int = READ_BYTES) -> DecoderOutput:
+    """:func:`parse_annotations` of a file, a block of whole lines at a time: with numpy
+    (:func:`_parse_plain_lines`) where every line of the block is a ``counter`` or
+    ``stepper_motor`` line in its usual form, else with :func:`parse_annotations`."""
+    counts: list[np.ndarray] = []
+    positions: list[np.ndarray] = []
+
+    def parse(data: bytes) -> None:
+        got = _parse_plain_lines(data)
+        if got is None:
+            got = parse_annotations(data.decode("utf-8", "replace"), path)
+        counts.append(got.counts)
+        positions.append(got.positions)
+
+    with open(file, "rb") as fh:
+        rest = b""
+        while chunk := fh.read(block):
+            data = rest + chunk
+            cut = data.rfind(b"\n") + 1
+            rest = data[cut:]
+            if cut:
+                parse(data[:cut])
+        if rest:
+            parse(rest)
+    return DecoderOutput(
+        np.concatenate(counts) if counts else np.zeros(0, dtype=np.int64),
+        np.concatenate(positions) if positions else np.zeros((0, 3), dtype=np.int64),
+    )
+
+
+_STEPPER = np.frombuffer(b"stepper_motor-", dtype=np.uint8)
+_COUNTER = np.frombuffer(b"counter-", dtype=np.uint8)
+_STEPS = np.frombuffer(b" steps", dtype=np.uint8)
+_POW10 = 10 ** np.arange(18, dtype=np.int64)
+_MAX_DIGITS = 18  # int64 holds every 18-digit number
+
+
+def _parse_plain_lines(data: bytes) -> DecoderOutput | None:
+    """The annotations in ``data`` (whole lines) when every line is ``SS-ES counter-N: V`` or
+    ``SS-ES stepper_motor-N: P steps`` (numbers of at most 18 digits, a sign only before V or
+    P, ``\\r\\n`` or ``\\n``), else None. Each line is cut at the first ``-`` after its start,
+    the first space after that and the first ``:`` after the decoder's name; every piece is
+    checked (digits where numbers are), so what is accepted is read as the line reader does."""
+    a = np.frombuffer(data, dtype=np.uint8)
+    end = np.flatnonzero(a == 10)
+    if not len(end) or end[-1] != len(a) - 1:
+        return None
+    start = np.concatenate(([0], end[:-1] + 1))
+    end = end - ((a[end - 1] == 13) & (end > start))  # a \r before the \n
+    other = np.concatenate(([0], np.cumsum((a - 48) >= 10)))  # non-digits before each byte
+
+    def digits(lo: np.ndarray, hi: np.ndarray) -> bool:
+        n = hi - lo
+        return bool(((n > 0) & (n <= _MAX_DIGITS) & (other[hi] == other[lo])).all())
+
+    def first(char: int, after: np.ndarray) -> np.ndarray | None:
+        at = np.flatnonzero(a == char)
+        i = np.searchsorted(at, after)
+        return at[i] if len(at) and (i < len(at)).all() else None
+
+    dash = first(45, start)
+    space = None if dash is None else first(32, dash)
+    if dash is None or space is None or not digits(start, dash) or not digits(dash + 1, space):
+        return None
+    name = space + 1
+    kind = a[np.minimum(name, len(a) - 1)]
+    stepper, counter = kind == 115, kind == 99  # "s", "c"
+    if not (stepper | counter).all():
+        return None
+    for rows, word in ((stepper, _STEPPER), (counter, _COUNTER)):
+        window = np.minimum(name[rows, None] + np.arange(len(word)), len(a) - 1)
+        if not (a[window] == word).all():
+            return None
+    number = name + np.where(stepper, len(_STEPPER), len(_COUNTER))
+    colon = first(58, number)
+    if colon is None or not digits(number, colon) or not (a[colon + 1] == 32).all():
+        return None
+    value = colon + 2
+    negative = a[np.minimum(value, len(a) - 1)] == 45
+    value = value + negative
+    value_end = end - np.where(stepper, len(_STEPS), 0)
+    window = np.minimum(value_end[stepper, None] + np.arange(len(_STEPS)), len(a) - 1)
+    if not digits(value, value_end) or not (a[window] == _STEPS).all():
+        return None
+    v = _number(a, value, value_end)
+    v[negative] *= -1
+    ss, es = _number(a, start, dash), _number(a, dash + 1, space)
+    return DecoderOutput(v[counter], np.stack([ss[stepper], es[stepper], v[stepper]], axis=1))
+
+
+def _number(a: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The decimal numbers ``a[lo:hi]`` (checked: 1 … 18 digits) as int64."""
+    width = int((hi - lo).max()) if len(lo) else 0
+    k = np.arange(width)
+    at = np.maximum(hi[:, None] - 1 - k, 0)
+    d = np.where(k < (hi - lo)[:, None], a[at].astype(np.int64) - 48, 0)
+    return d @ _POW10[:width]

@@ -30,6 +30,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+import numpy.typing as npt
 
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, EdgeArray
@@ -39,6 +40,7 @@ from wavecheck.engine.decode import (
     decode,
     in_stretches,
     phase_states,
+    touches_stretches,
     unknown_stretches,
 )
 from wavecheck.engine.interface import RoleSignal, StepInterface
@@ -108,12 +110,17 @@ class AxisCheck:
                 plan.resolution_ns,
                 keep=keep_violations,
                 order_by_end=r.listed_by_end,
+                binned=pictures,
             )
             for r in plan.rules
             if r.id in plan.limits or r.check == "sequence"
         ]
         self._judged = {s.rule: s for s in self.results}
         self.steps = StepCounts()
+        self.first_active: int | None = None
+        """The first active edge of STEP seen (step/dir)."""
+        self.unstepped_dir: int | None = None
+        """The last DIR change before the first active edge (or before the end, when none)."""
         self.sequence_errors = 0
         """Phase types: moves to a state that is not a neighbour (counted with or without the
         ``state_sequence`` rule)."""
@@ -207,6 +214,7 @@ class AxisCheck:
         self.sequence_errors += int(np.count_nonzero(steps.sequence_errors >= t0))
         for sink in self.sinks:
             sink.add(ticks, direction)
+        self._first_events(iface)
         for r in plan.rules:
             if r.check == "sequence":
                 self._sequence(iface, steps, t0, self._judged[r.id])
@@ -216,6 +224,20 @@ class AxisCheck:
         if self.windows is not None:
             self._keep_windows(t0)
         self._trim(self._context(iface, steps))
+
+    def _first_events(self, iface: StepInterface) -> None:
+        """Keep :attr:`first_active` and :attr:`unstepped_dir` up to date."""
+        step, dirs = iface.get("step"), iface.get("dir")
+        if step is None or dirs is None or self.first_active is not None:
+            return
+        act = active_edges(step, self.plan.active_edge)
+        if len(act):
+            self.first_active = int(act[0])
+        d = dirs.edges
+        if self.first_active is not None:
+            d = d[d < self.first_active]
+        if len(d):
+            self.unstepped_dir = max(int(d[-1]), self.unstepped_dir or int(d[-1]))
 
     def _keep_windows(self, t0: int) -> None:
         """Update the signal windows around the places the results name
@@ -310,14 +332,40 @@ class AxisCheck:
 
     # -- the end ---------------------------------------------------------------------------------
     def close(self) -> None:
-        """Check the last window and close the unknown stretches (before :meth:`report`)."""
+        """Check the last window and count the unknown stretches no judged interval touched
+        (before :meth:`report`): each is an unknown place of a rule when an interval of that rule
+        may hide in it (:meth:`_hiding`)."""
         self.window(NEVER)
         iface = self._iface()
         for r in self.plan.rules:
             s = self._judged.get(r.id)
             if s is not None and r.check != "sequence":
-                starts, _ = unknown_stretches(iface, r.roles_for(self.st))
-                s.close_stretches(starts)
+                starts, ends = unknown_stretches(iface, r.roles_for(self.st))
+                if len(starts):
+                    s.close_stretches(starts[self._hiding(r, iface, starts, ends)])
+
+    def _hiding(
+        self, r: Rule, iface: StepInterface, starts: EdgeArray, ends: EdgeArray
+    ) -> npt.NDArray[np.bool_]:
+        """Which unknown stretches ``[starts, ends]`` of ``r``'s roles may hide an interval of
+        ``r`` that no measured interval reveals. A setup interval starts at its reference event
+        (a DIR change): a stretch of the data line (STEP) alone hides none, since the DIR
+        changes around it are seen and their intervals reach across it. A hold interval ends at
+        its data event: a stretch of the reference line (STEP) hides one only when a data event
+        (a DIR change) follows it before any reference event (active edge) is seen; the data
+        line's stretches may hide one each. Any other rule: every stretch may."""
+        if r.check not in ("setup", "hold"):
+            return np.ones(len(starts), dtype=np.bool_)
+        ref_roles = r.event_roles(r.ref, self.st)
+        data_roles = r.event_roles(r.data, self.st)
+        hiding_roles = ref_roles if r.check == "setup" else data_roles
+        hs, he = unknown_stretches(iface, hiding_roles)
+        hide = touches_stretches(starts, ends, hs, he)
+        if r.check == "hold" and self.unstepped_dir is not None:
+            rs, re_ = unknown_stretches(iface, ref_roles)
+            early = rs < self.unstepped_dir  # a DIR change waits after it for an active edge
+            hide |= touches_stretches(starts, ends, rs[early], re_[early])
+        return hide
 
     def report(self, capture: Capture) -> Report:
         """The report of this axis (after :meth:`close`; ``capture``: the finished skeleton)."""

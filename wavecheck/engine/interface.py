@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import re
+import shlex
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
+from wavecheck.roles.names import leaf as leaf_name
 
 __all__ = [
     "ROLES",
@@ -40,12 +42,6 @@ ROLES: tuple[str, ...] = (
     "enable",
 )
 _ROLE_BY_KEY = {r.lower().replace("_", "-"): r for r in ROLES}
-
-
-def leaf_name(name: str) -> str:
-    """A channel name's last dotted part, as a role would be spelt: ``"stepgen.0.phase_A"`` →
-    ``"phase-a"``, ``"top.STEP"`` → ``"step"``."""
-    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
 
 
 def role_name(name: str) -> str:
@@ -105,8 +101,12 @@ def parse_map(items: Iterable[str], option: str = "--map") -> dict[str, str]:
     return mapping
 
 
+def _what(ref: str, role: str | None) -> str:
+    return f"--map {role}={ref}" if role else f"channel {ref!r}"
+
+
 def _ambiguous_name(capture: Capture, ref: str, hits: list[Channel], role: str | None) -> str:
-    what = f"--map {role}={ref}" if role else f"channel {ref!r}"
+    what = _what(ref, role)
     indices = [str(c.index) for c in hits]
     listed = ", ".join(indices[:-1]) + f" and {indices[-1]}"
     return (
@@ -129,8 +129,9 @@ _BIT = re.compile(r"^(.+?)\s*\[\s*(\d+)\s*\]$")
 
 
 def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> Channel:
-    """The channel ``ref`` names: its exact name, else its index (``"3"``), else another name
-    the file gives it, else the unique channel whose hierarchical name ends with ``ref``
+    """The channel ``ref`` names: its exact name, else the one channel so named in any case
+    (``STEP`` for ``step``), else its index (``"3"``), else another name the file gives it, else
+    the unique channel whose hierarchical name ends with ``ref``
     (``s2.step`` for ``tb.s2.step``; any case if no exact-case one), else bit ``i`` of a
     vector for ``name[i]`` (:meth:`Capture.bit`: ``stout[3]``, ``tb.dut.stout[3]``).
 
@@ -144,6 +145,14 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
     hits = [c for c in capture.channels if c.name == ref]
     if not hits:
         hits = [c for c in capture.channels if c.name.strip() == ref.strip()]
+    if not hits:  # any case, when one channel only is so named (step=STEP on a channel step)
+        hits = [c for c in capture.channels if c.name.strip().casefold() == ref.strip().casefold()]
+        if len(hits) > 1:
+            names = ", ".join(f"{c.index}={c.name!r}" for c in hits)
+            raise UsageError(
+                f"{capture.path}: {_what(ref, role)} is ambiguous: it names {names} in other "
+                "cases; map by the exact name or by index"
+            )
     if len(hits) > 1:
         raise UsageError(_ambiguous_name(capture, ref, hits, role))
     if hits:
@@ -158,7 +167,7 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
         if len(cands) == 1:
             return cands[0]
         if len(cands) > 1:
-            what = f"--map {role}={ref}" if role else f"channel {ref!r}"
+            what = _what(ref, role)
             names = ", ".join(f"{c.index}={c.name!r}" for c in cands[:8])
             more = f" and {len(cands) - 8} more" if len(cands) > 8 else ""
             raise UsageError(
@@ -168,7 +177,20 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
     bit = _BIT.match(stripped)
     if bit and capture.vectors:
         return capture.bit(bit.group(1), int(bit.group(2)))
+    if not known and ref not in capture.skipped and stripped not in capture.skipped:
+        raise UsageError(_not_found(capture, ref, role))
     return capture.channel(ref)
+
+
+def _not_found(capture: Capture, ref: str, role: str | None) -> str:
+    """No channel is ``ref``: the channels, and the one most like ``role`` to map instead."""
+    from wavecheck.roles import best_channel
+
+    available = ", ".join(f"{c.index}={c.name!r}" for c in capture.channels) or "none"
+    best = best_channel(capture, role or "step") if capture.channels else None
+    pair = f"{role or 'step'}={best}"
+    hint = f", e.g. --map {shlex.quote(pair)}" if best is not None else ""
+    return f"{capture.path}: no channel {ref!r} (channels: {available}; map by name or index{hint})"
 
 
 def mapped_channel_names(capture: Capture, mapping: Mapping[str, str]) -> set[str]:
@@ -226,9 +248,12 @@ class StepInterface:
         """The signal of ``role``; a clear error when it is not mapped."""
         sig = self.signals.get(role)
         if sig is None:
+            from wavecheck.roles import best_channel
+
+            best = best_channel(self.capture, role) if self.capture.channels else None
+            pair = shlex.quote(f"{role}={best if best is not None else 'CHANNEL'}")
             raise UsageError(
-                f"{self.capture.path}: role {role!r} is not mapped "
-                f"(add --map {role}=CHANNEL; channels: "
+                f"{self.capture.path}: role {role!r} is not mapped (add --map {pair}; channels: "
                 f"{', '.join(repr(c.name) for c in self.capture.channels)})"
             )
         return sig

@@ -66,7 +66,8 @@ class CheckOptions:
             drive's, else 0 step/dir or 1 up/down).
         forward_level: the DIR level meaning forward per axis (default 0: DIR high = reverse).
         user_table: the state table of step type 15.
-        pulse_level: the level of the generator's pulses at its output (1 high, 0 low).
+        pulse_level: the level of the generator's pulses at its output (1 high, 0 low); None:
+            as the waveform shows it at the drive's input, else high at the output.
         active_edge: override every drive's active edge.
         resolution: T in exact seconds (None: the capture's own).
         limits: ``RULE=T`` figures replacing the drives' (``--limit``).
@@ -89,7 +90,7 @@ class CheckOptions:
     step_type: PerAxis[int] = field(default_factory=dict)
     forward_level: PerAxis[int] = field(default_factory=dict)
     user_table: tuple[int, ...] | None = None
-    pulse_level: int = 1
+    pulse_level: int | None = None
     active_edge: ActiveEdge | None = None
     resolution: Fraction | None = None
     limits: tuple[str, ...] = ()
@@ -104,7 +105,7 @@ class CheckOptions:
 
     def __post_init__(self) -> None:
         check_require(self.require, RULE_IDS)
-        if self.pulse_level not in (0, 1):
+        if self.pulse_level not in (None, 0, 1):
             raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {self.pulse_level!r}")
         for axis, level in self.forward_level.items():
             if level not in (0, 1):

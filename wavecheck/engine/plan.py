@@ -13,6 +13,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from fractions import Fraction
+from typing import Literal
+
+import numpy as np
 
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.model import ActiveEdge, Drive, Figure
@@ -40,7 +43,9 @@ __all__ = [
     "default_step_type",
     "plan_axes",
     "plan_axis",
+    "pulse_level_seen",
     "resolve_resolution_ns",
+    "settle_level",
 ]
 
 
@@ -158,7 +163,10 @@ class AxisPlan:
         interface: the mapped roles (channel, index, inversion; no edges).
         active_edge: the edge that counts a step.
         forward_level: the DIR level taken as forward.
-        level: the level of the generator's pulses at the drive's input.
+        level: the level of the generator's pulses at the drive's input (stated, seen in the
+            waveform, or assumed: :attr:`level_basis`).
+        level_basis: ``"stated"`` (``--pulse-level``), ``"seen"`` (the waveform shows it:
+            :func:`pulse_level_seen`) or ``"assumed"`` (high at the generator's output).
         resolution_ns: T used for the verdicts, exact ns.
         user_table: the state table of step type 15.
         rules: the rules measured, in report order.
@@ -190,6 +198,17 @@ class AxisPlan:
     notes: tuple[str, ...]
     resolution_note: str | None = None
     found: tuple[str, ...] = ()
+    level_basis: LevelBasis = "assumed"
+
+    @property
+    def level_open(self) -> bool:
+        """The pulse level was not stated and matters (a step/dir or up/down interface with one
+        active edge): the waveform may show it (:func:`pulse_level_seen`)."""
+        return (
+            self.level_basis == "assumed"
+            and self.step_type.kind != "phases"
+            and self.active_edge != "both"
+        )
 
     @property
     def channels(self) -> set[int]:
@@ -197,11 +216,72 @@ class AxisPlan:
         return {s.index for s in self.interface.signals.values()}
 
 
+LevelBasis = Literal["stated", "seen", "assumed"]
+
+#: Edges of each pulse line the pulse level is told from (:func:`pulse_level_seen`).
+LEVEL_EDGES = 4096
+
+
 def _pulse_level(iface: StepInterface, st: StepType, generator_level: int) -> int:
     """The level of the generator's pulses at the drive's input: ``generator_level``, flipped
     when the pulse roles are inverted."""
     inverted = any(s.inverted for s in (iface.get(r) for r in st.pulse_roles) if s is not None)
     return generator_level ^ int(inverted)
+
+
+def pulse_level_seen(plan: AxisPlan, capture: Capture, before: int) -> int | None:
+    """The level of the pulses at the drive's input as the waveform shows it, or None when it
+    does not. A step generator makes pulses of one width and varies the gaps between them with
+    the speed, so the pulses are the level (after inversion) whose complete stretches spread at
+    most an eighth as much as the other level's, which do spread; judged on each pulse line's
+    first :data:`LEVEL_EDGES` edges before tick ``before`` (at least three stretches of each
+    level; every line must agree).
+
+    At one constant speed both levels hold still and the waveform does not decide (a burst of
+    long pulses with short gaps stays the generator's own statement: high at its output)."""
+    from wavecheck.engine.primitives import widths
+
+    seen: set[int] = set()
+    for role in plan.step_type.pulse_roles:
+        sig = plan.interface.get(role)
+        if sig is None:
+            continue
+        ch = capture.channel(sig.index)
+        edges = ch.edges[: int(np.searchsorted(ch.edges, before, side="left"))][:LEVEL_EDGES]
+        initial = ch.initial ^ int(sig.inverted)
+        high = widths(initial, edges, 1).measured
+        low = widths(initial, edges, 0).measured
+        if min(len(high), len(low)) < 3:
+            continue
+        spread_high = int(high.max()) - int(high.min())
+        spread_low = int(low.max()) - int(low.min())
+        if 8 * spread_high <= spread_low and spread_low > 0:
+            seen.add(1)
+        elif 8 * spread_low <= spread_high and spread_high > 0:
+            seen.add(0)
+        else:
+            return None
+    return seen.pop() if len(seen) == 1 else None
+
+
+def settle_level(plan: AxisPlan, capture: Capture, before: int) -> AxisPlan:
+    """``plan`` with the pulse level the waveform shows (:func:`pulse_level_seen`), a note when
+    that differs from the assumption (pulses high at the generator's output)."""
+    if not plan.level_open:
+        return plan
+    level = pulse_level_seen(plan, capture, before)
+    if level is None:
+        return plan
+    notes = plan.notes
+    if level != plan.level:
+        word = "high" if level else "low"
+        notes = (
+            *notes,
+            f"the pulses are {word} at the drive's input (the waveform shows it: the {word} "
+            "stretches of the pulse lines keep one width while the others vary), not as "
+            "assumed from a generator pulsing high (--pulse-level states it)",
+        )
+    return replace(plan, level=level, level_basis="seen", notes=notes)
 
 
 def plan_axis(
@@ -277,7 +357,8 @@ def plan_axis(
         interface=iface,
         active_edge=edge,
         forward_level=0 if forward is None else forward,
-        level=_pulse_level(iface, st, options.pulse_level),
+        level=_pulse_level(iface, st, 1 if options.pulse_level is None else options.pulse_level),
+        level_basis="assumed" if options.pulse_level is None else "stated",
         resolution_ns=resolution_ns,
         user_table=options.user_table,
         rules=rules,

@@ -188,7 +188,7 @@ def rates_from(
     """:func:`max_step_rates` from the capture's figures: ``gap`` the shortest interval between
     successive steps and the tick of the first such step (None: fewer than two steps), ``pulse``
     the longest and the (lower) median complete pulse at ``level`` in ticks (None: no complete
-    pulse). Both are mergeable block by block (:mod:`wavecheck.stream`)."""
+    pulse). Both are mergeable window by window (:mod:`wavecheck.engine.axis`)."""
     cap, limited_by = drive.step_rate()
     observed = observed_at = None
     if gap is not None and gap[0] > 0:

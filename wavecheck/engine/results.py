@@ -1,14 +1,15 @@
-"""Mergeable results of the streamed engine: one rule's figures and the step counts, in bounded
-memory, merged window by window to exactly the whole-capture figures.
+"""The one result type per rule and the step counts, merged window by window, in bounded memory:
+the same figures whatever the windows (tests/wavecheck/engine hold one window against many).
 
-:class:`RuleResult` satisfies :class:`wavecheck.engine.verdicts.RuleOutcome` (what every renderer
-reads): counts (checked, violations, indeterminate, unknown), the shortest and longest interval
-and where the shortest is, the worst ``keep`` violations (ties in the whole-capture path's order),
-the figures that decide ``decide_samplerate_hz``, and a fixed-bin
-:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval (the
-whole-capture :class:`~wavecheck.engine.verdicts.RuleResult` does): ``--plot``, ``--gtkw`` and
-``--html`` draw a streamed report from these summaries and the signal windows kept around the worst
-places (:mod:`wavecheck.engine.windows`); ``--steps-csv`` and ``--firmware`` read the capture whole.
+:class:`RuleResult` is what every renderer reads: counts (checked, violations, indeterminate,
+unknown), the shortest and longest interval and where the shortest is, the worst ``keep``
+violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and,
+when pictures are asked for (``binned``), a fixed-bin
+:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
+(each window's :class:`~wavecheck.engine.verdicts.Judged` is merged and dropped); the pictures
+draw from these results and the signal windows kept around the worst places
+(:mod:`wavecheck.engine.windows`); whatever needs every step or interval is a sink
+(:mod:`wavecheck.engine.sinks`).
 """
 
 from __future__ import annotations
@@ -40,16 +41,17 @@ UNKNOWN_KEPT = 100
 #: Violations of one window handed to :attr:`RuleResult.fresh`.
 FRESH_KEPT = 64
 
-_Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the whole path's order
+_Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the intervals' order
 
 
 @dataclass
 class RuleResult:
     """One rule's results merged window by window (see the module docstring).
 
-    ``order_by_end``: the whole-capture path lists this rule's intervals by their end event
-    (``dir_hold``: by DIR change; ``dir_delay``: by the pulse after the switch), not by start;
-    ties (same length) are broken in that order, as :meth:`RuleResult.worst_violations` does.
+    ``order_by_end``: this rule's intervals are listed by their end event (``dir_hold``: by DIR
+    change; ``dir_delay``: by the pulse after the switch; :attr:`wavecheck.rules.Rule.listed_by_end`),
+    not by start; ties (same length) are broken in that order. ``binned``: keep the measured
+    lengths' :meth:`histogram` (only a picture draws it).
     """
 
     rule: str
@@ -59,6 +61,7 @@ class RuleResult:
     resolution_ns: Fraction
     keep: int = 1000
     order_by_end: bool = False
+    binned: bool = True
     checked: int = 0
     fails: int = 0
     indet: int = 0
@@ -108,7 +111,8 @@ class RuleResult:
         lo, hi = iv.bounds
         self._shortest(w, a, b, lo)
         self._longest = hi if self._longest is None else max(self._longest, hi)
-        self._hist = self._hist + Histogram.of(w, (lo, hi))
+        if self.binned:
+            self._hist = self._hist + Histogram.of(w, (lo, hi))
         if indet:
             ind = part.outcome == INDETERMINATE
             below, above, exact = decide_parts(self.limit_ns, self.timebase, w[ind])
@@ -121,7 +125,7 @@ class RuleResult:
             self._add_worst(part, w, a, b, lo)
 
     def _shortest(self, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int) -> None:
-        """Keep the shortest interval (``lo`` ticks), ties broken as the whole path."""
+        """Keep the shortest interval (``lo`` ticks), ties broken in the intervals' order."""
         if self._best is not None and (
             lo > self._best[0] or lo == self._best[0] and a.min() > self._best[1]
         ):
@@ -279,9 +283,9 @@ class RuleResult:
             )
         return out
 
-    def histogram(self) -> Histogram:
-        """The measured intervals in fixed bins."""
-        return self._hist
+    def histogram(self) -> Histogram | None:
+        """The measured intervals in fixed bins (None: not ``binned``, no picture was asked for)."""
+        return self._hist if self.binned else None
 
 
 @dataclass

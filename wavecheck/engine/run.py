@@ -7,30 +7,33 @@ then checked like the rest), plans each axis on the source's skeleton
 (:mod:`wavecheck.engine.plan`), feeds every block to every axis (:mod:`wavecheck.engine.axis`) and
 returns a :class:`~wavecheck.engine.outcome.MachineReport`. A capture already in memory is a
 source of one block (:func:`check_capture`). With several axes, a note says whether their steps lie
-on one common periodic lattice (one thread or timer makes them), judged on each axis's first
-:data:`TIMER_STEPS` steps.
+on one common periodic lattice (one thread or timer makes them), judged on the first
+:data:`TIMER_TICKS` step times of them all.
 """
 
 from __future__ import annotations
 
 import itertools
+import shlex
 from collections.abc import Callable, Iterator, Sequence
+from fractions import Fraction
 
 import numpy as np
 
 from wavecheck.capture.blocks import BlockSource, EdgeBlock, MemorySource, assemble
-from wavecheck.capture.edges import Capture, EdgeArray
+from wavecheck.capture.edges import NEVER, Capture, EdgeArray
 from wavecheck.engine.axis import AxisCheck
 from wavecheck.engine.interface import leaf_name
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport
-from wavecheck.engine.plan import AxisPlan, plan_axes, with_found
+from wavecheck.engine.plan import LEVEL_EDGES, AxisPlan, plan_axes, settle_level, with_found
 from wavecheck.engine.sinks import IntervalSink, StepSink, TimerSample
 from wavecheck.errors import UsageError
+from wavecheck.units import format_time
 
 __all__ = [
-    "TIMER_STEPS",
+    "TIMER_TICKS",
     "MachineCheck",
     "axes_from_waveforms",
     "check_capture",
@@ -43,19 +46,22 @@ __all__ = [
     "start",
 ]
 
-#: Steps per axis the several-axes common-timer note looks at (the first ones).
-TIMER_STEPS = 1 << 16
+#: Step times the several-axes common-timer note reads: the first of the axes' steps merged (a
+#: bound on its cost; a thread or timer that makes them all shows in any stretch of them).
+TIMER_TICKS = 1 << 14
+#: Fewest step times from which the note tells anything.
+TIMER_MIN = 64
 
 StepSinks = Callable[[AxisPlan], Sequence[StepSink]]
 IntervalSinks = Callable[[AxisPlan], IntervalSink | None]
-
-_NAMED = ("step", "up", "phase-a")
 
 
 def names_give_roles(capture: Capture) -> bool:
     """Whether a channel is named after a pulse role (``step``, ``up``, ``phase-A``, as the
     last part of a hierarchical name): then roles are mapped by name, not told from waveforms."""
-    return any(leaf_name(c.name) in _NAMED for c in capture.channels)
+    from wavecheck.roles.names import named_kind
+
+    return named_kind([c.name for c in capture.channels]) is not None
 
 
 def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
@@ -63,21 +69,35 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
     how they were found.
 
     Raises:
-        UsageError: the waveforms do not settle the roles (the candidates and the ``--map``
-            line to copy are in the message).
+        UsageError: the waveforms do not settle the roles: a capture without step signals says
+            what its lines look like instead (one line); an ambiguous one lists the questions
+            and candidates on the lines below the error.
     """
     from wavecheck.roles import propose
 
     proposal = propose(capture)
-    if not proposal.unambiguous:
-        conflicts = (
-            "; ".join(f"{c.question}: {' | '.join(c.candidates)}" for c in proposal.ambiguous)
-            or "no STEP, UP/DOWN or phase channel found"
-        )
-        hint = f" (e.g. {proposal.map_args()})" if proposal.axes else ""
+    if not proposal.axes and not proposal.ambiguous:
+        best = proposal.candidates[:1]
+        hint = f" (e.g. --map step={shlex.quote(best[0])})" if best else ""
         raise UsageError(
-            f"{capture.path}: the channels' roles cannot be told from the waveforms: {conflicts}; "
-            f"give --map{hint}"
+            f"{capture.path}: no step signal found: the lines look like {proposal.summary()}; "
+            f"give --map to check a line anyway{hint}"
+        )
+    if not proposal.unambiguous:
+        example = proposal.map_args() if proposal.axes else ""
+        if not example and proposal.candidates:
+            example = f"--map step={shlex.quote(proposal.candidates[0])}"
+        hint = f" (e.g. {example})" if example else ""
+        details = tuple(
+            line
+            for c in proposal.ambiguous
+            for line in (f"{c.question}:", *(f"  - {cand}" for cand in c.candidates))
+        )
+        n = len(proposal.ambiguous)
+        raise UsageError(
+            f"{capture.path}: the channels' roles cannot be told from the waveforms "
+            f"({n} question{'s' if n != 1 else ''} below); give --map{hint}",
+            details,
         )
     single = len(proposal.axes) == 1
     axes = [
@@ -88,28 +108,32 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
     return axes, [found.rstrip()]
 
 
-def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: object) -> str:
-    """One line: do the axes' steps (``ticks``, one array per axis) lie on one common periodic
-    lattice (one thread or timer)?"""
-    from fractions import Fraction
-
-    from wavecheck.latency import analyse_times
+def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: Fraction) -> str:
+    """One line: do the axes' steps (``ticks``, one array per axis, each the axis's first steps)
+    lie on one common periodic lattice (one thread or timer)? Read from the first
+    :data:`TIMER_TICKS` step times of them all by :func:`wavecheck.lattice.common_period`."""
+    from wavecheck.lattice import common_period
+    from wavecheck.linuxcnc.worstcase import union
 
     stepping = [t for t in ticks if len(t)]
     if len(stepping) < 2:
         return "fewer than two axes step: no common timer to look for"
-    times = np.unique(np.concatenate(stepping))
-    assert isinstance(resolution_ns, Fraction)
-    found = analyse_times(
-        times, tick_ns=capture.timebase.tick_ns, resolution_ns=resolution_ns, path=capture.path
-    )
-    if found.lattice and found.period_ns is not None:
+    times = union(*stepping)
+    if len(times) < TIMER_MIN:
         return (
-            f"the steps of every axis lie on one {float(found.period_ns) / 1000:g} us lattice: "
-            "one base thread or timer makes them"
+            f"too few steps ({len(times)} step times) to tell whether one common periodic "
+            "lattice (one thread or timer) makes them"
         )
-    why = found.reason.split(" (")[0]
-    return f"the axes' steps are not on one common periodic lattice ({why})"
+    sample = times[:TIMER_TICKS]
+    period, why = common_period(sample, capture.timebase.tick_ns, resolution_ns)
+    bound = f" (from the first {len(sample)} step times)" if len(sample) < len(times) else ""
+    if period is not None:
+        return (
+            f"the steps of every axis lie on one common periodic lattice{bound}: one base "
+            f"thread or timer makes them (its period {float(period) / 1000:.6g} us or a whole "
+            "fraction of it)"
+        )
+    return f"the axes' steps are not on one common periodic lattice ({why}){bound}"
 
 
 class MachineCheck:
@@ -135,7 +159,7 @@ class MachineCheck:
         self.options = options
         self.block_edges = options.block_edges
         several = len(plans) > 1 or (len(plans) == 1 and plans[0].name is not None)
-        self.timers = [TimerSample(TIMER_STEPS) for _ in plans] if several else []
+        self.timers = [TimerSample(TIMER_TICKS) for _ in plans] if several else []
         self.axes = [
             AxisCheck(
                 p,
@@ -183,10 +207,7 @@ class MachineCheck:
         notes = []
         if self.timers:
             res = reports[0].resolution_ns if reports else capture.resolution_ns
-            note = common_timer([t.ticks for t in self.timers], capture, res)
-            if any(t.seen > t.kept for t in self.timers):
-                note += f" (judged on each axis's first {TIMER_STEPS} steps)"
-            notes.append(note)
+            notes.append(common_timer([t.ticks for t in self.timers], capture, res))
         return MachineReport(capture, reports, notes)
 
 
@@ -243,41 +264,87 @@ def start(
     """The axes of ``source`` planned and ready to be fed, and the source's blocks to feed them.
 
     Without a mapping or role names, the roles are told from the waveforms of the first
-    :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read), which
-    then come first among the blocks."""
+    :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read); an
+    axis whose pulse level is not stated takes the one its pulse lines show
+    (:func:`wavecheck.engine.plan.settle_level`) in their first edges. The blocks read for
+    either come first among the blocks returned. What is decided from a first part depends on
+    the capture's edges only, never on how its reader cuts it into blocks."""
     skeleton = source.skeleton
-    blocks: Iterator[EdgeBlock]
+    read: list[EdgeBlock] = []
+    it: Iterator[EdgeBlock] | None = None
     waveforms = None
     if needs_waveforms(options, skeleton):
         source.want(range(len(skeleton.channels)))
         it = source.blocks()
-        read: list[EdgeBlock] = []
-        edges = 0
-        for block in it:
-            read.append(block)
-            edges += sum(len(e) for e in block.edges.values())
-            if edges >= options.infer_edges:
-                break
-        waveforms = assemble(skeleton, read)
+        _read_until(it, read, lambda edges: edges >= options.infer_edges)
+        before = _tick_of_edge(assemble(skeleton, read), options.infer_edges)
+        waveforms = assemble(skeleton, read, before=before)
         axes, found = axes_for(options, waveforms)
-        if edges >= options.infer_edges:
-            found = [f"{found[0]} (told from the first {edges} edges)"]
-        blocks = itertools.chain(read, it)
+        if before < NEVER:
+            at = format_time(skeleton.timebase.seconds(before))
+            found = [f"{found[0]} (told from the first {options.infer_edges} edges, to {at})"]
     else:
         axes, found = axes_for(options, skeleton)
-    machine = machine_for(
-        skeleton,
-        options,
-        axes,
-        found,
-        waveforms=waveforms,
-        step_sinks=step_sinks,
-        interval_sinks=interval_sinks,
+    plans = [with_found(p, found) for p in plan_axes(skeleton, list(axes), options, waveforms)]
+    open_level = [p for p in plans if p.level_open]
+    if open_level:
+        channels = {i for p in plans for i in p.channels}
+        if it is None:  # planned first: a bit of a vector is a channel of the source
+            source.want(channels)
+            it = source.blocks()
+        roles = [(p.interface.signals[r].index) for p in open_level
+                 for r in p.step_type.pulse_roles if r in p.interface.signals]  # fmt: skip
+        counts = dict.fromkeys(roles, 0)
+        for block in read:
+            for i in counts:
+                counts[i] += len(block.edges.get(i, ()))
+
+        def enough(edges: int) -> bool:
+            return edges >= options.infer_edges or min(counts.values()) >= LEVEL_EDGES
+
+        _read_until(it, read, enough, counts)
+        seen = assemble(skeleton, read)
+        before = _tick_of_edge(seen, options.infer_edges, channels)
+        plans = [settle_level(p, seen, before) for p in plans]
+    machine = MachineCheck(
+        skeleton, plans, options, step_sinks=step_sinks, interval_sinks=interval_sinks
     )
     source.want(machine.channels)
-    if waveforms is None:
-        blocks = source.blocks()  # after planning: a bit of a vector is a channel of the source
+    blocks = source.blocks() if it is None else itertools.chain(read, it)
     return machine, blocks
+
+
+def _read_until(
+    it: Iterator[EdgeBlock],
+    read: list[EdgeBlock],
+    done: Callable[[int], bool],
+    counts: dict[int, int] | None = None,
+) -> None:
+    """Read blocks of ``it`` into ``read`` until ``done(edges read so far)`` or the end;
+    ``counts``: channel → its edges so far, kept up to date."""
+    edges = sum(len(e) for b in read for e in b.edges.values())
+    if done(edges):
+        return
+    for block in it:
+        read.append(block)
+        for i, e in block.edges.items():
+            edges += len(e)
+            if counts is not None and i in counts:
+                counts[i] += len(e)
+        if done(edges):
+            return
+
+
+def _tick_of_edge(capture: Capture, n: int, channels: set[int] | None = None) -> int:
+    """The tick of the ``n``-th edge of ``capture`` (over ``channels``, default all), counted in
+    time order: what came before it does not depend on how blocks were cut; NEVER when there
+    are fewer."""
+    arrays = [c.edges for c in capture.channels if channels is None or c.index in channels]
+    total = sum(len(a) for a in arrays)
+    if total < n or not arrays:
+        return NEVER
+    ticks = np.concatenate(arrays)
+    return int(np.partition(ticks, n - 1)[n - 1]) + 1
 
 
 def check_source(

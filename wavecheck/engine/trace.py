@@ -1,24 +1,25 @@
-"""A thinned step trace kept while streaming: position and step rate over time in bounded memory.
+"""A step trace kept as the engine runs: position and step rate over time in bounded memory.
 
-The whole-capture path draws position and step rate from every step
-(:func:`wavecheck.report.measurement_plot.draw_motion`). A streamed check keeps, per axis, a
-:class:`StepTrace`: at most :data:`MAX_BUCKETS` time buckets of equal width (ticks) from the first
+The motion panel (:func:`wavecheck.report.measurement_plot.draw_motion`) draws position and step
+rate from it, not from every step. The engine keeps, per axis, a :class:`StepTrace` (a step
+sink, :mod:`wavecheck.engine.sinks`): at most :data:`MAX_BUCKETS` time buckets of equal width (ticks) from the first
 step on. When a step falls past the last bucket, neighbouring buckets merge pairwise (the width
 doubles, the origin stays) until it fits, so the memory does not depend on the capture's length.
 
 Each bucket keeps, from the steps in it (ticks exact, positions exact):
 
 - the first and the last step's tick and the position after each (forward − reverse, steps of
-  unknown direction counting 0, as :attr:`wavecheck.engine.decode.StepEvents.position`): points on the
-  whole path's position curve; and the lowest and highest position reached in the bucket;
+  unknown direction counting 0, as :attr:`wavecheck.engine.decode.StepEvents.position`): points on
+  the position curve of every step; and the lowest and highest position reached in the bucket;
 - the fastest and the slowest step (the shortest and the longest time since the step before,
-  that step's tick, the earliest on ties): points on the whole path's step-rate curve, each step's
-  rate counted in the bucket of the step that ends the interval, as the whole path plots it;
+  that step's tick, the earliest on ties): points on the step-rate curve of every step, each
+  step's rate counted in the bucket of the step that ends the interval;
 - the reversals (a known direction unlike the last known one), counted exactly.
 
 The first :data:`REVERSALS_KEPT` reversal ticks are kept too (the plot marks that many). So the
-thinned curves have at most ``2 · MAX_BUCKETS`` points each; the highest rate drawn is the whole
-path's highest rate over the same bucket, and the reversal count is the whole path's.
+thinned curves have at most ``2 · MAX_BUCKETS`` points each; the highest rate drawn is the highest
+rate of every step over the same bucket, and the reversal count is exact. While no bucket holds
+more than two steps, the curves hold every step (:attr:`StepTrace.thinned` is False).
 """
 
 from __future__ import annotations
@@ -213,7 +214,7 @@ class StepTrace:
 
     def position_points(self) -> tuple[EdgeArray, EdgeArray]:
         """(ticks, position after the step): each used bucket's first and last step, in time
-        order (points of the whole path's position curve; a tick twice when steps share it)."""
+        order (points of the position curve; a tick twice when steps share it)."""
         u = self._used()
         t = np.stack([u.first_tick, u.last_tick], axis=1).ravel()
         p = np.stack([u.first_pos, u.last_pos], axis=1).ravel()
@@ -223,7 +224,7 @@ class StepTrace:
 
     def rate_points(self) -> tuple[EdgeArray, EdgeArray]:
         """(ticks, time since the step before, ticks): each used bucket's fastest and slowest
-        step, in time order (points of the whole path's step-rate curve: rate = samplerate / gap).
+        step, in time order (points of the step-rate curve: rate = samplerate / gap).
         """
         u = self._used()
         t = np.concatenate([u.fast_tick, u.slow_tick])

@@ -196,7 +196,7 @@ class Histogram:
 @functools.lru_cache(maxsize=64)
 def _thresholds(limit_ns: Fraction, tick_ns: Fraction, resolution_ns: Fraction) -> tuple[int, int]:
     """(pass_min, fail_max) in ticks: pass ⟺ W ≥ pass_min, fail ⟺ W ≤ fail_max (exact; once per
-    rule, not once per streamed window)."""
+    rule, not once per window)."""
     pass_min = _clamp(math.ceil((limit_ns + resolution_ns) / tick_ns))
     fail_max = _clamp(math.floor((limit_ns - resolution_ns) / tick_ns))
     return pass_min, fail_max

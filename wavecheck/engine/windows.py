@@ -1,8 +1,8 @@
-"""Small windows of the mapped signals around the places a streamed report's renderers draw.
+"""Small windows of the mapped signals around the places a report's pictures draw.
 
-The whole-capture renderers (``--plot``, ``--gtkw``, ``--html``) read the mapped signals' edges
-around a few places: each failing rule's worst violations and, when nothing fails, each rule's
-smallest margin. A streamed check keeps, per axis, only those edges: a :class:`WindowKeeper`
+The pictures (``--plot``, ``--gtkw``, ``--html``) read the mapped signals' edges around a few
+places: each failing rule's worst violations and, when nothing fails, each rule's smallest
+margin. A check that keeps pictures keeps, per axis, only those edges: a :class:`WindowKeeper`
 holds a window of every mapped role around each place the summaries currently name (each rule's
 :data:`PLACES_PER_RULE` worst violations and its smallest margin). A place that drops out of that
 set frees its window; a window opened before its later part arrived is completed by the later
@@ -96,7 +96,7 @@ class _Window:
 
 @dataclass
 class SignalWindows:
-    """The windows a streamed report keeps, joined (module docstring).
+    """The windows a report keeps, joined (module docstring).
 
     Attributes:
         signals: role → its signal with the windows' edges only (as
@@ -120,7 +120,7 @@ class SignalWindows:
 
 
 class WindowKeeper:
-    """The windows of one axis's mapped roles, fed by the streamed engine (module docstring)."""
+    """The windows of one axis's mapped roles, fed by the engine (module docstring)."""
 
     def __init__(self, roles: list[str]) -> None:
         self.roles = roles

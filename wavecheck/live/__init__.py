@@ -1,4 +1,4 @@
-"""Live checks: a logic analyzer streamed through sigrok-cli into the streamed engine.
+"""Live checks: a logic analyzer streamed through sigrok-cli into the engine.
 
 :mod:`.sigrok` starts and stops sigrok-cli and reads its raw samples; :mod:`.snippets` keeps the
 recent samples and writes a short ``.sr`` around each violation; :mod:`.watch` runs the loop

@@ -1,7 +1,7 @@
 """The live loop of ``wavecheck watch``: samples from sigrok-cli, checked as they arrive.
 
 Each piece read from the pipe goes, in this order, to the ``--save`` recorder, the snippet ring,
-the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the streamed engine
+the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the engine
 (:class:`~wavecheck.engine.run.MachineCheck`). At most every :data:`FLUSH_SECONDS` the engine
 checks what has gathered (so the figures are current whatever the step rate), the violations it
 found are handed to the snippets, and the status line is redrawn.

@@ -10,9 +10,9 @@ The dump file: a VCD capture is opened as it is (signals by their hierarchical n
 other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save file
 (``FILE.vcd`` for ``FILE.gtkw``) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
 channels only, raw (not inverted), on the largest VCD timescale that holds every edge exactly.
-A streamed check (:mod:`wavecheck.stream`) keeps only small windows of the signals around the
-worst places (:mod:`wavecheck.engine.windows`): the VCD then holds those windows, the level held
-between them, and a comment in both files says so. A VCD capture needs no windows.
+A check keeps only small windows of the signals around the worst places
+(:mod:`wavecheck.engine.windows`): the VCD then holds those windows, the level held between them,
+and a comment in both files says so. A VCD capture needs no windows.
 
 Marker times are in the dump's time unit (a ``$timescale`` of ``10 ns`` counts in ns, ``1 fs``
 in fs), as GTKWave reads them. Markers go to distinct times: a place whose time is already marked
@@ -128,7 +128,7 @@ def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str
     """Write the mapped channels of ``report``'s capture as a VCD (raw levels), atomically.
 
     Variables are named after the roles (``step``, ``dir``, ``phase_A`` …) in scope
-    ``wavecheck``. A streamed report writes only its windows around the worst places
+    ``wavecheck``. Only the windows kept around the worst places are written
     (:mod:`wavecheck.engine.windows`; the header comment says so). Returns the timescale used and
     the ticks → timescale-steps factor.
     """

@@ -8,7 +8,8 @@ The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and li
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
 Cross-axis facts: the step counts side by side and whether the axes' step edges lie on one common
-periodic lattice (one base thread or timer: :func:`wavecheck.engine.run.common_timer`).
+periodic lattice (one base thread or timer: :func:`wavecheck.engine.run.common_timer`, read with
+:mod:`wavecheck.lattice`).
 """
 
 from __future__ import annotations

@@ -343,7 +343,8 @@ def binned(r: RuleResult) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float
     (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
     from wavecheck.engine.verdicts import Histogram
 
-    pairs = r.histogram().counts
+    hist = r.histogram()
+    pairs = hist.counts if hist is not None else ()
     tick = r.timebase.tick_ns
     left = [0 if b == 0 else Histogram.lower_edge(b) * tick for b, _ in pairs]
     right = [Histogram.lower_edge(b + 1) * tick for b, _ in pairs]
@@ -415,14 +416,18 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
 
 def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figure:
     """The report's figure: timing diagrams, the motion panel (position and step rate, when
-    there are steps: every step, or a streamed report's thinned trace), then histograms."""
+    there are steps, from the step trace), then histograms."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
     places = choose_places(report, max_places)
-    hist_rules = [r for r in report.rules if r.limit_ns is not None and r.histogram().counts]
+    hist_rules = [
+        r
+        for r in report.rules
+        if r.limit_ns is not None and (h := r.histogram()) is not None and h.counts
+    ]
     n_roles = max(len(report.interface.signals), 1)
     diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1

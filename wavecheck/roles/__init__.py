@@ -2,22 +2,35 @@
 
 :func:`propose` looks at every channel of a capture and returns a :class:`Proposal`: the axes
 (each a kind, a LinuxCNC step type and a role → channel mapping with the evidence in words), shared
-lines, channels left unassigned with why, and the conflicts the waveforms cannot settle. The rules:
+lines, channels left unassigned with why, the conflicts the waveforms cannot settle, what each line
+looks like, and the channels most like a STEP (for hints). No role is given that the waveform
+contradicts. The rules:
 
-- **STEP**: a pulse train: many pulses at one level with nearly constant width, no longer than
-  the gaps, which may vary (:mod:`wavecheck.roles.features`).
-- **serial lines** (UART TX/RX, an SWO trace) are never STEP: their intervals are whole multiples of
-  one bit time with runs of several bits at both levels, and they idle at one level
-  (:mod:`wavecheck.roles.features`).
+- **names after roles**: when a channel is called ``step``, ``up`` or ``phase-A`` (the end of a
+  hierarchical name, any case), the axis is the one ``check`` maps by those names without
+  ``--map``; what the waveforms say against it goes into its notes.
+- **STEP**: a step train: many pulses at one level with nearly constant width, no longer than
+  the gaps, at a rate that changes as a motor's does (:mod:`wavecheck.roles.features`,
+  :mod:`wavecheck.roles.rates`). A clock (one period, about 50 % duty, no pause) and PWM (one
+  period, varying width) never are; pulses at one period without a pause, bursts at one rate
+  without speeding up or slowing down, and coded pulses (periods that jump between neighbours)
+  are a STEP only when named so. Serial lines (UART, SWO) never are: their intervals are whole
+  multiples of one bit time with runs of several bits at both levels.
+- **buses** (:mod:`wavecheck.roles.buses`): a line that changes in step with one edge of
+  another, at most once a period, is data of that bus clock; neither is a STEP, the data no DIR.
+  A line every change of a busier line falls inside, at one of its levels, gates it (an ENABLE,
+  a chip select, a frame line): never a STEP; the lines a bus's chip select frames and the pulses
+  that follow its bursts at one delay (a latch strobe) are that bus's.
 - **DIR** of a STEP line (:mod:`wavecheck.roles.dirs`): changes only between its pulses (never
   inside one; at the tick a pulse starts is allowed: DIR setup 0), with at least one pulse after
   each change before the next, and pulses at both of its levels. Among several STEP lines it fits,
   only those are candidates at whose reversals it changes (the period across each change is 1.25×
   the periods beside it: slow-down, gap, speed-up; or the change is before the first / after the
   last pulse): a change in a STEP's steady running proves it is not that STEP's DIR, and that is
-  all a change proves. A name with the same axis narrows the candidates. A STEP has one DIR, so
-  the DIRs are a matching of changing lines to distinct STEP lines; a line is given a STEP only
-  when every such matching gives it that STEP. A change that falls where several candidates all
+  all a change proves (a line that changes mostly while its STEP runs at full rate is no DIR).
+  A name with the same axis narrows the candidates. A STEP has one DIR, so the DIRs are a
+  matching of changing lines to distinct STEP lines; a line is given a STEP only when every
+  such matching gives it that STEP. A change that falls where several candidates all
   pause fits each of them: however near it is to one of them, it is ambiguous, and so is every
   pulse line it fits and every line those take turns with. Two DIRs for one STEP are ambiguous
   unless exactly one is named DIR.
@@ -28,9 +41,10 @@ lines, channels left unassigned with why, and the conflicts the waveforms cannot
   other, that is a conflict (unless the names say up/down or step).
 - **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables
   (:mod:`wavecheck.roles.phases`).
-- **ENABLE**: a leftover changing line at one level of which no axis ever moves, while some
-  axes move at the other (it changes before the first and after the last pulse, or around
-  bursts); serving several axes it is a shared line.
+- **ENABLE**: a leftover changing line (no bus clock or data) at one level of which no axis ever
+  moves, while some axes move at the other, and that changes only where they stand still
+  (before the first and after the last pulse, or in pauses); serving several axes it is a shared
+  line.
 - a **DIR that never changes** has no waveform evidence: a channel named like the axis's DIR is
   taken by name; else, when every STEP without a DIR is followed by an unchanging, neutrally named
   channel, each such channel is taken as that STEP's DIR by layout (the Smoothieware capture:
@@ -43,11 +57,12 @@ Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x
 took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
-from wavecheck.roles.infer import propose
-from wavecheck.roles.model import (
+from wavecheck.roles.infer import best_channel, propose
+from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,
+    LineLook,
     Proposal,
     RoleChoice,
     SharedLine,
@@ -58,9 +73,11 @@ __all__ = [
     "AxisProposal",
     "Basis",
     "Conflict",
+    "LineLook",
     "Proposal",
     "RoleChoice",
     "SharedLine",
     "Unassigned",
+    "best_channel",
     "propose",
 ]

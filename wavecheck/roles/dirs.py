@@ -26,11 +26,12 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
 from wavecheck.roles.features import Pulses
 
-__all__ = ["Assignment", "DirFit", "assign", "dir_fit", "plural"]
+__all__ = ["Assignment", "DirFit", "assign", "at_pauses", "dir_fit", "plural"]
 
 _REVERSAL_GAP = 1.25  # a reversal's period is this much longer than the periods beside it
 
@@ -69,10 +70,31 @@ class DirFit:
         )
 
 
+def at_pauses(t: npt.NDArray[np.int64], starts: npt.NDArray[np.int64]) -> tuple[int, int, int]:
+    """Where the changes at ticks ``t`` sit in a train of events at ``starts`` (pulse starts,
+    phase changes): (at a pause: the interval across the change is 1.25× the intervals beside
+    it; before the first or after the last event; in full running: neither, with the interval
+    across within twice the train's 10th percentile interval)."""
+    count = len(starts)
+    a = np.searchsorted(starts, t, side="left")  # the change is between events a-1 and a
+    outside = int(np.count_nonzero((a == 0) | (a == count)))
+    inner = a[(a > 0) & (a < count)]
+    st = starts
+    period = (st[inner] - st[inner - 1]).astype(np.float64)
+    before = np.where(inner >= 2, st[inner - 1] - st[np.maximum(inner - 2, 0)], 0)
+    after = np.where(inner + 1 < count, st[np.minimum(inner + 1, count - 1)] - st[inner], 0)
+    beside = np.maximum(before, after).astype(np.float64)
+    pause = period >= _REVERSAL_GAP * beside
+    fast = 2 * float(np.percentile(np.diff(st), 10)) if count > 1 else 0.0
+    running = int(np.count_nonzero(~pause & (period <= fast)))
+    return int(np.count_nonzero(pause)), outside, running
+
+
 def dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     """The fit of ``d`` as DIR of ``s`` (pulses ``p``), or None when a hard rule fails: an edge of
-    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, or pulses of
-    ``s`` at only one level of ``d``."""
+    ``d`` inside a pulse of ``s``, two changes of ``d`` with no pulse between them, pulses of
+    ``s`` at only one level of ``d``, or most changes (3 or more) where ``s`` runs at full rate
+    without slowing down (a motor stops to reverse)."""
     t = d.edges
     n = len(t)
     if n == 0 or p.count == 0:
@@ -91,16 +113,9 @@ def dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     lo, hi = int(counts[levels == 0].sum()), int(counts[levels == 1].sum())
     if lo == 0 or hi == 0:
         return None
-    # where each change sits in s's pulse train: between pulse a-1 and pulse a
-    a = np.searchsorted(p.starts, t, side="left")
-    outside = int(np.count_nonzero((a == 0) | (a == p.count)))
-    inner = a[(a > 0) & (a < p.count)]
-    st = p.starts
-    period = (st[inner] - st[inner - 1]).astype(np.float64)
-    before = np.where(inner >= 2, st[inner - 1] - st[np.maximum(inner - 2, 0)], 0)
-    after = np.where(inner + 1 < p.count, st[np.minimum(inner + 1, p.count - 1)] - st[inner], 0)
-    beside = np.maximum(before, after).astype(np.float64)
-    at_rev = int(np.count_nonzero(period >= _REVERSAL_GAP * beside))
+    at_rev, outside, running = at_pauses(t, p.starts)
+    if running >= 3 and running > n / 2:
+        return None  # it changes while s runs at full rate: no motor reverses so
     return DirFit(d, s, n, at_rev, outside, (lo, hi))
 
 

@@ -1,4 +1,6 @@
-"""What one channel's edges look like on their own: unchanging, a serial line, or a pulse train.
+"""What one channel's edges look like on their own: unchanging, a serial line, a pulse train (a
+step train, a clock, PWM, periodic pulses, bursts at one rate, coded pulses: their rates are
+told apart in :mod:`wavecheck.roles.rates`), or other.
 
 Everything here is vectorised over a channel's edge array (a few ``numpy`` passes, no Python loop
 per edge), so a channel of ten million edges costs a few hundred milliseconds.
@@ -26,9 +28,10 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
+from wavecheck.roles.rates import Timing, timing
 from wavecheck.units import format_frequency, format_time
 
-__all__ = ["ChannelLook", "Pulses", "look_at", "pulses_of"]
+__all__ = ["BY_NAME_ONLY", "KIND_WORDS", "ChannelLook", "Pulses", "look_at", "pulses_of"]
 
 _WIDTH_SPREAD = 1.6  # p90/p10 of a pulse train's pulse widths stays below this
 _SERIAL_FRAME_BITS = 10.5  # intervals up to this many bit times belong to a frame
@@ -68,28 +71,69 @@ def pulses_of(ch: Channel, level: int) -> Pulses:
     return Pulses(level, starts[: len(ends)], ends)
 
 
+#: What each kind of channel is called where the lines of a capture are summed up.
+KIND_WORDS: dict[str, str] = {
+    "constant": "unchanging",
+    "serial": "serial line",
+    "clock": "clock",
+    "pwm": "PWM",
+    "periodic": "periodic pulses",
+    "bursts": "bursts at one rate",
+    "coded": "coded pulses",
+    "pulses": "pulse train",
+    "other": "other",
+}
+#: Kinds that are a STEP only when the channel's name says so (the waveform cannot tell).
+BY_NAME_ONLY = frozenset({"periodic", "bursts", "coded"})
+
+
 @dataclass(frozen=True)
 class ChannelLook:
     """What a channel looks like on its own.
 
     Attributes:
         channel: the channel.
-        kind: ``"constant"`` (no edge), ``"serial"``, ``"pulses"`` (a pulse train: a STEP
-            candidate), ``"other"``.
-        pulses: for ``"pulses"``, its pulses at the pulse level; else the pulses at the level
+        kind: ``"constant"`` (no edge), ``"serial"``, ``"clock"`` (one period, about 50 % duty,
+            no pause), ``"pwm"`` (one period, varying width), ``"periodic"`` (one period and
+            width, no pause), ``"bursts"`` (runs at one rate without speeding up or slowing
+            down), ``"coded"`` (periods that jump), ``"pulses"`` (a step train: fixed width, a
+            rate that changes as a motor's), ``"other"`` (see :data:`KIND_WORDS`).
+        pulses: for a pulse kind, its pulses at the pulse level; else the pulses at the level
             that is shorter on median (used to test whether it is a DIR with long "pulses").
         evidence: what was seen, in words.
+        timing: the rate of the pulses, when there are two or more.
     """
 
     channel: Channel
     kind: str
     pulses: Pulses | None
     evidence: str
+    timing: Timing | None = None
 
     @property
     def is_step_like(self) -> bool:
-        """True for a pulse train (a STEP, UP or DOWN candidate)."""
+        """True for a step train (a STEP, UP or DOWN candidate on its waveform alone)."""
         return self.kind == "pulses"
+
+    @property
+    def step_by_name(self) -> bool:
+        """True for pulses the waveform cannot tell from steps at one constant rate: a STEP only
+        when named so."""
+        return self.kind in BY_NAME_ONLY
+
+    @property
+    def clock_like(self) -> bool:
+        """A clock, or bursts at one rate with about half the period at each level (a gated
+        clock)."""
+        t = self.timing
+        return self.kind == "clock" or (
+            self.kind == "bursts" and t is not None and 0.3 <= t.duty <= 0.7
+        )
+
+    @property
+    def word(self) -> str:
+        """The kind in a word or two (``"clock"``, ``"serial line"``)."""
+        return KIND_WORDS[self.kind]
 
 
 def _level_intervals(ch: Channel) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
@@ -152,6 +196,43 @@ def _span(cap: Capture, lo: int, hi: int) -> str:
     return a if lo == hi else f"{a}–{b}"
 
 
+def _rate_text(cap: Capture, t: Timing) -> str:
+    period = cap.timebase.seconds(1) * Fraction(t.period).limit_denominator(1000)
+    return f"{format_time(period)} ({format_frequency(1 / period, 4)})" if period else "0 s"
+
+
+def _shape_evidence(cap: Capture, kind: str, p: Pulses, t: Timing) -> str:
+    """Why a pulse train of this ``kind`` is not taken as steps on its waveform alone."""
+    rate = _rate_text(cap, t)
+    pct = f"{t.steady:.0%}"
+    if kind == "clock":
+        return (
+            f"clock: {p.count:,} pulses, every period {rate}, {t.duty:.0%} duty, no pause: "
+            "a free-running clock, not a step signal"
+        )
+    if kind == "pwm":
+        return (
+            f"PWM: one period {rate} with pulse widths varying by {t.width_spread:.0%}: "
+            "a step train keeps its pulse width, not its period"
+        )
+    if kind == "periodic":
+        return (
+            f"periodic pulses: {p.count:,} pulses, {pct} of periods {rate}, {t.duty:.0%} duty, "
+            "no pause: a sync, frame or PWM line, or steps at one constant speed (the waveform "
+            "cannot tell; a STEP only when named so)"
+        )
+    if kind == "bursts":
+        return (
+            f"bursts at one rate: {p.count:,} pulses in {t.pauses + 1:,} runs, {pct} of periods "
+            f"{rate}, {t.duty:.0%} duty, no run speeds up or slows down: a gated clock, or steps "
+            "without acceleration (a STEP only when named so)"
+        )
+    return (
+        f"coded pulses: {p.count:,} pulses, {t.coded_why()}: no motor's rate changes so fast "
+        "(a STEP only when named so)"
+    )
+
+
 def look_at(ch: Channel, cap: Capture) -> ChannelLook:
     """Classify one channel from its own edges (see the module docstring for the rules)."""
     n = len(ch.edges)
@@ -171,12 +252,17 @@ def look_at(ch: Channel, cap: Capture) -> ChannelLook:
         level = ch.initial ^ 1
     p = pulses_of(ch, level)
     gaps = lows if level == 1 else highs
-    res = 2 * max(cap.resolution_ticks, 0)
+    res = max(cap.resolution_ticks, 0)
+    t = timing(p.starts, p.widths, res) if p.count >= 2 else None
     if p.count >= 2:
         w = p.widths
         p10, p90 = np.percentile(w, [10, 90])
-        steady = p90 <= _WIDTH_SPREAD * p10 + res
+        steady = p90 <= _WIDTH_SPREAD * p10 + 2 * res
         short = float(np.median(w)) <= float(np.median(gaps)) if len(gaps) else True
+        if t is not None and steady:
+            kind = t.shape(res)
+            if kind != "steps":
+                return ChannelLook(ch, kind, p, _shape_evidence(cap, kind, p, t), t)
         if steady and short:
             periods = np.diff(p.starts)
             rate = ""
@@ -190,8 +276,12 @@ def look_at(ch: Channel, cap: Capture) -> ChannelLook:
                 p,
                 f"pulse train: {p.count:,} {'high' if level else 'low'} pulses of "
                 f"{_span(cap, int(w.min()), int(w.max()))}{gap_text}{rate}",
+                t,
             )
+        if t is not None and t.one_rate:  # one period, widths that vary
+            kind = "pwm" if t.pauses == 0 else "bursts"
+            return ChannelLook(ch, kind, p, _shape_evidence(cap, kind, p, t), t)
     why = f"changes {n:,} time{'s' if n != 1 else ''}"
     if p.count >= 2:
         why += ", not a pulse train (its pulse widths vary, or are longer than its gaps)"
-    return ChannelLook(ch, "other", p, why)
+    return ChannelLook(ch, "other", p, why, t)

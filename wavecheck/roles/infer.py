@@ -15,23 +15,25 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel
-from wavecheck.roles.dirs import DirFit, assign, dir_fit
+from wavecheck.roles.buses import BusFindings, find_buses
+from wavecheck.roles.dirs import DirFit, assign, at_pauses, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
-from wavecheck.roles.model import (
+from wavecheck.roles.names import NAMED_KINDS, NameHint, leaf, name_hint, named_kind
+from wavecheck.roles.phases import PhaseGroup, find_phase_groups
+from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,
+    LineLook,
     Proposal,
     RoleChoice,
     SharedLine,
     Unassigned,
 )
-from wavecheck.roles.names import NameHint, name_hint
-from wavecheck.roles.phases import PhaseGroup, find_phase_groups
 from wavecheck.roles.updown import UpDownFit, up_down
 
-__all__ = ["propose"]
+__all__ = ["best_channel", "propose"]
 
 _AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
 
@@ -74,6 +76,9 @@ class _Inference:
         self.dir_notes: dict[int, str] = {}  # DIR index -> how elimination decided
         self.turns: dict[int, set[int]] = {}  # pulse line -> lines it takes turns with
         self.unsure_steps: set[int] = set()  # pulse lines named in a DIR conflict
+        self.by_name: set[int] = set()  # pulse lines taken as STEP candidates by their names
+        self.bus = BusFindings({}, {}, {}, {})
+        self.named = False  # the axis is the one check maps by channel names
 
     def _refs(self) -> dict[int, str]:
         refs: dict[int, str] = {}
@@ -111,23 +116,134 @@ class _Inference:
         for c in self.cap.channels:
             if len(c.xz_times):
                 self.why[c.index] = f"goes x/z {_plural(len(c.xz_times), 'time')}"
+        kind = named_kind([c.name for c in self.cap.channels])
+        if kind is not None and self._named(kind, chans):
+            return self._finish()
         # stepgen's phase outputs change only on its base period, so they can pass as serial
         for g in find_phase_groups([c for c in chans if len(c.edges)]):
             self._phase_axis(g)
         movers = [
             c
             for c in chans
-            if self.looks[c.index].kind in ("pulses", "other") and c.index not in self.taken
+            if self.looks[c.index].kind not in ("constant", "serial") and c.index not in self.taken
         ]
-        pulse = [c for c in movers if self.looks[c.index].is_step_like]
+        self._buses(chans)
+        pulse = [c for c in movers if self._step_candidate(c)]
         pulse = self._demote(pulse)
         self.turns = self._takes_turns(pulse)
         in_pulse = {c.index for c in pulse}
-        dirs = self._dirs(pulse, [c for c in movers if c.index not in in_pulse])
+        others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
+        dirs = self._dirs(pulse, others)
         self._pulse_axes(pulse, dirs)
         self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
-        self._enables([c for c in movers if c.index not in self.taken])
+        self._enables(
+            [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
+        )
         return self._finish()
+
+    def _buses(self, chans: list[Channel]) -> None:
+        """Bus clocks, data, strobes and gates among the changing lines not yet taken."""
+        changing = [c for c in chans if len(c.edges) and c.index not in self.taken]
+        clock_like = {c.index for c in changing if self.looks[c.index].clock_like}
+        starts = {
+            i: look.pulses.starts
+            for i, look in self.looks.items()
+            if look.pulses is not None and (look.is_step_like or look.step_by_name)
+        }
+        self.bus = find_buses(changing, max(self.cap.resolution_ticks, 0), clock_like, starts)
+
+    def _named(self, kind: str, chans: list[Channel]) -> bool:
+        """The one axis ``check`` maps by channel names without ``--map`` (a channel called
+        ``step``, ``up`` or ``phase-A``; :func:`wavecheck.engine.auto_map`), with what the
+        waveforms say of each line; False (nothing done) when the names give no unique channel
+        for the first role."""
+        number, roles = NAMED_KINDS[kind]
+        found: list[tuple[str, Channel]] = []
+        for role in roles:
+            hits = [c for c in self.cap.channels if leaf(c.name) == role.lower()]
+            if len(hits) == 1:
+                found.append((role, hits[0]))
+        if not found or found[0][0] != roles[0]:
+            return False
+        self._buses(chans)
+        pulse_roles = [r for r, _ in found if r not in ("dir", "enable")]
+        notes = []
+        if kind == "phase-a":
+            group = [c for r, c in found if r in pulse_roles]
+            fits = [g for g in find_phase_groups(group) if len(g.channels) == len(group)]
+            number = fits[0].step_type if fits else 0
+            if not fits:
+                notes.append(
+                    "the phase outputs walk no LinuxCNC table: give the step type (--type)"
+                )
+        choices = []
+        for role, c in found:
+            look = self.looks[c.index]
+            against = self._against(c, role)
+            evidence = f"named {c.name!r}; its waveform: {look.evidence}"
+            if c.index in self.why:  # goes x/z: its unknown stretches are left out of the checks
+                evidence += f"; {self.why.pop(c.index)}"
+            step = self.looks[found[0][1].index].pulses
+            if role == "dir" and step is not None:
+                fit = dir_fit(c, found[0][1], step)
+                evidence += f"; {fit.evidence()}" if fit is not None else ""
+            if against:
+                notes.append(
+                    f"{role} {self.name_of(c)} is taken by its name, but its waveform says it is "
+                    f"no {role.upper()} ({against}): check checks it as named; give --map to "
+                    "check another line"
+                )
+            active = look.pulses.level if look.pulses is not None and role != "dir" else None
+            choices.append(self.choice(role, c, evidence, "name", active))
+        pulse = [c for r, c in found if r in pulse_roles]
+        motion = np.sort(
+            np.concatenate(
+                [p.starts for p in (self.looks[c.index].pulses for c in pulse) if p is not None]
+                or [np.zeros(0, np.int64)]
+            )
+        )
+        axis_kind = {"step": "step-dir", "up": "up-down", "phase-a": "phases"}[kind]
+        self.axes.append(_Axis(axis_kind, number, choices, pulse, motion, notes))
+        self.named = True
+        return True
+
+    def _against(self, c: Channel, role: str) -> str:
+        """What in the waveform of ``c`` says it is no ``role`` (empty when nothing does)."""
+        look = self.looks[c.index]
+        if role in ("dir", "enable") or role.startswith("phase-"):
+            return self.bus.data.get(c.index, "")
+        no = self.bus.no_step(c.index)
+        if no is not None:
+            return no
+        if look.kind in ("clock", "pwm", "serial", "constant"):
+            return look.word
+        if look.kind == "other":
+            return "not a pulse train"
+        return ""
+
+    def _step_candidate(self, c: Channel) -> bool:
+        """A STEP, UP or DOWN candidate: a step train, or pulses the waveform cannot tell from
+        steps at one rate on a line named so; never a line the relations rule out."""
+        look = self.looks[c.index]
+        if self.bus.no_step(c.index) is not None:
+            return False
+        if look.is_step_like:
+            return True
+        hint = self.hints[c.index]
+        if look.step_by_name and any(hint.fits(r) for r in ("step", "up", "down")):
+            self.by_name.add(c.index)
+            return True
+        return False
+
+    def _enable_candidate(self, c: Channel) -> bool:
+        """An ENABLE candidate: a changing line that is no bus clock or data (a bus's chip
+        select may be the ENABLE of an axis that moves while the bus idles)."""
+        return c.index not in self.bus.clocks and c.index not in self.bus.data
+
+    def _dir_candidate(self, c: Channel) -> bool:
+        """A DIR candidate: a changing line that is no bus data (a line that gates another may
+        still be the DIR of a third)."""
+        return c.index not in self.bus.data
 
     def _phase_axis(self, g: PhaseGroup) -> None:
         roles = [
@@ -331,7 +447,8 @@ class _Inference:
                 continue
             look = self.looks[s.index]
             assert look.pulses is not None
-            roles = [self.choice("step", s, look.evidence, active=look.pulses.level)]
+            basis: Basis = "name" if s.index in self.by_name else "waveform"
+            roles = [self.choice("step", s, look.evidence, basis, active=look.pulses.level)]
             fit = dirs.get(s.index)
             if fit is not None:
                 note = self.dir_notes.get(fit.d.index, "")
@@ -484,6 +601,9 @@ class _Inference:
                 continue
             active = 0 if served[0] else 1
             axes = [moving[k] for k in served[active]]
+            # an ENABLE changes where its axes stand still, never while one runs
+            if any(sum(at_pauses(e.edges, a.motion)[:2]) < len(e.edges) for a in axes):
+                continue
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
                 f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
@@ -558,6 +678,10 @@ class _Inference:
                 continue
             if c.index in self.why:
                 why = self.why[c.index]
+            elif c.index in self.bus.data:
+                why = self.bus.data[c.index]
+            elif self.bus.no_step(c.index) is not None:
+                why = f"{self.bus.no_step(c.index)}: not a step signal"
             else:
                 look = self.looks[c.index]
                 why = look.evidence
@@ -566,13 +690,69 @@ class _Inference:
                 elif look.kind == "constant":
                     why += ": an unused probe, or a line that did not change while captured"
             unassigned.append(Unassigned(c.name, c.index, why))
-        return Proposal(axes, shared, tuple(unassigned), tuple(self.conflicts))
+        return Proposal(
+            axes,
+            shared,
+            tuple(unassigned),
+            tuple(self.conflicts),
+            tuple(self._looks()),
+            tuple(self.refs[c.index] for c in self._candidates()),
+            self.named,
+        )
+
+    def _looks(self) -> list[LineLook]:
+        phase = {c.index for a in self.axes if a.kind == "phases" for c in a.channels}
+        out = []
+        for c in self.cap.channels:
+            if len(c.xz_times):
+                word = "unknown (x/z)"
+            elif c.index in phase:
+                word = "phase output"
+            else:
+                word = self.bus.words.get(c.index) or self.looks[c.index].word
+            out.append(LineLook(c.name, c.index, word))
+        return out
+
+    def _candidates(self) -> list[Channel]:
+        """The channels most like a STEP, best first: named so, then by how they look (a step
+        train, then pulses at one rate, then coded pulses), then the most pulses; never a line
+        the waveform rules out (a clock, PWM, a serial line, a bus's line, a gate)."""
+        rank = {"pulses": 0, "periodic": 1, "bursts": 2, "coded": 3}
+        cands = [
+            c
+            for c in self.cap.channels
+            if self.looks[c.index].kind in rank
+            and self.bus.no_step(c.index) is None
+            and not len(c.xz_times)
+        ]
+
+        def key(c: Channel) -> tuple[int, int, int]:
+            look = self.looks[c.index]
+            count = look.pulses.count if look.pulses is not None else 0
+            return (0 if self.hints[c.index].fits("step") else 1, rank[look.kind], -count)
+
+        return sorted(cands, key=key)
 
 
 def propose(capture: Capture) -> Proposal:
     """Propose axes and roles for ``capture``'s channels from their waveforms.
 
-    The proposal is :attr:`~wavecheck.roles.model.Proposal.unambiguous` when it may be used without
-    asking; otherwise :attr:`~wavecheck.roles.model.Proposal.ambiguous` lists the conflicts.
+    The proposal is :attr:`~wavecheck.roles.proposal.Proposal.unambiguous` when it may be used
+    without asking; otherwise :attr:`~wavecheck.roles.proposal.Proposal.ambiguous` lists the
+    conflicts.
     """
     return _Inference(capture).run()
+
+
+def best_channel(capture: Capture, role: str) -> str | None:
+    """The ``--map`` reference of the channel most like ``role`` for a hint: the one channel
+    whose name says ``role``, else for a pulse role the channel most like a STEP on its own
+    waveform (no relations between lines are looked at); None when there is none."""
+    inference = _Inference(capture)
+    named = [c for c in capture.channels if inference.hints[c.index].fits(role)]
+    if len(named) == 1:
+        return inference.refs[named[0].index]
+    if role in ("step", "up", "down"):
+        best = inference._candidates()
+        return inference.refs[best[0].index] if best else None
+    return None

@@ -4,7 +4,8 @@ Names only help: they break ties between waveform candidates and name the axes; 
 decides. Matching is case-insensitive on the name's words (split at anything not a letter or
 digit, and between letters and digits):
 
-- STEP: ``step``, ``stp``, ``pul``, ``pulse``, ``clk``, ``clock``;
+- STEP: ``step``, ``stp``, ``pul``, ``pulse`` (not ``clk``: in a capture that is a clock far
+  more often than a drive's CLK input);
   DIR: ``dir``, ``direction``; ``cw``/``ccw`` fit a DIR or, on pulse lines, UP/DOWN;
   UP/DOWN: ``up``, ``down``, ``dn``; ENABLE: ``en``, ``ena``, ``enable``, ``enbl``;
   phases: ``phase``/``ph`` followed by a letter A..E (``phase-A``, ``PHB``).
@@ -19,10 +20,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["NameHint", "name_hint"]
+__all__ = ["NAMED_KINDS", "NameHint", "leaf", "name_hint", "named_kind"]
 
 _KEYWORDS: dict[str, frozenset[str]] = {
-    **dict.fromkeys(("step", "stp", "pul", "pulse", "clk", "clock"), frozenset({"step"})),
+    **dict.fromkeys(("step", "stp", "pul", "pulse"), frozenset({"step"})),
     **dict.fromkeys(("dir", "direction"), frozenset({"dir"})),
     "cw": frozenset({"dir", "up"}),
     "ccw": frozenset({"dir", "down"}),
@@ -87,3 +88,26 @@ def name_hint(name: str) -> NameHint:
         i += 1
     axis = axes[0] if roles and len(set(axes)) == 1 else None
     return NameHint(frozenset(roles), axis)
+
+
+def leaf(name: str) -> str:
+    """The last dotted part of a channel name, stripped, lower case, ``_`` as ``-``
+    (``"stepgen.0.phase_A"`` → ``"phase-a"``): what a channel named after its role is called."""
+    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
+
+
+#: The roles of each kind of axis that a channel named after its role takes without ``--map``
+#: (``check`` maps them by name, :func:`wavecheck.engine.auto_map`): kind → (step type, roles).
+#: A capture is named after its roles when a channel is called ``step``, ``up`` or ``phase-A``.
+NAMED_KINDS: dict[str, tuple[int, tuple[str, ...]]] = {
+    "step": (0, ("step", "dir", "enable")),
+    "up": (1, ("up", "down", "enable")),
+    "phase-a": (2, ("phase-A", "phase-B", "phase-C", "phase-D", "phase-E", "enable")),
+}
+
+
+def named_kind(names: list[str]) -> str | None:
+    """``"step"``, ``"up"`` or ``"phase-a"`` when one of ``names`` is called after that role (the
+    first in this order), else None: then ``check`` maps the channels by their names."""
+    leaves = {leaf(n) for n in names}
+    return next((k for k in NAMED_KINDS if k in leaves), None)

@@ -11,7 +11,9 @@ as phase-A..E,
 - the time spent in consecutive states is alike (median ratio below 3), as for a motor turning,
   unlike a pulse train's short pulses and long gaps.
 
-Larger groups are tried first; a group found is not reused. Which channel is phase-A among the
+Larger groups are tried first, among channels that pairwise change in turns (each output
+changes twice a cycle, so between two changes of one the others change at most twice); a group
+found is not reused. Which channel is phase-A among the
 orders that fit is told by the names when they say, else the lowest channel fits first (an order
 that fits reversed only flips the direction).
 """
@@ -156,6 +158,38 @@ def _steady(times: npt.NDArray[np.int64]) -> bool:
     return float(np.median(ratio)) <= _MAX_DWELL_RATIO
 
 
+def _interleaved(a: Channel, b: Channel) -> bool:
+    """Whether ``a`` and ``b`` can be two outputs of one phase group: in every LinuxCNC table each
+    output changes twice a cycle, so between two changes of one the other changes at most twice,
+    but where the walk turns back (at most a fifth of the changes)."""
+    if max(len(a.edges), len(b.edges)) > 2 * min(len(a.edges), len(b.edges)) + 4:
+        return False
+    for x, y in ((a, b), (b, a)):
+        between = np.bincount(np.searchsorted(x.edges, y.edges), minlength=len(x.edges) + 1)
+        if np.count_nonzero(between[1:-1] > 2) > _MAX_REVERSALS * len(x.edges):
+            return False
+    return True
+
+
+def _cliques(pool: Sequence[Channel], m: int, fits: dict[int, set[int]]) -> list[list[Channel]]:
+    """Every group of ``m`` channels of ``pool`` (in pool order) whose pairs all fit."""
+    out: list[list[Channel]] = []
+
+    def grow(group: list[Channel], start: int) -> None:
+        if len(group) == m:
+            out.append(list(group))
+            return
+        for k in range(start, len(pool)):
+            c = pool[k]
+            if all(c.index in fits[g.index] for g in group):
+                group.append(c)
+                grow(group, k + 1)
+                group.pop()
+
+    grow([], 0)
+    return out
+
+
 def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
     """Disjoint phase groups among ``channels`` (each with at least 8 edges), largest first."""
     pool = [c for c in channels if len(c.edges) >= 8]
@@ -164,12 +198,15 @@ def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
     by_size: dict[int, list[int]] = {}
     for number, (_, table) in STATE_TABLES.items():
         by_size.setdefault(max(table).bit_length(), []).append(number)
+    longest = {m: max(len(STATE_TABLES[n][1]) for n in numbers) for m, numbers in by_size.items()}
+    fits: dict[int, set[int]] = {c.index: set() for c in pool}
+    for a, b in itertools.combinations(pool, 2):
+        if _interleaved(a, b):
+            fits[a.index].add(b.index)
+            fits[b.index].add(a.index)
     for m in sorted(by_size, reverse=True):
-        for group in itertools.combinations(pool, m):
+        for group in _cliques(pool, m, fits):
             if any(c.index in used for c in group):
-                continue
-            counts = [len(c.edges) for c in group]
-            if max(counts) > 2 * min(counts) + 4:
                 continue
             # a look at the first _PREFIX changes first: most groups fail there, cheaply
             cut = min(int(c.edges[min(len(c.edges), _PREFIX) - 1]) for c in group)
@@ -181,6 +218,11 @@ def find_phase_groups(channels: Sequence[Channel]) -> list[PhaseGroup]:
             ]
             h_times, h_states, h_initial = _states(head)
             h_seq = np.r_[h_initial, h_states]
+            # a walk of a table of L states visits L states at most, 2 bits changing at once
+            flips = np.bitwise_xor(h_seq[1:], h_seq[:-1])
+            beyond_one = flips & (flips - 1)  # flips of 2 bits or more …
+            if len(np.unique(h_seq)) > longest[m] or np.any(beyond_one & (beyond_one - 1)):
+                continue  # … of 3 or more
             if not _steady(h_times) or not any(
                 _fit(head, number, h_seq, 0) is not None for number in by_size[m]
             ):

@@ -2,7 +2,7 @@
 
 The fast paths are: members inflated straight from the file (zlib-ng or zlib, stored or
 deflated), and changed samples found by comparing 8-byte words with the same bytes one sample
-earlier (``_changed_bytes``). Edges are put exactly on, and one sample
+earlier (``_changed_words``). Edges are put exactly on, and one sample
 either side of, word boundaries (every 8 samples), read boundaries (``chunk_bytes``) and member
 boundaries, so a carry or an off-by-one at any of them shows up.
 """
@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from tests.wavecheck.capture.srutil import edges_by_unpacking, write_sr
 from wavecheck.capture import sr
-from wavecheck.capture.sr import _changed_bytes, _EdgeFinder, read_sr
+from wavecheck.capture.sr import _changed_words, _EdgeFinder, read_sr
 
 
 def _toggles_at(n: int, positions: list[int], unitsize: int, bit: int) -> bytes:
@@ -78,23 +78,31 @@ def test_stored_members_and_sparse_words(tmp_path: Path) -> None:
             assert (ch.initial, ch.edges.tolist()) == edges_by_unpacking(raw.tobytes(), 1, ch.index)
 
 
-def _simple_changes(block: np.ndarray, step: int) -> tuple[list[int], list[int]]:
-    """Byte indexes into ``block[step:]`` that differ from ``step`` bytes earlier, and the XOR."""
+def _simple_changes(block: np.ndarray, step: int) -> list[int]:
+    """8·byte + bit for every bit of ``block[step:]`` that differs from ``step`` bytes earlier."""
     d = block[step:] ^ block[: len(block) - step] if len(block) > step else block[:0]
-    at = np.flatnonzero(d)
-    return at.tolist(), d[at].tolist()
+    return np.flatnonzero(np.unpackbits(d, bitorder="little")).tolist()
 
 
 @pytest.mark.parametrize("n", [0, 1, 2, 7, 8, 9, 15, 16, 17, 24, 25, 1000])
 @pytest.mark.parametrize("step", [1, 2, 3, 8, 9])
-def test_changed_bytes_equals_xor_and_flatnonzero(n: int, step: int) -> None:
+def test_changed_words_equal_xor_and_unpackbits(n: int, step: int) -> None:
+    """Sparse and dense changes, one or several bits a byte, one or several bytes a word."""
     rng = np.random.default_rng(n * 10 + step)
     for density in (0.0, 0.01, 0.5, 1.0):
-        level = np.where(rng.random(n) < density, rng.integers(1, 256, n), 0).astype(np.uint8)
-        block = np.bitwise_xor.accumulate(level) if n else level  # changes where level != 0
-        for scratch in (None, np.zeros(2, dtype=bool), np.ones(n // 8 + 1, dtype=bool)):
-            at, xor = _changed_bytes(block, step, scratch)
-            assert (at.tolist(), xor.tolist()) == _simple_changes(block, step)
+        for one_bit in (True, False):
+            flips = rng.integers(1, 256, n) if not one_bit else 1 << rng.integers(0, 8, n)
+            level = np.where(rng.random(n) < density, flips, 0).astype(np.uint8)
+            block = np.bitwise_xor.accumulate(level) if n else level  # changes where level != 0
+            for scratch in (None, np.zeros(2, dtype=bool), np.ones(n // 8 + 1, dtype=bool)):
+                changed = _changed_words(block, step, scratch)
+                assert changed is not None
+                at, xor = changed
+                bits = np.unpackbits(xor.view(np.uint8), bitorder="little").reshape(-1, 64)
+                word, bit = np.nonzero(bits)  # bit b of a word: byte b // 8 from its start
+                got = (at[word] + bit // 8) * 8 + bit % 8
+                assert got.tolist() == _simple_changes(block, step)
+                assert (np.diff(at) > 0).all() and (at % 8 == 0).all()
 
 
 @settings(max_examples=300)
@@ -125,17 +133,24 @@ def test_edge_finder_equals_unpackbits(unitsize: int, data: st.DataObject) -> No
     wanted = data.draw(st.sets(st.sampled_from(range(len(bits)))), label="wanted slots")
     # the share of changed words above which a block is XORed whole: 0 always, 2 never
     dense = data.draw(st.sampled_from([0.0, sr.DENSE_WORDS, 2.0]), label="dense")
+    peek = data.draw(st.booleans(), label="edges read after every block (streaming)")
     finder = _EdgeFinder(unitsize, bits)
     finder.want(wanted)
+    got: list[list[int]] = [[] for _ in bits]
     saved, sr.DENSE_WORDS = sr.DENSE_WORDS, dense
     try:
         for a, b in zip([0, *cuts], [*cuts, n], strict=True):
             finder.add(np.frombuffer(raw, np.uint8)[a * unitsize : b * unitsize])
+            if peek:  # as a streamed read: everything up to the block's end is known
+                for slot, bit in enumerate(bits):
+                    so_far = [e for e in edges_by_unpacking(raw, unitsize, bit)[1] if e < b]
+                    assert finder.counted[slot] == len(so_far)
+                    got[slot] += finder.edges(slot).tolist()
     finally:
         sr.DENSE_WORDS = saved
     assert finder.nsamples == n
     for slot, bit in enumerate(bits):
         initial, edges = edges_by_unpacking(raw, unitsize, bit)
-        got = finder.edges(slot).tolist()
-        assert (finder.initial[slot], got) == (initial, edges if slot in wanted else [])
+        got[slot] += finder.edges(slot).tolist()
+        assert (finder.initial[slot], got[slot]) == (initial, edges if slot in wanted else [])
         assert finder.counted[slot] == len(edges)  # unwanted bits: only counted

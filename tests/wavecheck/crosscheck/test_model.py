@@ -31,7 +31,8 @@ def test_parse_annotations() -> None:
         "21-21 counter-1: 2\n"
     )
     got = parse_annotations(out, "x.sr")
-    assert got == DecoderOutput([1, 2], [(10, 20, 1), (20, 30, -1)])
+    assert got.counts.tolist() == [1, 2]
+    assert got.positions.tolist() == [[10, 20, 1], [20, 30, -1]]
     with pytest.raises(CaptureError, match="unexpected stepper_motor line"):
         parse_annotations("1-2 stepper_motor-1: fast\n", "x.sr")
 
@@ -58,7 +59,7 @@ def _result(
         steps=steps,
         rising=steps,
         sigrok_input=SigrokInput(str(vcd), ["step", "dir"], 5, converted=True),
-        sigrok=DecoderOutput(counts, positions),
+        sigrok=DecoderOutput.of(counts, positions),
     )
 
 

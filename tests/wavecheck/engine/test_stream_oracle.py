@@ -51,6 +51,7 @@ def _same(capture: Capture, axes: list[AxisMap], drives: dict, block: int, **kw:
     streamed = _check(capture, axes, drives, block, **kw)
     assert machine_dict(streamed, 10**6) == machine_dict(whole, 10**6)
     for a, b in zip(whole.axes, streamed.axes, strict=True):
+        assert all(r.histogram() is not None for r in a.rules)  # pictures: kept
         assert [r.histogram() for r in a.rules] == [r.histogram() for r in b.rules]
         for ra, rb in zip(a.rules, b.rules, strict=True):
             assert ra.max_measured_ns == rb.max_measured_ns

@@ -718,7 +718,10 @@ class VcdBlocks:
 
     A bit of a vector mapped as a channel (:meth:`Capture.bit` on the skeleton: ``stout[3]``)
     becomes a channel numbered after the file's, its edges read from the vector's value changes
-    in the same pass (before :meth:`blocks`)."""
+    in the same pass (before :meth:`blocks`).
+
+    The header is read once, here; with ``source`` (an open stream such as standard input,
+    ``path`` then only names it) the body is read from it by the one call of :meth:`blocks`."""
 
     def __init__(
         self,
@@ -729,12 +732,20 @@ class VcdBlocks:
         chunk_bytes: int = DEFAULT_CHUNK_BYTES,
         max_token_bytes: int = MAX_TOKEN_BYTES,
         channels: Iterable[int] | None = None,
+        source: BinaryIO | None = None,
     ) -> None:
         self.path = path
         self.samplerate, self.resolution_s = samplerate, resolution_s
         self.chunk_bytes, self.max_token_bytes = max(1, chunk_bytes), max_token_bytes
-        with open_vcd(path) as f:
-            self.header, _ = read_header(path, f)
+        self._stream = source is not None
+        #: a stream's body bytes the header read took (a file is opened again at its body)
+        self._body: tuple[BinaryIO, bytes] | None = None
+        if source is not None:
+            self.header, rest = read_header(path, source)
+            self._body = (source, rest)
+        else:
+            with open_vcd(path) as f:
+                self.header, _ = read_header(path, f)
         self.notes: list[str] = []
         self.tb = header_timebase(self.header, self.notes)
         self.lay = layout_of(self.header)
@@ -826,12 +837,19 @@ class VcdBlocks:
         from wavecheck.capture.blocks import EdgeBlock
 
         b = self.builder = _EdgeBuilder(len(self.lay.ids) + len(self.bit_channels))
-        with open_vcd(self.path) as f:
-            _, rest = read_header(self.path, f)
+        if self._body is not None:
+            f, rest = self._body
+            self._body = None
+        elif self._stream:
+            raise UsageError(f"{self.path}: a stream is read once (its blocks were taken already)")
+        else:  # a file: opened again at its body (the header was read once, above)
+            f, rest = open_vcd(self.path), b""
+            f.seek(self.header.body_offset)
+        with contextlib.nullcontext(f) if self._stream else f:
             body = _Body(
                 self.path, _IdMap(self.lay.ids, self.lay.vector_ids, self.bit_ids), b,
-                self.header.body_line, self.header.body_offset, f if f.seekable() else None,
-                self.bit_plan,
+                self.header.body_line, self.header.body_offset,
+                f if not self._stream and f.seekable() else None, self.bit_plan,
             )  # fmt: skip
             known = np.zeros(b.nsig, dtype=bool)
             started = False

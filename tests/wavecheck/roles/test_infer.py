@@ -21,14 +21,27 @@ from wavecheck.roles import Proposal, propose
 from wavecheck.roles.dirs import DirFit, assign
 from wavecheck.roles.names import name_hint
 
-from .waves import capture, pulses
+from ..waves import capture, pulses, renamed
 
-GOLDEN = Path(__file__).resolve().parents[2] / "captures" / "golden"
+GOLDEN = Path(__file__).resolve().parents[3] / "captures" / "golden"
 US = 1000  # ticks (ns) per µs
 
 
 def _roles(p: Proposal) -> dict[str, dict[str, str]]:
     return {a.name: {r.role: r.channel for r in a.roles} for a in p.axes}
+
+
+# periods of the first (last) steps of a move, in units of its period: from rest at constant
+# acceleration (steps at times proportional to the square roots of 1, 2, 3 …)
+_RAMP = (3.7, 1.55, 1.2)
+
+
+def _move(t0: int, n: int, period: int = 100 * US) -> list[int]:
+    """Pulse starts of one move of ``n`` steps after ``t0``: it speeds up over three steps and
+    slows down over three (periods 3.7, 1.55, 1.2 × ``period``), as a motor does; a train at one
+    rate is no step train to the waveform (:mod:`wavecheck.roles.rates`)."""
+    factors = [_RAMP[min(k, n - 1 - k)] if min(k, n - 1 - k) < 3 else 1.0 for k in range(n)]
+    return [t0 + int(x) for x in np.cumsum(factors) * period]
 
 
 # ---------------------------------------------------------------- real captures
@@ -104,26 +117,14 @@ def test_golden_traces(trace: str, kind: str, step_type: int, mapping: dict[str,
 
 def test_golden_dir_decided_by_waveform_when_it_changes() -> None:
     for trace in ("g202-p20-worst-dirhold", "xylotex-dirsetup-zero"):
-        d = propose(open_capture(GOLDEN / f"{trace}.vcd")).axes[0].role("dir")
+        cap = open_capture(GOLDEN / f"{trace}.vcd")
+        # named step/dir: taken by name as check takes them, the waveform's fit in the evidence
+        d = propose(cap).axes[0].role("dir")
+        assert d is not None and d.basis == "name"
+        assert "; toggles 2 times, only between pulses of 'step'" in d.evidence
+        d = propose(renamed(cap, ["s", "d"])).axes[0].role("dir")
         assert d is not None and d.basis == "waveform"
-        assert d.evidence.startswith("toggles 2 times, only between pulses of 'step'")
-
-
-def _renamed(cap: Capture, names: list[str]) -> Capture:
-    chans = [
-        Channel(name=n, index=c.index, initial=c.initial, edges=c.edges)
-        for n, c in zip(names, cap.channels, strict=True)
-    ]
-    return Capture(
-        cap.path,
-        cap.format,
-        cap.timebase,
-        cap.resolution_ticks,
-        cap.samplerate_hz,
-        cap.start,
-        cap.end,
-        chans,
-    )
+        assert d.evidence.startswith("toggles 2 times, only between pulses of 's'")
 
 
 @pytest.mark.parametrize(
@@ -139,7 +140,7 @@ def _renamed(cap: Capture, names: list[str]) -> Capture:
 def test_golden_traces_with_neutral_names(trace: str) -> None:
     cap = open_capture(GOLDEN / f"{trace}.vcd")
     named = propose(cap).axes[0]
-    neutral = propose(_renamed(cap, [f"D{c.index}" for c in cap.channels]))
+    neutral = propose(renamed(cap, [f"D{c.index}" for c in cap.channels]))
     assert neutral.unambiguous, neutral.text()
     axis = neutral.axes[0]
     assert (axis.kind, axis.step_type) == (named.kind, named.step_type)
@@ -174,34 +175,45 @@ def test_names_give_roles_and_axes() -> None:
 
 
 def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
-    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
-    # toggles at 502 µs: inside the pulse at 500..505 µs
-    p = propose(capture({"s": (0, step), "d": (0, [502 * US, 1203 * US])}))
+    starts = _move(0, 19)
+    step = pulses(starts, 5 * US)
+    # toggles 2 µs into the fifth pulse, and between the 12th and 13th
+    p = propose(capture({"s": (0, step), "d": (0, [starts[4] + 2 * US, starts[11] + 50 * US])}))
     assert _roles(p) == {"a": {"step": "s"}}
     assert [u.channel for u in p.unassigned] == ["d"]
 
 
 def test_waveform_beats_the_name() -> None:
-    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
-    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    step = pulses(_move(0, 19), 5 * US)
+    p = propose(capture({"X DIR": (0, step), "X STEP": (0, [1003 * US])}))
     s = p.axes[0].role("step")
-    assert s is not None and s.channel == "DIR" and "the waveform decides" in s.evidence
+    assert s is not None and s.channel == "X DIR" and "the waveform decides" in s.evidence
+
+
+def test_channels_named_after_their_roles_are_what_check_maps() -> None:
+    """Issue 26: a channel called ``step`` is the STEP ``check`` maps without --map
+    (engine.auto_map); the proposal is that mapping, with what the waveform says against it."""
+    step = pulses(_move(0, 19), 5 * US)
+    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
+    assert all(r.basis == "name" for r in p.axes[0].roles)
+    (note,) = p.axes[0].notes
+    assert note.startswith("step 1='STEP' is taken by its name, but its waveform says it is no ")
+    assert "check checks it as named" in note
 
 
 def _reversing_axis(
     t0: int, reversals: list[int], period: int = 100 * US
 ) -> tuple[list[int], list[int]]:
     """Starts of pulses and DIR toggles of an axis that reverses after the given pulse counts:
-    each reversal slows down (3 periods), pauses, and DIR changes 10 µs before the next pulse."""
+    each move speeds up and slows down (:func:`_move`), pauses, and DIR changes 10 µs before the
+    next pulse."""
     starts: list[int] = []
     toggles: list[int] = []
     t = t0
     for n in reversals:
-        for k in range(n):
-            slow = 3 if k in (0, n - 1) else 1
-            t += period * slow
-            starts.append(t)
-        t += 5 * period
+        starts += _move(t, n, period)
+        t = starts[-1] + 5 * period
         toggles.append(t + 3 * period - 10 * US)
     return starts, toggles[:-1]
 
@@ -224,23 +236,19 @@ def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
 
 
 def test_a_change_where_two_steps_pause_is_ambiguous_however_near_to_one() -> None:
-    # both lines pause from 1.2 ms to 3 ms; the single change of "d" at 1.21 ms is 5 µs after a
-    # pulse of "s" and 1.8 ms before one of "t": nearness is no proof, so it is refused
-    s = pulses(
-        [100 * US * k for k in range(1, 13)] + [3000 * US + 100 * US * k for k in range(12)], 5 * US
-    )
-    t = pulses(
-        [50 * US + 100 * US * k for k in range(1, 12)]
-        + [3000 * US + 50 * US + 100 * US * k for k in range(12)],
-        5 * US,
-    )
-    p = propose(capture({"s": (0, s), "t": (0, t), "d": (0, [1205 * US])}))
+    # both lines pause from about 1.6 ms to 3 ms; the single change of "d" is 15 µs after the last
+    # pulse of "s" and 1.5 ms before the next one of "t": nearness is no proof, so it is refused
+    s_starts = _move(0, 12) + _move(3000 * US, 12)
+    s = pulses(s_starts, 5 * US)
+    t = pulses(_move(50 * US, 11) + _move(3050 * US, 12), 5 * US)
+    change = s_starts[11] + 20 * US
+    p = propose(capture({"s": (0, s), "t": (0, t), "d": (0, [change])}))
     assert not p.unambiguous
     assert "fits as the DIR of several STEP lines" in p.ambiguous[0].question
     assert all(a.role("dir") is None for a in p.axes)
     # when "t" runs steadily through the change, the change proves "d" is not its DIR
-    t2 = pulses([50 * US + 100 * US * k for k in range(1, 45)], 5 * US)
-    p2 = propose(capture({"s": (0, s), "t": (0, t2), "d": (0, [1205 * US])}))
+    t2 = pulses(_move(50 * US, 44), 5 * US)
+    p2 = propose(capture({"s": (0, s), "t": (0, t2), "d": (0, [change])}))
     assert p2.unambiguous, p2.text()
     assert _roles(p2) == {"a": {"step": "s", "dir": "d"}, "b": {"step": "t"}}
     assert "'t' runs steadily through 1 of its changes" in p2.axis("a").role("dir").evidence
@@ -281,8 +289,8 @@ def test_dirs_are_given_only_where_every_matching_agrees() -> None:
 
 
 def test_up_down_pair_refused_when_unchanging_lines_could_be_dirs() -> None:
-    up = pulses([100 * US * k for k in range(1, 11)], 5 * US)
-    down = pulses([3000 * US + 100 * US * k for k in range(1, 11)], 5 * US)
+    up = pulses(_move(0, 10), 5 * US)
+    down = pulses(_move(3000 * US, 10), 5 * US)
     clean = propose(capture({"p": (0, up), "q": (0, down)}))
     assert clean.unambiguous and clean.axes[0].kind == "up-down"
     assert clean.map_args() == "--map up=p,down=q" and clean.type_args() == "--type 1"
@@ -316,7 +324,7 @@ def test_shared_enable_and_active_low() -> None:
 
 
 def test_map_args_quote_and_fall_back_to_indices() -> None:
-    step = pulses([100 * US * k for k in range(1, 20)], 5 * US)
+    step = pulses(_move(0, 19), 5 * US)
     assert propose(capture({"S,1": (0, step)})).map_args() == "--map step=0"
     named = propose(capture({"STEP (Y axis)": (0, step), "Y DIR": (0, [])}))
     assert named.map_args() == "--map 'step=STEP (Y axis),dir=Y DIR'"
@@ -324,9 +332,10 @@ def test_map_args_quote_and_fall_back_to_indices() -> None:
 
 
 def test_long_capture_is_bounded_in_time() -> None:
-    rng = np.random.default_rng(3)
     n = 1_000_000
-    starts = np.cumsum(rng.integers(20, 60, n)) * 1000
+    # the rate swings slowly between 17 and 50 kHz
+    starts = np.cumsum(40 + (20 * np.sin(np.arange(n) * 2 * np.pi / 20_000)).astype(np.int64))
+    starts *= 1000
     step = np.empty(2 * n, np.int64)
     step[0::2], step[1::2] = starts, starts + 5000
     rev = starts[np.arange(5000, n, 50_000)] - 3000
@@ -361,8 +370,9 @@ class Machine:
 def _motion(
     rng: np.random.Generator, t0: int, reverse: bool = False
 ) -> list[tuple[int, list[int]]]:
-    """Moves of one axis: (direction, pulse start ticks); each move speeds up and slows down,
-    consecutive moves are apart by a pause longer than their slowest periods."""
+    """Moves of one axis: (direction, pulse start ticks); each move speeds up and slows down (the
+    rate grows as the square root of the steps taken, as under constant acceleration, from half
+    the top rate), consecutive moves are apart by a pause longer than their slowest periods."""
     moves = []
     t = t0
     direction = int(rng.choice([-1, 1]))
@@ -370,7 +380,7 @@ def _motion(
     for i in range(int(rng.integers(2 if reverse else 1, 6))):
         n = int(rng.integers(3, 40))
         ramp = np.minimum(np.minimum(np.arange(n) + 1, n - np.arange(n)), 4)
-        periods = (fast * 4 / ramp * rng.uniform(0.95, 1.05, n)).astype(np.int64)
+        periods = (fast * 2 / np.sqrt(ramp) * rng.uniform(0.95, 1.05, n)).astype(np.int64)
         starts = t + np.cumsum(periods)
         moves.append((direction, starts.tolist()))
         t = int(starts[-1]) + int(periods[-1] * rng.uniform(1.6, 4))

@@ -19,6 +19,7 @@ __all__ = [
     "AxisProposal",
     "Basis",
     "Conflict",
+    "LineLook",
     "Proposal",
     "RoleChoice",
     "SharedLine",
@@ -119,6 +120,37 @@ class Conflict:
 
 
 @dataclass(frozen=True)
+class LineLook:
+    """What one channel looks like, in a word or two (``"clock"``, ``"bus data"``)."""
+
+    channel: str
+    index: int
+    word: str
+
+
+#: How the lines of a capture without step signals are summed up: the words of
+#: :class:`LineLook` gathered under one heading each, in this order.
+_SUMMARY: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("clock", ("clock",)),
+    (
+        "SPI-like bus",
+        ("bus clock", "bus data", "chip select", "bus strobe"),
+    ),
+    ("serial line", ("serial line",)),
+    ("PWM", ("PWM",)),
+    ("periodic pulses", ("periodic pulses",)),
+    ("bursts at one rate", ("bursts at one rate",)),
+    ("coded pulses", ("coded pulses",)),
+    ("pulse train", ("pulse train",)),
+    ("enable/select", ("enable/select",)),
+    ("phase output", ("phase output",)),
+    ("other", ("other",)),
+    ("unknown (x/z)", ("unknown (x/z)",)),
+    ("unchanging", ("unchanging",)),
+)
+
+
+@dataclass(frozen=True)
 class Proposal:
     """Roles proposed for a capture's channels (see :func:`wavecheck.roles.propose`).
 
@@ -130,6 +162,14 @@ class Proposal:
     shared: tuple[SharedLine, ...] = ()
     unassigned: tuple[Unassigned, ...] = ()
     ambiguous: tuple[Conflict, ...] = field(default_factory=tuple)
+    looks: tuple[LineLook, ...] = ()
+    """What every channel looks like (for the summary of a capture without step signals)."""
+    candidates: tuple[str, ...] = ()
+    """``--map`` references of the channels most like a STEP, best first (for the hint of an
+    error: a line named so, a step train, then pulses the waveform cannot tell from steps)."""
+    named: bool = False
+    """The channels are named after their roles (``step``, ``up``, ``phase-A``): the axis is the
+    one ``check`` maps by those names without ``--map``, with what the waveforms say of it."""
 
     @property
     def unambiguous(self) -> bool:
@@ -146,6 +186,28 @@ class Proposal:
             if a.name == name:
                 return a
         raise KeyError(name)
+
+    def summary(self) -> str:
+        """What the lines look like, in one line: ``clock (clk); serial line (TX, RX); …``."""
+        by_word: dict[str, list[str]] = {}
+        for look in self.looks:
+            by_word.setdefault(look.word, []).append(look.channel)
+        parts = []
+        for heading, words in _SUMMARY:
+            if heading == "SPI-like bus":
+                roles = [(w, by_word.get(w, [])) for w in words]
+                if any(names for _, names in roles):
+                    inner = "; ".join(
+                        f"{w.removeprefix('bus ')} {', '.join(names)}"
+                        for w, names in roles
+                        if names
+                    )
+                    parts.append(f"{heading} ({inner})")
+                continue
+            names = [n for w in words for n in by_word.get(w, [])]
+            if names:
+                parts.append(f"{heading} ({', '.join(names)})")
+        return "; ".join(parts)
 
     def map_args(self) -> str:
         """The ``--map`` options that give this mapping, ready to paste into a shell."""
@@ -173,7 +235,8 @@ class Proposal:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON form: ``axes`` [{name, kind, step_type, map, roles [{role, channel, index,
-        evidence, basis}], notes}], ``shared``, ``unassigned``, ``ambiguous``, ``map_args``."""
+        evidence, basis}], notes}], ``shared``, ``unassigned``, ``ambiguous``, ``lines``
+        [{channel, index, look}], ``candidates`` and ``map_args``."""
         return {
             "axes": [
                 {
@@ -212,6 +275,8 @@ class Proposal:
             "ambiguous": [
                 {"question": c.question, "candidates": list(c.candidates)} for c in self.ambiguous
             ],
+            "lines": [{"channel": k.channel, "index": k.index, "look": k.word} for k in self.looks],
+            "candidates": list(self.candidates),
             "map_args": self.map_args() if self.axes else None,
         }
 
@@ -237,6 +302,6 @@ class Proposal:
             lines.append(
                 f"map: {self.map_args()}" + (f" {self.type_args()}" if self.type_args() else "")
             )
-        if not lines:
-            lines.append("no step signal found")
+        if not self.axes and not self.ambiguous:
+            lines.append(f"no step signal found: the lines look like {self.summary()}")
         return "\n".join(lines)
