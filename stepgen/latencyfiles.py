@@ -31,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wavecheck.errors import ConfigError
+from wavecheck.errors import ConfigError, UnitError
+from wavecheck.units import finite_float, parse_int
 
 __all__ = [
     "MAX_LATENCY_FILE_BYTES",
@@ -136,20 +137,36 @@ def read_text(path: str | Path) -> str:
 
 _read = read_text
 
+#: The largest latency a file may state: 1000 s (LinuxCNC is unusable beyond about 1 ms).
+MAX_LATENCY_NS = 10**12
+#: The largest count of one histogram bin (sums over bins and threads stay within int64).
+MAX_COUNT = 10**15
 
-def _us_to_ns(text: str) -> int:
-    return round(float(text) * 1000)
+
+def _int(text: str, path: str | Path, lineno: int, limit: int = MAX_LATENCY_NS) -> int:
+    """A whole number of the file, at most ``limit`` (one line naming the file and line)."""
+    try:
+        return parse_int(text, f"{path}: line {lineno}:", limit=limit)
+    except UnitError as err:
+        raise ConfigError(str(err)) from None
 
 
-def _nox(text: str) -> tuple[int, int, int] | None:
+def _us_to_ns(text: str, path: str | Path, lineno: int) -> int:
+    try:
+        us = finite_float(text, f"{path}: line {lineno}:", limit=MAX_LATENCY_NS // 1000)
+    except UnitError as err:
+        raise ConfigError(str(err)) from None
+    return round(us * 1000)
+
+
+def _nox(text: str, path: str | Path) -> tuple[int, int, int] | None:
     """(min_ns, max_ns, sdev_ns) of the base thread (or the only thread) in --nox output."""
     rows: dict[str, list[tuple[int, int, int]]] = {}
-    for line in text.splitlines():
+    for lineno, line in enumerate(text.splitlines(), 1):
         m = _NOX.match(line)
         if m:
-            rows.setdefault(m.group(2), []).append(
-                (_us_to_ns(m.group(3)), _us_to_ns(m.group(4)), _us_to_ns(m.group(5)))
-            )
+            ns = [_us_to_ns(m.group(k), path, lineno) for k in (3, 4, 5)]
+            rows.setdefault(m.group(2), []).append((ns[0], ns[1], ns[2]))
     if not rows:
         return None
     lines = rows.get("base") or next(iter(rows.values()))
@@ -165,15 +182,16 @@ def _cyclictest_hist(text: str, path: str | Path) -> tuple[np.ndarray, np.ndarra
     for lineno, line in enumerate(text.splitlines(), 1):
         m = _HIST_ROW.match(line)
         if m:
-            bins.append(int(m.group(1)))
-            cols.append([int(x) for x in m.group(2).split()])
+            bins.append(_int(m.group(1), path, lineno, MAX_LATENCY_NS // 1000))
+            cols.append([_int(x, path, lineno, MAX_COUNT) for x in m.group(2).split()])
             continue
         if line.startswith("# Max Latencies:"):
-            nums = [int(x) for x in re.findall(r"\d+", line.split(":", 1)[1])]
+            found = re.findall(r"\d+", line.split(":", 1)[1])
+            nums = [_int(x, path, lineno, MAX_LATENCY_NS // 1000) for x in found]
             max_lat = max(nums) if nums else None
         elif line.startswith("# Histogram Overflows:"):
-            nums = [int(x) for x in re.findall(r"\d+", line.split(":", 1)[1])]
-            overflows = sum(nums)
+            found = re.findall(r"\d+", line.split(":", 1)[1])
+            overflows = sum(_int(x, path, lineno, MAX_COUNT) for x in found)
         elif line.strip() and not line.startswith("#") and bins:
             raise ConfigError(
                 f"{path}: line {lineno}: not a cyclictest histogram row: {line.strip()!r}"
@@ -200,8 +218,10 @@ def read_latency_file(path: str | Path, cyclictest_unit: str = "us") -> tuple[in
     text = _read(path)
     stripped = text.strip()
     if re.fullmatch(r"\d+", stripped):
-        return int(stripped), f"{path}: LinuxCNC latency-test result (Max Jitter, ns)"
-    nox = _nox(text)
+        line = next(n for n, li in enumerate(text.splitlines(), 1) if li.strip())
+        ns = _int(stripped, path, line)
+        return ns, f"{path}: LinuxCNC latency-test result (Max Jitter, ns)"
+    nox = _nox(text, path)
     if nox is not None:
         lo, hi, _ = nox
         worst = max(abs(lo), hi)
@@ -220,7 +240,11 @@ def read_latency_file(path: str | Path, cyclictest_unit: str = "us") -> tuple[in
                 int(bins[nonzero[-1]]) + 1
             ) * 1000, f"{path}: cyclictest -h highest non-empty bin (upper edge)"
         raise ConfigError(f"{path}: cyclictest histogram is empty")
-    maxes = [int(m.group(2)) for li in text.splitlines() if (m := _CT_SUMMARY.match(li))]
+    maxes = [
+        _int(m.group(2), path, n, MAX_LATENCY_NS)
+        for n, li in enumerate(text.splitlines(), 1)
+        if (m := _CT_SUMMARY.match(li))
+    ]
     if maxes:
         factor = {"us": 1000, "ns": 1}.get(cyclictest_unit)
         if factor is None:
@@ -240,7 +264,7 @@ def read_histogram(path: str | Path) -> LatencyHistogram:
     Overflows (≥ the histogram size) are drawn as the ``# Max Latencies`` value.
     """
     text = _read(path)
-    nox = _nox(text)
+    nox = _nox(text, path)
     if nox is not None:
         lo, hi, sdev = nox
         worst = max(abs(lo), hi)

@@ -34,7 +34,9 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
+import stat
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -45,6 +47,7 @@ import numpy.typing as npt
 
 from wavecheck.engine.decode import StepEvents
 from wavecheck.errors import UsageError
+from wavecheck.units import check_finite
 
 __all__ = [
     "Command",
@@ -63,6 +66,8 @@ _TIME_COLUMN = re.compile(r"^\s*(?:time|t)[ _]?\(?(s|ms|us|µs|ns)\)?\s*$", re.I
 _TIME_NS = {"s": 1e9, "ms": 1e6, "us": 1e3, "µs": 1e3, "ns": 1.0}
 #: Most rows read from a command file (bounded memory on hostile input).
 MAX_ROWS = 50_000_000
+#: Longest line of a command file (a CSV row or a halsampler sample is tens of bytes).
+MAX_LINE = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -135,9 +140,8 @@ def _read_csv(
             ) from None
         times.append(t * scale)
         values.append(v)
-    t_ns = np.array(times)
-    if len(t_ns) and not np.all(np.abs(t_ns) < 2**62):
-        raise UsageError(f"{path}: a time is too large (or not finite)")
+    t_ns = np.array(times, dtype=np.float64)
+    check_finite(t_ns, lambda i: f"{path}: line {lines[i + 1][0]}: time in ns", limit=2**62)
     return np.rint(t_ns).astype(np.int64), np.array(values), header[p_col]
 
 
@@ -174,6 +178,36 @@ def _read_halsampler(
     return np.array(times, dtype=np.int64), np.array(values), fraction
 
 
+def _command_lines(p: Path) -> list[tuple[int, str]]:
+    """The non-blank, non-comment lines of a command file with their numbers (a UTF-8 byte
+    order mark dropped), read with bounds: a device or folder is refused before reading, a line
+    longer than :data:`MAX_LINE` or more than :data:`MAX_ROWS` rows end the reading."""
+    try:
+        mode = os.stat(p).st_mode
+    except OSError as err:
+        raise UsageError(f"{p}: cannot read the command file ({err.strerror})") from None
+    if stat.S_ISDIR(mode) or stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        what = "a folder" if stat.S_ISDIR(mode) else "a device"
+        raise UsageError(f"{p}: is {what}, not a command file (a CSV or halsampler output)")
+    lines: list[tuple[int, str]] = []
+    try:
+        with open(p, encoding="utf-8-sig", errors="replace") as fh:
+            lineno = 0
+            while text := fh.readline(MAX_LINE + 1):
+                lineno += 1
+                if len(text) > MAX_LINE:
+                    raise _bad(p, lineno, f"longer than {MAX_LINE} characters: not a command file")
+                stripped = text.strip()
+                if not stripped or stripped.startswith("#"):
+                    continue
+                lines.append((lineno, text))
+                if len(lines) > MAX_ROWS + 1:
+                    raise UsageError(f"{p}: more than {MAX_ROWS} rows")
+    except OSError as err:
+        raise UsageError(f"{p}: cannot read the command file ({err.strerror})") from None
+    return lines
+
+
 def read_command(
     path: str | Path,
     *,
@@ -190,18 +224,7 @@ def read_command(
             non-finite values, no rows, or more than :data:`MAX_ROWS`.
     """
     p = Path(path)
-    lines: list[tuple[int, str]] = []
-    try:
-        with open(p, encoding="utf-8", errors="replace") as fh:
-            for lineno, text in enumerate(fh, 1):
-                stripped = text.strip()
-                if not stripped or stripped.startswith("#"):
-                    continue
-                lines.append((lineno, text))
-                if len(lines) > MAX_ROWS + 1:
-                    raise UsageError(f"{p}: more than {MAX_ROWS} rows")
-    except OSError as err:
-        raise UsageError(f"{p}: cannot read the command file ({err.strerror})") from None
+    lines = _command_lines(p)
     if sample_period_s is not None:
         if sample_period_s <= 0:
             raise UsageError(f"{p}: the sample period must be > 0")
@@ -217,9 +240,8 @@ def read_command(
         guessed = "counts" if _counts_name(name) else "units"
     if not len(times):
         raise UsageError(f"{p}: no command rows")
-    if not np.all(np.isfinite(values)):
-        bad = int(np.flatnonzero(~np.isfinite(values))[0])
-        raise _bad(p, lines[bad + (0 if sample_period_s is not None else 1)][0], "not finite")
+    first = 0 if sample_period_s is not None else 1
+    check_finite(values, lambda i: f"{p}: line {lines[i + first][0]}")
     back = np.flatnonzero(np.diff(times) < 0)
     if len(back):
         i = int(back[0]) + 1

@@ -32,12 +32,20 @@ from typing import TextIO
 
 __all__ = [
     "DELAY_S",
+    "QUIET_HELP",
     "ProgressBar",
     "ProgressCallback",
     "activate",
     "current",
     "no_progress",
 ]
+
+#: The one meaning of ``-q/--quiet`` in both tools (wavecheck check/measure, stepgen simulate):
+#: no bar and no summary line; the requested outputs, warnings and errors still come.
+QUIET_HELP = (
+    "quiet: no progress bar and no summary line; only the report (or -o FILE), the files asked "
+    "for, warnings and errors (the same in wavecheck and stepgen)"
+)
 
 ProgressCallback = Callable[[int, int | None], None]
 """``callback(done, total)``: ``done`` units of ``total`` (None when the total is unknown)."""

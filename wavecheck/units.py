@@ -16,6 +16,10 @@ Numbers and units, the one policy of both tools (README "Numbers and units"):
 * A value outside what any capture or machine can mean (``1e400us``, ``1e-400 Hz``, a time
   beyond 10^9 s or below 1 fs) is a :class:`~wavecheck.errors.UnitError`; a refused value is
   shown shortened, never as a 400-digit number.
+* A plain number (a scale, a gain, a plant figure; a number in a data file) is read by
+  :func:`parse_number` / :func:`finite_float` / :func:`parse_int`: NaN, infinity, more than 40
+  significant digits, an exponent beyond 40 and a magnitude beyond :data:`MAX_NUMBER` are
+  refused in one line (:func:`number_option` is the ``argparse`` type of such options).
 * Values that are almost surely a unit slip are judged by :func:`check_plausible` with an
   option's :class:`Plausible` bounds: a base period below 1 us and a sample rate below 1 kHz are
   refused, a latency below 100 ns (other than 0) is warned about on stderr.
@@ -30,15 +34,19 @@ Fraction(31000, 1)
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from wavecheck.errors import UnitError
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "BASE_PERIOD",
@@ -47,8 +55,10 @@ __all__ = [
     "Dimension",
     "Plausible",
     "check_plausible",
+    "check_finite",
     "exact_ns",
     "exact_number",
+    "finite_float",
     "format_frequency",
     "format_ns",
     "format_rate",
@@ -56,8 +66,11 @@ __all__ = [
     "is_bare_number",
     "is_number",
     "json_number",
+    "number_option",
     "option_ns",
     "parse_frequency",
+    "parse_int",
+    "parse_number",
     "parse_option",
     "parse_quantity",
     "parse_time",
@@ -258,6 +271,93 @@ def parse_frequency(text: str | int | Fraction, default_unit: str | None = None)
             raise _Bad(f"period {shown(text)} must be positive to give a frequency", why)
         return 1 / value
     return value
+
+
+# -- plain numbers -----------------------------------------------------------------------------
+#: The largest magnitude of a plain number (no unit): beyond it no scale, gain, plant figure or
+#: value in a data file means anything, and float arithmetic on it overflows.
+MAX_NUMBER = 10**15
+
+
+def parse_number(text: object, what: str, *, limit: int | Fraction = MAX_NUMBER) -> Fraction:
+    """A plain number (no unit) written in ``text``, exact; ``what`` names it in the message
+    (``"--scale"``, ``"line 3"``).
+
+    Raises:
+        UnitError: not a number, NaN or infinity, too many digits, or beyond ``limit``.
+    """
+    t = str(text).strip()
+    if not re.fullmatch(_NUMBER, t):
+        why = "nan/inf is not a number here" if t.lower().lstrip("+-") in _NON_FINITE else ""
+        raise UnitError(f"{what} {shown(t)}: {why or 'not a number'}")
+    try:
+        value = _exact(t, t)
+    except _Bad as err:
+        raise UnitError(f"{what} {shown(t)}: {err.reason}") from None
+    if abs(value) > limit:
+        raise UnitError(f"{what} {shown(t)}: out of range (at most {_magnitude(limit)})")
+    return value
+
+
+def _magnitude(limit: int | Fraction) -> str:
+    return f"{float(limit):.3g} in magnitude".replace("e+", "e")
+
+
+_NON_FINITE = ("nan", "inf", "infinity", "snan")
+
+
+def finite_float(text: object, what: str, *, limit: int | Fraction = MAX_NUMBER) -> float:
+    """:func:`parse_number` as a float (finite, at most ``limit`` in magnitude)."""
+    return float(parse_number(text, what, limit=limit))
+
+
+def parse_int(text: object, what: str, *, limit: int = 2**62) -> int:
+    """A whole number written in ``text`` (digits, optional sign), at most ``limit`` in
+    magnitude; the digits are counted before any conversion, so a 5,000-digit number costs
+    nothing.
+
+    Raises:
+        UnitError: not a whole number, or beyond ``limit``.
+    """
+    t = str(text).strip()
+    digits = t.lstrip("+-")
+    if not digits.isascii() or not digits.isdigit() or len(t) - len(digits) > 1:
+        raise UnitError(f"{what} {shown(t)}: not a whole number")
+    if len(digits.lstrip("0")) > len(str(limit)) or abs(int(t)) > limit:
+        raise UnitError(f"{what} {shown(t)}: out of range (at most {_magnitude(limit)})")
+    return int(t)
+
+
+def check_finite(
+    values: npt.ArrayLike, where: Callable[[int], str], *, limit: int | Fraction = MAX_NUMBER
+) -> None:
+    """Refuse the first of ``values`` (numbers read with ``float()`` from a data file) that is
+    NaN, infinite (an overflowed ``1e999`` too) or beyond ``limit``; ``where(i)`` names the place
+    of value ``i`` (``"file: line 7"``).
+
+    Raises:
+        UnitError: one line naming the place and the value.
+    """
+    import numpy as np
+
+    a = np.asarray(values, dtype=np.float64)
+    bad = np.flatnonzero(~(np.abs(a) <= float(limit)))  # NaN compares false
+    if len(bad):
+        i = int(bad[0])
+        v = float(a[i])
+        why = "not a finite number" if not math.isfinite(v) else f"beyond {_magnitude(limit)}"
+        raise UnitError(f"{where(i)}: {shorten(repr(v))} is {why}")
+
+
+def number_option(text: str) -> float:
+    """``argparse`` ``type=`` of a plain-number option: :func:`finite_float` (the option's
+    name is added by argparse: ``argument --inertia: '1e308': out of range …``)."""
+    import argparse
+
+    try:
+        return finite_float(text, "")
+    except UnitError as err:
+        raise argparse.ArgumentTypeError(str(err).strip()) from None
 
 
 # -- command-line options ----------------------------------------------------------------------

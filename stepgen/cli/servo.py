@@ -42,6 +42,7 @@ from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
 from wavecheck.output import atomic_path, figure_file, figure_format
+from wavecheck.units import number_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 __all__ = ["add_servo_loop_arguments", "run_servo_loop"]
@@ -61,10 +62,10 @@ def add_servo_loop_arguments(parser: Any) -> None:
         "P = 1/servo period, FF1 = 1); servo: pid.output → amplifier of a motor and load",
     )
     add_pid_arguments(g)
-    g.add_argument("--ferror", type=float, help="[JOINT_n]FERROR (default 1.0)")
-    g.add_argument("--min-ferror", type=float, help="[JOINT_n]MIN_FERROR (default FERROR)")
+    g.add_argument("--ferror", type=number_option, help="[JOINT_n]FERROR (default 1.0)")
+    g.add_argument("--min-ferror", type=number_option, help="[JOINT_n]MIN_FERROR (default FERROR)")
     g.add_argument(
-        "--joint-max-velocity", type=float, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
+        "--joint-max-velocity", type=number_option, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
     )
     g.add_argument(
         "--plot",

@@ -37,8 +37,8 @@ from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import atomic_write, output_file
-from wavecheck.progress import activate
-from wavecheck.units import BASE_PERIOD, Plausible, option_ns, shorten
+from wavecheck.progress import QUIET_HELP, activate
+from wavecheck.units import BASE_PERIOD, Plausible, number_option, option_ns, shorten
 
 __all__ = ["build_config", "build_motion", "register", "run"]
 
@@ -70,12 +70,17 @@ def register(sub: Any) -> None:
         default="position",
         help="ctrl_type (default position)",
     )
-    g.add_argument("--position-scale", type=float, default=1.0, help="steps per position unit")
     g.add_argument(
-        "--maxvel", type=float, default=0.0, help="units/s (0 = only the step-rate limit)"
+        "--position-scale", type=number_option, default=1.0, help="steps per position unit"
     )
     g.add_argument(
-        "--maxaccel", type=float, default=0.0, help="units/s² (0 = full speed in one servo period)"
+        "--maxvel", type=number_option, default=0.0, help="units/s (0 = only the step-rate limit)"
+    )
+    g.add_argument(
+        "--maxaccel",
+        type=number_option,
+        default=0.0,
+        help="units/s² (0 = full speed in one servo period)",
     )
     for name in ("steplen", "stepspace", "dirsetup", "dirhold", "dirdelay"):
         g.add_argument(
@@ -90,8 +95,8 @@ def register(sub: Any) -> None:
         "ticks first); update-first shows the start-up quirk",
     )
     m = p.add_argument_group("motion")
-    m.add_argument("--position", type=float, help="constant position-cmd (units)")
-    m.add_argument("--velocity", type=float, help="constant velocity-cmd (units/s)")
+    m.add_argument("--position", type=number_option, help="constant position-cmd (units)")
+    m.add_argument("--velocity", type=number_option, help="constant velocity-cmd (units/s)")
     m.add_argument(
         "--command", metavar="FILE.csv", help="time_s,value rows, each held until the next"
     )
@@ -105,8 +110,12 @@ def register(sub: Any) -> None:
         "interval make-pulses can make occurs at its fewest periods (velocity mode; the default "
         "with --latency worst:J:RULE and no other motion)",
     )
-    m.add_argument("--move-vel", type=float, help="peak velocity of --move (default --maxvel)")
-    m.add_argument("--move-accel", type=float, help="acceleration of --move (default --maxaccel)")
+    m.add_argument(
+        "--move-vel", type=number_option, help="peak velocity of --move (default --maxvel)"
+    )
+    m.add_argument(
+        "--move-accel", type=number_option, help="acceleration of --move (default --maxaccel)"
+    )
     m.add_argument("--duration", help="simulated time with its unit (e.g. 2s, 500ms)")
     m.add_argument("--periods", type=int, help="simulated base periods")
     lat = p.add_argument_group("latency")
@@ -154,7 +163,7 @@ def register(sub: Any) -> None:
         default="fast",
         help="fast (default) or the plain per-period loop",
     )
-    o.add_argument("-q", "--quiet", action="store_true", help="no summary")
+    o.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     add_servo_loop_arguments(p)  # --pid: the closed loop (stepgen.cli.servo)
     add_simulate_arguments(p)  # --ini/--hal/--channel fill the options left at their defaults
     p.set_defaults(func=run)

@@ -25,7 +25,7 @@ from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
 from stepgen.tune import Stage, TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import atomic_path, atomic_write, figure_file, figure_format, output_file
-from wavecheck.units import time_ns
+from wavecheck.units import number_option, time_ns
 
 __all__ = [
     "add_pid_arguments",
@@ -83,7 +83,7 @@ def add_pid_arguments(group: Any) -> None:
     """pid's pins as options (LinuxCNC names; unset = the component's or the files' value)."""
     for dest, pin in GAIN_OPTIONS.items():
         group.add_argument(
-            "--" + dest.replace("_", "-"), dest=dest, type=float, help=f"pid.N.{pin}"
+            "--" + dest.replace("_", "-"), dest=dest, type=number_option, help=f"pid.N.{pin}"
         )
     group.add_argument(
         "--no-error-previous-target",
@@ -97,17 +97,27 @@ def add_pid_arguments(group: Any) -> None:
 def add_servo_arguments(group: Any) -> None:
     """The servo plant's options (``--plant servo``)."""
     d = ServoParams()
-    group.add_argument("--inertia", type=float, default=d.inertia, help="J, F·s²/unit")
-    group.add_argument("--viscous", type=float, default=d.viscous, help="B, F·s/unit")
+    group.add_argument("--inertia", type=number_option, default=d.inertia, help="J, F·s²/unit")
+    group.add_argument("--viscous", type=number_option, default=d.viscous, help="B, F·s/unit")
     group.add_argument(
-        "--torque-constant", type=float, default=d.torque_constant, help="Kt, F per amp unit"
+        "--torque-constant",
+        type=number_option,
+        default=d.torque_constant,
+        help="Kt, F per amp unit",
     )
-    group.add_argument("--coulomb", type=float, default=0.0, help="Coulomb friction, F")
-    group.add_argument("--load", type=float, default=0.0, help="constant load, F (e.g. gravity)")
+    group.add_argument("--coulomb", type=number_option, default=0.0, help="Coulomb friction, F")
     group.add_argument(
-        "--encoder-counts", type=float, default=0.0, help="encoder counts per unit (0 = exact)"
+        "--load", type=number_option, default=0.0, help="constant load, F (e.g. gravity)"
     )
-    group.add_argument("--amp-limit", type=float, default=0.0, help="amplifier limit (0 = none)")
+    group.add_argument(
+        "--encoder-counts",
+        type=number_option,
+        default=0.0,
+        help="encoder counts per unit (0 = exact)",
+    )
+    group.add_argument(
+        "--amp-limit", type=number_option, default=0.0, help="amplifier limit (0 = none)"
+    )
 
 
 def pid_gains(args: argparse.Namespace, defaults: PidGains) -> PidGains:
@@ -157,18 +167,26 @@ def register(sub: Any) -> None:
     )
     g.add_argument("--servo-period", default="1ms", help="servo thread period (default 1ms)")
     g.add_argument("--base-period", default="25us", help="base thread period (stepgen plant)")
-    g.add_argument("--position-scale", type=float, default=200.0, help="steps per unit (stepgen)")
-    g.add_argument("--maxvel", type=float, default=0.0, help="stepgen maxvel, units/s")
-    g.add_argument("--maxaccel", type=float, default=0.0, help="stepgen maxaccel, units/s²")
+    g.add_argument(
+        "--position-scale", type=number_option, default=200.0, help="steps per unit (stepgen)"
+    )
+    g.add_argument("--maxvel", type=number_option, default=0.0, help="stepgen maxvel, units/s")
+    g.add_argument("--maxaccel", type=number_option, default=0.0, help="stepgen maxaccel, units/s²")
     add_servo_arguments(p.add_argument_group("servo plant (--plant servo)"))
     t = p.add_argument_group("method")
-    t.add_argument("--step", type=float, default=0.01, help="step size, position units (0.01)")
+    t.add_argument(
+        "--step", type=number_option, default=0.01, help="step size, position units (0.01)"
+    )
     t.add_argument("--settle", default="200ms", help="the offset must go within this (200ms)")
-    t.add_argument("--band", type=float, default=0.02, help="settling band, fraction of the step")
+    t.add_argument(
+        "--band", type=number_option, default=0.02, help="settling band, fraction of the step"
+    )
     t.add_argument("--window", default="1s", help="length of each step response (1s)")
-    t.add_argument("--p-start", type=float, default=1.0, help="first P tried (1)")
+    t.add_argument("--p-start", type=number_option, default=1.0, help="first P tried (1)")
     t.add_argument("--joint", type=int, default=0, help="joint number of the INI/HAL lines")
-    t.add_argument("--ff-velocity", type=float, help="cruise speed of the FF comparison (stepgen)")
+    t.add_argument(
+        "--ff-velocity", type=number_option, help="cruise speed of the FF comparison (stepgen)"
+    )
     o = p.add_argument_group("output")
     o.add_argument("--format", choices=("text", "json"), default="text")
     o.add_argument(
@@ -389,6 +407,12 @@ def run(args: argparse.Namespace) -> int:
         band=args.band,
         p_start=args.p_start,
     )
+    gains = (res.ku, res.final.Pgain, res.final.Igain, res.final.Dgain)
+    if not all(math.isfinite(g) for g in gains):
+        raise ConfigError(
+            "the model gives no finite gains for these plant figures (check --inertia, "
+            "--viscous, --torque-constant and their units)"
+        )
     ff_lines: list[str] = []
     ff = None
     if cfg is not None:

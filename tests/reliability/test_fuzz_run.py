@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from tests.reliability.corpus import Case, one_line_error, sr_cases, vcd_cases
-from tests.reliability.fuzz import run_random
+from tests.reliability.fuzz import FORKED, READERS, run_random
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -27,6 +27,19 @@ REPO = Path(__file__).resolve().parents[2]
 def test_bounded_fuzz(tmp_path: Path, reader: str) -> None:
     tally = run_random(reader, 300, seed=1, out=tmp_path)  # each case bounded in time, memory
     assert tally.cases > 300 and tally.peak_bytes > 0
+    assert not tally.failures, tally.report(tmp_path)
+
+
+@pytest.mark.parametrize("reader", sorted(FORKED))
+def test_bounded_fuzz_in_a_child(tmp_path: Path, reader: str) -> None:
+    """Issue 27: GHW, FST, Saleae CSV and binary, latency files and histograms, follow's
+    command files: 24 truncations of each seed and 40 mutants (``make fuzz`` runs thousands),
+    each case in a forked child under RLIMIT_AS and a time bound (a panic, an abort, a hang or
+    a traceback is a failure)."""
+    if not READERS[reader][2]:
+        pytest.skip("the tool that makes its seeds (ghdl, gtkwave) is not installed")
+    tally = run_random(reader, 40, seed=27, out=tmp_path, cuts=24)
+    assert tally.results >= 1 and tally.errors >= 1  # its seeds read, broken inputs refused
     assert not tally.failures, tally.report(tmp_path)
 
 

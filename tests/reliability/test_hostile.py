@@ -4,8 +4,9 @@ its own process under a wall-clock timeout and an address-space limit (``RLIMIT_
 The shapes: a ``.sr`` whose chunk numbers are far apart (``logic-1-1`` and
 ``logic-1-100000000000``: a reader listing the missing numbers allocated 14 GB), a ``.sr`` whose
 1,000 directory entries share one deflate stream (inflated 1,000 times: minutes), a VCD with
-200,000 ``$var`` lines (line numbers recounted from the start: quadratic, 80,000 took 42 s), and
-a VCD body of 2 GB without whitespace (a sparse file: read whole, 8.2 GB).
+200,000 ``$var`` lines (line numbers recounted from the start: quadratic, 80,000 took 42 s), one
+with a million (over 60 s and 1 GB before issue 27: now refused at once, beyond
+``MAX_VARS``), and a VCD body of 2 GB without whitespace (a sparse file: read whole, 8.2 GB).
 """
 
 from __future__ import annotations
@@ -75,6 +76,10 @@ def _many_vars(path: Path) -> None:
     path.write_bytes(vcd_many_vars(200_000))
 
 
+def _million_vars(path: Path) -> None:
+    path.write_bytes(vcd_many_vars(1_000_000))
+
+
 def _no_whitespace(path: Path) -> None:
     head, size = vcd_no_whitespace_body()
     with open(path, "wb") as f:
@@ -92,6 +97,7 @@ SHAPES: list[tuple[str, str, Callable[[Path], None], float, str, str]] = [
     ("sr-chunk-number-1e11", ".sr", _far_chunk, 20, "error", "logic-1-2: is missing"),
     ("sr-1000-entries-one-stream", ".sr", _overlap, 20, "error", "overlap"),
     ("vcd-200000-vars", ".vcd", _many_vars, 90, "ok", "w199999"),
+    ("vcd-1000000-vars", ".vcd", _million_vars, 20, "error", "1,000,002 variables"),
     ("vcd-2GB-without-whitespace", ".vcd", _no_whitespace, 20, "error", "byte "),
     ("vcd-19-digit-time", ".vcd", _time_19_digits, 20, "ok", "9000000000000000000 ticks"),
 ]

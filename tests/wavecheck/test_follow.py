@@ -234,7 +234,7 @@ def test_command_files(
         ("time,position\n0,0\n", "no time column with its unit"),
         ("time_s,position\n0,0\n1,x\n", "line 3: expected numbers"),
         ("time_s,position\n1,0\n0,1\n", "line 3: time goes backwards"),
-        ("time_s,position\n0,nan\n", "line 2: not finite"),
+        ("time_s,position\n0,nan\n", "line 2: nan is not a finite number"),
         ("time_s\n0\n", "no position column"),
         ("", "no rows"),
     ],

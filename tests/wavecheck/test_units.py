@@ -5,7 +5,17 @@ from fractions import Fraction
 import pytest
 
 from wavecheck.errors import UnitError
-from wavecheck.units import format_frequency, format_time, parse_frequency, parse_time, time_ns
+from wavecheck.units import (
+    check_finite,
+    finite_float,
+    format_frequency,
+    format_time,
+    parse_frequency,
+    parse_int,
+    parse_number,
+    parse_time,
+    time_ns,
+)
 
 
 @pytest.mark.parametrize(
@@ -159,3 +169,49 @@ def test_plausibility_refuses_and_warns() -> None:
     parse_option("0", "--latency", "time", LATENCY, warned.append)  # 0 is never judged
     check_plausible(Fraction(0), "--base-period", "0", BASE_PERIOD)
     assert len(warned) == 1
+
+
+@pytest.mark.parametrize(
+    ("text", "value"),
+    [("1", Fraction(1)), (" -2.5 ", Fraction(-5, 2)), ("1e15", Fraction(10**15)), ("0", 0)],
+)
+def test_parse_number_exact(text: str, value: Fraction) -> None:
+    assert parse_number(text, "--scale") == value
+    assert finite_float(text, "--scale") == float(value)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("nan", "nan/inf is not a number here"),
+        ("-Infinity", "nan/inf is not a number here"),
+        ("1e308", "out of range"),
+        ("1.1e15", "at most 1e15 in magnitude"),
+        ("9" * 5000, "out of range"),
+        ("0x10", "not a number"),
+        ("1,5", "not a number"),
+    ],
+)
+def test_parse_number_refuses_in_one_short_line(text: str, message: str) -> None:
+    with pytest.raises(UnitError, match=message) as info:
+        parse_number(text, "--scale")
+    assert str(info.value).startswith("--scale ") and len(str(info.value)) < 120
+
+
+@pytest.mark.parametrize(
+    ("text", "ok"),
+    [("12", True), ("-3", True), ("+7", True), ("1.0", False), ("٣", False), ("9" * 5000, False)],
+)
+def test_parse_int_counts_digits_first(text: str, ok: bool) -> None:
+    if ok:
+        assert parse_int(text, "line 1:") == int(text)
+    else:
+        with pytest.raises(UnitError, match="line 1:"):
+            parse_int(text, "line 1:", limit=10**12)
+
+
+def test_check_finite_names_the_first_bad_value() -> None:
+    check_finite([0.0, -1e15, 1e15], lambda i: f"row {i}")
+    for values, place in (([1.0, float("nan"), float("inf")], "row 1"), ([2e15], "row 0")):
+        with pytest.raises(UnitError, match=place):
+            check_finite(values, lambda i: f"row {i}")

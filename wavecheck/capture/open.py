@@ -8,6 +8,7 @@ sigrok-cli to a temporary ``.sr`` first.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import shutil
@@ -26,7 +27,16 @@ from wavecheck.errors import CaptureError, UsageError
 if TYPE_CHECKING:
     from wavecheck.capture.blocks import BlockSource
 
-__all__ = ["STDIN", "detect_format", "format_of", "is_stream", "open_capture", "open_source"]
+__all__ = [
+    "STDIN",
+    "detect_format",
+    "format_of",
+    "ghw_timescale",
+    "is_stream",
+    "open_capture",
+    "open_source",
+    "path_argument",
+]
 
 _ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
 _BY_EXTENSION = {
@@ -150,6 +160,22 @@ def _read_head(f: BinaryIO, size: int) -> bytes:
     return b"".join(parts)
 
 
+def _say_waiting(path: str | os.PathLike[str]) -> None:
+    """On a terminal, say that a FIFO (which blocks until a writer opens it) or a terminal's
+    standard input is waited for; Ctrl-C ends the wait (KeyboardInterrupt, exit 130)."""
+    if not sys.stderr.isatty():
+        return
+    if str(path) == STDIN:
+        if sys.stdin.isatty():
+            print("wavecheck: reading the capture from standard input (a terminal: pipe a "
+                  "file in; Ctrl-C to stop)", file=sys.stderr, flush=True)  # fmt: skip
+        return
+    with contextlib.suppress(OSError):
+        if stat.S_ISFIFO(os.stat(path).st_mode):
+            print(f"wavecheck: waiting for data on FIFO {path} (Ctrl-C to stop)",
+                  file=sys.stderr, flush=True)  # fmt: skip
+
+
 def _open_stream(
     path: str | os.PathLike[str],
     *,
@@ -168,6 +194,7 @@ def _open_stream(
     is named ``<stdin>``).
     """
     name = "<stdin>" if str(path) == STDIN else str(path)
+    _say_waiting(path)
     try:
         f: BinaryIO = sys.stdin.buffer if str(path) == STDIN else open(path, "rb")
     except OSError as err:
@@ -295,13 +322,19 @@ def open_capture(
 
         return read_saleae_csv(path, samplerate=samplerate, resolution_s=resolution_s)
     if name in ("fst", "ghw"):
-        if options:
-            raise UsageError(f"--input-format {fmt!r}: {name} takes no options")
+        if options and name == "fst":
+            raise UsageError(f"--input-format {fmt!r}: fst takes no options")
         from wavecheck.capture.wellen import read_fst, read_wellen
 
         if name == "fst":
             return read_fst(path, samplerate=samplerate, resolution_s=resolution_s)
-        return read_wellen(path, kind="ghw", samplerate=samplerate, resolution_s=resolution_s)
+        return read_wellen(
+            path,
+            kind="ghw",
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            timescale=ghw_timescale(fmt),
+        )
     if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
         from wavecheck.capture.vcd import read_vcd
 
@@ -311,6 +344,37 @@ def open_capture(
     return read_with_sigrok(
         path, fmt, samplerate=samplerate, resolution_s=resolution_s, require_time=require_time
     )
+
+
+def ghw_timescale(fmt: str) -> Fraction | None:
+    """The tick of a GHW file from ``--input-format ghw:timescale=1ps`` (None: not given).
+
+    Raises:
+        UsageError: another option, or a timescale that is not a positive time.
+    """
+    from wavecheck.units import parse_option
+
+    _, _, options = fmt.partition(":")
+    value = None
+    for item in filter(None, options.split(":")):
+        key, eq, text = item.partition("=")
+        if key.strip() != "timescale" or not eq:
+            raise UsageError(
+                f"--input-format {fmt!r}: ghw takes one option, timescale=TIME (e.g. "
+                "ghw:timescale=1ps: GHDL's --time-resolution of the run)"
+            )
+        value = parse_option(text.strip(), "--input-format ghw:timescale", "time")
+        if value <= 0:
+            raise UsageError(f"--input-format {fmt!r}: the timescale must be positive")
+    return value
+
+
+def path_argument(path: str | os.PathLike[str]) -> str:
+    """``path`` as an argument of another program (fst2vcd, sigrok-cli): a relative path that
+    starts with ``-`` gets ``./`` so that it is never read as an option (``-fother.fst`` is
+    fst2vcd's ``-f other.fst``)."""
+    text = os.fspath(path)
+    return f"./{text}" if text.startswith("-") else text
 
 
 def detect_path_exists(path: str | os.PathLike[str]) -> None:

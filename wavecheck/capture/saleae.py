@@ -22,12 +22,17 @@ from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
+from wavecheck.units import shown
 
 __all__ = ["HEADER", "read_saleae_csv"]
 
 #: How a Logic 2 digital CSV export begins.
 HEADER = b"Time [s],"
 _MAX_HEADER = 1 << 16
+#: Most digits of a time (Logic 2 prints seconds to 9 decimals: a day is 14 digits).
+_MAX_DIGITS = 30
+#: The largest tick (int64, with room for sums of two ticks).
+_MAX_TICK = 2**62
 
 
 def _decimal(path: str | os.PathLike[str], text: str, line: int) -> tuple[int, int]:
@@ -38,7 +43,11 @@ def _decimal(path: str | os.PathLike[str], text: str, line: int) -> tuple[int, i
     whole, _, frac = body.partition(".")
     if not (whole or frac) or not (whole or "0").isdigit() or not (frac or "0").isdigit():
         raise CaptureError(
-            path, f"line {line}", f"time {t[:30]!r} is not a decimal number of seconds"
+            path, f"line {line}", f"time {shown(t)} is not a decimal number of seconds"
+        )
+    if len(whole) + len(frac) > _MAX_DIGITS:
+        raise CaptureError(
+            path, f"line {line}", f"time {shown(t)} has more than {_MAX_DIGITS} digits"
         )
     value = int((whole or "0") + frac)
     return (-value if neg else value), len(frac)
@@ -55,7 +64,7 @@ def read_saleae_csv(
     Raises:
         CaptureError: not such an export, a bad row, or times not on a common sample grid.
     """
-    with open(path, encoding="utf-8-sig", newline="") as f:
+    with open(path, encoding="utf-8-sig", errors="replace", newline="") as f:
         header = f.readline(_MAX_HEADER)
         names = [n.strip() for n in header.rstrip("\r\n").split(",")]
         if len(names) < 2 or names[0] != "Time [s]":
@@ -123,6 +132,8 @@ def read_saleae_csv(
             f"sample period {g * unit} s recovered from the times (their common grid); "
             "give --samplerate if Logic 2 sampled faster"
         )
+    if max(abs(ticks[0]), abs(ticks[-1])) >= _MAX_TICK:
+        raise CaptureError(path, None, f"the times reach beyond 2^62 samples of {rate} Hz")
     tb = Timebase.from_samplerate(rate)
     t = np.asarray(ticks, dtype=np.int64)
     t0 = int(t[0])

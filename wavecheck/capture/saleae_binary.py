@@ -23,7 +23,6 @@ names them by default; ``analog_N.bin`` files are skipped with a note), or one s
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import struct
@@ -36,9 +35,9 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.header import resolution_of
-from wavecheck.errors import CaptureError
+from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
-from wavecheck.units import format_frequency
+from wavecheck.units import check_finite, format_frequency
 
 __all__ = ["MAGIC", "holds_export", "read_saleae_binary"]
 
@@ -48,6 +47,11 @@ _DIGITAL = re.compile(r"digital_(\d{1,6})\.bin")
 _ANALOG = re.compile(r"analog_(\d{1,6})\.bin")
 _TIMES_PER_READ = 1 << 20
 _GRID_SLACK = 0.05  # samples
+#: The largest time (s, from the trigger) and sample rate (Hz) a chunk may state.
+_MAX_SECONDS = 10**9
+_MAX_RATE = 1e15
+#: The largest tick a time may give (int64, with room for sums of two ticks).
+_MAX_TICK = 2.0**62
 
 
 class _Chunk:
@@ -144,6 +148,7 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
                 raise CaptureError(
                     label, f"byte {offset}", f"initial state {initial} is not 0 or 1"
                 )
+            _check_header(label, f"byte {offset - (28 if version == 0 else 36)}", rate, begin, end)
             if n * 8 > size - offset:
                 raise CaptureError(
                     label, f"byte {offset}",
@@ -158,6 +163,7 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
                 offset += 8 * take
                 left -= take
             times = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float64)
+            _check_seconds(label, f"chunk {k}: transition", times)
             chunks.append(_Chunk(initial, rate, begin, end, times))
             if k + 1 < count and offset >= size:
                 raise CaptureError(
@@ -168,6 +174,27 @@ def _chunks(path: Path, label: str) -> tuple[int, list[_Chunk]]:
     if not chunks:
         raise CaptureError(label, None, "holds no chunks of data")
     return version, chunks
+
+
+def _check_seconds(label: str, what: str, seconds: npt.ArrayLike) -> None:
+    """Refuse a time that is NaN, infinite or beyond :data:`_MAX_SECONDS` (one line)."""
+    try:
+        check_finite(seconds, lambda i: f"{what} {i}: time (s)", limit=_MAX_SECONDS)
+    except UnitError as err:
+        raise CaptureError(label, None, str(err)) from None
+
+
+def _check_header(label: str, where: str, rate: float | None, begin: float, end: float) -> None:
+    """Refuse a chunk header whose rate or times cannot be a capture's."""
+    if rate is not None and not 0 < rate <= _MAX_RATE:
+        raise CaptureError(
+            label, where, f"sample rate {rate!r} Hz is not a rate (0 to 1e15 Hz expected)"
+        )
+    for name, value in (("begin", begin), ("end", end)):
+        if not abs(value) <= _MAX_SECONDS:
+            raise CaptureError(label, where, f"{name} time {value!r} s is not a capture's time")
+    if end < begin:
+        raise CaptureError(label, where, f"end time {end!r} s is before the begin {begin!r} s")
 
 
 def _exact_rate(rate: float) -> Fraction:
@@ -256,6 +283,10 @@ def read_saleae_binary(
                 if level_before is not None and c.initial != level_before:
                     edges.append(np.array([begin], dtype=np.int64))
             x = (c.times - t0) * r
+            if len(x) and not np.all(np.abs(x) < _MAX_TICK):
+                raise CaptureError(
+                    label, None, f"times beyond 2^62 samples of {format_frequency(rate)}"
+                )
             ticks = np.rint(x)
             off = np.abs(x - ticks) > _GRID_SLACK
             if off.any():
@@ -315,8 +346,8 @@ def read_saleae_binary(
 def _tick(label: str, t: float, t0: float, rate: float) -> int:
     """Time ``t`` (s) as a tick from ``t0``; refused when it is not near a sample."""
     x = (t - t0) * rate
-    if not math.isfinite(x):
-        raise CaptureError(label, None, f"time {t!r} is not a finite number of seconds")
+    if not abs(x) < _MAX_TICK:
+        raise CaptureError(label, None, f"time {t!r} s is beyond 2^62 samples of {rate:g} Hz")
     k = round(x)
     if abs(x - k) > _GRID_SLACK:
         raise CaptureError(

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from wavecheck.capture.edges import Capture
+from wavecheck.capture.open import path_argument
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.units import parse_frequency
 
@@ -54,6 +55,8 @@ FAILURE_PATTERNS = (
     "superfluous",
 )
 _TIMEOUT_S = 3600.0
+#: sigrok-cli options whose value is a file.
+_FILE_OPTIONS = ("-i", "--input-file", "-o", "--output-file")
 #: sigrok-cli input formats that take a ``samplerate`` option (the others carry their own rate).
 SAMPLERATE_OPTION_FORMATS = ("binary", "csv", "trace32_ad", "raw_analog")
 
@@ -83,6 +86,10 @@ def run_sigrok(
             None,
             "needs sigrok-cli to be read, and it is not installed (apt-get install sigrok-cli)",
         )
+    # a file named like an option ("-fother.sr") is made a path ("./-fother.sr")
+    args = [
+        path_argument(a) if k and args[k - 1] in _FILE_OPTIONS else a for k, a in enumerate(args)
+    ]
     try:
         proc = subprocess.run(
             [exe, *args],

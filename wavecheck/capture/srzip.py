@@ -16,7 +16,6 @@ that libsigrok ignores, saying every edge lies exactly on its sample, so the rea
 
 from __future__ import annotations
 
-import contextlib
 import io
 import os
 import zipfile
@@ -31,7 +30,6 @@ from wavecheck.output import atomic_path
 __all__ = [
     "EXACT_SECTION",
     "SR_CHUNK_BYTES",
-    "SrRecorder",
     "SrZip",
     "exact_edges_section",
     "rate_text",
@@ -239,55 +237,6 @@ def _write_zip(
         z.add(piece)
     z.close()
     return z.bytes
-
-
-class SrRecorder:
-    """A ``.sr`` file written while the samples arrive (``wavecheck watch --save``): bytes are
-    gathered into members of ``chunk_bytes`` (libsigrok's 4 MiB); the file appears under its
-    name only at :meth:`close` (atomically, :func:`wavecheck.output.atomic_path`) and
-    :meth:`discard` leaves nothing. Memory: one member."""
-
-    def __init__(
-        self,
-        target: str | os.PathLike[str],
-        metadata: str,
-        unitsize: int,
-        *,
-        chunk_bytes: int = SR_CHUNK_BYTES,
-        compresslevel: int | None = 1,
-    ) -> None:
-        self.step = max(unitsize, chunk_bytes - chunk_bytes % unitsize)
-        self._stack = contextlib.ExitStack()
-        tmp = self._stack.enter_context(atomic_path(target))
-        self._fh = self._stack.enter_context(open(tmp, "wb"))  # noqa: SIM115 - closed by the stack
-        self._zip = SrZip(self._fh, metadata, compresslevel=compresslevel)
-        self._buf = bytearray()
-
-    def add(self, data: bytes) -> None:
-        """Append sample bytes (the caller keeps them whole samples overall)."""
-        self._buf += data
-        while len(self._buf) >= self.step:
-            self._zip.add(bytes(self._buf[: self.step]))
-            del self._buf[: self.step]
-
-    @property
-    def bytes(self) -> int:
-        """Sample bytes taken so far."""
-        return self._zip.bytes + len(self._buf)
-
-    def close(self) -> None:
-        """Write the rest and put the file in place."""
-        if self._buf:
-            self._zip.add(bytes(self._buf))
-            self._buf.clear()
-        self._zip.close()
-        self._stack.close()
-
-    def discard(self) -> None:
-        """Leave no file (the temporary one is removed)."""
-        with contextlib.suppress(OSError, ValueError):
-            self._zip.close()  # ends the zip object; its file is removed below
-        self._stack.__exit__(RuntimeError, RuntimeError("discarded"), None)
 
 
 def write_sr_edges(

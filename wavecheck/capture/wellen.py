@@ -16,9 +16,16 @@ come from the vector's value changes, read again from the file with pywellen.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
+import select
 import shutil
 import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, BinaryIO, cast
 
@@ -26,12 +33,15 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, Vector
+from wavecheck.capture.ghw import DEFAULT_TIME_UNIT, read_ghw_header
+from wavecheck.capture.open import path_argument
 from wavecheck.capture.vcd.header import SignalEdges, resolution_of
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.timebase import Timebase
+from wavecheck.units import format_time
 
-__all__ = ["load_bit", "read_fst", "read_wellen"]
+__all__ = ["ghw_timebase", "load_bit", "read_fst", "read_wellen"]
 
 # unknown is 2 (x, u, w, -) or 3 (z), as in the VCD reader
 _CODES = {"0": 0, "1": 1, "l": 0, "h": 1, "z": 3}
@@ -41,13 +51,64 @@ def _code(ch: str) -> int:
     return _CODES.get(ch.lower(), 2)
 
 
+@contextlib.contextmanager
+def _rust_output() -> Iterator[list[str]]:
+    """While pywellen runs, its Rust code's output goes to a temporary file, not the user's
+    terminal: warnings are printed to standard output (``WARN: time decreased … Skipping!``)
+    and panics to standard error. The lines (at most 64 KiB) are added to the list yielded."""
+    lines: list[str] = []
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    with tempfile.TemporaryFile() as tmp:
+        try:
+            saved = [os.dup(1), os.dup(2)]
+        except OSError:  # a closed descriptor: nothing to keep clean
+            yield lines
+            return
+        try:
+            os.dup2(tmp.fileno(), 1)
+            os.dup2(tmp.fileno(), 2)
+            yield lines
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            tmp.seek(0)
+            lines += tmp.read(1 << 16).decode("utf-8", "replace").splitlines()
+
+
+def _reason(err: BaseException) -> str:
+    text = " ".join(str(err).split()) or type(err).__name__
+    return text.removeprefix("failed to load Ghw: ").removeprefix("[ghw] ")[:200]
+
+
+@contextlib.contextmanager
+def _guarded(path: str | os.PathLike[str], kind: str) -> Iterator[None]:
+    """Run pywellen on ``path``: every failure, a Rust panic included (pyo3's PanicException
+    is not an Exception), and every warning that data was skipped, is one CaptureError."""
+    failure: BaseException | None = None
+    with _rust_output() as lines:
+        try:
+            yield
+        except (KeyboardInterrupt, SystemExit, GeneratorExit, CaptureError):
+            raise
+        except BaseException as err:  # noqa: BLE001 - a Rust panic derives from BaseException
+            failure = err
+    if failure is not None:
+        raise CaptureError(path, None, f"cannot read the {kind} file: {_reason(failure)}")
+    skipped = [ln for ln in lines if "decreased" in ln or "Skipping" in ln]
+    if skipped:
+        raise CaptureError(
+            path, None, f"corrupt {kind} file: {skipped[0].removeprefix('WARN: ')[:160]}"
+        )
+
+
 def _open(path: str | os.PathLike[str]) -> Any:
     import pywellen
 
-    try:
-        return pywellen.Waveform(str(path), multi_threaded=False)
-    except Exception as err:  # pywellen raises its own (Rust) errors with the reason
-        raise CaptureError(path, None, f"cannot read the waveform: {err}") from None
+    return pywellen.Waveform(str(path), multi_threaded=False)
 
 
 def _timebase(w: Any) -> Timebase:
@@ -79,22 +140,62 @@ def _edges(times: npt.NDArray[np.int64], codes: npt.NDArray[np.int8]) -> SignalE
     return b.signals()[0]
 
 
+@dataclass
+class _Var:
+    """What read_wellen needs of one pywellen variable (read inside the guard)."""
+
+    full: str
+    name: str
+    width: int
+    skipped: str | None = None  # "a real", "a string"
+    key: Any = None  # the signal's identity (a signal declared twice has one)
+    times: npt.NDArray[np.int64] | None = None
+    codes: npt.NDArray[np.int8] | None = None
+
+
+def _load(path: str | os.PathLike[str]) -> tuple[Timebase, list[_Var]]:
+    """The time base and variables of a pywellen waveform, the 1-bit ones with their changes."""
+    w = _open(path)
+    out: list[_Var] = []
+    for v in w.all_vars():
+        var = _Var(v.full_name, v.name, int(v.bitwidth or 0))
+        if v.is_real or v.is_string:
+            var.skipped = "a real" if v.is_real else "a string"
+        elif var.width == 1:
+            ref = v.signal_ref
+            var.key = ref.index() if hasattr(ref, "index") else id(ref)
+            var.times, var.codes = _changes(v.signal, 1, 0)
+        out.append(var)
+    return _timebase(w), out
+
+
 def read_wellen(
     path: str | os.PathLike[str],
     *,
     kind: str,
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
+    timescale: Fraction | None = None,
 ) -> Capture:
     """Read the 1-bit signals of an FST or GHW file with pywellen (``kind`` ``"fst"``/``"ghw"``).
 
+    A GHW file records no time unit (:mod:`wavecheck.capture.ghw`): its ticks are
+    ``timescale`` seconds each, by default GHDL's default resolution (1 fs), and a note says
+    which; its vectors' declared ranges come from its header.
+
     Raises:
-        CaptureError: pywellen cannot read the file (its reason is given).
+        CaptureError: the file cannot be read (its reason is given), is corrupt, or its header
+            is malformed.
     """
-    w = _open(path)
-    tb = _timebase(w)
     notes: list[str] = []
-    variables = list(w.all_vars())
+    ranges: dict[str, tuple[int, int]] = {}
+    if kind == "ghw":
+        ranges = read_ghw_header(path).ranges
+    with _guarded(path, kind.upper()):
+        tb, variables = _load(path)
+    if kind == "ghw":
+        tb, note = ghw_timebase(timescale)
+        notes.append(note)
     by_short: dict[str, int] = {}
     for v in variables:
         by_short[v.name] = by_short.get(v.name, 0) + 1
@@ -102,37 +203,49 @@ def read_wellen(
     aliases: dict[str, str] = {}
     skipped: dict[str, str] = {}
     vectors: dict[str, Vector] = {}
+    unranged: list[str] = []
     found: list[tuple[str, SignalEdges]] = []
     first, last = None, None
     for v in variables:
-        full = v.full_name
-        if v.is_real or v.is_string:
-            skipped[full] = "a real" if v.is_real else "a string"
+        full = v.full
+        if v.skipped:
+            skipped[full] = v.skipped
             continue
-        width = int(v.bitwidth or 0)
-        if width != 1:
-            if width > 1:
-                vectors[full] = Vector(width, width - 1, 0, full)
-                skipped.setdefault(full, f"a {width}-bit vector")
+        if v.width != 1:
+            if v.width > 1:
+                if full in ranges:
+                    vectors[full] = Vector(v.width, *ranges[full], full)
+                else:
+                    unranged.append(full)
+                skipped.setdefault(full, f"a {v.width}-bit vector")
             continue
-        ref = v.signal_ref
-        key = ref.index() if hasattr(ref, "index") else id(ref)
         name = v.name if by_short[v.name] == 1 else full
-        if key in seen:
-            aliases[full] = seen[key]
+        if v.key in seen:
+            aliases[full] = seen[v.key]
             continue
-        times, codes = _changes(v.signal, 1, 0)
-        if len(times):
-            first = int(times[0]) if first is None else min(first, int(times[0]))
-            last = int(times[-1]) if last is None else max(last, int(times[-1]))
-        seen[key] = name
+        assert v.times is not None and v.codes is not None
+        if len(v.times):
+            first = int(v.times[0]) if first is None else min(first, int(v.times[0]))
+            last = int(v.times[-1]) if last is None else max(last, int(v.times[-1]))
+        seen[v.key] = name
         if name != full:
             aliases[full] = name
-        found.append((name, _edges(times, codes)))
+        found.append((name, _edges(v.times, v.codes)))
     if vectors:
         notes.append(
             f"{len(vectors)} vector(s) not read as channels; a bit of one maps as a channel "
-            "(--map step=NAME[0]); ranges taken as [width-1:0]"
+            "(--map step=NAME[0], NAME[i] an index of its declared range)"
+        )
+    if unranged:
+        why = (
+            "pywellen does not give an FST vector's declared range (GTKWave's fst2vcd does: "
+            "install gtkwave)"
+            if kind == "fst"
+            else "integers and enumerations have no range of bits"
+        )
+        notes.append(
+            f"{len(unranged)} vector(s) whose bits cannot be mapped ({', '.join(unranged[:5])}): "
+            + why
         )
     start, end = first or 0, last or 0
     channels = [s.channel(n, i, end) for i, (n, s) in enumerate(found)]
@@ -157,6 +270,64 @@ def read_wellen(
     )
 
 
+def ghw_timebase(timescale: Fraction | None) -> tuple[Timebase, str]:
+    """The time base of a GHW file's ticks and the note that says how it was decided."""
+    if timescale is not None:
+        return Timebase(timescale), (
+            f"time unit: {format_time(timescale)} per tick (ghw:timescale given; a GHW file "
+            "records none)"
+        )
+    unit = Fraction(1, 10**15)
+    return Timebase(unit), (
+        f"time unit: 1 {DEFAULT_TIME_UNIT} per tick ASSUMED: a GHW file records none, and 1 fs "
+        "is GHDL's default --time-resolution; if the simulation ran with another (e.g. "
+        "--time-resolution=ps), give --input-format ghw:timescale=1ps"
+    )
+
+
+#: Seconds fst2vcd may go without output before it is taken as hung (a corrupt FST can make
+#: GTKWave 3.3's fst2vcd loop forever without output).
+FST2VCD_STALL_SECONDS = 10.0
+#: fst2vcd's output may be at most this many times the FST file (plus 64 MiB): a real FST is
+#: 5-50 times smaller than its VCD; a corrupt one could make fst2vcd write forever.
+FST2VCD_MAX_EXPANSION = 4096
+
+
+class _Watched(io.RawIOBase):
+    """fst2vcd's standard output for the VCD reader, with bounds: no output for
+    :data:`FST2VCD_STALL_SECONDS`, or more than ``limit`` bytes, kills it (a CaptureError)."""
+
+    def __init__(self, path: str | os.PathLike[str], proc: subprocess.Popen[bytes], limit: int):
+        super().__init__()
+        assert proc.stdout is not None
+        self.path = path
+        self.proc = proc
+        self.fd = proc.stdout.fileno()
+        self.left = limit
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        if not select.select([self.fd], [], [], FST2VCD_STALL_SECONDS)[0]:
+            self.proc.kill()
+            raise CaptureError(
+                self.path, None, f"fst2vcd gave nothing for {FST2VCD_STALL_SECONDS:g} s (a "
+                "corrupt FST file?): stopped",
+            )  # fmt: skip
+        data = os.read(self.fd, min(len(buffer), 1 << 20))
+        self.left -= len(data)
+        if self.left < 0:
+            self.proc.kill()
+            raise CaptureError(
+                self.path,
+                None,
+                "fst2vcd's output grows beyond any FST's (a corrupt file?): stopped",
+            )
+        memoryview(buffer).cast("B")[: len(data)] = data
+        return len(data)
+
+
 def read_fst(
     path: str | os.PathLike[str],
     *,
@@ -164,7 +335,8 @@ def read_fst(
     resolution_s: Fraction | None = None,
 ) -> Capture:
     """Read an FST file: GTKWave's ``fst2vcd`` streamed into the VCD reader, or pywellen when
-    ``fst2vcd`` is not installed (slower per value change, same result).
+    ``fst2vcd`` is not installed (slower per value change, same result). fst2vcd is bounded
+    (:class:`_Watched`): it is stopped when it stalls or writes beyond any FST's expansion.
 
     Raises:
         CaptureError: the file cannot be read as FST.
@@ -174,24 +346,32 @@ def read_fst(
         return read_wellen(path, kind="fst", samplerate=samplerate, resolution_s=resolution_s)
     from wavecheck.capture.vcd import read_vcd
 
-    with subprocess.Popen(
-        [tool, os.fspath(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE
-    ) as proc:
+    try:
+        limit = FST2VCD_MAX_EXPANSION * os.path.getsize(path) + (64 << 20)
+    except OSError as err:
+        raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+    with (
+        tempfile.TemporaryFile() as errors,
+        subprocess.Popen(
+            [tool, path_argument(path)], stdout=subprocess.PIPE, stderr=errors
+        ) as proc,
+    ):
         assert proc.stdout is not None
+        source = io.BufferedReader(_Watched(path, proc, limit), buffer_size=1 << 20)
         try:
             cap = read_vcd(
-                path,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                source=cast(BinaryIO, proc.stdout),
-            )
+                path, samplerate=samplerate, resolution_s=resolution_s,
+                source=cast(BinaryIO, source),
+            )  # fmt: skip
         except CaptureError as err:
             proc.kill()
             raise CaptureError(path, None, f"not a readable FST file ({err.msg})") from None
         finally:
             proc.stdout.close()
-        err_text = proc.stderr.read().decode("utf-8", "replace").strip() if proc.stderr else ""
-        if proc.wait() != 0:
+        status = proc.wait()
+        errors.seek(0)
+        err_text = errors.read(4096).decode("utf-8", "replace").strip()
+        if status != 0:
             raise CaptureError(path, None, f"fst2vcd cannot read it: {err_text[:200]}")
     cap.format = "fst"
     cap.bit_source = str(path)
@@ -216,10 +396,12 @@ def load_bit(capture: Capture, key: str, vec: Vector, bit: int) -> Channel:
             f"{capture.path}: a bit of a vector ({key}[{bit}]) can be mapped only from a file "
             "(the vector's changes are read again); save the input to a file first"
         )
-    w = _open(capture.bit_source)
-    var = next((v for v in w.all_vars() if v.full_name == key), None)
+    with _guarded(capture.bit_source, capture.format.upper()):
+        w = _open(capture.bit_source)
+        var = next((v for v in w.all_vars() if v.full_name == key), None)
+        if var is not None:
+            times, codes = _changes(var.signal, vec.width, pos)
     if var is None:
         raise UsageError(f"{capture.path}: vector {key!r} not found when reading it again")
-    times, codes = _changes(var.signal, vec.width, pos)
     index = max((c.index for c in capture.channels), default=-1) + 1
     return _edges(times, codes).channel(f"{key}[{bit}]", index, capture.end)

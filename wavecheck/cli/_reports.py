@@ -37,7 +37,7 @@ from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
-from wavecheck.progress import activate
+from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
@@ -92,7 +92,7 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
         "-q",
         "--quiet",
         action="store_true",
-        help="no progress bar (it is off anyway when stderr is not a terminal)",
+        help=QUIET_HELP,
     )
     add_stepgen_arguments(p)
 
@@ -296,7 +296,13 @@ def _side_outputs(
             from wavecheck.report.gtkw import write_gtkw
 
             target = _per_capture(args.gtkw, _tagged(r), k, gstems) if several else args.gtkw
-            write_gtkw(r, target)
+            vcd = write_gtkw(r, target)
+            if vcd is not None and vcd.name != f"{Path(target).stem}.vcd":
+                print(  # the usual name holds a file wavecheck did not write: kept
+                    f"wavecheck: {Path(target).stem}.vcd is not wavecheck's (kept): {target}: its "
+                    f"signals are in {vcd}",
+                    file=sys.stderr,
+                )
     if args.html:
         from wavecheck.report.html import write_html
 
@@ -454,9 +460,9 @@ def run_checks(
         return exit_code(report, required(args))
     jobs = _jobs(args, len(paths))
     stream = (
-        sys.stdout
-        if args.output
-        else (None if args.quiet or not sys.stderr.isatty() else sys.stderr)
+        None
+        if args.quiet
+        else (sys.stdout if args.output else (sys.stderr if sys.stderr.isatty() else None))
     )
     done: list[_Outcome | None] = [None] * len(paths)
     for outcome in _outcomes(args, build_report, paths, jobs):
@@ -502,7 +508,8 @@ def _write_many(args: argparse.Namespace, outcomes: list[_Outcome], code: int) -
         text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
     if args.output:
         atomic_write(args.output, text)
-        print(f"report written to {args.output}")
+        if not args.quiet:
+            print(f"report written to {args.output}")
     else:
         sys.stdout.write(text)
 

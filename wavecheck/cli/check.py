@@ -12,6 +12,7 @@ files) can be added as options handled in :func:`write_outputs`.
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from collections.abc import Callable
 from typing import Any
@@ -85,10 +86,11 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--drive",
         action="append",
-        required=True,
         metavar="ID|FILE|AXIS=ID",
         help="drive id from rules/ or a TOML file; AXIS=ID gives one axis its own drive "
-        "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542)",
+        "(repeatable: --drive x=gecko-g202 --drive y=leadshine-dm542). Required, except for "
+        "a snippet written by wavecheck watch --snippets: it carries its drive, map and step "
+        "type, and options given here override them",
     )
     add_axis_arguments(p)
     add_tuning_arguments(p)
@@ -158,6 +160,8 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
         from wavecheck.report.claims import requirement_line, verdict_line
 
         atomic_write(args.output, text)
+        if getattr(args, "quiet", False):  # -q: the report file only
+            return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
             f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
@@ -170,8 +174,52 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
         sys.stdout.write(text)
 
 
+class _Refusing(argparse.ArgumentParser):
+    """A parser whose errors are UsageErrors (for the options a snippet carries)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise UsageError(message)
+
+
+def _stored_settings(args: argparse.Namespace) -> None:
+    """Without ``--drive``: take the options the captures carry (snippets of ``wavecheck watch
+    --snippets``; :func:`wavecheck.live.snippets.stored_arguments`) where none was given.
+
+    Raises:
+        UsageError: a capture carries none, or they carry different ones.
+    """
+    from wavecheck.live.snippets import stored_arguments
+
+    patterns = args.capture if isinstance(args.capture, list) else [args.capture]
+    paths = expand_captures(patterns)
+    found = {tuple(stored_arguments(p) or ()) for p in paths}
+    stored = next(iter(found)) if len(found) == 1 else ()
+    if not stored:
+        raise UsageError(
+            "the following arguments are required: --drive (only a snippet written by "
+            "wavecheck watch --snippets carries its own"
+            + (", and these captures carry different ones)" if len(found) > 1 else ")")
+        )
+    parser = _Refusing(prog="wavecheck")
+    sub = parser.add_subparsers(parser_class=_Refusing)
+    register(sub)
+    try:
+        given = parser.parse_args(["check", paths[0], *stored])
+    except UsageError as err:
+        raise UsageError(f"{paths[0]}: the check options it carries: {err}") from None
+    for key, value in vars(given).items():  # an option given on the command line wins
+        if key != "capture" and getattr(args, key, None) == sub.choices["check"].get_default(key):
+            setattr(args, key, value)
+    print(
+        f"wavecheck: {paths[0]}: checked with the options it carries: {shlex.join(stored)}",
+        file=sys.stderr,
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck check``; returns the exit code."""
+    if not args.drive:
+        _stored_settings(args)
     check_steps_arguments(args)
     if getattr(args, "pulseview", None):  # issue 28: one capture, one PulseView session
         check_pulseview(args, len(expand_captures(args.capture)))

@@ -39,7 +39,7 @@ from wavecheck.follow import (
 )
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.steptypes import step_type
-from wavecheck.units import parse_option
+from wavecheck.units import number_option, parse_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 __all__ = ["register", "render_json", "render_text", "run"]
@@ -122,19 +122,19 @@ def register(sub: Any) -> None:
     )
     f.add_argument(
         "--scale",
-        type=float,
+        type=number_option,
         help="feedback counts per position unit (LinuxCNC "
         "position-scale / encoder scale); needed for a command in units",
     )
     f.add_argument(
         "--command-scale",
-        type=float,
+        type=number_option,
         help="counts per unit of a command in counts "
         "when it differs from the feedback's (a step input and an encoder)",
     )
     f.add_argument(
         "--start-position",
-        type=float,
+        type=number_option,
         metavar="COUNTS",
         help="the feedback's position at the capture's start (default: the command there, rounded)",
     )
@@ -142,7 +142,7 @@ def register(sub: Any) -> None:
     o = p.add_argument_group("report")
     o.add_argument(
         "--max-error",
-        type=float,
+        type=number_option,
         metavar="COUNTS",
         help="exit 1 when |following error| exceeds this (counts)",
     )
@@ -195,6 +195,11 @@ def _describe(mapping: dict[str, str], roles: tuple[str, ...]) -> str:
 def analyse(args: argparse.Namespace) -> tuple[FollowReport, StepEvents, Command]:
     """Open the capture and the command, decode, and compute the following error."""
     delay_ns = _time_s(args.delay, "--delay") * 10**9  # option errors before any reading
+    for option, value in (("--scale", args.scale), ("--command-scale", args.command_scale)):
+        if value == 0:
+            raise UsageError(f"{option} 0: counts per unit must not be 0")
+    if args.max_error is not None and args.max_error < 0:
+        raise UsageError(f"--max-error {args.max_error:g}: must be 0 or more (counts)")
     capture = capture_from_args(args, args.capture)
     tick_ns = capture.timebase.tick_ns
     mapping = _mapping(capture, args)

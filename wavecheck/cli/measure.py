@@ -25,7 +25,7 @@ from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments
 from wavecheck.cli.config import add_firmware_arguments, check_firmware
 from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
-from wavecheck.progress import activate
+from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.measurement import measurement_dict, render_measure_text
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
@@ -68,7 +68,7 @@ def register(sub: Any) -> None:
     )
     add_steps_arguments(p)
     add_engine_arguments(p)
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     p.set_defaults(func=run)
 
 
@@ -123,11 +123,12 @@ def run(args: argparse.Namespace) -> int:
                 text += "\n" + "\n".join([*head, *firmware_check_lines(fc)]) + "\n"
     if args.output:
         atomic_write(args.output, text)
+    if args.output and not args.quiet:
         steps = ", ".join(
             f"{'' if a.name is None else a.name + ' '}{a.steps.count}" for a in m.axes
         )
         print(f"measured {len(m.axes)} axis/axes ({steps} steps); report written to {args.output}")
-    else:
+    elif not args.output:
         sys.stdout.write(text)
     png = None
     if args.plot or args.html:

@@ -22,6 +22,7 @@ from wavecheck.cli._reports import add_stepgen_arguments
 from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
 from wavecheck.cli.config import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
+from wavecheck.live import START_GRACE
 from wavecheck.output import output_file
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
@@ -37,6 +38,8 @@ DEFAULT_MAX_SNIPPETS = 100
 MAX_LEARN_BYTES = 256 << 20
 #: Edges a live check gathers at most before checking them (it also checks every 0.25 s).
 LIVE_BLOCK_EDGES = 1 << 16
+#: Time kept before and after each violation in a snippet, unless --snippet-window says.
+DEFAULT_SNIPPET_WINDOW = "5ms"
 
 
 def register(sub: Any) -> None:
@@ -106,7 +109,12 @@ def register(sub: Any) -> None:
         "256 MiB of samples are kept)",
     )
     end = p.add_argument_group("when to stop")
-    end.add_argument("--time", metavar="TIME", help="watch this long (10m, 30s), exactly")
+    end.add_argument(
+        "--time",
+        metavar="TIME",
+        help="watch this long (10m, 30s), exactly that many samples; if they have not all "
+        f"arrived {START_GRACE:g} s after that (a stalled analyzer), the watch ends, exit 2",
+    )
     end.add_argument(
         "--stop-on-fail", action="store_true", help="stop at the first violation found"
     )
@@ -118,9 +126,9 @@ def register(sub: Any) -> None:
     )
     keep.add_argument(
         "--snippet-window",
-        default="5ms",
         metavar="TIME",
-        help="samples kept before and after each violation in a snippet (default 5ms)",
+        help="samples kept before and after each violation in a snippet (at least this long, "
+        f"whole samples; default {DEFAULT_SNIPPET_WINDOW})",
     )
     keep.add_argument(
         "--max-snippets",
@@ -151,13 +159,19 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _time_samples(text: str | None, rate: Fraction, option: str) -> int | None:
+def _time_samples(
+    text: str | None, rate: Fraction, option: str, *, round_up: bool = False
+) -> int | None:
+    """``option``'s time as a number of samples at ``rate``: exact, or (``round_up``) the
+    smallest whole number of samples that long."""
     if text is None:
         return None
     seconds = parse_option(text, option, "time")
     if seconds <= 0:
         raise UsageError(f"{option} {text}: must be positive")
     n = seconds * rate
+    if round_up:
+        return -(-n.numerator // n.denominator)
     if n.denominator != 1:
         raise UsageError(
             f"{option} {text}: not a whole number of samples at {format_frequency(rate)} "
@@ -183,10 +197,11 @@ def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck watch``; returns the exit code."""
     # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
     from wavecheck.capture.binary import SampleBlocks
-    from wavecheck.capture.srzip import SrRecorder, sr_metadata
+    from wavecheck.capture.srzip import sr_metadata
     from wavecheck.live.learn import RoleLearner
+    from wavecheck.live.record import CHECKPOINT_SECONDS, SrRecorder
     from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
-    from wavecheck.live.snippets import SampleRing, Snippets
+    from wavecheck.live.snippets import SampleRing, Snippets, replay_arguments
     from wavecheck.live.watch import Watch
 
     if args.max_violations is not None and args.max_violations < 0:
@@ -214,10 +229,16 @@ def run(args: argparse.Namespace) -> int:
             )
         names = wanted
     limit = _time_samples(args.time, rate, "--time")
-    window = _time_samples(args.snippet_window, rate, "--snippet-window") or 0
+    window = (
+        _time_samples(
+            args.snippet_window or DEFAULT_SNIPPET_WINDOW, rate, "--snippet-window", round_up=True
+        )
+        or 0
+    )
     label = f"sigrok-cli -d {args.driver} at {format_frequency(rate)} (live)"
     scanner = SampleBlocks(label, len(names), rate, names)
     found: list[str] = []
+    snippets = None
 
     from wavecheck.engine.run import axes_for, machine_for, needs_waveforms
 
@@ -226,7 +247,10 @@ def run(args: argparse.Namespace) -> int:
     def start(capture: Capture) -> MachineCheck:
         """The live check of ``args``' axes (roles resolved against ``capture``)."""
         axes, found[:] = axes_for(options, capture)
-        return machine_for(scanner.skeleton, options, axes, found)
+        machine = machine_for(scanner.skeleton, options, axes, found)
+        if snippets is not None:  # each snippet says how to check it again
+            snippets.check = replay_arguments(args, [a.plan for a in machine.axes], names)
+        return machine
 
     def decide(capture: Capture, final: bool) -> MachineCheck | None:
         """The check once the roles can be told from ``capture`` (the first samples)."""
@@ -239,17 +263,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"wavecheck: {found[0]}", file=sys.stderr, flush=True)
         return machine
 
+    if args.snippets:
+        ring = SampleRing(scanner.unitsize, 2 * window + int(rate) * 2)
+        snippets = Snippets(Path(args.snippets), ring, names, rate, window, args.max_snippets)
     checker: MachineCheck | RoleLearner
     if needs_waveforms(options, scanner.skeleton):
-        learn = _time_samples(args.learn, rate, "--learn") or 1
+        learn = _time_samples(args.learn, rate, "--learn", round_up=True) or 1
         checker = RoleLearner(scanner, decide, min(learn, MAX_LEARN_BYTES // scanner.unitsize))
     else:
         checker = start(scanner.skeleton)
     meta = sr_metadata(names, samplerate=int(rate), unitsize=scanner.unitsize, total_analog=0)
-    snippets = None
-    if args.snippets:
-        ring = SampleRing(scanner.unitsize, 2 * window + int(rate) * 2)
-        snippets = Snippets(Path(args.snippets), ring, names, rate, window, args.max_snippets)
     command = acquisition_command(
         program,
         args.driver,
@@ -260,6 +283,13 @@ def run(args: argparse.Namespace) -> int:
         group=args.channel_group,
     )
     recorder = SrRecorder(args.save, meta, scanner.unitsize) if args.save else None
+    if recorder is not None and recorder.replaces is not None:
+        print(
+            f"wavecheck: recording to {recorder.path} (complete every {CHECKPOINT_SECONDS:g} s; "
+            f"it replaces {recorder.replaces} when the watch ends)",
+            file=sys.stderr,
+            flush=True,
+        )
     status = _status(args.status)
     watch = Watch(
         Acquisition(command, continuous=limit is None),
@@ -289,8 +319,7 @@ def run(args: argparse.Namespace) -> int:
         f"watched {result.samples:,} samples in {result.wall_s:.1f} s ({result.ended}); "
         f"wavecheck used {result.cpu_s:.2f} s of processor time "
         f"({100 * result.cpu_s / max(result.wall_s, 1e-9):.0f} % of one core)"
-        + (f"; {len(result.snippets)} snippet(s) in {args.snippets}" if snippets else "")
-        + (f", {snippets.left_out} more not written" if snippets and snippets.left_out else ""),
+        + (f"; {result.snippet_summary}" if result.snippet_summary else ""),
         file=sys.stderr,
     )
     if result.failure is not None:

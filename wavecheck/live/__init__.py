@@ -5,3 +5,7 @@ recent samples and writes a short ``.sr`` around each violation; :mod:`.watch` r
 (samples → :class:`~wavecheck.capture.binary.SampleBlocks` →
 :class:`~wavecheck.engine.axis.MachineCheck`) with a status line and the stop conditions.
 """
+
+#: Seconds beyond ``--time`` a watch may take in all (the analyzer's start, the pipe's delay)
+#: before it ends short of the samples asked (:mod:`wavecheck.live.watch`).
+START_GRACE = 10.0

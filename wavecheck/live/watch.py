@@ -6,11 +6,20 @@ the sample scanner (:class:`~wavecheck.capture.binary.SampleBlocks`) and the eng
 checks what has gathered (so the figures are current whatever the step rate), the violations it
 found are handed to the snippets, and the status line is redrawn.
 
-The end: ``--time`` (sigrok-cli's ``--samples``: exactly that many samples), Ctrl-C or SIGTERM
-(the acquisition is stopped and the samples already taken are checked), ``--stop-on-fail``, or
-the data ending by itself. sigrok-cli dying, reporting an error or giving fewer samples than asked
-is a failure of the acquisition (:class:`~wavecheck.errors.DeviceError` at the CLI, exit 2), and
-the report still covers every sample that arrived; nothing is bridged over a gap.
+The end: ``--time`` (sigrok-cli's ``--samples``: exactly that many samples, and no more even
+from a sigrok-cli that ignores ``--samples``), Ctrl-C or SIGTERM (the acquisition is stopped and
+the samples already taken are checked; a second Ctrl-C kills it at once), ``--stop-on-fail``, or
+the data ending by itself. sigrok-cli dying, reporting an error, giving fewer samples than asked,
+or ending by itself when it was to run until stopped is a failure of the acquisition
+(:class:`~wavecheck.errors.DeviceError` at the CLI, exit 2), and the report still covers every
+sample that arrived; nothing is bridged over a gap.
+
+Nothing waits without a bound: with ``--time T`` the watch ends by ``T`` + :data:`START_GRACE`
+seconds of wall-clock time whatever sigrok-cli does (short of the samples: a failure); an
+acquisition asked to stop is killed (its process group) when it has not ended
+:data:`~wavecheck.live.sigrok.STOP_GRACE` seconds later; and a sigrok-cli that has exited while
+a child of it keeps the pipe open is ended :data:`~wavecheck.live.sigrok.EXIT_GRACE` seconds
+after the last data.
 """
 
 from __future__ import annotations
@@ -23,12 +32,13 @@ from fractions import Fraction
 from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
-from wavecheck.capture.srzip import SrRecorder
 from wavecheck.engine.outcome import MachineReport
 from wavecheck.engine.run import MachineCheck
 from wavecheck.errors import DeviceError
+from wavecheck.live import START_GRACE
 from wavecheck.live.learn import RoleLearner
-from wavecheck.live.sigrok import Acquisition
+from wavecheck.live.record import SrRecorder
+from wavecheck.live.sigrok import EXIT_GRACE, STOP_GRACE, Acquisition
 from wavecheck.live.snippets import Snippets
 from wavecheck.units import format_ns, format_time
 
@@ -51,6 +61,9 @@ class WatchResult:
         samples: samples checked.
         wall_s: seconds from start to end.
         cpu_s: processor seconds wavecheck spent (sigrok-cli's not counted).
+        snippets: the snippet files written.
+        snippet_summary: violations seen against snippets written, and why
+            (:meth:`~wavecheck.live.snippets.Snippets.summary`; empty without ``--snippets``).
     """
 
     report: MachineReport
@@ -60,6 +73,7 @@ class WatchResult:
     wall_s: float
     cpu_s: float
     snippets: list[str] = field(default_factory=list)
+    snippet_summary: str = ""
 
 
 def status_line(machine: MachineCheck, samples: int, rate: Fraction, wall_s: float) -> str:
@@ -105,6 +119,7 @@ class Watch:
         self.status = status
         self.status_seconds = status_seconds
         self.why: str | None = None
+        self.notes: list[str] = []
         if self.machine is not None:
             self._start(self.machine)
 
@@ -121,9 +136,44 @@ class Watch:
             self.learner = None
 
     def _signal(self, signum: int, frame: FrameType | None) -> None:
+        if self.why == "interrupted":  # a second Ctrl-C: end now
+            self.acq.kill()
         if self.why is None:
             self.why = "interrupted"
         self.acq.stop()
+
+    def _take(self, data: bytes) -> None:
+        """Hand one piece of the stream to the recorder, the snippet ring and the check."""
+        if self.recorder is not None:
+            self.recorder.add(data)
+        if self.snippets is not None:
+            self.snippets.ring.add(data)
+        if self.machine is not None:
+            self.machine.feed(self.scanner.scan(data))
+        else:
+            assert self.learner is not None
+            self.learner.add(data)
+
+    def _watchdog(self, now: float, deadline: float | None, quiet_since: float) -> str | None:
+        """Why the acquisition must be killed now (None: it may go on)."""
+        if self.acq.overdue(now):
+            self.notes.append(
+                f"sigrok-cli did not end within {STOP_GRACE:g} s of being asked to stop: its "
+                "process group was killed"
+            )
+            return None
+        if deadline is not None and now > deadline and not self.acq.stopped_by_us:
+            assert self.limit is not None
+            return (
+                f"sigrok-cli gave {self.scanner.nsamples:,} of the {self.limit:,} samples asked "
+                f"for within --time + {START_GRACE:g} s; stopped"
+            )
+        if self.acq.exited and now - quiet_since > EXIT_GRACE:
+            self.notes.append(
+                "sigrok-cli exited, but a process it started kept the sample pipe open: its "
+                "process group was killed"
+            )
+        return None
 
     def _check_now(self, final: bool = False) -> None:
         if self.learner is not None:
@@ -160,23 +210,34 @@ class Watch:
         old = {s: signal.signal(s, self._signal) for s in (signal.SIGINT, signal.SIGTERM)}
         t_start = time.monotonic()
         cpu_start = time.process_time()
-        last_check = last_status = t_start
+        last_check = last_status = quiet_since = t_start
+        asked = None if self.limit is None else self.limit * self.scanner.unitsize  # bytes
+        deadline = None
+        if self.limit is not None:
+            deadline = t_start + float(self.limit / self.scanner.rate) + START_GRACE
+        taken = 0
+        cut_short: str | None = None
         try:
             while True:
                 data = self.acq.read(READ_BYTES, FLUSH_SECONDS)
                 if data == b"":
                     break
-                if data:
-                    if self.recorder is not None:
-                        self.recorder.add(data)
-                    if self.snippets is not None:
-                        self.snippets.ring.add(data)
-                    if self.machine is not None:
-                        self.machine.feed(self.scanner.scan(data))
-                    else:
-                        assert self.learner is not None
-                        self.learner.add(data)
                 now = time.monotonic()
+                if self.recorder is not None:
+                    self.recorder.tick()  # a checkpoint is due also when nothing comes
+                if data:
+                    quiet_since = now
+                    if asked is not None and taken + len(data) > asked:  # beyond --samples
+                        data = data[: asked - taken]
+                        self.acq.stop()
+                    taken += len(data)
+                    if data:
+                        self._take(data)
+                notes = len(self.notes)
+                cut_short = self._watchdog(now, deadline, quiet_since)
+                if cut_short is not None or len(self.notes) > notes:
+                    self.acq.kill()
+                    break
                 if now - last_check >= FLUSH_SECONDS:
                     self._check_now()
                     last_check = now
@@ -184,13 +245,13 @@ class Watch:
                     self.status(self._status(now - t_start))
                     last_status = now
         except BaseException:
-            self.acq.stop()
+            self.acq.kill()
             raise
         finally:
             for s, handler in old.items():
                 signal.signal(s, handler)
             code = self.acq.close()
-        failure = self.acq.failure(code)
+        failure = cut_short or self.acq.failure(code)
         if self.learner is not None and (failure or not self.learner.samples):
             raise DeviceError(
                 f"{self.scanner.label}: {failure or 'no samples arrived'}, before the channels' "
@@ -205,9 +266,15 @@ class Watch:
             self.scanner.notes.append(
                 f"the stream ended inside a sample ({self.scanner.partial} byte(s)): dropped"
             )
+        summary = ""
         if self.snippets is not None:
             self.snippets.due(n, final=True)
+            seen = sum(s.fails for a in self.machine.axes for s in a.results)
+            summary = self.snippets.summary(seen)
         capture = self.scanner.capture()
+        capture.notes += self.notes
+        if summary:
+            capture.notes.append(summary)
         if self.why == "interrupted":
             capture.notes.append(
                 f"watch interrupted after {format_time(Fraction(n) / self.scanner.rate)}: "
@@ -223,4 +290,5 @@ class Watch:
             time.monotonic() - t_start,
             time.process_time() - cpu_start,
             [str(p) for p in self.snippets.written] if self.snippets else [],
+            summary,
         )

@@ -8,7 +8,9 @@ per marker says which violation it is.
 
 The dump file: a VCD capture is opened as it is (signals by their hierarchical names). Any
 other capture (``.sr``, sigrok-cli formats) is written as a VCD beside the save file
-(``FILE.vcd`` for ``FILE.gtkw``) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
+(``FILE.vcd`` for ``FILE.gtkw``; :func:`companion_vcd`: a file of that name that is not an
+earlier companion of the same save file is never replaced, the first free ``FILE-2.vcd``,
+``FILE-3.vcd`` … is taken) with :func:`wavecheck.capture.vcd.writer.write_vcd`: the mapped
 channels only, raw (not inverted), on the largest VCD timescale that holds every edge exactly.
 A check keeps only small windows of the signals around the worst places
 (:mod:`wavecheck.engine.windows`): the VCD then holds those windows, the level held between them,
@@ -44,6 +46,7 @@ import numpy.typing as npt
 from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
 from wavecheck.engine.outcome import Report
+from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write
 from wavecheck.report.plot import Place, choose_places
 from wavecheck.units import SI_TIME, format_time
@@ -53,6 +56,7 @@ __all__ = [
     "WAVE_PIXELS",
     "WINDOW_SIZE",
     "View",
+    "companion_vcd",
     "render_gtkw",
     "vcd_timescale",
     "view_of",
@@ -124,7 +128,36 @@ def _round_all(ticks: npt.NDArray[np.int64], steps_per_tick: Fraction) -> npt.ND
     return np.asarray((2 * t * num + den) // (2 * den), dtype=np.int64)
 
 
-def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str, Fraction]:
+def _companion_mark(save: Path) -> str:
+    """What the ``$comment`` of the VCD written for the save file ``save`` begins with."""
+    return f"wavecheck: companion of {save.name}:"
+
+
+def companion_vcd(save: str | os.PathLike[str]) -> Path:
+    """Where the VCD of the save file ``save`` (``FILE.gtkw``) goes: ``FILE.vcd`` when it does
+    not exist or is the companion wavecheck wrote for this same save file before; else the
+    first free ``FILE-2.vcd``, ``FILE-3.vcd`` … A file wavecheck did not write (a capture, a
+    symbolic link to one) is never replaced."""
+    save = Path(save)
+    mark = _companion_mark(save).encode()
+    for k in range(1, 10_000):
+        candidate = save.with_name(f"{save.stem}{'' if k == 1 else f'-{k}'}.vcd")
+        if not os.path.lexists(candidate):
+            return candidate
+        try:
+            if candidate.is_symlink() or not candidate.is_file():
+                continue
+            with open(candidate, "rb") as f:
+                if mark in f.read(4096):
+                    return candidate
+        except OSError:
+            continue
+    raise UsageError(f"{save}: no free name for its companion VCD beside it")
+
+
+def write_vcd_of(
+    report: Report, path: str | os.PathLike[str], comment: str = ""
+) -> tuple[int, str, Fraction]:
     """Write the mapped channels of ``report``'s capture as a VCD (raw levels), atomically.
 
     Variables are named after the roles (``step``, ``dir``, ``phase_A`` …) in scope
@@ -150,7 +183,8 @@ def write_vcd_of(report: Report, path: str | os.PathLike[str]) -> tuple[int, str
         timescale=f"{magnitude} {unit}",
         end=_round(cap.end - cap.start, factor),
         scope="wavecheck",
-        comment=f"wavecheck: mapped channels of {cap.path} ({channels}); raw levels{windows}",
+        comment=f"{comment}wavecheck: mapped channels of {cap.path} ({channels}); raw "
+        f"levels{windows}",
         version="wavecheck",
     )
     return magnitude, unit, factor
@@ -300,7 +334,8 @@ def _neighbours(report: Report, tick: int) -> tuple[int, int]:
 def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
     """Write the save file to ``path`` (and the VCD beside it for a non-VCD capture).
 
-    Returns the VCD written beside it, or None when the capture's own VCD is used.
+    Returns the VCD written beside it (:func:`companion_vcd`), or None when the capture's own
+    VCD is used.
     """
     path = Path(path)
     cap = report.capture
@@ -310,8 +345,8 @@ def write_gtkw(report: Report, path: str | os.PathLike[str]) -> Path | None:
         text = render_gtkw(report, cap.path, names=names, unit_factor=magnitude, save_path=path)
         atomic_write(path, text)
         return None
-    vcd_path = path.with_suffix(".vcd")
-    magnitude, _, factor = write_vcd_of(report, vcd_path)
+    vcd_path = companion_vcd(path)
+    magnitude, _, factor = write_vcd_of(report, vcd_path, _companion_mark(path) + " ")
     names = {role: "wavecheck." + role.replace("-", "_") for role in report.interface.signals}
     text = render_gtkw(
         report,

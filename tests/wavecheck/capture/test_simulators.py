@@ -167,3 +167,97 @@ def test_a_never_known_signal_is_unknown(tmp_path: Path, ghdl_dumps: tuple[Path,
         assert len(starts) == 2 and cap.timebase.seconds(int(ends[1] - starts[1])) == Fraction(
             1, 10**6
         )
+
+
+# Issue 26: a bit of a vector is the bit at that index of its *declared* range. Each vector is
+# declared the "wrong" way round for a [width-1:0] guess: rev [0:3] / (0 to 3) and off [5:2] /
+# (5 downto 2); the leftmost bit (rev[0], off[5]) toggles 8 times, the rightmost (rev[3],
+# off[2]) 4 times and the two middle bits never, so any other reading of the range picks a bit
+# with another edge count.
+BUS_V = """`timescale 1ns/1ps
+module tb;
+  reg [0:3] rev = 4'b0000;
+  reg [5:2] off = 4'b0000;
+  integer k;
+  initial begin
+    $dumpfile(`DUMPFILE);
+    $dumpvars(0, tb);
+    for (k = 0; k < 8; k = k + 1) begin
+      #10 rev[0] = ~rev[0]; off[5] = ~off[5];
+      if (k < 4) begin rev[3] = ~rev[3]; off[2] = ~off[2]; end
+    end
+    #10 $finish;
+  end
+endmodule
+"""
+BUS_VHD = """library ieee; use ieee.std_logic_1164.all;
+entity tb is end;
+architecture sim of tb is
+  signal rev : std_logic_vector(0 to 3) := "0000";
+  signal off : std_logic_vector(5 downto 2) := "0000";
+begin
+  process begin
+    for k in 0 to 7 loop
+      wait for 10 ns;
+      rev(0) <= not rev(0); off(5) <= not off(5);
+      if k < 4 then rev(3) <= not rev(3); off(2) <= not off(2); end if;
+    end loop;
+    wait;
+  end process;
+end;
+"""
+BUS_EDGES = {"rev[0]": 8, "rev[1]": 0, "rev[3]": 4, "off[5]": 8, "off[4]": 0, "off[2]": 4}
+
+
+@pytest.fixture(scope="module")
+def bus_dumps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The same two vectors dumped by Icarus (VCD, FST) and GHDL (VCD, FST, GHW)."""
+    tmp = tmp_path_factory.mktemp("bus")
+    dumps: dict[str, Path] = {}
+    if shutil.which("iverilog") and shutil.which("vvp"):
+        (tmp / "bus.v").write_text(BUS_V)
+        for ext in ("vcd", "fst"):
+            exe = tmp / f"bus-{ext}.vvp"
+            dump = tmp / f"icarus.{ext}"
+            subprocess.run(
+                ["iverilog", f'-DDUMPFILE="{dump}"', "-o", str(exe), "bus.v"], check=True, cwd=tmp
+            )
+            flags = ["-fst"] if ext == "fst" else []
+            subprocess.run(
+                ["vvp", "-n", str(exe), *flags], check=True, cwd=tmp, capture_output=True
+            )
+            dumps[f"icarus-{ext}"] = dump
+    if shutil.which("ghdl"):
+        (tmp / "bus.vhd").write_text(BUS_VHD)
+        subprocess.run(["ghdl", "-a", "bus.vhd"], check=True, cwd=tmp)
+        subprocess.run(["ghdl", "-e", "tb"], check=True, cwd=tmp)
+        subprocess.run(
+            ["ghdl", "-r", "tb", "--vcd=ghdl.vcd", "--fst=ghdl.fst", "--wave=ghdl.ghw"],
+            check=True, cwd=tmp, capture_output=True,
+        )  # fmt: skip
+        dumps.update({f"ghdl-{e}": tmp / f"ghdl.{e}" for e in ("vcd", "fst", "ghw")})
+    return dumps
+
+
+@pytest.mark.parametrize("dump", ["icarus-vcd", "icarus-fst", "ghdl-vcd", "ghdl-fst", "ghdl-ghw"])
+def test_bits_of_buses_follow_the_declared_range(bus_dumps: dict[str, Path], dump: str) -> None:
+    if dump not in bus_dumps:
+        pytest.skip("needs iverilog and ghdl (make system-deps)")
+    cap = open_capture(bus_dumps[dump])
+    got = {name: len(find_channel(cap, name).edges) for name in BUS_EDGES}
+    assert got == BUS_EDGES
+    ranges = {key.rsplit(".", 1)[-1]: v.range_text for key, v in cap.vectors.items()}
+    assert ranges == {"rev": "[0:3]", "off": "[5:2]"}
+    with pytest.raises(UsageError, match="has no bit 1 .bits 2 to 5"):
+        find_channel(cap, "off[1]")
+
+
+def test_fst_through_pywellen_offers_no_bits_it_cannot_place(bus_dumps: dict[str, Path]) -> None:
+    """pywellen does not give an FST vector's range: without fst2vcd no bit is guessed."""
+    if "icarus-fst" not in bus_dumps:
+        pytest.skip("needs iverilog (make system-deps)")
+    cap = read_wellen(bus_dumps["icarus-fst"], kind="fst")
+    assert cap.vectors == {}
+    assert any("fst2vcd" in n for n in cap.notes)
+    with pytest.raises(UsageError, match="no channel 'rev.0.'"):
+        find_channel(cap, "rev[0]")

@@ -121,39 +121,3 @@ def test_wide_samples(tmp_path: Path) -> None:
     edges = [np.zeros(0, dtype=np.int64)] * 16 + [np.array([2], dtype=np.int64)]
     raw = samples_from_edges(edges, [1] + [0] * 16, 4)
     assert raw.tolist() == [1, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1]
-
-
-# -- SrRecorder: a .sr written as the samples arrive (wavecheck watch --save) ---------------------
-def test_recorder_writes_what_arrived_in_members_and_reads_back(tmp_path: Path) -> None:
-    import numpy as np
-
-    from wavecheck.capture.sr import read_sr
-    from wavecheck.capture.srzip import SrRecorder, sr_metadata
-
-    rng = np.random.default_rng(5)
-    raw = np.bitwise_xor.accumulate((rng.random(10_000) < 0.05).astype(np.uint8) * 0x05)
-    target = tmp_path / "live.sr"
-    rec = SrRecorder(target, sr_metadata(["STEP", "DIR", "EN"], samplerate=1000000), 1,
-                     chunk_bytes=4096)  # fmt: skip
-    data = raw.tobytes()
-    for a in range(0, len(data), 777):
-        rec.add(data[a : a + 777])
-        assert not target.exists()  # only at close
-    rec.close()
-    import zipfile
-
-    members = [n for n in zipfile.ZipFile(target).namelist() if n.startswith("logic-1-")]
-    assert len(members) == 3  # 4096 + 4096 + 1808
-    got = read_sr(target)
-    bit0 = (raw & 1).astype(np.int8)
-    assert got.end == 10_000
-    assert got.channels[0].edges.tolist() == (np.flatnonzero(np.diff(bit0)) + 1).tolist()
-
-
-def test_recorder_discard_leaves_nothing(tmp_path: Path) -> None:
-    from wavecheck.capture.srzip import SrRecorder, sr_metadata
-
-    rec = SrRecorder(tmp_path / "x.sr", sr_metadata(["A"], samplerate=1000), 1)
-    rec.add(b"\x00\x01" * 100)
-    rec.discard()
-    assert list(tmp_path.iterdir()) == []

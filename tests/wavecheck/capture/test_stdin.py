@@ -118,3 +118,41 @@ def test_open_capture_reads_a_fifo(tmp_path: Path) -> None:
     assert cap.path == str(fifo)
     for a, b in zip(cap.channels, ref.channels, strict=True):
         assert a.edges.tolist() == b.edges.tolist()
+
+
+@pytest.mark.parametrize("command", [["info"], ["check", "--drive", "gecko-g202"]])
+def test_a_fifo_without_a_writer_says_so_and_ends_on_ctrl_c(
+    tmp_path: Path, command: list[str]
+) -> None:
+    """Issue 27: a FIFO nobody writes to blocked silently. On a terminal the wait is said, and
+    Ctrl-C (SIGINT) ends it at once: exit 130, one line."""
+    import pty
+    import select
+    import signal
+    import time
+
+    fifo = tmp_path / "capture.fifo"
+    os.mkfifo(fifo)
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "wavecheck", command[0], str(fifo), *command[1:]],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave, cwd=REPO,
+    )  # fmt: skip
+    os.close(slave)
+    seen = b""
+    deadline = time.monotonic() + 60
+    while b"waiting for data on FIFO" not in seen and time.monotonic() < deadline:
+        if select.select([master], [], [], 1.0)[0]:
+            seen += os.read(master, 4096)
+    assert f"waiting for data on FIFO {fifo}".encode() in seen, seen
+    assert proc.poll() is None  # still waiting: nothing was made up
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=10) == 130
+    rest = b""
+    while select.select([master], [], [], 0.5)[0]:
+        try:
+            rest += os.read(master, 4096)
+        except OSError:
+            break
+    os.close(master)
+    assert [ln for ln in rest.decode().splitlines() if ln.strip()] == ["wavecheck: interrupted"]

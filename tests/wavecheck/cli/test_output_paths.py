@@ -171,7 +171,8 @@ def test_per_capture_outputs_are_written_through_the_same_mechanism(tmp_path: Pa
 
 
 def test_gtkw_companion_vcd_does_not_overwrite_an_input(tmp_path: Path, capfd) -> None:
-    """A ``.sr`` capture's ``--gtkw view.gtkw`` writes ``view.vcd`` beside it: never over an input."""
+    """A ``.sr`` capture's ``--gtkw view.gtkw`` writes ``view.vcd`` beside it: never over an
+    input (nor any other file wavecheck did not write)."""
     from stepgen.cli import main as stepgen
 
     assert (
@@ -207,5 +208,7 @@ def test_gtkw_companion_vcd_does_not_overwrite_an_input(tmp_path: Path, capfd) -
         ]
     )
     _, err = capfd.readouterr()
-    assert code == 2 and f"{ini}: is the --ini file" in err
+    # issue 27: not wavecheck's own companion, so not replaced: the next free name is taken
+    assert code == 0 and f"its signals are in {tmp_path / 'view-2.vcd'}" in err
     assert ini.read_bytes() == before
+    assert f'"{tmp_path / "view-2.vcd"}"' in (tmp_path / "view.gtkw").read_text()

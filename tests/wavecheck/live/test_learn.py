@@ -21,13 +21,18 @@ SHARED = Path(__file__).resolve().parents[4] / "shared" / "captures" / "sigrok-d
 SMOOTHIE = SHARED / "stepper_motor" / "smoothieware" / "smoothieware_snippet.sr"
 pytestmark = pytest.mark.skipif(not SMOOTHIE.exists(), reason="needs ../shared/captures")
 
+# as sigrok-cli does: --samples N gives N samples (one byte each here) and ends; --continuous
+# gives samples until a line comes on standard input (ending by itself would be a failure)
 STAND_IN = """#!/bin/sh
 case "$*" in
   *--show*) echo "replay - Stand-in with 8 channels: 0 1 2 3 4 5 6 7";;
   *--get*) echo 12000000;;
-  *) exec cat "{raw}";;
+  *--samples*) exec head -c "$(echo "$*" | sed 's/.*--samples \\([0-9]*\\).*/\\1/')" "{raw}";;
+  *) cat "{raw}"; read line;;
 esac
 """
+#: 87 ms at 12 MHz: the whole samples of the Smoothieware capture's first 87 ms (of 87.38 ms)
+TIME, SAMPLES = "87ms", 1_044_000
 
 
 def _stand_in(tmp: Path, raw: bytes) -> Path:
@@ -53,10 +58,15 @@ def _run(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
 
 
 def test_roles_learned_live_give_check_s_report(tmp_path: Path) -> None:
-    script = _stand_in(tmp_path, _logic(SMOOTHIE))
+    from wavecheck.capture.srzip import sr_metadata, write_sr
+
+    raw = _logic(SMOOTHIE)
+    script = _stand_in(tmp_path, raw)
     live = _run("watch", "--driver", "replay", "--sigrok-cli", str(script), "--drive",
-                "gecko-g202", "--format", "json", cwd=tmp_path)  # fmt: skip
-    ref = _run("check", str(SMOOTHIE), "--drive", "gecko-g202", "--format", "json", cwd=tmp_path)
+                "gecko-g202", "--format", "json", "--time", TIME, cwd=tmp_path)  # fmt: skip
+    meta = sr_metadata([str(k) for k in range(8)], samplerate=12_000_000)
+    write_sr(tmp_path / "ref.sr", raw[:SAMPLES], metadata=meta)
+    ref = _run("check", "ref.sr", "--drive", "gecko-g202", "--format", "json", cwd=tmp_path)
     assert live.returncode == ref.returncode == 1, live.stderr
     got, want = json.loads(live.stdout), json.loads(ref.stdout)
     assert [a["map"] for a in got["axes"]] == [a["map"] for a in want["axes"]]
@@ -72,7 +82,7 @@ def test_undecided_roles_end_with_the_candidates_and_exit_2(tmp_path: Path) -> N
     """Samples with no pulse train at all (every channel low): no STEP can be found."""
     script = _stand_in(tmp_path, bytes(120_000))
     run = _run("watch", "--driver", "replay", "--sigrok-cli", str(script), "--drive",
-               "gecko-g202", "--learn", "5ms", cwd=tmp_path)  # fmt: skip
+               "gecko-g202", "--learn", "5ms", "--time", "10ms", cwd=tmp_path)  # fmt: skip
     assert run.returncode == 2
     last = run.stderr.strip().splitlines()[-1]
     assert "no step signal found: the lines look like unchanging" in last

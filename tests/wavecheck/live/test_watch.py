@@ -11,6 +11,7 @@ A capture of the same pattern to a file (``sigrok-cli --samples N -o X.sr``) is 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -151,11 +152,20 @@ def test_stop_on_fail_and_snippets_around_each_violation(tmp_path: Path) -> None
     assert {r["id"]: r["min_margin_ns"] for r in report["rules"]}["dir_setup"] == -20_000
     snippets = sorted((tmp_path / "snips").iterdir())
     assert len(snippets) == 3
+    # the report says how many violations were seen, and why most have no snippet of their own
+    seen = sum(r["violations"] for r in report["rules"])
+    summary = f"snippets: 3 file(s) in snips for {seen} violation(s) seen ("
+    assert summary in run.stderr and summary in json.dumps(report)
+    assert "beyond --max-snippets 3" in run.stderr
     for snip in snippets:
         meta = zipfile.ZipFile(snip).read("metadata").decode()
         first = int(meta.split("first_sample=")[1].split()[0])
-        check = json.loads(_wavecheck("check", str(snip), *CHECK, "--limit", "dir_setup=60us",
+        # issue 27: the snippet carries its drive, map and step type: no options needed
+        check = json.loads(_wavecheck("check", str(snip), "--format", "json",
+                                      cwd=tmp_path).stdout)  # fmt: skip
+        given = json.loads(_wavecheck("check", str(snip), *CHECK, "--limit", "dir_setup=60us",
                                       "--format", "json", cwd=tmp_path).stdout)  # fmt: skip
+        assert check == given
         v = check["violations"][0]
         assert v["rule"] == "dir_setup" and v["margin_ns"] == -20_000
         # the name is the violation's time in the watched stream
@@ -193,3 +203,67 @@ def test_the_readme_watch_block_runs_as_written(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr
     assert "steps:   25000" in run.stdout  # 2 s at 200 kHz: (400000 + 7) // 16 rising edges of D3
     assert (tmp_path / "demo.sr").is_file() and (tmp_path / "snippets").is_dir()
+
+
+def test_save_is_readable_after_the_watcher_is_killed(tmp_path: Path) -> None:
+    """Issue 27: ``--save`` was a hidden temporary file renamed at the end, so a watch killed
+    after an hour left nothing. Killed with SIGKILL (no handler runs), the file is a complete
+    ``.sr`` holding all but at most the last checkpoint interval of what had been checked."""
+    import re
+
+    from wavecheck.capture.open import open_capture
+    from wavecheck.live.record import CHECKPOINT_SECONDS
+
+    proc = _start("--save", "kept.sr", cwd=tmp_path)
+    assert proc.stderr is not None
+    seen = 0
+    deadline = time.monotonic() + 60
+    while seen < 3 * RATE and time.monotonic() < deadline:
+        m = re.search(r"([\d,]+) samples", proc.stderr.readline())
+        if m:
+            seen = int(m.group(1).replace(",", ""))
+    children = subprocess.run(
+        ["pgrep", "-P", str(proc.pid)], capture_output=True, text=True
+    ).stdout.split()
+    proc.kill()
+    proc.communicate(timeout=30)
+    for pid in children:  # sigrok-cli sees its input end and stops; make sure
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(int(pid), signal.SIGKILL)
+    assert seen >= 3 * RATE
+    kept = tmp_path / "kept.sr"
+    with zipfile.ZipFile(kept) as z:
+        assert z.testzip() is None
+        stored = sum(i.file_size for i in z.infolist() if i.filename.startswith("logic-1-"))
+    assert seen - (CHECKPOINT_SECONDS + 0.5) * RATE <= stored
+    shown = subprocess.run(["sigrok-cli", "-i", str(kept), "--show"], capture_output=True,
+                           text=True, check=True).stdout  # fmt: skip
+    assert f"Logic sample count: {stored}" in shown  # libsigrok (PulseView) reads it whole
+    cap = open_capture(kept)
+    d3 = next(c for c in cap.channels if c.name == "D3")
+    assert (len(d3.edges) + 1) // 2 == (stored + 7) // 16  # every pulse of the counter's D3
+
+
+def test_a_snippet_repeats_the_check_of_several_axes_without_options(tmp_path: Path) -> None:
+    """Two axes, an inverted DIR, a DIR sense, a shared ENABLE, a drive file and limits: the
+    check of a snippet without options equals the check with all of them (issue 27)."""
+    drive = tmp_path / "mine.toml"
+    drive.write_text((Path(__file__).resolve().parents[3] / "rules" / "drv8825.toml").read_text())
+    opts = ["--drive", "x=drv8825", "--drive", f"y={drive}", "--map",
+            "x.step=D3,x.dir=D6", "--map", "y.step=D2,y.dir=D5", "--map", "enable=D7",
+            "--invert", "y.dir", "--dir-forward", "y=high", "--type", "x=0",
+            "--limit", "dir_setup=60us", "--margin", "+100ns"]  # fmt: skip
+    run = _wavecheck("watch", *DEMO, *opts, "--time", "50ms", "--snippets", "snips",
+                     "--max-snippets", "2", "--format", "json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 1, run.stderr
+    snips = sorted((tmp_path / "snips").iterdir())
+    assert snips
+    for snip in snips:
+        bare = _wavecheck("check", str(snip), "--format", "json", cwd=tmp_path)
+        full = _wavecheck("check", str(snip), *opts, "--format", "json", cwd=tmp_path)
+        assert bare.returncode == full.returncode == 1, bare.stderr
+        assert json.loads(bare.stdout) == json.loads(full.stdout)
+        assert "checked with the options it carries" in bare.stderr
+    # a capture that carries none still needs --drive, in one line
+    plain = _wavecheck("check", str(tmp_path / "mine.toml"), cwd=tmp_path)
+    assert plain.returncode == 2 and "--drive" in plain.stderr

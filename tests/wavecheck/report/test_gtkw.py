@@ -6,6 +6,7 @@ import re
 from fractions import Fraction
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tests.conftest import write_vcd
@@ -181,3 +182,39 @@ def test_header_names_come_from_the_shared_vcd_header(tmp_path: Path) -> None:
     assert magnitude == 100
     assert names["dir"] == "top.y.dir" and names["top.x.step"] == "top.x.step"
     assert "step" not in names  # two leaves named step: only their full names
+
+
+def test_the_companion_vcd_never_replaces_a_file_wavecheck_did_not_write(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 27: ``check X.sr --gtkw X.gtkw`` beside an existing capture ``X.vcd`` replaced it
+    with a small window. The capture is kept byte for byte, the companion takes the first free
+    name and the run says which; a second run replaces its own companion, not the capture; a
+    symbolic link named X.vcd is not followed into its target."""
+    from wavecheck.capture.srzip import write_sr_edges
+    from wavecheck.cli import main
+
+    sr = tmp_path / "X.sr"
+    steps = [10 * k for k in range(1, 40)]
+    edges = sorted(steps + [t + 3 for t in steps])
+    write_sr_edges(sr, ["STEP", "DIR"], [np.asarray(edges), np.asarray([5])], [0, 0], 500,
+                   samplerate=1_000_000)  # fmt: skip
+    capture = tmp_path / "X.vcd"
+    capture.write_bytes(b"$comment a 1.5 MB capture of someone else's $end\n" * 3)
+    before = capture.read_bytes()
+    argv = ["check", str(sr), "--drive", "gecko-g202", "--map", "step=STEP,dir=DIR",
+            "--gtkw", str(tmp_path / "X.gtkw")]  # fmt: skip
+    for _ in range(2):
+        main(argv)
+        err = capsys.readouterr().err
+        assert f"its signals are in {tmp_path / 'X-2.vcd'}" in err
+        assert capture.read_bytes() == before
+        assert f'[dumpfile] "{tmp_path / "X-2.vcd"}"' in (tmp_path / "X.gtkw").read_text()
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["X-2.vcd", "X.gtkw", "X.sr", "X.vcd"]
+    target = tmp_path / "elsewhere.vcd"
+    target.write_bytes(before)
+    (tmp_path / "X-2.vcd").unlink()
+    (tmp_path / "X-2.vcd").symlink_to(target)
+    main(argv)
+    assert f"its signals are in {tmp_path / 'X-3.vcd'}" in capsys.readouterr().err
+    assert target.read_bytes() == before and capture.read_bytes() == before

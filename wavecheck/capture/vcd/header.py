@@ -43,6 +43,9 @@ __all__ = [
 ]
 
 _MAX_HEADER_BYTES = 64 << 20
+#: Most variables a header may declare: a stepper's dump has a few, a whole FPGA's tens of
+#: thousands; a million costs minutes and a gigabyte before any check (issue 27).
+MAX_VARS = 250_000
 _MAX_ID_LEN = 8
 _TIMESCALE_RE = re.compile(r"^(\d+)\s*(s|ms|us|ns|ps|fs|as|zs)$")
 _RATE = r"(\d+(?:\.\d+)?\s*[kMG]?Hz)\b"
@@ -293,6 +296,15 @@ def read_header(path: str | os.PathLike[str], f: BinaryIO) -> tuple[VcdHeader, b
         raise CaptureError(path, None, "the file is empty (no VCD header)")
     whole = bytes(data)
     del data
+    declared = whole.count(b"$var", 0, end)
+    if declared > MAX_VARS:
+        raise CaptureError(
+            path,
+            None,
+            f"declares {declared:,} variables, more than the {MAX_VARS:,} wavecheck reads (a "
+            "logic analyzer has at most a few hundred channels): dump only the step "
+            "generator's scope ($dumpvars with a depth and a scope)",
+        )
     header = parse_header(path, whole[:end])
     return header, whole[header.body_offset :]
 
