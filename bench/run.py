@@ -25,6 +25,12 @@ Sections (goals of issues 18, 7 and 14 in brackets):
    writing the same trace.
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
    of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
+   Issue 29: ``--help`` and ``drives`` against the numpy import [CPU ≤ 0.5×: no numpy, no
+   subcommand module but the one run].
+5b. Many small captures (issue 29, section ``many``): ``check 'many1000/*.vcd' -j 2`` against
+   ``-j 1`` (``bench/many_files.py``'s 1000 VCDs of 200 steps, JSON to ``-o``, checked whole
+   and in input order) [wall ≥ 1.8× faster]; peak RSS of ``-j 1`` on 1000 files against 100
+   [≤ 1.1×: flat in the number of files]. ``--quick``: 200 and 20 files.
 6. Bounded memory (issue 14): peak RSS of ``wavecheck check`` streamed (the default) on the
    generated 8 G-sample ``.sr`` (13 M edges) [≤ 100 MB] and a 50 M-change VCD [≤ 150 MB], then
    on captures twice as long (16 G samples, 100 M changes) [peak ≤ 1.1× the base's]; peer: the
@@ -54,6 +60,7 @@ are kept in the JSON.
 from __future__ import annotations
 
 import argparse
+import configparser
 import datetime as _dt
 import json
 import os
@@ -64,6 +71,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -563,8 +571,81 @@ def bench_startup(runs: int) -> dict[str, Any]:
     peer = f"numpy import {floor:.2f} s; sigrok-cli --version {sigrok:.2f} s"
     for k in list(cmds)[:3]:
         figure(f"start-up: {k}", f"{best[k]:.2f} s cpu", "≤ 0.25 s", best[k] <= 0.25, peer, load)
-    return {"cpu_s": best, "runs": times, "load": load,
+    ratios = {k: best[k] / floor for k in list(cmds)[:2]}  # issue 29: no numpy, one subcommand
+    for k, ratio in ratios.items():
+        figure(f"start-up: {k} vs `import numpy` (CPU)", f"{ratio:.2f}× ({best[k]:.3f} s)",
+               f"≤ {STARTUP_RATIO}×", ratio <= STARTUP_RATIO,
+               f"python -c 'import numpy' {floor:.3f} s", load)  # fmt: skip
+    return {"cpu_s": best, "runs": times, "load": load, "ratios": ratios,
             "target": all(best[k] <= 0.25 for k in list(cmds)[:3])}  # fmt: skip
+
+
+#: Issue 29: ``--help`` and ``drives`` against the numpy import, CPU (they import no numpy).
+STARTUP_RATIO = 0.5
+#: Issue 29: 1000 small VCDs, wall of ``-j 1`` ÷ wall of ``-j 2``.
+MANY_SPEEDUP = 1.8
+#: Issue 29: peak RSS of ``-j 1`` on ten times the files, at most this factor (flat).
+MANY_RSS_RATIO = 1.1
+
+
+def _many_cmd(folder: Path, jobs: int, out: str) -> list[str]:
+    return [WAVECHECK, "check", str(folder / "*.vcd"), "--drive", "gecko-g202",
+            "--map", "step=STEP,dir=DIR", "-j", str(jobs), "--format", "json", "-o", out]  # fmt: skip
+
+
+def _rss_run(cmd: list[str], out: str) -> dict[str, Any]:
+    """One run of ``cmd`` under ``/usr/bin/time -v`` (exit 0 or 1 expected), stdout to ``out``."""
+    r = timed(cmd, out)
+    if r["rc"] not in (0, 1):
+        raise SystemExit(f"{sh(cmd)}: exit {r['rc']}: {r['stderr'][-300:]}")
+    return r
+
+
+def _many_run(folder: Path, jobs: int, count: int, out: str) -> dict[str, Any]:
+    """One timed ``check`` of the ``count`` VCDs of ``folder``; the report checked whole."""
+    r = _rss_run(_many_cmd(folder, jobs, out), os.devnull)
+    paths = [c["capture"]["path"] for c in json.loads(Path(out).read_text())["reports"]]
+    if paths != sorted(str(p) for p in folder.glob("*.vcd")) or len(paths) != count:
+        raise SystemExit(f"{sh(_many_cmd(folder, jobs, out))}: reports missing or out of order")
+    return r
+
+
+def bench_many(quick: bool, runs: int) -> dict[str, Any]:
+    """Issue 29: many small VCDs (``bench/many_files.py``'s) in one ``check`` call: wall of
+    ``-j 2`` against ``-j 1`` on 1000 files, and peak RSS of ``-j 1`` on 100 against 1000."""
+    from bench.many_files import make_files
+
+    small, big = (20, 200) if quick else (100, 1000)
+    folders = {n: ROOT / "bench" / "data" / f"many{n}" for n in (small, big)}
+    for n, folder in folders.items():
+        make_files(folder, n)
+    for jobs in (1, 2):
+        print(f"  $ {sh(_many_cmd(folders[big], jobs, 'REPORT.json'))}")
+    print(f"  $ {sh(_many_cmd(folders[small], 1, 'REPORT.json'))}")
+    rows: dict[str, list[dict[str, Any]]] = {"j1": [], "j2": [], "j1_small": []}
+    loads = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = f"{tmp}/report.json"
+        for _ in range(runs):
+            loads.append(load1())
+            rows["j1"].append(_many_run(folders[big], 1, big, out))
+            rows["j2"].append(_many_run(folders[big], 2, big, out))
+            rows["j1_small"].append(_many_run(folders[small], 1, small, out))
+    load = max(loads)
+    w1, w2 = med(rows["j1"], "wall_s"), med(rows["j2"], "wall_s")
+    c1, c2 = (med(rows[k], "user_s") + med(rows[k], "sys_s") for k in ("j1", "j2"))
+    speedup = w1 / w2
+    figure(f"{big} small VCDs, `-j 2` vs `-j 1` (wall)", f"{speedup:.2f}× ({w2:.2f} s)",
+           f"≥ {MANY_SPEEDUP}×", speedup >= MANY_SPEEDUP,
+           f"-j 1 {w1:.2f} s wall ({c1:.2f} s cpu); -j 2 {c2:.2f} s cpu", load)  # fmt: skip
+    rss_big = max(r["max_rss_mb"] for r in rows["j1"])
+    rss_small = max(r["max_rss_mb"] for r in rows["j1_small"])
+    grow = rss_big / rss_small
+    figure(f"peak RSS `-j 1`, {big} vs {small} small VCDs", f"{grow:.2f}× ({rss_big:.1f} MB)",
+           f"flat: ≤ {MANY_RSS_RATIO}×", grow <= MANY_RSS_RATIO,
+           f"{small} files {rss_small:.1f} MB", load)  # fmt: skip
+    return {"runs": rows, "load": load, "speedup": speedup, "rss_ratio": grow,
+            "files": [small, big]}  # fmt: skip
 
 
 #: Issue 14's bounded-memory cases: (label, base key, doubled key, map, peak RSS goal MB).
@@ -578,14 +659,6 @@ MEMORY_QUICK = {"sr": ("sr1g", "sr2g"), "vcd": ("vcd_sim_1m", "vcd_sim_2m")}
 MEMORY_RATIO = 1.1
 
 
-def _rss_run(cmd: list[str], out: str) -> dict[str, Any]:
-    """One run of ``cmd`` under ``/usr/bin/time -v`` (exit 0 or 1 expected), stdout to ``out``."""
-    r = timed(cmd, out)
-    if r["rc"] not in (0, 1):
-        raise SystemExit(f"{sh(cmd)}: exit {r['rc']}: {r['stderr'][-300:]}")
-    return r
-
-
 def _truth_steps(path: Path) -> int:
     """The steps of the checked axis (X) that ``bench/gen.py`` put into ``path``."""
     truth = json.loads(path.with_suffix(".truth.json").read_text())
@@ -594,20 +667,43 @@ def _truth_steps(path: Path) -> int:
     return int(truth["edges_per_signal"][0]) // 2  # VCD: x step rises and falls
 
 
-def _same(row: dict[str, Any]) -> str:
-    """Whether the streamed report is the whole path's and counts the steps generated."""
-    same = "report = --no-stream's" if row["same_report"] else "REPORT DIFFERS from --no-stream's"
-    steps = row["steps"] == row["truth_steps"]
-    return same + ("" if steps else f"; STEPS {row['steps']} ≠ generated {row['truth_steps']}")
+#: grbl settings that bench_memory's --firmware row reads (a real file, bundled).
+GRBL_SETTINGS = ROOT / "captures/firmware/grbl/settings.md"
 
 
-def _right(row: dict[str, Any]) -> bool:
-    return bool(row["same_report"]) and row["steps"] == row["truth_steps"]
+def _memory_variants(path: Path, mapping: str, tmp: str) -> dict[str, tuple[list[str], str]]:
+    """The ways of checking ``path`` whose peak RSS must not follow the capture's length (issue
+    23: every option on the one engine): name → (argv, shell text)."""
+    base = [WAVECHECK, "check", str(path), "--drive", "gecko-g202"]
+    mapped = [*base, "--map", mapping]
+    out = {
+        "plain": mapped,
+        "--steps-csv": [*mapped, "--steps-csv", f"{tmp}/steps.csv"],
+        "--firmware": [*mapped, "--firmware", str(GRBL_SETTINGS)],
+        "no --map": base,
+        "--no-stream (one block: the peer)": [*mapped, "--no-stream"],
+    }
+    argv = {k: (v, sh(v)) for k, v in out.items()}
+    if path.suffix == ".sr":  # raw samples through a pipe, as a logic analyzer's tool gives them
+        meta = configparser.ConfigParser()
+        with zipfile.ZipFile(path) as z:
+            meta.read_string(z.read("metadata").decode())
+        dev = meta["device 1"]
+        names = ",".join(dev[f"probe{k}"] for k in range(1, int(dev["total probes"]) + 1))
+        rate = json.loads(path.with_suffix(".truth.json").read_text())["samplerate"]  # Hz
+        fmt = f"binary:numchannels={dev['total probes']}:samplerate={rate}"
+        pipe = (f"unzip -p {shlex.quote(str(path))} 'logic-1-*' | {shlex.quote(WAVECHECK)} check - "
+                f"--input-format {fmt} --channels {names} --drive gecko-g202 --map {mapping}")  # fmt: skip
+        argv["stdin (raw samples)"] = (["bash", "-o", "pipefail", "-c", pipe], pipe)
+    return argv
 
 
 def bench_memory(quick: bool, runs: int) -> dict[str, Any]:
-    """Peak RSS of ``wavecheck check`` streamed (the default) against ``--no-stream`` on a long
-    capture and on one twice as long (issue 14); the reports of both paths compared."""
+    """Peak RSS of ``wavecheck check`` on a long capture and on one twice as long, every option
+    that once needed the whole capture (issue 23: ``--steps-csv``, ``--firmware``, roles told
+    without ``--map``, standard input) against the plain check and ``--no-stream`` (the one
+    engine fed one block: memory follows the capture). Every variant's report is compared with
+    the plain one's (verdict and step counts)."""
     floor_cmd = [WAVECHECK, "check", str(TINY_VCD), "--drive", "gecko-g202"]
     floor = min(r["max_rss_mb"] for r in [timed(floor_cmd) for _ in range(2)])
     print(f"  floor: {sh(floor_cmd)}: max RSS {floor:.0f} MB (interpreter, numpy, wavecheck)")
@@ -615,60 +711,61 @@ def bench_memory(quick: bool, runs: int) -> dict[str, Any]:
     for kind, (label, base_key, double_key, mapping, goal) in MEMORY_CASES.items():
         if quick:
             base_key, double_key = MEMORY_QUICK[kind]
-        rows: dict[str, Any] = {}
+        rows: dict[str, dict[str, Any]] = {}
         for key in (base_key, double_key):
             path = ensure(key)
-            cmd = [WAVECHECK, "check", str(path), "--drive", "gecko-g202", "--map", mapping]
-            old = [*cmd, "--no-stream"]
-            print(
-                f"\n- {path.name} ({path.stat().st_size / 1e6:.0f} MB)\n  $ {sh(cmd)}\n  $ {sh(old)}"
-            )
-            loads, new_runs, old_runs = [], [], []
+            print(f"\n- {path.name} ({path.stat().st_size / 1e6:.0f} MB)")
             with tempfile.TemporaryDirectory() as tmp:
+                variants = _memory_variants(path, mapping, tmp)
+                got: dict[str, list[dict[str, Any]]] = {v: [] for v in variants}
+                loads = []
                 for _ in range(runs):  # interleaved
                     loads.append(load1())
-                    new_runs.append(_rss_run(cmd, f"{tmp}/new.txt"))
-                    old_runs.append(_rss_run(old, f"{tmp}/old.txt"))
-                text = Path(f"{tmp}/new.txt").read_text()
-                same = text == Path(f"{tmp}/old.txt").read_text()
-            m = re.search(r"^steps:\s+(\d+)", text, re.M)
-            row = {
-                "file": str(path),
-                "commands": {"streamed": sh(cmd), "no_stream": sh(old)},
-                "streamed": new_runs,
-                "no_stream": old_runs,
-                "rss_mb": max(r["max_rss_mb"] for r in new_runs),
-                "no_stream_rss_mb": max(r["max_rss_mb"] for r in old_runs),
-                "wall_s": med(new_runs, "wall_s"),
-                "no_stream_wall_s": med(old_runs, "wall_s"),
-                "same_report": same,
-                "steps": int(m.group(1)) if m else None,
-                "truth_steps": _truth_steps(path),
-                "load": max(loads),
-            }
-            print(f"  streamed    max RSS {row['rss_mb']:5.0f} MB (runs "
-                  f"{spread(new_runs, 'max_rss_mb')}), {row['wall_s']:.2f} s\n"
-                  f"  --no-stream max RSS {row['no_stream_rss_mb']:5.0f} MB (runs "
-                  f"{spread(old_runs, 'max_rss_mb')}), {row['no_stream_wall_s']:.2f} s; "
-                  f"same report: {same}; steps {row['steps']} "
-                  f"(generated: {row['truth_steps']})")  # fmt: skip
-            rows[key] = row
-        b, d = rows[base_key], rows[double_key]
-        name = Path(b["file"]).name
-        goal_text = f"≤ {goal} MB" + (f" (set for the {label})" if quick else "")
-        ok = b["rss_mb"] <= goal and _right(b)
-        figure(f"`check` {name} peak RSS, streamed",
-               f"{b['rss_mb']:.0f} MB ({b['wall_s']:.2f} s; floor {floor:.0f} MB; {_same(b)})",
-               goal_text, ok, f"--no-stream {b['no_stream_rss_mb']:.0f} MB", b["load"])  # fmt: skip
-        ratio = d["rss_mb"] / b["rss_mb"]
-        old_ratio = d["no_stream_rss_mb"] / b["no_stream_rss_mb"]
-        ok = ratio <= MEMORY_RATIO and _right(d)
-        figure(f"`check` {Path(d['file']).name} (twice as long) peak RSS, streamed",
-               f"{ratio:.2f}× the base ({d['rss_mb']:.0f} MB; {d['wall_s']:.2f} s; {_same(d)})",
-               f"≤ {MEMORY_RATIO}×", ok,
-               f"--no-stream {d['no_stream_rss_mb']:.0f} MB = {old_ratio:.2f}×",
-               d["load"])  # fmt: skip
-        out["cases"][kind] = {"label": label, "goal_mb": goal, "ratio": ratio, "rows": rows}
+                    for v, (argv, _) in variants.items():
+                        got[v].append(timed(argv, f"{tmp}/{len(v)}.txt"))
+                        text = Path(f"{tmp}/{len(v)}.txt").read_text()
+                        if got[v][-1]["rc"] not in (0, 1):  # a refusal is a row, not a crash
+                            text = f"exit {got[v][-1]['rc']}: {got[v][-1]['stderr'][-300:]}"
+                        got[v][-1]["report"] = text
+            plain = got["plain"][-1]["report"]
+            m = re.search(r"^steps:\s+(\d+)", plain, re.M)
+            truth = _truth_steps(path)
+            print(f"  plain check's steps {m and m.group(1)}; generated {truth}")
+            for v, (_, text) in variants.items():
+                report = got[v][-1].pop("report")
+                for r in got[v]:
+                    r.pop("report", None)
+                # --firmware adds its own verdict; without --map every axis is checked
+                verdict = v in ("--firmware", "no --map") or (
+                    report.splitlines()[0:1] == plain.splitlines()[0:1]
+                )
+                steps = re.search(r"^steps:\s+(\d+)", report, re.M)
+                row = {
+                    "command": text,
+                    "runs": got[v],
+                    "rss_mb": max(r["max_rss_mb"] for r in got[v]),
+                    "wall_s": med(got[v], "wall_s"),
+                    "same_verdict_and_steps": verdict and (steps and int(steps.group(1))) == truth,
+                    "refused": report if report.startswith("exit ") else None,
+                    "load": max(loads),
+                }
+                rows.setdefault(v, {})[key] = row
+                if row["refused"]:
+                    print(f"  {v:34} {row['refused']}")
+                print(f"  {v:34} max RSS {row['rss_mb']:5.0f} MB, {row['wall_s']:6.2f} s; "
+                      f"verdict and steps as plain: {row['same_verdict_and_steps']}\n    $ {text}")  # fmt: skip
+        for v, by_key in rows.items():
+            b, d = by_key[base_key], by_key[double_key]
+            ratio = d["rss_mb"] / b["rss_mb"]
+            peer = v.startswith("--no-stream")
+            ok = peer or (b["rss_mb"] <= goal and ratio <= MEMORY_RATIO
+                          and b["same_verdict_and_steps"] and d["same_verdict_and_steps"])  # fmt: skip
+            figure(f"`check` {label} peak RSS, {v}",
+                   f"{b['rss_mb']:.0f} MB; twice as long {ratio:.2f}× ({d['rss_mb']:.0f} MB)",
+                   "(peer: follows the capture)" if peer else f"≤ {goal} MB, ≤ {MEMORY_RATIO}× when twice as long",
+                   ok, f"floor {floor:.0f} MB", max(b["load"], d["load"]))  # fmt: skip
+        out["cases"][kind] = {"label": label, "goal_mb": goal, "rows": rows,
+                              "files": [str(ensure(base_key)), str(ensure(double_key))]}  # fmt: skip
     return out
 
 
@@ -691,6 +788,28 @@ def bench_stdin(runs: int) -> dict[str, Any]:
            f"`check grbl.sr` {res['sr_wall_s']:.2f} s; pipe {res['pipe_wall_s']:.2f} s",
            load)  # fmt: skip
     res["cpu_vs_demo"] = cpu_x
+    res["target"] = ok
+    return res
+
+
+def bench_one_engine(runs: int) -> dict[str, Any]:
+    """``bench/one_engine.py``: 1000 small VCDs, the one engine against the two it replaced."""
+    cmd = [PY, str(HERE / "one_engine.py"), "--files", "1000", "--runs", str(runs)]
+    got = run_script(cmd)
+    if isinstance(got, dict):
+        return got
+    res, load = got[0][-1], got[1]
+    res.update(command=sh(cmd), load=load)
+    cpu, rss = res["cpu_ms_per_file"], res["max_rss_mb"]
+    print(f"  CPU per file: one engine {cpu['one_engine']:.2f} ms, old streamed "
+          f"{cpu['old_streamed']:.2f} ms, old whole {cpu['old_whole']:.2f} ms; peak RSS "
+          f"{rss['one_engine']:.0f} / {rss['old_streamed']:.0f} / {rss['old_whole']:.0f} MB; "
+          f"same verdicts and steps: {res['same_verdicts_and_steps']}")  # fmt: skip
+    ok = res["ratio_vs_old_whole"] <= 1.0 and res["same_verdicts_and_steps"]
+    figure("1000 small VCDs: CPU per file vs the old whole path (issue 23)",
+           f"{res['ratio_vs_old_whole']:.2f}× ({cpu['one_engine']:.2f} ms)", "≤ 1.0×", ok,
+           f"old whole {cpu['old_whole']:.2f} ms, old streamed {cpu['old_streamed']:.2f} ms",
+           load)  # fmt: skip
     res["target"] = ok
     return res
 
@@ -846,7 +965,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,memory,stdin,watch,decoder,latency,crosscheck",
+        default="sr,vcd,checks,stepgen,startup,many,memory,stdin,watch,decoder,latency,crosscheck,one_engine",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -922,10 +1041,12 @@ def main() -> int:
         print("\n== 5. start-up ==")
         results["startup"] = bench_startup(runs)
 
+    if "many" in only:
+        print("\n== 5b. many small VCDs in one check: -j 2 vs -j 1, memory in the files ==")
+        results["many"] = bench_many(args.quick, runs)
+
     if "memory" in only:
-        print(
-            "\n== 6. bounded memory: check streamed vs --no-stream, and a capture twice as long =="
-        )
+        print("\n== 6. bounded memory: every option of check on a capture and one twice as long ==")
         results["memory"] = bench_memory(args.quick, runs)
 
     if "stdin" in only:
@@ -945,6 +1066,10 @@ def main() -> int:
     if "crosscheck" in only:
         print("\n== 11. crosscheck against sigrok-cli's own decode ==")
         results["crosscheck"] = bench_crosscheck(args.quick, runs)
+
+    if "one_engine" in only:
+        print("\n== 12. one engine: 1000 small VCDs against the two engines it replaced ==")
+        results["one_engine"] = bench_one_engine(runs)
 
     load_end = Path("/proc/loadavg").read_text().split()[:3]
     results["loadavg_end"] = load_end

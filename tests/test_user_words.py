@@ -99,8 +99,7 @@ def test_every_user_visible_output_speaks_no_internal_words(
     check reports (text, JSON, JUnit, HTML) of the golden traces."""
     seen: dict[str, str] = {}
     seen["wavecheck --help"] = _run(wavecheck_main, ["--help"], capsys)
-    for module in COMMANDS:
-        name = module.rsplit(".", 1)[1]
+    for name in COMMANDS:
         seen[f"wavecheck {name} --help"] = _run(wavecheck_main, [name, "--help"], capsys)
     for argv in (["--help"], ["plan", "--help"], ["simulate", "--help"]):
         seen["stepgen " + " ".join(argv)] = _run(stepgen_main, argv, capsys)

@@ -23,7 +23,6 @@ import errno
 import os
 import stat
 import sys
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import NamedTuple
@@ -201,6 +200,8 @@ def _check_folder(folder: Path, probe: bool) -> None:
     if not folder.is_dir():
         raise _Refused(f"{str(folder)!r} is not a folder")
     if probe:
+        import tempfile  # here, not at start-up: most commands write nothing
+
         try:
             fd, tmp = tempfile.mkstemp(prefix=".wavecheck-probe.", dir=folder)
         except OSError as err:
@@ -284,6 +285,8 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     if t.in_place:
         yield t.path
         return
+    import tempfile  # here, not at start-up: most commands write nothing
+
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{t.path.name}.", suffix=".tmp", dir=t.path.parent)
     except OSError as err:
@@ -308,6 +311,10 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
         raise
 
 
+def _utf8(data: str | bytes) -> bytes:
+    return data.encode("utf-8") if isinstance(data, str) else data
+
+
 def _write_fd(fd: int, data: bytes) -> None:
     """Write to one of this process's descriptors at its own offset (``>>`` stays appending)."""
     for stream in (sys.stdout, sys.stderr):
@@ -318,23 +325,26 @@ def _write_fd(fd: int, data: bytes) -> None:
         view = view[os.write(fd, view) :]
 
 
-def atomic_write(target: str | os.PathLike[str], data: str | bytes) -> None:
-    """Write ``data`` (text as UTF-8) to ``target`` whole, or in place (see the module docstring).
+def atomic_write(target: str | os.PathLike[str], data: str | bytes | Iterable[str]) -> None:
+    """Write ``data`` (text as UTF-8; or text in pieces, written as they come) to ``target``
+    whole, or in place (see the module docstring).
 
     Raises:
         UsageError: the target is refused, or it cannot be written.
     """
-    payload = data.encode("utf-8") if isinstance(data, str) else data
+    pieces = [data] if isinstance(data, str | bytes) else data
     text = os.fspath(target)
     fd = None
     with contextlib.suppress(_Refused):
         fd = _target(text).fd
     try:
         if fd is not None:
-            _write_fd(fd, payload)
+            for piece in pieces:
+                _write_fd(fd, _utf8(piece))
             return
         with atomic_path(target) as path, open(path, "wb") as f:
-            f.write(payload)
+            for piece in pieces:
+                f.write(_utf8(piece))
     except OSError as err:
         if err.errno == errno.EPIPE:
             raise

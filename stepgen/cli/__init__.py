@@ -2,27 +2,35 @@
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Sequence
 
-from wavecheck.cli._main import run_cli
+from wavecheck.cli._main import Command, run_cli
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "main"]
 
-#: Each subcommand's module (``stepgen.cli.NAME`` registers the subcommand NAME).
-COMMANDS = ("stepgen.cli.simulate", "stepgen.cli.plan", "stepgen.cli.tune")
+#: Every subcommand: the module that builds its parser (imported only when that subcommand
+#: runs) and its line in ``stepgen --help``.
+COMMANDS = {
+    "simulate": Command(
+        "stepgen.cli.simulate",
+        "simulate LinuxCNC's software stepgen with base-thread latency; write VCD or .sr",
+    ),
+    "plan": Command(
+        "stepgen.cli.plan",
+        "choose BASE_PERIOD and steplen/stepspace/dirsetup/dirhold for a drive and a latency",
+    ),
+    "tune": Command(
+        "stepgen.cli.tune",
+        "tune pid by the integrator's manual method on a model plant (stepgen or servo)",
+    ),
+}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``stepgen`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code.
-
-    When the first argument names a subcommand only that one's module is imported (the others
-    would only add start-up time); otherwise all of them, for ``--help`` and usage errors."""
-    args = sys.argv[1:] if argv is None else list(argv)
-    chosen = [m for m in COMMANDS if args and m.rsplit(".", 1)[1] == args[0]]
+    """Run ``stepgen`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
     return run_cli(
         "stepgen",
         "A faithful model of LinuxCNC's software step generator, and its timing calculator.",
-        chosen or COMMANDS,
-        args,
+        COMMANDS,
+        argv,
     )

@@ -47,7 +47,6 @@ def register(sub: Any) -> None:
     """Add the ``plan`` subcommand to ``sub`` (an argparse subparsers object)."""
     p = sub.add_parser(
         "plan",
-        help="choose BASE_PERIOD and steplen/stepspace/dirsetup/dirhold for a drive and a latency",
         description=(
             "The step timing calculator: from a drive's datasheet figures and the worst latency J "
             "it gives the minimum and the simple BASE_PERIOD, each stepgen parameter as "

@@ -47,7 +47,6 @@ def register(sub: Any) -> None:
     """Add the ``simulate`` subcommand."""
     p = sub.add_parser(
         "simulate",
-        help="simulate LinuxCNC's software stepgen with base-thread latency; write VCD or .sr",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

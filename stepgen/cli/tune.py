@@ -154,7 +154,6 @@ def register(sub: Any) -> None:
     """Add the ``tune`` subcommand."""
     p = sub.add_parser(
         "tune",
-        help="tune pid by the integrator's manual method on a model plant (stepgen or servo)",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -1,14 +1,20 @@
-"""Start-up stays light (issue 18): the heavy or rarely needed layers are imported only by the
-command that uses them, so ``wavecheck --help``, ``wavecheck drives`` and a check of a small VCD
-load none of them. (Timings are in ``make bench``, not here: this checks what is imported.)"""
+"""Start-up stays light (issues 18 and 29): the heavy or rarely needed layers are imported only by
+the command that uses them, so ``wavecheck --help``, ``wavecheck drives`` and a check of a small
+VCD load none of them; ``--help``, ``--version`` and ``drives`` load no numpy and no subcommand's
+module but the one run. (Timings are in ``make bench``, not here: this checks what is imported.)"""
 
 from __future__ import annotations
 
+import argparse
+import importlib
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from stepgen.cli import COMMANDS as STEPGEN_COMMANDS
+from wavecheck.cli import COMMANDS
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "captures/golden/g202-p16-dirhold2-worst.vcd"
@@ -37,19 +43,19 @@ LAZY = (
 )
 
 
-def _loaded_after(argv: list[str]) -> set[str]:
+def _loaded_after(argv: list[str], tool: str = "wavecheck") -> set[str]:
     code = (
         "import sys\n"
-        "from wavecheck.cli import main\n"
+        f"from {tool}.cli import main\n"
         "try:\n"
         f"    main({argv!r})\n"
         "except SystemExit:\n"
         "    pass\n"
-        "print('\\n'.join(sys.modules))\n"
+        "print('--- modules ---', *sys.modules)\n"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert run.returncode == 0, run.stderr
-    return set(run.stdout.split())
+    return set(run.stdout.rpartition("--- modules ---")[2].split())
 
 
 @pytest.mark.parametrize(
@@ -71,3 +77,50 @@ def test_start_up_does_not_import_heavy_layers(argv: list[str]) -> None:
 def test_the_probe_sees_a_lazy_import_when_it_happens() -> None:
     loaded = _loaded_after(["check", str(TINY), "--drive", "gecko-g202", "--format", "junit"])
     assert "wavecheck.report.junit" in loaded
+
+
+#: The subcommand modules (every ``wavecheck.cli.NAME`` and ``stepgen.cli.NAME`` that is one).
+SUBCOMMAND_MODULES = {c.module for c in (*COMMANDS.values(), *STEPGEN_COMMANDS.values())}
+
+
+@pytest.mark.parametrize(
+    ("tool", "argv", "module"),
+    [
+        ("wavecheck", ["--help"], None),
+        ("wavecheck", ["--version"], None),
+        ("wavecheck", [], None),  # the usage error
+        ("wavecheck", ["no-such-command"], None),
+        ("wavecheck", ["drives"], "wavecheck.cli.drives"),
+        ("wavecheck", ["drives", "gecko-g202", "--format", "json"], "wavecheck.cli.drives"),
+        ("wavecheck", ["sigrok", "--help"], "wavecheck.cli.sigrok"),
+        ("stepgen", ["--help"], None),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, list) else str(v),
+)
+def test_short_commands_load_no_numpy_and_one_subcommand(
+    tool: str, argv: list[str], module: str | None
+) -> None:
+    loaded = _loaded_after(argv, tool)
+    assert f"{tool}.cli._main" in loaded or "wavecheck.cli._main" in loaded
+    assert "numpy" not in loaded
+    assert sorted(SUBCOMMAND_MODULES & loaded) == ([module] if module else [])
+
+
+def test_the_probe_sees_numpy_and_the_subcommand_when_they_load() -> None:
+    loaded = _loaded_after(["check", str(TINY), "--drive", "gecko-g202"])
+    assert "numpy" in loaded
+    assert "wavecheck.cli.check" in loaded
+    assert "wavecheck.cli.info" not in loaded
+
+
+@pytest.mark.parametrize(
+    ("name", "module"),
+    [(n, c.module) for n, c in (*COMMANDS.items(), *STEPGEN_COMMANDS.items())],
+)
+def test_each_listed_subcommand_is_built_by_its_module(name: str, module: str) -> None:
+    """The table's name is the one parser its module's ``register`` adds, and that parser
+    runs the module's command; ``--help`` lists the table's line (one place for it)."""
+    sub = argparse.ArgumentParser().add_subparsers()
+    importlib.import_module(module).register(sub)
+    assert list(sub.choices) == [name]
+    assert callable(sub.choices[name].get_default("func"))

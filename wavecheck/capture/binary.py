@@ -19,7 +19,7 @@ has no time base.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, BinaryIO
 
@@ -36,7 +36,15 @@ from wavecheck.units import format_frequency
 if TYPE_CHECKING:
     from wavecheck.capture.blocks import EdgeBlock
 
-__all__ = ["MAX_CHANNELS", "BinaryFormat", "SampleBlocks", "parse_binary_format", "read_binary"]
+__all__ = [
+    "MAX_CHANNELS",
+    "BinaryBlocks",
+    "BinaryFormat",
+    "SampleBlocks",
+    "binary_blocks",
+    "parse_binary_format",
+    "read_binary",
+]
 
 #: The most channels a raw sample can carry here (64 bytes per sample, like the ``.sr`` reader).
 MAX_CHANNELS = 512
@@ -309,3 +317,123 @@ class SampleBlocks:
     def capture(self) -> Capture:
         """The capture so far, without edges (each channel's edge count, the end)."""
         return self._capture(self.finder.nsamples)
+
+
+class BinaryBlocks:
+    """Raw samples from a file or a stream (standard input) as a block source: read and scanned
+    ``chunk_bytes`` at a time (:class:`SampleBlocks`), never held whole. The engine's source for
+    ``--input-format binary:…`` when the sample rate is known and no ``--resolution`` is given
+    (:func:`wavecheck.capture.open.open_source`; otherwise :func:`read_binary` reads it whole).
+
+    Raises (from :meth:`blocks`):
+        CaptureError: empty input, a partial last sample, a read error.
+    """
+
+    def __init__(
+        self,
+        source: str | os.PathLike[str] | BinaryIO,
+        fmt: BinaryFormat,
+        samplerate: Fraction,
+        *,
+        name: str,
+        channel_names: Sequence[str] = (),
+        chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+        notes: Sequence[str] = (),
+    ) -> None:
+        self.source, self.label = source, name
+        self.scanner = SampleBlocks(name, fmt.numchannels, samplerate, channel_names)
+        self.scanner.notes += notes
+        self.step = max(fmt.unitsize, chunk_bytes - chunk_bytes % fmt.unitsize)
+        self.skeleton = self.scanner.skeleton
+        self._read = False
+
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` only (from the next block on)."""
+        self.scanner.want(channels)
+
+    def blocks(self) -> Iterator[EdgeBlock]:
+        """A block per chunk read (the edges of the samples it completes)."""
+        if self._read:
+            raise UsageError(f"{self.label}: raw samples are read once (blocks taken already)")
+        self._read = True
+        total: int | None = None
+        opened: BinaryIO | None = None
+        if isinstance(self.source, (str, os.PathLike)):
+            try:
+                opened = open(self.source, "rb")  # noqa: SIM115 - closed below
+                total = os.fstat(opened.fileno()).st_size
+            except OSError as err:
+                raise CaptureError(
+                    self.label, None, f"cannot open: {err.strerror or err}"
+                ) from None
+        f = opened if opened is not None else self.source
+        assert not isinstance(f, (str, os.PathLike))
+        report = current()
+        done = 0
+        try:
+            while data := _read_full(f, self.step):
+                done += len(data)
+                report(done, total)
+                yield self.scanner.scan(data)
+        except OSError as err:
+            raise CaptureError(
+                self.label, f"byte {done}", f"cannot be read: {err.strerror or err}"
+            ) from None
+        finally:
+            if opened is not None:
+                opened.close()
+            else:
+                f.close()
+        if carry := self.scanner.partial:
+            us = self.scanner.unitsize
+            raise CaptureError(
+                self.label,
+                f"byte {done - carry}",
+                f"the data ends in a partial sample ({carry} of {us} bytes): not a whole number "
+                f"of {us}-byte samples for numchannels={len(self.scanner.bits)} (cut short, or "
+                "another numchannels?)",
+            )
+        if self.scanner.nsamples == 0:
+            raise CaptureError(self.label, None, "holds no samples (the input is empty)")
+
+    def capture(self) -> Capture:
+        """The finished skeleton (each channel's edge count, the end)."""
+        return self.scanner.capture()
+
+
+def binary_blocks(
+    source: str | os.PathLike[str] | BinaryIO,
+    spec: str,
+    *,
+    name: str,
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    channel_names: Sequence[str] | None,
+    chunk_bytes: int | None = None,
+) -> BinaryBlocks | None:
+    """Raw samples as a :class:`BinaryBlocks` source, or None where they must be read whole
+    (:func:`read_binary`): no sample rate (read untimed) or a ``--resolution`` to apply.
+    Arguments as :func:`read_binary`'s."""
+    try:
+        fmt = parse_binary_format(spec)
+    except UsageError as err:
+        raise UsageError(f"{name}: {err}") from None
+    rate = samplerate if samplerate is not None else fmt.samplerate
+    if rate is None or resolution_s is not None:
+        return None
+    names = list(channel_names or [])
+    if len(names) > fmt.numchannels:
+        raise UsageError(
+            f"{len(names)} channel names given for {fmt.numchannels} channels "
+            f"(give --input-format binary:numchannels={len(names)})"
+        )
+    notes = []
+    if samplerate is not None and fmt.samplerate is not None and samplerate != fmt.samplerate:
+        notes.append(
+            f"sample rate {format_frequency(samplerate)} given by --samplerate overrides the "
+            f"format's samplerate={fmt.samplerate}"
+        )
+    return BinaryBlocks(
+        source, fmt, rate, name=name, channel_names=names,
+        chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES, notes=notes,
+    )  # fmt: skip

@@ -16,6 +16,7 @@ import stat
 import sys
 import tempfile
 from collections.abc import Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
@@ -138,6 +139,12 @@ class _Prefixed(io.RawIOBase):
     def readable(self) -> bool:
         return True
 
+    def close(self) -> None:
+        """Close the stream and the file under it (standard input stays open)."""
+        if not self.closed and self._rest is not sys.stdin.buffer:
+            self._rest.close()
+        super().close()
+
     def readinto(self, buffer: Any) -> int:
         out = memoryview(buffer).cast("B")
         if self._head.nbytes:
@@ -176,23 +183,25 @@ def _say_waiting(path: str | os.PathLike[str]) -> None:
                   file=sys.stderr, flush=True)  # fmt: skip
 
 
-def _open_stream(
-    path: str | os.PathLike[str],
-    *,
-    samplerate: Fraction | None,
-    resolution_s: Fraction | None,
-    input_format: str | None,
-    require_time: bool,
-    channel_names: Sequence[str] | None,
-) -> Capture:
-    """Read a capture from standard input or a pipe without losing what format detection read.
+@dataclass
+class _Sniffed:
+    """A stream whose first bytes told its format: ``stream`` gives them again, then the rest."""
 
-    The first bytes are sniffed and then handed on: a VCD and raw binary samples are read from
-    the stream itself (a VCD held whole only as far as the VCD reader holds any file; raw
-    samples one chunk at a time); a ``.sr`` (a zip, which needs seeking)
-    or a sigrok-cli format is copied to a temporary file first. Messages name ``path`` (``-``
-    is named ``<stdin>``).
-    """
+    name: str
+    fmt: str
+    kind: str
+    stream: BinaryIO
+    raw: BinaryIO
+
+    def close(self) -> None:
+        """Close the underlying file (never standard input)."""
+        if self.raw is not sys.stdin.buffer:
+            self.raw.close()
+
+
+def _sniff_stream(path: str | os.PathLike[str], input_format: str | None) -> _Sniffed:
+    """Open standard input or a pipe and tell its format from its first bytes (or
+    ``input_format``) without losing them. Messages name ``path`` (``-`` is ``<stdin>``)."""
     name = "<stdin>" if str(path) == STDIN else str(path)
     _say_waiting(path)
     try:
@@ -207,8 +216,31 @@ def _open_stream(
                 raise CaptureError(name, None, "the input is empty")
         else:
             fmt = format_of(name, head, "")
-        kind = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
-        stream = io.BufferedReader(_Prefixed(head, f), buffer_size=1 << 20)
+    except BaseException:
+        if f is not sys.stdin.buffer:
+            f.close()
+        raise
+    kind = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
+    stream = io.BufferedReader(_Prefixed(head, f), buffer_size=1 << 20)
+    return _Sniffed(name, fmt, kind, stream, f)
+
+
+def _read_stream(
+    sniffed: _Sniffed,
+    *,
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    require_time: bool,
+    channel_names: Sequence[str] | None,
+) -> Capture:
+    """Read a capture from standard input or a pipe (its format told: :func:`_sniff_stream`).
+
+    A VCD and raw binary samples are read from the stream itself (raw samples one chunk at a
+    time); a ``.sr`` (a zip, which needs seeking) or a sigrok-cli format is copied to a
+    temporary file first. Messages name the stream (``-`` is named ``<stdin>``).
+    """
+    name, fmt, kind, stream = sniffed.name, sniffed.fmt, sniffed.kind, sniffed.stream
+    try:
         if kind == "vcd" and ":" not in fmt:
             from wavecheck.capture.vcd import read_vcd
 
@@ -244,8 +276,7 @@ def _open_stream(
         cap.bit_source = None  # the spooled copy is gone
         return cap
     finally:
-        if f is not sys.stdin.buffer:
-            f.close()
+        sniffed.close()
 
 
 def open_capture(
@@ -281,11 +312,10 @@ def open_capture(
     if resolution_s is not None and resolution_s < 0:
         raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
     if is_stream(path):
-        return _open_stream(
-            path,
+        return _read_stream(
+            _sniff_stream(path, input_format),
             samplerate=samplerate,
             resolution_s=resolution_s,
-            input_format=input_format,
             require_time=require_time,
             channel_names=channel_names,
         )
@@ -398,36 +428,62 @@ def open_source(
     channel_names: Sequence[str] | None = None,
     chunk_bytes: int | None = None,
 ) -> BlockSource:
-    """A block source for any capture (as :func:`open_capture` reads it): ``.sr`` and VCD files
-    are read block by block in bounded memory; every other input is read whole first and given
-    as one block (:class:`~wavecheck.capture.blocks.MemorySource`, its ``whole_reason`` says why).
+    """A block source for any capture (as :func:`open_capture` reads it): ``.sr``, VCD and timed
+    raw binary samples, from a file or from standard input or a pipe, are read block by block in
+    bounded memory; every other input is read whole first and given as one block
+    (:class:`~wavecheck.capture.blocks.MemorySource`).
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
     """
     if samplerate is not None and samplerate <= 0:
         raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
-    if not is_stream(path):
-        fmt = (input_format.strip() if input_format else detect_format(path)).lower()
-        if fmt in ("sr", "srzip", "sigrok"):
-            from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
+    if resolution_s is not None and resolution_s < 0:
+        raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+    if is_stream(path):
+        return _stream_source(
+            _sniff_stream(path, input_format),
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            require_time=require_time,
+            channel_names=channel_names,
+            chunk_bytes=chunk_bytes,
+        )
+    fmt = (input_format.strip() if input_format else detect_format(path)).lower()
+    if fmt in ("sr", "srzip", "sigrok"):
+        from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
 
-            return SrBlocks(
-                path,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES,
-            )
-        if fmt == "vcd":
-            from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
-            from wavecheck.capture.vcd.reader import VcdBlocks
+        return SrBlocks(
+            path,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES,
+        )
+    if fmt == "vcd":
+        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
+        from wavecheck.capture.vcd.reader import VcdBlocks
 
-            return VcdBlocks(
-                path,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                chunk_bytes=chunk_bytes or VCD_CHUNK,
-            )
+        return VcdBlocks(
+            path,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            chunk_bytes=chunk_bytes or VCD_CHUNK,
+        )
+    if fmt.split(":", 1)[0] == "binary" and input_format:
+        from wavecheck.capture.binary import binary_blocks
+
+        detect_path_exists(path)
+        raw = binary_blocks(
+            path,
+            input_format.strip(),
+            name=str(path),
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            channel_names=channel_names,
+            chunk_bytes=chunk_bytes,
+        )
+        if raw is not None:
+            return raw
     from wavecheck.capture.blocks import MemorySource
 
     whole = open_capture(
@@ -439,3 +495,61 @@ def open_source(
         channel_names=channel_names,
     )
     return MemorySource(whole)
+
+
+def _stream_source(
+    sniffed: _Sniffed,
+    *,
+    samplerate: Fraction | None,
+    resolution_s: Fraction | None,
+    require_time: bool,
+    channel_names: Sequence[str] | None,
+    chunk_bytes: int | None,
+) -> BlockSource:
+    """The block source of standard input or a pipe: a VCD or timed raw samples read block by
+    block from the stream (never held whole); any other format read whole
+    (:func:`_read_stream`), one block."""
+    from wavecheck.capture.blocks import MemorySource
+
+    if sniffed.kind == "vcd" and ":" not in sniffed.fmt:
+        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
+        from wavecheck.capture.vcd.reader import VcdBlocks
+
+        try:
+            return VcdBlocks(
+                sniffed.name,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                chunk_bytes=chunk_bytes or VCD_CHUNK,
+                source=sniffed.stream,
+            )
+        except BaseException:
+            sniffed.close()
+            raise
+    if sniffed.kind == "binary":
+        from wavecheck.capture.binary import binary_blocks
+
+        try:
+            raw = binary_blocks(
+                sniffed.stream,
+                sniffed.fmt,
+                name=sniffed.name,
+                samplerate=samplerate,
+                resolution_s=resolution_s,
+                channel_names=channel_names,
+                chunk_bytes=chunk_bytes,
+            )
+        except BaseException:
+            sniffed.close()
+            raise
+        if raw is not None:
+            return raw
+    return MemorySource(
+        _read_stream(
+            sniffed,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            require_time=require_time,
+            channel_names=channel_names,
+        )
+    )

@@ -16,14 +16,23 @@ import glob
 import importlib
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import NamedTuple
 
 from wavecheck import __version__
 from wavecheck.errors import WavecheckError
 from wavecheck.output import OUTPUT_TYPES, check_outputs, protect_inputs
 from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
-__all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "run_cli"]
+__all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "Command", "run_cli"]
+
+
+class Command(NamedTuple):
+    """A subcommand: the module whose ``register(subparsers)`` builds its parser, and the one
+    line the tool's ``--help`` lists for it (the module is imported only when it runs)."""
+
+    module: str
+    help: str
 
 
 class _Parser(argparse.ArgumentParser):
@@ -33,20 +42,28 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[str] | None) -> int:
-    """Build a parser from subcommand ``modules`` and run the chosen one.
+def run_cli(
+    prog: str, description: str, commands: Mapping[str, Command], argv: Sequence[str] | None
+) -> int:
+    """Build the parser of the subcommand asked for and run it.
 
-    Each module defines ``register(subparsers)``, which adds its subparser and sets ``func``
-    to a ``run(args) -> int``.
+    Only that subcommand's module is imported: its ``register(subparsers)`` adds its parser and
+    sets ``func`` to a ``run(args) -> int``. Every other subcommand is listed from ``commands``
+    (``--help``, usage errors) with an empty parser that never parses.
     """
+    words = sys.argv[1:] if argv is None else list(argv)
+    chosen = _command_word(words)
     parser = _Parser(prog=prog, description=description)
     parser.add_argument("--version", action="version", version=f"{prog} {__version__}")
     # dest: not "command", which stepgen simulate's --command option also sets
     sub = parser.add_subparsers(dest="_subcommand", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in modules:
-        importlib.import_module(name).register(sub)
-    args = parser.parse_args(argv)
+    for name, command in commands.items():
+        if name == chosen:
+            importlib.import_module(command.module).register(sub)
+        else:
+            sub.add_parser(name, help=command.help)
+    args = parser.parse_args(words)
     try:
         outputs, inputs = _files(sub.choices[args._subcommand], args)
         check_outputs(outputs, inputs)  # before any work
@@ -62,6 +79,12 @@ def run_cli(prog: str, description: str, modules: Sequence[str], argv: Sequence[
         return 130
     except BrokenPipeError:
         return 0
+
+
+def _command_word(words: Sequence[str]) -> str | None:
+    """The word argparse takes for the subcommand: the tool's own options (``-h``,
+    ``--version``) take no value, so it is the first word that is not an option."""
+    return next((word for word in words if not word.startswith("-")), None)
 
 
 def _files(

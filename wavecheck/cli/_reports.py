@@ -8,10 +8,11 @@ Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--
 Several captures (``wavecheck check a.sr b.vcd 'runs/*.sr' -j N``): each is checked on its own,
 spread over N worker processes (default: the usable cores); a capture that cannot be read is
 reported (one line on stderr) and the others go on. Each summary line prints as its capture
-finishes (stdout with ``-o``, else stderr when it is a terminal); only what the outputs need is
-kept per capture (its summary and its piece of the document, never the report), and the
-document lists the captures in input order: stdout gets each text report and then one summary
-line per capture; the exit code is the worst one
+finishes (stdout with ``-o``, else stderr when it is a terminal). Per capture only its summary
+line is kept in memory, its piece of the document in a temporary file, never the report (figures
+and GTKWave files are written as each capture is checked), so memory does not grow with the
+number of captures. The document lists the captures in input order: stdout gets each text
+report and then one summary line per capture; the exit code is the worst one
 (2 unusable > 1 fail > 3 indeterminate > 0 pass). JSON becomes ``{"reports": [...], "errors":
 [...], "verdict", "exit_code"}``; JUnit has one ``testsuite`` per capture; the HTML page a section
 per capture; ``--plot``/``--gtkw`` write one file per capture, named ``FILE-<capture stem>.png``.
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import itertools
 import json
 import os
 import sys
@@ -256,7 +258,7 @@ def summary_line(checked: Checked, require: tuple[str, ...] = ()) -> str:
     )
 
 
-def _per_capture(path: str, capture: str, index: int, stems: dict[str, int]) -> str:
+def _per_capture(path: str, capture: str, stems: dict[str, int]) -> str:
     """``out.png`` → ``out-<capture stem>.png`` (a number added when stems repeat); ``capture``
     may end in ``#AXIS`` for one axis of several (``out-<stem>-<axis>.png``)."""
     p = Path(path)
@@ -272,49 +274,107 @@ def _tagged(r: Report) -> str:
     return r.capture.path if r.axis is None else f"{r.capture.path}#{r.axis}"
 
 
-def _side_outputs(
-    args: argparse.Namespace, checked: list[Checked], errors: list[tuple[str, str]]
-) -> None:
-    reports = [r for c in checked for r in axis_reports(c)]
-    several = len(reports) + len(errors) > 1
-    stems: dict[str, int] = {}
-    gstems: dict[str, int] = {}
-    pngs: list[bytes | None] = []
-    for k, r in enumerate(reports):
-        png = None
-        if args.plot:
-            from wavecheck.report.plot import render_png
+class _Spool:
+    """Pieces of text in an unnamed temporary file, read back in any order: what the documents
+    of many captures keep per capture, so that memory does not grow with their number."""
 
-            target = _per_capture(args.plot, _tagged(r), k, stems) if several else args.plot
-            fmt = figure_format(target)
-            png = render_png(r) if fmt == "png" or args.html else None
-            atomic_write(
-                target, png if png is not None and fmt == "png" else render_png(r, fmt=fmt)
-            )
-        pngs.append(png)  # rendered once, embedded in the HTML page too
-        if args.gtkw:
-            from wavecheck.report.gtkw import write_gtkw
+    def __init__(self) -> None:
+        import tempfile
 
-            target = _per_capture(args.gtkw, _tagged(r), k, gstems) if several else args.gtkw
-            vcd = write_gtkw(r, target)
-            if vcd is not None and vcd.name != f"{Path(target).stem}.vcd":
-                print(  # the usual name holds a file wavecheck did not write: kept
-                    f"wavecheck: {Path(target).stem}.vcd is not wavecheck's (kept): {target}: its "
-                    f"signals are in {vcd}",
-                    file=sys.stderr,
+        self._file = tempfile.TemporaryFile()
+        self._where: dict[int, tuple[int, int]] = {}
+
+    def put(self, key: int, text: str) -> None:
+        data = text.encode("utf-8")
+        self._file.seek(0, os.SEEK_END)
+        self._where[key] = (self._file.tell(), len(data))
+        self._file.write(data)
+
+    def get(self, key: int) -> str:
+        at, size = self._where[key]
+        self._file.seek(at)
+        return self._file.read(size).decode("utf-8")
+
+    def close(self) -> None:
+        self._file.close()
+
+
+class _SideOutputs:
+    """``--plot``, ``--gtkw`` and ``--html``, written capture by capture as each is checked (in
+    this process, in input order): a capture's figure and GTKWave file at once, and of the HTML
+    page its summary row and its section (spooled) until the page is written at the end."""
+
+    def __init__(self, args: argparse.Namespace, several: bool) -> None:
+        self.args = args
+        self.several = several  # per-capture file names (else several axes of one capture)
+        self._stems: dict[str, int] = {}
+        self._gstems: dict[str, int] = {}
+        self._rows: list[Any] = []  # html.PageRow
+        self._sections = _Spool() if args.html else None
+
+    def add(self, checked: Checked) -> None:
+        """Write the figures and GTKWave files of ``checked``; keep its HTML section."""
+        args = self.args
+        reports = axis_reports(checked)
+        several = self.several or len(reports) > 1
+        for r in reports:
+            target = None
+            if args.plot:
+                target = _per_capture(args.plot, _tagged(r), self._stems) if several else args.plot
+            fmt = figure_format(target) if target else "png"
+            png = None
+            if target or args.html:
+                from wavecheck.report.plot import render_png
+
+                if args.html or fmt == "png":  # rendered once, embedded in the HTML page too
+                    png = render_png(r)
+                if target:
+                    data = png if png is not None and fmt == "png" else render_png(r, fmt=fmt)
+                    atomic_write(target, data)
+            if args.gtkw:
+                from wavecheck.report.gtkw import write_gtkw
+
+                gtkw = _per_capture(args.gtkw, _tagged(r), self._gstems) if several else args.gtkw
+                _gtkw_written(gtkw, write_gtkw(r, gtkw))
+            if self._sections is not None:
+                from wavecheck.report.html import PageRow, html_section
+
+                self._rows.append(PageRow.of(r, required(args)))
+                cap = (
+                    DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
                 )
-    if args.html:
-        from wavecheck.report.html import write_html
+                section = html_section(r, len(self._rows), png, cap, required(args))
+                self._sections.put(len(self._rows), section)
 
-        write_html(
-            reports,
-            args.html,
-            errors=[f"{p}: {e}" if not e.startswith(p) else e for p, e in errors],
-            pngs=pngs,
-            max_violations=DEFAULT_TEXT_VIOLATIONS
-            if args.max_violations is None
-            else args.max_violations,
-            require=required(args),
+    def finish(self, errors: list[tuple[str, str]]) -> None:
+        """Write the HTML page (``errors``: the captures that could not be checked)."""
+        if self._sections is None:
+            return
+        from wavecheck.report.html import html_page
+
+        spool = self._sections
+        sections = (spool.get(k) for k in range(1, len(self._rows) + 1))
+        try:
+            atomic_write(
+                self.args.html,
+                html_page(
+                    self._rows,
+                    sections,
+                    errors=[f"{p}: {e}" if not e.startswith(p) else e for p, e in errors],
+                ),
+            )
+        finally:
+            spool.close()
+
+
+def _gtkw_written(target: str, vcd: Path | None) -> None:
+    """Say so when the GTKWave file's signals went to another VCD than ``STEM.vcd`` (that name
+    holds a file wavecheck did not write, which is kept)."""
+    if vcd is not None and vcd.name != f"{Path(target).stem}.vcd":
+        print(
+            f"wavecheck: {Path(target).stem}.vcd is not wavecheck's (kept): {target}: its "
+            f"signals are in {vcd}",
+            file=sys.stderr,
         )
 
 
@@ -339,60 +399,70 @@ def _jobs(args: argparse.Namespace, count: int) -> int:
 class _Outcome:
     """What the outputs need of one capture of several (never the report itself, so memory
     does not grow with the number of captures): its summary line, exit code and verdict, and
-    the piece of the ``--format`` document (text report, JSON dict, or JUnit XML)."""
+    the piece of the ``--format`` document (text report, JSON text, or JUnit suites and their
+    counts), which the parent spools to a file."""
 
     index: int
     path: str
     summary: str
     code: int
     verdict: str | None = None
-    piece: Any = None
+    piece: str = ""
+    counts: tuple[int, int, int, int] | None = None  # JUnit's tests, failures, errors, skipped
     error: str | None = None
-    report: Checked | None = None  # only for the side outputs (in-process runs)
 
 
-_WORKER: tuple[argparse.Namespace, Callable[[argparse.Namespace, str], Checked], bool] | None = None
+_WORKER: (
+    tuple[argparse.Namespace, Callable[[argparse.Namespace, str], Checked], _SideOutputs | None]
+    | None
+) = None
 
 
 def _init_worker(
     args: argparse.Namespace,
     build_report: Callable[[argparse.Namespace, str], Checked],
-    keep: bool,
+    side: _SideOutputs | None,
 ) -> None:
     global _WORKER
-    _WORKER = (args, build_report, keep)
+    _WORKER = (args, build_report, side)
 
 
-def _piece(args: argparse.Namespace, checked: Checked) -> Any:
+def _piece(args: argparse.Namespace, checked: Checked) -> tuple[str, Any]:
+    """The capture's piece of the document, and (JUnit) its counts."""
     if args.format == "json":  # rendered here (in the worker), nested in "reports": [ … ]
         text = json.dumps(_dict(checked, args), indent=2, ensure_ascii=False)
-        return text.replace("\n", "\n" + _NESTED)
+        return text.replace("\n", "\n" + _NESTED), None
     if args.format == "junit":
-        from wavecheck.report.junit import render_junit
+        from wavecheck.report.junit import render_suites
 
-        return render_junit(axis_reports(checked), require=required(args))
-    return render_text_report(checked, args)
+        suites = render_suites(axis_reports(checked), require=required(args))
+        return suites.text, suites.counts
+    return render_text_report(checked, args), None
 
 
 def _check_one(index: int, path: str) -> _Outcome:
-    """Check one capture of several (in a worker process, or in this one)."""
+    """Check one capture of several (in a worker process, or in this one with its side
+    outputs)."""
     assert _WORKER is not None
-    args, build_report, keep = _WORKER
+    args, build_report, side = _WORKER
     try:
-        with activate(f"reading {path}", quiet=args.quiet or not keep, unit="bytes"):
+        with activate(f"reading {path}", quiet=args.quiet or side is None, unit="bytes"):
             checked = build_report(args, path)
     except WavecheckError as err:
         text = str(err)
         line = f"{'ERROR':<13} {text if text.startswith(path) else f'{path}: {text}'}"
         return _Outcome(index, path, line, err.exit_code, error=text)
+    if side is not None:
+        side.add(checked)
+    piece, counts = _piece(args, checked)
     return _Outcome(
         index,
         path,
         summary_line(checked, required(args)),
         exit_code(checked, required(args)),
         checked.verdict,
-        _piece(args, checked),
-        report=checked if keep else None,
+        piece,
+        counts,
     )
 
 
@@ -401,10 +471,12 @@ def _outcomes(
     build_report: Callable[[argparse.Namespace, str], Checked],
     paths: list[str],
     jobs: int,
+    side: _SideOutputs | None = None,
 ) -> Iterator[_Outcome]:
-    """Every capture's outcome, as each finishes (in input order with one job)."""
+    """Every capture's outcome, as each finishes (in input order with one job, in this process
+    with ``side`` written as each is checked)."""
     if jobs == 1:
-        _init_worker(args, build_report, True)
+        _init_worker(args, build_report, side or _SideOutputs(args, several=True))
         for k, path in enumerate(paths):
             yield _check_one(k, path)
         return
@@ -418,7 +490,7 @@ def _outcomes(
     size = max(1, min(_MAX_BATCH, len(paths) // (jobs * 4)))
     batches = [list(range(k, min(k + size, len(paths)))) for k in range(0, len(paths), size)]
     with ProcessPoolExecutor(
-        jobs, mp_context=context, initializer=_init_worker, initargs=(args, build_report, False)
+        jobs, mp_context=context, initializer=_init_worker, initargs=(args, build_report, None)
     ) as pool:
         futures = [pool.submit(_check_batch, [(k, paths[k]) for k in b]) for b in batches]
         for future in as_completed(futures):
@@ -456,7 +528,9 @@ def run_checks(
         with activate(f"reading {paths[0]}", quiet=args.quiet, unit="bytes"):
             report = build_report(args, paths[0])
         write_outputs(args, report)
-        _side_outputs(args, [report], [])
+        side = _SideOutputs(args, several=False)
+        side.add(report)
+        side.finish([])
         return exit_code(report, required(args))
     jobs = _jobs(args, len(paths))
     stream = (
@@ -464,26 +538,47 @@ def run_checks(
         if args.quiet
         else (sys.stdout if args.output else (sys.stderr if sys.stderr.isatty() else None))
     )
+    side = _SideOutputs(args, several=True)
     done: list[_Outcome | None] = [None] * len(paths)
-    for outcome in _outcomes(args, build_report, paths, jobs):
-        if outcome.error is not None:
-            print(f"wavecheck: error: {outcome.error}", file=sys.stderr, flush=True)
-        if stream is not None:
-            print(outcome.summary, file=stream, flush=True)
-        done[outcome.index] = outcome
-    outcomes = [o for o in done if o is not None]
-    code = worst_exit_code([o.code for o in outcomes])
-    _write_many(args, outcomes, code)
-    if args.plot or args.gtkw or args.html:
-        reports = [o.report for o in outcomes if o.report is not None]
-        errors = [(o.path, o.error) for o in outcomes if o.error is not None]
-        _side_outputs(args, reports, errors)
+    spool = _Spool()
+    try:
+        for outcome in _outcomes(args, build_report, paths, jobs, side):
+            if outcome.error is not None:
+                print(f"wavecheck: error: {outcome.error}", file=sys.stderr, flush=True)
+            if stream is not None:
+                print(outcome.summary, file=stream, flush=True)
+            if outcome.error is None:
+                spool.put(outcome.index, outcome.piece)
+                outcome.piece = ""
+            done[outcome.index] = outcome
+        outcomes = [o for o in done if o is not None]
+        code = worst_exit_code([o.code for o in outcomes])
+        _write_many(args, outcomes, spool, code)
+    finally:
+        spool.close()
+    side.finish([(o.path, o.error) for o in outcomes if o.error is not None])
     return code
 
 
-def _write_many(args: argparse.Namespace, outcomes: list[_Outcome], code: int) -> None:
+def _write_many(
+    args: argparse.Namespace, outcomes: list[_Outcome], spool: _Spool, code: int
+) -> None:
     """The ``--format`` document of several captures, in input order: to ``-o`` (the summary
-    lines were printed as the captures finished) or stdout."""
+    lines were printed as the captures finished) or stdout, piece by piece from ``spool``."""
+    pieces = _document(args, outcomes, spool, code)
+    if args.output:
+        atomic_write(args.output, pieces)
+        if not args.quiet:
+            print(f"report written to {args.output}")
+    else:
+        for piece in pieces:
+            sys.stdout.write(piece)
+
+
+def _document(
+    args: argparse.Namespace, outcomes: list[_Outcome], spool: _Spool, code: int
+) -> Iterator[str]:
+    """The document's text in pieces (each capture's from ``spool``)."""
     ok = [o for o in outcomes if o.error is None]
     errors = [(o.path, o.error) for o in outcomes if o.error is not None]
     if args.format == "json":
@@ -497,37 +592,27 @@ def _write_many(args: argparse.Namespace, outcomes: list[_Outcome], code: int) -
             "exit_code": code,
         }
         text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
-        if ok:  # each report was rendered by its worker: json.dumps's own layout, spliced in
-            joined = f",\n{_NESTED}".join(o.piece for o in ok)
-            text = text.replace('"reports": []', f'"reports": [\n{_NESTED}{joined}\n  ]', 1)
+        if not ok:
+            yield text
+            return
+        # each report was rendered by its worker: json.dumps's own layout, spliced in
+        head, _, foot = text.partition('"reports": []')
+        yield f'{head}"reports": [\n{_NESTED}'
+        for k, o in enumerate(ok):
+            yield spool.get(o.index) if k == 0 else f",\n{_NESTED}" + spool.get(o.index)
+        yield "\n  ]" + foot
     elif args.format == "junit":
-        text = _join_junit([o.piece for o in ok], errors)
+        from wavecheck.report.junit import Unreadable, join_suites, render_suites
+
+        unreadable = render_suites(errors=[Unreadable(p, e) for p, e in errors])
+        counts = [o.counts for o in ok if o.counts is not None] + [unreadable.counts]
+        pieces = (spool.get(o.index) for o in ok)
+        yield from join_suites(
+            itertools.chain(pieces, [unreadable.text] if errors else []),
+            [sum(c[k] for c in counts) for k in range(4)],
+        )
     else:
+        for k, o in enumerate(ok):
+            yield ("\n" if k else "") + f"== {o.path} ==\n" + spool.get(o.index)
         summary = [o.summary for o in ok] + [o.summary for o in outcomes if o.error is not None]
-        parts = [f"== {o.path} ==\n{o.piece}" for o in ok]
-        text = "\n".join(parts) + "\n== summary ==\n" + "\n".join(summary) + "\n"
-    if args.output:
-        atomic_write(args.output, text)
-        if not args.quiet:
-            print(f"report written to {args.output}")
-    else:
-        sys.stdout.write(text)
-
-
-def _join_junit(documents: list[str], errors: list[tuple[str, str]]) -> str:
-    """One JUnit document of every capture's suites (input order), then the unreadable ones."""
-    import xml.etree.ElementTree as ET
-
-    from wavecheck.report.junit import Unreadable, render_junit
-
-    root = ET.fromstring(render_junit([], [Unreadable(p, e) for p, e in errors]))
-    unreadable = list(root)
-    for suite in unreadable:
-        root.remove(suite)
-    for doc in documents:
-        root.extend(ET.fromstring(doc).findall("testsuite"))
-    root.extend(unreadable)
-    for key in ("tests", "failures", "errors", "skipped"):
-        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+        yield "\n== summary ==\n" + "\n".join(summary) + "\n"

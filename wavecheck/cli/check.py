@@ -71,7 +71,6 @@ def register(sub: Any) -> None:
     """Add the ``check`` subcommand."""
     p = sub.add_parser(
         "check",
-        help="check every edge of a capture against a drive's timing rules",
         description="Check every STEP/DIR edge of CAPTURE against a drive's datasheet timing. "
         "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 4 a rule --require asks for was "
         "not decided, 2 unusable input.",

@@ -167,7 +167,6 @@ def register(sub: Any) -> None:
     """Add the ``compare`` subcommand."""
     p = sub.add_parser(
         "compare",
-        help="compare a capture with a golden trace (steps, times, rule tables)",
         description="Compare CAPTURE with GOLDEN (e.g. a VCD made by stepgen simulate): step "
         "count, final position, per-step time difference, and the two rule tables. Exit 0 pass, "
         "1 different or worse, 3 indeterminate, 2 unusable input.",

@@ -150,7 +150,6 @@ def register(sub: Any) -> None:
     """Add the ``config`` subcommand."""
     p = sub.add_parser(
         "config",
-        help="can a firmware configuration meet the drive? (no capture needed)",
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     p.add_argument("file", metavar="FILE", help="the firmware configuration file")

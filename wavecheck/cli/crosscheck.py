@@ -25,7 +25,6 @@ __all__ = ["register", "run"]
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "crosscheck",
-        help="compare wavecheck's step decode with sigrok-cli's counter/stepper_motor decoders",
         description=(
             "Run sigrok-cli's counter and stepper_motor decoders on CAPTURE and compare step "
             "counts, step samples and positions with wavecheck's decode, accounting for sigrok's "

@@ -21,7 +21,6 @@ def register(sub: Any) -> None:
     """Add the ``drives`` subcommand."""
     p = sub.add_parser(
         "drives",
-        help="list the drive rule files, or show one with its sources",
         description="List the drive rule library (rules/ and $WAVECHECK_RULES), or show one "
         "drive's figures with their status and full sources.",
     )

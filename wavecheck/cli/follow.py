@@ -49,7 +49,6 @@ def register(sub: Any) -> None:
     """Add the ``follow`` subcommand."""
     p = sub.add_parser(
         "follow",
-        help="following error: commanded motion against the position decoded from a capture",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

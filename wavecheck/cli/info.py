@@ -36,7 +36,6 @@ __all__ = ["info_dict", "info_text", "register", "run"]
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "info",
-        help="show a capture's channels, sample rate, duration and edge counts",
         description="Show a capture's format, sample rate or timescale, resolution, duration, "
         "and per channel its name, initial level and number of edges.",
     )

@@ -38,7 +38,6 @@ def register(sub: Any) -> None:
     """Add the ``latency`` subcommand."""
     p = sub.add_parser(
         "latency",
-        help="base-thread latency from the step pins: the invocation lattice k·P + l of a capture",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -39,7 +39,6 @@ def register(sub: Any) -> None:
     """Add the ``measure`` subcommand."""
     p = sub.add_parser(
         "measure",
-        help="measure every interval and the steps of a capture, without a drive",
         description="Measure CAPTURE per axis: steps, reversals, and for every interval kind "
         "(high, low, period, DIR setup/hold, …) min, max, mean, percentiles and where the "
         "extremes are, plus the step-rate range. No drive, no limits, no verdict. Exit 0, or 2 "

@@ -21,7 +21,6 @@ def register(sub: Any) -> None:
     """Add the ``sigrok`` subcommand."""
     p = sub.add_parser(
         "sigrok",
-        help="install the wavecheck protocol decoder for PulseView and sigrok-cli",
         description="Install the wavecheck decoder for libsigrokdecode (PulseView, sigrok-cli): "
         "violations as annotations on the waveform.",
     )

@@ -46,7 +46,6 @@ def register(sub: Any) -> None:
     """Add the ``watch`` subcommand."""
     p = sub.add_parser(
         "watch",
-        help="check a running machine live, from a logic analyzer through sigrok-cli",
         description="Start sigrok-cli on a logic analyzer and check every STEP/DIR edge as the "
         "samples arrive. Ctrl-C or --time ends it with the full report. Exit 0 pass, 1 a rule "
         "failed, 3 only indeterminate, 4 a rule --require asks for was not decided, 2 unusable "

@@ -21,7 +21,8 @@ from __future__ import annotations
 import base64
 import html
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.drives.model import MARK_LEGEND
@@ -33,7 +34,7 @@ from wavecheck.report.groups import group_violations
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import overall_verdict
 
-__all__ = ["render_html", "write_html"]
+__all__ = ["PageRow", "html_page", "html_section", "render_html", "write_html"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:2rem auto;
@@ -209,13 +210,14 @@ def _verdict_lines(report: Report, require: Sequence[str]) -> list[str]:
     return out + ([f'<p class="required">{_e(line)}</p>'] if line else [])
 
 
-def _section(
+def html_section(
     report: Report,
     index: int,
     png: bytes | None,
     max_violations: int,
     require: Sequence[str] = (),
 ) -> str:
+    """The page's section of ``report``, the ``index``-th (from 1), with its figure ``png``."""
     cap = report.capture
     res = "exact" if report.resolution_ns == 0 else _ns(report.resolution_ns)
     mapping = ", ".join(f"{role} = {ch!r}" for role, ch in report.mapping.items())
@@ -267,12 +269,6 @@ def _section(
     return "\n".join(parts)
 
 
-def _qualifier(report: Report) -> str:
-    """The rules not checked and why, beside a summary row's badge."""
-    said = claims.not_checked(report)
-    return f' <span class="note">({_e(said)})</span>' if said else ""
-
-
 def render_html(
     reports: Sequence[Report],
     *,
@@ -295,9 +291,6 @@ def render_html(
         pngs: figures already rendered (one per report; None entries are rendered here).
         require: the rules ``--require`` asks to be decided.
     """
-    verdict: str = overall_verdict([r.verdict for r in reports]) if reports else "unchecked"
-    if errors:
-        verdict = "error"
     given = list(pngs) if pngs is not None else [None] * len(reports)
     figures: list[bytes | None] = []
     for r, png in zip(reports, given, strict=True):
@@ -306,16 +299,70 @@ def render_html(
 
             png = render_png(r)
         figures.append(png if plots else None)
-    axes = any(r.axis is not None for r in reports)
+    sections = (
+        html_section(r, k, png, max_violations, require)
+        for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1)
+    )
+    rows = [PageRow.of(r, require) for r in reports]
+    return "".join(html_page(rows, sections, errors=errors, title=title))
+
+
+@dataclass(frozen=True)
+class PageRow:
+    """A report's row in the page's summary table: all the page needs of a report besides its
+    section (so a page of many captures can be written section by section)."""
+
+    path: str
+    axis: str | None
+    drive: str
+    verdict: str
+    violations: int
+    steps: int
+    not_checked: str = ""  # the rules not checked and why (:func:`claims.not_checked`)
+    required: str = ""  # the required rules not decided (:func:`claims.requirement_line`)
+
+    @classmethod
+    def of(cls, report: Report, require: Sequence[str] = ()) -> PageRow:
+        """The row of ``report``; ``require``: the rules ``--require`` asks to be decided."""
+        return cls(
+            report.capture.path,
+            report.axis,
+            report.drive.id,
+            report.verdict,
+            report.total_violations,
+            report.steps.count,
+            claims.not_checked(report),
+            claims.requirement_line(report, require),
+        )
+
+
+def _qualifier(row: PageRow) -> str:
+    """The rules not checked and why, beside a summary row's badge."""
+    return f' <span class="note">({_e(row.not_checked)})</span>' if row.not_checked else ""
+
+
+def html_page(
+    rows: Sequence[PageRow],
+    sections: Iterable[str],
+    *,
+    errors: Sequence[str] = (),
+    title: str = "wavecheck report",
+) -> Iterator[str]:
+    """The page in pieces: its head and summary of ``rows`` (and ``errors``), then each of
+    ``sections`` (:func:`html_section`, one per row, in the same order), then its foot."""
+    verdict: str = overall_verdict([r.verdict for r in rows]) if rows else "unchecked"
+    if errors:
+        verdict = "error"
+    axes = any(r.axis is not None for r in rows)
     summary_rows = "".join(
-        f'<tr><td><a href="#capture-{k}">{_e(r.capture.path)}</a></td>'
+        f'<tr><td><a href="#capture-{k}">{_e(r.path)}</a></td>'
         + (f"<td>{_e('' if r.axis is None else r.axis)}</td>" if axes else "")
-        + f"<td>{_e(r.drive.id)}</td><td>{_badge(r.verdict)}{_qualifier(r)}</td>"
-        f'<td class="num">{r.total_violations:,}</td><td class="num">{r.steps.count:,}</td></tr>'
-        for k, r in enumerate(reports, 1)
+        + f"<td>{_e(r.drive)}</td><td>{_badge(r.verdict)}{_qualifier(r)}</td>"
+        f'<td class="num">{r.violations:,}</td><td class="num">{r.steps:,}</td></tr>'
+        for k, r in enumerate(rows, 1)
     )
     error_rows = "".join(f"<li>{_e(e)}</li>" for e in errors)
-    body = [
+    head = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
@@ -325,28 +372,27 @@ def render_html(
         f'<p>Overall verdict: <span id="verdict" class="verdict v-{_e(verdict)}">'
         f"{_e(verdict.upper())}</span></p>",
     ]
-    for r in reports:
-        line = claims.requirement_line(r, require)
-        if line and len(reports) > 1:
-            line = f"{r.capture.path}" + (f" axis {r.axis}" if r.axis else "") + f": {line}"
-        body += [f'<p class="required">{_e(line)}</p>'] if line else []
-    if len(reports) > 1 or errors:
+    for r in rows if len(rows) > 1 else ():  # one report: its section says it
+        if r.required:
+            where = r.path + (f" axis {r.axis}" if r.axis else "")
+            head.append(f'<p class="required">{_e(where)}: {_e(r.required)}</p>')
+    if len(rows) > 1 or errors:
         axis_head = "<th>axis</th>" if axes else ""
-        body.append(
+        head.append(
             f'<table class="summary"><tr><th>capture</th>{axis_head}<th>drive</th><th>verdict</th>'
             f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
         )
     if errors:
-        body.append(
+        head.append(
             f'<h3>Captures that could not be checked</h3><ul class="errors">{error_rows}</ul>'
         )
-    for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1):
-        body.append(_section(r, k, png, max_violations, require))
-    body.append(
+    yield "".join(line + "\n" for line in head)
+    for section in sections:
+        yield section + "\n"
+    yield (
         '<p class="note">Made by wavecheck. Times in s, intervals in ns/µs; a margin is measured − '
-        "limit (negative = violation).</p></body></html>"
+        "limit (negative = violation).</p></body></html>\n"
     )
-    return "\n".join(body) + "\n"
 
 
 def write_html(reports: Sequence[Report], path: str | os.PathLike[str], **kwargs: object) -> None:

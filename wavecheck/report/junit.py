@@ -25,7 +25,7 @@ The layout is the one Jenkins, GitLab, GitHub Actions reporters and Azure read (
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
 
@@ -36,7 +36,15 @@ from wavecheck.report import claims
 from wavecheck.units import format_frequency, format_ns
 from wavecheck.verdict import Unmet
 
-__all__ = ["Unreadable", "classname", "render_junit", "required_failure"]
+__all__ = [
+    "Suites",
+    "Unreadable",
+    "classname",
+    "join_suites",
+    "render_junit",
+    "render_suites",
+    "required_failure",
+]
 
 _LISTED = 10
 
@@ -185,13 +193,70 @@ def render_junit(
 ) -> str:
     """The JUnit XML document for ``reports`` (and captures that could not be checked);
     ``require``: the rules ``--require`` asks to be decided."""
+    root = _root(reports, errors, name, require)
+    for key in _COUNTS:
+        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
+    root.set("time", "0")
+    ET.indent(root)
+    return _DECLARATION + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _root(
+    reports: Sequence[Report],
+    errors: Sequence[Unreadable],
+    name: str,
+    require: Sequence[str] = (),
+) -> ET.Element:
     root = ET.Element("testsuites", name=name)
     for report in reports:
         _suite(root, report, require)
     for err in errors:
         _error_suite(root, err)
-    for key in ("tests", "failures", "errors", "skipped"):
-        root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
-    root.set("time", "0")
+    return root
+
+
+_DECLARATION = '<?xml version="1.0" encoding="UTF-8"?>\n'
+_COUNTS = ("tests", "failures", "errors", "skipped")
+
+
+@dataclass(frozen=True)
+class Suites:
+    """The ``testsuite`` elements of some reports as they stand inside :func:`render_junit`'s
+    ``<testsuites>`` (indented one level), and their counts (tests, failures, errors, skipped):
+    a document of many captures is joined from these (:func:`join_suites`) one by one."""
+
+    text: str
+    counts: tuple[int, int, int, int]
+
+
+def render_suites(
+    reports: Sequence[Report] = (),
+    errors: Sequence[Unreadable] = (),
+    require: Sequence[str] = (),
+) -> Suites:
+    """:func:`render_junit`'s suites of ``reports`` and ``errors``, to be joined."""
+    root = _root(reports, errors, "", require)
     ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    for suite in root:
+        suite.tail = None
+    text = "\n  ".join(ET.tostring(suite, encoding="unicode") for suite in root)
+    c = [sum(int(s.get(key, "0")) for s in root) for key in _COUNTS]
+    return Suites(text, (c[0], c[1], c[2], c[3]))
+
+
+def join_suites(
+    pieces: Iterable[str], counts: Sequence[int], name: str = "wavecheck"
+) -> Iterator[str]:
+    """One JUnit document of ``pieces`` (:attr:`Suites.text`, not empty, in order) whose summed
+    ``counts`` are given, in pieces: what :func:`render_junit` of their reports gives."""
+    root = ET.Element("testsuites", name=name)
+    for key, n in zip(_COUNTS, counts, strict=True):
+        root.set(key, str(n))
+    root.set("time", "0")
+    root.text = "\n  "
+    ET.SubElement(root, "suites").tail = "\n"
+    head, _, foot = ET.tostring(root, encoding="unicode").partition("<suites />")
+    yield _DECLARATION + head
+    for k, piece in enumerate(pieces):
+        yield piece if k == 0 else "\n  " + piece
+    yield foot + "\n"

@@ -48,6 +48,7 @@ _GATE_IDLE = (20.0, 4.0)  # e's idle stretches at least this many times b's puls
 #   second figure when b is a gated clock)
 _GATE_BUSIER = 2  # b has at least this many times the edges of e
 _MOST_LINES = 64  # lines whose pairs are looked at, the busiest
+_CYCLE_SLACK = 1.25  # a clock's cycle around a change lasts at most this many periods
 _CLOCK_SHARE = 0.02  # clocked changes, as a share of the clock's periods, for a bus clock
 _DATA_SHARE = 0.05  # … for data (a synchronous design's STEP changes far more rarely)
 
@@ -94,11 +95,15 @@ def clocked_data(
     if period <= 0:
         return None
     i = np.searchsorted(ce, de, side="right")
-    ok = (i >= 1) & (i < len(ce))
+    ok = (i >= 2) & (i + 1 < len(ce))
     i = i[ok]
     t = de[ok]
     before, after = ce[i - 1], ce[i]
-    inside = (t - before <= period) & (after - t <= period) & (after - before <= period)
+    # inside a run of the clock: both whole cycles around t last about a period (a line
+    # pulsing short with long, varying gaps would else be judged only inside its pulses,
+    # where every change lies "just after the rising edge")
+    cycles = np.maximum(after - ce[i - 2], ce[i + 1] - before)
+    inside = cycles <= _CYCLE_SLACK * period
     if np.count_nonzero(inside) < least:
         return None
     i, t, before = i[inside], t[inside], before[inside]

@@ -15,8 +15,10 @@ import pytest
 
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
+from wavecheck.capture.blocks import assemble
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import open_capture
+from wavecheck.capture.open import open_capture, open_source
+from wavecheck.capture.vcd.reader import VcdBlocks
 
 REPO = Path(__file__).resolve().parents[3]
 
@@ -117,6 +119,27 @@ def test_open_capture_reads_a_fifo(tmp_path: Path) -> None:
     ref = open_capture(src)
     assert cap.path == str(fifo)
     for a, b in zip(cap.channels, ref.channels, strict=True):
+        assert a.edges.tolist() == b.edges.tolist()
+
+
+def test_a_vcd_on_a_pipe_is_read_block_by_block(tmp_path: Path) -> None:
+    """One engine (issue 23): a VCD on a pipe is a block source read from the stream, never held
+    whole (its blocks are as small as the chunk asked), and its edges are the file's."""
+    import threading
+
+    src = _big_vcd(tmp_path)
+    fifo = tmp_path / "pipe.vcd"
+    os.mkfifo(fifo)
+    writer = threading.Thread(target=lambda: fifo.write_bytes(src.read_bytes()), daemon=True)
+    writer.start()
+    source = open_source(fifo, chunk_bytes=1024)
+    assert isinstance(source, VcdBlocks)
+    blocks = list(source.blocks())
+    writer.join(timeout=30)
+    assert len(blocks) > 10  # about 3 edges per 1 KB of text: many blocks
+    got = assemble(source.capture(), blocks)
+    ref = open_capture(src)
+    for a, b in zip(got.channels, ref.channels, strict=True):
         assert a.edges.tolist() == b.edges.tolist()
 
 

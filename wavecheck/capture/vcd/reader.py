@@ -845,7 +845,7 @@ class VcdBlocks:
         else:  # a file: opened again at its body (the header was read once, above)
             f, rest = open_vcd(self.path), b""
             f.seek(self.header.body_offset)
-        with contextlib.nullcontext(f) if self._stream else f:
+        with f:  # a stream too: read once, closed at its end (standard input stays open)
             body = _Body(
                 self.path, _IdMap(self.lay.ids, self.lay.vector_ids, self.bit_ids), b,
                 self.header.body_line, self.header.body_offset,
