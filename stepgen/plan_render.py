@@ -112,10 +112,30 @@ def render_text(p: Plan, other: Plan | None = None) -> str:
             f"{r.rule:<13} {r.what:<42} {r.formula:<36} {exact_ns(r.worst_ns):>8} {exact_ns(r.limit_ns):>8} "
             f"{exact_ns(r.margin_ns):>9}"
         )
+    changed = _changed(p, "  ")
+    if changed:
+        lines += ["", "figures changed on the command line (the table uses them):", *changed]
     lines += ["", "assumptions:"] + [f"  - {a}" for a in p.assumptions]
     if p.warnings:
         lines += ["", "warnings:"] + [f"  ! {w}" for w in p.warnings]
     return "\n".join(lines) + "\n"
+
+
+def _changed(p: Plan, lead: str) -> list[str]:
+    """The drive's figures ``--limit``/``--margin`` changed, each beside its datasheet figure."""
+    figures = [(rule, fig) for rule, fig in p.drive.limits.items() if fig.applied]
+    rate = p.drive.max_rate
+    out = [
+        f"{lead}{rule}: {exact_ns(fig.value)} ns applied ({fig.applied}); datasheet "
+        + ("none" if fig.datasheet is None else f"{exact_ns(fig.datasheet)} ns")
+        for rule, fig in figures
+    ]
+    if rate is not None and rate.applied:
+        out.append(
+            f"{lead}max_rate: {_rate(rate.value):,} steps/s applied ({rate.applied}); datasheet "
+            + ("none" if rate.datasheet is None else f"{_rate(rate.datasheet):,} steps/s")
+        )
+    return out
 
 
 def _header(p: Plan, comment: str) -> list[str]:
@@ -127,6 +147,7 @@ def _header(p: Plan, comment: str) -> list[str]:
         f"the {p.active_at} of stepgen's pulse",
         f"{comment} max step rate {_rate(p.max_step_rate_hz)} steps/s; shortest output time "
         f"{exact_ns(p.shortest_output_ns)} ns under worst latency",
+        *_changed(p, f"{comment} "),
     ]
 
 

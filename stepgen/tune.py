@@ -2,10 +2,11 @@
 
 The method (Machinekit/LinuxCNC "Integrator concepts", Manual tuning; pid reference §4.1):
 
-1. I = D = 0; raise P until the loop oscillates — here: sustained oscillation of a step
-   response (half-cycle peaks no longer decaying, :func:`stepgen.loop.oscillation`), found by
-   doubling P and then bisecting to 1 %; the lowest oscillating P is the ultimate gain Ku, its
-   period Pu;
+1. I = D = 0; raise P until the loop oscillates — here: the later half-cycle peaks of a step
+   response's error decay by less than 1 % per cycle (:func:`stepgen.loop.oscillation`), found
+   by doubling P and then bisecting to 1 %; the lowest such P is the ultimate gain Ku, its
+   period Pu. The report says what that response's swing does over the whole window
+   (:func:`swing_words`: it may still decay, as its plot shows);
 2. P = Ku/2 ("about half, for a quarter amplitude decay");
 3. raise I until the offset is corrected within the settling time the user gives (I grows by
    ×1.4 from 0.05·P/Pu; stops before a setting that oscillates, keeping the last stable one);
@@ -40,6 +41,7 @@ __all__ = [
     "hal_lines",
     "ini_lines",
     "step_response",
+    "swing_words",
     "tune",
 ]
 
@@ -99,6 +101,24 @@ def _judge(r: LoopResult, step: float, band: float) -> tuple[StepMetrics, Oscill
     return step_metrics(r.t_s, r.feedback, 0.0, step, t_step=r.servo_ns * 1e-9, band=band), osc
 
 
+def swing_words(r: LoopResult, period_s: float) -> str:
+    """What the response's swing does over the whole window, in words that match its plot: the
+    peak-to-peak of the position over its first cycle after the step and over its last cycle,
+    and the ratio per cycle between them (units of position)."""
+    k = round(period_s / (r.servo_ns * 1e-9)) if math.isfinite(period_s) else 0
+    if r.diverged or k < 2 or r.n < 1 + 3 * k:
+        return "the loop diverges" if r.diverged else "no full cycles to compare"
+    first = float(np.ptp(r.feedback[1 : 1 + k]))
+    last = float(np.ptp(r.feedback[-k:]))
+    cycles = (r.n - 1 - k) / k
+    ratio = (last / first) ** (1 / cycles) if first > 0 else math.nan
+    what = "decays" if ratio < 0.995 else "grows" if ratio > 1.005 else "keeps its size"
+    return (
+        f"its swing {what} from {first:.3g} to {last:.3g} units over the {r.n * r.servo_ns * 1e-9:g} s "
+        f"window (×{ratio:.3f} per cycle)"
+    )
+
+
 def find_ultimate_gain(
     make_plant: Callable[[], Plant],
     step: float,
@@ -106,7 +126,7 @@ def find_ultimate_gain(
     p_start: float = 1.0,
     base: PidGains | None = None,
 ) -> tuple[float, float, int]:
-    """(Ku, Pu in s, responses run): the lowest P (I = D = 0) that sustains oscillation.
+    """(Ku, Pu in s, responses run): the lowest P (I = D = 0) that passes the oscillation test.
 
     Raises:
         ConfigError: no P up to 2^60·p_start oscillates (or even p_start/2^60 does).
@@ -202,10 +222,11 @@ def tune(
         stages.append(s)
         return s
 
-    run(
-        "1 oscillation",
-        replace(g0, Pgain=ku),
-        f"P = Ku = {ku:.6g} sustains oscillation, period Pu = {pu:.6g} s",
+    s_ku = run("1 oscillation", replace(g0, Pgain=ku), "")
+    s_ku.note = (
+        f"P = Ku = {ku:.6g}, the lowest P the oscillation test (later half-cycles decaying by "
+        f"less than {1 - SUSTAINED_RATIO:.0%} per cycle) passes: {swing_words(s_ku.result, pu)}; "
+        f"period Pu = {pu:.6g} s"
     )
     p = ku / 2
     s_p = run("2 P = Ku/2", replace(g0, Pgain=p), "half the oscillating P")

@@ -73,6 +73,41 @@ def test_axes_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert {a["name"]: a["verdict"] for a in data["axes"]} == {"x": "fail", "y": "pass"}
 
 
+def test_require_block(capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
+    """The Verdicts section's --require example: exit 4 and the line saying why (issue 26)."""
+    monkeypatch.chdir(REPO)
+    (line,) = _block("require").strip().splitlines()
+    assert main(shlex.split(line)[1:]) == 4
+    first, second = capsys.readouterr().out.splitlines()[:2]
+    assert first == (
+        "verdict: PASS (dir_setup, dir_hold not checked: no DIR channel; "
+        "enable_setup not checked: drive drv8825 states no figure)"
+    )
+    assert second == "required but not decided: dir_setup, dir_hold not checked: no DIR channel"
+
+
+def test_rule_file_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The README's own rule file, as written (issue 26: the documented top-level form was
+    refused), used by --drive; the other figures stay the G202's."""
+    (workdir / "my-g202.toml").write_text(_block("rule-file"))
+    code = main(["check", GOLDEN, "--drive", "./my-g202.toml", "--format", "json"])
+    rules = {r["id"]: r for r in json.loads(capsys.readouterr().out)["rules"]}
+    assert code == 1  # the G202 trace still fails dir_hold
+    assert rules["step_high"]["limit_ns"] == 2500 and rules["step_high"]["limit_status"] == "user"
+    assert (
+        rules["dir_hold"]["limit_ns"] == 20000 and rules["dir_hold"]["limit_status"] == "datasheet"
+    )
+
+
+def test_a_figure_at_the_top_of_a_rule_file_says_where_it_goes(workdir: Path, capsys) -> None:
+    (workdir / "top.toml").write_text('extends = "gecko-g202"\nstep_high = "2.5us"\n')
+    assert main(["check", GOLDEN, "--drive", "./top.toml"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        'step_high: unknown key (a figure goes under [limits]: [limits] step_high = "2.5us")' in err
+    )
+
+
 def test_python_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     exec(compile(_block("python"), "README.md", "exec"), {})
     assert capsys.readouterr().out == "fail 9000 20000\n"

@@ -23,11 +23,12 @@ from wavecheck.engine.mapping import AxisMap, axes_from_tables
 from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, DEFAULT_KEEP, CheckOptions
 from wavecheck.engine.outcome import MachineReport, Report
 from wavecheck.engine.run import check_source
-from wavecheck.errors import UsageError
+from wavecheck.errors import RequirementError, UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
+from wavecheck.verdict import require_list
 
-__all__ = ["Axis", "build_options", "check", "check_axes"]
+__all__ = ["Axis", "build_options", "check", "check_axes", "require_met"]
 
 PathOrText = str | os.PathLike[str]
 
@@ -122,6 +123,7 @@ def build_options(
     pictures: bool = False,
     keep_violations: int = DEFAULT_KEEP,
     block_edges: int = DEFAULT_BLOCK_EDGES,
+    require: str | Iterable[str] = (),
 ) -> CheckOptions:
     """The :class:`~wavecheck.engine.options.CheckOptions` of the Python entry points'
     arguments (:func:`check`, :func:`check_axes`, :class:`wavecheck.cocotb.StepMonitor`):
@@ -143,7 +145,21 @@ def build_options(
         pictures=pictures,
         keep_violations=keep_violations,
         block_edges=block_edges,
+        require=require_list(require),
     )
+
+
+def require_met(checked: Report | MachineReport, require: Sequence[str]) -> None:
+    """Raise :class:`~wavecheck.errors.RequirementError` (holding the report) when a rule of
+    ``require`` was not decided (unchecked or indeterminate; :mod:`wavecheck.report.claims`)."""
+    if not require:
+        return
+    from wavecheck.report.claims import requirement_line, unmet
+
+    missing = unmet(checked, require)
+    if missing:
+        path = checked.capture.path
+        raise RequirementError(f"{path}: {requirement_line(checked, require)}", checked, missing)
 
 
 def check(
@@ -169,6 +185,7 @@ def check(
     pictures: bool = False,
     keep_violations: int = DEFAULT_KEEP,
     block_edges: int = DEFAULT_BLOCK_EDGES,
+    require: str | Iterable[str] = (),
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
 
@@ -198,8 +215,12 @@ def check(
             outputs draw (signal windows around the worst places, a thinned step trace).
         keep_violations: the worst violations kept per rule (the counts are exact).
         block_edges: edges gathered before a window is checked (memory follows it).
+        require: rules that must be decided (``"dir_setup,dir_hold"``, ``["all"]``: every rule
+            the drive gives a figure for), as ``--require``.
 
     Raises:
+        RequirementError: a rule of ``require`` is unchecked or indeterminate (exit code 4;
+            ``.report`` is the report, ``.unmet`` the rules and why).
         WavecheckError: unreadable capture or rule file, unknown channel, bad option.
     """
     if map and any("." in role for role in map):
@@ -226,6 +247,7 @@ def check(
         pictures=pictures,
         keep_violations=keep_violations,
         block_edges=block_edges,
+        require=require,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)
     if len(machine.axes) != 1 or machine.axes[0].axis is not None:
@@ -233,6 +255,7 @@ def check(
             f"{machine.capture.path}: the waveforms show {len(machine.axes)} axes: "
             "use wavecheck.check_axes, or give map="
         )
+    require_met(machine.axes[0], options.require)
     return machine.axes[0]
 
 
@@ -260,6 +283,7 @@ def check_axes(
     pictures: bool = False,
     keep_violations: int = DEFAULT_KEEP,
     block_edges: int = DEFAULT_BLOCK_EDGES,
+    require: str | Iterable[str] = (),
 ) -> MachineReport:
     """Check every axis of a capture, read once, each against its drive (``wavecheck check
     --map x.step=5,x.dir=6 --map y.step=3,y.dir=4``); the report has one
@@ -273,10 +297,11 @@ def check_axes(
         map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
         invert, step_type, forward_level: for every axis that does not give its own.
         resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
-            channel, latency, limit, margin, pictures, keep_violations, block_edges: as
+            channel, latency, limit, margin, pictures, keep_violations, block_edges, require: as
             :func:`check`, for every axis.
 
     Raises:
+        RequirementError: a rule of ``require`` is unchecked or indeterminate on an axis.
         WavecheckError: an axis without a drive, a bad axis name or mapping (a channel in two
             axes, a shared role other than enable), and what :func:`check` raises.
     """
@@ -322,5 +347,8 @@ def check_axes(
         pictures=pictures,
         keep_violations=keep_violations,
         block_edges=block_edges,
+        require=require,
     )
-    return check_source(_source(capture, samplerate, input_format), options)
+    machine = check_source(_source(capture, samplerate, input_format), options)
+    require_met(machine, options.require)
+    return machine

@@ -43,7 +43,7 @@ try:
 except ImportError as err:  # pragma: no cover - the extra is part of the test install
     raise ImportError("wavecheck.cocotb needs cocotb 2: pip install 'wavecheck[cocotb]'") from err
 
-from wavecheck.api import build_options
+from wavecheck.api import build_options, require_met
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
@@ -108,6 +108,9 @@ class StepMonitor:
             (for every axis).
         fail_on_violation: raise :class:`WavecheckViolation` as soon as a batch has a failed
             rule (failing the test at that simulation time), and in :meth:`finish`.
+        require: rules that must be decided, as :func:`wavecheck.check`'s: :meth:`finish`
+            raises :class:`~wavecheck.errors.RequirementError` when one is unchecked or
+            indeterminate (with or without ``fail_on_violation``).
         batch: value changes gathered before they are checked.
         batch_time: also check once this much simulated time has passed since the last check
             (``"100us"`` or exact seconds; None: by ``batch`` only).
@@ -142,6 +145,7 @@ class StepMonitor:
         channel: int = 0,
         latency: str | Fraction | None = None,
         pictures: bool = False,
+        require: str | Iterable[str] = (),
         fail_on_violation: bool = True,
         batch: int = DEFAULT_BATCH,
         batch_time: str | Fraction | None = None,
@@ -183,6 +187,7 @@ class StepMonitor:
             pictures=pictures,
             keep_violations=keep_violations,
             block_edges=1,  # a window per batch: the batches are this monitor's
+            require=require,
         )
         self.fail_on_violation = fail_on_violation
         self.batch = max(1, batch)
@@ -345,6 +350,7 @@ class StepMonitor:
         Raises:
             WavecheckViolation: with ``fail_on_violation``, a rule failed (the message names the
                 first failed rule's worst violation; ``.report`` is the report).
+            RequirementError: a rule of ``require`` is unchecked or indeterminate.
         """
         return self.report()
 
@@ -356,7 +362,9 @@ class StepMonitor:
             bad = [(r, a) for a in self._report.axes for r in a.rules if r.verdict == "fail"]
             r, a = bad[0]
             raise WavecheckViolation(self._message(r, a.drive.id, a.axis, None), self._report)
-        return self._report if self.several else self._report.axes[0]
+        checked = self._report if self.several else self._report.axes[0]
+        require_met(checked, self._options.require)
+        return checked
 
     def _close(self) -> MachineReport:
         if self._stream is None:

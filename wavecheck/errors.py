@@ -4,6 +4,9 @@ Every error a user can cause (a bad file, a bad option, a bad rule file, a bad s
 is a :class:`WavecheckError`. The command-line tools print ``str(error)`` as one line (then its
 ``details``, if any, one a line) and exit with :attr:`WavecheckError.exit_code` (2). Messages say
 what is wrong, show the value, and end with a hint in parentheses where one helps.
+:class:`RequirementError` is the one that is not about the input: a check from Python
+(:func:`wavecheck.check`, the cocotb monitor) whose ``require=`` rules were not decided, exit code
+4 as the command line's ``--require``.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ __all__ = [
     "CaptureError",
     "ConfigError",
     "DeviceError",
+    "RequirementError",
     "RuleError",
     "UnitError",
     "UsageError",
@@ -81,3 +85,19 @@ class UsageError(WavecheckError):
 
 class UnitError(UsageError):
     """A quantity such as ``"4.5us"`` or ``"31 kHz"`` cannot be parsed."""
+
+
+class RequirementError(WavecheckError):
+    """A rule the run requires (``require=``, ``--require``) is unchecked or indeterminate.
+
+    Attributes:
+        report: the report of the check (a ``Report`` or ``MachineReport``), complete.
+        unmet: the required rules not decided (:class:`wavecheck.verdict.Unmet`).
+    """
+
+    exit_code = 4
+
+    def __init__(self, message: str, report: object, unmet: tuple[object, ...]) -> None:
+        super().__init__(message)
+        self.report = report
+        self.unmet = unmet

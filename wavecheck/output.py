@@ -10,12 +10,14 @@ Where a path leads decides how it is written:
 - a directory, a folder that is missing or cannot be written, ``-``, or an input of the same run
   (see :func:`protect_inputs`): refused with a :class:`~wavecheck.errors.UsageError` (exit 2).
 
-The command line declares each output option with ``type=``:func:`output_file` and checks them
-all with :func:`check_outputs` before any work is done.
+The command line declares each output option with ``type=``:func:`output_file` (a figure option:
+:func:`figure_file`, whose extension says the format: PNG, JPEG, SVG, PDF) and checks them all
+with :func:`check_outputs` before any work is done.
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import errno
 import os
@@ -28,10 +30,14 @@ from typing import NamedTuple
 from wavecheck.errors import UsageError
 
 __all__ = [
+    "FIGURE_FORMATS",
+    "OUTPUT_TYPES",
     "OutputTarget",
     "atomic_path",
     "atomic_write",
     "check_outputs",
+    "figure_file",
+    "figure_format",
     "output_file",
     "protect_inputs",
     "resolve_output",
@@ -60,6 +66,49 @@ def output_file(text: str) -> str:
     after parsing.
     """
     return text
+
+
+#: What a figure option (``--plot``) writes for each file name extension (matplotlib's format
+#: names); a name without one (a device, a FIFO) gets PNG. Any other extension is refused.
+FIGURE_FORMATS = {
+    "": "png",
+    ".png": "png",
+    ".jpg": "jpg",
+    ".jpeg": "jpg",
+    ".svg": "svg",
+    ".pdf": "pdf",
+}
+
+
+def figure_format(path: str | os.PathLike[str]) -> str:
+    """The format a figure written to ``path`` is drawn in, by its extension
+    (:data:`FIGURE_FORMATS`).
+
+    Raises:
+        UsageError: an extension no figure is written as (``out.gif``).
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix not in FIGURE_FORMATS:
+        raise UsageError(
+            f"{os.fspath(path)}: a figure is written as PNG, JPEG, SVG or PDF, not "
+            f"{suffix.lstrip('.').upper()} (name it .png, .jpg, .svg or .pdf)"
+        )
+    return FIGURE_FORMATS[suffix]
+
+
+def figure_file(text: str) -> str:
+    """argparse ``type=`` of a figure option: an output (:func:`output_file`, checked like
+    every output) whose extension says a format a figure is written in (:func:`figure_format`),
+    refused before any work otherwise."""
+    try:
+        figure_format(text)
+    except UsageError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+    return text
+
+
+#: The ``type=`` of every output option (:func:`wavecheck.cli._main` checks them all).
+OUTPUT_TYPES = (output_file, figure_file)
 
 
 def _fd_link(link: Path) -> int | None:

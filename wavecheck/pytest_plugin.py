@@ -23,6 +23,7 @@ The file (paths relative to it)::
     hal = ["machine.hal"]              #   step rates (channel = N), with latency = "11us"
     expect = "pass"                    # pass | fail | indeterminate (default pass)
     expect_rules = { dir_hold = "fail" }
+    require = ["dir_setup", "dir_hold"]  # or "all": these must be decided (not skipped)
 
 Several axes of one capture (read once; ``wavecheck check --map x.step=…``)::
 
@@ -43,8 +44,10 @@ capture: the entry's ``expect``, else the worst of the axes'), and per axis
 What an item expects: a rule listed in ``expect_rules`` must have that verdict. Otherwise, with
 ``expect = "pass"`` every rule must pass; with ``expect = "fail"`` (or indeterminate) a rule may
 pass or have the expected verdict — the ``verdict`` item checks the capture as a whole. A rule
-with no interval in the capture (``unchecked``) is skipped. A failure shows the worst
-violation.
+with no interval in the capture (``unchecked``) is skipped, unless ``require`` names it (or is
+``"all"``: every rule the drive gives a figure for): a required rule that is unchecked or
+indeterminate fails its item and the ``verdict`` item, saying why (``wavecheck check
+--require``). A failure shows the worst violation.
 
 Options: ``--wavecheck-report-dir DIR`` writes an HTML report (with plots) of every capture that
 has a failing item; ``--wavecheck-max-violations N`` lists N violations in a failure (default 3).
@@ -111,9 +114,10 @@ _KEYS = {
     "active_edge",
     "limit",
     "margin",
+    "require",
 }
 #: Keys of an axis table besides its roles.
-_AXIS_KEYS = {"map", "drive", "type", "invert", "dir_forward", "expect", "expect_rules"}
+_AXIS_KEYS = {"map", "drive", "type", "invert", "dir_forward", "expect", "expect_rules", "require"}
 
 
 class WavecheckConfigError(Exception):
@@ -145,6 +149,7 @@ class AxisSpec:
     dir_forward: str = "low"
     expect: str = "pass"
     expect_rules: dict[str, str] = field(default_factory=dict)
+    require: tuple[str, ...] = ()
 
     def expected(self, rule: str) -> tuple[str, ...]:
         """The verdicts a rule item of this axis accepts."""
@@ -182,6 +187,7 @@ class CaptureSpec:
     active_edge: str | None = None
     limit: tuple[str, ...] = ()
     margin: str | None = None
+    require: tuple[str, ...] = ()
 
     def expected(self, rule: str) -> tuple[str, ...]:
         """The verdicts a rule item accepts."""
@@ -215,6 +221,25 @@ def _expectations(entry: dict[str, Any], where: str) -> tuple[str | None, dict[s
 
 def _strings(value: Any) -> tuple[str, ...]:
     return (value,) if isinstance(value, str) else tuple(str(v) for v in value)
+
+
+def _require(entry: dict[str, Any], where: str, default: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """``require`` of a table (``"all"``, ``"dir_setup,dir_hold"`` or a list), checked."""
+    from wavecheck.errors import UsageError
+    from wavecheck.rules import RULE_IDS
+    from wavecheck.verdict import check_require, require_list
+
+    if "require" not in entry:
+        return default
+    raw = entry["require"]
+    if not isinstance(raw, (str, list)):
+        raise WavecheckConfigError(f"{where}: 'require' must be \"all\" or a list of rule ids")
+    require = require_list(raw)
+    try:
+        check_require(require, RULE_IDS)
+    except UsageError as err:
+        raise WavecheckConfigError(f"{where}: {err}") from None
+    return require
 
 
 def _drive_ref(drive: str, folder: Path) -> str:
@@ -283,6 +308,7 @@ def _axes(
                 dir_forward=str(table.get("dir_forward", defaults.dir_forward)),
                 expect=expect or defaults.expect,
                 expect_rules={**defaults.expect_rules, **rules},
+                require=_require(table, at, defaults.require),
             )
         )
     return tuple(out)
@@ -307,12 +333,21 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
     invert = _strings(entry.get("invert", []))
     drive = entry.get("drive")
     dir_forward = str(entry.get("dir_forward", "low"))
+    require = _require(entry, where)
     axes: tuple[AxisSpec, ...] = ()
     if several:
         from wavecheck.verdict import overall_verdict
 
         defaults = AxisSpec(
-            "", drive or "", {}, invert, entry.get("type"), dir_forward, expect or "pass", rules
+            "",
+            drive or "",
+            {},
+            invert,
+            entry.get("type"),
+            dir_forward,
+            expect or "pass",
+            rules,
+            require,
         )
         axes = _axes(entry, where, folder, defaults, mapping)
         if expect is None:  # the whole capture: the worst of its axes
@@ -344,6 +379,7 @@ def _spec(entry: Any, where: str, folder: Path) -> CaptureSpec:
         active_edge=_choice(entry, "active_edge", ("rising", "falling", "both"), where),
         limit=_limits(entry.get("limit", []), where),
         margin=None if entry.get("margin") is None else str(entry["margin"]),
+        require=require,
     )
 
 
@@ -685,6 +721,19 @@ class RuleItem(pytest.Item):
             self._write_html(checked)
             raise
 
+    def _unmet(self, report: Checked) -> str:
+        """The required rules (``require``) ``report`` did not decide, as one line ("": none)."""
+        from wavecheck.engine.outcome import MachineReport
+        from wavecheck.report.claims import requirement_line
+
+        if isinstance(report, MachineReport):  # the capture's verdict: each axis's own require
+            lines = [
+                (a.name, requirement_line(report.axis(a.name), a.require)) for a in self.spec.axes
+            ]
+            return "; ".join(f"axis {name}: {line}" for name, line in lines if line)
+        spec = self.spec if self.axis is None else self.axis
+        return requirement_line(report, spec.require)
+
     def _judge(self, report: Checked, max_v: int) -> None:
         expect = self.spec.expect if self.axis is None else self.axis.expect
         if self.rule is None:
@@ -692,15 +741,28 @@ class RuleItem(pytest.Item):
                 raise WavecheckFailure(
                     f"{self._where}: expected {expect.upper()}, got {_describe(report, max_v)}"
                 )
+            missing = self._unmet(report)
+            if missing:
+                raise WavecheckFailure(f"{self._where}: {missing}")
             return
         from wavecheck.engine.outcome import MachineReport
+        from wavecheck.report.claims import unmet
 
         assert not isinstance(report, MachineReport)  # rule items belong to one report
         r = report.rule(self.rule)
         if r is None:
             raise WavecheckFailure(f"{self._where}: rule {self.rule} was not evaluated")
+        spec = self.spec if self.axis is None else self.axis
+        for u in unmet(report, spec.require):
+            if u.rule == self.rule:
+                raise WavecheckFailure(
+                    f"{self._where}: {self.rule} is required but {u.said}: {u.why}"
+                )
         if r.verdict == "unchecked":
-            pytest.skip(f"no {self.rule} interval in {self.spec.path.name}")
+            from wavecheck.report.claims import rule_statuses
+
+            why = next(s.why for s in rule_statuses(report) if s.rule == self.rule)
+            pytest.skip(f"{self.rule} not checked in {self.spec.path.name}: {why}")
         expected = (self.spec if self.axis is None else self.axis).expected(self.rule)
         if r.verdict not in expected:
             want = " or ".join(v.upper() for v in expected)

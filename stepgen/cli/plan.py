@@ -1,7 +1,12 @@
 """``stepgen plan``: the step timing calculator (LinuxCNC's StepTimingCalculator as a command).
 
 ``stepgen plan --drive ID|FILE --latency J|FILE [--base-period P] [--invert-step]
-[--format text|json|ini|hal] [--channel N] [-o FILE]``
+[--limit RULE=T] [--margin 2x|+T] [--format text|json|ini|hal] [--channel N] [-o FILE]``
+
+``--limit`` gives a figure the drive's file lacks or overrides one (a drive without a DIR hold
+figure, such as the Leadshine DM542, is planned with ``--limit dir_hold=5us`` from its manual or
+a measurement), and ``--margin`` tightens every figure, as for ``wavecheck check`` and ``config``
+(:mod:`wavecheck.drives.tune`).
 
 Times carry their unit (``11us``, ``15500ns``); a bare number other than 0 is refused with the
 fix spelled out (README "Numbers and units"). A base period below 1 us is refused and a latency
@@ -28,6 +33,7 @@ from typing import Any
 from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
+from wavecheck.cli.config import add_limit_arguments
 from wavecheck.errors import ConfigError, UsageError, WavecheckError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import BASE_PERIOD, LATENCY, Plausible, is_number, option_ns, shorten
@@ -81,6 +87,7 @@ def register(sub: Any) -> None:
         help="the STEP pin is inverted to the drive (default: not inverted, as in the G202 "
         "example of LinuxCNC's Stepper Tuning chapter)",
     )
+    add_limit_arguments(p)
     p.add_argument(
         "--format", choices=_FORMATS, default="text", help="output format (default text)"
     )
@@ -182,6 +189,7 @@ def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction,
 def run(args: argparse.Namespace) -> int:
     """Run ``stepgen plan``; returns 0 (errors raise a WavecheckError, exit 2)."""
     from wavecheck.drives.library import load_drive
+    from wavecheck.drives.tune import tune_drive
 
     if args.channel < 0 or args.channel > 15:
         raise UsageError(f"--channel {args.channel}: stepgen has channels 0..15")
@@ -195,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
     period = None
     if args.base_period is not None:
         period, _ = parse_time_arg(args.base_period, "--base-period", BASE_PERIOD)
-    drive = load_drive(args.drive)
+    drive = tune_drive(load_drive(args.drive), args.limit, args.margin)
     result = plan(drive, latency, period, step_inverted=args.invert_step, latency_source=source)
     if args.format == "json":
         out = render_json(result)

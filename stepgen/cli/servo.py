@@ -41,7 +41,7 @@ from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
-from wavecheck.output import atomic_path, output_file
+from wavecheck.output import atomic_path, figure_file, figure_format
 from wavecheck.units import number_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
@@ -67,7 +67,11 @@ def add_servo_loop_arguments(parser: Any) -> None:
     g.add_argument(
         "--joint-max-velocity", type=number_option, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
     )
-    g.add_argument("--plot", type=output_file, help="PNG: command, feedback, following error")
+    g.add_argument(
+        "--plot",
+        type=figure_file,
+        help="command, feedback, following error (PNG; .jpg, .svg or .pdf by the file's name)",
+    )
     add_servo_arguments(parser.add_argument_group("servo plant (--pid --plant servo)"))
 
 
@@ -226,7 +230,8 @@ def report(
         print(f"pid: {gains_text(gains)}{origin}")
         if r.diverged:
             print(f"the loop diverged: stopped after {r.n} servo periods ({r.t_s[-1]:.6g} s)")
-        print(f"following error: max {worst:.6g} units at {at:.6g} s ({r.n} servo periods)")
+        run = f"{r.n * r.servo_ns * 1e-9:.6g} s ({r.n} servo periods of {r.servo_ns * 1e-6:g} ms)"
+        print(f"following error: max {worst:.6g} units at {at:.6g} s, in a run of {run}")
         print(
             f"following-error check {verdict}: limit max(FERROR {check.ferror_limit:g}·|v|/"
             f"{check.max_velocity:g}, MIN_FERROR {check.min_ferror:g}); worst |ferror|/limit "
@@ -269,5 +274,5 @@ def _plot(r: LoopResult, path: str) -> None:
     a2.set_ylabel("following error")
     a2.set_xlabel("time (ms)")
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
+        fig.savefig(tmp, format=figure_format(path), dpi=100)
     plt.close(fig)

@@ -1,6 +1,6 @@
 """``stepgen tune``: the integrator's manual PID tuning method, run on a model plant.
 
-I = D = 0, raise P until the loop sustains oscillation (ultimate gain Ku, period Pu), P = Ku/2,
+I = D = 0, raise P until the loop oscillates (ultimate gain Ku, period Pu), P = Ku/2,
 raise I until the offset is corrected within --settle (stopping before instability), then D
 while it reduces the overshoot. Prints each stage's step response and the final gains as
 [JOINT_n] INI lines and the setp lines that read them; for a velocity-mode stepgen also the
@@ -24,7 +24,7 @@ from stepgen.pid import PidGains
 from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
 from stepgen.tune import Stage, TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.output import atomic_path, atomic_write, output_file
+from wavecheck.output import atomic_path, atomic_write, figure_file, figure_format, output_file
 from wavecheck.units import number_option, time_ns
 
 __all__ = [
@@ -188,7 +188,11 @@ def register(sub: Any) -> None:
     )
     o = p.add_argument_group("output")
     o.add_argument("--format", choices=("text", "json"), default="text")
-    o.add_argument("--plot", type=output_file, help="PNG of every stage's step response")
+    o.add_argument(
+        "--plot",
+        type=figure_file,
+        help="every stage's step response (PNG; .jpg, .svg or .pdf by the file's name)",
+    )
     o.add_argument(
         "--html",
         type=output_file,
@@ -281,7 +285,7 @@ def write_plot(res: TuneResult, path: str) -> None:
     ax.set_title(f"step responses (Ku = {res.ku:.4g}, Pu = {res.pu * 1e3:.4g} ms)")
     ax.legend(fontsize=6)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
+        fig.savefig(tmp, format=figure_format(path), dpi=100)
     plt.close(fig)
 
 

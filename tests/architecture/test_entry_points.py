@@ -64,6 +64,8 @@ SPELLINGS: dict[str, dict[str, tuple[str, ...] | str]] = {
                  "api": ("pictures",),
                  "toml": "n/a: the plugin draws a failing capture's page itself (--wavecheck-html)",
                  "cocotb": ("pictures",)},
+    "require": {p: ("--require",) if p in ("check", "watch") else ("require",)
+                for p in ("check", "watch", "api", "toml", "cocotb")},
     "infer_edges": {p: "n/a: the engine's own bound on what it reads to tell roles"
                     for p in ("check", "watch", "api", "toml", "cocotb")},
 }  # fmt: skip

@@ -206,6 +206,33 @@ def test_readme_servo_block_runs(tmp_path, monkeypatch, capsys) -> None:
         assert main(shlex.split(line)[1:]) == 0
     out = capsys.readouterr().out
     assert "following-error check pass" in out
+    # issue 26: the run's length said as one ("(650 servo periods)" read as the time of the max)
+    assert "following error: max 0.000149262 units at 0.005 s, in a run of 0.65 s " in out
+    assert "(650 servo periods of 1 ms)" in out
     assert "[JOINT_0]" in out and "setp pid.0.Pgain [JOINT_0]P" in out
     assert (tmp_path / "loop.vcd").stat().st_size > 0
-    assert "data:image/png;base64," in (tmp_path / "tune.html").read_text()
+    page = (tmp_path / "tune.html").read_text()
+    assert "data:image/png;base64," in page
+    # issue 26: the Ku response decays in its plot, and the page says so (not "sustains")
+    assert "sustains oscillation" not in page and "sustains oscillation" not in out
+    assert "its swing decays from 0.0182 to 0.00484 units over the 1 s window (×0.981" in page
+
+
+def test_swing_words_follow_the_curve() -> None:
+    """The words of stage 1 describe the response's swing over the window, as its plot shows."""
+    from stepgen.loop import LoopResult
+    from stepgen.tune import swing_words
+
+    n, period = 1001, 20  # 1 ms servo periods, a 20 ms oscillation
+    t = np.arange(n)
+
+    def result(per_cycle: float) -> LoopResult:
+        fb = 1 + 0.5 * per_cycle ** (t / period) * np.sin(2 * np.pi * t / period)
+        z = np.zeros(n)
+        return LoopResult(1_000_000, np.ones(n), fb, z, 1 - fb, z.astype(bool))
+
+    assert "swing decays" in swing_words(result(0.97), 0.02)
+    assert "(×0.970 per cycle)" in swing_words(result(0.97), 0.02)
+    assert "swing keeps its size" in swing_words(result(1.0), 0.02)
+    assert "swing grows" in swing_words(result(1.02), 0.02)
+    assert swing_words(result(0.97), float("nan")) == "no full cycles to compare"

@@ -28,6 +28,7 @@ __all__ = [
     "axis_runs",
     "check_options",
     "pulse_level",
+    "required",
     "user_table",
 ]
 
@@ -270,9 +271,17 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         keep_violations=kept_violations(args),
         block_edges=DEFAULT_BLOCK_EDGES if block is None else block,
         pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
+        require=required(args),
     )
     args._check_options = options
     return options
+
+
+def required(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--require`` as rule ids (and ``all``), each once (checked by :class:`CheckOptions`)."""
+    from wavecheck.verdict import require_list
+
+    return require_list(getattr(args, "require", None))
 
 
 def kept_violations(args: argparse.Namespace) -> int:

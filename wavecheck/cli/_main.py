@@ -1,7 +1,8 @@
 """Shared command-line plumbing: subcommand dispatch, ``--version``, the output checks and the
 one-line error contract.
 
-Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 2 unusable input or usage.
+Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results, 4 a rule ``--require`` asks
+for was not decided, 2 unusable input or usage (:mod:`wavecheck.verdict`).
 
 Every output option is declared with ``type=``:func:`wavecheck.output.output_file`; before a
 command runs, each one is checked (:func:`wavecheck.output.check_outputs`) against the command's
@@ -20,7 +21,7 @@ from typing import NamedTuple
 
 from wavecheck import __version__
 from wavecheck.errors import WavecheckError
-from wavecheck.output import check_outputs, output_file, protect_inputs
+from wavecheck.output import OUTPUT_TYPES, check_outputs, protect_inputs
 from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
 __all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "Command", "run_cli"]
@@ -101,7 +102,7 @@ def _files(
             continue
         name = action.option_strings[0] if action.option_strings else action.dest
         value = getattr(args, action.dest, None)
-        if action.type is output_file:
+        if action.type in OUTPUT_TYPES:
             outputs[name] = value
             continue
         if action.type not in (None, str):

@@ -33,12 +33,14 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from wavecheck.cli._axis_args import required
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import QUIET_HELP, activate
+from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
@@ -63,7 +65,10 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     """Add the report-file, quiet and LinuxCNC-configuration options to ``check``'s parser."""
     out = p.add_argument_group("reports")  # output_file: checked before any work (wavecheck.output)
     out.add_argument(
-        "--plot", type=output_file, metavar="FILE.png", help="timing diagrams and histograms (PNG)"
+        "--plot",
+        type=figure_file,
+        metavar="FILE.png",
+        help="timing diagrams and histograms (PNG; .jpg, .svg or .pdf by the file's name)",
     )
     out.add_argument(
         "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
@@ -204,15 +209,15 @@ def render_text_report(report: Checked, args: argparse.Namespace) -> str:
     """The text report (``--max-violations`` listed)."""
     cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
-        return render_machine_text(report, cap)
-    return render_text(report, cap)
+        return render_machine_text(report, cap, required(args))
+    return render_text(report, cap, required(args))
 
 
 def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
     cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
-        return machine_dict(report, cap)
-    return report_dict(report, cap)
+        return machine_dict(report, cap, required(args))
+    return report_dict(report, cap, required(args))
 
 
 def render_json_report(report: Checked, args: argparse.Namespace) -> str:
@@ -224,17 +229,21 @@ def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
     """JUnit XML of one capture (a testsuite per axis)."""
     from wavecheck.report.junit import render_junit
 
-    return render_junit(axis_reports(report))
+    return render_junit(axis_reports(report), require=required(args))
 
 
 # -- several captures --------------------------------------------------------------------------------
-def summary_line(checked: Checked) -> str:
-    """One line: verdict, capture, violations, steps (per axis) and the worst rule."""
+def summary_line(checked: Checked, require: tuple[str, ...] = ()) -> str:
+    """One line: verdict, capture, violations, steps (per axis), the worst rule, the rules not
+    checked and why, and the required rules not decided (``--require``)."""
+    tail = "".join(
+        f"; {x}" for x in (not_checked(checked), requirement_line(checked, require)) if x
+    )
     if isinstance(checked, MachineReport):
         steps = ", ".join(f"{r.axis} {r.steps.count}" for r in checked.axes)
         return (
             f"{checked.verdict.upper():<13} {checked.capture.path}: {checked.total_violations} "
-            f"violation(s), steps {steps}"
+            f"violation(s), steps {steps}{tail}"
         )
     report = checked
     worst = ""
@@ -245,7 +254,7 @@ def summary_line(checked: Checked) -> str:
         worst = f"; closest {rule} {sign}{format_time(m / 10**9)}"
     return (
         f"{report.verdict.upper():<13} {report.capture.path}: {report.total_violations} "
-        f"violation(s), {report.steps.count} steps{worst}"
+        f"violation(s), {report.steps.count} steps{worst}{tail}"
     )
 
 
@@ -309,14 +318,19 @@ class _SideOutputs:
         reports = axis_reports(checked)
         several = self.several or len(reports) > 1
         for r in reports:
+            target = None
+            if args.plot:
+                target = _per_capture(args.plot, _tagged(r), self._stems) if several else args.plot
+            fmt = figure_format(target) if target else "png"
             png = None
-            if args.plot or args.html:  # rendered once, embedded in the HTML page too
+            if target or args.html:
                 from wavecheck.report.plot import render_png
 
-                png = render_png(r)
-            if args.plot:
-                target = _per_capture(args.plot, _tagged(r), self._stems) if several else None
-                atomic_write(target or args.plot, png)  # type: ignore[arg-type]
+                if args.html or fmt == "png":  # rendered once, embedded in the HTML page too
+                    png = render_png(r)
+                if target:
+                    data = png if png is not None and fmt == "png" else render_png(r, fmt=fmt)
+                    atomic_write(target, data)
             if args.gtkw:
                 from wavecheck.report.gtkw import write_gtkw
 
@@ -325,11 +339,12 @@ class _SideOutputs:
             if self._sections is not None:
                 from wavecheck.report.html import PageRow, html_section
 
-                self._rows.append(PageRow.of(r))
+                self._rows.append(PageRow.of(r, required(args)))
                 cap = (
                     DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
                 )
-                self._sections.put(len(self._rows), html_section(r, len(self._rows), png, cap))
+                section = html_section(r, len(self._rows), png, cap, required(args))
+                self._sections.put(len(self._rows), section)
 
     def finish(self, errors: list[tuple[str, str]]) -> None:
         """Write the HTML page (``errors``: the captures that could not be checked)."""
@@ -420,7 +435,7 @@ def _piece(args: argparse.Namespace, checked: Checked) -> tuple[str, Any]:
     if args.format == "junit":
         from wavecheck.report.junit import render_suites
 
-        suites = render_suites(axis_reports(checked))
+        suites = render_suites(axis_reports(checked), require=required(args))
         return suites.text, suites.counts
     return render_text_report(checked, args), None
 
@@ -441,7 +456,13 @@ def _check_one(index: int, path: str) -> _Outcome:
         side.add(checked)
     piece, counts = _piece(args, checked)
     return _Outcome(
-        index, path, summary_line(checked), checked.exit_code, checked.verdict, piece, counts
+        index,
+        path,
+        summary_line(checked, required(args)),
+        exit_code(checked, required(args)),
+        checked.verdict,
+        piece,
+        counts,
     )
 
 
@@ -510,7 +531,7 @@ def run_checks(
         side = _SideOutputs(args, several=False)
         side.add(report)
         side.finish([])
-        return report.exit_code
+        return exit_code(report, required(args))
     jobs = _jobs(args, len(paths))
     stream = (
         None

@@ -1,7 +1,8 @@
 """``wavecheck check CAPTURE --drive ID|FILE``: check every edge against a drive's datasheet.
 
-Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 2
-unusable input or usage (one line, no traceback).
+Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing checkable), 4 a
+rule ``--require`` asks for was not decided (unchecked or indeterminate), 2 unusable input or
+usage (one line, no traceback).
 
 The command is a thin layer: options → :func:`wavecheck.engine.run.check_source` → a renderer. New
 outputs register in :data:`RENDERERS` (``--format``); extra side outputs (plots, HTML, GTKWave
@@ -16,7 +17,12 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
+from wavecheck.cli._axis_args import (
+    add_axis_arguments,
+    add_engine_arguments,
+    check_options,
+    required,
+)
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
@@ -66,7 +72,8 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "check",
         description="Check every STEP/DIR edge of CAPTURE against a drive's datasheet timing. "
-        "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 2 unusable input.",
+        "Exit 0 pass, 1 a rule failed, 3 only indeterminate, 4 a rule --require asks for was "
+        "not decided, 2 unusable input.",
     )
     p.add_argument(
         "capture",
@@ -149,14 +156,19 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
             print(line, file=sys.stderr)
     text = RENDERERS[args.format](report, args)
     if args.output:
+        from wavecheck.report.claims import requirement_line, verdict_line
+
         atomic_write(args.output, text)
         if getattr(args, "quiet", False):  # -q: the report file only
             return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
-            f"{report.verdict}: {report.total_violations} violation(s), {steps} steps; "
+            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
             f"report written to {args.output}"
         )
+        missing = requirement_line(report, required(args))
+        if missing:
+            print(missing)
     else:
         sys.stdout.write(text)
 

@@ -8,7 +8,8 @@ hm2 stepgen, decided by what its HALFILEs load). The
 format is detected by content (``--firmware-format`` forces it). For every axis and every rule:
 the generator's guaranteed figure, the drive's limit, the margin, pass/fail, the max step rate the
 pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 something cannot be
-proven from the configuration (measure it), 2 unusable input.
+proven from the configuration (measure it), 4 a rule ``--require`` asks for was not decided, 2
+unusable input.
 
 Also here: the options ``check`` shares (``--firmware``, ``--firmware-axis``, ``--limit``,
 ``--margin``) and :func:`check_firmware`, which ``check --firmware`` runs on each report and
@@ -29,13 +30,22 @@ from wavecheck.errors import UsageError
 from wavecheck.firmware import FIRMWARES, read_firmware
 from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, output_file
+from wavecheck.rules import RULE_IDS
 from wavecheck.units import parse_frequency, time_ns
+from wavecheck.verdict import (
+    check_require,
+    require_list,
+    required_exit_code,
+    required_line,
+    unmet_requirements,
+)
 
 if TYPE_CHECKING:  # imported where used: only with a firmware configuration
     from wavecheck.firmware.capture import FirmwareCheck
 
 __all__ = [
     "add_firmware_arguments",
+    "add_limit_arguments",
     "add_tuning_arguments",
     "check_firmware",
     "register",
@@ -43,8 +53,9 @@ __all__ = [
 ]
 
 
-def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
-    """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``."""
+def add_limit_arguments(p: argparse.ArgumentParser) -> None:
+    """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``: the drive's figures as
+    the user changes them (:func:`wavecheck.drives.tune.tune_drive`; ``stepgen plan`` too)."""
     p.add_argument(
         "--limit",
         action="append",
@@ -58,6 +69,20 @@ def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
         metavar="2x|+500ns",
         help="tighten every datasheet figure: a factor (2x, as StepConf advises for 3.3 V "
         "parallel ports) or an added time (+500ns); --limit figures are taken as given",
+    )
+
+
+def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
+    """:func:`add_limit_arguments` and ``--require RULES|all`` (which rules must be decided)."""
+    add_limit_arguments(p)
+    p.add_argument(
+        "--require",
+        action="append",
+        default=[],
+        metavar="RULES|all",
+        help="rules that must be decided (comma-separated; all: every rule the drive gives a "
+        "figure for): one not checked or indeterminate makes the run exit 4, with a line "
+        "saying why (repeatable)",
     )
 
 
@@ -181,22 +206,27 @@ def run(args: argparse.Namespace) -> int:
     from wavecheck.firmware.evaluate import evaluate_config
     from wavecheck.report.firmware import config_dict, config_junit, config_text
 
+    require = require_list(args.require)
+    check_require(require, RULE_IDS)
     cfg = _read(args, args.file)
     result = evaluate_config(cfg, [(cfg.axis(a), d) for a, d in _drives(args, cfg)])
     if not result.pairs:
         raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")
+    unmet = unmet_requirements(result.statuses, require)
     if args.format == "json":
-        text = json.dumps(config_dict(result), indent=2, ensure_ascii=False) + "\n"
+        text = json.dumps(config_dict(result, require), indent=2, ensure_ascii=False) + "\n"
     elif args.format == "junit":
-        text = config_junit(result)
+        text = config_junit(result, require)
     else:
-        text = config_text(result)
+        text = config_text(result, require)
     if args.output:
         atomic_write(args.output, text)
         print(
             f"{result.verdict_line}: {len(result.pairs)} axis/drive pair(s); report written to "
             f"{args.output}"
         )
+        if unmet:
+            print(required_line(unmet, result.statuses))
     else:
         sys.stdout.write(text)
-    return result.exit_code
+    return required_exit_code(result.exit_code, unmet)

@@ -37,7 +37,7 @@ from wavecheck.follow import (
     positions_at,
     read_command,
 )
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.steptypes import step_type
 from wavecheck.units import number_option, parse_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
@@ -149,9 +149,10 @@ def register(sub: Any) -> None:
     o.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report here")
     o.add_argument(
         "--plot",
-        type=output_file,
+        type=figure_file,
         metavar="FILE.png",
-        help="command and feedback over time, and the error",
+        help="command and feedback over time, and the error (PNG; .jpg, .svg or .pdf by the "
+        "file's name)",
     )
     p.set_defaults(func=run)
 
@@ -408,8 +409,9 @@ def _decimate(t: np.ndarray, *ys: np.ndarray, n: int = 4000) -> list[np.ndarray]
     return [t[idx], *(y[idx] for y in ys)]
 
 
-def render_png(r: FollowReport) -> bytes:
-    """Command and feedback over time, and the following error (matplotlib, imported here)."""
+def render_png(r: FollowReport, fmt: str = "png") -> bytes:
+    """Command and feedback over time, and the following error (matplotlib, imported here),
+    PNG or ``fmt``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -430,7 +432,7 @@ def render_png(r: FollowReport) -> bytes:
     ax2.set_ylabel("command − feedback (counts)")
     ax2.set_xlabel("time (s)")
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format=fmt)
     return buf.getvalue()
 
 
@@ -444,5 +446,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(out)
     if args.plot:
-        atomic_write(args.plot, render_png(report))
+        atomic_write(args.plot, render_png(report, figure_format(args.plot)))
     return EXIT_FAIL if fails else EXIT_PASS

@@ -23,7 +23,7 @@ from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.errors import UnitError, UsageError
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import activate, current
 from wavecheck.units import format_ns, json_number, time_ns
 from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
@@ -57,7 +57,10 @@ def register(sub: Any) -> None:
     p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
     p.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report here")
     p.add_argument(
-        "--plot", type=output_file, metavar="FILE.png", help="histogram + lateness over time"
+        "--plot",
+        type=figure_file,
+        metavar="FILE.png",
+        help="histogram + lateness over time (PNG; .jpg, .svg or .pdf by the file's name)",
     )
     p.add_argument("--html", type=output_file, metavar="FILE.html", help="a self-contained page")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -296,8 +299,8 @@ def render_json(r: LatencyReport, source: str = "") -> str:
     return json.dumps(out, indent=2) + "\n"
 
 
-def render_png(r: LatencyReport) -> bytes:
-    """Histogram and lateness over time (matplotlib, imported here)."""
+def render_png(r: LatencyReport, fmt: str = "png") -> bytes:
+    """Histogram and lateness over time (matplotlib, imported here), PNG or ``fmt``."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -321,7 +324,7 @@ def render_png(r: LatencyReport) -> bytes:
     else:
         ax1.set_title(r.reason[:110])
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format=fmt)
     return buf.getvalue()
 
 
@@ -350,7 +353,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot or args.html:
         png = render_png(report)
         if args.plot:
-            atomic_write(args.plot, png)
+            fmt = figure_format(args.plot)
+            atomic_write(args.plot, png if fmt == "png" else render_png(report, fmt))
         if args.html:
             atomic_write(args.html, render_html(report, text, png))
     return EXIT_PASS if report.lattice else EXIT_INDETERMINATE

@@ -24,7 +24,7 @@ from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
 from wavecheck.cli.config import add_firmware_arguments, check_firmware
 from wavecheck.measurement import Measurement, measure
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.measurement import measurement_dict, render_measure_text
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
@@ -57,10 +57,10 @@ def register(sub: Any) -> None:
     out = p.add_argument_group("figures")
     out.add_argument(
         "--plot",
-        type=output_file,
+        type=figure_file,
         metavar="FILE.png",
         help="position and step rate against time per axis (reversals marked), and a histogram "
-        "of every interval kind (PNG)",
+        "of every interval kind (PNG; .jpg, .svg or .pdf by the file's name)",
     )
     out.add_argument(
         "--html", type=output_file, metavar="FILE.html", help="one self-contained HTML page"
@@ -135,8 +135,9 @@ def run(args: argparse.Namespace) -> int:
 
         png = render_measure_png(m)
     if args.plot:
+        fmt = figure_format(args.plot)
         assert png is not None
-        atomic_write(args.plot, png)
+        atomic_write(args.plot, png if fmt == "png" else render_measure_png(m, fmt=fmt))
     if args.html:
         from wavecheck.report.measurement import write_measure_html
 

@@ -48,7 +48,8 @@ def register(sub: Any) -> None:
         "watch",
         description="Start sigrok-cli on a logic analyzer and check every STEP/DIR edge as the "
         "samples arrive. Ctrl-C or --time ends it with the full report. Exit 0 pass, 1 a rule "
-        "failed, 3 only indeterminate, 2 unusable input or a failed acquisition.",
+        "failed, 3 only indeterminate, 4 a rule --require asks for was not decided, 2 unusable "
+        "input or a failed acquisition.",
     )
     dev = p.add_argument_group("analyzer")
     dev.add_argument(
@@ -322,4 +323,6 @@ def run(args: argparse.Namespace) -> int:
     )
     if result.failure is not None:
         raise DeviceError(f"{label}: {result.failure}; the report covers the samples before it")
-    return report.exit_code
+    from wavecheck.report.claims import exit_code
+
+    return exit_code(report, options.require)

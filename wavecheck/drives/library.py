@@ -242,6 +242,10 @@ def _check_keys(
         if key not in allowed:
             close = difflib.get_close_matches(key, allowed, n=1)
             hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(allowed)}"
+            if not where and key in LIMIT_KEYS:  # a figure written at the top of the file
+                value = table[key]
+                shown = f'"{value}"' if isinstance(value, str) else repr(value)
+                hint = f"a figure goes under [limits]: [limits] {key} = {shown}"
             raise RuleError(path, f"{where}{key}", f"unknown key ({hint})")
     for key in required:
         if key not in table:

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 
 from wavecheck.drives.model import Drive, Figure
-from wavecheck.errors import UsageError
+from wavecheck.errors import UnitError, UsageError
 from wavecheck.rules import TIME_RULES
 from wavecheck.units import parse_frequency, parse_quantity
 
@@ -67,12 +67,17 @@ def parse_limit(text: str) -> tuple[str, Fraction]:
         raise UsageError(
             f"--limit {text!r}: write RULE=VALUE with RULE one of {', '.join(allowed)}"
         )
+    try:
+        if rule == "max_rate":
+            hz = parse_frequency(value)
+        else:
+            v, dim = parse_quantity(value)
+    except UnitError as err:  # the value's own message, with the option it came in
+        raise UsageError(f"--limit {text!r}: {err}") from None
     if rule == "max_rate":
-        hz = parse_frequency(value)
         if hz <= 0:
             raise UsageError(f"--limit {text!r}: the rate must be positive")
         return rule, hz
-    v, dim = parse_quantity(value)
     if dim != "time" or v < 0:
         raise UsageError(f"--limit {text!r}: expected a time >= 0 with a unit, e.g. {rule}=5us")
     return rule, v * _GIGA

@@ -21,6 +21,8 @@ from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.rules import RULE_IDS
+from wavecheck.verdict import check_require
 
 __all__ = [
     "DEFAULT_BLOCK_EDGES",
@@ -77,6 +79,9 @@ class CheckOptions:
         pictures: keep what ``--plot``/``--html``/``--gtkw`` draw (signal windows around the
             worst places, a thinned step trace); off, nothing is kept that no output needs.
         infer_edges: edges read to tell roles from the waveforms when none is mapped.
+        require: rule ids (or ``all``: every rule the drive gives a figure for) that must be
+            decided: one unchecked or indeterminate makes the run exit 4 (``--require``;
+            :mod:`wavecheck.verdict`, judged on the report by :mod:`wavecheck.report.claims`).
     """
 
     drive: PerAxis[Drive] = field(default_factory=dict)
@@ -96,8 +101,10 @@ class CheckOptions:
     block_edges: int = DEFAULT_BLOCK_EDGES
     pictures: bool = False
     infer_edges: int = INFER_EDGES
+    require: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
+        check_require(self.require, RULE_IDS)
         if self.pulse_level not in (None, 0, 1):
             raise UsageError(f"pulse level must be 0 (low) or 1 (high), got {self.pulse_level!r}")
         for axis, level in self.forward_level.items():

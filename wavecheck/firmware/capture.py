@@ -94,7 +94,7 @@ def observed_in_measurement(axis: AxisMeasurement, resolution_ns: Fraction) -> O
     if period is not None and period.min_at is not None:
         at = period.timebase.seconds(period.min_at)
     return Observed(axis.interface, axis.step_type, axis.active_edge, resolution_ns,
-                    shortest, axis.rate_max_hz, at, "it was not measured (no such interval in the capture)",
+                    shortest, axis.rate_max_hz, at, "no such interval in the capture",
                     axis_name=axis.name)  # fmt: skip
 
 

@@ -25,7 +25,14 @@ from wavecheck.drives.model import Drive, Figure
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
 from wavecheck.rules import Rule, applicable
 from wavecheck.units import format_ns
-from wavecheck.verdict import Verdict, exit_code, overall_verdict, qualified_verdict
+from wavecheck.verdict import (
+    RuleStatus,
+    Verdict,
+    exit_code,
+    overall_verdict,
+    qualified_verdict,
+    unchecked_by_reason,
+)
 
 __all__ = ["ConfigResult", "PairResult", "PairRow", "evaluate_config", "evaluate_pair"]
 
@@ -86,16 +93,26 @@ class ConfigResult:
         return exit_code(self.verdict)
 
     @property
+    def statuses(self) -> tuple[RuleStatus, ...]:
+        """Every rule of every pair as the verdict line and ``--require`` read it
+        (:mod:`wavecheck.verdict`)."""
+        return tuple(
+            RuleStatus(
+                row.rule,
+                row.verdict,
+                (row.why_unchecked or _SILENT) if row.verdict == "unchecked" else row.note,
+                pair.axis.axis,
+                stated=row.limit is not None,
+            )
+            for pair in self.pairs
+            for row in pair.rows
+        )
+
+    @property
     def unchecked(self) -> dict[str, tuple[str, ...]]:
-        """Why → the rules not checked for that reason (on any axis), in rule order."""
-        out: dict[str, list[str]] = {}
-        for pair in self.pairs:
-            for row in pair.rows:
-                if row.verdict == "unchecked":
-                    rules = out.setdefault(row.why_unchecked or _SILENT, [])
-                    if row.rule not in rules:
-                        rules.append(row.rule)
-        return {why: tuple(rules) for why, rules in out.items()}
+        """Why → the rules not checked for that reason, in rule order (a rule not checked on
+        every axis for that reason named ``AXIS.RULE``)."""
+        return unchecked_by_reason(self.statuses)
 
     @property
     def verdict_line(self) -> str:
@@ -167,8 +184,9 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if fig is not None and fig.note
                 else note or "no bound in the configuration"
             )
+            why += "" if why.endswith("measure it") else "; measure it"
             rows.append(PairRow(r.id, role, None, fig, limit, limit_fig, None, "indeterminate",
-                                note=f"{why}; measure it"))  # fmt: skip
+                                note=why))  # fmt: skip
             continue
         margin = value - limit
         verdict = _judge(value, limit)

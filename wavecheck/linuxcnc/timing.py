@@ -87,9 +87,12 @@ def require_figures(drive: Drive, rules: tuple[str, ...] = PLAN_RULES) -> None:
     """Raise ConfigError unless ``drive`` states every figure of ``rules``."""
     missing = [r for r in rules if drive.limit_ns(r) is None]
     if missing:
+        given = " ".join(f"--limit {r}=T" for r in missing)
         raise ConfigError(
             f"drive {drive.id} ({drive.path}) gives no {', '.join(missing)} figure; stepgen's "
-            f"timing needs {', '.join(PLAN_RULES)} (add the datasheet figure to the rule file)"
+            f"timing needs {', '.join(PLAN_RULES)} (give the figure from the drive's manual or a "
+            f"measurement: {given}, e.g. {missing[0]}=5us; or a rule file of your own with "
+            f'extends = "{drive.id}" and it under [limits])'
         )
 
 

@@ -3,6 +3,7 @@ section of ``check --firmware``."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -12,6 +13,7 @@ from wavecheck.firmware.evaluate import ConfigResult, PairRow
 from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed
 from wavecheck.rules import rule
 from wavecheck.units import format_ns, format_rate, json_number
+from wavecheck.verdict import Unmet, required_exit_code, required_line, unmet_requirements
 
 __all__ = [
     "config_dict",
@@ -47,8 +49,8 @@ def _axis_head(a: GeneratorGuarantee) -> str:
     return f"axis {a.axis}: pulses {level} at the pin, {edges}"
 
 
-def config_text(result: ConfigResult) -> str:
-    """The text report of ``wavecheck config``."""
+def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
+    """The text report of ``wavecheck config`` (``require``: ``--require``)."""
     cfg, results = result.config, result.pairs
     out = [f"{cfg.firmware} configuration {cfg.path}"]
     out += [f"  read: {f}" for f in cfg.files if f != cfg.path]
@@ -104,6 +106,8 @@ def config_text(result: ConfigResult) -> str:
         "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
         f"verdict: {result.verdict_line}",
     ]
+    unmet = unmet_requirements(result.statuses, require)
+    out += [line for line in [required_line(unmet, result.statuses)] if line]
     return "\n".join(out) + "\n"
 
 
@@ -143,9 +147,12 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
     }
 
 
-def config_dict(result: ConfigResult) -> dict[str, Any]:
-    """The JSON report of ``wavecheck config``."""
+def config_dict(result: ConfigResult, require: Sequence[str] = ()) -> dict[str, Any]:
+    """The JSON report of ``wavecheck config`` (``require``: ``--require``)."""
+    from wavecheck.report.json import required_dict
+
     cfg, results = result.config, result.pairs
+    unmet = unmet_requirements(result.statuses, require)
     return {
         "firmware": cfg.firmware,
         "path": cfg.path,
@@ -188,15 +195,20 @@ def config_dict(result: ConfigResult) -> dict[str, Any]:
         "unchecked": [
             {"why": why, "rules": list(rules)} for why, rules in result.unchecked.items()
         ],
-        "exit_code": result.exit_code,
+        "required": required_dict(require, unmet),
+        "exit_code": required_exit_code(result.exit_code, unmet),
     }
 
 
-def _junit_case(suite: Any, classname: str, row: PairRow) -> str:
+def _junit_case(suite: Any, classname: str, row: PairRow, unmet: Unmet | None) -> str:
     """One rule as a JUnit test case (the conventions of :mod:`wavecheck.report.junit`)."""
     import xml.etree.ElementTree as ET
 
+    from wavecheck.report.junit import required_failure
+
     case = ET.SubElement(suite, "testcase", classname=classname, name=row.rule, time="0")
+    if unmet is not None:
+        return required_failure(case, unmet)
     lim = format_ns(row.limit_ns)
     gen = format_ns(row.guaranteed_ns, missing="unknown")
     if row.verdict in ("fail", "indeterminate"):
@@ -211,13 +223,15 @@ def _junit_case(suite: Any, classname: str, row: PairRow) -> str:
     return "pass"
 
 
-def config_junit(result: ConfigResult) -> str:
+def config_junit(result: ConfigResult, require: Sequence[str] = ()) -> str:
     """JUnit XML of ``wavecheck config``: one ``testsuite`` per axis/drive pair, one
-    ``testcase`` per rule (failure: fail or indeterminate; skipped: unchecked, with why)."""
+    ``testcase`` per rule (failure: fail or indeterminate, or a required rule not decided;
+    skipped: unchecked, with why)."""
     import xml.etree.ElementTree as ET
 
-    from wavecheck.report.junit import classname
+    from wavecheck.report.junit import classname, required_failure
 
+    unmet = {(u.axis, u.rule): u for u in unmet_requirements(result.statuses, require)}
     root = ET.Element("testsuites", name="wavecheck config")
     base = classname(result.config.path)
     for pair in result.pairs:
@@ -225,11 +239,17 @@ def config_junit(result: ConfigResult) -> str:
                               name=f"{result.config.path} [axis {pair.axis.axis}, drive {pair.drive.id}]")  # fmt: skip
         props = ET.SubElement(suite, "properties")
         for key, value in (("firmware", result.config.firmware), ("drive", pair.drive.id),
-                           ("verdict", pair.verdict)):  # fmt: skip
+                           ("verdict", pair.verdict),
+                           ("verdict_line", result.verdict_line)):  # fmt: skip
             ET.SubElement(props, "property", name=key, value=value)
         counts = {"failure": 0, "skipped": 0, "pass": 0}
         for row in pair.rows:
-            counts[_junit_case(suite, f"{base}.{pair.axis.axis}", row)] += 1
+            u = unmet.pop((pair.axis.axis, row.rule), None)
+            counts[_junit_case(suite, f"{base}.{pair.axis.axis}", row, u)] += 1
+        for axis, rule_id in [k for k in unmet if k[0] == pair.axis.axis]:  # no such rule here
+            case = ET.SubElement(suite, "testcase", classname=f"{base}.{axis}",
+                                 name=rule_id, time="0")  # fmt: skip
+            counts[required_failure(case, unmet.pop((axis, rule_id)))] += 1
         if pair.verdict == "unchecked":  # the command exits 3: the suite must not read as green
             case = ET.SubElement(suite, "testcase", classname=f"{base}.{pair.axis.axis}",
                                  name="verdict", time="0")  # fmt: skip

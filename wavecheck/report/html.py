@@ -6,7 +6,10 @@ it shows the verdict, what was checked, the rule table, the worst violations, th
 rates, the notes and the plots (:mod:`wavecheck.report.plot`).
 
 Element ids for tools and tests: ``verdict`` (the overall verdict), per capture a ``section``
-with class ``capture`` and ``data-verdict``, tables with class ``rules``, ``violations``, ``rates``,
+with class ``capture`` and ``data-verdict`` whose ``p.verdict-line`` names the rules not checked
+and why (and ``p.required`` the rules ``--require`` asks for that were not decided), a
+``summary`` table (several captures or axes; an ``axis`` column when there are axes), tables
+with class ``rules``, ``violations``, ``rates``,
 and a ``dl`` with class ``sources`` (``id="sources-N"``; each key's ``dt`` has ``id="src-N-KEY"``)
 listing the full references the rule table's "source" column cites. A limit whose figure is
 uncertain or a firmware default carries its mark (``100 ns?``); identical violations are one row
@@ -25,6 +28,7 @@ from fractions import Fraction
 from wavecheck.drives.model import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.output import atomic_write
+from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.groups import group_violations
 from wavecheck.units import format_ns, format_rate, format_time
@@ -47,6 +51,7 @@ dl{display:grid;grid-template-columns:max-content auto;gap:.1rem 1rem;margin:.4r
 dt{font-weight:600}dd{margin:0}.note{color:#555;font-size:.9rem}
 img{max-width:100%;border:1px solid #eee}
 .summary td:first-child{font-family:ui-monospace,monospace}
+.verdict-line{font-weight:600}.required{color:#c0392b;font-weight:600}
 """
 
 
@@ -182,8 +187,14 @@ def _rates_table(report: Report) -> str:
         if cfg.latency_ns is not None:
             assumed += f", J = {_ns(cfg.latency_ns)}"
         rows.append(("config", cfg.config, f"stepgen's own clamp ({assumed})"))
+        why = "" if cfg.latency_safe is not None else "; ".join(cfg.notes)
         rows.append(
-            ("latency_safe", cfg.latency_safe, f"meets the drive under worst latency ({assumed})")
+            (
+                "latency_safe",
+                cfg.latency_safe,
+                f"meets the drive under worst latency ({assumed})"
+                + (f"; none: {why}" if why else ""),
+            )
         )
     body = "".join(
         f'<tr><td>{_e(k)}</td><td class="num">{_hz(v)}</td><td class="note">{_e(what)}</td></tr>'
@@ -192,11 +203,19 @@ def _rates_table(report: Report) -> str:
     return f'<table class="rates"><tr><th>max step rate</th><th>rate</th><th>meaning</th></tr>{body}</table>'
 
 
+def _verdict_lines(report: Report, require: Sequence[str]) -> list[str]:
+    """The verdict line (rules not checked and why) and the required rules not decided."""
+    out = [f'<p class="verdict-line">Verdict: {_e(claims.verdict_line(report))}</p>']
+    line = claims.requirement_line(report, require)
+    return out + ([f'<p class="required">{_e(line)}</p>'] if line else [])
+
+
 def html_section(
     report: Report,
     index: int,
     png: bytes | None,
     max_violations: int,
+    require: Sequence[str] = (),
 ) -> str:
     """The page's section of ``report``, the ``index``-th (from 1), with its figure ``png``."""
     cap = report.capture
@@ -212,6 +231,7 @@ def html_section(
         f"<h2>{_badge(report.verdict)} {_e(cap.path)}"
         + (f" — axis {_e(report.axis)}" if report.axis is not None else "")
         + "</h2>",
+        *_verdict_lines(report, require),
         "<dl>",
         f"<dt>drive</dt><dd>{_e(report.drive.id)} — {_e(report.drive.name)} "
         f"(steps on the {_e(report.active_edge)}{_e(edge_mark)} edge)</dd>",
@@ -257,6 +277,7 @@ def render_html(
     errors: Sequence[str] = (),
     title: str = "wavecheck report",
     pngs: Sequence[bytes | None] | None = None,
+    require: Sequence[str] = (),
 ) -> str:
     """The page for ``reports`` (one section each).
 
@@ -268,6 +289,7 @@ def render_html(
             overall verdict ``error``).
         title: the page title.
         pngs: figures already rendered (one per report; None entries are rendered here).
+        require: the rules ``--require`` asks to be decided.
     """
     given = list(pngs) if pngs is not None else [None] * len(reports)
     figures: list[bytes | None] = []
@@ -278,10 +300,10 @@ def render_html(
             png = render_png(r)
         figures.append(png if plots else None)
     sections = (
-        html_section(r, k, png, max_violations)
+        html_section(r, k, png, max_violations, require)
         for k, (r, png) in enumerate(zip(reports, figures, strict=True), 1)
     )
-    rows = [PageRow.of(r) for r in reports]
+    rows = [PageRow.of(r, require) for r in reports]
     return "".join(html_page(rows, sections, errors=errors, title=title))
 
 
@@ -291,21 +313,32 @@ class PageRow:
     section (so a page of many captures can be written section by section)."""
 
     path: str
+    axis: str | None
     drive: str
     verdict: str
     violations: int
     steps: int
+    not_checked: str = ""  # the rules not checked and why (:func:`claims.not_checked`)
+    required: str = ""  # the required rules not decided (:func:`claims.requirement_line`)
 
     @classmethod
-    def of(cls, report: Report) -> PageRow:
-        """The row of ``report``."""
+    def of(cls, report: Report, require: Sequence[str] = ()) -> PageRow:
+        """The row of ``report``; ``require``: the rules ``--require`` asks to be decided."""
         return cls(
             report.capture.path,
+            report.axis,
             report.drive.id,
             report.verdict,
             report.total_violations,
             report.steps.count,
+            claims.not_checked(report),
+            claims.requirement_line(report, require),
         )
+
+
+def _qualifier(row: PageRow) -> str:
+    """The rules not checked and why, beside a summary row's badge."""
+    return f' <span class="note">({_e(row.not_checked)})</span>' if row.not_checked else ""
 
 
 def html_page(
@@ -320,10 +353,12 @@ def html_page(
     verdict: str = overall_verdict([r.verdict for r in rows]) if rows else "unchecked"
     if errors:
         verdict = "error"
+    axes = any(r.axis is not None for r in rows)
     summary_rows = "".join(
-        f'<tr><td><a href="#capture-{k}">{_e(r.path)}</a></td><td>{_e(r.drive)}</td>'
-        f'<td>{_badge(r.verdict)}</td><td class="num">{r.violations:,}</td>'
-        f'<td class="num">{r.steps:,}</td></tr>'
+        f'<tr><td><a href="#capture-{k}">{_e(r.path)}</a></td>'
+        + (f"<td>{_e('' if r.axis is None else r.axis)}</td>" if axes else "")
+        + f"<td>{_e(r.drive)}</td><td>{_badge(r.verdict)}{_qualifier(r)}</td>"
+        f'<td class="num">{r.violations:,}</td><td class="num">{r.steps:,}</td></tr>'
         for k, r in enumerate(rows, 1)
     )
     error_rows = "".join(f"<li>{_e(e)}</li>" for e in errors)
@@ -337,9 +372,14 @@ def html_page(
         f'<p>Overall verdict: <span id="verdict" class="verdict v-{_e(verdict)}">'
         f"{_e(verdict.upper())}</span></p>",
     ]
+    for r in rows if len(rows) > 1 else ():  # one report: its section says it
+        if r.required:
+            where = r.path + (f" axis {r.axis}" if r.axis else "")
+            head.append(f'<p class="required">{_e(where)}: {_e(r.required)}</p>')
     if len(rows) > 1 or errors:
+        axis_head = "<th>axis</th>" if axes else ""
         head.append(
-            '<table class="summary"><tr><th>capture</th><th>drive</th><th>verdict</th>'
+            f'<table class="summary"><tr><th>capture</th>{axis_head}<th>drive</th><th>verdict</th>'
             f"<th>violations</th><th>steps</th></tr>{summary_rows}</table>"
         )
     if errors:

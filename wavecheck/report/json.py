@@ -2,7 +2,10 @@
 
 Top-level keys: ``capture``, ``drive``, ``steps``, ``rules``, ``violations`` (capped, worst first),
 ``violations_total`` (the uncapped count; added beside the design's keys so the cap is visible),
-``max_step_rate_hz``, ``verdict``. Times: ``*_ns`` in ns, ``*_s`` in s, rates in Hz. A value that
+``max_step_rate_hz``, ``verdict``; beside them what the verdict claims (:mod:`wavecheck.report.claims`):
+``verdict_line`` (``PASS (dir_setup, dir_hold not checked: no DIR channel)``), ``unchecked``
+(``[{why, rules}]``, as ``config``'s JSON), ``required`` (``{rules, unmet: [{rule, axis, verdict,
+why}]}``, ``--require``) and ``exit_code``. Times: ``*_ns`` in ns, ``*_s`` in s, rates in Hz. A value that
 does not exist (no interval measured, no limit) is ``null``.
 
 How sure each limit is: ``rules[].limit_status`` (datasheet, secondary, firmware-default, preset,
@@ -15,21 +18,24 @@ up to the cap is listed one by one (the text and HTML reports group identical on
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
-from wavecheck.engine.outcome import Report
+from wavecheck.engine.outcome import MachineReport, Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.verdicts import Violation
 from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
 from wavecheck.units import json_number
+from wavecheck.verdict import Unmet
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["DEFAULT_VIOLATION_CAP", "render_json", "report_dict"]
+__all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict", "required_dict"]
 
 DEFAULT_VIOLATION_CAP = 1000
 
@@ -77,7 +83,31 @@ def _violation(v: Violation) -> dict[str, Any]:
     return d
 
 
-def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> dict[str, Any]:
+def claims_dict(checked: Report | MachineReport, require: Sequence[str] = ()) -> dict[str, Any]:
+    """``verdict_line``, ``unchecked``, ``required`` and ``exit_code`` of a report or a run of
+    several axes (:mod:`wavecheck.report.claims`)."""
+    unchecked = claims.unchecked(checked)
+    return {
+        "verdict_line": claims.verdict_line(checked),
+        "unchecked": [{"why": why, "rules": list(rules)} for why, rules in unchecked.items()],
+        "required": required_dict(require, claims.unmet(checked, require)),
+        "exit_code": claims.exit_code(checked, require),
+    }
+
+
+def required_dict(require: Sequence[str], unmet: Sequence[Unmet]) -> dict[str, Any]:
+    """``{"rules": [...], "unmet": [{rule, axis, verdict, why}]}`` of ``--require``."""
+    return {
+        "rules": list(require),
+        "unmet": [
+            {"rule": u.rule, "axis": u.axis, "verdict": u.verdict, "why": u.why} for u in unmet
+        ],
+    }
+
+
+def report_dict(
+    report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP, require: Sequence[str] = ()
+) -> dict[str, Any]:
     """The report as plain JSON-ready data (see the module docstring for the keys)."""
     cap = report.capture
     mapped = {sig.channel: role for role, sig in report.interface.signals.items()}
@@ -148,6 +178,7 @@ def report_dict(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> d
             **_configured(rates.configured),
         },
         "verdict": report.verdict,
+        **claims_dict(report, require),
         **_firmware(report),
     }
 
@@ -172,6 +203,9 @@ def _configured(cfg: ConfigRates | None) -> dict[str, Any]:
     }
 
 
-def render_json(report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP) -> str:
+def render_json(
+    report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP, require: Sequence[str] = ()
+) -> str:
     """The JSON report as text (indented, ending in a newline)."""
-    return json.dumps(report_dict(report, violation_cap), indent=2, ensure_ascii=False) + "\n"
+    data = report_dict(report, violation_cap, require)
+    return json.dumps(data, indent=2, ensure_ascii=False) + "\n"

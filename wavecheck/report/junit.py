@@ -9,11 +9,16 @@ The layout is the one Jenkins, GitLab, GitHub Actions reporters and Azure read (
   names at dots do not take ``.vcd`` for a class), ``name`` the rule id.
 - A failing rule is a ``<failure type="fail">`` whose message is the worst violation (measured,
   limit, margin, time); the element's text lists the first few violations.
-- An unchecked rule (no interval of its kind in the capture) and a rule the drive states no limit
-  for are ``<skipped>``.
+- An unchecked rule (no interval of its kind in the capture, no channel for it: the message says
+  why) and a rule the drive states no limit for are ``<skipped>``.
 - **Indeterminate is a failure** (``type="indeterminate"``): the capture cannot show that the
   rule is met, and ``wavecheck check`` exits non-zero (3) for it; reporting it as skipped would
   show a green dashboard for a red job. The message says which sample rate would decide it.
+- A rule the run requires (``--require``) that is unchecked or indeterminate is a
+  ``<failure type="required">`` saying why (the command exits 4), also when the drive states no
+  figure for it or the step type has no such rule (a test case of its own).
+- The suite's properties carry ``verdict`` and ``verdict_line``, which names the rules not
+  checked and why (``PASS (dir_setup, dir_hold not checked: no DIR channel)``).
 - A capture that could not be read at all is one ``<testcase name="read">`` with an ``<error>``.
 """
 
@@ -27,9 +32,19 @@ from pathlib import PurePath
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.verdicts import Violation
+from wavecheck.report import claims
 from wavecheck.units import format_frequency, format_ns
+from wavecheck.verdict import Unmet
 
-__all__ = ["Suites", "Unreadable", "classname", "join_suites", "render_junit", "render_suites"]
+__all__ = [
+    "Suites",
+    "Unreadable",
+    "classname",
+    "join_suites",
+    "render_junit",
+    "render_suites",
+    "required_failure",
+]
 
 _LISTED = 10
 
@@ -63,8 +78,21 @@ def _describe(v: Violation) -> str:
     )
 
 
-def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
+def required_failure(case: ET.Element, u: Unmet) -> str:
+    """Mark ``case`` as a required rule that was not decided (``--require``)."""
+    ET.SubElement(
+        case,
+        "failure",
+        message=f"required but {u.said}: {u.why}",
+        type="required",
+    )
+    return "failure"
+
+
+def _testcase(suite: ET.Element, report: Report, r: RuleResult, why: str, u: Unmet | None) -> str:
     case = ET.SubElement(suite, "testcase", classname=_classname(report), name=r.rule, time="0")
+    if u is not None:
+        return required_failure(case, u)
     if r.verdict == "fail":
         worst = r.worst_violations(_LISTED)
         el = ET.SubElement(
@@ -90,7 +118,7 @@ def _testcase(suite: ET.Element, report: Report, r: RuleResult) -> str:
         )
         return "failure"
     if r.verdict == "unchecked":
-        ET.SubElement(case, "skipped", message=f"no {r.rule} interval in the capture")
+        ET.SubElement(case, "skipped", message=f"{r.rule} not checked: {why}")
         return "skipped"
     return "pass"
 
@@ -101,13 +129,16 @@ def _rate_properties(report: Report) -> list[tuple[str, str]]:
     return [(f"max_step_rate_hz.{k}", f"{float(v):.6g}") for k, v in named if v is not None]
 
 
-def _suite(root: ET.Element, report: Report) -> None:
+def _suite(root: ET.Element, report: Report, require: Sequence[str]) -> None:
     name = report.capture.path + (f" [axis {report.axis}]" if report.axis is not None else "")
     suite = ET.SubElement(root, "testsuite", name=name)
     props = ET.SubElement(suite, "properties")
+    unmet = {u.rule: u for u in claims.unmet(report, require)}
+    why = {s.rule: s.why for s in claims.rule_statuses(report)}
     for key, value in (
         ("drive", report.drive.id),
         ("verdict", report.verdict),
+        ("verdict_line", claims.verdict_line(report)),
         ("steps", str(report.steps.count)),
         ("step_type", str(report.step_type.number)),
         *_rate_properties(report),
@@ -115,11 +146,17 @@ def _suite(root: ET.Element, report: Report) -> None:
         ET.SubElement(props, "property", name=key, value=value)
     counts = {"failure": 0, "skipped": 0, "pass": 0}
     for r in report.rules:
-        counts[_testcase(suite, report, r)] += 1
+        counts[_testcase(suite, report, r, why[r.rule], unmet.pop(r.rule, None))] += 1
     for rule in report.not_stated:
         case = ET.SubElement(suite, "testcase", classname=_classname(report), name=rule, time="0")
+        if rule in unmet:
+            counts[required_failure(case, unmet.pop(rule))] += 1
+            continue
         ET.SubElement(case, "skipped", message=f"drive {report.drive.id} states no {rule} limit")
         counts["skipped"] += 1
+    for rule, u in unmet.items():  # required, but the step type has no such rule
+        case = ET.SubElement(suite, "testcase", classname=_classname(report), name=rule, time="0")
+        counts[required_failure(case, u)] += 1
     if report.verdict == "unchecked":
         # Nothing could be checked: the command exits 3, so the suite must not read as green.
         case = ET.SubElement(
@@ -149,10 +186,14 @@ def _error_suite(root: ET.Element, err: Unreadable) -> None:
 
 
 def render_junit(
-    reports: Sequence[Report], errors: Sequence[Unreadable] = (), name: str = "wavecheck"
+    reports: Sequence[Report],
+    errors: Sequence[Unreadable] = (),
+    name: str = "wavecheck",
+    require: Sequence[str] = (),
 ) -> str:
-    """The JUnit XML document for ``reports`` (and captures that could not be checked)."""
-    root = _root(reports, errors, name)
+    """The JUnit XML document for ``reports`` (and captures that could not be checked);
+    ``require``: the rules ``--require`` asks to be decided."""
+    root = _root(reports, errors, name, require)
     for key in _COUNTS:
         root.set(key, str(sum(int(s.get(key, "0")) for s in root)))
     root.set("time", "0")
@@ -160,10 +201,15 @@ def render_junit(
     return _DECLARATION + ET.tostring(root, encoding="unicode") + "\n"
 
 
-def _root(reports: Sequence[Report], errors: Sequence[Unreadable], name: str) -> ET.Element:
+def _root(
+    reports: Sequence[Report],
+    errors: Sequence[Unreadable],
+    name: str,
+    require: Sequence[str] = (),
+) -> ET.Element:
     root = ET.Element("testsuites", name=name)
     for report in reports:
-        _suite(root, report)
+        _suite(root, report, require)
     for err in errors:
         _error_suite(root, err)
     return root
@@ -183,9 +229,13 @@ class Suites:
     counts: tuple[int, int, int, int]
 
 
-def render_suites(reports: Sequence[Report] = (), errors: Sequence[Unreadable] = ()) -> Suites:
+def render_suites(
+    reports: Sequence[Report] = (),
+    errors: Sequence[Unreadable] = (),
+    require: Sequence[str] = (),
+) -> Suites:
     """:func:`render_junit`'s suites of ``reports`` and ``errors``, to be joined."""
-    root = _root(reports, errors, "")
+    root = _root(reports, errors, "", require)
     ET.indent(root)
     for suite in root:
         suite.tail = None

@@ -3,7 +3,8 @@
 The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and lists the axes::
 
     {"capture": {...}, "axes": [{"name", "drive", "map", "steps", "rules", "violations",
-     "violations_total", "max_step_rate_hz", "verdict"}, ...], "cross_axis": {...}, "verdict"}
+     "violations_total", "max_step_rate_hz", "verdict", "verdict_line", "unchecked"}, ...],
+     "cross_axis": {...}, "verdict", "verdict_line", "unchecked", "required", "exit_code"}
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
 Cross-axis facts: the step counts side by side and whether the axes' step edges lie on one common
@@ -13,21 +14,25 @@ periodic lattice (one base thread or timer: :func:`wavecheck.engine.run.common_t
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from wavecheck.engine.outcome import MachineReport
+from wavecheck.report.claims import requirement_line, verdict_line
 
 __all__ = ["machine_dict", "render_machine_text"]
 
 
-def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
+def machine_dict(
+    m: MachineReport, violation_cap: int, require: Sequence[str] = ()
+) -> dict[str, Any]:
     """The JSON-ready data of a several-axes run (keys in the module docstring)."""
-    from wavecheck.report.json import report_dict
+    from wavecheck.report.json import claims_dict, report_dict
 
     axes = []
     capture: dict[str, Any] = {}
     for r in m.axes:
-        d = report_dict(r, violation_cap)
+        d = report_dict(r, violation_cap, require)
         capture = capture or {
             k: v for k, v in d["capture"].items() if k not in ("mapping", "inverted")
         }
@@ -43,6 +48,8 @@ def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
                 "violations_total": d["violations_total"],
                 "max_step_rate_hz": d["max_step_rate_hz"],
                 "verdict": d["verdict"],
+                "verdict_line": d["verdict_line"],
+                "unchecked": d["unchecked"],
                 **({"firmware": d["firmware"]} if "firmware" in d else {}),  # check --firmware
             }
         )
@@ -65,10 +72,11 @@ def machine_dict(m: MachineReport, violation_cap: int) -> dict[str, Any]:
             "notes": list(m.notes),
         },
         "verdict": m.verdict,
+        **claims_dict(m, require),
     }
 
 
-def render_machine_text(m: MachineReport, max_violations: int) -> str:
+def render_machine_text(m: MachineReport, max_violations: int, require: Sequence[str] = ()) -> str:
     """A summary of every axis side by side, then each axis's own text report."""
     from wavecheck.report.text import render_text
 
@@ -88,12 +96,13 @@ def render_machine_text(m: MachineReport, max_violations: int) -> str:
         )
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     out = [
-        f"verdict: {m.verdict.upper()} ({len(m.axes)} axes)",
+        f"verdict: {verdict_line(m)}",
+        *[line for line in [requirement_line(m, require)] if line],
         f"capture: {cap.path}",
         "",
         *("  ".join(x.ljust(w) for x, w in zip(row, widths, strict=True)).rstrip() for row in rows),
     ]
     out += [f"note: {n}" for n in m.notes]
     for r in m.axes:
-        out += ["", f"== axis {r.axis} ==", render_text(r, max_violations).rstrip("\n")]
+        out += ["", f"== axis {r.axis} ==", render_text(r, max_violations, require).rstrip("\n")]
     return "\n".join(out) + "\n"

@@ -18,15 +18,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from wavecheck.engine.interface import StepInterface
+from wavecheck.engine.results import StepCounts
 from wavecheck.engine.trace import StepTrace
 from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
+from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["draw_motion", "render_measure_png"]
+__all__ = ["draw_motion", "position_unknown", "render_measure_png"]
 
 
 #: Reversals marked at most per panel.
@@ -41,13 +44,28 @@ def _style(ax: Axes) -> None:
     ax.tick_params(labelsize=8)
 
 
+def position_unknown(step_type: StepType, interface: StepInterface, steps: StepCounts) -> str:
+    """Why no step's direction is known ("no DIR": a step/dir axis without a DIR channel), or ""
+    when some are known (the position is then drawn, steps of unknown direction counting 0)."""
+    if step_type.kind == "step-dir" and interface.get("dir") is None:
+        return "no DIR"
+    return "direction unknown" if steps.count and steps.unknown == steps.count else ""
+
+
 def draw_motion(
-    ax_pos: Axes, ax_rate: Axes, trace: StepTrace, timebase: Timebase, title: str
+    ax_pos: Axes,
+    ax_rate: Axes,
+    trace: StepTrace,
+    timebase: Timebase,
+    title: str,
+    unknown: str = "",
 ) -> None:
     """Position and step rate of an axis's steps against time (s) on two axes, reversals marked,
     from its step trace (:mod:`wavecheck.engine.trace`): every step when it holds them all, else
     the position through each bucket's first and last step over the range it reached and each
-    bucket's fastest and slowest step (the titles then say "thinned")."""
+    bucket's fastest and slowest step (the titles then say "thinned"). ``unknown``: why no
+    step's direction is known (:func:`position_unknown`); the position panel then says so
+    instead of drawing a flat line at 0."""
     from matplotlib.collections import PolyCollection
 
     def sec(ticks: npt.NDArray[np.int64]) -> Any:
@@ -55,7 +73,7 @@ def draw_motion(
 
     start, low, high = trace.envelope()
     bucket = format_ns(trace.width * timebase.tick_ns)
-    if trace.thinned:
+    if trace.thinned and not unknown:
         x0, width = sec(start), float(trace.width * timebase.tick_ns) / 1e9
         boxes = [
             [(a, lo), (a + width, lo), (a + width, hi), (a, hi)]
@@ -63,7 +81,14 @@ def draw_motion(
         ]
         ax_pos.add_collection(PolyCollection(boxes, facecolors=_LINE, alpha=0.2, lw=0))
     t, p = trace.position_points()
-    ax_pos.plot(sec(t), p, drawstyle="steps-post", color=_LINE, lw=1)
+    if unknown:
+        ax_pos.text(0.5, 0.5, f"{unknown}: position unknown", transform=ax_pos.transAxes,
+                    ha="center", va="center", fontsize=11, color=_MARK)  # fmt: skip
+        ax_pos.set_yticks([])
+        if len(t) > 1:  # the steps' time span, as the rate panel beside it
+            ax_pos.set_xlim(float(sec(t)[0]), float(sec(t)[-1]))
+    else:
+        ax_pos.plot(sec(t), p, drawstyle="steps-post", color=_LINE, lw=1)
     t, gap = trace.rate_points()
     rate = float(timebase.samplerate_hz) / gap
     ms = 2 if len(rate) > 1000 else 5
@@ -77,10 +102,16 @@ def draw_motion(
     extra = f" (first {MAX_MARKS} marked)" if trace.reversals > MAX_MARKS else ""
     thin = " — thinned" if trace.thinned else ""
     ax_pos.set_title(
-        f"{title}: position, {trace.reversals} reversal(s){extra}{thin}", fontsize=9, loc="left"
+        f"{title}: position unknown ({unknown})"
+        if unknown
+        else f"{title}: position, {trace.reversals} reversal(s){extra}{thin}",
+        fontsize=9,
+        loc="left",
     )
     ax_pos.set_xlabel(
-        f"time (s); {len(p):,} points of {trace.count:,} steps, range per {bucket} shaded"
+        f"time (s); {trace.count:,} steps, none of known direction"
+        if unknown
+        else f"time (s); {len(p):,} points of {trace.count:,} steps, range per {bucket} shaded"
         if trace.thinned
         else f"time (s); every one of {trace.count:,} steps",
         fontsize=8.5,
@@ -138,8 +169,8 @@ def _draw_histogram(ax: Axes, s: IntervalStats, distribution: tuple[Any, Any], t
     _style(ax)
 
 
-def render_measure_png(m: Measurement, dpi: int = 110) -> bytes:
-    """The measurement's figure as PNG bytes."""
+def render_measure_png(m: Measurement, dpi: int = 110, fmt: str = "png") -> bytes:
+    """The measurement's figure as PNG bytes (``fmt``: ``jpg``, ``svg``, ``pdf`` instead)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -156,7 +187,10 @@ def render_measure_png(m: Measurement, dpi: int = 110) -> bytes:
     tb = m.capture.timebase
     for k, a in enumerate(m.axes):
         name = "axis" if a.name is None else f"axis {a.name}"
-        draw_motion(fig.add_subplot(grid[k, 0]), fig.add_subplot(grid[k, 1]), a.trace, tb, name)
+        unknown = position_unknown(a.step_type, a.interface, a.steps)
+        draw_motion(
+            fig.add_subplot(grid[k, 0]), fig.add_subplot(grid[k, 1]), a.trace, tb, name, unknown
+        )
     several = len(m.axes) > 1
     for k, (a, s) in enumerate(hists):
         row, col = divmod(k, 2)
@@ -164,5 +198,5 @@ def render_measure_png(m: Measurement, dpi: int = 110) -> bytes:
         ax = fig.add_subplot(grid[len(m.axes) + row, span])
         _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format=fmt)
     return buf.getvalue()

@@ -28,6 +28,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import textwrap
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
@@ -37,7 +38,8 @@ import numpy.typing as npt
 
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
-from wavecheck.output import atomic_write
+from wavecheck.output import atomic_write, figure_format
+from wavecheck.report.claims import not_checked
 from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
@@ -437,9 +439,11 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
     fig = Figure(figsize=(11, sum(heights) + 1.0), dpi=dpi, layout="constrained")
     verdict = report.verdict.upper()
     vcolor = {"FAIL": _FAIL_COLOR, "PASS": _PASS_COLOR}.get(verdict, _INDET_COLOR)
+    said = not_checked(report)  # "dir_setup, dir_hold not checked: no DIR channel; …"
     fig.suptitle(
         f"{verdict} — {os.path.basename(report.capture.path)} vs {report.drive.id} "
-        f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)",
+        f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)"
+        + "".join(f"\n{line}" for line in textwrap.wrap(f"({said})" if said else "", 110)),
         fontsize=12,
         color=vcolor,
         fontweight="bold",
@@ -449,12 +453,13 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
         ax = fig.add_subplot(grid[k, :])
         _draw_place(ax, report, place, k + 1)
     if motion:
-        from wavecheck.report.measurement_plot import draw_motion
+        from wavecheck.report.measurement_plot import draw_motion, position_unknown
 
         pair = grid[len(places), :].subgridspec(1, 2)
         ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
         assert report.trace is not None
-        draw_motion(ax_pos, ax_rate, report.trace, report.capture.timebase, "steps")
+        unknown = position_unknown(report.step_type, report.interface, report.steps)
+        draw_motion(ax_pos, ax_rate, report.trace, report.capture.timebase, "steps", unknown)
     for k, r in enumerate(hist_rules):
         row, col = divmod(k, hist_cols)
         span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col
@@ -467,13 +472,17 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
     return fig
 
 
-def render_png(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> bytes:
-    """The report's figure (:func:`figure`) as PNG bytes."""
+def render_png(
+    report: Report, max_places: int = MAX_PLACES, dpi: int = 110, fmt: str = "png"
+) -> bytes:
+    """The report's figure (:func:`figure`) as PNG bytes (``fmt``: another format matplotlib
+    writes, ``jpg``, ``svg``, ``pdf``: :data:`wavecheck.output.FIGURE_FORMATS`)."""
     buf = io.BytesIO()
-    figure(report, max_places, dpi).savefig(buf, format="png")
+    figure(report, max_places, dpi).savefig(buf, format=fmt)
     return buf.getvalue()
 
 
 def write_plot(report: Report, path: str | os.PathLike[str], max_places: int = MAX_PLACES) -> None:
-    """Render the report's figure and write it to ``path`` atomically."""
-    atomic_write(path, render_png(report, max_places))
+    """Render the report's figure in the format ``path``'s extension says and write it there
+    atomically."""
+    atomic_write(path, render_png(report, max_places, fmt=figure_format(path)))

@@ -7,6 +7,7 @@ A limit whose figure is uncertain or a firmware default carries its mark (``100 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, cast
 
@@ -14,6 +15,7 @@ from wavecheck.drives.model import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.report.assumptions import assumptions
+from wavecheck.report.claims import requirement_line, verdict_line
 from wavecheck.report.groups import ViolationGroup, group_violations
 from wavecheck.rules import rule
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
@@ -113,11 +115,16 @@ def _table(rows: list[list[str]]) -> list[str]:
     ]
 
 
-def render_text(report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS) -> str:
-    """The human report; ``max_violations`` worst violations are listed, the rest counted."""
+def render_text(
+    report: Report, max_violations: int = DEFAULT_TEXT_VIOLATIONS, require: Sequence[str] = ()
+) -> str:
+    """The human report; ``max_violations`` worst violations are listed, the rest counted. The
+    verdict line names the rules not checked and why; with ``require`` (``--require``) the next
+    line says which required rules were not decided."""
     cap = report.capture
     drive = report.drive
-    out: list[str] = [f"verdict: {report.verdict.upper()}"]
+    out: list[str] = [f"verdict: {verdict_line(report)}"]
+    out += [line for line in [requirement_line(report, require)] if line]
     res = "exact" if report.resolution_ns == 0 else f"T = {_ns(report.resolution_ns)}"
     rate = f"{format_frequency(cap.samplerate_hz)}, " if cap.samplerate_hz else ""
     out.append(

@@ -107,6 +107,17 @@ def test_dir_hold_knob_fails_the_test_during_the_run(tmp_path: Path) -> None:
     assert _sim_stop_ns(case) == 41_000 < END_NS
 
 
+def test_a_required_rule_not_checked_fails_the_test(tmp_path: Path) -> None:
+    case = run(tmp_path, "requires_enable_setup", {})
+    failure = case.find("failure")
+    assert failure is not None, ET.tostring(case)
+    assert failure.get("type") == "RequirementError"
+    assert (failure.get("message") or "").endswith(
+        "required but not decided: enable_setup not checked: no ENABLE channel"
+    )
+    assert _sim_stop_ns(case) == END_NS  # at finish(), after the whole run
+
+
 # -- the monitor's report = wavecheck.check on the simulator's dump ---------------------------
 CASES = {
     "bad-hold-x-mid-run": {"DIR_HOLD_NS": 400, "XZ_AT_NS": 63_500, "XZ_NS": 1000},

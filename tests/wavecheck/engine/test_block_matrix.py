@@ -45,6 +45,8 @@ SAMPLES: dict[str, list[tuple[str, list[str]]]] = {
     "--active-edge": [(G202, ["--active-edge", "both"]), (G202, ["--active-edge", "rising"])],
     "--limit": [(G202, ["--limit", "dir_hold=5us"])],
     "--margin": [(G202, ["--margin", "2x"])],
+    "--require": [(G202, ["--require", "all"]),
+                  (UPDOWN, ["--type", "1", "--require", "enable_setup"])],
     "--firmware": [(G202, ["--firmware", str(LINUXCNC / "Gecko_540B3.ini")])],
     "--axis": [(G202, ["--firmware", str(LINUXCNC / "Gecko_540B3.ini"), "--axis", "y"])],
     "--firmware-axis": [
@@ -86,9 +88,9 @@ SAMPLES: dict[str, list[tuple[str, list[str]]]] = {
     "--steps-per-unit": [(G202, ["--steps-csv", "{tmp}/s.csv", "--steps-per-unit", "80"])],
 }  # fmt: skip
 #: check-only options (measure has no drive, no stepgen configuration, no several captures).
-CHECK_ONLY = {"--drive", "--limit", "--margin", "--format", "--max-violations", "--gtkw", "-j",
-              "--ini", "--hal", "--channel", "--base-period", "--steplen", "--stepspace",
-              "--dirsetup", "--dirhold", "--latency", "--pulseview"}  # fmt: skip
+CHECK_ONLY = {"--drive", "--limit", "--margin", "--require", "--format", "--max-violations",
+              "--gtkw", "-j", "--ini", "--hal", "--channel", "--base-period", "--steplen",
+              "--stepspace", "--dirsetup", "--dirhold", "--latency", "--pulseview"}  # fmt: skip
 
 
 def _options(command: str) -> set[str]:
@@ -154,6 +156,6 @@ def test_one_block_or_many(
         _raw(tmp_path)
     results = [_run(command, capture, args, b, tmp_path, capsys) for b in BLOCKS]
     first = results[0]
-    assert first[0] in (0, 1, 3), first  # a usable sample: not a usage error
+    assert first[0] in (0, 1, 3, 4), first  # a usable sample: not a usage error (2)
     for block, got in zip(BLOCKS[1:], results[1:], strict=True):
         assert got == first, f"{command} {option} differs at {block}"

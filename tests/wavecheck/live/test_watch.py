@@ -99,6 +99,19 @@ def test_watch_reports_the_figures_of_a_file_capture_of_the_same_pattern(tmp_pat
         assert logic(a) == logic(b)
 
 
+def test_require_ends_the_watch_with_exit_4_and_why(tmp_path: Path) -> None:
+    """``--require`` as ``check``'s (issue 26): every DRV8825 rule is decided on the demo's
+    pattern; enable_setup, which the DRV8825 states no figure for, is not."""
+    live = _wavecheck("watch", *DEMO, *CHECK, "--time", "200ms", "--require", "all",
+                      "--require", "enable_setup", cwd=tmp_path)  # fmt: skip
+    assert live.returncode == 4, live.stderr
+    no_figure = "enable_setup not checked: drive drv8825 states no figure"
+    assert live.stdout.splitlines()[:2] == [
+        f"verdict: PASS ({no_figure})",
+        f"required but not decided: {no_figure}",
+    ]
+
+
 def test_ctrl_c_ends_with_the_complete_report_of_what_arrived(tmp_path: Path) -> None:
     proc = _start("--format", "json", cwd=tmp_path)
     _first_status(proc)

@@ -97,3 +97,21 @@ def test_pytest_plugin_shows_the_rates(pytester: pytest.Pytester, latency: str |
     xml = (pytester.path / "out.xml").read_text()
     assert 'name="max_step_rate_hz.config" value="31250' in xml
     assert ('name="max_step_rate_hz.latency_safe"' in xml) == (latency is not None)
+
+
+def test_every_output_says_why_latency_safe_is_missing() -> None:
+    """Issue 26: ``check --ini … --latency`` against a drive without a DIR hold figure left
+    ``latency_safe`` empty; every report says why and how to give the figure."""
+    cfg = LinuxCNCConfig(base_period_ns=16_000, params={"dirhold": 32_000})
+    r = run_check(open_capture(GOOD), "leadshine-dm542", stepgen=cfg, latency_ns=11_000).report
+    assert r.rates.latency_safe is None and r.rates.config is not None
+    why = "latency_safe not computed: drive leadshine-dm542"
+    how = "--limit dir_hold=T"
+    text = render_text(r)
+    assert any(line.startswith(f"note: {why}") and how in line for line in text.splitlines())
+    notes = report_dict(r)["max_step_rate_hz"]["config_notes"]
+    assert any(n.startswith(why) and how in n for n in notes)
+    page = etree.HTML(render_html([r], plots=False))
+    row = page.xpath('//table[@class="rates"]/tr[td[1]="latency_safe"]')[0]
+    meaning = "".join(row.xpath("td[3]//text()"))
+    assert why in meaning and how in meaning and "gives no dir_hold figure" in meaning

@@ -55,14 +55,10 @@ def _chromium() -> str:
     return exe
 
 
-@pytest.mark.browser
-def test_chromium_renders_verdict_and_rule_table(failing_report: Report, tmp_path: Path) -> None:
-    exe = _chromium()
-    page = tmp_path / "report.html"
-    write_html([failing_report], page)
-    profile = tmp_path / "profile"
+def _dump_dom(page: Path, profile: Path) -> str:
+    """The DOM headless chromium builds of ``page`` (after parsing and layout)."""
     cmd = [
-        exe,
+        _chromium(),
         "--headless",
         "--no-sandbox",
         "--disable-gpu",
@@ -76,8 +72,41 @@ def test_chromium_renders_verdict_and_rule_table(failing_report: Report, tmp_pat
         page.as_uri(),
     ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
-    dom = out.stdout
     assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+@pytest.mark.browser
+def test_several_axes_summary_has_an_axis_column(tmp_path: Path) -> None:
+    """Issue 26: two axes of one capture were two identical summary rows. Each row names its
+    axis, and each section's verdict line says what was not checked."""
+    from wavecheck.cli import main
+
+    capture = Path(__file__).resolve().parents[3] / "captures" / "examples" / "two-axis.vcd"
+    page = tmp_path / "axes.html"
+    main(["check", str(capture), "--drive", "gecko-g202", "--map", "x.step=x_step,x.dir=x_dir",
+          "--map", "y.step=y_step", "--html", str(page)])  # fmt: skip
+    dom = _dump_dom(page, tmp_path / "profile")
+    table = re.search(r'<table class="summary">(.*?)</table>', dom, re.S)
+    assert table is not None
+    head = re.findall(r"<th>(\w+)</th>", table.group(1))
+    assert head == ["capture", "axis", "drive", "verdict", "violations", "steps"]
+    rows = re.findall(r"</a></td><td>(\w+)</td><td>gecko-g202</td>", table.group(1))
+    assert rows == ["x", "y"]
+    assert "dir_setup, dir_hold not checked: no DIR channel" in table.group(1)  # y's row only
+    lines = re.findall(r'<p class="verdict-line">Verdict: ([^<]*)</p>', dom)
+    assert lines == [
+        "FAIL (enable_setup not checked: drive gecko-g202 states no figure)",
+        "PASS (dir_setup, dir_hold not checked: no DIR channel; "
+        "enable_setup not checked: drive gecko-g202 states no figure)",
+    ]
+
+
+@pytest.mark.browser
+def test_chromium_renders_verdict_and_rule_table(failing_report: Report, tmp_path: Path) -> None:
+    page = tmp_path / "report.html"
+    write_html([failing_report], page)
+    dom = _dump_dom(page, tmp_path / "profile")
     # the DOM after parsing and layout: the verdict element, the rule table, the image
     assert re.search(r'<span id="verdict" class="verdict v-fail">FAIL</span>', dom), dom[:2000]
     table = re.search(r'<table class="rules">(.*?)</table>', dom, re.S)

@@ -48,6 +48,7 @@ def test_json_keys_and_values() -> None:
         "violations_total",
         "max_step_rate_hz",
         "verdict",
+        *("verdict_line", "unchecked", "required", "exit_code"),  # issue 26: what it claims
     }
     assert {"path", "format", "resolution_ns", "duration_s", "channels"} <= set(data["capture"])
     assert {"id", "name", "source"} <= set(data["drive"])
