@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from stepgen.model import StepgenConfig, run_reference
 from stepgen.motion import Motion
+from stepgen.reference import StepgenConfig, run_reference
 from stepgen.simulate import simulate
 from stepgen.vcdout import write_vcd
 

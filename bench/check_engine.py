@@ -14,7 +14,7 @@ import numpy as np
 
 from wavecheck.api import check
 from wavecheck.capture.edges import Capture, Channel
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.timebase import Timebase
 
 

@@ -365,8 +365,8 @@ def gen_stepgen_sr(path: Path, *, seconds: float) -> dict[str, object]:
     """A ``.sr`` from stepgen (25 µs base period, no latency: 40 kHz), position mode following
     15·sin(t) units at 1000 steps/unit, 20 kHz at most: ~9600 steps a second, DIR reversing every
     π s (the cross-check's input: ~575 k steps a minute)."""
-    from stepgen.model import StepgenConfig
     from stepgen.motion import Motion
+    from stepgen.reference import StepgenConfig
     from stepgen.simulate import simulate
     from stepgen.vcdout import write_sr as write_trace_sr
 
@@ -386,8 +386,8 @@ def gen_stepgen_sr(path: Path, *, seconds: float) -> dict[str, object]:
 
 def gen_stepgen_vcd(path: Path) -> dict[str, object]:
     """Issue 25's capture (module docstring) and its truth."""
-    from stepgen.model import StepgenConfig
     from stepgen.motion import Motion, parse_moves
+    from stepgen.reference import StepgenConfig
     from stepgen.simulate import n_periods_for, simulate
     from stepgen.vcdout import write_vcd
 

@@ -20,9 +20,9 @@ from unittest import mock
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from stepgen import fast  # noqa: E402
-from stepgen.latency import parse_latency  # noqa: E402
-from stepgen.model import StepgenConfig, update_schedule  # noqa: E402
+from stepgen.lateness import parse_latency  # noqa: E402
 from stepgen.motion import Motion, parse_command_csv  # noqa: E402
+from stepgen.reference import StepgenConfig, update_schedule  # noqa: E402
 from stepgen.simulate import trace_from_run  # noqa: E402
 from stepgen.vcdout import write_vcd  # noqa: E402
 

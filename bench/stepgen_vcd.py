@@ -20,8 +20,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from stepgen.model import StepgenConfig  # noqa: E402
 from stepgen.motion import Motion  # noqa: E402
+from stepgen.reference import StepgenConfig  # noqa: E402
 from stepgen.simulate import simulate  # noqa: E402
 from stepgen.vcdout import write_vcd  # noqa: E402
 from wavecheck.capture.vcd import writer  # noqa: E402

@@ -14,12 +14,12 @@ Between two update-freq calls the base thread's behaviour is deterministic. In t
   and the phase state moves by ±1 at each step.
 
 Every other servo period ("exact chunk": a reversal, a hold, a timer interaction at the start,
-the first steps) is run through the reference make-pulses of :mod:`stepgen.model`, one period
+the first steps) is run through the reference make-pulses of :mod:`stepgen.reference`, one period
 at a time, with the timers made concrete first. The timers of the fast chunks are kept lazily:
 only the last step's invocation is needed, and only when an exact chunk follows.
 
 ``tests/stepgen/test_fast.py`` checks with hypothesis that this engine and
-:func:`stepgen.model.run_reference` give identical toggles, counts and final state.
+:func:`stepgen.reference.run_reference` give identical toggles, counts and final state.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from stepgen.model import (
+from stepgen.reference import (
     ONE_STEP,
     PICKOFF,
     Channel,
@@ -88,7 +88,7 @@ def run_fast(
     commands: Sequence[float] | np.ndarray,
     n_periods: int,
 ) -> InvocationRun:
-    """Same contract and result as :func:`stepgen.model.run_reference`, much faster.
+    """Same contract and result as :func:`stepgen.reference.run_reference`, much faster.
 
     Pass 1 keeps the channel state in local variables. Until update-freq has settled (the first
     one or two calls re-round the timing params, §3) it calls the reference update-freq; after

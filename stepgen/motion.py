@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stepgen.model import PICKOFF, Component, StepgenConfig, make_pulses_channel
+from stepgen.reference import PICKOFF, Component, StepgenConfig, make_pulses_channel
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.units import parse_option
 

@@ -5,7 +5,7 @@ Every plant has the same two-call interface, matching LinuxCNC's servo thread (p
 (``stepgen.capture-position`` / the encoder read), and :meth:`advance` applies pid's output for
 one servo period (``stepgen.update-freq`` then make-pulses in the base thread / the amplifier).
 
-- :class:`StepgenPlant`: LinuxCNC's software stepgen (:mod:`stepgen.model`, the reference
+- :class:`StepgenPlant`: LinuxCNC's software stepgen (:mod:`stepgen.reference`, the reference
   per-period model) in velocity mode; pid's output is ``velocity-cmd`` (units/s), the feedback
   is ``position-fb`` (with the DDS fraction, stepgen reference §5). It records the output pins
   and ``counts`` of every base period, so the run becomes an ordinary trace (VCD, latency).
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stepgen.model import (
+from stepgen.reference import (
     Channel,
     Component,
     InvocationRun,
@@ -78,7 +78,7 @@ class Plant:
 class StepgenPlant(Plant):
     """LinuxCNC's software stepgen in velocity mode, one servo period per :meth:`advance`.
 
-    Thread order as :func:`stepgen.model.update_schedule`: pulses-first runs make-pulses 0
+    Thread order as :func:`stepgen.reference.update_schedule`: pulses-first runs make-pulses 0
     before the first capture; every :meth:`advance` runs update-freq then n make-pulses.
     ``record``: keep each base period's output bits and counts (:meth:`invocation_run`).
     """

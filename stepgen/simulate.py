@@ -1,7 +1,7 @@
 """The Python API: run the stepgen model under a latency model and get edges in ns.
 
 >>> from stepgen.simulate import simulate
->>> from stepgen.model import StepgenConfig
+>>> from stepgen.reference import StepgenConfig
 >>> from stepgen.motion import Motion
 >>> cfg = StepgenConfig(base_period_ns=100_000, servo_period_ns=100_000, position_scale=32000,
 ...                     maxvel=0.15, maxaccel=2)
@@ -22,18 +22,18 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stepgen.fast import run_fast
-from stepgen.latency import (
+from stepgen.lateness import (
     LatencyModel,
     catchup_for,
     invocation_clock,
     parse_latency,
 )
-from stepgen.model import InvocationRun, StepgenConfig, run_reference, update_schedule
 from stepgen.motion import Motion
+from stepgen.reference import InvocationRun, StepgenConfig, run_reference, update_schedule
 from wavecheck.errors import ConfigError
 
 if TYPE_CHECKING:
-    from wavecheck.drives.model import ActiveEdge
+    from wavecheck.drives.datasheet import ActiveEdge
 
 __all__ = ["Trace", "n_periods_for", "simulate", "trace_from_run"]
 
@@ -94,7 +94,7 @@ def trace_from_run(
     n_periods: int | None = None,
 ) -> Trace:
     """A :class:`Trace` of ``run``'s first ``n_periods`` base periods (default all), each
-    invocation timed by ``latency`` (:func:`~stepgen.latency.invocation_clock`; catch-up time
+    invocation timed by ``latency`` (:func:`~stepgen.lateness.invocation_clock`; catch-up time
     ``catchup_ns``): the edges and ``counts`` changes in ns, the end of the span, the run's
     warnings as notes. The one place a per-period run becomes edge times."""
     n = run.n_periods if n_periods is None else n_periods
@@ -147,8 +147,8 @@ def simulate(
         n_periods: base-thread invocations to run (>= 1).
         seed: for the random latency models.
         active_edge: the drive's active STEP edge (worst-case dir_setup/step_period events).
-        catchup_ns: run time G of an invocation (see :mod:`stepgen.latency`); None: 1 µs,
-            or P − J under ``worst:J:RULE`` when that is shorter (:func:`~stepgen.latency.catchup_for`).
+        catchup_ns: run time G of an invocation (see :mod:`stepgen.lateness`); None: 1 µs,
+            or P − J under ``worst:J:RULE`` when that is shorter (:func:`~stepgen.lateness.catchup_for`).
         engine: ``"fast"`` or ``"reference"`` (the plain per-period loop; same result, slower).
 
     Raises:

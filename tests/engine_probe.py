@@ -18,14 +18,14 @@ import numpy as np
 
 from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import ActiveEdge, Drive
 from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import Report
-from wavecheck.engine.plan import AxisPlan
 from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import check_source
 from wavecheck.engine.sinks import StepCollector, StepSink

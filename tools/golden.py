@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from stepgen.cli.simulate import build_config, build_motion, register
-from stepgen.latency import parse_latency
+from stepgen.lateness import parse_latency
 from stepgen.simulate import Trace, n_periods_for, simulate
 from stepgen.vcdout import write_vcd
 from wavecheck.units import time_ns

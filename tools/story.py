@@ -8,7 +8,7 @@ the seed states are data, in ``tools/seed_numbers.toml`` (``--numbers`` names an
 Each configuration is simulated with the faithful LinuxCNC stepgen model (:mod:`stepgen.simulate`)
 once per rule under ``worst:J:RULE`` — the invocations that end that rule's intervals run on time,
 all others ``J`` late, so every interval is ``n·P − J`` — and every trace is checked edge by edge
-against the drive by the validator (:func:`wavecheck.engine.plan.run_check`). A rule's figure is the
+against the drive by the validator (:func:`wavecheck.engine.resolve.run_check`). A rule's figure is the
 shortest interval over all those runs; a configuration passes when no run fails any rule.
 
 The motion (:func:`reversal_motion`): velocity mode, servo thread = base thread, reversals at the
@@ -33,15 +33,15 @@ from typing import Any
 
 import numpy as np
 
-from stepgen.latency import RULES as WORST_RULES
-from stepgen.model import StepgenConfig
+from stepgen.lateness import RULES as WORST_RULES
 from stepgen.motion import Motion
 from stepgen.plan import PARAMS, Plan, min_base_period_ns, plan
+from stepgen.reference import StepgenConfig
 from stepgen.simulate import Trace, simulate
 from wavecheck.api import check as check_report
 from wavecheck.capture.edges import Capture, Channel
+from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import list_drives, load_drive
-from wavecheck.drives.model import Drive
 from wavecheck.engine.outcome import Report
 from wavecheck.rules import applicable
 from wavecheck.timebase import Timebase

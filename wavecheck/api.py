@@ -18,7 +18,7 @@ from fractions import Fraction
 
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.mapping import AxisMap, axes_from_tables
 from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, DEFAULT_KEEP, CheckOptions
 from wavecheck.engine.outcome import MachineReport, Report

@@ -47,7 +47,7 @@ from wavecheck.api import build_options, require_met
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
-from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.outcome import MachineReport, Report
 from wavecheck.engine.results import RuleResult

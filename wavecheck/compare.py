@@ -36,12 +36,12 @@ from typing import Literal
 import numpy as np
 
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.model import Drive
+from wavecheck.drives.datasheet import Drive
 from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.plan import AxisPlan
+from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.run import check_capture
 from wavecheck.engine.sinks import StepCollector, StepSink
 from wavecheck.errors import UsageError

@@ -25,11 +25,11 @@ import numpy as np
 
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture, EdgeArray
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.plan import AxisPlan
 from wavecheck.engine.primitives import Intervals
+from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.results import StepCounts
 from wavecheck.engine.run import start
 from wavecheck.engine.sinks import StepSink

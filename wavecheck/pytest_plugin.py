@@ -681,7 +681,7 @@ def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
     """The rules a check against ``drive_ref`` will evaluate, known without reading the capture."""
     from wavecheck.drives.library import load_drive
     from wavecheck.engine.intervals import planned_rules
-    from wavecheck.engine.plan import default_step_type
+    from wavecheck.engine.resolve import default_step_type
     from wavecheck.steptypes import step_type
 
     drive = load_drive(drive_ref)

@@ -17,7 +17,7 @@ from wavecheck.errors import ConfigError
 
 if TYPE_CHECKING:  # the readers are imported only when files are given
     from wavecheck.linuxcnc.config import LinuxCNCConfig
-    from wavecheck.linuxcnc.pid import PidConfig
+    from wavecheck.linuxcnc.pid_settings import PidConfig
 
 __all__ = ["add_simulate_arguments", "apply_to_simulate_args"]
 
@@ -117,7 +117,7 @@ def _apply_pid(args: Any, cfg: LinuxCNCConfig) -> PidConfig | None:
     given on the command line wins) and drop the stepgen parser's "net … velocity-cmd ignored"
     line for the net pid's output drives (the closed loop honours it). Without ``--pid``: a
     note when the files close a loop around the channel."""
-    from wavecheck.linuxcnc.pid import read_pid_config
+    from wavecheck.linuxcnc.pid_settings import read_pid_config
 
     hal = list(args.hal or [])
     kwargs: dict[str, Any] = {

@@ -6,7 +6,7 @@
 ``--limit`` gives a figure the drive's file lacks or overrides one (a drive without a DIR hold
 figure, such as the Leadshine DM542, is planned with ``--limit dir_hold=5us`` from its manual or
 a measurement), and ``--margin`` tightens every figure, as for ``wavecheck check`` and ``config``
-(:mod:`wavecheck.drives.tune`).
+(:mod:`wavecheck.drives.overrides`).
 
 Times carry their unit (``11us``, ``15500ns``); a bare number other than 0 is refused with the
 fix spelled out (README "Numbers and units"). A base period below 1 us is refused and a latency
@@ -189,7 +189,7 @@ def parse_latency_arg(text: str, cyclictest_unit: str = "us") -> tuple[Fraction,
 def run(args: argparse.Namespace) -> int:
     """Run ``stepgen plan``; returns 0 (errors raise a WavecheckError, exit 2)."""
     from wavecheck.drives.library import load_drive
-    from wavecheck.drives.tune import tune_drive
+    from wavecheck.drives.overrides import tune_drive
 
     if args.channel < 0 or args.channel > 15:
         raise UsageError(f"--channel {args.channel}: stepgen has channels 0..15")

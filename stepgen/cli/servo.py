@@ -23,9 +23,8 @@ from typing import Any
 import numpy as np
 
 from stepgen.cli.tune import add_pid_arguments, add_servo_arguments, pid_gains, servo_params
-from stepgen.latency import catchup_for, parse_latency
+from stepgen.lateness import catchup_for, parse_latency
 from stepgen.loop import LoopResult, ferror_check, run_loop, step_metrics
-from stepgen.model import StepgenConfig
 from stepgen.motion import Motion
 from stepgen.pid import PidGains
 from stepgen.plant import (
@@ -35,6 +34,7 @@ from stepgen.plant import (
     StepgenPlant,
     quadrature_edges,
 )
+from stepgen.reference import StepgenConfig
 from stepgen.simulate import Trace, trace_from_run
 from stepgen.vcdout import write_sr, write_vcd
 from wavecheck.capture.srzip import write_sr_edges

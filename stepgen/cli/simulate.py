@@ -30,9 +30,9 @@ import numpy as np
 
 from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
 from stepgen.cli.servo import add_servo_loop_arguments, run_servo_loop
-from stepgen.latency import DEFAULT_CATCHUP_NS, parse_latency
-from stepgen.model import StepgenConfig, update_schedule
+from stepgen.lateness import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
+from stepgen.reference import StepgenConfig, update_schedule
 from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
 from wavecheck.errors import ConfigError, UnitError

@@ -19,9 +19,9 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from stepgen.model import StepgenConfig
 from stepgen.pid import PidGains
 from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
+from stepgen.reference import StepgenConfig
 from stepgen.tune import Stage, TuneResult, feedforward_comparison, hal_lines, ini_lines, tune
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import atomic_path, atomic_write, figure_file, figure_format, output_file

@@ -33,7 +33,7 @@ LAZY = (
     "wavecheck.firmware.capture",
     "wavecheck.lattice",
     "wavecheck.live.watch",
-    "wavecheck.live.sigrok",
+    "wavecheck.live.acquisition",
     "wavecheck.live.record",
     "cocotb",
     "wavecheck.report.html",

@@ -136,8 +136,8 @@ def test_injected_short_pulse(tmp_path: Path) -> None:
     from dataclasses import replace
     from fractions import Fraction
 
+    from wavecheck.drives.datasheet import Figure
     from wavecheck.drives.library import load_drive
-    from wavecheck.drives.model import Figure
 
     src = GOLDEN / "stepgen0.vcd"
     g202 = load_drive("gecko-g202")

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from stepgen.model import StepgenConfig
+from stepgen.reference import StepgenConfig
 from tests.reliability.helpers import assert_no_output, cli
 from wavecheck.errors import ConfigError
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from stepgen.model import InvocationRun
+from stepgen.reference import InvocationRun
 
 
 def levels(run: InvocationRun, pin: str) -> np.ndarray:

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from stepgen.fast import run_fast
-from stepgen.model import StepgenConfig, run_reference
+from stepgen.reference import StepgenConfig, run_reference
 from tests.stepgen.helpers import levels
 
 BASE = 25_000

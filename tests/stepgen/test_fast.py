@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from stepgen import fast
 from stepgen.fast import run_fast
-from stepgen.model import InvocationRun, StepgenConfig, run_reference
+from stepgen.reference import InvocationRun, StepgenConfig, run_reference
 
 
 def assert_same(a: InvocationRun, b: InvocationRun) -> None:

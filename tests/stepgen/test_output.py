@@ -122,8 +122,8 @@ def test_golden_set_is_small() -> None:
 
 def test_simulation_and_vcd_writing_report_progress(tmp_path: Path) -> None:
     """A long run reports its progress through wavecheck.progress (the CLI draws the bar)."""
-    from stepgen.model import StepgenConfig
     from stepgen.motion import Motion
+    from stepgen.reference import StepgenConfig
     from stepgen.simulate import simulate as run_sim
     from stepgen.vcdout import write_vcd as write
     from wavecheck.progress import _ACTIVE

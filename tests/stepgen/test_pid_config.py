@@ -17,7 +17,7 @@ from stepgen.cli import main
 from tests.stepgen.pncconf_pid import HAL, INI, line_of, write_pair
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.config import read_config
-from wavecheck.linuxcnc.pid import read_pid_config
+from wavecheck.linuxcnc.pid_settings import read_pid_config
 
 FW = Path("/work/shared/firmware/linuxcnc")
 

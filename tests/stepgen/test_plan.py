@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from stepgen.plan import PARAMS, latency_guidance, min_base_period_ns, plan, simple_base_period_ns
 from stepgen.plan_render import plan_to_dict
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.timing import evaluate, periods_needed, step_rate_hz
 

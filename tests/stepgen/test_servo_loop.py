@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from stepgen.loop import ferror_check, oscillation, run_loop, step_metrics
-from stepgen.model import StepgenConfig
 from stepgen.motion import Motion, parse_moves
 from stepgen.pid import PidGains
 from stepgen.plant import ServoParams, ServoPlant, StepgenPlant, quadrature_edges
+from stepgen.reference import StepgenConfig
 from stepgen.tune import find_ultimate_gain, tune
 
 T_NS = 1_000_000

@@ -20,8 +20,8 @@ import pytest
 
 import wavecheck
 from stepgen.cli import main
-from stepgen.model import StepgenConfig, run_reference, update_schedule
 from stepgen.motion import worst_motion
+from stepgen.reference import StepgenConfig, run_reference, update_schedule
 from stepgen.simulate import simulate
 from tests.wavecheck.waves import drive
 from wavecheck.linuxcnc.timing import evaluate

@@ -14,7 +14,7 @@ from tests.conftest import write_vcd
 from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.tune import tune_drive
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.primitives import Intervals

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from wavecheck.capture.edges import Capture, Channel
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.timebase import Timebase
 
 

@@ -484,8 +484,6 @@ def open_source(
         )
         if raw is not None:
             return raw
-    from wavecheck.capture.blocks import MemorySource
-
     whole = open_capture(
         path,
         samplerate=samplerate,
@@ -494,7 +492,7 @@ def open_source(
         require_time=require_time,
         channel_names=channel_names,
     )
-    return MemorySource(whole)
+    return _one_block(whole)
 
 
 def _stream_source(
@@ -509,8 +507,6 @@ def _stream_source(
     """The block source of standard input or a pipe: a VCD or timed raw samples read block by
     block from the stream (never held whole); any other format read whole
     (:func:`_read_stream`), one block."""
-    from wavecheck.capture.blocks import MemorySource
-
     if sniffed.kind == "vcd" and ":" not in sniffed.fmt:
         from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
         from wavecheck.capture.vcd.reader import VcdBlocks
@@ -544,7 +540,7 @@ def _stream_source(
             raise
         if raw is not None:
             return raw
-    return MemorySource(
+    return _one_block(
         _read_stream(
             sniffed,
             samplerate=samplerate,
@@ -553,3 +549,14 @@ def _stream_source(
             channel_names=channel_names,
         )
     )
+
+
+def _one_block(whole: Capture) -> BlockSource:
+    """A capture its reader gives only whole, as one block; its notes say so, once."""
+    from wavecheck.capture.blocks import MemorySource
+
+    whole.notes.append(
+        f"read whole, then checked as one block ({whole.format} is not read block by block): "
+        "memory follows the capture's length"
+    )
+    return MemorySource(whole)

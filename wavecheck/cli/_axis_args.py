@@ -15,7 +15,7 @@ from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.model import Drive
+from wavecheck.drives.datasheet import Drive
 from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert, split_per_axis
 from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, CheckOptions
 from wavecheck.errors import UsageError
@@ -40,7 +40,7 @@ class AxisRun:
     Attributes:
         name: the axis name (None: the unnamed single axis).
         roles: role → channel as written (``--map``, or inferred); roles left out are mapped by
-            channel name (:func:`wavecheck.engine.plan.auto_map`).
+            channel name (:func:`wavecheck.engine.resolve.auto_map`).
         invert: roles to invert (``--invert`` for this axis, then those found with the roles).
         step_type: LinuxCNC step type 0–15, None: the drive's (check) or the default (measure).
         forward_level: the DIR level that means forward (0 low, 1 high).

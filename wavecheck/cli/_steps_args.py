@@ -13,7 +13,7 @@ from typing import Any
 
 from wavecheck.capture.blocks import BlockSource
 from wavecheck.engine.mapping import split_per_axis
-from wavecheck.engine.plan import AxisPlan
+from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.sinks import StepSink
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file

@@ -23,9 +23,9 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
+from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import Drive
-from wavecheck.drives.tune import tune_drive
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.errors import UsageError
 from wavecheck.firmware import FIRMWARES, read_firmware
 from wavecheck.firmware.guarantee import FirmwareConfig
@@ -55,7 +55,7 @@ __all__ = [
 
 def add_limit_arguments(p: argparse.ArgumentParser) -> None:
     """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``: the drive's figures as
-    the user changes them (:func:`wavecheck.drives.tune.tune_drive`; ``stepgen plan`` too)."""
+    the user changes them (:func:`wavecheck.drives.overrides.tune_drive`; ``stepgen plan`` too)."""
     p.add_argument(
         "--limit",
         action="append",

@@ -7,8 +7,8 @@ import json
 from fractions import Fraction
 from typing import Any
 
+from wavecheck.drives.datasheet import MARK_LEGEND, TIME_RULES, Drive, Figure
 from wavecheck.drives.library import list_drives, load_drive
-from wavecheck.drives.model import MARK_LEGEND, TIME_RULES, Drive, Figure
 from wavecheck.rules import PLAN_RULES
 from wavecheck.units import format_frequency, format_time
 

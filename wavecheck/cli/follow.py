@@ -27,7 +27,7 @@ from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.engine.decode import StepEvents, decode
 from wavecheck.engine.interface import build_interface, find_channel, parse_map
-from wavecheck.engine.plan import auto_map
+from wavecheck.engine.resolve import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,

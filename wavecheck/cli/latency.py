@@ -69,14 +69,14 @@ def register(sub: Any) -> None:
 
 def channel_roles(capture: Capture, args: argparse.Namespace) -> tuple[list[str], dict[str, str]]:
     """Every channel the axes of ``args`` map (as ``check`` maps them: the engine's planning,
-    :func:`wavecheck.engine.run.axes_for` and :func:`wavecheck.engine.plan.plan_axes`; ENABLE
+    :func:`wavecheck.engine.run.axes_for` and :func:`wavecheck.engine.resolve.plan_axes`; ENABLE
     left out), and role → channel of the first axis (the roles the worst-case patterns are told
     by).
 
     Raises:
         UsageError: no step channel found, or the axis options do not fit the capture.
     """
-    from wavecheck.engine.plan import plan_axes
+    from wavecheck.engine.resolve import plan_axes
     from wavecheck.engine.run import axes_for
 
     options = check_options(args, with_drive=False)

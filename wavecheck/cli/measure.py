@@ -3,7 +3,7 @@
 Per axis: steps, reversals, and for every interval kind of the step type the count, min, max,
 mean, percentiles and where the extremes are, plus the step-rate range
 (:mod:`wavecheck.measurement`; the intervals are ``check``'s). Text or ``--format json``
-(:mod:`wavecheck.report.measurement`), ``--plot``/``--html`` with position, step rate and histograms,
+(:mod:`wavecheck.report.measured`), ``--plot``/``--html`` with position, step rate and histograms,
 ``--steps-csv`` with every step. Exit 0, or 2 for unusable input (nothing is judged).
 
 ``--firmware FILE`` (issue 15) compares each axis's measured minima with the configuration that
@@ -26,7 +26,7 @@ from wavecheck.cli.config import add_firmware_arguments, check_firmware
 from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import QUIET_HELP, activate
-from wavecheck.report.measurement import measurement_dict, render_measure_text
+from wavecheck.report.measured import measurement_dict, render_measure_text
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 if TYPE_CHECKING:
@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(text)
     png = None
     if args.plot or args.html:
-        from wavecheck.report.measurement_plot import render_measure_png
+        from wavecheck.report.measured_plot import render_measure_png
 
         png = render_measure_png(m)
     if args.plot:
@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
         assert png is not None
         atomic_write(args.plot, png if fmt == "png" else render_measure_png(m, fmt=fmt))
     if args.html:
-        from wavecheck.report.measurement import write_measure_html
+        from wavecheck.report.measured import write_measure_html
 
         write_measure_html(m, args.html, png)
     return EXIT_FAIL if any(fc.verdict == "fail" for fc in own) else EXIT_PASS

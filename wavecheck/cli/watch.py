@@ -1,6 +1,6 @@
 """``wavecheck watch --driver DRIVER --drive ID --map …``: check a running machine live.
 
-sigrok-cli is started on the logic analyzer (``wavecheck.live.sigrok``), its raw samples are
+sigrok-cli is started on the logic analyzer (``wavecheck.live.acquisition``), its raw samples are
 checked as they arrive (``wavecheck.live.watch``), a status line shows the figures so far, and
 the end (``--time``, Ctrl-C, ``--stop-on-fail``) prints the same report as ``check`` with the same
 exit codes. A failed acquisition (no device, sigrok-cli dying or stopping early) still prints the
@@ -197,9 +197,14 @@ def run(args: argparse.Namespace) -> int:
     # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
     from wavecheck.capture.binary import SampleBlocks
     from wavecheck.capture.srzip import sr_metadata
+    from wavecheck.live.acquisition import (
+        Acquisition,
+        acquisition_command,
+        probe_device,
+        sigrok_cli,
+    )
     from wavecheck.live.learn import RoleLearner
     from wavecheck.live.record import CHECKPOINT_SECONDS, SrRecorder
-    from wavecheck.live.sigrok import Acquisition, acquisition_command, probe_device, sigrok_cli
     from wavecheck.live.snippets import SampleRing, Snippets, replay_arguments
     from wavecheck.live.watch import Watch
 

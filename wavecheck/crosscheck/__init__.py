@@ -5,8 +5,8 @@ its output), :mod:`.model` (the result and the comparison). The CLI is
 :mod:`wavecheck.cli.crosscheck`.
 """
 
-from wavecheck.crosscheck.model import CrosscheckResult
-from wavecheck.crosscheck.run import crosscheck
+from wavecheck.crosscheck.comparison import CrosscheckResult
+from wavecheck.crosscheck.decoders import crosscheck
 from wavecheck.crosscheck.sigrok import pick_downsample
 
 __all__ = ["CrosscheckResult", "crosscheck", "pick_downsample"]

@@ -26,7 +26,7 @@ import numpy as np
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.capture.sigrokcli import SAMPLERATE_OPTION_FORMATS, convert, run_sigrok, show
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.units import SI_TIME
 

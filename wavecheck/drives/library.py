@@ -20,7 +20,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any, get_args
 
-from wavecheck.drives.model import TIME_RULES, ActiveEdge, Drive, Figure, Interface, Status
+from wavecheck.drives.datasheet import TIME_RULES, ActiveEdge, Drive, Figure, Interface, Status
 from wavecheck.errors import RuleError, UnitError
 from wavecheck.units import parse_quantity
 

@@ -46,9 +46,9 @@ from wavecheck.engine.decode import (
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.intervals import rule_intervals, split_unknown
 from wavecheck.engine.outcome import Report
-from wavecheck.engine.plan import AxisPlan, ambiguous_note
 from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.engine.rates import rates_from
+from wavecheck.engine.resolve import AxisPlan, ambiguous_note
 from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.sinks import IntervalSink, StepSink
 from wavecheck.engine.trace import StepTrace

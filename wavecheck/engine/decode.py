@@ -34,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.errors import UsageError
 from wavecheck.steptypes import StepType, step_type

@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.drives.model import ActiveEdge, Drive, Figure
+from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
 from wavecheck.engine.decode import (
     StepEvents,
     active_edges,

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TypeVar
 
-from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig

@@ -16,7 +16,7 @@ from fractions import Fraction
 from typing import Protocol
 
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.rates import MaxStepRates
 from wavecheck.engine.results import RuleResult, StepCounts

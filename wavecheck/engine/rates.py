@@ -27,7 +27,7 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.drives.model import ActiveEdge, Drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.primitives import Intervals, widths

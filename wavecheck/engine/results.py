@@ -21,7 +21,7 @@ from fractions import Fraction
 import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.drives.model import Figure
+from wavecheck.drives.datasheet import Figure
 from wavecheck.engine.verdicts import (
     FAIL,
     INDETERMINATE,

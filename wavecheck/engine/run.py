@@ -4,7 +4,7 @@
 (the options' mapping; else channels named after their roles; else the roles told from the
 waveforms of the first :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges, which are
 then checked like the rest), plans each axis on the source's skeleton
-(:mod:`wavecheck.engine.plan`), feeds every block to every axis (:mod:`wavecheck.engine.axis`) and
+(:mod:`wavecheck.engine.resolve`), feeds every block to every axis (:mod:`wavecheck.engine.axis`) and
 returns a :class:`~wavecheck.engine.outcome.MachineReport`. A capture already in memory is a
 source of one block (:func:`check_capture`). With several axes, a note says whether their steps lie
 on one common periodic lattice (one thread or timer makes them), judged on the first
@@ -27,7 +27,7 @@ from wavecheck.engine.interface import leaf_name
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport
-from wavecheck.engine.plan import LEVEL_EDGES, AxisPlan, plan_axes, settle_level, with_found
+from wavecheck.engine.resolve import LEVEL_EDGES, AxisPlan, plan_axes, settle_level, with_found
 from wavecheck.engine.sinks import IntervalSink, StepSink, TimerSample
 from wavecheck.errors import UsageError
 from wavecheck.units import format_time
@@ -276,7 +276,7 @@ def start(
     Without a mapping or role names, the roles are told from the waveforms of the first
     :attr:`~wavecheck.engine.options.CheckOptions.infer_edges` edges (every channel read); an
     axis whose pulse level is not stated takes the one its pulse lines show
-    (:func:`wavecheck.engine.plan.settle_level`) in their first edges. The blocks read for
+    (:func:`wavecheck.engine.resolve.settle_level`) in their first edges. The blocks read for
     either come first among the blocks returned. What is decided from a first part depends on
     the capture's edges only, never on how its reader cuts it into blocks."""
     skeleton = source.skeleton

@@ -1,6 +1,6 @@
 """A step trace kept as the engine runs: position and step rate over time in bounded memory.
 
-The motion panel (:func:`wavecheck.report.measurement_plot.draw_motion`) draws position and step
+The motion panel (:func:`wavecheck.report.measured_plot.draw_motion`) draws position and step
 rate from it, not from every step. The engine keeps, per axis, a :class:`StepTrace` (a step
 sink, :mod:`wavecheck.engine.sinks`): at most :data:`MAX_BUCKETS` time buckets of equal width (ticks) from the first
 step on. When a step falls past the last bucket, neighbouring buckets merge pairwise (the width

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.rates import pulse_level
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed

@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
 from wavecheck.rules import Rule, applicable
 from wavecheck.units import format_ns

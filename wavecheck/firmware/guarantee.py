@@ -21,7 +21,7 @@ from fractions import Fraction
 from functools import cached_property
 from typing import Literal
 
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.errors import ConfigError
 
 __all__ = [

@@ -11,7 +11,7 @@ so the shortest, a STEP pulse of one period (steplen ≥ 1 period), lasts P − 
 makes a pulse while J < P: the largest lateness it can show and still produce steps is just
 under one period, P − G, G being how long one invocation runs (the next cannot start before it
 ends). From J = P on, an invocation runs after the next was due and the thread catches up G
-apart (stepgen/latency.py). Lateness 0 … P − G is read; lateness of a period or more only where
+apart (stepgen/lateness.py). Lateness 0 … P − G is read; lateness of a period or more only where
 the wire shows it (two write times in one period: a catch-up run), as a lower bound.
 
 How (all times integer ticks, P exact):

@@ -19,7 +19,7 @@ What a file says that a model of one stepgen channel cannot honour (a ``net`` dr
 command or ``enable`` pin, an unknown ``stepgen.N.*`` name) is listed in
 :attr:`LinuxCNCConfig.ignored`, one line each naming the file and line.
 
-The joint's ``pid`` settings: :mod:`wavecheck.linuxcnc.pid`; INI and HAL syntax:
+The joint's ``pid`` settings: :mod:`wavecheck.linuxcnc.pid_settings`; INI and HAL syntax:
 :mod:`wavecheck.linuxcnc.files`.
 
 One parser serves ``wavecheck check`` (the ``config`` and ``latency_safe`` max step rates) and
@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.drives.model import Drive
+from wavecheck.drives.datasheet import Drive
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.files import (
     HalLine,
@@ -466,7 +466,7 @@ def config_rates(
 
     Args:
         cfg: the configuration (needs BASE_PERIOD).
-        drive: a :class:`~wavecheck.drives.model.Drive`.
+        drive: a :class:`~wavecheck.drives.datasheet.Drive`.
         latency_ns: worst latency ``J`` in ns; without it ``latency_safe`` is None.
         step_inverted: the STEP pin is inverted between stepgen and the drive (moves the active
             edge to the start of stepgen's pulse; see :mod:`wavecheck.linuxcnc.timing`).

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Literal
 
-from wavecheck.drives.model import Drive
+from wavecheck.drives.datasheet import Drive
 from wavecheck.errors import ConfigError
 from wavecheck.rules import PLAN_RULES, rate_rule, width_rule
 

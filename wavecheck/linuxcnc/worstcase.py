@@ -1,6 +1,6 @@
 """LinuxCNC's worst case for one timing rule: which make-pulses invocations run on time.
 
-``stepgen simulate --latency worst:J:RULE`` (:mod:`stepgen.latency`) runs every invocation J late
+``stepgen simulate --latency worst:J:RULE`` (:mod:`stepgen.lateness`) runs every invocation J late
 except those that make an *end* event of RULE's intervals, so that each interval lasts n·P − J
 (the Stepper Tuning chapter's reasoning, ``stepgen-linuxcnc.md`` §9). ``wavecheck latency``
 (:mod:`wavecheck.lattice`) reads such a capture back by recognising that the on-time edges are

@@ -33,7 +33,7 @@ from wavecheck.engine.mapping import per_axis
 from wavecheck.errors import UsageError
 
 if TYPE_CHECKING:
-    from wavecheck.engine.plan import AxisPlan
+    from wavecheck.engine.resolve import AxisPlan
 
 __all__ = ["SampleRing", "Snippets", "replay_arguments", "stored_arguments"]
 

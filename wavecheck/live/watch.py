@@ -17,8 +17,8 @@ sample that arrived; nothing is bridged over a gap.
 Nothing waits without a bound: with ``--time T`` the watch ends by ``T`` + :data:`START_GRACE`
 seconds of wall-clock time whatever sigrok-cli does (short of the samples: a failure); an
 acquisition asked to stop is killed (its process group) when it has not ended
-:data:`~wavecheck.live.sigrok.STOP_GRACE` seconds later; and a sigrok-cli that has exited while
-a child of it keeps the pipe open is ended :data:`~wavecheck.live.sigrok.EXIT_GRACE` seconds
+:data:`~wavecheck.live.acquisition.STOP_GRACE` seconds later; and a sigrok-cli that has exited while
+a child of it keeps the pipe open is ended :data:`~wavecheck.live.acquisition.EXIT_GRACE` seconds
 after the last data.
 """
 
@@ -36,9 +36,9 @@ from wavecheck.engine.outcome import MachineReport
 from wavecheck.engine.run import MachineCheck
 from wavecheck.errors import DeviceError
 from wavecheck.live import START_GRACE
+from wavecheck.live.acquisition import EXIT_GRACE, STOP_GRACE, Acquisition
 from wavecheck.live.learn import RoleLearner
 from wavecheck.live.record import SrRecorder
-from wavecheck.live.sigrok import EXIT_GRACE, STOP_GRACE, Acquisition
 from wavecheck.live.snippets import Snippets
 from wavecheck.units import format_ns, format_time
 

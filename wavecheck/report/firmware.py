@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
-from wavecheck.drives.model import Figure
+from wavecheck.drives.datasheet import Figure
 from wavecheck.firmware.capture import FirmwareCheck
 from wavecheck.firmware.evaluate import ConfigResult, PairRow
 from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed

@@ -25,7 +25,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from wavecheck.drives.model import MARK_LEGEND
+from wavecheck.drives.datasheet import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.output import atomic_write
 from wavecheck.report import claims

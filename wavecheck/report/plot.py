@@ -453,7 +453,7 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
         ax = fig.add_subplot(grid[k, :])
         _draw_place(ax, report, place, k + 1)
     if motion:
-        from wavecheck.report.measurement_plot import draw_motion, position_unknown
+        from wavecheck.report.measured_plot import draw_motion, position_unknown
 
         pair = grid[len(places), :].subgridspec(1, 2)
         ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])

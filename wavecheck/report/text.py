@@ -1,7 +1,7 @@
 """The text report: verdict, what was checked, a rule table, worst violations, max step rates.
 
 A limit whose figure is uncertain or a firmware default carries its mark (``100 ns?``, see
-:data:`~wavecheck.drives.model.STATUS_MARKS`); identical violations are grouped on one line
+:data:`~wavecheck.drives.datasheet.STATUS_MARKS`); identical violations are grouped on one line
 (:mod:`wavecheck.report.groups`); the assumptions the check made close the report as notes.
 """
 
@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, cast
 
-from wavecheck.drives.model import MARK_LEGEND
+from wavecheck.drives.datasheet import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.report.assumptions import assumptions

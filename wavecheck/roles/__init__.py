@@ -11,7 +11,7 @@ contradicts. The rules:
   ``--map``; what the waveforms say against it goes into its notes.
 - **STEP**: a step train: many pulses at one level with nearly constant width, no longer than
   the gaps, at a rate that changes as a motor's does (:mod:`wavecheck.roles.features`,
-  :mod:`wavecheck.roles.rates`). A clock (one period, about 50 % duty, no pause) and PWM (one
+  :mod:`wavecheck.roles.periodic`). A clock (one period, about 50 % duty, no pause) and PWM (one
   period, varying width) never are; pulses at one period without a pause, bursts at one rate
   without speeding up or slowing down, and coded pulses (periods that jump between neighbours)
   are a STEP only when named so. Serial lines (UART, SWO) never are: their intervals are whole

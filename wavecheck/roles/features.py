@@ -1,6 +1,6 @@
 """What one channel's edges look like on their own: unchanging, a serial line, a pulse train (a
 step train, a clock, PWM, periodic pulses, bursts at one rate, coded pulses: their rates are
-told apart in :mod:`wavecheck.roles.rates`), or other.
+told apart in :mod:`wavecheck.roles.periodic`), or other.
 
 Everything here is vectorised over a channel's edge array (a few ``numpy`` passes, no Python loop
 per edge), so a channel of ten million edges costs a few hundred milliseconds.
@@ -28,7 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
-from wavecheck.roles.rates import Timing, timing
+from wavecheck.roles.periodic import Timing, timing
 from wavecheck.units import format_frequency, format_time
 
 __all__ = ["BY_NAME_ONLY", "KIND_WORDS", "ChannelLook", "Pulses", "look_at", "pulses_of"]

@@ -6,7 +6,7 @@ wavecheck goes through :func:`open_check`, which returns a :class:`Check`:
 - its :class:`Plan`: the step type, the roles of the decoder's channels, inversions, the active
   edge and every rule of the rule table (:mod:`wavecheck.rules`) that applies, with the drive
   library's limit (:func:`wavecheck.drives.library.load_drive`, ``--limit``/``--margin`` applied
-  by :func:`wavecheck.drives.tune.tune_drive`) and the engine's exact pass/fail thresholds in
+  by :func:`wavecheck.drives.overrides.tune_drive`) and the engine's exact pass/fail thresholds in
   samples — the same drive, rules and thresholds ``wavecheck check`` uses;
 - the engine (:class:`wavecheck.engine.run.MachineCheck`, fed
   :class:`~wavecheck.capture.blocks.EdgeBlock` s of the edges the decoder collects), whose figures
@@ -30,15 +30,15 @@ import numpy as np
 
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import Capture, Channel
+from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import ActiveEdge, Drive
-from wavecheck.drives.tune import tune_drive
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine.interface import build_interface, role_name
 from wavecheck.engine.intervals import figure_of
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.plan import default_step_type
 from wavecheck.engine.rates import pulse_level as level_at_drive
+from wavecheck.engine.resolve import default_step_type
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import MachineCheck, machine_for
 from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS

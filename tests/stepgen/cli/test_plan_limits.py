@@ -2,7 +2,7 @@
 figure (Leadshine DM542, StepperOnline DM542T; the TB6600 gives no DIR figure at all) were
 refused with no way to plan them; the refusal now says how to give the figure, and
 ``--limit``/``--margin`` change the figures as for ``wavecheck check`` and ``config``
-(:mod:`wavecheck.drives.tune`)."""
+(:mod:`wavecheck.drives.overrides`)."""
 
 from __future__ import annotations
 

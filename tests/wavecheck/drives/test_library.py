@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import list_drives, load_drive, rules_dir
-from wavecheck.drives.model import Drive
 from wavecheck.errors import RuleError
 
 RULE_FILES = sorted(rules_dir().glob("*.toml"))

@@ -18,7 +18,7 @@ import numpy as np
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from tests.wavecheck.engine.test_stream_oracle import _drive, captures
+from tests.wavecheck.engine.test_block_oracle import _drive, captures
 from wavecheck.capture.blocks import MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.engine.mapping import AxisMap

@@ -1,4 +1,4 @@
-"""Captures with a known lateness for the lattice tests: stepgen model runs (stepgen/latency.py's
+"""Captures with a known lateness for the lattice tests: stepgen model runs (stepgen/lateness.py's
 models), seen by an analyzer at a sample rate (an edge at the first sample at or after it)."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from stepgen.model import StepgenConfig
 from stepgen.motion import Motion, parse_moves
+from stepgen.reference import StepgenConfig
 from stepgen.simulate import Trace, simulate
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.timebase import Timebase

@@ -1,7 +1,7 @@
 """wavecheck.lattice: the base-thread lattice read back from stepgen captures (issues 17, 25).
 
 Documented facts checked: every edge software stepgen makes lies at k·P + l_k (l_k ≥ 0, the
-invocation's lateness, shared by every pin it changes; stepgen/latency.py); P is recovered
+invocation's lateness, shared by every pin it changes; stepgen/lateness.py); P is recovered
 exactly, the worst lateness never below the true one and within a sample of it, the spike times
 found, under every latency model, from VCD and .sr at several sample rates; LinuxCNC's worst
 case (worst:J:RULE) read as J, not P − J, where the capture can tell, and both readings given
@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stepgen.model import StepgenConfig
 from stepgen.motion import Motion, parse_moves
+from stepgen.reference import StepgenConfig
 from stepgen.simulate import Trace, simulate
 from stepgen.vcdout import write_vcd
 from tests.wavecheck.lattice.captures import capture, roles, run, true_lateness

@@ -2,7 +2,7 @@
 latency at 10 … 95 % of P × 3 seeds × two sample rates, each capture a short stepgen run with
 ramps, cruises at the maximum step rate and reversals (tests/wavecheck/lattice_captures.py).
 
-Facts checked (stepgen reference §2.1, stepgen/latency.py): every pin a make-pulses invocation
+Facts checked (stepgen reference §2.1, stepgen/lateness.py): every pin a make-pulses invocation
 changes changes at its one moment k·P + l_k, l_k ≥ 0; the model's worst case runs the end events
 of RULE's intervals on time and every other invocation J late. Required: a lattice at exactly P,
 and a maximum lateness never below the true one (the bound: measured + one sample) and within a

@@ -139,7 +139,7 @@ def test_read_ini_keeps_duplicates(tmp_path: Path) -> None:
 def test_config_rate_of_a_phase_type_has_no_stepspace(files: tuple[Path, Path]) -> None:
     # DESIGN "Maximum achievable step rate": config is stepgen's own clamp. For step types ≥ 2
     # stepgen has no stepspace (the reference: "For types ≥ 2 stepspace is 0 → 1e9 / steplen_ns";
-    # stepgen/model.py does the same), so channel 2 (type 2, default steplen 1 ns → one 16 µs
+    # stepgen/reference.py does the same), so channel 2 (type 2, default steplen 1 ns → one 16 µs
     # period) steps at up to 62,500/s, not 31,250/s; latency_safe is not the step/dir plan's.
     ini, hal = files
     cfg = read_config(ini, hal, channel=2)

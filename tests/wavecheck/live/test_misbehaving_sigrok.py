@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from wavecheck.live import START_GRACE
-from wavecheck.live.sigrok import EXIT_GRACE, PROBE_TIMEOUT, STOP_GRACE
+from wavecheck.live.acquisition import EXIT_GRACE, PROBE_TIMEOUT, STOP_GRACE
 
 REPO = Path(__file__).resolve().parents[3]
 #: Seconds a run may take beyond its bound on a loaded machine (Python start-up included).

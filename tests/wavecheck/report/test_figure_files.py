@@ -145,7 +145,7 @@ def test_measure_says_it_too(grbl_sr: Path) -> None:
     from wavecheck.capture.open import open_source
     from wavecheck.engine.mapping import AxisMap
     from wavecheck.measurement import measure
-    from wavecheck.report.measurement_plot import draw_motion, position_unknown
+    from wavecheck.report.measured_plot import draw_motion, position_unknown
 
     m = measure(open_source(grbl_sr), build_options({}, (AxisMap(None, {"step": "1"}),)))
     (a,) = m.axes

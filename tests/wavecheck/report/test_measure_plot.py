@@ -7,7 +7,7 @@ from fractions import Fraction
 import numpy as np
 
 from wavecheck.engine.trace import StepTrace
-from wavecheck.report.measurement_plot import draw_motion
+from wavecheck.report.measured_plot import draw_motion
 from wavecheck.timebase import Timebase
 
 

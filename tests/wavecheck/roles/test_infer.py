@@ -39,7 +39,7 @@ _RAMP = (3.7, 1.55, 1.2)
 def _move(t0: int, n: int, period: int = 100 * US) -> list[int]:
     """Pulse starts of one move of ``n`` steps after ``t0``: it speeds up over three steps and
     slows down over three (periods 3.7, 1.55, 1.2 × ``period``), as a motor does; a train at one
-    rate is no step train to the waveform (:mod:`wavecheck.roles.rates`)."""
+    rate is no step train to the waveform (:mod:`wavecheck.roles.periodic`)."""
     factors = [_RAMP[min(k, n - 1 - k)] if min(k, n - 1 - k) < 3 else 1.0 for k in range(n)]
     return [t0 + int(x) for x in np.cumsum(factors) * period]
 

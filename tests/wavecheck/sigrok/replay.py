@@ -17,7 +17,7 @@ import numpy as np
 
 from tests.engine_probe import decoded, every_interval, run_check
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.model import Drive
+from wavecheck.drives.datasheet import Drive
 from wavecheck.sigrok.adapter import CHANNEL_ROLES, MEASURED, Plan, open_check
 from wavecheck.sigrok.judge import INTERVAL, SEQUENCE, STEP, Judge
 

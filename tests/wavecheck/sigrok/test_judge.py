@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 from tests.wavecheck import waves
 from tests.wavecheck.sigrok.replay import engine_view, replay
 from wavecheck.capture.open import open_capture
+from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import Drive
 from wavecheck.errors import UsageError
 from wavecheck.rules import RULES
 from wavecheck.sigrok.adapter import FAIL, INDETERMINATE, MEASURED, PASS, open_check

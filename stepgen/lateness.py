@@ -46,14 +46,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stepgen.model import InvocationRun
+from stepgen.reference import InvocationRun
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.steptypes import kind_of
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
 if TYPE_CHECKING:
-    from wavecheck.drives.model import ActiveEdge
+    from wavecheck.drives.datasheet import ActiveEdge
 
 __all__ = [
     "DEFAULT_CATCHUP_NS",

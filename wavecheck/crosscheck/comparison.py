@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wavecheck.crosscheck.sigrok import DecoderOutput, SigrokInput
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.interface import RoleSignal
 

@@ -1,6 +1,6 @@
 """Users' changes to a drive's figures: ``--limit RULE=VALUE`` and ``--margin 2x|+500ns``.
 
-A changed :class:`~wavecheck.drives.model.Figure` keeps the datasheet value in ``datasheet`` and
+A changed :class:`~wavecheck.drives.datasheet.Figure` keeps the datasheet value in ``datasheet`` and
 says how it was changed in ``applied``, so reports can show both. ``--limit`` sets one figure
 (status ``user``); ``--margin`` tightens every figure the drive states: ``Nx`` multiplies each
 minimum time by N (and divides the maximum rate by N), ``+T`` adds T to each minimum time (and
@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
-from wavecheck.drives.model import Drive, Figure
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.rules import TIME_RULES
 from wavecheck.units import parse_frequency, parse_quantity

@@ -18,8 +18,8 @@ from typing import Literal
 import numpy as np
 
 from wavecheck.capture.edges import Capture, EdgeArray
-from wavecheck.drives.model import ActiveEdge, Drive, Figure
-from wavecheck.drives.tune import tune_drive
+from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine.interface import (
     StepInterface,
     build_interface,

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stepgen.latency import invocation_clock, invocation_times, parse_latency
 from stepgen.latencyfiles import read_histogram, read_latency_file
-from stepgen.model import StepgenConfig
+from stepgen.lateness import invocation_clock, invocation_times, parse_latency
 from stepgen.motion import Motion, parse_moves
+from stepgen.reference import StepgenConfig
 from stepgen.simulate import simulate
 from wavecheck.errors import ConfigError
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from stepgen.fast import run_fast
-from stepgen.model import (
+from stepgen.reference import (
     Component,
     StepgenConfig,
     hal_thread_period,

@@ -23,8 +23,8 @@ from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, SHARED, engine_c
 from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.open import open_capture
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import Drive, Figure
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.outcome import MachineReport
 from wavecheck.report.machine import machine_dict

@@ -8,7 +8,7 @@ Two independent decoders run on the same capture:
 
 Both are compared with :func:`wavecheck.engine.decode.decode` on the same channels:
 :mod:`wavecheck.crosscheck.sigrok` prepares sigrok-cli's input and runs it,
-:mod:`wavecheck.crosscheck.model` compares (and explains sigrok's known differences).
+:mod:`wavecheck.crosscheck.comparison` compares (and explains sigrok's known differences).
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from pathlib import Path
 
 from wavecheck.capture.edges import Capture
 from wavecheck.capture.sigrokcli import find_sigrok_cli
-from wavecheck.crosscheck.model import CrosscheckResult, compare
+from wavecheck.crosscheck.comparison import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import prepare_input, run_decoders
-from wavecheck.drives.model import ActiveEdge
+from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine.decode import decode
 from wavecheck.engine.interface import build_interface
 from wavecheck.errors import CaptureError, UsageError

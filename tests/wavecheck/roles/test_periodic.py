@@ -1,4 +1,4 @@
-"""The shapes of a pulse train's rate (wavecheck.roles.rates, wavecheck.roles.features): a step
+"""The shapes of a pulse train's rate (wavecheck.roles.periodic, wavecheck.roles.features): a step
 train against clocks, PWM, periodic lines, bursts at one rate and coded pulses."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import numpy.typing as npt
 import pytest
 
 from wavecheck.roles.features import look_at
-from wavecheck.roles.rates import timing
+from wavecheck.roles.periodic import timing
 
 from ..waves import capture
 

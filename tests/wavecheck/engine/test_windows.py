@@ -26,8 +26,8 @@ from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT, engine_che
 from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
+from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.drives.library import load_drive
-from wavecheck.drives.model import Drive, Figure
 from wavecheck.engine.interface import build_interface
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.outcome import Report

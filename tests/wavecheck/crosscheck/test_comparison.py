@@ -10,7 +10,7 @@ import pytest
 
 from tests.conftest import write_vcd
 from wavecheck.capture.vcd import read_vcd
-from wavecheck.crosscheck.model import CrosscheckResult, compare
+from wavecheck.crosscheck.comparison import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import (
     DecoderOutput,
     SigrokInput,

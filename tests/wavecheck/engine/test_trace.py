@@ -34,7 +34,7 @@ from wavecheck.engine.outcome import Report
 from wavecheck.engine.run import check_source
 from wavecheck.engine.sinks import StepCollector
 from wavecheck.engine.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
-from wavecheck.report.measurement_plot import MAX_MARKS
+from wavecheck.report.measured_plot import MAX_MARKS
 from wavecheck.report.plot import figure
 from wavecheck.timebase import Timebase
 
