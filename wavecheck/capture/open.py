@@ -429,8 +429,9 @@ def open_source(
     chunk_bytes: int | None = None,
 ) -> BlockSource:
     """A block source for any capture (as :func:`open_capture` reads it): ``.sr``, VCD and timed
-    raw binary samples, from a file or from standard input or a pipe, are read block by block in
-    bounded memory; every other input is read whole first and given as one block
+    raw binary samples, from a file or from standard input or a pipe, and FST through
+    ``fst2vcd``, are read block by block in bounded memory; every other input is read whole
+    first and given as one block
     (:class:`~wavecheck.capture.blocks.MemorySource`).
 
     Raises:
@@ -468,6 +469,16 @@ def open_source(
             samplerate=samplerate,
             resolution_s=resolution_s,
             chunk_bytes=chunk_bytes or VCD_CHUNK,
+        )
+    if fmt == "fst" and (tool := shutil.which("fst2vcd")):
+        from wavecheck.capture.wellen import FstBlocks
+
+        return FstBlocks(
+            path,
+            tool,
+            samplerate=samplerate,
+            resolution_s=resolution_s,
+            chunk_bytes=chunk_bytes,
         )
     if fmt.split(":", 1)[0] == "binary" and input_format:
         from wavecheck.capture.binary import binary_blocks

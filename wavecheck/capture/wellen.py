@@ -24,10 +24,10 @@ import shutil
 import subprocess
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, BinaryIO, cast
+from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -41,7 +41,10 @@ from wavecheck.errors import CaptureError, UsageError
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_time
 
-__all__ = ["ghw_timebase", "load_bit", "read_fst", "read_wellen"]
+if TYPE_CHECKING:
+    from wavecheck.capture.blocks import EdgeBlock
+
+__all__ = ["FstBlocks", "ghw_timebase", "load_bit", "read_fst", "read_wellen"]
 
 # unknown is 2 (x, u, w, -) or 3 (z), as in the VCD reader
 _CODES = {"0": 0, "1": 1, "l": 0, "h": 1, "z": 3}
@@ -377,6 +380,89 @@ def read_fst(
     cap.bit_source = str(path)
     cap.notes = [n for n in cap.notes if "$comment" not in n]
     return cap
+
+
+class FstBlocks:
+    """An FST file as a block source: GTKWave's ``fst2vcd`` streamed into
+    :class:`~wavecheck.capture.vcd.reader.VcdBlocks` (bounded as :func:`read_fst`), never held
+    whole. The capture is :func:`read_fst`'s, block by block (``tool``: fst2vcd's path).
+
+    Raises (from the constructor and :meth:`blocks`):
+        CaptureError: the file cannot be read as FST, or fst2vcd fails or stalls.
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        tool: str,
+        *,
+        samplerate: Fraction | None = None,
+        resolution_s: Fraction | None = None,
+        chunk_bytes: int | None = None,
+    ) -> None:
+        import weakref
+
+        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES, VcdBlocks
+
+        self.path = path
+        try:
+            limit = FST2VCD_MAX_EXPANSION * os.path.getsize(path) + (64 << 20)
+        except OSError as err:
+            raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+        self._errors = tempfile.TemporaryFile()  # noqa: SIM115 - closed with the process
+        self.proc = subprocess.Popen(
+            [tool, path_argument(path)], stdout=subprocess.PIPE, stderr=self._errors
+        )
+        weakref.finalize(self, _end, self.proc, self._errors)  # however the source is left
+        source = io.BufferedReader(_Watched(path, self.proc, limit), buffer_size=1 << 20)
+        try:
+            self.vcd = VcdBlocks(
+                path, samplerate=samplerate, resolution_s=resolution_s,
+                chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES, source=cast(BinaryIO, source),
+            )  # fmt: skip
+        except CaptureError as err:
+            _end(self.proc, self._errors)
+            raise CaptureError(path, None, f"not a readable FST file ({err.msg})") from None
+        self.skeleton = self._as_fst(self.vcd.skeleton)
+
+    def _as_fst(self, cap: Capture) -> Capture:
+        cap.format = "fst"
+        cap.notes = [n for n in cap.notes if "$comment" not in n]
+        return cap
+
+    def want(self, channels: Iterable[int]) -> None:
+        """Extract the edges of ``channels`` only (from the next block on)."""
+        self.vcd.want(channels)
+
+    def blocks(self) -> Iterator[EdgeBlock]:
+        """The VCD reader's blocks of fst2vcd's output; fst2vcd's exit status checked at the end."""
+        try:
+            yield from self.vcd.blocks()
+        except CaptureError as err:
+            _end(self.proc, self._errors)
+            raise CaptureError(self.path, None, f"not a readable FST file ({err.msg})") from None
+        status = self.proc.wait()
+        self._errors.seek(0)
+        err_text = self._errors.read(4096).decode("utf-8", "replace").strip()
+        _end(self.proc, self._errors)
+        if status != 0:
+            raise CaptureError(self.path, None, f"fst2vcd cannot read it: {err_text[:200]}")
+
+    def capture(self) -> Capture:
+        """The finished skeleton, as :func:`read_fst` names it."""
+        cap = self._as_fst(self.vcd.capture())
+        cap.bit_source = str(self.path)
+        return cap
+
+
+def _end(proc: subprocess.Popen[bytes], errors: Any) -> None:
+    """Stop fst2vcd if it still runs and close its pipes."""
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+    if proc.stdout is not None:
+        proc.stdout.close()
+    errors.close()
 
 
 def load_bit(capture: Capture, key: str, vec: Vector, bit: int) -> Channel:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import subprocess
 import threading
 from pathlib import Path
 
@@ -25,6 +26,7 @@ from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.sr import SrBlocks
 from wavecheck.capture.vcd.reader import VcdBlocks
+from wavecheck.capture.wellen import FstBlocks
 
 
 def _channel_fields(capture: Capture) -> list[dict[str, object]]:
@@ -74,6 +76,13 @@ def _raw(tmp: Path) -> Path:
     return path
 
 
+def _fst(tmp: Path) -> Path:
+    """The VCD below as an FST, made by GTKWave's vcd2fst."""
+    path = tmp / "c.fst"
+    subprocess.run(["vcd2fst", str(VCD), str(path)], check=True, capture_output=True)
+    return path
+
+
 VCD = REPO / "captures/golden/g202-p16-dirhold2-worst.vcd"
 SR = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"
 RAW = "binary:numchannels=16:samplerate=1000000"
@@ -82,6 +91,7 @@ CASES = {
     "vcd file": ("vcd", None, VcdBlocks),
     "vcd pipe": ("vcd", None, VcdBlocks),
     "sr file": ("sr", None, SrBlocks),
+    "fst file (fst2vcd)": ("fst", None, FstBlocks),
     "raw file": ("raw", RAW, BinaryBlocks),
     "raw pipe": ("raw", RAW, BinaryBlocks),
     "vcd through sigrok-cli, one block": ("vcd", "vcd:downsample=1", MemorySource),
@@ -94,7 +104,8 @@ def test_a_block_source_gives_the_whole_reads_capture(
     tmp_path: Path, case: str, chunk: int
 ) -> None:
     what, fmt, kind = CASES[case]
-    path = {"vcd": VCD, "raw": _raw(tmp_path)}.get(what) or shared_capture(SR)
+    make = {"vcd": lambda: VCD, "raw": lambda: _raw(tmp_path), "fst": lambda: _fst(tmp_path)}
+    path = make[what]() if what in make else shared_capture(SR)
     ref = open_capture(path, input_format=fmt)
     source = open_source(
         _pipe(path, tmp_path) if case.endswith("pipe") else path, input_format=fmt,
