@@ -279,6 +279,14 @@ def _read_stream(
         sniffed.close()
 
 
+def _check_given(samplerate: Fraction | None, resolution_s: Fraction | None) -> None:
+    """Refuse a sample rate or resolution no capture can have (before any reading)."""
+    if samplerate is not None and samplerate <= 0:
+        raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
+    if resolution_s is not None and resolution_s < 0:
+        raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+
+
 def open_capture(
     path: str | os.PathLike[str],
     *,
@@ -307,10 +315,7 @@ def open_capture(
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
     """
-    if samplerate is not None and samplerate <= 0:
-        raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
-    if resolution_s is not None and resolution_s < 0:
-        raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+    _check_given(samplerate, resolution_s)
     if is_stream(path):
         return _read_stream(
             _sniff_stream(path, input_format),
@@ -437,10 +442,7 @@ def open_source(
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
     """
-    if samplerate is not None and samplerate <= 0:
-        raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
-    if resolution_s is not None and resolution_s < 0:
-        raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+    _check_given(samplerate, resolution_s)
     if is_stream(path):
         return _stream_source(
             _sniff_stream(path, input_format),
