@@ -472,7 +472,11 @@ def _fill(
     report.times, report.channel_mask = times, mask
     report.lattice = not bad
     report.rule = reading.rule
-    report.reason = "edges lie on a periodic lattice: a software base thread" if not bad else bad[0]
+    report.reason = (
+        "edges lie on a periodic lattice, as a software base thread's do (so may a sampling clock's)"
+        if not bad
+        else bad[0]
+    )
     if moved:
         first = int(times[int(np.argmax(k != fold.lateness(reading.anchor)[0]))])
         report.catch_up = CatchUp(
