@@ -442,8 +442,18 @@ class _Inference:
                 )
             motion = np.sort(np.concatenate([upl.pulses.starts, downl.pulses.starts]))
             self.axes.append(_Axis("up-down", 1, roles, [up, down], motion, notes))
+        rejected = [
+            c
+            for c in self.cap.channels
+            if c.index not in self.taken
+            and c.index not in {p.index for p in pulse}
+            and self.looks[c.index].pulses is not None
+            and not self.hints[c.index].fits("step")
+        ]
         for s in pulse:
             if s.index in paired or s.index in self.taken:
+                continue
+            if s.index not in dirs and self._half_of_a_pair(s, rejected):
                 continue
             look = self.looks[s.index]
             assert look.pulses is not None
@@ -454,6 +464,33 @@ class _Inference:
                 note = self.dir_notes.get(fit.d.index, "")
                 roles.append(self.choice("dir", fit.d, fit.evidence() + note))
             self.axes.append(_Axis("step-dir", 0, roles, [s], look.pulses.starts, []))
+
+    def _half_of_a_pair(self, s: Channel, rejected: list[Channel]) -> bool:
+        """Whether ``s``, a STEP without DIR, takes turns with a pulse line judged no STEP (a
+        coded or periodic line): then it may be one half of an up/down pair, and is left to the
+        user with that line (a conflict) rather than checked as a STEP alone."""
+        if self.hints[s.index].fits("step"):
+            return False  # named STEP: an axis of its own
+        sp = self.looks[s.index].pulses
+        assert sp is not None
+        for r in rejected:
+            rp = self.looks[r.index].pulses
+            assert rp is not None
+            if up_down(sp, rp, self.cap.resolution_ticks) is not None:
+                self.conflicts.append(
+                    Conflict(
+                        f"{self.name_of(s)} takes turns with {self.name_of(r)}, judged no STEP: "
+                        "a STEP without DIR, or an up/down pair?",
+                        (
+                            f"{self.name_of(s)}: {self.looks[s.index].evidence}",
+                            f"{self.name_of(r)}: {self.why.get(r.index) or self.looks[r.index].evidence}",
+                        ),
+                    )
+                )
+                self.why[s.index] = "a STEP or an up/down line (see below)"
+                self.taken.add(s.index)
+                return True
+        return False
 
     def _up_down_pairs(self, free: list[Channel]) -> list[tuple[Channel, Channel, UpDownFit]]:
         partners: dict[int, list[tuple[Channel, UpDownFit]]] = {c.index: [] for c in free}
