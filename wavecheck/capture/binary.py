@@ -193,16 +193,7 @@ def read_binary(
     finally:
         if opened is not None:
             opened.close()
-    if carry := finder.partial:
-        raise CaptureError(
-            label,
-            f"byte {done - len(carry)}",
-            f"the data ends in a partial sample ({len(carry)} of {us} bytes): not a whole number "
-            f"of {us}-byte samples for numchannels={fmt.numchannels} (cut short, or another "
-            "numchannels?)",
-        )
-    if finder.nsamples == 0:
-        raise CaptureError(label, None, "holds no samples (the input is empty)")
+    _check_end(label, done, len(finder.partial), us, fmt.numchannels, finder.nsamples)
     tb = Timebase.from_samplerate(rate if rate is not None else 1)
     res = 1
     if resolution_s is not None and rate is not None:
@@ -228,6 +219,23 @@ def read_binary(
         notes=notes,
         time_known=rate is not None,
     )
+
+
+def _check_end(
+    label: str, done: int, carry: int, unitsize: int, numchannels: int, nsamples: int
+) -> None:
+    """Refuse raw samples that end inside a sample (``carry`` bytes of one, after ``done``
+    bytes) or hold none."""
+    if carry:
+        raise CaptureError(
+            label,
+            f"byte {done - carry}",
+            f"the data ends in a partial sample ({carry} of {unitsize} bytes): not a whole number "
+            f"of {unitsize}-byte samples for numchannels={numchannels} (cut short, or another "
+            "numchannels?)",
+        )
+    if nsamples == 0:
+        raise CaptureError(label, None, "holds no samples (the input is empty)")
 
 
 class SampleBlocks:
@@ -384,17 +392,8 @@ class BinaryBlocks:
                 opened.close()
             else:
                 f.close()
-        if carry := self.scanner.partial:
-            us = self.scanner.unitsize
-            raise CaptureError(
-                self.label,
-                f"byte {done - carry}",
-                f"the data ends in a partial sample ({carry} of {us} bytes): not a whole number "
-                f"of {us}-byte samples for numchannels={len(self.scanner.bits)} (cut short, or "
-                "another numchannels?)",
-            )
-        if self.scanner.nsamples == 0:
-            raise CaptureError(self.label, None, "holds no samples (the input is empty)")
+        sc = self.scanner
+        _check_end(self.label, done, sc.partial, sc.unitsize, len(sc.bits), sc.nsamples)
 
     def capture(self) -> Capture:
         """The finished skeleton (each channel's edge count, the end)."""

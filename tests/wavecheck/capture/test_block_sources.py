@@ -27,6 +27,7 @@ from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.sr import SrBlocks
 from wavecheck.capture.vcd.reader import VcdBlocks
 from wavecheck.capture.wellen import FstBlocks
+from wavecheck.errors import CaptureError
 
 
 def _channel_fields(capture: Capture) -> list[dict[str, object]]:
@@ -122,3 +123,25 @@ def test_a_block_source_gives_the_whole_reads_capture(
     if not case.endswith("pipe"):
         assert got.path == ref.path
     _same(got, ref)
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (b"\x01\x02\x03", "byte 2: the data ends in a partial sample (1 of 2 bytes)"),
+        (b"", "the file is empty"),
+    ],
+)
+def test_raw_samples_cut_short_or_empty_are_refused_as_the_whole_read_refuses_them(
+    tmp_path: Path, data: bytes, message: str
+) -> None:
+    path = tmp_path / "raw.bin"
+    path.write_bytes(data)
+    with pytest.raises(CaptureError) as block_err:
+        source = open_source(path, input_format=RAW, chunk_bytes=2)
+        assert isinstance(source, BinaryBlocks)
+        list(source.blocks())
+    with pytest.raises(CaptureError) as whole_err:
+        open_capture(path, input_format=RAW)
+    assert message in str(block_err.value)
+    assert str(block_err.value) == str(whole_err.value)
