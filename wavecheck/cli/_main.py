@@ -51,6 +51,9 @@ def run_cli(
     sets ``func`` to a ``run(args) -> int``. Every other subcommand is listed from ``commands``
     (``--help``, usage errors) with an empty parser that never parses.
     """
+    # numpy's OpenBLAS starts a thread per core when numpy is imported: about 0.1 s of CPU at
+    # every start, for linear algebra no command does (an environment variable says otherwise)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     words = sys.argv[1:] if argv is None else list(argv)
     chosen = _command_word(words)
     parser = _Parser(prog=prog, description=description)
