@@ -108,6 +108,61 @@ def _read_full(f: BinaryIO, size: int) -> bytes:
     return b"".join(parts)
 
 
+def _prepare(
+    label: str, spec: str, samplerate: Fraction | None, channel_names: Sequence[str] | None
+) -> tuple[BinaryFormat, Fraction | None, list[str], list[str]]:
+    """The format ``spec`` states, the sample rate (``samplerate`` overrides the format's), the
+    channel names and the notes to give (an overridden rate)."""
+    try:
+        fmt = parse_binary_format(spec)
+    except UsageError as err:
+        raise UsageError(f"{label}: {err}") from None
+    names = list(channel_names or [])
+    if len(names) > fmt.numchannels:
+        raise UsageError(
+            f"{len(names)} channel names given for {fmt.numchannels} channels "
+            f"(give --input-format binary:numchannels={len(names)})"
+        )
+    notes: list[str] = []
+    if samplerate is not None and fmt.samplerate is not None and samplerate != fmt.samplerate:
+        notes.append(
+            f"sample rate {format_frequency(samplerate)} given by --samplerate overrides the "
+            f"format's samplerate={fmt.samplerate}"
+        )
+    return fmt, samplerate if samplerate is not None else fmt.samplerate, names, notes
+
+
+def _chunks(
+    source: str | os.PathLike[str] | BinaryIO, label: str, step: int, *, close: bool
+) -> Iterator[bytes]:
+    """``step`` bytes at a time (the last piece shorter) of a file, or of a stream (closed at
+    the end when ``close``), with progress; a read error is a CaptureError at its byte."""
+    total: int | None = None
+    report = current()
+    if isinstance(source, (str, os.PathLike)):
+        try:
+            f: BinaryIO = open(source, "rb")  # noqa: SIM115 - closed below
+            total = os.fstat(f.fileno()).st_size
+        except OSError as err:
+            raise CaptureError(label, None, f"cannot open: {err.strerror or err}") from None
+        close = True
+    else:
+        f = source
+    done = 0
+    try:
+        while data := _read_full(f, step):
+            done += len(data)
+            report(done, total)
+            yield data
+    except OSError as err:
+        raise CaptureError(
+            label, f"byte {done}", f"cannot be read: {err.strerror or err}"
+        ) from None
+    finally:
+        if close:
+            f.close()
+
+
 def read_binary(
     source: str | os.PathLike[str] | BinaryIO,
     spec: str = "binary",
@@ -137,25 +192,9 @@ def read_binary(
         UsageError: bad format options or too many channel names.
     """
     label = name if name is not None else str(source)
-    try:
-        fmt = parse_binary_format(spec)
-    except UsageError as err:
-        raise UsageError(f"{label}: {err}") from None
     if chunk_bytes < 1:
         raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
-    names = list(channel_names or [])
-    if len(names) > fmt.numchannels:
-        raise UsageError(
-            f"{len(names)} channel names given for {fmt.numchannels} channels "
-            f"(give --input-format binary:numchannels={len(names)})"
-        )
-    notes: list[str] = []
-    rate = samplerate if samplerate is not None else fmt.samplerate
-    if samplerate is not None and fmt.samplerate is not None and samplerate != fmt.samplerate:
-        notes.append(
-            f"sample rate {format_frequency(samplerate)} given by --samplerate overrides the "
-            f"format's samplerate={fmt.samplerate}"
-        )
+    fmt, rate, names, notes = _prepare(label, spec, samplerate, channel_names)
     if rate is None and require_time:
         raise CaptureError(
             label, None, "raw binary data states no sample rate (give it, e.g. --samplerate 24MHz)"
@@ -168,31 +207,10 @@ def read_binary(
     us = fmt.unitsize
     bits = list(range(fmt.numchannels))
     finder = EdgeFinder(us, bits)
-    step = max(us, chunk_bytes - chunk_bytes % us)
-    total: int | None = None
-    report = current()
-    opened: BinaryIO | None = None
-    if isinstance(source, (str, os.PathLike)):
-        try:
-            opened = open(source, "rb")  # noqa: SIM115 - closed below
-            total = os.fstat(opened.fileno()).st_size
-        except OSError as err:
-            raise CaptureError(label, None, f"cannot open: {err.strerror or err}") from None
-    f = opened if opened is not None else source
-    assert not isinstance(f, (str, os.PathLike))
     done = 0
-    try:
-        while data := _read_full(f, step):
-            done += len(data)
-            finder.add_bytes(data)
-            report(done, total)
-    except OSError as err:
-        raise CaptureError(
-            label, f"byte {done}", f"cannot be read: {err.strerror or err}"
-        ) from None
-    finally:
-        if opened is not None:
-            opened.close()
+    for data in _chunks(source, label, max(us, chunk_bytes - chunk_bytes % us), close=False):
+        done += len(data)
+        finder.add_bytes(data)
     _check_end(label, done, len(finder.partial), us, fmt.numchannels, finder.nsamples)
     tb = Timebase.from_samplerate(rate if rate is not None else 1)
     res = 1
@@ -364,34 +382,10 @@ class BinaryBlocks:
         if self._read:
             raise UsageError(f"{self.label}: raw samples are read once (blocks taken already)")
         self._read = True
-        total: int | None = None
-        opened: BinaryIO | None = None
-        if isinstance(self.source, (str, os.PathLike)):
-            try:
-                opened = open(self.source, "rb")  # noqa: SIM115 - closed below
-                total = os.fstat(opened.fileno()).st_size
-            except OSError as err:
-                raise CaptureError(
-                    self.label, None, f"cannot open: {err.strerror or err}"
-                ) from None
-        f = opened if opened is not None else self.source
-        assert not isinstance(f, (str, os.PathLike))
-        report = current()
         done = 0
-        try:
-            while data := _read_full(f, self.step):
-                done += len(data)
-                report(done, total)
-                yield self.scanner.scan(data)
-        except OSError as err:
-            raise CaptureError(
-                self.label, f"byte {done}", f"cannot be read: {err.strerror or err}"
-            ) from None
-        finally:
-            if opened is not None:
-                opened.close()
-            else:
-                f.close()
+        for data in _chunks(self.source, self.label, self.step, close=True):
+            done += len(data)
+            yield self.scanner.scan(data)
         sc = self.scanner
         _check_end(self.label, done, sc.partial, sc.unitsize, len(sc.bits), sc.nsamples)
 
@@ -413,25 +407,9 @@ def binary_blocks(
     """Raw samples as a :class:`BinaryBlocks` source, or None where they must be read whole
     (:func:`read_binary`): no sample rate (read untimed) or a ``--resolution`` to apply.
     Arguments as :func:`read_binary`'s."""
-    try:
-        fmt = parse_binary_format(spec)
-    except UsageError as err:
-        raise UsageError(f"{name}: {err}") from None
-    rate = samplerate if samplerate is not None else fmt.samplerate
+    fmt, rate, names, notes = _prepare(name, spec, samplerate, channel_names)
     if rate is None or resolution_s is not None:
         return None
-    names = list(channel_names or [])
-    if len(names) > fmt.numchannels:
-        raise UsageError(
-            f"{len(names)} channel names given for {fmt.numchannels} channels "
-            f"(give --input-format binary:numchannels={len(names)})"
-        )
-    notes = []
-    if samplerate is not None and fmt.samplerate is not None and samplerate != fmt.samplerate:
-        notes.append(
-            f"sample rate {format_frequency(samplerate)} given by --samplerate overrides the "
-            f"format's samplerate={fmt.samplerate}"
-        )
     return BinaryBlocks(
         source, fmt, rate, name=name, channel_names=names,
         chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES, notes=notes,

@@ -505,7 +505,7 @@ def open_source(
         require_time=require_time,
         channel_names=channel_names,
     )
-    return _one_block(whole)
+    return _one_block(whole, whole.format)
 
 
 def _stream_source(
@@ -553,23 +553,23 @@ def _stream_source(
             raise
         if raw is not None:
             return raw
-    return _one_block(
-        _read_stream(
-            sniffed,
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            require_time=require_time,
-            channel_names=channel_names,
-        )
+    whole = _read_stream(
+        sniffed,
+        samplerate=samplerate,
+        resolution_s=resolution_s,
+        require_time=require_time,
+        channel_names=channel_names,
     )
+    return _one_block(whole, f"{whole.format} from {sniffed.name}")
 
 
-def _one_block(whole: Capture) -> BlockSource:
-    """A capture its reader gives only whole, as one block; its notes say so, once."""
+def _one_block(whole: Capture, what: str) -> BlockSource:
+    """A capture its reader gives only whole (``what``: ``"ghw"``, ``"sr from <stdin>"``), as
+    one block; its notes say so, once."""
     from wavecheck.capture.blocks import MemorySource
 
     whole.notes.append(
-        f"read whole, then checked as one block ({whole.format} is not read block by block): "
+        f"read whole, then checked as one block ({what} is not read block by block): "
         "memory follows the capture's length"
     )
     return MemorySource(whole)

@@ -347,45 +347,20 @@ def read_fst(
     tool = shutil.which("fst2vcd")
     if tool is None:
         return read_wellen(path, kind="fst", samplerate=samplerate, resolution_s=resolution_s)
-    from wavecheck.capture.vcd import read_vcd
+    from wavecheck.capture.blocks import assemble
 
-    try:
-        limit = FST2VCD_MAX_EXPANSION * os.path.getsize(path) + (64 << 20)
-    except OSError as err:
-        raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
-    with (
-        tempfile.TemporaryFile() as errors,
-        subprocess.Popen(
-            [tool, path_argument(path)], stdout=subprocess.PIPE, stderr=errors
-        ) as proc,
-    ):
-        assert proc.stdout is not None
-        source = io.BufferedReader(_Watched(path, proc, limit), buffer_size=1 << 20)
-        try:
-            cap = read_vcd(
-                path, samplerate=samplerate, resolution_s=resolution_s,
-                source=cast(BinaryIO, source),
-            )  # fmt: skip
-        except CaptureError as err:
-            proc.kill()
-            raise CaptureError(path, None, f"not a readable FST file ({err.msg})") from None
-        finally:
-            proc.stdout.close()
-        status = proc.wait()
-        errors.seek(0)
-        err_text = errors.read(4096).decode("utf-8", "replace").strip()
-        if status != 0:
-            raise CaptureError(path, None, f"fst2vcd cannot read it: {err_text[:200]}")
-    cap.format = "fst"
-    cap.bit_source = str(path)
-    cap.notes = [n for n in cap.notes if "$comment" not in n]
+    source = FstBlocks(path, tool, samplerate=samplerate, resolution_s=resolution_s)
+    blocks = list(source.blocks())
+    cap = assemble(source.capture(), blocks)
+    cap.bit_reader = None  # read: a bit of a vector comes from the file again (load_bit)
     return cap
 
 
 class FstBlocks:
-    """An FST file as a block source: GTKWave's ``fst2vcd`` streamed into
-    :class:`~wavecheck.capture.vcd.reader.VcdBlocks` (bounded as :func:`read_fst`), never held
-    whole. The capture is :func:`read_fst`'s, block by block (``tool``: fst2vcd's path).
+    """An FST file as a block source: GTKWave's ``fst2vcd`` (``tool``: its path) streamed into
+    :class:`~wavecheck.capture.vcd.reader.VcdBlocks`, never held whole; fst2vcd is bounded
+    (:class:`_Watched`) and stopped however the source is left. :func:`read_fst` is these
+    blocks assembled.
 
     Raises (from the constructor and :meth:`blocks`):
         CaptureError: the file cannot be read as FST, or fst2vcd fails or stalls.

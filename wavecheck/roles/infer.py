@@ -442,11 +442,12 @@ class _Inference:
                 )
             motion = np.sort(np.concatenate([upl.pulses.starts, downl.pulses.starts]))
             self.axes.append(_Axis("up-down", 1, roles, [up, down], motion, notes))
+        in_pulse = {p.index for p in pulse}
         rejected = [
             c
             for c in self.cap.channels
             if c.index not in self.taken
-            and c.index not in {p.index for p in pulse}
+            and c.index not in in_pulse
             and self.looks[c.index].pulses is not None
             and not self.hints[c.index].fits("step")
         ]
