@@ -88,9 +88,14 @@ def screenshot(
     input_format: str | None = None,
     timeout: float = 90.0,
     size: str = "1280x720",
+    pointer: tuple[int, int] | None = None,
+    keys: str = "",
 ) -> tuple[object, str]:
     """PulseView's window showing ``capture`` with ``session`` (a PIL image, cropped to the
-    window), and PulseView's log."""
+    window), and PulseView's log. With ``pointer``: once the window has settled, the pointer
+    moves there and ``keys`` are typed (``"f"``: zoom to fit), and the window is grabbed once it
+    has settled again (PulseView draws annotations put after its last repaint, such as the
+    decoder's summary at the end of the input, when it next repaints)."""
     from PIL import ImageChops, ImageGrab
 
     server, display = _xvfb(size)
@@ -105,7 +110,11 @@ def screenshot(
             viewer = subprocess.Popen([*cmd, "-i", str(capture)], env=env, stdout=out,
                                       stderr=subprocess.STDOUT)  # fmt: skip
         try:
-            image = _settled(lambda: ImageGrab.grab(xdisplay=display), ImageChops, timeout)
+            grab = lambda: ImageGrab.grab(xdisplay=display)  # noqa: E731
+            image = _settled(grab, ImageChops, timeout)
+            if pointer is not None:  # the pointer moved over the view: PulseView repaints
+                _x_input(display, pointer, keys)
+                image = _settled(grab, ImageChops, timeout)
         finally:
             viewer.terminate()
             try:
@@ -117,6 +126,38 @@ def screenshot(
         text = log.read_text(errors="replace")
     box = image.getbbox()  # the window: the rest of the screen is black
     return (image.crop(box) if box else image), text
+
+
+def _x_input(display: str, pointer: tuple[int, int], keys: str) -> None:
+    """Move the X pointer of ``display`` to ``pointer`` and type ``keys`` there (the XTEST
+    extension, as a user's mouse and keyboard would: with no window manager, the keyboard
+    goes to the window under the pointer)."""
+    import ctypes
+
+    x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    x11.XFlush.argtypes = x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XStringToKeysym.restype = ctypes.c_ulong
+    x11.XStringToKeysym.argtypes = [ctypes.c_char_p]
+    x11.XKeysymToKeycode.restype = ctypes.c_ubyte
+    x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
+    xtst.XTestFakeMotionEvent.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                          ctypes.c_int, ctypes.c_ulong]  # fmt: skip
+    xtst.XTestFakeKeyEvent.argtypes = [ctypes.c_void_p, ctypes.c_uint, ctypes.c_int,
+                                       ctypes.c_ulong]  # fmt: skip
+    handle = x11.XOpenDisplay(display.encode())
+    if not handle:
+        raise RuntimeError(f"cannot open X display {display}")
+    try:
+        xtst.XTestFakeMotionEvent(handle, -1, *pointer, 0)
+        for key in keys:
+            code = x11.XKeysymToKeycode(handle, x11.XStringToKeysym(key.encode()))
+            xtst.XTestFakeKeyEvent(handle, code, 1, 0)
+            xtst.XTestFakeKeyEvent(handle, code, 0, 0)
+        x11.XFlush(handle)
+    finally:
+        x11.XCloseDisplay(handle)
 
 
 def _settled(grab, chops, timeout: float):  # type: ignore[no-untyped-def]
