@@ -6,10 +6,11 @@ settings in a temporary ``XDG_CONFIG_HOME``, the decoder from ``SIGROKDECODE_DIR
 the window stops changing, and grabs it (Pillow's X11 grab). :func:`annotation_rows` finds the
 decode trace's annotation rows in a screenshot (for ``tests/wavecheck/sigrok/test_pulseview.py``).
 
-Run as a program it regenerates the README's picture, ``docs/pulseview.png``: the golden trace
-of LinuxCNC's stepgen driving a Gecko G202 with 11 us of latency (``captures/golden/
-g202-p20-worst-dirhold.vcd``, the seed's story), sampled at 1 MHz around its reversal, where the
-DIR hold is 9 us against the G202's 20 us.
+Run as a program it regenerates the README's picture, ``docs/pulseview.png``: the README's trace
+of LinuxCNC's stepgen driving a Gecko G202 with 11 us of latency (the command of ``captures/
+golden/g202-p20-worst-dirhold.toml`` written as a 1 MHz ``.sr``: :func:`readme_trace`), whole,
+at full zoom-out (zoom to fit): its one violation, a DIR hold of 9 us against the G202's 20 us,
+is the red box of the Violation regions row, and the Summary row ends in the verdict.
 """
 
 from __future__ import annotations
@@ -27,14 +28,26 @@ from pathlib import Path
 import numpy as np
 
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import open_capture
 from wavecheck.capture.srzip import write_sr_edges
 
 ROOT = Path(__file__).resolve().parent.parent
 PICTURE = ROOT / "docs" / "pulseview.png"
 GOLDEN = ROOT / "captures" / "golden" / "g202-p20-worst-dirhold.vcd"
-#: The window of the golden trace shown (ns): two steps and the reversal between them.
-WINDOW_NS = (484_970_000, 485_080_000)
+
+
+def readme_trace(folder: Path) -> Path:
+    """The README's G202 trace (the golden trace's stepgen command, written as ``g202.sr``)."""
+    import shlex
+    import tomllib
+
+    argv = shlex.split(tomllib.loads(GOLDEN.with_suffix(".toml").read_text())["command"])
+    sr = folder / "g202.sr"
+    argv[argv.index("-o") + 1] = str(sr)
+    run = subprocess.run([sys.executable, "-m", "stepgen", *argv[1:]], capture_output=True,
+                         text=True)  # fmt: skip
+    if run.returncode != 0:
+        raise RuntimeError(f"{shlex.join(argv)}: {run.stderr.strip()}")
+    return sr
 
 
 def sampled_sr(
@@ -155,6 +168,7 @@ def _x_input(display: str, pointer: tuple[int, int], keys: str) -> None:
             code = x11.XKeysymToKeycode(handle, x11.XStringToKeysym(key.encode()))
             xtst.XTestFakeKeyEvent(handle, code, 1, 0)
             xtst.XTestFakeKeyEvent(handle, code, 0, 0)
+        xtst.XTestFakeMotionEvent(handle, -1, 0, 0, 50)  # away: no hover marker in the picture
         x11.XFlush(handle)
     finally:
         x11.XCloseDisplay(handle)
@@ -217,15 +231,13 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         install(work / "decoders")
-        cap = open_capture(str(GOLDEN))
-        tick = cap.timebase.tick_ns
-        window = (int(WINDOW_NS[0] / tick), int(WINDOW_NS[1] / tick))
-        sr = sampled_sr(cap, work / "g202-reversal.sr", 1_000_000, window)
+        sr = readme_trace(work)
         pvs = work / "g202.pvs"
         check = [sys.executable, "-m", "wavecheck", "check", str(sr), "--drive", "gecko-g202",
-                 "--map", "step=step,dir=dir", "--pulseview", str(pvs)]  # fmt: skip
+                 "--pulseview", str(pvs)]  # fmt: skip
         subprocess.run(check, check=False, capture_output=True)
-        image, _ = screenshot(sr, pvs, work / "decoders")
+        # the pointer over the view (a repaint: the summary at the end of the input), zoom to fit
+        image, _ = screenshot(sr, pvs, work / "decoders", pointer=(700, 600), keys="f")
     rows = annotation_rows(image)
     if rows:  # down to the last annotation row, not the empty rest of the window
         image = image.crop((0, 0, image.width, min(image.height, rows[-1][1] + 40)))  # type: ignore[attr-defined]

@@ -29,10 +29,8 @@ import colorsys
 import json
 import os
 import re
-import shlex
 import subprocess
 import sys
-import tomllib
 from fractions import Fraction
 from pathlib import Path
 
@@ -42,7 +40,7 @@ import pytest
 from tests.conftest import shared_capture
 from tests.wavecheck.sigrok.conftest import RunDecoder, need
 from tests.wavecheck.sigrok.test_sigrok_cli import _decoder_options
-from tools.pulseview_shot import GOLDEN, screenshot
+from tools.pulseview_shot import readme_trace, screenshot
 
 pytestmark = [pytest.mark.sigrok, pytest.mark.slow]
 
@@ -57,18 +55,6 @@ _REGION = re.compile(r"^(\d+) violations?: (.*)$")
 #: Hues (degrees) of the decoder's classes on screen (pd.py's ANNOTATIONS: 120° + 20° per row
 #: + 55° per class): a violation 10°, a region 5°; the summary 235°.
 RED, SUMMARY = 15, 235
-
-
-def _readme_trace(tmp: Path) -> Path:
-    """The README's G202 trace: the golden trace's stepgen command, written as a .sr."""
-    command = tomllib.loads(GOLDEN.with_suffix(".toml").read_text())["command"]
-    argv = shlex.split(command)
-    sr = tmp / "g202.sr"
-    argv[argv.index("-o") + 1] = str(sr)
-    stepgen = Path(sys.executable).parent / "stepgen"
-    run = subprocess.run([str(stepgen), *argv[1:]], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    return sr
 
 
 def _hues(image: object) -> tuple[np.ndarray, np.ndarray]:
@@ -99,11 +85,11 @@ def _spans(columns: np.ndarray) -> list[tuple[int, int]]:
                     strict=True))  # fmt: skip
 
 
-def _check(capture: Path, argv: list[str], pvs: Path) -> dict:  # type: ignore[type-arg]
+def _check(capture: Path, argv: list[str], pvs: Path, code: int = 1) -> dict:  # type: ignore[type-arg]
     cmd = [sys.executable, "-m", "wavecheck", "check", str(capture), *argv, "--format", "json",
            "--max-violations", "100000", "--pulseview", str(pvs)]  # fmt: skip
     run = subprocess.run(cmd, capture_output=True, text=True)
-    assert run.returncode == 1, run.stderr
+    assert run.returncode == code, run.stderr
     return json.loads(run.stdout)  # type: ignore[no-any-return]
 
 
@@ -114,9 +100,7 @@ def test_pulseview_shows_violations_and_summary(
     need("pulseview")
     need("Xvfb")
     capture, argv = (
-        (_readme_trace(tmp_path), G202_ARGV)
-        if case == "g202"
-        else (shared_capture(GRBL), GRBL_ARGV)
+        (readme_trace(tmp_path), G202_ARGV) if case == "g202" else (shared_capture(GRBL), GRBL_ARGV)
     )
     pvs = tmp_path / f"{case}.pvs"
     doc = _check(capture, argv, pvs)
@@ -207,3 +191,23 @@ def test_pulseview_shows_violations_and_summary(
 def _covered(a: int, b: int, marks: list[tuple[float, float]]) -> bool:
     """Every column a..b lies within one of ``marks``."""
     return all(any(lo <= x <= hi for lo, hi in marks) for x in range(a, b + 1))
+
+
+def test_no_violation_no_red(tmp_path: Path, decoder_dir: Path) -> None:
+    """The same trace with the DIR hold limit at 5 us passes: no region, nothing red in the
+    decode trace, and the logged summary is a PASS."""
+    need("pulseview")
+    need("Xvfb")
+    capture, pvs = readme_trace(tmp_path), tmp_path / "pass.pvs"
+    doc = _check(capture, [*G202_ARGV, "--limit", "dir_hold=5us"], pvs, code=0)
+    assert doc["violations_total"] == 0
+    image, log = screenshot(capture, pvs, decoder_dir, pointer=(700, 600), keys="f")
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    image.save(ARTEFACTS / "g202-pass-full-zoom.png")  # type: ignore[attr-defined]
+    assert _SUMMARY_LOG.findall(log)[-1][1].startswith("PASS against gecko-g202: 0 violation(s)")
+    hues, coloured = _hues(image)
+    xs = np.nonzero(_near(hues, coloured, SUMMARY, 10))[1]
+    badge = _near(hues, coloured, 120, 10)[:, : xs.min() - 2]
+    top = _spans(np.flatnonzero(badge.any(axis=1)))[-1][0]
+    red = _near(hues, coloured, 0, RED)[top - 3 :, xs.min() - 2 :]
+    assert not red.any()
