@@ -398,3 +398,18 @@ def test_bad_options_are_one_message(
     (message,) = out.annotations
     assert message.text.startswith("wavecheck decoder: ") and says in message.text
     assert message.text in out.stderr
+
+
+@pytest.mark.parametrize("tail", [0, 1, 5_000, 400_000])
+def test_the_summary_reaches_the_end(run_decoder: RunDecoder, tmp_path: Path, tail: int) -> None:
+    """However short the tail after the last edge, the summary covers the input to within the
+    decoder's tick (max(1024, samples // 1024), pd.py) of its end: the last edge when the tail
+    is shorter than that."""
+    step = np.array([1000, 1002, 3000, 3002], np.int64)
+    n = int(step[-1]) + 1 + tail
+    path = tmp_path / "tail.sr"
+    write_sr_edges(path, ["STEP"], [step], [0], n, samplerate=1_000_000)
+    out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202"}, rows="summary")
+    last = out.annotations[-1]
+    assert last.text.startswith("FAIL against gecko-g202: 2 violation(s), 2 steps")
+    assert int(step[-1]) <= last.end <= n - 1 and n - 1 - last.end < max(1024, n // 1024)

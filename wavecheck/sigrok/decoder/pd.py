@@ -466,8 +466,8 @@ class _Run:
         self.fails = ([], [], [])
         lines = self.check.summary(end + 1, final=final)
         if lines:  # side by side, the overall verdict last (at the end): none hides another
-            # first what the summary covers (where PulseView writes the row's title over it)
-            extent = f"{self.plan.interval(begin)} – {self.plan.interval(end)}"
+            # first what the figures cover, the input from its start (under the row's title)
+            extent = f"{self.plan.interval(0)} – {self.plan.interval(end)}"
             lines = [[f"summary of {extent}", extent], *lines[1:], lines[0]]
             n, span = len(lines), max(end - begin, len(lines))
             for k, texts in enumerate(lines):
