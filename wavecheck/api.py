@@ -62,7 +62,7 @@ def _source(
     from wavecheck.capture.open import open_source
 
     rate = None
-    if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
+    if isinstance(samplerate, str):  # text needs its unit (docs/reference.md "Numbers and units")
         rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
     elif samplerate is not None:
         rate = parse_frequency(samplerate, default_unit="Hz")
