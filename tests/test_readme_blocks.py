@@ -11,8 +11,7 @@ its own test (``readme-test`` markers); this one holds every block to running at
 other block (Python, TOML) to having such a test.
 
 Skipped, each with its reason (:data:`SKIPPED`): only what needs hardware, a window, or sets up
-the machine. Files a block names that come from elsewhere (:data:`FROM_ELSEWHERE`) are put where
-the page says they come from. The pages also build as a site: ``mkdocs build --strict``
+the machine. Every file a block names ships (the grbl capture in ``captures/real/``). The pages also build as a site: ``mkdocs build --strict``
 (:func:`test_the_docs_build_as_a_site`).
 """
 
@@ -28,7 +27,6 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import shared_capture
 from tests.doc_pages import pages
 
 REPO = Path(__file__).resolve().parent.parent
@@ -46,11 +44,6 @@ SKIPPED = {
     "wavecheck watch --driver fx2lafw": "needs an FX2 logic analyzer on USB",
     "pulseview": "opens PulseView's window (tests/wavecheck/sigrok/test_pulseview.py runs it "
     "under Xvfb)",
-}
-#: Files the pages name that do not ship, and where the page says they come from.
-FROM_ELSEWHERE = {
-    # "the grbl capture of sigrok-dumps", docs/captures.md says (From a pipe)
-    "grbl_cnc_1.sr": "sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr",
 }
 #: What LinuxCNC's latency-test leaves in ~/.latency (one number, ns), for `--latency ~/.latency`.
 DOT_LATENCY_NS = "11000\n"
@@ -109,8 +102,6 @@ def clone(tmp_path_factory: pytest.TempPathFactory) -> Path:
         if name and (REPO / name).is_file():
             (root / name).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(REPO / name, root / name)
-    for name, rel in FROM_ELSEWHERE.items():
-        shutil.copy2(shared_capture(rel), root / name)
     home = root.parent / "home"
     home.mkdir()
     (home / ".latency").write_text(DOT_LATENCY_NS)

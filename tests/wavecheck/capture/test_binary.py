@@ -259,7 +259,8 @@ def test_readme_pipe_block(grbl_sr: Path, tmp_path: Path) -> None:
 
     _need_sigrok()
     block = marked("pipe")
-    (tmp_path / "grbl_cnc_1.sr").symlink_to(grbl_sr)
+    (tmp_path / "captures" / "real").mkdir(parents=True)
+    (tmp_path / "captures" / "real" / "grbl_cnc_1.sr").symlink_to(grbl_sr)
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     assert shutil.which("wavecheck", path=env["PATH"]) is not None
     piped = subprocess.run(["bash", "-o", "pipefail", "-c", block], cwd=tmp_path, env=env,
