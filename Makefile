@@ -42,7 +42,8 @@ system-deps:
 # 16 us with dirhold = 2 periods, and the capture made with that plan passes.
 DEMO_BAD  := captures/golden/g202-p20-worst-dirhold.vcd
 DEMO_GOOD := captures/golden/g202-p16-dirhold2-worst.vcd
-GRBL      := captures/real/grbl_cnc_1.sr  # ships (public domain, captures/real/README.md)
+# the real capture ships (sigrok-dumps, public domain: captures/real/README.md)
+GRBL      := captures/real/grbl_cnc_1.sr
 
 demo: setup
 	@mkdir -p out

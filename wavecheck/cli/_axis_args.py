@@ -14,8 +14,7 @@ from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine.mapping import parse_axes, split_per_axis
-from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, CheckOptions
+from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions, parse_axes, split_per_axis
 from wavecheck.errors import UsageError
 
 __all__ = [

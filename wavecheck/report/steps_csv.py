@@ -37,8 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.mapping import check_axis_names
+from wavecheck.engine import StepEvents, check_axis_names
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
 from wavecheck.timebase import Timebase
