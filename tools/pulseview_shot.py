@@ -151,6 +151,13 @@ def _x_input(display: str, pointer: tuple[int, int], keys: str) -> None:
     x11.XOpenDisplay.restype = ctypes.c_void_p
     x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
     x11.XFlush.argtypes = x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XSync.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    x11.XDefaultRootWindow.restype = ctypes.c_ulong
+    x11.XDefaultRootWindow.argtypes = [ctypes.c_void_p]
+    x11.XSetInputFocus.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_ulong]
+    ulong_p, int_p = ctypes.POINTER(ctypes.c_ulong), ctypes.POINTER(ctypes.c_int)
+    x11.XQueryPointer.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ulong_p, ulong_p, int_p, int_p,
+                                  int_p, int_p, ctypes.POINTER(ctypes.c_uint)]  # fmt: skip
     x11.XStringToKeysym.restype = ctypes.c_ulong
     x11.XStringToKeysym.argtypes = [ctypes.c_char_p]
     x11.XKeysymToKeycode.restype = ctypes.c_ubyte
@@ -164,6 +171,22 @@ def _x_input(display: str, pointer: tuple[int, int], keys: str) -> None:
         raise RuntimeError(f"cannot open X display {display}")
     try:
         xtst.XTestFakeMotionEvent(handle, -1, *pointer, 0)
+        x11.XSync(handle, 0)
+        time.sleep(0.5)
+        if keys:  # the keyboard to the window under the pointer (Qt takes keys once focused)
+            root, child, coord, mask = (
+                ctypes.c_ulong(),
+                ctypes.c_ulong(),
+                ctypes.c_int(),
+                ctypes.c_uint(),
+            )
+            x11.XQueryPointer(handle, x11.XDefaultRootWindow(handle), ctypes.byref(root),
+                              ctypes.byref(child), *(ctypes.byref(coord) for _ in range(4)),
+                              ctypes.byref(mask))  # fmt: skip
+            if child.value:
+                x11.XSetInputFocus(handle, child, 2, 0)  # RevertToParent, CurrentTime
+                x11.XSync(handle, 0)
+                time.sleep(0.5)
         for key in keys:
             code = x11.XKeysymToKeycode(handle, x11.XStringToKeysym(key.encode()))
             xtst.XTestFakeKeyEvent(handle, code, 1, 0)

@@ -43,7 +43,7 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 TICK_MIN = 1024
 TICK_SHARE = 1024
 #: Seconds of no input after which the decoder takes the input as ended (:class:`_Watch`).
-IDLE_S = 1.0
+IDLE_S = 1.5
 _LOCK = threading.Lock()
 _ADAPTER: dict[str, Any] = {}
 
