@@ -39,7 +39,7 @@ import pytest
 
 from tests.conftest import shared_capture
 from tests.wavecheck.sigrok.conftest import RunDecoder, need
-from tests.wavecheck.sigrok.test_sigrok_cli import _decoder_options
+from tests.wavecheck.sigrok.test_sigrok_cli import _REGION, _decoder_options
 from tools.pulseview_shot import readme_trace, screenshot
 
 pytestmark = [pytest.mark.sigrok, pytest.mark.slow]
@@ -51,7 +51,6 @@ GRBL_ARGV = ["--drive", "leadshine-dm542", "--map", "step=STEP (Y axis)",
 G202_ARGV = ["--drive", "gecko-g202", "--map", "step=step,dir=dir", "--resolution", "0"]
 _SUMMARY_LOG = re.compile(r"^wavecheck decoder: summary to sample (\d+): (.*)$", re.M)
 _RULE_LINE = re.compile(r"^(\w+): (\w+), (\d+) checked, (\d+) violation\(s\)")
-_REGION = re.compile(r"^(\d+) violations?: (.*)$")
 #: Hues (degrees) of the decoder's classes on screen (pd.py's ANNOTATIONS: 120° + 20° per row
 #: + 55° per class): a violation 10°, a region 5°; the summary 235°.
 RED, SUMMARY = 15, 235

@@ -32,6 +32,7 @@ pytestmark = pytest.mark.sigrok
 ROOT = Path(__file__).resolve().parents[3]
 _FAIL = re.compile(r"^(\w+): measured (\S+ \S+), limit (\S+ \S+), margin (\S+ \S+)$")
 _SEQUENCE = re.compile(r"^(state_sequence): state (\d+) → (\d+)$")
+_REGION = re.compile(r"^(\d+) violations?: (.*)$")
 #: The decoder's channel ids for each role (pd.py's channels).
 _CHANNEL = {"step": "step", "up": "step", "phase-A": "step", "dir": "dir", "down": "dir",
             "phase-B": "dir", "enable": "enable", "phase-C": "c", "phase-D": "d", "phase-E": "e"}  # fmt: skip
@@ -66,7 +67,7 @@ def decoder_violations(decoded: Decoded, rate: int) -> Seen:
     wavecheck's own formatting of the exact samples."""
     seen: Seen = Counter()
     for ann in decoded.annotations:
-        if "indeterminate" in ann.text:
+        if "indeterminate" in ann.text or _REGION.match(ann.text):
             continue
         seq = _SEQUENCE.match(ann.text)
         if seq:
@@ -91,6 +92,7 @@ def _same(decoded: Decoded, doc: dict, rate: int) -> Seen:  # type: ignore[type-
         f"decoder only: {sorted((got - want).elements())[:5]}; "
         f"check only: {sorted((want - got).elements())[:5]}"
     )
+    _regions_hold(decoded, got)
     limits = {r["id"]: r["limit_ns"] for r in doc["rules"]}
     for ann in decoded.annotations:
         m = _FAIL.match(ann.text)
@@ -136,10 +138,27 @@ def _decoder_options(argv: list[str]) -> tuple[dict[str, str], dict[str, str]]:
     return channels, options
 
 
+def _regions_hold(decoded: Decoded, seen: Seen) -> None:
+    """The Violation regions row (when asked for): every violation in exactly one region, each
+    region's counts per rule those of the violations in it (issue 36)."""
+    regions = [(a, _REGION.match(a.text)) for a in decoded.annotations]
+    regions = [(a, m) for a, m in regions if m]
+    if "regions" not in " ".join(decoded.command):
+        return
+    assert sum(int(m.group(1)) for _, m in regions) == sum(seen.values())
+    for a, m in regions:
+        inside: Counter[str] = Counter()
+        for (rule, start, width), n in seen.items():
+            if a.start <= min(start, start + width) and max(start, start + width) <= a.end:
+                inside[rule] += n
+        counts = {r: int(n) for r, n in re.findall(r"(\w+) ×(\d+)", m.group(2))}
+        assert counts == dict(inside), (a, inside)
+
+
 def _compare(run_decoder: RunDecoder, path: Path, argv: list[str], rate: int) -> Seen:
     doc = check_json(path, argv)
     channels, options = _decoder_options(argv)
-    return _same(run_decoder(path, channels, options), doc, rate)
+    return _same(run_decoder(path, channels, options, rows="violations:regions"), doc, rate)
 
 
 # -- the golden captures -----------------------------------------------------------------------
