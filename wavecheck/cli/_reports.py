@@ -1,9 +1,8 @@
 """``wavecheck check``'s report outputs and its several-captures mode.
 
 Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--html FILE.html``,
-``--gtkw FILE.gtkw``, ``-q/--quiet``, and the stepgen configuration ``--ini FILE``,
-``--hal FILE`` (repeatable), ``--channel N``, ``--latency J`` for the ``config`` and
-``latency_safe`` max step rates.
+``--gtkw FILE.gtkw``, ``-j N``, ``-q/--quiet``, and the stepgen configuration options
+(:mod:`wavecheck.cli._stepgen_args`).
 
 Several captures (``wavecheck check a.sr b.vcd 'runs/*.sr' -j N``): each is checked on its own,
 spread over N worker processes (default: the usable cores); a capture that cannot be read is
@@ -29,34 +28,29 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 from wavecheck.cli._axis_args import required
-from wavecheck.cli.linuxcnc import add_file_arguments
+from wavecheck.cli._stepgen_args import add_stepgen_arguments, latency_ns, stepgen_config
 from wavecheck.engine import Report
 from wavecheck.errors import UsageError, WavecheckError
-from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
-from wavecheck.units import BASE_PERIOD, LATENCY, format_time, option_ns
+from wavecheck.units import format_time
 from wavecheck.verdict import overall_verdict, worst_exit_code
 
 __all__ = [
     "add_report_arguments",
-    "add_stepgen_arguments",
     "expand_captures",
-    "latency_ns",
     "render_json_report",
     "render_junit_report",
     "render_text_report",
     "run_checks",
-    "stepgen_config",
     "summary_line",
 ]
 
@@ -99,27 +93,6 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     add_stepgen_arguments(p)
 
 
-def add_stepgen_arguments(p: argparse.ArgumentParser) -> None:
-    """Add the LinuxCNC stepgen configuration options (``--ini``, ``--hal``, ``--channel``,
-    ``--base-period``, ``--steplen`` …, ``--latency``) for the ``config``/``latency_safe``
-    rates."""
-    cfg = p.add_argument_group("stepgen configuration (config and latency_safe step rates)")
-    add_file_arguments(cfg)
-    for name, what in _CONFIG_OPTIONS.items():
-        cfg.add_argument(
-            f"--{name.replace('_', '-')}",
-            metavar="T",
-            help=f"{what}, with its unit (e.g. 16us; overrides --ini/--hal)"
-            + ("; below 1 us is refused as a unit slip" if name == "base_period" else ""),
-        )
-    cfg.add_argument(
-        "--latency",
-        metavar="J",
-        help="worst base-thread latency, with its unit (e.g. 11us), for latency_safe; "
-        "below 100 ns gives a warning",
-    )
-
-
 def expand_captures(patterns: list[str]) -> list[str]:
     """Capture paths from the command line: existing files as given, glob patterns expanded
     (sorted); a pattern matching nothing is an error."""
@@ -133,67 +106,6 @@ def expand_captures(patterns: list[str]) -> list[str]:
         else:
             out.append(pat)
     return out
-
-
-#: check's stepgen-configuration options (config and latency_safe rates), LinuxCNC's names.
-_CONFIG_OPTIONS = {
-    "base_period": "BASE_PERIOD",
-    "steplen": "stepgen steplen",
-    "stepspace": "stepgen stepspace",
-    "dirsetup": "stepgen dirsetup",
-    "dirhold": "stepgen dirhold",
-}
-
-
-# -- stepgen configuration rates -------------------------------------------------------------------
-def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
-    """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given);
-    read once and kept on ``args``."""
-    if hasattr(args, "_linuxcnc_config"):
-        cached: LinuxCNCConfig | None = args._linuxcnc_config
-        return cached
-    cfg = None
-    given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
-    if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):
-        cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
-        for name, text in given.items():
-            if text is None:
-                continue
-            option = f"--{name.replace('_', '-')}"
-            ns = option_ns(text, option, BASE_PERIOD if name == "base_period" else None)
-            if ns.denominator != 1 or ns < 0 or (name == "base_period" and ns == 0):
-                raise UsageError(f"{option} {text}: must be a whole, positive number of ns")
-            if name == "base_period":
-                cfg.base_period_ns = int(ns)
-            else:
-                cfg.params[name] = int(ns)
-            cfg.sources[name] = option
-    elif getattr(args, "latency", None):
-        raise UsageError(
-            "--latency needs the stepgen configuration: give --ini/--hal or --base-period"
-        )
-    args._linuxcnc_config = cfg
-    return cfg
-
-
-def latency_ns(args: argparse.Namespace) -> Fraction | None:
-    """``--latency`` in exact ns (None when not given); read (and warned about) once, kept on
-    ``args``."""
-    if hasattr(args, "_latency_ns"):
-        cached: Fraction | None = args._latency_ns
-        return cached
-    text = getattr(args, "latency", None)
-    j = None
-    if text is not None:
-        j = option_ns(text, "--latency", LATENCY, _warn)
-        if j < 0:
-            raise UsageError(f"--latency {text}: must not be negative")
-    args._latency_ns = j
-    return j
-
-
-def _warn(message: str) -> None:
-    print(f"wavecheck: warning: {message}", file=sys.stderr)
 
 
 Checked = Report | MachineReport
