@@ -23,16 +23,15 @@ from wavecheck.cli._axis_args import (
     check_options,
     required,
 )
+from wavecheck.cli._batch import expand_captures, run_checks
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._reports import (
     Checked,
     add_report_arguments,
     axis_reports,
-    expand_captures,
     render_json_report,
     render_junit_report,
     render_text_report,
-    run_checks,
 )
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
