@@ -1,5 +1,6 @@
-"""``wavecheck check``'s reports of one capture: the report-file options and a renderer per
-``--format``.
+"""The reports of one capture, for ``check`` and ``watch``: the report-file options, a renderer
+per ``--format`` (:data:`RENDERERS`), ``--firmware`` findings added (:func:`finish_report`) and
+every output asked for written (:func:`write_outputs`).
 
 Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--html FILE.html``,
 ``--gtkw FILE.gtkw``, ``-j N``, ``-q/--quiet``, and the stepgen configuration options
@@ -10,22 +11,28 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+from collections.abc import Callable
 from typing import Any
 
 from wavecheck.cli._axis_args import required
+from wavecheck.cli._firmware_args import check_firmware
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
 from wavecheck.engine import Report
-from wavecheck.output import figure_file, output_file
+from wavecheck.output import atomic_write, figure_file, output_file
 from wavecheck.progress import QUIET_HELP
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
 from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
 
 __all__ = [
+    "RENDERERS",
     "add_report_arguments",
+    "finish_report",
     "render_json_report",
     "render_junit_report",
     "render_text_report",
+    "write_outputs",
 ]
 
 
@@ -101,3 +108,48 @@ def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
     from wavecheck.report.junit import render_junit
 
     return render_junit(axis_reports(report), require=required(args))
+
+
+#: ``--format`` name → renderer(report, args) → text.
+RENDERERS: dict[str, Callable[[Checked, argparse.Namespace], str]] = {
+    # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
+    "text": render_text_report,
+    "json": render_json_report,
+    "junit": render_junit_report,
+}
+
+
+def finish_report(args: argparse.Namespace, machine: MachineReport) -> Checked:
+    """Add ``--firmware`` findings; a single unnamed axis as its Report."""
+    for report in machine.axes:
+        if getattr(args, "firmware", None):  # the capture against its own firmware settings
+            report.firmware = check_firmware(args, report)
+    if len(machine.axes) == 1 and machine.axes[0].axis is None:
+        return machine.axes[0]
+    return machine
+
+
+def write_outputs(args: argparse.Namespace, report: Checked) -> None:
+    """Render ``report`` in ``--format`` to ``-o`` FILE (a one-line summary on stdout) or stdout."""
+    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
+        from wavecheck.sigrok.session import write_pulseview
+
+        for line in write_pulseview(args, axis_reports(report)):
+            print(line, file=sys.stderr)
+    text = RENDERERS[args.format](report, args)
+    if args.output:
+        from wavecheck.report.claims import requirement_line, verdict_line
+
+        atomic_write(args.output, text)
+        if getattr(args, "quiet", False):  # -q: the report file only
+            return
+        steps = sum(r.steps.count for r in axis_reports(report))
+        print(
+            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
+            f"report written to {args.output}"
+        )
+        missing = requirement_line(report, required(args))
+        if missing:
+            print(missing)
+    else:
+        sys.stdout.write(text)

@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
+from wavecheck.cli._reports import RENDERERS, finish_report, write_outputs
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
-from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
-from wavecheck.cli.config import add_tuning_arguments
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.live import START_GRACE
 from wavecheck.output import output_file
