@@ -16,9 +16,8 @@ One capture keeps the single-report behaviour and output shapes exactly.
 from __future__ import annotations
 
 import argparse
+import functools
 import glob
-import itertools
-import json
 import os
 import sys
 from collections.abc import Callable, Iterator
@@ -27,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.cli._axis_args import required
-from wavecheck.cli._reports import Checked, _dict, axis_reports, render_text_report
+from wavecheck.cli._formats import FORMATS, Checked, Part, axis_reports
 from wavecheck.cli._stepgen_args import latency_ns, stepgen_config
 from wavecheck.engine import MachineReport, Report
 from wavecheck.errors import UsageError, WavecheckError
@@ -36,7 +35,7 @@ from wavecheck.progress import activate
 from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 from wavecheck.units import format_time
-from wavecheck.verdict import overall_verdict, worst_exit_code
+from wavecheck.verdict import worst_exit_code
 
 __all__ = ["expand_captures", "run_checks", "summary_line"]
 
@@ -250,19 +249,6 @@ def _init_worker(
     _WORKER = (args, build_report, side)
 
 
-def _piece(args: argparse.Namespace, checked: Checked) -> tuple[str, Any]:
-    """The capture's piece of the document, and (JUnit) its counts."""
-    if args.format == "json":  # rendered here (in the worker), nested in "reports": [ … ]
-        text = json.dumps(_dict(checked, args), indent=2, ensure_ascii=False)
-        return text.replace("\n", "\n" + _NESTED), None
-    if args.format == "junit":
-        from wavecheck.report.junit import render_suites
-
-        suites = render_suites(axis_reports(checked), require=required(args))
-        return suites.text, suites.counts
-    return render_text_report(checked, args), None
-
-
 def _check_one(index: int, path: str) -> _Outcome:
     """Check one capture of several (in a worker process, or in this one with its side
     outputs)."""
@@ -277,7 +263,7 @@ def _check_one(index: int, path: str) -> _Outcome:
         return _Outcome(index, path, line, err.exit_code, error=text)
     if side is not None:
         side.add(checked)
-    piece, counts = _piece(args, checked)
+    piece, counts = FORMATS[args.format].piece(checked, args)
     return _Outcome(
         index,
         path,
@@ -319,9 +305,6 @@ def _outcomes(
         for future in as_completed(futures):
             yield from future.result()
 
-
-#: A report's indentation inside ``{"reports": [ … ]}`` (json.dumps with indent=2).
-_NESTED = " " * 4
 
 #: The most captures a worker checks per task (their summary lines print when the task ends).
 _MAX_BATCH = 16
@@ -401,41 +384,12 @@ def _write_many(
 def _document(
     args: argparse.Namespace, outcomes: list[_Outcome], spool: _Spool, code: int
 ) -> Iterator[str]:
-    """The document's text in pieces (each capture's from ``spool``)."""
-    ok = [o for o in outcomes if o.error is None]
-    errors = [(o.path, o.error) for o in outcomes if o.error is not None]
-    if args.format == "json":
-        verdict: str = overall_verdict([str(o.verdict) for o in ok]) if ok else "unchecked"  # type: ignore[arg-type]
-        if errors:
-            verdict = "error"
-        doc = {
-            "reports": [],
-            "errors": [{"path": p, "error": e} for p, e in errors],
-            "verdict": verdict,
-            "exit_code": code,
-        }
-        text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
-        if not ok:
-            yield text
-            return
-        # each report was rendered by its worker: json.dumps's own layout, spliced in
-        head, _, foot = text.partition('"reports": []')
-        yield f'{head}"reports": [\n{_NESTED}'
-        for k, o in enumerate(ok):
-            yield spool.get(o.index) if k == 0 else f",\n{_NESTED}" + spool.get(o.index)
-        yield "\n  ]" + foot
-    elif args.format == "junit":
-        from wavecheck.report.junit import Unreadable, join_suites, render_suites
-
-        unreadable = render_suites(errors=[Unreadable(p, e) for p, e in errors])
-        counts = [o.counts for o in ok if o.counts is not None] + [unreadable.counts]
-        pieces = (spool.get(o.index) for o in ok)
-        yield from join_suites(
-            itertools.chain(pieces, [unreadable.text] if errors else []),
-            [sum(c[k] for c in counts) for k in range(4)],
-        )
-    else:
-        for k, o in enumerate(ok):
-            yield ("\n" if k else "") + f"== {o.path} ==\n" + spool.get(o.index)
-        summary = [o.summary for o in ok] + [o.summary for o in outcomes if o.error is not None]
-        yield "\n== summary ==\n" + "\n".join(summary) + "\n"
+    """The document's text in pieces (each capture's from ``spool``), by its format."""
+    ok = [
+        Part(o.path, o.summary, o.verdict, o.counts, functools.partial(spool.get, o.index))
+        for o in outcomes
+        if o.error is None
+    ]
+    failed = [o for o in outcomes if o.error is not None]
+    errors = [(o.path, o.error) for o in failed if o.error is not None]
+    yield from FORMATS[args.format].join(ok, errors, [o.summary for o in failed], code)

@@ -1,6 +1,6 @@
-"""The reports of one capture, for ``check`` and ``watch``: the report-file options, a renderer
-per ``--format`` (:data:`RENDERERS`), ``--firmware`` findings added (:func:`finish_report`) and
-every output asked for written (:func:`write_outputs`).
+"""The reports of one capture, for ``check`` and ``watch``: the report-file options,
+``--firmware`` findings added (:func:`finish_report`) and every output asked for written
+(:func:`write_outputs`, the ``--format`` document by :mod:`wavecheck.cli._formats`).
 
 Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--html FILE.html``,
 ``--gtkw FILE.gtkw``, ``-j N``, ``-q/--quiet``, and the stepgen configuration options
@@ -10,30 +10,17 @@ Options added here (see :func:`add_report_arguments`): ``--plot FILE.png``, ``--
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from collections.abc import Callable
-from typing import Any
 
 from wavecheck.cli._axis_args import required
 from wavecheck.cli._firmware_args import check_firmware
+from wavecheck.cli._formats import FORMATS, Checked, axis_reports
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
-from wavecheck.engine import Report
 from wavecheck.output import atomic_write, figure_file, output_file
 from wavecheck.progress import QUIET_HELP
-from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
-from wavecheck.report.machine import MachineReport, machine_dict, render_machine_text
-from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
+from wavecheck.report.machine import MachineReport
 
-__all__ = [
-    "RENDERERS",
-    "add_report_arguments",
-    "finish_report",
-    "render_json_report",
-    "render_junit_report",
-    "render_text_report",
-    "write_outputs",
-]
+__all__ = ["add_report_arguments", "finish_report", "write_outputs"]
 
 
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
@@ -74,51 +61,6 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     add_stepgen_arguments(p)
 
 
-Checked = Report | MachineReport
-"""What one capture gives: a report, or one per axis."""
-
-
-def axis_reports(checked: Checked) -> list[Report]:
-    """The reports of ``checked``: its axes, or itself."""
-    return checked.axes if isinstance(checked, MachineReport) else [checked]
-
-
-def render_text_report(report: Checked, args: argparse.Namespace) -> str:
-    """The text report (``--max-violations`` listed)."""
-    cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
-    if isinstance(report, MachineReport):
-        return render_machine_text(report, cap, required(args))
-    return render_text(report, cap, required(args))
-
-
-def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
-    cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
-    if isinstance(report, MachineReport):
-        return machine_dict(report, cap, required(args))
-    return report_dict(report, cap, required(args))
-
-
-def render_json_report(report: Checked, args: argparse.Namespace) -> str:
-    """The JSON report (``--max-violations`` listed)."""
-    return json.dumps(_dict(report, args), indent=2, ensure_ascii=False) + "\n"
-
-
-def render_junit_report(report: Checked, args: argparse.Namespace) -> str:
-    """JUnit XML of one capture (a testsuite per axis)."""
-    from wavecheck.report.junit import render_junit
-
-    return render_junit(axis_reports(report), require=required(args))
-
-
-#: ``--format`` name → renderer(report, args) → text.
-RENDERERS: dict[str, Callable[[Checked, argparse.Namespace], str]] = {
-    # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
-    "text": render_text_report,
-    "json": render_json_report,
-    "junit": render_junit_report,
-}
-
-
 def finish_report(args: argparse.Namespace, machine: MachineReport) -> Checked:
     """Add ``--firmware`` findings; a single unnamed axis as its Report."""
     for report in machine.axes:
@@ -136,7 +78,7 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
 
         for line in write_pulseview(args, axis_reports(report)):
             print(line, file=sys.stderr)
-    text = RENDERERS[args.format](report, args)
+    text = FORMATS[args.format].render(report, args)
     if args.output:
         from wavecheck.report.claims import requirement_line, verdict_line
 

@@ -5,7 +5,7 @@ rule ``--require`` asks for was not decided (unchecked or indeterminate), 2 unus
 usage (one line, no traceback).
 
 The command is a thin layer: options → :func:`wavecheck.engine.check_source` → a renderer. New
-outputs register in :data:`wavecheck.cli._reports.RENDERERS` (``--format``); extra side outputs
+outputs register in :data:`wavecheck.cli._formats.FORMATS` (``--format``); extra side outputs
 (plots, HTML, GTKWave files) are options handled in :func:`wavecheck.cli._reports.write_outputs`.
 """
 
@@ -24,13 +24,8 @@ from wavecheck.cli._axis_args import (
 from wavecheck.cli._batch import expand_captures, run_checks
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
 from wavecheck.cli._firmware_args import add_firmware_arguments
-from wavecheck.cli._reports import (
-    RENDERERS,
-    Checked,
-    add_report_arguments,
-    finish_report,
-    write_outputs,
-)
+from wavecheck.cli._formats import FORMATS, Checked
+from wavecheck.cli._reports import add_report_arguments, finish_report, write_outputs
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
     check_steps_arguments,
@@ -80,7 +75,7 @@ def register(sub: Any) -> None:
     add_tuning_arguments(p)
     add_firmware_arguments(p)
     add_capture_arguments(p)
-    p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
+    p.add_argument("--format", choices=sorted(FORMATS), default="text", help="report format")
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
