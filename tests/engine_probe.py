@@ -30,7 +30,7 @@ from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import check_source
 from wavecheck.engine.sinks import StepCollector, StepSink
 from wavecheck.engine.verdicts import FAIL, INDETERMINATE, evaluate
-from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import Rule
 from wavecheck.units import parse_time
 

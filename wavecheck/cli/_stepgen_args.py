@@ -10,7 +10,7 @@ from fractions import Fraction
 
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config
 from wavecheck.units import BASE_PERIOD, LATENCY, option_ns
 
 __all__ = ["add_stepgen_arguments", "latency_ns", "stepgen_config"]

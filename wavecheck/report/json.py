@@ -23,7 +23,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
 from wavecheck.engine import MachineReport, Report, RuleResult, Violation
-from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
