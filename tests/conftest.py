@@ -6,6 +6,7 @@ import os
 import re
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -131,6 +132,25 @@ def _why(report: pytest.TestReport) -> str:
     return text if len(text) <= 100 else text[:99] + "…"
 
 
+#: How many tests the xdist workers deselected (each collects the whole run: the largest count).
+_WORKERS_DESELECTED = pytest.StashKey[int]()
+
+
+def pytest_deselected(items: list[pytest.Item]) -> None:
+    """In an xdist worker, count what ``-m`` left out for the controller's last line."""
+    if items and hasattr(items[0].config, "workeroutput"):
+        output = items[0].config.workeroutput  # type: ignore[attr-defined]
+        output["deselected"] = output.get("deselected", 0) + len(items)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: Any, error: Any) -> None:
+    """In the xdist controller: keep the workers' count of deselected tests."""
+    count = getattr(node, "workeroutput", {}).get("deselected", 0)
+    stash = node.config.stash
+    stash[_WORKERS_DESELECTED] = max(stash.get(_WORKERS_DESELECTED, 0), count)
+
+
 def pytest_unconfigure(config: pytest.Config) -> None:
     """The run's last line: what did not run, and why (issue 37)."""
     terminalreporter = config.pluginmanager.get_plugin("terminalreporter")
@@ -138,7 +158,7 @@ def pytest_unconfigure(config: pytest.Config) -> None:
         return
     stats = terminalreporter.stats
     skipped = [r for r in stats.get("skipped", []) if getattr(r, "longrepr", None) is not None]
-    deselected = len(stats.get("deselected", []))
+    deselected = len(stats.get("deselected", [])) or config.stash.get(_WORKERS_DESELECTED, 0)
     parts = []
     if deselected:
         expr = config.getoption("markexpr") or ""

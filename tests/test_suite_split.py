@@ -6,6 +6,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import SLOW
 
 REPO = Path(__file__).resolve().parent.parent
@@ -32,8 +34,10 @@ def test_make_test_leaves_the_slow_ones_to_test_all_and_ci() -> None:
     assert re.search(r"^make test-all$", ci, re.M)
 
 
-def test_the_last_line_says_what_did_not_run(pytester) -> None:
-    """A run with a skip and a deselected test ends with one line naming both, paths left out."""
+@pytest.mark.parametrize("workers", [[], ["-n", "2"]], ids=["one-process", "xdist"])
+def test_the_last_line_says_what_did_not_run(pytester, workers: list[str]) -> None:
+    """A run with a skip and a deselected test ends with one line naming both, paths left out
+    (with xdist too, whose workers deselect and tell the controller)."""
     pytester.makeconftest((REPO / "tests" / "conftest.py").read_text(encoding="utf-8"))
     pytester.makepyfile(
         test_x="""
@@ -51,7 +55,7 @@ def test_c():
 """
     )
     pytester.makeini("[pytest]\nmarkers =\n    slow: slow\n")
-    result = pytester.runpytest("-m", "not slow", "-p", "no:cacheprovider")
+    result = pytester.runpytest("-m", "not slow", "-p", "no:cacheprovider", *workers)
     last = result.outlines[-1]
     assert last.startswith('not run: 1 deselected (-m "not slow"')
     assert "2 skipped: 2 shared capture not present: …" in last
