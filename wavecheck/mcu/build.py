@@ -118,10 +118,11 @@ def _cached(name: str, key: str, product: str, make: Callable[[Path], None]) -> 
     return final / product
 
 
-def build_runner(simavr_src: Path) -> Path:
-    """The ``wavecheck-avr`` program, built with the patched simavr of ``simavr_src``."""
+def build_runner(simavr_src: Path, *, fixes: bool = True) -> Path:
+    """The ``wavecheck-avr`` program, built with the patched simavr of ``simavr_src`` (or, with
+    ``fixes=False``, with simavr as it is: the tests show what each fix changes)."""
     src = _source_tree(simavr_src, "simavr", "simavr/sim/avr_timer.c")
-    patch = (SIMAVR_FILES / "fixes.patch").read_bytes()
+    patch = (SIMAVR_FILES / "fixes.patch").read_bytes() if fixes else b"unpatched"
     runner = (SIMAVR_FILES / "wavecheck_avr.c").read_bytes()
     key = tree_hash(src, (patch, runner))
 
@@ -130,7 +131,8 @@ def build_runner(simavr_src: Path) -> Path:
             _need(tool)
         tree = work / "simavr-src"
         shutil.copytree(src, tree, ignore=shutil.ignore_patterns(".git", "obj-*", "*.o", "*.a"))
-        _run(["patch", "-p1", "-i", str(SIMAVR_FILES / "fixes.patch")], tree, "simavr patch")
+        if fixes:
+            _run(["patch", "-p1", "-i", str(SIMAVR_FILES / "fixes.patch")], tree, "simavr patch")
         sim = tree / "simavr"
         _run(["make", "obj", "config"], sim, "simavr")
         _run(["make", "libsimavr"], sim, "simavr")
