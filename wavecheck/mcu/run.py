@@ -160,4 +160,6 @@ def simulate(
                 f"{elf}: the simulated MCU stopped (invalid instruction or sleep with interrupts "
                 f"off) at cycle {end_cycle}"
             )
-    return SimRun(end, end_cycle, tuple(printed))
+        run = SimRun(end, end_cycle, tuple(printed))
+        accept(run)
+    return run
