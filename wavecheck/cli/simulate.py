@@ -175,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
         target = ["build/main.elf", f"CLOCK={int(clock)}"]
         elf = build_firmware(grbl_src, "grbl/stepper.c", replace, target, "build/main.elf")
     check_elf(elf, grbl.MCU)
-    names = grbl.status_names(grbl_src or (Path(args.grbl_src) if args.grbl_src else None))
+    names, alarms = grbl.status_names(grbl_src or (Path(args.grbl_src) if args.grbl_src else None))
     outcome = simulate(
         runner,
         elf,
@@ -188,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
         int(max_s * clock),
         int(tail_s * clock),
         float(wall_s),
-        lambda r: grbl.replies(r, sent, names),
+        lambda r: grbl.replies(r, sent, names, alarms),
     )
     dump = grbl.settings_dump(outcome, sent)
     dump_text = "".join(f"{ln}\n" for ln in dump)

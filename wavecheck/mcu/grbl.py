@@ -9,6 +9,7 @@ Facts from grbl 1.1h's source (gnea/grbl bfb67f0):
   serial input was flushed at reset: nothing may be sent before it;
 - every line is answered ``ok`` or ``error:N`` (``grbl/report.c:116-118``), N one of the
   ``STATUS_*`` codes of ``grbl/report.h``; a blank line is answered ``ok`` (``protocol.c:93-95``);
+- ``$20=1`` (soft limits) is refused while ``$22`` (homing) is 0 (``settings.c:264-266``);
 - ``G4`` waits for the planner to empty before it dwells (``motion_control.c``, ``mc_dwell`` calls
   ``protocol_buffer_synchronize``): its ``ok`` comes after the last step of the moves before it.
 """
@@ -52,6 +53,14 @@ ENABLE_PIN = "STEPPERS_DISABLE"
 SYNC = "G4 P0"
 _STATUS = re.compile(r"#define\s+STATUS_(\w+)\s+(\d+)")
 _SETTING = re.compile(r"^\$(\d+)=(\S+)$")
+_ALARM = re.compile(r"#define\s+EXEC_ALARM_(\w+)\s+(\d+)")
+#: The hint of an alarm the simulation's missing switches cause (by the first word of its name).
+_ALARM_HINTS = {
+    "soft": ": the simulated machine is not homed and starts at machine position 0; run with "
+    "$20=0, or keep the job inside the soft limits",
+    "hard": ": the simulated limit inputs are unconnected; run with $21=0",
+    "homing": ": the simulation has no limit switches to home on; run with $22=0 and no $H",
+}
 
 
 @dataclass(frozen=True)
@@ -98,6 +107,7 @@ def job(settings: Path | None, gcode: Path) -> Job:
                     f"{settings}:{k}: '{text}' is not a grbl setting ($N=V); G-code goes in --gcode"
                 )
             lines.append(Line(text, str(settings), k))
+    lines = _homing_first(lines)
     dump = len(lines)
     lines.append(Line("$$", None, 0))
     lines += [Line(text, str(gcode), k) for k, text in _read(gcode, "G-code")]
@@ -107,18 +117,32 @@ def job(settings: Path | None, gcode: Path) -> Job:
     return Job(tuple(lines), dump)
 
 
-def status_names(grbl_src: Path | None) -> dict[int, str]:
-    """``error:N`` → its name in ``grbl/report.h`` (``gcode unsupported command``), if at hand."""
+def _homing_first(lines: list[Line]) -> list[Line]:
+    """A ``$$`` dump lists ``$20`` (soft limits) before ``$22`` (homing), but grbl refuses
+    ``$20=1`` while homing is off (``settings.c:264-266``, error:10): send ``$22`` first, so that
+    the dump sets the state it shows."""
+    homing = [ln for ln in lines if ln.text.replace(" ", "").startswith("$22=")]
+    return homing + [ln for ln in lines if ln not in homing] if homing else lines
+
+
+def status_names(grbl_src: Path | None) -> tuple[dict[int, str], dict[int, str]]:
+    """``error:N`` → its name in ``grbl/report.h`` (``gcode unsupported command``) and
+    ``ALARM:N`` → its name in ``grbl/system.h`` (``soft limit``), if the source is at hand."""
     if grbl_src is None:
-        return {}
-    try:
-        text = (grbl_src / "grbl" / "report.h").read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return {}
-    return {int(n): name.lower().replace("_", " ") for name, n in _STATUS.findall(text)}
+        return {}, {}
+    out: list[dict[int, str]] = []
+    for header, pattern in (("report.h", _STATUS), ("system.h", _ALARM)):
+        try:
+            text = (grbl_src / "grbl" / header).read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            text = ""
+        out.append({int(n): k.lower().replace("_", " ") for k, n in pattern.findall(text)})
+    return out[0], out[1]
 
 
-def replies(run: SimRun, sent: Job, names: dict[int, str]) -> list[tuple[Line, Printed]]:
+def replies(
+    run: SimRun, sent: Job, names: dict[int, str], alarms: dict[int, str]
+) -> list[tuple[Line, Printed]]:
     """Pair each line sent with grbl's answer.
 
     Raises:
@@ -131,10 +155,18 @@ def replies(run: SimRun, sent: Job, names: dict[int, str]) -> list[tuple[Line, P
             "firmware for this MCU, or another clock or baud rate"
         )
     answers = [p for p in _after_banner(run) if p.text.startswith(("ok", "error"))]
-    for p in _after_banner(run):
-        if p.text.startswith("ALARM"):
-            raise ConfigError(f"grbl raised {p.text} at {p.cycle / CLOCK_HZ:.6f} s of the run")
     pairs = list(zip(sent.lines, answers, strict=False))
+    alarm = next((p for p in _after_banner(run) if p.text.startswith("ALARM")), None)
+    if alarm is not None:
+        code = alarm.text.partition(":")[2]
+        name = alarms.get(int(code), "") if code.isdigit() else ""
+        line = sent.lines[len(pairs)] if len(pairs) < len(sent.lines) else sent.lines[-1]
+        where = f"{line.path}:{line.lineno}" if line.path else "wavecheck's own line"
+        hint = _ALARM_HINTS.get(name.split(" ")[0], "")
+        raise ConfigError(
+            f"{where}: grbl raised {alarm.text}{f' ({name})' if name else ''} at "
+            f"{alarm.cycle / CLOCK_HZ:.6f} s, running '{line.text}' or a line before it{hint}"
+        )
     for line, answer in pairs:
         if answer.text.startswith("error"):
             code = answer.text.partition(":")[2]

@@ -74,3 +74,23 @@ def test_settings_that_are_gcode(tmp_path, capsys):
     s.write_text("$0=10\nG1 X1\n")
     _run(tmp_path, "G1 X1 F100\n", "--settings", str(s))
     assert f"{s}:2: 'G1 X1' is not a grbl setting" in _error(capsys)
+
+
+def test_an_alarm_names_the_line_and_gives_the_hint(grbl, tmp_path, capsys):
+    s = tmp_path / "s.txt"
+    s.write_text("$20=1\n$22=1\n")  # as a $$ dump lists them: $20 before $22 (sent after it)
+    g = _run(tmp_path, "G21\nG1 X5 F500\n", "--settings", str(s))
+    line = _error(capsys)
+    assert f"{g}:2: grbl raised ALARM:2 (soft limit)" in line and "$20=0" in line
+
+
+def test_soft_limits_from_a_dump_inside_them(grbl, tmp_path, capsys):
+    s, g = tmp_path / "s.txt", tmp_path / "job.nc"
+    s.write_text("$20=1\n$22=1\n$130=200\n")
+    g.write_text("G1 X-5 F500\n")  # machine space is negative (grbl's default, config.h)
+    vcd = tmp_path / "out.vcd"
+    code = main(
+        ["simulate", "grbl", "--gcode", str(g), "--settings", str(s), "--vcd", str(vcd)]
+        + ["--drive", "drv8825", "--grbl-src", str(GRBL_SRC), "--simavr-src", str(SIMAVR_SRC)]
+    )
+    assert code == 0 and "steps:   1250" in capsys.readouterr().out

@@ -14,9 +14,11 @@
  * Standard input: the lines to send, one per line. Nothing is sent before a UART line that
  * contains BANNER (at once if BANNER is empty); then each line is sent (at the UART's own byte rate, with its fifo's
  * XON/XOFF) and the next one only after a reply line starting "ok" or "error". After the last
- * reply the simulation runs TAIL_CYCLES more and stops. It never runs past MAX_CYCLES.
+ * reply the simulation runs TAIL_CYCLES more and stops. It never runs past MAX_CYCLES, and it
+ * stops at a line starting "ALARM" (grbl's alarm: it resets and drops the line in flight).
  * Standard output: "CYCLE LINE" for every line the firmware prints, then one of
- *   "END done CYCLE", "END limit CYCLE", "END nobanner CYCLE", "END crashed CYCLE".
+ *   "END done CYCLE", "END limit CYCLE", "END nobanner CYCLE", "END alarm CYCLE",
+ *   "END crashed CYCLE".
  * Exit status: 0 when it ran (whatever the end), 2 for bad arguments or an unloadable ELF.
  */
 #include <inttypes.h>
@@ -96,6 +98,10 @@ got_line(void)
 		cur_line++;
 		cur_pos = 0;
 		state = cur_line < nlines ? SENDING : TAIL;
+	}
+	if (state != WAIT_BANNER && strncmp(rx, "ALARM", 5) == 0) {
+		end_reason = "alarm";	/* grbl resets and flushes its input: no reply will come */
+		state = STOP;
 	}
 	if (state == TAIL && !stop_at)
 		stop_at = 1;	/* set by the main loop */
@@ -265,6 +271,8 @@ main(int argc, char *argv[])
 			end_reason = "crashed";
 			break;
 		}
+		if (state == STOP)
+			break;
 		if (state == TAIL && stop_at == 1)
 			stop_at = avr->cycle + tail_cycles;
 		if (state == TAIL && avr->cycle >= stop_at)
