@@ -29,6 +29,7 @@ from wavecheck.cli._steps_args import add_steps_arguments
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
+from wavecheck.sigrok.session import add_pulseview_argument
 from wavecheck.units import parse_frequency, parse_time
 
 __all__ = ["register", "run"]
@@ -123,6 +124,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--max-violations", type=int, default=None, metavar="N")
     add_report_arguments(p)
+    add_pulseview_argument(p)
     add_steps_arguments(p)
     add_engine_arguments(p)
     p.set_defaults(func=run)
