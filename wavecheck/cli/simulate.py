@@ -219,6 +219,9 @@ def _check(args: argparse.Namespace, dump_text: str) -> int:
             args.invert = ["enable"]
     if args.firmware or not args.check_settings:
         return check.run(args)
+    if args.settings_out:  # the report names a file that stays
+        args.firmware = args.settings_out
+        return check.run(args)
     with tempfile.TemporaryDirectory(prefix="wavecheck-grbl-") as tmp:
         dump_path = Path(tmp) / "grbl-settings.txt"
         dump_path.write_text(dump_text, encoding="utf-8")

@@ -115,3 +115,32 @@ def test_the_interrupt_response_is_four_cycles(
     elf = build_avr(tmp_path, "response", RESPONSE)
     assert high_widths(_pulse(runner, elf, tmp_path)) == [10]
     assert high_widths(_pulse(runner_unpatched, elf, tmp_path)) == [6]
+
+
+# Fix 2, its other half: a stopped timer holds the count it reached (datasheet: TCNT0 keeps its
+# value while the clock select is 0). Started at clk/8 from 0, stopped 101 cycles later (the OUT
+# that starts it, then 100 NOPs), it has counted 12 or 13 times (the first count 1..8 cycles after
+# the start); the program shows TCNT0 on PORTB.
+STOPPED = r"""
+#include <avr/io.h>
+int main(void) {
+    DDRB = 0xff; TCCR0A = 0; TCCR0B = 0; TCNT0 = 0;
+    asm volatile("ldi r24, 2\n\tout %0, r24\n\t.rept 100\n\tnop\n\t.endr\n\tout %0, __zero_reg__"
+                 :: "I"(_SFR_IO_ADDR(TCCR0B)) : "r24");
+    PORTB = TCNT0;
+    for (;;) {}
+}
+"""
+
+
+def _count(runner: Path, elf: Path, tmp: Path) -> int:
+    vcd = tmp / f"count-{runner.parent.name}.vcd"
+    run_avr(runner, elf, vcd, [f"B{k}=B.{k}" for k in range(8)])
+    changes, _ = vcd_changes(vcd)
+    return sum(changes[f"B{k}"][-1][1] << k for k in range(8))
+
+
+def test_a_stopped_timer_keeps_its_count(runner: Path, runner_unpatched: Path, tmp_path: Path):
+    elf = build_avr(tmp_path, "stopped", STOPPED)
+    assert _count(runner, elf, tmp_path) in (12, 13)
+    assert _count(runner_unpatched, elf, tmp_path) == 0  # the count is lost at the stop
