@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +20,7 @@ def test_every_block_runs_and_gives_the_verdict_the_page_says(grbl, runner, tmp_
     assert len(blocks) == 3
     # the page runs from the checkout's root, where ../shared/firmware-src is the source
     (tmp_path / "repo").mkdir()
+    shutil.copytree(REPO / "docs" / "grbl", tmp_path / "repo" / "docs" / "grbl")
     (tmp_path / "shared").symlink_to(GRBL_SRC.parents[1])
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     codes = []
