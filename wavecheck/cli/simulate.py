@@ -163,6 +163,8 @@ def run(args: argparse.Namespace) -> int:
         path = getattr(args, name)
         if path is not None and not Path(path).is_file():
             raise UsageError(f"{path}: no such file (--{name.replace('_', '-')})")
+    if not args.map and (not args.axes or set(args.axes.lower()) - set("xyz")):
+        raise UsageError(f"--axes {args.axes}: grbl's axes are x, y and z (e.g. --axes xy)")
     sent = grbl.job(Path(args.settings) if args.settings else None, Path(args.gcode))
 
     runner = build_runner(_source(args, "simavr_src"))
@@ -173,7 +175,10 @@ def run(args: argparse.Namespace) -> int:
         assert grbl_src is not None
         replace = {}
         if args.config_h:
-            replace["grbl/config.h"] = Path(args.config_h).read_bytes()
+            try:
+                replace["grbl/config.h"] = Path(args.config_h).read_bytes()
+            except OSError as err:
+                raise UsageError(f"{args.config_h}: cannot read it: {err.strerror}") from None
         target = ["build/main.elf", f"CLOCK={int(clock)}"]
         elf = build_firmware(grbl_src, "grbl/stepper.c", replace, target, "build/main.elf")
     check_elf(elf, grbl.MCU)
@@ -208,9 +213,7 @@ def _check(args: argparse.Namespace, dump_text: str) -> int:
     args.capture = [args.vcd]
     invert_enable = "$4=1" not in dump_text.split()
     if not args.map:
-        axes = [a for a in args.axes.lower() if a in "xyz"]
-        if not axes:
-            raise UsageError(f"--axes {args.axes}: name grbl axes among x, y, z")
+        axes = list(dict.fromkeys(args.axes.lower()))
         maps = [f"{a}.step={a.upper()}_STEP,{a}.dir={a.upper()}_DIR" for a in axes]
         if len(axes) == 1:
             maps = [f"step={axes[0].upper()}_STEP,dir={axes[0].upper()}_DIR"]

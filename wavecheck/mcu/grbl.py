@@ -51,6 +51,8 @@ PINS = {
 ENABLE_PIN = "STEPPERS_DISABLE"
 #: The line sent last: its ``ok`` comes when every step before it was made.
 SYNC = "G4 P0"
+#: The longest line sent (the runner reads its input in 4096-byte lines).
+_MAX_SENT = 4000
 _STATUS = re.compile(r"#define\s+STATUS_(\w+)\s+(\d+)")
 _SETTING = re.compile(r"^\$(\d+)=(\S+)$")
 _ALARM = re.compile(r"#define\s+EXEC_ALARM_(\w+)\s+(\d+)")
@@ -90,6 +92,11 @@ def _read(path: Path, what: str) -> list[tuple[int, str]]:
     out = []
     for k, raw in enumerate(text.splitlines(), 1):
         line = raw.strip()
+        if len(line) > _MAX_SENT:
+            raise UsageError(
+                f"{path}:{k}: a line of {len(line)} characters, more than wavecheck sends "
+                f"({_MAX_SENT}); grbl's own limit is LINE_BUFFER_SIZE (80, protocol.h:32)"
+            )
         if line and line != "%":  # a blank line is answered ok and changes nothing
             out.append((k, line))
     return out

@@ -94,3 +94,13 @@ def test_soft_limits_from_a_dump_inside_them(grbl, tmp_path, capsys):
         + ["--drive", "drv8825", "--grbl-src", str(GRBL_SRC), "--simavr-src", str(SIMAVR_SRC)]
     )
     assert code == 0 and "steps:   1250" in capsys.readouterr().out
+
+
+def test_a_line_longer_than_the_runner_sends(tmp_path, capsys):
+    g = _run(tmp_path, "G1 X1 F100\nG1 X2 (" + "a" * 5000 + ")\n")
+    assert f"{g}:2: a line of 5008 characters" in _error(capsys)
+
+
+def test_axes_that_grbl_has_not(tmp_path, capsys):
+    _run(tmp_path, "G1 X1 F100\n", "--axes", "xa")
+    assert "--axes xa: grbl's axes are x, y and z" in _error(capsys)
