@@ -30,8 +30,10 @@ __all__ = [
     "MCU",
     "PINS",
     "Job",
+    "Line",
     "job",
     "replies",
+    "settings_dump",
     "status_names",
 ]
 
@@ -172,7 +174,7 @@ def replies(
         hint = _ALARM_HINTS.get(name.split(" ")[0], "")
         raise ConfigError(
             f"{where}: grbl raised {alarm.text}{f' ({name})' if name else ''} at "
-            f"{alarm.cycle / CLOCK_HZ:.6f} s, running '{line.text}' or a line before it{hint}"
+            f"{alarm.cycle / run.clock_hz:.6f} s, running '{line.text}' or a line before it{hint}"
         )
     for line, answer in pairs:
         if answer.text.startswith("error"):
@@ -187,7 +189,7 @@ def replies(
         last = pairs[-1][0] if pairs else None
         at = f"; the last line answered: {last.path}:{last.lineno}" if last and last.path else ""
         raise ConfigError(
-            f"the job did not finish within the simulated time limit ({run.end_cycle / CLOCK_HZ:g} s)"
+            f"the job did not finish within the simulated time limit ({run.end_cycle / run.clock_hz:g} s)"
             f"{at}: raise --max-time, or shorten the job"
         )
     return pairs

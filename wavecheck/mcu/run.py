@@ -54,11 +54,12 @@ class Printed:
 @dataclass(frozen=True)
 class SimRun:
     """The outcome of one simulation: how it ended (``done``, ``limit``, ``nobanner``,
-    ``crashed``), at which cycle, and what the firmware printed."""
+    ``alarm``), at which cycle of the MCU's clock, and what the firmware printed."""
 
     end: str
     end_cycle: int
     printed: tuple[Printed, ...]
+    clock_hz: int
 
 
 def check_elf(path: Path, mcu: str) -> None:
@@ -160,6 +161,6 @@ def simulate(
                 f"{elf}: the simulated MCU stopped (invalid instruction or sleep with interrupts "
                 f"off) at cycle {end_cycle}"
             )
-        run = SimRun(end, end_cycle, tuple(printed))
+        run = SimRun(end, end_cycle, tuple(printed), clock_hz)
         accept(run)
     return run
