@@ -21,12 +21,14 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from wavecheck.cli import check
 from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments
 from wavecheck.cli._capture_args import add_capture_arguments
+from wavecheck.cli._check_flow import run_check
+from wavecheck.cli._firmware_args import add_firmware_arguments
+from wavecheck.cli._formats import FORMATS
 from wavecheck.cli._reports import add_report_arguments
 from wavecheck.cli._steps_args import add_steps_arguments
-from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.sigrok.session import add_pulseview_argument
@@ -118,7 +120,7 @@ def register(sub: Any) -> None:
     add_tuning_arguments(p)
     add_firmware_arguments(p)
     add_capture_arguments(p)
-    p.add_argument("--format", choices=sorted(check.RENDERERS), default="text")
+    p.add_argument("--format", choices=sorted(FORMATS), default="text")
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
@@ -221,12 +223,12 @@ def _check(args: argparse.Namespace, dump_text: str) -> int:
         if invert_enable and not args.invert:
             args.invert = ["enable"]
     if args.firmware or not args.check_settings:
-        return check.run(args)
+        return run_check(args)
     if args.settings_out:  # the report names a file that stays
         args.firmware = args.settings_out
-        return check.run(args)
+        return run_check(args)
     with tempfile.TemporaryDirectory(prefix="wavecheck-grbl-") as tmp:
         dump_path = Path(tmp) / "grbl-settings.txt"
         dump_path.write_text(dump_text, encoding="utf-8")
         args.firmware = str(dump_path)
-        return check.run(args)
+        return run_check(args)
