@@ -10,7 +10,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.wavecheck.mcu.helpers import GRBL_SRC, REPO, SIMAVR_SRC
+
+#: grbl simulated end to end (make test-all and CI run it; make test leaves it out)
+pytestmark = pytest.mark.slow
 
 DOC = REPO / "docs" / "firmware-simulation.md"
 

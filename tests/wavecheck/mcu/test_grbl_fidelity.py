@@ -22,6 +22,9 @@ from tests.wavecheck.mcu.helpers import (
 )
 from wavecheck.cli import main
 
+#: grbl simulated end to end (make test-all and CI run it; make test leaves it out)
+pytestmark = pytest.mark.slow
+
 #: G1 X10 and back along X (G90).
 THERE_AND_BACK = "G1 X10 F500\nG1 X0\n"
 #: Five X reversals at speed: X is the axis with more than half the steps of the dominant Y, so

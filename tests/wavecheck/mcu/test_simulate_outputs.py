@@ -6,8 +6,13 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import pytest
+
 from tests.wavecheck.mcu.helpers import GRBL_SRC, SIMAVR_SRC
 from wavecheck.cli import main
+
+#: grbl simulated end to end (make test-all and CI run it; make test leaves it out)
+pytestmark = pytest.mark.slow
 
 SETTINGS = "$0=3\n$100=250\n$110=500\n$120=10\n"
 JOB = "G1 X2 F500\nG1 X0\n"
