@@ -17,7 +17,9 @@ $(VENV_STAMP): pyproject.toml
 # Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks,
 # the protocol decoder's tests), pulseview (the decoder drawn under Xvfb), chromium (the HTML
 # report test), gtkwave + xvfb (the save-file test; gtkwave's fst2vcd reads FST), iverilog + ghdl
-# (the simulators whose VCD, FST and GHW dumps the format tests compare). Installed when missing.
+# (the simulators whose VCD, FST and GHW dumps the format tests compare), gcc-avr + avr-libc +
+# binutils-avr + libelf-dev + patch (wavecheck simulate: grbl and simavr built from source).
+# Installed when missing.
 system-deps:
 	@missing=""; \
 	command -v sigrok-cli >/dev/null || missing="$$missing sigrok-cli"; \
@@ -27,6 +29,9 @@ system-deps:
 	command -v xvfb-run   >/dev/null || missing="$$missing xvfb xauth"; \
 	command -v iverilog   >/dev/null || missing="$$missing iverilog"; \
 	command -v ghdl       >/dev/null || missing="$$missing ghdl"; \
+	command -v avr-gcc    >/dev/null || missing="$$missing gcc-avr avr-libc binutils-avr"; \
+	test -f /usr/include/libelf.h    || missing="$$missing libelf-dev"; \
+	command -v patch      >/dev/null || missing="$$missing patch"; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "installing from Debian:$$missing"; \
