@@ -19,21 +19,19 @@ from typing import Any
 from wavecheck.cli._axis_args import (
     add_axis_arguments,
     add_engine_arguments,
-    check_options,
 )
 from wavecheck.cli._batch import expand_captures, run_checks
-from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
+from wavecheck.cli._capture_args import add_capture_arguments
+from wavecheck.cli._check_flow import build_report
 from wavecheck.cli._firmware_args import add_firmware_arguments
 from wavecheck.cli._formats import FORMATS, Checked
-from wavecheck.cli._reports import add_report_arguments, finish_report, write_outputs
+from wavecheck.cli._reports import add_report_arguments, write_outputs
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
     check_steps_arguments,
     steps_csv_path,
-    steps_writer,
 )
 from wavecheck.cli._tuning_args import add_tuning_arguments
-from wavecheck.engine import check_source, start
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
@@ -92,29 +90,6 @@ def register(sub: Any) -> None:
     add_steps_arguments(p)
     add_engine_arguments(p)
     p.set_defaults(func=run)
-
-
-def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = None) -> Checked:
-    """Read ``path`` once and check every axis of ``args`` against its drive (and write the
-    steps to ``steps_csv`` as they are decoded)."""
-    if args.max_violations is not None and args.max_violations < 0:
-        raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    options = check_options(args)
-    source = source_from_args(args, path)
-    if steps_csv is None:
-        return finish_report(args, check_source(source, options))
-    writer, sinks = steps_writer(args, steps_csv, source)
-    try:
-        machine, blocks = start(source, options, step_sinks=sinks)
-        for block in blocks:
-            machine.feed(block)
-            writer.settled(machine.settled(block.end))
-        checked = finish_report(args, machine.finish(source.capture()))
-    except BaseException:
-        writer.abort()
-        raise
-    writer.close()
-    return checked
 
 
 class _Refusing(argparse.ArgumentParser):
