@@ -79,6 +79,7 @@ from wavecheck.lattice.period import (
 from wavecheck.lattice.reading import (
     MAX_LOG10_CHANCE,
     MIN_EDGES,
+    MIN_GAP_FRACTION,
     EdgeKinds,
     Evaluation,
     Floats,
@@ -90,6 +91,7 @@ from wavecheck.lattice.reading import (
     catch_up,
     evaluate,
     significance,
+    widest_gap,
 )
 from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.progress import ProgressCallback, no_progress
@@ -213,10 +215,35 @@ class LatencyReport:
     rule: str = ""
 
     @property
+    def unestablished(self) -> str:
+        """Why the worst lateness is not established ("" when it is): no lattice, lateness of a
+        period or more (a lower bound only), fewer than :data:`ESTABLISH_EDGES` edge times, or
+        readings the capture cannot tell apart."""
+        if not self.lattice:
+            return self.reason
+        if self.catch_up is not None:
+            return (
+                f"invocations a period or more late (at least "
+                f"{format_ns(self.catch_up.at_least_ns)}, first at "
+                f"{float(self.catch_up.first_ns) * 1e-9:.6g} s): only a lower bound is seen"
+            )
+        if len(self.lateness_num) < ESTABLISH_EDGES:
+            return (
+                f"only {len(self.lateness_num)} edge times (at least {ESTABLISH_EDGES} are needed "
+                "to establish a worst lateness)"
+            )
+        if self.candidates:
+            figures = [self.max_lateness_ns] + [c.max_lateness_ns for c in self.candidates]
+            return (
+                f"the capture cannot tell {len(figures)} readings of the lattice apart (worst "
+                f"lateness {' or '.join(format_ns(f) for f in figures)})"
+            )
+        return ""
+
+    @property
     def established(self) -> bool:
-        """The worst lateness is known: a lattice, no lateness of a period or more, and at least
-        :data:`ESTABLISH_EDGES` edge times."""
-        return self.lattice and self.catch_up is None and len(self.lateness_num) >= ESTABLISH_EDGES
+        """The worst lateness is known (:attr:`unestablished` gives no reason against it)."""
+        return not self.unestablished
 
     # -- exact figures ----------------------------------------------------------------------
     def lateness_ns_at(self, i: int) -> Fraction:
@@ -371,6 +398,9 @@ def analyse_times(
     times = np.asarray(times, dtype=np.int64)
     mask = np.ones(len(times), np.int64) if channel_mask is None else channel_mask
     res_ticks = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
+    grid = sample_grid(times, tick_ns, res_ticks)
+    if grid:  # the analyzer's sample period, or exact times that all fall on it: the same figures
+        res_ticks, resolution_ns = grid, grid * tick_ns
     report = LatencyReport(
         path=path,
         tick_ns=tick_ns,
@@ -388,7 +418,7 @@ def analyse_times(
             f"{2 if given else MIN_EDGES} are needed{'' if given else ' to infer a period'})"
         )
         return report
-    pmin, pmax = limits(tick_ns, res_ticks)
+    pmin, pmax = limits(tick_ns, res_ticks)  # a lattice of the sample grid is none
     if period_ns is not None:
         period = Fraction(period_ns) / tick_ns
         ev = evaluate(times, period, res_ticks, kinds)
@@ -406,7 +436,24 @@ def analyse_times(
             report.reason = _not_lattice(why.format(period=format_ns(p_ticks * tick_ns)))
             return report
         ev, env = found, float(found.fold.period)
+    if grid:
+        report.notes.append(
+            f"every edge time is a whole multiple of {format_ns(resolution_ns)} apart: taken as "
+            "the analyzer's sample period, which the file does not state (each figure is exact to "
+            "± that; a lattice of that grid is the analyzer's, not a thread's)"
+        )
     return _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
+
+
+def sample_grid(times: Ints, tick_ns: Fraction, res_ticks: int) -> int:
+    """The analyzer's sample period (ticks) when the file states a finer one (or none) but every
+    edge time is a multiple of it apart, it is shorter than any base period, and at least
+    :data:`ESTABLISH_EDGES` edges show it (fewer may share a grid by chance); else 0. A 500 kHz analyzer's 2 µs grid, exported with 1 ns
+    timestamps, is such a grid: a lattice commensurate with it is the analyzer's, not a thread's."""
+    if len(times) < ESTABLISH_EDGES:
+        return 0
+    g = int(np.gcd.reduce(np.diff(times)))
+    return g if g > max(res_ticks, 1) and g * tick_ns < MIN_PERIOD_NS else 0
 
 
 def _fill(
@@ -454,6 +501,13 @@ def _fill(
             f"{float(report.period_ns):.6g} ns; more edges are needed when lateness is this "
             "close to a period)"
         )
+    gap, need = widest_gap(lat, fold.a), max(MIN_GAP_FRACTION * fold.a, 2 * q * fold.b)
+    if gap < need:
+        bad.append(
+            f"no empty arc between the edges' phases at {float(report.period_ns):.6g} ns (the "
+            f"widest is {gap / fold.a:.1%} of the period, at least {need / fold.a:.1%} is needed): "
+            "a thread that is never a period late leaves part of each period without edges"
+        )
     collisions = reading.collisions
     if collisions > allowance(len(times)) + int(np.count_nonzero(bursts(times, pmin))):
         bad.append(
@@ -498,8 +552,8 @@ def _fill(
         report.candidates.append(Candidate(fold.period * tick, r.max_lateness * tick, _how(r)))
     if report.candidates:
         report.notes.append(
-            "the capture cannot tell these readings apart; the figures are those of the one "
-            "with the largest lateness, the one to plan from"
+            "the capture cannot tell these readings apart (so the worst lateness is not "
+            "established); the figures are those of the one with the largest lateness"
         )
     if given and abs(env - float(fold.period)) * span_p > q + float(fit.p99):
         drift = (env / float(fold.period) - 1) * 1e6
@@ -560,6 +614,7 @@ def common_period(
     res = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
     if len(times) < MIN_EDGES:
         return None, f"too few steps ({len(times)})"
+    res = sample_grid(times, tick_ns, res) or res
     pmin, pmax = limits(tick_ns, res)
     combs = coarse(times, pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
     if not combs:
@@ -568,6 +623,8 @@ def common_period(
     p, err = grow(times, combs[0], (i + j) // 2, float(max(res, 1)), no_progress, 0.0)
     if not pmin <= p <= pmax:
         return None, "no base-thread period fits"
+    if not math.isfinite(err):
+        return None, "the comb's period could not be refined on the floor of the lateness"
     ev = evaluate(times, exact(p, err, times), res, None, 1 << 14, False)
     fold = ev.fold
     lat = fold.lateness(ev.readings[0].anchor)[1]

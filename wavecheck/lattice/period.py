@@ -450,15 +450,20 @@ def _up(
 def exact(p: float, err: float, times: Ints) -> Fraction:
     """The rational with the smallest denominator within ``err`` ticks of ``p`` (at least a
     millionth of a tick; the nearest of them), its denominator small enough for exact int64
-    arithmetic over the capture."""
-    half = Fraction(max(err, 1e-6)).limit_denominator(10**9)
+    arithmetic over the capture. An ``err`` that is not finite (the floor of the lateness gave
+    no line to refine on) leaves ``p`` as it is, to that denominator."""
+    if not math.isfinite(p) or p <= 0:
+        raise ValueError(f"a period must be finite and positive, got {p} ticks")
     centre = Fraction(p).limit_denominator(10**12)
+    bmax = max(1, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4)
+    if not math.isfinite(err):
+        return centre.limit_denominator(bmax)
+    half = Fraction(max(err, 1e-6)).limit_denominator(10**9)
     lo, hi = max(centre - half, Fraction(1, 10**9)), centre + half
     b = simplest_between(lo, hi).denominator
     exact = Fraction(round(centre * b), b)  # the nearest with that denominator
     if not lo <= exact <= hi:
         exact = simplest_between(lo, hi)
-    bmax = max(1, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4)
     return exact if exact.denominator <= bmax else centre.limit_denominator(bmax)
 
 
