@@ -70,6 +70,7 @@ from wavecheck.lattice.period import (
     WINDOW_EDGES,
     coarse,
     densest,
+    dither,
     exact,
     grow,
     infer,
@@ -616,7 +617,7 @@ def common_period(
         return None, f"too few steps ({len(times)})"
     res = sample_grid(times, tick_ns, res) or res
     pmin, pmax = limits(tick_ns, res)
-    combs = coarse(times, pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
+    combs = coarse(dither(times, res), pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
     if not combs:
         return None, "no periodic comb in the steps' timing"
     i, j = densest(times, int(64 * WINDOW_EDGES * combs[0]))

@@ -37,6 +37,7 @@ __all__ = [
     "WINDOW_EDGES",
     "coarse",
     "densest",
+    "dither",
     "exact",
     "grow",
     "infer",
@@ -61,6 +62,12 @@ WINDOW_EDGES = 1 << 14
 
 #: Edges the comb search looks at, and refines its periods on (exact harmonic sums).
 COMB_EDGES = 2048
+
+
+#: Submultiples p/m of a comb's period tried as the thread's: a constant step rate a/b of the
+#: thread's repeats every b periods (a cruise at 0.3 of the top rate: 3 steps in 10 periods), and
+#: the comb may find that pattern's period.
+SUBMULTIPLES = 16
 
 
 #: Edges of the first window P is refined on: enough that the widest empty arc of their phases
@@ -366,7 +373,7 @@ def _down(
     times: Ints, coarse: list[float], res: int, kinds: EdgeKinds | None, pmin: float, pmax: float
 ) -> float | None:
     """The thread among the ``coarse`` periods, their submultiples p/m and the multiples of the
-    best of those (m ≤ 8), on a stretch of edges. Among those with no more double writes than
+    best of those (m ≤ :data:`SUBMULTIPLES`), on a stretch of edges. Among those with no more double writes than
     the fewest: when some read as a worst-case pattern (whose exact structure chance does not
     make), the longest of those (at P/m the pattern repeats with J wrapped); otherwise the one
     with the least mean lateness, the longest among equals (within half a sample): a stepgen
@@ -396,7 +403,9 @@ def _down(
 
     # each submultiple refined on its own: a lattice at a multiple of the thread's period
     # (its step pattern) does not fit well enough to refine P there
-    starts = [p0 / m for p0 in coarse for m in range(1, 9) if m == 1 or p0 / m >= pmin]
+    starts = [
+        p0 / m for p0 in coarse for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin
+    ]
     subs: list[float] = []
     for p0 in sorted(starts, reverse=True):
         if all(abs(p0 - s) > 1e-3 * s for s in subs):
@@ -472,6 +481,15 @@ def limits(tick_ns: Fraction, res_ticks: int) -> tuple[float, float]:
     return pmin, MAX_PERIOD_NS / float(tick_ns)
 
 
+def dither(times: Ints, res: int) -> Ints:
+    """``times`` each moved later by a fixed pseudo-random part of a sample (``res`` ticks; none
+    when a sample is a tick): the comb of a sample grid coarser than the tick is gone, a thread's
+    lattice stays (an edge is seen up to a sample late anyway), the order too."""
+    if res <= 1:
+        return times
+    return times + np.random.default_rng(0).integers(0, res, len(times))
+
+
 def infer(
     times: Ints, res: int, kinds: EdgeKinds | None, pmin: float, pmax: float,
     progress: ProgressCallback,
@@ -495,7 +513,7 @@ def infer(
         )
     if len(times) < MIN_EDGES:
         return None, 0.0, "too few edges outside catch-up runs", Fraction(0)
-    combs = coarse(times, pmin, pmax)
+    combs = coarse(dither(times, res), pmin, pmax)
     if not combs:
         return None, 0.0, "no periodic comb in the edges' timing", Fraction(0)
     i, j = densest(times, int(64 * WINDOW_EDGES * max(combs)))
