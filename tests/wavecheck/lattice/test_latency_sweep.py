@@ -33,10 +33,14 @@ def test_sweep_table_reads_most() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 33 not met yet: 14 of 600 cases wrong at exit 0 (P a tick off on the 2 us grid, "
+    "or a submultiple pattern of type-2 cruises), 73 not established (12 %), measured 2026-11-28",
+)
 def test_whole_sweep() -> None:
     results = [(c.name, *judge(c)) for c in cases()]
     bad = [r for r in results if r[1] in ("wrong", "below")]
     assert not bad, bad
     unsure = [r for r in results if r[1] == "not established"]
-    # issue 33 asks for at most 10 %; measured 2026-11-28: see the branch's report
-    assert len(unsure) <= 0.3 * len(results), unsure
+    assert len(unsure) <= 0.1 * len(results), unsure  # issue 33's bound
