@@ -447,14 +447,16 @@ def analyse_times(
 
 
 def sample_grid(times: Ints, tick_ns: Fraction, res_ticks: int) -> int:
-    """The analyzer's sample period (ticks) when the file states a finer one (or none) but every
-    edge time is a multiple of it apart, it is shorter than any base period, and at least
-    :data:`ESTABLISH_EDGES` edges show it (fewer may share a grid by chance); else 0. A 500 kHz analyzer's 2 µs grid, exported with 1 ns
-    timestamps, is such a grid: a lattice commensurate with it is the analyzer's, not a thread's."""
-    if len(times) < ESTABLISH_EDGES:
+    """The analyzer's sample period (ticks) when the file states none (an export with 1 ns
+    times, a VCD without a sample rate) but every edge time is a multiple of it apart, it is
+    shorter than any base period, and at least :data:`ESTABLISH_EDGES` edges show it (fewer
+    may share a grid by chance); else 0. A 500 kHz analyzer's 2 µs grid exported with 1 ns
+    times is such a grid: a lattice commensurate with it is the analyzer's, not a thread's.
+    (So is an exact simulation whose P and latency are whole µs: its figures widen by the µs.)"""
+    if res_ticks or len(times) < ESTABLISH_EDGES:  # a stated sample period is the analyzer's
         return 0
     g = int(np.gcd.reduce(np.diff(times)))
-    return g if g > max(res_ticks, 1) and g * tick_ns < MIN_PERIOD_NS else 0
+    return g if g > 1 and g * tick_ns < MIN_PERIOD_NS else 0
 
 
 def _fill(
