@@ -264,7 +264,7 @@ class AxisCheck:
         # the end of an up/down pulse depends on its level: not stated nor seen, both are read
         # (the verdict then depends on the signal at the drive's input only, issue 33)
         long = None
-        if r.id == "dir_delay" and plan.level_open:
+        if r.ends_by_level and plan.level_open:
             other = rule_intervals(r, iface, self.st, steps, plan.active_edge, 1 - plan.level)
             iv, long, both = either_level(iv, other)
         sel = np.maximum(iv.start, iv.end) >= t0

@@ -68,10 +68,7 @@ from wavecheck.lattice.period import (
     MAX_PERIOD_NS,
     MIN_PERIOD_NS,
     WINDOW_EDGES,
-    coarse,
     densest,
-    dither,
-    exact,
     grow,
     infer,
     limits,
@@ -610,32 +607,13 @@ def common_period(
     times: Ints, tick_ns: Fraction, resolution_ns: Fraction
 ) -> tuple[Fraction | None, str]:
     """Whether edge ``times`` (ticks, sorted, unique: the steps of several axes) lie on one
-    periodic lattice, one timer's or thread's, as cheaply as that can be told: the comb's best
-    period (8 harmonics), refined, and the chance of its fit. (P in ns or None, why not.)
-    The edges of one timer interrupt may be written one after another, so two write times in a
-    period do not refuse it; the period may be the thread's or a multiple or submultiple."""
-    res = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
-    if len(times) < MIN_EDGES:
-        return None, f"too few steps ({len(times)})"
-    res = sample_grid(times, tick_ns, res) or res
-    pmin, pmax = limits(tick_ns, res)
-    combs = coarse(dither(times, res), pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
-    if not combs:
-        return None, "no periodic comb in the steps' timing"
-    i, j = densest(times, int(64 * WINDOW_EDGES * combs[0]))
-    p, err = grow(times, combs[0], (i + j) // 2, float(max(res, 1)), no_progress, 0.0)
-    if not pmin <= p <= pmax:
-        return None, "no base-thread period fits"
-    if not math.isfinite(err):
-        return None, "the comb's period could not be refined on the floor of the lateness"
-    ev = evaluate(times, exact(p, err, times), res, None, 1 << 14, False)
-    fold = ev.fold
-    lat = fold.lateness(ev.readings[0].anchor)[1]
-    span = int(ev.slots.max() - ev.slots.min()) if len(ev.slots) else 1
-    _, _, f, chance = significance(lat, fold.b, max(res, 1), fold.period, span)
-    if chance > MAX_LOG10_CHANCE:
-        return None, f"the best lattice could be chance (10^{chance:.1f})"
-    return fold.period * tick_ns, ""
+    periodic lattice: the one analysis ``wavecheck latency`` makes (:func:`analyse_times`, its
+    evidence rules included), so ``check``'s note and ``latency`` give one answer on the same
+    edges. (P in ns or None, why not.)"""
+    r = analyse_times(times, tick_ns=tick_ns, resolution_ns=resolution_ns)
+    if not r.lattice or r.period_ns is None:
+        return None, r.reason
+    return r.period_ns, ""
 
 
 def _signatures(capture: Capture, roles: dict[str, str]) -> Signatures:

@@ -67,7 +67,7 @@ COMB_EDGES = 2048
 #: Submultiples p/m of a comb's period tried as the thread's: a constant step rate a/b of the
 #: thread's repeats every b periods (a cruise at 0.3 of the top rate: 3 steps in 10 periods), and
 #: the comb may find that pattern's period.
-SUBMULTIPLES = 16
+SUBMULTIPLES = 8
 
 
 #: Edges of the first window P is refined on: enough that the widest empty arc of their phases
@@ -490,6 +490,40 @@ def dither(times: Ints, res: int) -> Ints:
     return times + np.random.default_rng(0).integers(0, res, len(times))
 
 
+def _rival(times: Ints, ev: Evaluation, res: int, pmin: float) -> str | None:
+    """A fraction k/m (2 ≤ k < m ≤ 16) of ``ev``'s period whose lattice, refined, reads the edges
+    ``times`` (a bounded stretch) with no more double writes and at most two thirds of the
+    mean lateness (and a tenth of its period and two samples less: a few spikes do not decide),
+    which the thread's own period would: a constant step rate a/b of the
+    thread's repeats every b periods, and a lattice at a fraction of that pattern fits it too
+    (``k/m`` as text), else None."""
+    mine = _spread(evaluate(times, ev.fold.period, res, None, 1 << 14, False))
+    if mine is None or ev.readings[0].rule:  # a worst-case pattern's structure decides
+        return None
+    p = float(ev.fold.period)
+    q = float(max(res, 1))
+    seen: set[Fraction] = set()
+    for m in range(3, 17):
+        for k in range(2, m):  # P/m itself: _up's judgement (spikes read less late there)
+            f = Fraction(k, m)
+            if f.numerator == 1 or f in seen or p * k / m < pmin:
+                continue
+            seen.add(f)
+            p2, err = grow(times, p * k / m, len(times) // 2, q, no_progress, 0.0)
+            if not math.isfinite(err) or abs(p2 / (p * k / m) - 1) > 0.01:
+                continue
+            theirs = evaluate(times, exact(p2, err, times), res, None, 1 << 14, False)
+            spread = _spread(theirs)
+            if (
+                spread is not None
+                and theirs.collisions <= ev.collisions + allowance(len(times))
+                and spread[0] <= 2 * mine[0] / 3
+                and mine[0] - spread[0] >= max(2 * q, 0.1 * p2)
+            ):
+                return f"{k}/{m}"
+    return None
+
+
 def infer(
     times: Ints, res: int, kinds: EdgeKinds | None, pmin: float, pmax: float,
     progress: ProgressCallback,
@@ -533,6 +567,14 @@ def infer(
             Fraction(p).limit_denominator(10**6),
         )  # fmt: skip
     ev = _up(times, exact(p, err, times), res, kinds, pmax, slice(i, j))
+    rival = _rival(times[i:j], ev, res, pmin) if ev.readings else None
+    if rival is not None:
+        return (
+            None, 0.0,
+            f"a lattice at {rival} of the best period, {{period}}, reads the edges with far "
+            "less lateness: which period the thread runs at is not established",
+            ev.fold.period,
+        )  # fmt: skip
     if ev.readings and burst.any():
         ev = evaluate(every, ev.fold.period, res, whole)
     if ev.readings:
