@@ -35,8 +35,9 @@ def test_sweep_table_reads_most() -> None:
 @pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 33 not met yet: 14 of 600 cases wrong at exit 0 (P a tick off on the 2 us grid, "
-    "or a submultiple pattern of type-2 cruises), 73 not established (12 %), measured 2026-11-28",
+    reason="issue 33 not met yet (2026-11-28, 600 cases: 499 ok, 86 not established = 14 %, "
+    "15 wrong, 0 below the truth): P a tick off on the unstated 2 us grid (6), a type-2 cruise "
+    "at 0.3 of the top rate read at 10P/7 with lateness 70-90 % of P (8), 2P for a type-2 ramp (1)",
 )
 def test_whole_sweep() -> None:
     results = [(c.name, *judge(c)) for c in cases()]
