@@ -3,7 +3,7 @@ SHELL := /bin/bash
 PY    := .venv/bin/python
 VENV_STAMP := .venv/.installed
 
-.PHONY: demo test setup system-deps lint typecheck bench golden golden-check story fuzz clean
+.PHONY: demo test test-all setup system-deps lint typecheck bench golden golden-check story fuzz clean
 
 setup: $(VENV_STAMP) system-deps
 
@@ -72,11 +72,17 @@ demo: setup
 	@echo
 	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
-test: setup
-	.venv/bin/ruff check wavecheck stepgen tools tests bench
-	.venv/bin/ruff format --check wavecheck stepgen tools tests bench
-	.venv/bin/mypy
+# make test: lint, types and every test but those marked slow (the corpora, sweeps, installs),
+# within 10 minutes on two quiet cores; its last line says what did not run and why.
+# make test-all (what .ci/run runs): the same and the slow tests too.
+test: setup lint typecheck
+	.venv/bin/pytest -n 2 -q -m "not slow"
+
+test-all: setup lint typecheck
 	.venv/bin/pytest -n 2 -q
+
+typecheck:
+	.venv/bin/mypy
 
 lint:
 	.venv/bin/ruff check wavecheck stepgen tools tests bench

@@ -94,7 +94,7 @@ class RuleSpec:
     """One rule of the table as the decoder measures it: its limit and the engine's thresholds.
 
     ``pass_min``/``fail_max`` (samples): pass ⟺ W ≥ pass_min, fail ⟺ W ≤ fail_max, pass tested
-    first (:func:`wavecheck.engine.verdicts.evaluate`); None when the rule is only measured.
+    first (:func:`wavecheck.engine.judge.evaluate`); None when the rule is only measured.
     """
 
     rule: Rule
