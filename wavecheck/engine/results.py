@@ -299,6 +299,9 @@ class StepCounts:
     ambiguous_count: int = 0
     ambiguous: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     """The first :data:`UNKNOWN_KEPT` steps of ambiguous direction (ticks)."""
+    lost_from: int | None = None
+    """The tick where a step line first went unknown (``x``/``z``) after its level was known:
+    steps inside are not seen, so the position is unknown from there (None: never)."""
 
     @property
     def unknown(self) -> int:
@@ -307,8 +310,13 @@ class StepCounts:
 
     @property
     def final_position(self) -> int | None:
-        """forward − reverse, or None when any step's direction is unknown."""
-        return None if self.unknown else self.forward - self.reverse
+        """forward − reverse, or None when any step's direction is unknown or steps may have
+        been lost in an unknown stretch (:attr:`lost_from`)."""
+        return None if self.unknown or self.lost_from is not None else self.forward - self.reverse
+
+    def lose_from(self, tick: int) -> None:
+        """A step line went unknown at ``tick``: the position is unknown from the earliest."""
+        self.lost_from = tick if self.lost_from is None else min(self.lost_from, tick)
 
     def add(self, direction: np.ndarray, ambiguous: EdgeArray) -> None:
         """Merge one window's steps (their directions) and its ambiguous steps' ticks."""

@@ -146,6 +146,9 @@ def report_dict(
             "unknown_direction": steps.unknown,
             "ambiguous": steps.ambiguous_count,
             "final_position": steps.final_position,
+            "position_unknown_from_s": None
+            if steps.lost_from is None
+            else json_number(report.capture.timebase.seconds(steps.lost_from)),
         },
         "rules": [_rule(r) for r in report.rules],
         "violations": [_violation(v) for v in report.violations(violation_cap)],

@@ -145,6 +145,11 @@ def render_text(
         line += " (direction unknown: no DIR mapped)"
     else:
         pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
+        if s.lost_from is not None:
+            pos = (
+                f"unknown from {format_time(report.capture.timebase.seconds(s.lost_from))} (steps "
+                "inside an unknown stretch of a step line are not seen)"
+            )
         line += f" (forward {s.forward}, reverse {s.reverse}"
         if s.unknown:
             line += f", unknown {s.unknown}"
