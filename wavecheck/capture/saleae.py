@@ -18,8 +18,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from wavecheck.capture.common import resolution_of
 from wavecheck.capture.edges import Capture, Channel
-from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
 from wavecheck.units import shown
