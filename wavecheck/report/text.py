@@ -23,9 +23,15 @@ from wavecheck.units import format_frequency, format_ns, format_rate, format_tim
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["DEFAULT_TEXT_VIOLATIONS", "rate_lines", "render_text"]
+__all__ = ["DEFAULT_TEXT_VIOLATIONS", "note_line", "rate_lines", "render_text"]
 
 DEFAULT_TEXT_VIOLATIONS = 20
+
+
+def note_line(note: str) -> str:
+    """A capture's note as a report line: ``note: …``, or as it is when it is a warning (a
+    reader's ``warning: …``, such as a sample rate no capture has)."""
+    return note if note.startswith("warning: ") else f"note: {note}"
 
 
 def _ns(v: Fraction | None, signed: bool = False) -> str:
@@ -210,7 +216,7 @@ def render_text(
         out += _violation_lines(report, max_violations)
     rates, *configured = rate_lines(report)
     out += ["", rates]
-    out += [f"note: {note}" for note in report.notes]
+    out += [note_line(n) for n in report.notes]
     out += [f"note: {a}" for a in assumptions(report)]
     out += configured
     if report.firmware is not None:  # check --firmware
