@@ -250,6 +250,12 @@ def _saleae_csv_head(head: bytes) -> bool:
     return head.removeprefix(b"\xef\xbb\xbf").startswith(HEADER)
 
 
+def _saleae1_csv_head(head: bytes) -> bool:
+    from wavecheck.capture.saleae import HEADER_1X
+
+    return head.removeprefix(b"\xef\xbb\xbf").startswith(HEADER_1X)
+
+
 def _vcd_head(head: bytes) -> bool:
     return head.lstrip().startswith(b"$")
 
@@ -284,6 +290,10 @@ FORMATS: tuple[Format, ...] = (
         aliases=("saleae",),
     ),
     Format(
+        "saleae1-csv", "a Saleae Logic 1.x CSV export", _read_saleae_csv, sniff=_saleae1_csv_head,
+        aliases=("saleae1",),
+    ),
+    Format(
         "saleae-bin", "a Saleae Logic 2 binary export", _read_saleae_bin, magic=(b"<SALEAE>",),
         aliases=("saleae-binary",), folder=_holds_saleae_export,
     ),
@@ -299,10 +309,20 @@ FORMATS: tuple[Format, ...] = (
         "lxt2", "an LXT2 file",
         _refuse(
             "an LXT2 file (GTKWave's older compressed dump), not a VCD: convert it with GTKWave's "
-            "lxt2vcd (lxt2vcd FILE > FILE.vcd), or dump FST or VCD from the simulator"
+            "lxt2vcd (lxt2vcd FILE > FILE.vcd), or dump VCD or FST (vvp without -lxt2, or -fst)"
         ),
         magic=(b"\x13\x80\x00\x01",), extensions=(".lxt2", ".lx2"), by_extension=True,
         options=False,
+        readable=False,
+    ),
+    # LXT (the first) starts with its header id 0x0138 and version 4 (iverilog's vvp -lxt)
+    Format(
+        "lxt", "an LXT file",
+        _refuse(
+            "an LXT file (GTKWave's oldest compressed dump), not a VCD: dump VCD or FST instead "
+            "(vvp without -lxt, or vvp -fst)"
+        ),
+        magic=(b"\x01\x38\x00\x04",), extensions=(".lxt",), by_extension=True, options=False,
         readable=False,
     ),
     Format(
