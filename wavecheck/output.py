@@ -39,6 +39,7 @@ __all__ = [
     "check_outputs",
     "figure_file",
     "figure_format",
+    "gtkw_file",
     "open_stream",
     "output_file",
     "protect_inputs",
@@ -110,8 +111,24 @@ def figure_file(text: str) -> str:
     return text
 
 
+#: Extensions GTKWave opens as a dump, never as a save file (``gtkwave FILE.vcd``).
+_DUMP_EXTENSIONS = (".vcd", ".fst", ".ghw", ".lxt", ".lxt2", ".vzt", ".evcd")
+
+
+def gtkw_file(text: str) -> str:
+    """argparse ``type=`` of ``--gtkw``: an output (:func:`output_file`) not named like a dump,
+    which GTKWave would open as one (and whose companion VCD would take its name)."""
+    suffix = Path(text).suffix.lower()
+    if suffix in _DUMP_EXTENSIONS:
+        raise argparse.ArgumentTypeError(
+            f"{text}: GTKWave opens a {suffix} file as a dump, not as a save file; name it "
+            f"{Path(text).with_suffix('.gtkw').name} (its VCD, when one is written, goes beside it)"
+        )
+    return text
+
+
 #: The ``type=`` of every output option (:func:`wavecheck.cli._main` checks them all).
-OUTPUT_TYPES = (output_file, figure_file)
+OUTPUT_TYPES = (output_file, figure_file, gtkw_file)
 
 
 def _fd_link(link: Path) -> int | None:

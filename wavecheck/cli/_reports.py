@@ -38,7 +38,13 @@ from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.engine.outcome import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
-from wavecheck.output import atomic_write, figure_file, figure_format, output_file
+from wavecheck.output import (
+    atomic_write,
+    figure_file,
+    figure_format,
+    gtkw_file,
+    output_file,
+)
 from wavecheck.progress import QUIET_HELP, activate
 from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
@@ -75,7 +81,7 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     )
     out.add_argument(
         "--gtkw",
-        type=output_file,
+        type=gtkw_file,
         metavar="FILE.gtkw",
         help="GTKWave save file with markers at the worst violations (a non-VCD capture is "
         "written as FILE.vcd beside it)",
