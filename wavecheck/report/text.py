@@ -77,21 +77,20 @@ def _mark(r: RuleResult) -> str:
 
 
 def _violation_lines(report: Report, max_violations: int) -> list[str]:
-    """The worst ``max_violations`` violations, identical ones grouped on one line."""
+    """The worst ``max_violations`` violations, identical ones grouped on one line; a group
+    counts every identical violation of the capture, and spans from the first to the last."""
     total = report.total_violations
     shown = report.violations(max_violations)
-    groups = group_violations(shown)
+    groups = group_violations(shown, report.rules)
     marks = {r.rule: _mark(r) for r in report.rules}
     head = f"violations: {total} (worst first"
     if len(groups) < len(shown):
-        head += (
-            f"; the {len(shown)} worst shown as {len(groups)} "
-            f"group{'' if len(groups) == 1 else 's'} of identical violations"
-        )
+        head += "; identical ones grouped, each group counted over the whole capture"
     out = ["", head + ")"]
     out += [_group_line(g, marks.get(g.rule, "")) for g in groups]
-    if total > len(shown):
-        out.append(f"  … and {total - len(shown)} more")
+    told = sum(g.count for g in groups)
+    if total > told:
+        out.append(f"  … and {total - told} more, not identical to these")
     return out
 
 
@@ -110,7 +109,7 @@ def _group_line(g: ViolationGroup, mark: str) -> str:
             f"  margin {_ns(v.margin_ns, signed=True)}"
         )
     if g.count > 1:
-        line += f"  first at {float(v.time_s):.9f} s, last at {float(g.last.time_s):.9f} s"
+        line += f"  first at {float(g.first_s):.9f} s, last at {float(g.last_s):.9f} s"
     return line
 
 
