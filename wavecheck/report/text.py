@@ -85,7 +85,11 @@ def _violation_lines(report: Report, max_violations: int) -> list[str]:
     marks = {r.rule: _mark(r) for r in report.rules}
     head = f"violations: {total} (worst first"
     if len(groups) < len(shown):
-        head += "; identical ones grouped, each group counted over the whole capture"
+        head += (
+            f"; the {len(shown)} worst shown as {len(groups)} "
+            f"group{'' if len(groups) == 1 else 's'} of identical violations, each counted over "
+            "the whole capture"
+        )
     out = ["", head + ")"]
     out += [_group_line(g, marks.get(g.rule, "")) for g in groups]
     told = sum(g.count for g in groups)

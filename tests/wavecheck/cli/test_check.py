@@ -157,4 +157,5 @@ def test_real_capture_cli(smoothie_sr: Path, capsys) -> None:
         capsys, "check", str(smoothie_sr), "--drive", "gecko-g202", "--map", "step=5,dir=6"
     )
     assert code == 1
-    assert "steps:   739" in out and "… and 510 more" in out
+    assert "steps:   739" in out and "… and 361 more, not identical to these" in out
+    assert "169 × step_high" in out  # the whole capture's count of the group shown
