@@ -156,14 +156,15 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
             print(line, file=sys.stderr)
     text = RENDERERS[args.format](report, args)
     if args.output:
-        from wavecheck.report.claims import requirement_line, verdict_line
+        from wavecheck.report.claims import outcome_line, requirement_line
 
         atomic_write(args.output, text)
         if getattr(args, "quiet", False):  # -q: the report file only
             return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
-            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
+            f"{outcome_line(report, required(args))}: {report.total_violations} violation(s), "
+            f"{steps} steps; "
             f"report written to {args.output}"
         )
         missing = requirement_line(report, required(args))

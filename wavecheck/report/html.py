@@ -206,7 +206,7 @@ def _rates_table(report: Report) -> str:
 
 def _verdict_lines(report: Report, require: Sequence[str]) -> list[str]:
     """The verdict line (rules not checked and why) and the required rules not decided."""
-    out = [f'<p class="verdict-line">Verdict: {_e(claims.verdict_line(report))}</p>']
+    out = [f'<p class="verdict-line">Verdict: {_e(claims.outcome_line(report, require))}</p>']
     line = claims.requirement_line(report, require)
     return out + ([f'<p class="required">{_e(line)}</p>'] if line else [])
 

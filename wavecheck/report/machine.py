@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from wavecheck.engine.outcome import MachineReport
-from wavecheck.report.claims import requirement_line, verdict_line
+from wavecheck.report.claims import outcome_line, requirement_line
 
 __all__ = ["machine_dict", "render_machine_text"]
 
@@ -96,7 +96,7 @@ def render_machine_text(m: MachineReport, max_violations: int, require: Sequence
         )
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     out = [
-        f"verdict: {verdict_line(m)}",
+        f"verdict: {outcome_line(m, require)}",
         *[line for line in [requirement_line(m, require)] if line],
         f"capture: {cap.path}",
         "",

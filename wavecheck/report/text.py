@@ -15,7 +15,7 @@ from wavecheck.drives.datasheet import MARK_LEGEND
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.results import RuleResult
 from wavecheck.report.assumptions import assumptions
-from wavecheck.report.claims import requirement_line, verdict_line
+from wavecheck.report.claims import outcome_line, requirement_line
 from wavecheck.report.groups import ViolationGroup, group_violations
 from wavecheck.rules import rule
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
@@ -132,7 +132,7 @@ def render_text(
     line says which required rules were not decided."""
     cap = report.capture
     drive = report.drive
-    out: list[str] = [f"verdict: {verdict_line(report)}"]
+    out: list[str] = [f"verdict: {outcome_line(report, require)}"]
     out += [line for line in [requirement_line(report, require)] if line]
     res = "exact" if report.resolution_ns == 0 else f"T = {_ns(report.resolution_ns)}"
     rate = f"{format_frequency(cap.samplerate_hz)}, " if cap.samplerate_hz else ""

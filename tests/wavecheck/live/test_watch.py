@@ -107,7 +107,8 @@ def test_require_ends_the_watch_with_exit_4_and_why(tmp_path: Path) -> None:
     assert live.returncode == 4, live.stderr
     no_figure = "enable_setup not checked: drive drv8825 states no figure"
     assert live.stdout.splitlines()[:2] == [
-        f"verdict: PASS ({no_figure})",
+        f"verdict: NOT DECIDED (exit 4: required {no_figure}); the rules checked: "
+        f"PASS ({no_figure})",
         f"required but not decided: {no_figure}",
     ]
 
