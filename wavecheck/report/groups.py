@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Protocol, runtime_checkable
 
-from wavecheck.engine.verdicts import Violation
+from wavecheck.engine import Violation
 from wavecheck.timebase import Timebase
 
 __all__ = ["Tally", "ViolationGroup", "group_violations"]
