@@ -3,7 +3,8 @@
 The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and lists the axes::
 
     {"capture": {...}, "axes": [{"name", "drive", "map", "steps", "rules", "violations",
-     "violations_total", "max_step_rate_hz", "verdict", "verdict_line", "unchecked"}, ...],
+     "violations_total", "violations_listed", "violations_truncated", "max_step_rate_hz",
+     "verdict", "verdict_line", "unchecked"}, ...],
      "cross_axis": {...}, "verdict", "verdict_line", "unchecked", "required", "exit_code"}
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
@@ -46,6 +47,8 @@ def machine_dict(
                 "rules": d["rules"],
                 "violations": d["violations"],
                 "violations_total": d["violations_total"],
+                "violations_listed": d["violations_listed"],
+                "violations_truncated": d["violations_truncated"],
                 "max_step_rate_hz": d["max_step_rate_hz"],
                 "verdict": d["verdict"],
                 "verdict_line": d["verdict_line"],
