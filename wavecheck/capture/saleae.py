@@ -218,7 +218,7 @@ def read_saleae_csv(
         rate = 1 / period
         tick = g_tick * unit
         notes.append(
-            f"sample period {period} s recovered from the times (their common grid); "
+            f"sample period {format_time(period)} recovered from the times (their common grid); "
             "give --samplerate if Logic sampled faster"
         )
     how = (
