@@ -1,9 +1,9 @@
 """Open any capture: pick the reader from ``--input-format``, the file's content, or its extension.
 
-``.sr``, VCD, FST and GHW (:mod:`wavecheck.capture.wellen`), raw binary samples
-(:mod:`wavecheck.capture.binary`, sigrok-cli's ``-O binary``) and Saleae Logic 2 exports are read
-natively; every other format sigrok-cli knows (csv, chronovu-la8, logicport, …) is converted by
-sigrok-cli to a temporary ``.sr`` first.
+The formats are the records of :data:`wavecheck.capture.formats.FORMATS` (name, magic bytes,
+extensions, ``read``, ``blocks``); this module only walks them, for a file, a folder, standard
+input or a pipe (a format that cannot read a stream is spooled to a temporary file first), and
+gives a capture read whole the reader of its vectors' bits (:func:`_wired`).
 """
 
 from __future__ import annotations
