@@ -83,8 +83,8 @@ def _zip_names(path: Path) -> bytes:
     try:
         with zipfile.ZipFile(path) as zf:
             return "\n".join(zf.namelist()[:1000]).encode("utf-8", "replace")
-    except (OSError, zipfile.BadZipFile, ValueError):
-        return b""
+    except (OSError, zipfile.BadZipFile, ValueError, NotImplementedError, EOFError, KeyError):
+        return b""  # the .sr reader says what is wrong with the zip
 
 
 def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
