@@ -16,7 +16,7 @@ from wavecheck.cli._axis_args import required
 from wavecheck.cli._firmware_args import check_firmware
 from wavecheck.cli._formats import FORMATS, Checked, axis_reports
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
-from wavecheck.output import atomic_write, figure_file, output_file
+from wavecheck.output import atomic_write, figure_file, gtkw_file, output_file
 from wavecheck.progress import QUIET_HELP
 from wavecheck.report.machine import MachineReport
 
@@ -37,7 +37,7 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     )
     out.add_argument(
         "--gtkw",
-        type=output_file,
+        type=gtkw_file,
         metavar="FILE.gtkw",
         help="GTKWave save file with markers at the worst violations (a non-VCD capture is "
         "written as FILE.vcd beside it)",
@@ -80,14 +80,15 @@ def write_outputs(args: argparse.Namespace, report: Checked) -> None:
             print(line, file=sys.stderr)
     text = FORMATS[args.format].render(report, args)
     if args.output:
-        from wavecheck.report.claims import requirement_line, verdict_line
+        from wavecheck.report.claims import outcome_line, requirement_line
 
         atomic_write(args.output, text)
         if getattr(args, "quiet", False):  # -q: the report file only
             return
         steps = sum(r.steps.count for r in axis_reports(report))
         print(
-            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
+            f"{outcome_line(report, required(args))}: {report.total_violations} violation(s), "
+            f"{steps} steps; "
             f"report written to {args.output}"
         )
         missing = requirement_line(report, required(args))

@@ -24,7 +24,7 @@ from wavecheck.cli._stepgen_args import add_stepgen_arguments
 from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.live import START_GRACE
-from wavecheck.output import output_file
+from wavecheck.output import output_file, resolve_output, same_file
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 if TYPE_CHECKING:
@@ -193,6 +193,20 @@ def _status(mode: str) -> Any:
     return redraw
 
 
+def _refuse_shared_save(save: str, output: str | None) -> None:
+    """Refuse ``--save`` onto the file or stream the report goes to: a zip and a report in one
+    file are neither (``--save /dev/stdout > rec.sr`` with the report on standard output)."""
+    target = resolve_output(save)
+    report = output if output is not None else 1
+    report_fd = resolve_output(output).fd if output is not None else 1
+    if (target.fd is not None and target.fd == report_fd) or same_file(save, report):
+        where = f"-o {output}" if output is not None else "standard output"
+        raise UsageError(
+            f"--save {save}: the report goes there too ({where}); give the report its own "
+            "file (-o FILE) or --save a file"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck watch``; returns the exit code."""
     # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
@@ -213,6 +227,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
     if args.max_snippets < 0:
         raise UsageError(f"--max-snippets must be 0 or more, got {args.max_snippets}")
+    if args.save:
+        _refuse_shared_save(args.save, args.output)
     program = sigrok_cli(args.sigrok_cli)
     rate = None
     if args.samplerate is not None:

@@ -22,6 +22,7 @@ from wavecheck.engine import MachineReport, Report, RuleResult
 from wavecheck.rules import RULE_IDS, rule
 from wavecheck.units import format_ns
 from wavecheck.verdict import (
+    EXIT_REQUIRED,
     RuleStatus,
     Unmet,
     check_require,
@@ -36,6 +37,7 @@ from wavecheck.verdict import (
 __all__ = [
     "exit_code",
     "not_checked",
+    "outcome_line",
     "requirement_line",
     "required_dict",
     "rule_statuses",
@@ -124,6 +126,19 @@ def verdict_line(checked: Checked) -> str:
     ``FAIL (2 axes; y.dir_setup … not checked: …)``."""
     lead = f"{len(checked.axes)} axes" if isinstance(checked, MachineReport) else ""
     return qualified_verdict(checked.verdict, unchecked(checked), lead)
+
+
+def outcome_line(checked: Checked, require: Sequence[str] = ()) -> str:
+    """The verdict line with the run's outcome first: as :func:`verdict_line`, or, when a
+    required rule was not decided and the run exits 4, ``NOT DECIDED (exit 4: required dir_hold
+    not checked: no DIR channel); the rules checked: PASS (…)`` — the first line of a report
+    says what its exit code says."""
+    line = verdict_line(checked)
+    missing = unmet(checked, require)
+    if required_exit_code(checked.exit_code, missing) != EXIT_REQUIRED:
+        return line
+    what = required_line(missing, statuses(checked)).removeprefix("required but not decided: ")
+    return f"NOT DECIDED (exit {EXIT_REQUIRED}: required {what}); the rules checked: {line}"
 
 
 def unmet(checked: Checked, require: Sequence[str]) -> tuple[Unmet, ...]:

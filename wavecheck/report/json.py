@@ -2,6 +2,8 @@
 
 Top-level keys: ``capture``, ``drive``, ``steps``, ``rules``, ``violations`` (capped, worst first),
 ``violations_total`` (the uncapped count; added beside the design's keys so the cap is visible),
+``violations_listed`` (how many ``violations`` lists) and ``violations_truncated`` (true when it
+lists fewer than ``violations_total``: raise ``--max-violations`` to list more),
 ``max_step_rate_hz``, ``verdict``; beside them what the verdict claims (:mod:`wavecheck.report.claims`):
 ``verdict_line`` (``PASS (dir_setup, dir_hold not checked: no DIR channel)``), ``unchecked``
 (``[{why, rules}]``, as ``config``'s JSON), ``required`` (``{rules, unmet: [{rule, axis, verdict,
@@ -100,6 +102,7 @@ def report_dict(
     mapped = {sig.channel: role for role, sig in report.interface.signals.items()}
     steps = report.steps
     rates = report.rates
+    listed = [_violation(v) for v in report.violations(violation_cap)]
     return {
         "capture": {
             "path": cap.path,
@@ -151,8 +154,10 @@ def report_dict(
             else json_number(report.capture.timebase.seconds(steps.lost_from)),
         },
         "rules": [_rule(r) for r in report.rules],
-        "violations": [_violation(v) for v in report.violations(violation_cap)],
+        "violations": listed,
         "violations_total": report.total_violations,
+        "violations_listed": len(listed),
+        "violations_truncated": len(listed) < report.total_violations,
         "max_step_rate_hz": {
             "drive": json_number(rates.drive),
             "drive_limited_by": rates.drive_limited_by,

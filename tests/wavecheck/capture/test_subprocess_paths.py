@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import write_vcd
-from wavecheck.capture.open import open_capture, path_argument
+from wavecheck.capture.common import path_argument
+from wavecheck.capture.open import open_capture
 from wavecheck.capture.sigrokcli import convert, read_with_sigrok
 
 
