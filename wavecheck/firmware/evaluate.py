@@ -7,11 +7,14 @@ pulses are high, else the low time. DIR setup/hold count from the drive's active
 is the pulse's trailing edge, setup gains the pulse width and hold is the trailing-edge hold. A
 generator in both-edge mode configures the drive (TMC ``dedge``) to count both edges.
 ``step_period`` compares the axis's configured max step rate with the drive's. The max step rate
-of the pair is min(the drive's max rate, 1 / (pulse + the drive's minimum for the idle level)), or
-1 / the longest of the pulse and the two level minimums in both-edge mode.
+of the pair is the smallest of the generator's max rate, the drive's, and 1 / (pulse + the
+drive's minimum for the idle level), or 1 / the longest of the pulse and the two level minimums
+in both-edge mode.
 
 A figure whose sources disagree (:attr:`Guaranteed.disputed`) is judged under both readings: a
-rule that passes under one and fails under the other is indeterminate, and says so.
+rule that passes under one and fails under the other is indeterminate, and says so. A figure the
+firmware does not enforce (status ``not_enforced``) is never a PASS: it is indeterminate, with the
+note saying why and how to measure it; a setting that asks for too little still FAILs.
 :class:`ConfigResult` holds every pair, the overall verdict (:mod:`wavecheck.verdict`) and the
 rules that were not checked, with why.
 """
@@ -184,12 +187,16 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if fig is not None and fig.note
                 else note or "no bound in the configuration"
             )
-            why += "" if why.endswith("measure it") else "; measure it"
+            why += "" if "measure it" in why else "; measure it"
             rows.append(PairRow(r.id, role, None, fig, limit, limit_fig, None, "indeterminate",
                                 note=why))  # fmt: skip
             continue
         margin = value - limit
         verdict = _judge(value, limit)
+        if fig is not None and fig.status == "not_enforced":
+            note = "; ".join(x for x in (note, fig.note) if x)
+            if verdict == "pass":
+                verdict = "indeterminate"  # the setting meets the limit; the firmware need not
         if other is not None:
             second = _judge(other, limit)
             said = f"{format_ns(value)} under the reading used, {format_ns(other)} under the other"
@@ -234,5 +241,6 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
         total = width + (idle_lim or Fraction(0))
         known = idle_lim is not None or pulse is not None
         timing = _GIGA / total if total > 0 and known else None
-    rates = [v for v in (timing, drive.max_rate.value if drive.max_rate else None) if v is not None]
+    drive_rate = drive.max_rate.value if drive.max_rate else None
+    rates = [v for v in (timing, drive_rate, g.max_rate.value) if v is not None]
     return min(rates) if rates else None

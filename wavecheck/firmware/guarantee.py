@@ -33,7 +33,9 @@ __all__ = [
     "GeneratorGuarantee",
     "Guaranteed",
     "Role",
+    "MEASURE_HOW",
     "ceil_to",
+    "not_enforced",
     "unknown",
 ]
 
@@ -55,11 +57,16 @@ MAX_AXES = 256
 Role = Literal["pulse", "idle", "setup", "hold", "max_rate"]
 """A generator figure: pulse width, time between pulses, DIR setup/hold, max step rate."""
 
-GStatus = Literal["set", "default", "derived", "uncertain", "unknown"]
+GStatus = Literal["set", "default", "derived", "uncertain", "not_enforced", "unknown"]
 """``set`` = written in the file; ``default`` = the firmware's default (the file says nothing);
 ``derived`` = computed from settings (rounding, rate → low time); ``uncertain`` = the firmware
-aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding); ``unknown`` =
-no bound can be read from the configuration."""
+aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding);
+``not_enforced`` = no code of the firmware keeps it (the value, if any, is what the setting asks
+for: a rule it passes is indeterminate, one it fails still fails); ``unknown`` = no bound can be
+read from the configuration."""
+
+#: How to measure a figure the configuration cannot decide.
+MEASURE_HOW = "capture STEP and DIR, then `wavecheck check --firmware FILE`"
 
 
 @dataclass(frozen=True)
@@ -90,6 +97,15 @@ class Guaranteed:
 def unknown(setting: str, note: str, where: str = "") -> Guaranteed:
     """A figure the configuration cannot prove (``value`` None, status ``unknown``)."""
     return Guaranteed(None, setting, where, "", "unknown", note)
+
+
+def not_enforced(
+    setting: str, why: str, where: str = "", value: Fraction | None = None, unit: str = ""
+) -> Guaranteed:
+    """A figure no code of the firmware keeps (``why`` names the code, file:line): never a
+    PASS. ``value``: what the setting asks for, when it has one (a FAIL under it stands)."""
+    note = f"not enforced by the firmware: measure it ({MEASURE_HOW}); {why}"
+    return Guaranteed(value, setting, where, unit, "not_enforced", note)
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,8 @@ stepgen rounds each parameter up to whole base periods ``P``, and any base-threa
 that is the guarantee (``stepgen plan``'s latency-aware answer; ``J`` = 0 when not given, with a
 note). Across a reversal the space between pulses is only dirhold + dirsetup periods; LinuxCNC's
 dirhold counts from the end of the pulse, so the hold from the leading edge is steplen + dirhold.
+DIR setup is what ``dirsetup`` asks for, not a bound stepgen keeps (LinuxCNC issue #2332): a rule
+that passes on it is indeterminate, one that fails still fails.
 
 The output pin: when ``stepgen.N.step`` drives a parallel-port pin (``net … parport.P.pin-NN-out``)
 its ``-invert`` makes pulses low, and with ``-reset 1`` and ``parport.P.reset`` in the base thread
@@ -24,7 +26,13 @@ from fractions import Fraction
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
-from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role, unknown
+from wavecheck.firmware.guarantee import (
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+    not_enforced,
+    unknown,
+)
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.files import ini_value, int_ns
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
@@ -156,7 +164,7 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         axis=f"stepgen.{cfg.channel}",
         pulse=pulse,
         idle=idle,
-        dir_setup=fig(("dirsetup",), "dirsetup"),
+        dir_setup=_collapsible(fig(("dirsetup",), "dirsetup")),
         dir_hold=hold,
         max_rate=rate,
         pulse_level=0 if step.inverted else 1,
@@ -166,6 +174,19 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         notes=tuple(notes),
         aliases=aliases,
     )
+
+
+#: LinuxCNC issue #2332 (open): stepgen.c can start a step sooner than dirsetup after a DIR change.
+DIRSETUP_COLLAPSE = (
+    "the software stepgen can fail to obey dirsetup (LinuxCNC issue #2332: a step follows a DIR "
+    "change sooner than dirsetup)"
+)
+
+
+def _collapsible(setup: Guaranteed) -> Guaranteed:
+    """The configured DIR setup as what stepgen aims at, not a bound it keeps (issue #2332)."""
+    return not_enforced(setup.setting, f"{DIRSETUP_COLLAPSE}; configured {setup.note}",
+                        setup.where, setup.value, setup.unit)  # fmt: skip
 
 
 def _reset(
