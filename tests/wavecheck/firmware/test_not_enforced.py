@@ -100,3 +100,31 @@ def test_pair_rate_is_the_smaller_of_generator_and_drive(
           "--drive", "leadshine-dm542", "--format", "json"])  # fmt: skip
     doc = json.loads(capsys.readouterr().out)
     assert doc["pairs"][0]["max_rate_hz"] == 24000
+
+
+@pytest.mark.parametrize(
+    ("steplen", "dirhold", "lead", "trailing"),
+    [
+        # issue 32's GHDL runs of kubstepgenz.vhd: steplen 2.01 us, dirhold 1.02 us -> DIR changed
+        # in the clock of STEP's falling edge; dirhold 20 us, steplen ~4.5 us -> 15.48 us after it
+        (2010, 1020, 2020, 0),
+        (4500, 20000, 20000, 15490),
+    ],
+)
+def test_hm2_dir_hold_counts_from_the_pulse_start(
+    tmp_path: Path, steplen: int, dirhold: int, lead: int, trailing: int
+) -> None:
+    """Class 2: DIR may change max(steplen, dirhold) after the leading edge (the hold counter is
+    loaded when the pulse starts), max(0, dirhold - steplen) after the trailing one; at 100 MHz
+    the pulse is steplen clocks + 1 (here 2020 / 4510 ns)."""
+    src = Path("/work/shared/firmware/linuxcnc/hm2-stepper")
+    for f in src.iterdir():
+        text = f.read_text()
+        if f.suffix == ".ini":
+            text = text.replace("DIRHOLD    =              200", f"DIRHOLD = {dirhold}")
+            text = text.replace("STEPLEN    =              40000", f"STEPLEN = {steplen}")
+        (tmp_path / f.name).write_text(text)
+    cfg = read_firmware(tmp_path / "5i20.ini", clock_hz=F(100_000_000))
+    s = cfg.axis("stepgen.00")
+    assert s.dir_hold.value == lead and s.dir_hold_trailing is not None
+    assert s.dir_hold_trailing.value == trailing

@@ -106,18 +106,17 @@ def test_hm2_without_a_hostmot2_section_is_hm2(tmp_path: Path) -> None:
     assert cfg.axes[0].pulse.value == 40000  # STEPLEN, not a 1 ms software-stepgen period
 
 
-def test_hm2_dir_hold_names_both_readings(capsys: pytest.CaptureFixture[str]) -> None:
-    """5i20 (DIRHOLD 200, STEPLEN 40000): against a falling-edge drive the hold was
-    INDETERMINATE with no figure, against a rising-edge one FAIL at 200 ns where the man page
-    gives steplen + dirhold. Now: the man page's figure with the VHDL's beside it (FT §8)."""
+def test_hm2_dir_hold_is_what_the_hardware_does(capsys: pytest.CaptureFixture[str]) -> None:
+    """5i20 (DIRHOLD 200, STEPLEN 40000): the hold counter starts with the pulse
+    (kubstepgenz.vhd under GHDL, issue 32): max(steplen, dirhold) = 40 us after the leading edge
+    (was steplen + dirhold, indeterminate), max(0, dirhold - steplen) = 0 after the trailing."""
     ini = str(FW / "linuxcnc/hm2-stepper/5i20.ini")
     _, doc = _config(capsys, ini, "--drive", "drv8825")  # rising edge, 650 ns hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
-    assert hold["generator_ns"] == 40200 and hold["verdict"] == "indeterminate"
-    assert "the readings give different verdicts" in hold["note"] and "200 ns" in hold["note"]
+    assert hold["generator_ns"] == 40000 and hold["verdict"] == "pass"
     _, doc = _config(capsys, ini, "--drive", "gecko-g202")  # falling edge, 20 us hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
-    assert hold["generator_ns"] == 200 and hold["verdict"] == "fail"  # both readings fail
+    assert hold["generator_ns"] == 0 and hold["verdict"] == "fail"
 
 
 # -- Marlin ----------------------------------------------------------------------------------
