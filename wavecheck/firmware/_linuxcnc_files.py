@@ -43,9 +43,9 @@ _MAX_HAL_FILES = 64
 
 def is_ini(text: str) -> bool:
     """True for an INI file (section headers and ``KEY = VALUE`` lines, no HAL commands)."""
-    return bool(re.search(r"^\s*(\[[A-Za-z_0-9]+\]|#INCLUDE\s)", text, re.M)) and not re.search(
-        r"^\s*(loadrt|setp|net|addf)\s", text, re.M
-    )
+    return bool(
+        re.search(r"^[ \t]*(\[[A-Za-z_0-9]+\]|#INCLUDE[ \t])", text, re.M)
+    ) and not re.search(r"^[ \t]*(loadrt|setp|net|addf)[ \t]", text, re.M)
 
 
 def expand_refs(text: str, ini: IniFile | None) -> str:

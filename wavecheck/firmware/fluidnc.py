@@ -56,7 +56,7 @@ _US = Fraction(1000)
 _RMT_TICK_NS = Fraction(250)  # RMT clock 4 ticks/us: a dir_delay of 0 is one tick
 _I2S_MAX_US = 20
 _I2S_FRAME_US = 2
-_NO_SPACE = re.compile(r"^(\s*[A-Za-z0-9_]+)\s*:(?=[^\s])", re.M)
+_NO_SPACE = re.compile(r"^([ \t]*[A-Za-z0-9_]+)[ \t]*:(?=[^\s])", re.M)
 _AXES = "xyzabcuvw"
 
 
@@ -64,9 +64,9 @@ def looks_like(text: str) -> bool:
     """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
     (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
     return (
-        bool(re.search(r"^axes\s*:\s*(#.*)?$", text, re.M))
-        and bool(re.search(r"^\s+[xyzabc]\s*:\s*(#.*)?$", text, re.M))
-        and not re.search(r"^\[[^\]]+\]\s*$", text, re.M)
+        bool(re.search(r"^axes[ \t]*:[ \t]*(#.*)?$", text, re.M))
+        and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t]*(#.*)?$", text, re.M))
+        and not re.search(r"^\[[^\]\n]+\][ \t]*$", text, re.M)
     )
 
 

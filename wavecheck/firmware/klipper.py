@@ -110,8 +110,8 @@ def looks_like(text: str) -> bool:
     """A Klipper config: ``[section]`` headers with ``key: value`` lines, one of them a
     ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section."""
     return bool(
-        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]]*\]", text, re.M)
-    ) and bool(re.search(r"^\w+\s*:", text, re.M))
+        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]\n]*\]", text, re.M)
+    ) and bool(re.search(r"^\w+[ \t]*:", text, re.M))
 
 
 def _parse(

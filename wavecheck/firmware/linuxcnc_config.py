@@ -43,12 +43,12 @@ def looks_like(text: str) -> bool:
     if is_ini(text):
         return bool(
             re.search(
-                r"^\s*(\[(EMCMOT|HAL|KINS|TRAJ|EMCIO|EMC|DISPLAY|RS274NGC)\]|#INCLUDE\s)",
+                r"^[ \t]*(\[(EMCMOT|HAL|KINS|TRAJ|EMCIO|EMC|DISPLAY|RS274NGC)\]|#INCLUDE[ \t])",
                 text,
                 re.M,
             )
         )
-    return len(re.findall(r"^\s*(loadrt|setp|net|addf)\s", text, re.M)) >= 2
+    return len(re.findall(r"^[ \t]*(loadrt|setp|net|addf)[ \t]", text, re.M)) >= 2
 
 
 def read(

@@ -52,8 +52,8 @@ def looks_like(text: str) -> bool:
     """A ``config.g``: ``M569``/``M584``/``M92``/``M350``/``M203`` commands, or a file of
     ``M98 P"….g"`` includes."""
     return (
-        len(re.findall(r"^\s*M(569|584|92|350|203)\b", text, re.M)) >= 2
-        or len(re.findall(r"^\s*M98\s+P\"[^\"]+\.g\"", text, re.M)) >= 2
+        len(re.findall(r"^[ \t]*M(569|584|92|350|203)\b", text, re.M)) >= 2
+        or len(re.findall(r"^[ \t]*M98[ \t]+P\"[^\"\n]+\.g\"", text, re.M)) >= 2
     )
 
 

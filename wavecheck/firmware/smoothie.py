@@ -42,7 +42,7 @@ _COUPLED = {
 
 def looks_like(text: str) -> bool:
     """A Smoothieware config: ``alpha_steps_per_mm`` or ``alpha_step_pin`` lines."""
-    return bool(re.search(r"^\s*alpha_(steps_per_mm|step_pin)\s", text, re.M))
+    return bool(re.search(r"^[ \t]*alpha_(steps_per_mm|step_pin)[ \t]", text, re.M))
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
