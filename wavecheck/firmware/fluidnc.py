@@ -64,9 +64,9 @@ def looks_like(text: str) -> bool:
     """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
     (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
     return (
-        bool(re.search(r"^axes[ \t]*:[ \t]*(#.*)?$", text, re.M))
-        and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t]*(#.*)?$", text, re.M))
-        and not re.search(r"^\[[^\]\n]+\][ \t]*$", text, re.M)
+        bool(re.search(r"^axes[ \t]*:[ \t\r]*(#.*)?$", text, re.M))
+        and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t\r]*(#.*)?$", text, re.M))
+        and not re.search(r"^\[[^\]\n]+\][ \t\r]*$", text, re.M)
     )
 
 

@@ -105,3 +105,14 @@ def test_a_megabyte_of_newlines_is_refused(tmp_path: Path) -> None:
     (tmp_path / "blank.txt").write_text(BLANK)
     with pytest.raises(ConfigError, match="not a configuration"):
         bounded(lambda: read_firmware(tmp_path / "blank.txt"), 120)
+
+
+@pytest.mark.parametrize(("fmt", "name", "text"), FORMATS, ids=[f[0] for f in FORMATS])
+def test_crlf_files_are_still_recognised(tmp_path: Path, fmt: str, name: str, text: str) -> None:
+    """The line-bound patterns end lines at \\r too (6x_X_Carve.yaml is a CRLF file)."""
+    (tmp_path / name).write_bytes(text.replace("\n", "\r\n").encode())
+    if fmt == "linuxcnc":
+        (tmp_path / "m.hal").write_bytes(
+            b"loadrt stepgen step_type=0\r\naddf stepgen.make-pulses base-thread\r\n"
+        )
+    assert read_firmware(tmp_path / name).firmware == fmt
