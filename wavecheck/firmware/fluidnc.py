@@ -60,13 +60,24 @@ _NO_SPACE = re.compile(r"^([ \t]*[A-Za-z0-9_]+)[ \t]*:(?=[^\s])", re.M)
 _AXES = "xyzabcuvw"
 
 
+#: Top-level sections only FluidNC machine files have (a file with two of them is FluidNC's,
+#: whether or not it has motors).
+_TOP = re.compile(
+    r"^(stepping|axes|i2so|kinematics|coolant|probe|control|macros|user_outputs|sdcard|spi)"
+    r"[ \t]*:[ \t\r]*(?:#.*)?$",
+    re.M,
+)
+
+
 def looks_like(text: str) -> bool:
     """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
-    (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
-    return (
-        bool(re.search(r"^axes[ \t]*:[ \t\r]*(#.*)?$", text, re.M))
-        and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t\r]*(#.*)?$", text, re.M))
-        and not re.search(r"^\[[^\]\n]+\][ \t\r]*$", text, re.M)
+    (``  x:``) or two of FluidNC's top-level sections, no ``[section]`` headers (Klipper's
+    ``axes: z`` is a value, not a mapping)."""
+    if re.search(r"^\[[^\]\n]+\][ \t\r]*$", text, re.M):
+        return False
+    found = set(_TOP.findall(text))
+    return len(found) >= 2 or (
+        "axes" in found and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t\r]*(#.*)?$", text, re.M))
     )
 
 
@@ -98,13 +109,16 @@ def _items(node: yaml.Node | None) -> Iterator[tuple[str, yaml.Node]]:
 
 
 def _child(node: yaml.Node | None, key: str) -> yaml.Node | None:
+    """The section ``key`` of ``node``: the first one when it is repeated."""
     return next((v for k, v in _items(node) if k == key), None)
 
 
 def _scalar(node: yaml.Node | None, key: str) -> _Value | None:
-    found = _child(node, key)
-    if isinstance(found, yaml.ScalarNode):
-        return _Value(str(found.value).strip(), found.start_mark.line + 1)
+    """The value of ``key``: the last one when it is repeated (FluidNC's parser assigns each
+    ``key: value`` line as it reads it, so a later line overwrites an earlier one)."""
+    found = [v for k, v in _items(node) if k == key and isinstance(v, yaml.ScalarNode)]
+    if found:
+        return _Value(str(found[-1].value).strip(), found[-1].start_mark.line + 1)
     return None
 
 
@@ -141,9 +155,11 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     engine_max = _engine_rate(engine, pulse, dir_delay)
     axes_node = _child(root, "axes")
     axes: list[GeneratorGuarantee] = []
+    seen: set[str] = set()
     for name, axis_node in _items(axes_node):
-        if name not in _AXES:
-            continue
+        if name not in _AXES or name in seen:
+            continue  # a repeated axis section: the first is read
+        seen.add(name)
         for motor in ("motor0", "motor1"):
             driver = _driver(_child(axis_node, motor))
             if driver is None:
@@ -226,8 +242,10 @@ def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fract
 
 
 def _driver(motor: yaml.Node | None) -> tuple[str, yaml.Node] | None:
+    """The motor's driver section with a step pin (``NO_PIN`` is none: no step generator)."""
     for kind, node in _items(motor):
-        if _scalar(node, "step_pin") is not None:
+        pin = _scalar(node, "step_pin")
+        if pin is not None and pin.text.strip().lower() not in ("no_pin", ""):
             return kind, node
     return None
 

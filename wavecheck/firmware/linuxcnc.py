@@ -154,6 +154,7 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         if n["stepspace"] == 0:
             notes.append("stepspace 0 without the parport reset function: STEP stays high at the "
                          "top rate")  # fmt: skip
+    rate = _maxvel_clamp(files, cfg, rate)
     info = {
         "base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
         **{k: f"{v} base periods" for k, v in n.items()},
@@ -174,6 +175,21 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         notes=tuple(notes),
         aliases=aliases,
     )
+
+
+def _maxvel_clamp(files: LinuxCNCFiles, cfg: LinuxCNCConfig, rate: Guaranteed) -> Guaranteed:
+    """``rate``, or ``maxvel x |position-scale|`` when ``setp stepgen.N.maxvel`` is lower
+    (stepgen.c clamps the commanded velocity to maxvel when it is > 0)."""
+    maxvel, scale = cfg.floats.get("maxvel"), cfg.floats.get("position-scale")
+    if not maxvel or maxvel <= 0 or not scale:
+        return rate
+    hz = Fraction(repr(maxvel)) * abs(Fraction(repr(scale)))
+    if rate.value is not None and hz >= rate.value:
+        return rate
+    at = files.setp.get(f"stepgen.{cfg.channel}.maxvel", ("", ""))[1]
+    return Guaranteed(hz, "maxvel x |position-scale|", at, "units/s", "derived",
+                      f"stepgen clamps the velocity to maxvel {maxvel:g} units/s "
+                      f"(position-scale {scale:g} steps/unit)")  # fmt: skip
 
 
 #: LinuxCNC issue #2332 (open): stepgen.c can start a step sooner than dirsetup after a DIR change.

@@ -69,6 +69,9 @@ def read(
     if not soft and not hw:
         raise ConfigError(_none(files, "stepgen or hostmot2 stepgen"))
     notes = list(files.not_read)
+    if files.found_ini:
+        notes.insert(0, f"a HAL file given alone: read with {files.found_ini}, whose [HAL] "
+                        "HALFILE names it")  # fmt: skip
     unsupported = []
     for module, at in files.loads:
         if module in UNMODELLED:
@@ -98,7 +101,7 @@ def read(
         firmware="hm2" if hw and not soft else "linuxcnc",
         path=str(path),
         axes=tuple(soft + hw),
-        files=(str(path), *files.hal_files),
+        files=tuple(dict.fromkeys((str(path), *filter(None, [files.found_ini]), *files.hal_files))),
         unsupported=tuple(dict.fromkeys(unsupported)),
         notes=tuple(notes),
         fixer=_fixer({id(a) for a in hw}, linuxcnc.fixer(j)),
