@@ -211,10 +211,8 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if role == "max_rate"
                 else limit - offset
             )
-            if role == "hold" and "trailing" in note and g.pulse.value is not None:
-                need = limit + g.pulse.value  # a trailing-edge hold, as a leading-edge one
-                note += " (inverting STEP would make it the leading edge)"
-            fix = config.fix(g, role, need)
+            trailing = role == "hold" and "trailing" in note
+            fix = config.fix(g, "trailing_hold" if trailing else role, need)
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
     notes = list(g.notes)
     if drive.active_edge == "both" and not g.both_edges:

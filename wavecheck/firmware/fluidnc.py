@@ -41,9 +41,10 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
     ceil_to,
     unknown,
 )
@@ -166,7 +167,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 continue
             kind, drv = driver
             axes.append(
-                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine)
+                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine, frame)
             )
     if not axes:
         raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
@@ -269,10 +270,14 @@ def _axis(
     setup: Guaranteed,
     engine_max: Fraction | None,
     engine: str,
+    frame: Fraction | None,
 ) -> GeneratorGuarantee:
     step_pin, step_low = _pin(_scalar(drv, "step_pin"))
     _, dir_low = _pin(_scalar(drv, "direction_pin"))
-    info = {"driver": f"{kind} ({motor}, step_pin {step_pin})"}
+    info = {
+        "driver": f"{kind} ({motor}, step_pin {step_pin})",
+        "engine": f"{engine} {frame} ns frames" if frame is not None else engine,
+    }
     spm_v = _scalar(axis_node, "steps_per_mm")
     rate_v = _scalar(axis_node, "max_rate_mm_per_min")
     max_rate = Guaranteed(None, "max_rate_mm_per_min", "", "mm/min", "unknown", "not set")
@@ -318,18 +323,33 @@ def _axis(
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    us = -(-need // _US)
-    if role in ("pulse", "hold"):
-        return f"set `stepping: pulse_us: {us}` (whole us, at most 30)"
-    if role == "setup":
-        return f"set `stepping: dir_delay_us: {us}` (whole us, at most 10)"
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    engine = axis.info.get("engine", "RMT").split(" ")[0]
+    words = axis.info.get("engine", "RMT").split(" ")
+    frame = Fraction(words[1]) if len(words) > 1 else Fraction(0)
+    if role in ("pulse", "hold", "setup"):
+        key, top = ("dir_delay_us", 10) if role == "setup" else ("pulse_us", 30)
+        if engine.startswith("I2S"):
+            top = min(top, _I2S_MAX_US)
+            need = ceil_to(need, frame)  # whole frames (see _setup and _engine_pulse)
+        us: Fraction = max(Fraction(-(-need // _US)), Fraction(1 if role != "setup" else 0))
+        if us > top:
+            return (
+                f"FluidNC tops out at {key} {top} us with the {engine} engine: this drive needs "
+                f"{float(us):g} us"
+            )
+        return f"set `stepping: {key}: {us}` (whole us, at most {top})"
+    if role == "trailing_hold":
+        return (
+            "FluidNC may change DIR right after the pulse ends: invert the step pin (add or "
+            f"remove `:low`) of {axis.axis} so that the drive's active edge starts the pulse"
+        )
     if role == "idle" and axis.pulse.value is not None:
         need = Fraction(10**9) / (axis.pulse.value + need)
     spm = axis.info.get("steps/mm", "").split(" ")[0]
     if spm:
         return (
-            f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min` to at most "
-            f"{float(need * 60 / Fraction(spm)):.6g}"
+            f"set `{axis.axis.split('.')[0]}: max_rate_mm_per_min: "
+            f"{at_most(need * 60 / Fraction(spm))}`"
         )
     return f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min`"

@@ -23,7 +23,13 @@ from fractions import Fraction
 
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware._text import number
-from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware.guarantee import (
+    FixRole,
+    GeneratorGuarantee,
+    Guaranteed,
+    at_least,
+    at_most,
+)
 from wavecheck.firmware.linuxcnc import joint_of
 from wavecheck.linuxcnc.files import resolve_ref
 
@@ -92,7 +98,7 @@ def _axis(
                           "1e9 / (steplen + stepspace)", pulse.where, "ns", "derived")  # fmt: skip
     mv, scale = params.get("maxvel"), params.get("position-scale")
     if scale:
-        info["position-scale"] = f"{float(scale[0]):g} steps/unit ({scale[1]})"
+        info["position-scale"] = f"{scale[0]} steps/unit ({scale[1]})"
     if mv and scale and mv[0] > 0:
         info["maxvel"] = f"{float(mv[0]):g} units/s ({mv[1]})"
         hz = mv[0] * abs(scale[0])
@@ -139,15 +145,18 @@ def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guarantee
     return lead, trail
 
 
-def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    """The hm2 setting to change so that ``role`` reaches ``need``."""
+def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    """The hm2 ``setp`` line to add so that ``role`` reaches ``need`` (the INI value the HAL
+    file names, ``STEPLEN`` …, is the other place to change it)."""
+    full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
     name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-            "hold": "dirhold"}.get(role)  # fmt: skip
+            "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
     if name is None:
-        return f"lower hm2_….{axis.axis}.maxvel so that it steps at most {float(need):.6g} steps/s"
-    if role == "hold":
-        # the hold counter starts with the pulse (kubstepgenz.vhd): dirhold alone must reach it
-        return (
-            f"set hm2_….{axis.axis}.dirhold (the INI's DIRHOLD) to at least {int(-(-need // 1))} ns"
-        )
-    return f"set hm2_….{axis.axis}.{name} (the INI's {name.upper()}) to at least {int(-(-need // 1))} ns"
+        scale = axis.info.get("position-scale", "").split(" ")[0]
+        if scale and Fraction(scale):
+            return f"add `setp {full}.maxvel {at_most(need / abs(Fraction(scale)))}` (units/s)"
+        pulse = axis.pulse.value or Fraction(0)
+        return f"add `setp {full}.stepspace {at_least(Fraction(10**9) / need - pulse)}` (ns)"
+    if role == "trailing_hold" and axis.pulse.value is not None:
+        need += axis.pulse.value  # the hold counter starts with the pulse (kubstepgenz.vhd)
+    return f"add `setp {full}.{name} {int(-(-need // 1))}` (ns; the INI's {name.upper()})"

@@ -46,9 +46,10 @@ from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     MAX_AXES,
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
     not_enforced,
     unknown,
 )
@@ -501,7 +502,15 @@ def _edge_path(made: Fraction, mcu: _Mcu) -> bool | None:
     return False if made > 250 else None
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    # whole us: a whole number of ticks of every whole-MHz MCU clock (the host truncates to ticks)
+    us: Fraction = max(Fraction(-(-need // 1000)), Fraction(1))
+    if role == "trailing_hold":
+        return (
+            f"invert step_pin in [{axis.axis}] (add or remove its `!`) and set "
+            f"`step_pulse_duration: {float(us / 10**6):.9g}` in [{axis.axis}]: Klipper changes DIR "
+            "right after the pulse ends, so the drive's active edge must start a pulse that long"
+        )
     if role == "max_rate" or (
         role == "idle"
         and not axis.both_edges
@@ -510,14 +519,17 @@ def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
         and axis.pulse.value >= need
     ):
         rate = need if role == "max_rate" else Fraction(10**9) / ((axis.pulse.value or 0) + need)
+        key = axis.max_rate.setting.split(" x ")[0]
+        speed = axis.info.get("max speed", "").split(" ")[0]
+        if axis.max_rate.value and speed:
+            value = Fraction(speed) * rate / axis.max_rate.value
+            return f"set `{key}: {at_most(value)}` in [printer] ({axis.axis} then steps at most {float(rate):.6g} steps/s)"
         return (
-            f"lower max_velocity in [printer] so that {axis.axis} steps at most "
-            f"{float(rate):.6g} steps/s"
+            f"lower {key} in [printer] so that {axis.axis} steps at most {float(rate):.6g} steps/s"
         )
-    s = float(need / 10**9)
     extra = (
         " (over 0.0000005 this turns both-edge stepping off)"
-        if axis.both_edges and need > _BOTH_EDGE_MAX_NS
+        if axis.both_edges and us * 1000 > _BOTH_EDGE_MAX_NS
         else ""
     )
-    return f"set `step_pulse_duration: {s:.9g}` in [{axis.axis}]{extra}"
+    return f"set `step_pulse_duration: {float(us / 10**6):.9g}` in [{axis.axis}]{extra}"

@@ -22,7 +22,7 @@ from fractions import Fraction
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import hm2, linuxcnc
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles, is_ini, scan
-from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Role
+from wavecheck.firmware.guarantee import FirmwareConfig, FixRole, GeneratorGuarantee
 
 __all__ = ["UNMODELLED", "looks_like", "read"]
 
@@ -135,9 +135,9 @@ def _none(files: LinuxCNCFiles, what: str) -> str:
 
 
 def _fixer(
-    hw: set[int], soft: Callable[[GeneratorGuarantee, Role, Fraction], str]
-) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
-    def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    hw: set[int], soft: Callable[[GeneratorGuarantee, FixRole, Fraction], str]
+) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         return hm2.fix(axis, role, need) if id(axis) in hw else soft(axis, role, need)
 
     return fix

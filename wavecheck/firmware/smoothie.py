@@ -24,9 +24,10 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
     unknown,
 )
 
@@ -123,7 +124,8 @@ def _axis(  # type: ignore[no-untyped-def]
     extruder = rate_key == "max_speed"
     if f"{prefix}steps_per_mm" in keys or extruder:
         spm, at, _ = get(f"{prefix}steps_per_mm", "1" if extruder else "0", 0, 10**7, "steps/mm")
-        info["steps/mm"] = f"{float(spm):g} ({prefix}steps_per_mm, {at})"
+        raw = keys.get(f"{prefix}steps_per_mm", ("1", ""))[0]
+        info["steps/mm"] = f"{raw} ({prefix}steps_per_mm, {at})"
         default, unit, per_s = ("1000", "mm/s", 1) if extruder else ("30000", "mm/min", 60)
         mr, mr_at, _ = get(f"{prefix}{rate_key}", default, 0, 10**9, unit)
         info["max rate"] = f"{float(mr):g} {unit} ({prefix}{rate_key}, {mr_at})"
@@ -149,18 +151,19 @@ def _axis(  # type: ignore[no-untyped-def]
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     if role == "pulse":
         return f"set `microseconds_per_step_pulse {-(-need // 1000)}`"
     if role in ("idle", "setup"):
         p = axis.pulse.value or Fraction(0)
         extra = p if role == "idle" else Fraction(0)
-        return f"lower `base_stepping_frequency` to at most {int(Fraction(10**9) / (need + extra))}"
+        return f"set `base_stepping_frequency {int(Fraction(10**9) / (need + extra))}` (or lower)"
     if role == "max_rate":
-        key = (
-            f"{axis.axis}.max_speed"
-            if axis.axis.startswith("extruder.")
-            else f"{axis.axis}_max_rate"
-        )
+        spm = axis.info.get("steps/mm", "").split(" ")[0]
+        extruder = axis.axis.startswith("extruder.")
+        key = f"{axis.axis}.max_speed" if extruder else f"{axis.axis}_max_rate"
+        if spm and Fraction(spm) > 0:
+            value = need / Fraction(spm) * (1 if extruder else 60)
+            return f"set `{key} {at_most(value)}` ({'mm/s' if extruder else 'mm/min'})"
         return f"lower `{key}` so that it steps at most {float(need):.6g} steps/s"
     return "Smoothieware has no DIR hold setting"

@@ -23,7 +23,7 @@ def test_grbl_settings_md() -> None:
     cfg = read_firmware(FW / "grbl/settings.md")
     assert cfg.firmware == "grbl" and cfg.axis_names == ("X", "Y", "Z")
     x = cfg.axis("X")
-    assert v(x.pulse) == 10_000  # line 32: $0=10 (us)
+    assert v(x.pulse) == 9437.5  # line 32: $0=10 (us), less 562.5 ns (grbl stepper.c:241)
     assert x.pulse.where.endswith("settings.md:32")
     assert x.pulse_level == 1  # line 34: $2=0
     assert not x.dir_inverted  # line 35: $3=0
@@ -33,7 +33,7 @@ def test_grbl_settings_md() -> None:
 
 def test_grbl_user_dumps() -> None:
     cfg = read_firmware(FW / "grbl/GRBL-config.md")  # first dump, lines 6-39
-    assert v(cfg.axis("X").pulse) == 10_000  # line 6: $0=10
+    assert v(cfg.axis("X").pulse) == 9437.5  # line 6: $0=10, less 562.5 ns
     assert [a.dir_inverted for a in cfg.axes] == [True, False, True]  # line 9: $3=5 (X, Z)
     assert v(cfg.axis("X").max_rate) == F(800 * 1000, 60)  # lines 28, 31: $100=800, $110=1000
     assert v(cfg.axis("Y").max_rate) == F(800 * 800, 60)  # lines 29, 32: $101=800, $111=800

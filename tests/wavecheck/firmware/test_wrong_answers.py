@@ -236,7 +236,7 @@ def test_grbl_dump_without_0_uses_the_default(tmp_path: Path) -> None:
     text = (CORPUS / "grbl/tiago-rorke+wandering-gaze/grbl_settings.txt").read_text()
     (tmp_path / "dump.txt").write_text(re.sub(r"^\$0=.*\n", "", text, flags=re.M))
     x = read_firmware(tmp_path / "dump.txt").axis("X")
-    assert x.pulse.value == 10_000 and x.pulse.status == "default"
+    assert x.pulse.value == 9437.5 and x.pulse.status == "default"  # 10 us - 562.5 ns
 
 
 def test_fluidnc_is_read() -> None:
