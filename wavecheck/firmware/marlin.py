@@ -243,6 +243,10 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
     return out
 
 
+#: The drivers Marlin 2.0.0's HAS_TRINAMIC counts (HAS_DRIVER of each; not the standalone ones).
+_TRINAMIC_200 = {"TMC2130", "TMC2160", "TMC2208", "TMC2209", "TMC2660", "TMC5130", "TMC5160"}
+
+
 def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
     """What Marlin's own headers derive from ``Configuration.h`` before ``Configuration_adv.h``
     (``drivers.h``, ``Conditionals``): ``HAS_DRIVER(T)``, ``AXIS_IS_TMC(A)``,
@@ -269,6 +273,11 @@ def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
         "HAS_TRINAMIC_CONFIG": any_axis(config),
         "HAS_TRINAMIC_STANDALONE": any_axis(lambda t: t.startswith("TMC") and not config(t)),
     }
+    version = h.definition("CONFIGURATION_H_VERSION")
+    if version is not None and (version.value or "").strip() == "020000":
+        # Marlin 2.0.0's name for it (src/inc/Conditionals_post.h): HAS_TRINAMIC, the drivers
+        # configured over UART/SPI
+        derived["HAS_TRINAMIC"] = any_axis(lambda t: t in _TRINAMIC_200)
     ext = h.definition("EXTRUDERS")
     if ext is not None:
         n = evaluate(h, ext.value or "")

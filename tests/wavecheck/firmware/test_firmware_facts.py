@@ -126,3 +126,24 @@ def test_a_hal_file_without_its_ini_never_advises_a_missing_option(tmp_path: Pat
     with pytest.raises(ConfigError) as err:
         read_firmware(tmp_path / "Gecko_540B3.hal")
     assert "--ini" not in str(err.value) and "give the INI" in str(err.value)
+
+
+# -- Marlin ---------------------------------------------------------------------------------------
+
+
+def test_marlin_200_has_trinamic_decides_square_wave_stepping(tmp_path: Path) -> None:
+    """Marlin 2.0.0 names the condition HAS_TRINAMIC (its Configuration_adv.h wraps the TMC
+    options, SQUARE_WAVE_STEPPING among them, in `#if HAS_TRINAMIC`, e.g. FYSETC/Cheetah line
+    1877): with TMC2209 drivers it is true, so both edges step."""
+    (tmp_path / "Configuration.h").write_text(
+        "#define CONFIGURATION_H_VERSION 020000\n#define MOTHERBOARD BOARD_RAMPS_14_EFB\n"
+        "#define X_DRIVER_TYPE TMC2209\n#define Y_DRIVER_TYPE TMC2209\n"
+        "#define Z_DRIVER_TYPE TMC2209\n#define E0_DRIVER_TYPE TMC2209\n"
+        "#define DEFAULT_AXIS_STEPS_PER_UNIT { 80, 80, 400, 93 }\n"
+        "#define DEFAULT_MAX_FEEDRATE { 300, 300, 5, 25 }\n"
+    )
+    (tmp_path / "Configuration_adv.h").write_text(
+        "#define CONFIGURATION_ADV_H_VERSION 020000\n#if HAS_TRINAMIC\n"
+        "  #define SQUARE_WAVE_STEPPING\n#endif\n"
+    )
+    assert read_firmware(tmp_path / "Configuration.h").axis("X").both_edges
