@@ -3,7 +3,7 @@
 
 Read with PyYAML (the node tree keeps every value's line): ``stepping:`` ``engine`` (default RMT),
 ``pulse_us`` (default 4, 0..30), ``dir_delay_us`` (default 0, 0..10), ``disable_delay_us``;
-``i2so: min_pulse_us`` (the I2S frame, default 2 µs); per axis ``steps_per_mm``,
+per axis ``steps_per_mm``,
 ``max_rate_mm_per_min`` and ``motor0``/``motor1`` with one driver section that has a
 ``step_pin`` (``standard_stepper``, ``stepstick``, ``tmc_2209`` …; an ``rc_servo`` or other
 motor without one is not a step generator). ``gpio.26:low`` is an inverted pin. FluidNC's own
@@ -17,10 +17,12 @@ What each engine guarantees at the pin:
 - **TIMED**: the CPU raises the pin, spins ``pulse_us`` and lowers it; ``dir_delay_us`` is spun
   after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
   (``uncertain``).
-- **I2S_STATIC / I2S_STREAM**: pins change only at I2S frame boundaries; the pulse is raised to
-  at least one frame, capped at 20 µs, rounded up to whole frames; ``dir_delay_us`` becomes
-  whole frames before the step, rounded down (``i2s_out_push_sample`` divides by the frame;
-  I2S_STREAM pushes at least one), so a delay under one frame may be none on I2S_STATIC.
+- **I2S_STATIC / I2S_STREAM** (one engine under two names in current FluidNC): DIR is shifted
+  out at once and the CPU spins ``dir_delay_us`` before the step (the I2S engine's
+  ``finish_dir``: ``delay_us(dir_delay_us)``); the step is shifted out, the CPU spins until
+  ``pulse_us`` has passed and shifts it back (``finish_step``/``start_unstep``): both are spun,
+  not hardware-timed (``uncertain``). Older builds quantised both to I2S frames; the current
+  engine decides.
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
 after the last pulse's leading edge when the step rate stays under the engine's maximum
@@ -45,7 +47,6 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_most,
-    ceil_to,
     unknown,
 )
 
@@ -55,8 +56,6 @@ __all__ = ["ENGINES", "looks_like", "read"]
 ENGINES = ("RMT", "TIMED", "I2S_STATIC", "I2S_STREAM")
 _US = Fraction(1000)
 _RMT_TICK_NS = Fraction(250)  # RMT clock 4 ticks/us: a dir_delay of 0 is one tick
-_I2S_MAX_US = 20
-_I2S_FRAME_US = 2
 _NO_SPACE = re.compile(r"^([ \t]*[A-Za-z0-9_]+)[ \t]*:(?=[^\s])", re.M)
 _AXES = "xyzabcuvw"
 
@@ -151,8 +150,8 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     notes = [
         f"stepping engine {engine} ({engine_at}); pulse_us and dir_delay_us apply to every motor"
     ]
-    pulse, frame = _engine_pulse(p, root, engine, pulse, notes)
-    setup = _setup(engine, dir_delay, frame)
+    pulse = _engine_pulse(engine, pulse)
+    setup = _setup(engine, dir_delay)
     engine_max = _engine_rate(engine, pulse, dir_delay)
     axes_node = _child(root, "axes")
     axes: list[GeneratorGuarantee] = []
@@ -167,7 +166,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 continue
             kind, drv = driver
             axes.append(
-                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine, frame)
+                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine)
             )
     if not axes:
         raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
@@ -181,56 +180,32 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )
 
 
-def _engine_pulse(
-    path: str, root: yaml.Node, engine: str, pulse: Guaranteed, notes: list[str]
-) -> tuple[Guaranteed, Fraction | None]:
-    """The pulse as the engine makes it, and the I2S frame (ns) or None."""
-    if not engine.startswith("I2S"):
-        status = "set" if engine == "RMT" else "uncertain"
-        note = (
-            "RMT: hardware-timed"
-            if engine == "RMT"
-            else "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
-        )
-        return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", status, note), None  # type: ignore[arg-type]
-    frame_v = _scalar(_child(root, "i2so"), "min_pulse_us")
-    frame_us = (
-        number(
-            frame_v.text, where(path, frame_v.line), "i2so min_pulse_us", low=1, high=_I2S_MAX_US
-        )
-        if frame_v
-        else Fraction(_I2S_FRAME_US)
+def _engine_pulse(engine: str, pulse: Guaranteed) -> Guaranteed:
+    """The pulse as the engine makes it."""
+    if engine == "RMT":
+        return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", pulse.status,
+                          "RMT: hardware-timed")  # fmt: skip
+    note = (
+        "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
+        if engine == "TIMED"
+        else "I2S: the step is shifted out, the CPU spins pulse_us, then shifts it back"
     )
-    frame = frame_us * _US
-    assert pulse.value is not None
-    wanted = min(max(pulse.value, frame), _I2S_MAX_US * _US)
-    made = ceil_to(wanted, frame)
-    note = f"I2S: pins change on {float(frame_us):g} us frames; pulse {float(made / _US):g} us"
-    if made != pulse.value:
-        notes.append(f"FluidNC adjusts stepping/pulse_us to {float(made / _US):g} us ({note})")
-    return Guaranteed(made, pulse.setting, pulse.where, "us", "derived", note), frame
+    return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", "uncertain", note)
 
 
-def _setup(engine: str, dir_delay: Guaranteed, frame: Fraction | None) -> Guaranteed:
+def _setup(engine: str, dir_delay: Guaranteed) -> Guaranteed:
     dd = dir_delay.value or Fraction(0)
     if engine == "RMT":
         value = dd if dd else _RMT_TICK_NS
         note = "RMT: every pulse starts with dir_delay_us at the idle level (one 0.25 us tick at 0)"
         return Guaranteed(value, dir_delay.setting, dir_delay.where, "us", "set", note)
-    if engine == "TIMED":
-        note = "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
-        return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
-    assert frame is not None
-    frames = dd // frame
-    if engine == "I2S_STREAM" and dd:
-        frames = max(frames, 1)  # i2s_out_push_sample: whole frames, at least one sample
     note = (
-        "I2S: dir_delay_us becomes whole frames before the step (FluidNC's I2SOut.cpp divides "
-        "it by the frame"
-        + (", at least one" if engine == "I2S_STREAM" else "; DIR and STEP may share a frame")
-        + ")"
+        "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
+        if engine == "TIMED"
+        else "I2S: DIR is shifted out at once and the CPU spins dir_delay_us before the step "
+        "(the I2S engine's finish_dir; 0: DIR right before STEP)"
     )
-    return Guaranteed(frames * frame, dir_delay.setting, dir_delay.where, "us", "derived", note)
+    return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
 
 
 def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fraction | None:
@@ -270,13 +245,12 @@ def _axis(
     setup: Guaranteed,
     engine_max: Fraction | None,
     engine: str,
-    frame: Fraction | None,
 ) -> GeneratorGuarantee:
     step_pin, step_low = _pin(_scalar(drv, "step_pin"))
     _, dir_low = _pin(_scalar(drv, "direction_pin"))
     info = {
         "driver": f"{kind} ({motor}, step_pin {step_pin})",
-        "engine": f"{engine} {frame} ns frames" if frame is not None else engine,
+        "engine": engine,
     }
     spm_v = _scalar(axis_node, "steps_per_mm")
     rate_v = _scalar(axis_node, "max_rate_mm_per_min")
@@ -325,13 +299,8 @@ def _axis(
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     engine = axis.info.get("engine", "RMT").split(" ")[0]
-    words = axis.info.get("engine", "RMT").split(" ")
-    frame = Fraction(words[1]) if len(words) > 1 else Fraction(0)
     if role in ("pulse", "hold", "setup"):
         key, top = ("dir_delay_us", 10) if role == "setup" else ("pulse_us", 30)
-        if engine.startswith("I2S"):
-            top = min(top, _I2S_MAX_US)
-            need = ceil_to(need, frame)  # whole frames (see _setup and _engine_pulse)
         us: Fraction = max(Fraction(-(-need // _US)), Fraction(1 if role != "setup" else 0))
         if us > top:
             return (

@@ -147,3 +147,12 @@ def test_marlin_200_has_trinamic_decides_square_wave_stepping(tmp_path: Path) ->
         "  #define SQUARE_WAVE_STEPPING\n#endif\n"
     )
     assert read_firmware(tmp_path / "Configuration.h").axis("X").both_edges
+
+
+def test_fluidnc_i2s_dir_delay_follows_the_current_engine() -> None:
+    """Current FluidNC runs I2S_STATIC and I2S_STREAM as one engine (Stepping.cpp's engine
+    notes): DIR is shifted out at once and finish_dir spins delay_us(dir_delay_us) before the
+    step. 6_pack_TMC2130_XYZ.yaml lines 4-7 (I2S_STREAM, dir_delay_us 1): 1 us (the older
+    frame model said one 2 us frame)."""
+    x = read_firmware(FLUIDNC).axis("x")
+    assert x.dir_setup.value == 1000 and "finish_dir" in x.dir_setup.note
