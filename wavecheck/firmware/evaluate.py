@@ -131,7 +131,7 @@ def _mapping(
     hold is the generator's DIR delay or hold (from the trailing edge when the drive's active
     edge ends the pulse); the rate rule the maximum step rate."""
     edge = "both" if g.both_edges else drive.active_edge
-    trailing = edge != g.leading_edge and not g.both_edges
+    trailing = _trailing(g, drive)
     if r.check == "width":
         role: Role = "pulse" if r.level == g.pulse_level else "idle"
         return role, g.figure(role), Fraction(0), ""
@@ -148,6 +148,11 @@ def _mapping(
     if r.figure == "max_rate":
         return "max_rate", g.max_rate, Fraction(0), ""
     return None, None, Fraction(0), _SILENT
+
+
+def _trailing(g: GeneratorGuarantee, drive: Drive) -> bool:
+    """The drive's active edge ends the generator's pulse."""
+    return not g.both_edges and drive.active_edge != g.leading_edge
 
 
 def _as_ns(v: Fraction | None, rate: bool, offset: Fraction) -> Fraction | None:
@@ -211,8 +216,8 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if role == "max_rate"
                 else limit - offset
             )
-            trailing = role == "hold" and "trailing" in note
-            fix = config.fix(g, "trailing_hold" if trailing else role, need)
+            fix = config.fix(g, "trailing_hold" if role == "hold" and _trailing(g, drive) else role,
+                             need)  # fmt: skip
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
     notes = list(g.notes)
     if drive.active_edge == "both" and not g.both_edges:
