@@ -33,7 +33,7 @@ from typing import Any
 from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
-from wavecheck.cli.config import add_limit_arguments
+from wavecheck.cli._tuning_args import add_limit_arguments
 from wavecheck.errors import ConfigError, UsageError, WavecheckError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import BASE_PERIOD, LATENCY, Plausible, is_number, option_ns, shorten

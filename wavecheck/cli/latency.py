@@ -102,7 +102,7 @@ def _period_ns(args: argparse.Namespace) -> tuple[Fraction | None, str]:
         except UnitError as err:
             raise UnitError(f"--base-period: {err}") from None
     if args.ini or args.hal:
-        from wavecheck.linuxcnc.config import read_config
+        from wavecheck.linuxcnc.stepgen_config import read_config
 
         cfg = read_config(args.ini, list(args.hal))
         if cfg.base_period_ns is None:

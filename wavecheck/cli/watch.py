@@ -18,9 +18,10 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
-from wavecheck.cli._reports import add_stepgen_arguments
-from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
-from wavecheck.cli.config import add_tuning_arguments
+from wavecheck.cli._formats import FORMATS
+from wavecheck.cli._reports import finish_report, write_outputs
+from wavecheck.cli._stepgen_args import add_stepgen_arguments
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.live import START_GRACE
 from wavecheck.output import output_file
@@ -142,7 +143,7 @@ def register(sub: Any) -> None:
         metavar="FILE.sr",
         help="keep the whole stream as a .sr file, written as it arrives",
     )
-    p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
+    p.add_argument("--format", choices=sorted(FORMATS), default="text", help="report format")
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )

@@ -3,7 +3,7 @@
 Blocks (:mod:`wavecheck.capture.blocks`) are gathered until about ``block_edges`` edges have come;
 then the window ``[t0, t1)`` (t1 the blocks' end) is checked by the vectorised code
 (:func:`wavecheck.engine.decode.decode`, :func:`wavecheck.engine.intervals.rule_intervals`,
-:func:`wavecheck.engine.verdicts.evaluate`) on the plan's signals holding, per mapped channel, its
+:func:`wavecheck.engine.judge.evaluate`) on the plan's signals holding, per mapped channel, its
 edges from a context tick ``c0`` on (its level at ``c0`` as the initial level) up to ``t1``. An
 interval is kept only in the window where its later event lies (``max(start, end)`` in
 ``[t0, t1)``), so each is counted once; a step, a sequence error, a state change, a step gap and a
@@ -45,6 +45,7 @@ from wavecheck.engine.decode import (
 )
 from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.intervals import rule_intervals, split_unknown
+from wavecheck.engine.judge import evaluate, sequence_result
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.engine.rates import rates_from
@@ -52,7 +53,6 @@ from wavecheck.engine.resolve import AxisPlan, ambiguous_note
 from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.sinks import IntervalSink, StepSink
 from wavecheck.engine.trace import StepTrace
-from wavecheck.engine.verdicts import evaluate, sequence_result
 from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 from wavecheck.rules import Rule, width_rule
 

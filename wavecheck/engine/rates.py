@@ -31,7 +31,7 @@ from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.primitives import Intervals, widths
-from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.rules import width_rule
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase

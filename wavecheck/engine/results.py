@@ -5,8 +5,8 @@ the same figures whatever the windows (tests/wavecheck/engine hold one window ag
 unknown), the shortest and longest interval and where the shortest is, the worst ``keep``
 violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and,
 when pictures are asked for (``binned``), a fixed-bin
-:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
-(each window's :class:`~wavecheck.engine.verdicts.Judged` is merged and dropped); the pictures
+:class:`~wavecheck.engine.judge.Histogram`. What it does not keep: every interval
+(each window's :class:`~wavecheck.engine.judge.Judged` is merged and dropped); the pictures
 draw from these results and the signal windows kept around the worst places
 (:mod:`wavecheck.engine.windows`); whatever needs every step or interval is a sink
 (:mod:`wavecheck.engine.sinks`).
@@ -22,7 +22,7 @@ import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import Figure
-from wavecheck.engine.verdicts import (
+from wavecheck.engine.judge import (
     FAIL,
     INDETERMINATE,
     Histogram,

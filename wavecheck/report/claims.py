@@ -16,6 +16,7 @@ one mechanism for both. Why a rule was not checked, in order:
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from wavecheck.engine import MachineReport, Report, RuleResult
 from wavecheck.rules import RULE_IDS, rule
@@ -36,6 +37,7 @@ __all__ = [
     "exit_code",
     "not_checked",
     "requirement_line",
+    "required_dict",
     "rule_statuses",
     "statuses",
     "unchecked",
@@ -140,3 +142,13 @@ def exit_code(checked: Checked, require: Sequence[str] = ()) -> int:
     """The run's exit code: the verdict's, or 4 when a required rule was not decided
     (:func:`wavecheck.verdict.required_exit_code`)."""
     return required_exit_code(checked.exit_code, unmet(checked, require))
+
+
+def required_dict(require: Sequence[str], unmet: Sequence[Unmet]) -> dict[str, Any]:
+    """``{"rules": [...], "unmet": [{rule, axis, verdict, why}]}`` of ``--require``."""
+    return {
+        "rules": list(require),
+        "unmet": [
+            {"rule": u.rule, "axis": u.axis, "verdict": u.verdict, "why": u.why} for u in unmet
+        ],
+    }

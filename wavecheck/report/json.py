@@ -23,17 +23,16 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
 from wavecheck.engine import MachineReport, Report, RuleResult, Violation
-from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
 from wavecheck.units import json_number
-from wavecheck.verdict import Unmet
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict", "required_dict"]
+__all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict"]
 
 DEFAULT_VIOLATION_CAP = 1000
 
@@ -88,18 +87,8 @@ def claims_dict(checked: Report | MachineReport, require: Sequence[str] = ()) ->
     return {
         "verdict_line": claims.verdict_line(checked),
         "unchecked": [{"why": why, "rules": list(rules)} for why, rules in unchecked.items()],
-        "required": required_dict(require, claims.unmet(checked, require)),
+        "required": claims.required_dict(require, claims.unmet(checked, require)),
         "exit_code": claims.exit_code(checked, require),
-    }
-
-
-def required_dict(require: Sequence[str], unmet: Sequence[Unmet]) -> dict[str, Any]:
-    """``{"rules": [...], "unmet": [{rule, axis, verdict, why}]}`` of ``--require``."""
-    return {
-        "rules": list(require),
-        "unmet": [
-            {"rule": u.rule, "axis": u.axis, "verdict": u.verdict, "why": u.why} for u in unmet
-        ],
     }
 
 

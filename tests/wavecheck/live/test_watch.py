@@ -25,6 +25,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.bounds import HANG_GUARD_S
+
 pytestmark = pytest.mark.skipif(
     shutil.which("sigrok-cli") is None, reason="needs Debian's sigrok-cli (make system-deps)"
 )
@@ -52,7 +54,7 @@ def _start(*args: str, cwd: Path) -> subprocess.Popen[str]:
 def _first_status(proc: subprocess.Popen[str]) -> str:
     """Wait for a status line with steps in it (the watch is checking)."""
     assert proc.stderr is not None
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_GUARD_S  # a guard against a hang (tests/bounds.py)
     while time.monotonic() < deadline:
         line = proc.stderr.readline()
         if " steps" in line and not line.startswith("[   0.0"):
@@ -215,7 +217,7 @@ def test_save_is_readable_after_the_watcher_is_killed(tmp_path: Path) -> None:
     proc = _start("--save", "kept.sr", cwd=tmp_path)
     assert proc.stderr is not None
     seen = 0
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_GUARD_S  # a guard against a hang (tests/bounds.py)
     while seen < 3 * RATE and time.monotonic() < deadline:
         m = re.search(r"([\d,]+) samples", proc.stderr.readline())
         if m:
