@@ -24,7 +24,7 @@ __all__ = [
     "guaranteed_dict",
 ]
 
-_MARK = {"uncertain": "?", "default": "*", "unknown": ""}
+_MARK = {"uncertain": "?", "not_enforced": "!", "default": "*", "unknown": ""}
 
 
 def _g(fig: Guaranteed | None, rate: bool = False) -> str:
@@ -103,7 +103,8 @@ def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
         out += [f"  note: {n}" for n in res.notes]
     out += [
         "",
-        "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
+        "* = firmware default, ? = not enforced exactly by the firmware, ! = not enforced by the "
+        "firmware (measure it)",
         f"verdict: {result.verdict_line}",
     ]
     unmet = unmet_requirements(result.statuses, require)
