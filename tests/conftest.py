@@ -109,6 +109,8 @@ SLOW = {
         "a long capture's motion panel, streamed (35 s)",
     "tests/reliability/test_malformed_sr.py::test_fuzz_metadata_values":
         "fuzzed .sr metadata (26 s)",
+    "tests/wavecheck/firmware/test_fixes_work.py::test_every_printed_fix_works":
+        "every printed fix applied to every corpus file and re-run (3-8 min)",
 }  # fmt: skip
 
 
