@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from wavecheck.api import check
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.report.layout import Row, figure_height, place_rows
 from wavecheck.report.plot import figure
 
