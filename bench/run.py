@@ -23,6 +23,12 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 4. ``stepgen simulate`` with a VCD out, end to end in one process (``bench/stepgen_vcd.py``: 20 s
    at a 25 µs base period, simulate + write) [≥ 100× real time]; the peer is the same with pyvcd
    writing the same trace.
+4b–4d. Issue 38 (``bench/issue38.py``, sections ``stepgen120``, ``plot``, ``fst``): ``stepgen
+   simulate`` of a 120 s sine with a VCD out as a process [≥ 100× real time]; the CPU ``check
+   --plot`` adds on a tiny capture against ``import matplotlib.pyplot`` [≤ 1.5×]; ``check`` of an
+   FST (through fst2vcd, and through pywellen) against the same simulation's VCD [CPU ≤ 1.0×].
+   Its other rows: section 1's grbl row by CPU [≥ 8×], section 2's VCD rows [≥ 3×], section
+   4's ``--command`` row [≥ 100×], section 5's ``drives`` row [≤ 0.5×].
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
    of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
    Issue 29: ``--help`` and ``drives`` against the numpy import [CPU ≤ 0.5×: no numpy, no

@@ -11,13 +11,21 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["Row", "WIDTH_IN", "figure_bytes", "figure_height", "place_rows", "suptitle"]
+__all__ = [
+    "Row",
+    "WIDTH_IN",
+    "figure_bytes",
+    "figure_height",
+    "fixed_titles",
+    "place_rows",
+    "suptitle",
+]
 
 #: The figure's width (inches).
 WIDTH_IN = 11.0
@@ -29,6 +37,10 @@ BELOW_IN = 0.52
 LEFT_IN = 1.0
 RIGHT_IN = 0.25
 GAP_IN = 1.0
+#: Where the axis labels go: the x label's top this far under the panel (below its tick labels),
+#: the y label's edge this far left of it (left of tick labels up to "1,000,000" at 8 pt).
+X_LABEL_IN = 0.27
+Y_LABEL_IN = 0.66
 #: The figure title: room per line and above it (inches).
 SUPTITLE_LINE_IN = 0.26
 SUPTITLE_PAD_IN = 0.12
@@ -51,7 +63,9 @@ def figure_height(rows: list[Row], title_lines: int) -> float:
 
 def place_rows(fig: Figure, rows: list[Row], title_lines: int) -> list[list[Axes]]:
     """Add the panels of ``rows`` to ``fig`` (sized by :func:`figure_height`), top to bottom;
-    the panels of each row."""
+    the panels of each row. Their titles and axis labels have fixed places too (matplotlib
+    would otherwise lay out every tick label again to place them): draw inside
+    :func:`fixed_titles`."""
     width, height = fig.get_size_inches()
     y = height - SUPTITLE_PAD_IN - SUPTITLE_LINE_IN * title_lines
     out = []
@@ -72,7 +86,26 @@ def place_rows(fig: Figure, rows: list[Row], title_lines: int) -> list[list[Axes
             ]
         )
         y -= BELOW_IN
+    for ax in (a for row in out for a in row):
+        _fixed_labels(fig, ax)
     return out
+
+
+def _fixed_labels(fig: Figure, ax: Axes) -> None:
+    """The x label :data:`X_LABEL_IN` under the panel, the y label :data:`Y_LABEL_IN` left."""
+    from matplotlib.transforms import ScaledTranslation
+
+    inch = fig.dpi_scale_trans
+    ax.xaxis.set_label_coords(0.5, 0, ax.transAxes + ScaledTranslation(0, -X_LABEL_IN, inch))
+    ax.yaxis.set_label_coords(0, 0.5, ax.transAxes + ScaledTranslation(-Y_LABEL_IN, 0, inch))
+
+
+def fixed_titles() -> Any:
+    """A context in which panels made and titled keep their title just above them (matplotlib
+    otherwise measures the tick labels at draw time to move it over any at the top)."""
+    import matplotlib
+
+    return matplotlib.rc_context({"axes.titley": 1.0})
 
 
 def suptitle(fig: Figure, text: str, **kw: object) -> None:

@@ -176,25 +176,27 @@ def render_measure_png(m: Measurement, dpi: int = 110, fmt: str = "png") -> byte
         Row,
         figure_bytes,
         figure_height,
+        fixed_titles,
         place_rows,
         suptitle,
     )
 
-    hists: list[tuple[AxisMeasurement, IntervalStats]] = [
-        (a, s) for a in m.axes for s in a.stats if s.count
-    ]
-    full, last = divmod(len(hists), 2)
-    rows = [Row(1.7, 2)] * (len(m.axes) + full) + [Row(1.7)] * last
-    fig = Figure(figsize=(WIDTH_IN, figure_height(rows, 1)), dpi=dpi)
-    suptitle(fig, f"wavecheck measure — {os.path.basename(m.capture.path)}", fontsize=12)
-    panels = place_rows(fig, rows, 1)
-    tb = m.capture.timebase
-    for (ax_pos, ax_rate), a in zip(panels, m.axes, strict=False):
-        name = "axis" if a.name is None else f"axis {a.name}"
-        unknown = position_unknown(a.step_type, a.interface, a.steps)
-        draw_motion(ax_pos, ax_rate, a.trace, tb, name, unknown)
-    several = len(m.axes) > 1
-    hist_axes = [ax for row in panels[len(m.axes) :] for ax in row]
-    for ax, (a, s) in zip(hist_axes, hists, strict=True):
-        _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
+    with fixed_titles():
+        hists: list[tuple[AxisMeasurement, IntervalStats]] = [
+            (a, s) for a in m.axes for s in a.stats if s.count
+        ]
+        full, last = divmod(len(hists), 2)
+        rows = [Row(1.7, 2)] * (len(m.axes) + full) + [Row(1.7)] * last
+        fig = Figure(figsize=(WIDTH_IN, figure_height(rows, 1)), dpi=dpi)
+        suptitle(fig, f"wavecheck measure — {os.path.basename(m.capture.path)}", fontsize=12)
+        panels = place_rows(fig, rows, 1)
+        tb = m.capture.timebase
+        for (ax_pos, ax_rate), a in zip(panels, m.axes, strict=False):
+            name = "axis" if a.name is None else f"axis {a.name}"
+            unknown = position_unknown(a.step_type, a.interface, a.steps)
+            draw_motion(ax_pos, ax_rate, a.trace, tb, name, unknown)
+        several = len(m.axes) > 1
+        hist_axes = [ax for row in panels[len(m.axes) :] for ax in row]
+        for ax, (a, s) in zip(hist_axes, hists, strict=True):
+            _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
     return figure_bytes(fig, fmt)

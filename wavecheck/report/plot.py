@@ -416,6 +416,13 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
     """The report's figure: timing diagrams, the motion panel (position and step rate, when
     there are steps, from the step trace), then histograms; laid out in fixed room
     (:mod:`wavecheck.report.layout`), drawn on a bare Agg figure (no pyplot state)."""
+    from wavecheck.report.layout import fixed_titles
+
+    with fixed_titles():
+        return _figure(report, max_places, dpi)
+
+
+def _figure(report: Report, max_places: int, dpi: int) -> Figure:
     from matplotlib.figure import Figure
 
     from wavecheck.report.layout import WIDTH_IN, Row, figure_height, place_rows, suptitle

@@ -40,6 +40,19 @@ def _misplaced(fig: Any) -> list[str]:
             if _overlaps(b1, b2)]  # fmt: skip
     title = fig._suptitle.get_window_extent(r)
     bad += [f"the figure title on {n}" for n, b in boxes if _overlaps(title, b)]
+    for name, ax in zip((n for n, _ in boxes), fig.axes, strict=True):  # inside a panel
+        frame = ax.get_window_extent(r)
+        for axis in (ax.xaxis, ax.yaxis):
+            label = axis.label.get_window_extent(r)
+            ticks = [t.get_window_extent(r) for t in axis.get_ticklabels() if t.get_text()]
+            if axis.label.get_text() and any(_overlaps(label, t) for t in ticks):
+                bad.append(f"{name}: its {axis.axis_name} label on its tick labels")
+            if axis.label.get_text() and _overlaps(label, frame):
+                bad.append(f"{name}: its {axis.axis_name} label on the panel")
+        for t in (ax.title, ax._left_title, ax._right_title):
+            box = t.get_window_extent(r)
+            if t.get_text() and not frame.y1 - 1 <= box.y0 <= frame.y1 + 20:
+                bad.append(f"{name}: title not just above the panel")
     return bad
 
 
