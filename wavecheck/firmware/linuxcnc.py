@@ -1,5 +1,5 @@
 """LinuxCNC's software stepgen: the channels a configuration loads (``loadrt stepgen``), read by
-:mod:`wavecheck.linuxcnc.config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
+:mod:`wavecheck.linuxcnc.stepgen_config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
 
 stepgen rounds each parameter up to whole base periods ``P``, and any base-thread run may be up to
 ``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on the wire:
@@ -25,8 +25,8 @@ from fractions import Fraction
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role, unknown
-from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.files import ini_value, int_ns
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
 
 __all__ = ["PinOut", "axes", "fixer", "joint_of", "pin_out"]

@@ -149,7 +149,7 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
 
 def config_dict(result: ConfigResult, require: Sequence[str] = ()) -> dict[str, Any]:
     """The JSON report of ``wavecheck config`` (``require``: ``--require``)."""
-    from wavecheck.report.json import required_dict
+    from wavecheck.report.claims import required_dict
 
     cfg, results = result.config, result.pairs
     unmet = unmet_requirements(result.statuses, require)
