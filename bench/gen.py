@@ -432,6 +432,8 @@ FILES = {
     # issue 29: stepgen's --command input (20 s), the cross-check's 575 k / 1.15 M steps
     "cmd20s": ("sine_20s.csv", lambda p: gen_command(p)),
     "cmd2s": ("sine_2s.csv", lambda p: gen_command(p, seconds=2.0)),
+    # issue 38: the long trace (120 s) with a VCD out
+    "cmd120s": ("sine_120s.csv", lambda p: gen_command(p, seconds=120.0)),
     "xc600k": ("stepgen_575k.sr", lambda p: gen_stepgen_sr(p, seconds=60)),
     "xc1200k": ("stepgen_1150k.sr", lambda p: gen_stepgen_sr(p, seconds=120)),
     "xc60k": ("stepgen_57k.sr", lambda p: gen_stepgen_sr(p, seconds=6)),

@@ -23,6 +23,12 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 4. ``stepgen simulate`` with a VCD out, end to end in one process (``bench/stepgen_vcd.py``: 20 s
    at a 25 µs base period, simulate + write) [≥ 100× real time]; the peer is the same with pyvcd
    writing the same trace.
+4b–4d. Issue 38 (``bench/issue38.py``, sections ``stepgen120``, ``plot``, ``fst``): ``stepgen
+   simulate`` of a 120 s sine with a VCD out as a process [≥ 100× real time]; the CPU ``check
+   --plot`` adds on a tiny capture against ``import matplotlib.pyplot`` [≤ 1.5×]; ``check`` of an
+   FST (through fst2vcd, and through pywellen) against the same simulation's VCD [CPU ≤ 1.0×].
+   Its other rows: section 1's grbl row by CPU [≥ 8×], section 2's VCD rows [≥ 3×], section
+   4's ``--command`` row [≥ 100×], section 5's ``drives`` row [≤ 0.5×].
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s
    of CPU]; peers: ``python -c "import numpy"`` (the floor) and ``sigrok-cli --version``.
    Issue 29: ``--help`` and ``drives`` against the numpy import [CPU ≤ 0.5×: no numpy, no
@@ -79,7 +85,9 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import issue38  # noqa: E402
 from bench.gen import ensure  # noqa: E402
+from bench.harness import FIGURES, _cpu, figure, load1, med, sh, spread, table, timed  # noqa: E402
 
 PY = sys.executable
 WAVECHECK = str(Path(PY).with_name("wavecheck"))
@@ -87,85 +95,6 @@ TIME = "/usr/bin/time"
 GRBL = ROOT.parent / "shared/captures/sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr"
 RESULTS = HERE / "results"
 MIB = 1 << 20
-
-
-def sh(cmd: list[str]) -> str:
-    return " ".join(shlex.quote(c) for c in cmd)
-
-
-def timed(cmd: list[str], stdout_path: str | None = None) -> dict[str, Any]:
-    """Run ``cmd`` under ``/usr/bin/time -v``; wall/user/sys seconds, max RSS, exit code."""
-    with tempfile.NamedTemporaryFile("w+", suffix=".time") as tf:
-        out = open(stdout_path, "w") if stdout_path else subprocess.DEVNULL  # noqa: SIM115
-        try:
-            p = subprocess.run(
-                [TIME, "-v", "-o", tf.name, *cmd], stdout=out, stderr=subprocess.PIPE, text=True
-            )
-        finally:
-            if stdout_path:
-                out.close()  # type: ignore[union-attr]
-        text = Path(tf.name).read_text()
-
-    def field(name: str) -> str:
-        m = re.search(rf"{re.escape(name)}: (.+)", text)
-        return m.group(1).strip() if m else "0"
-
-    wall = field("Elapsed (wall clock) time (h:mm:ss or m:ss)")
-    parts = [float(x) for x in wall.split(":")]
-    secs = parts[-1] + 60 * parts[-2] + (3600 * parts[-3] if len(parts) > 2 else 0)
-    return {
-        "wall_s": secs,
-        "user_s": float(field("User time (seconds)")),
-        "sys_s": float(field("System time (seconds)")),
-        "max_rss_mb": int(field("Maximum resident set size (kbytes)")) / 1024,
-        "rc": p.returncode,
-        "stderr": p.stderr[-2000:],
-    }
-
-
-def med(runs: list[dict[str, Any]], key: str) -> float:
-    return float(statistics.median(r[key] for r in runs))
-
-
-def spread(runs: list[dict[str, Any]], key: str) -> str:
-    vals = [r[key] for r in runs]
-    return f"{min(vals):.2f}–{max(vals):.2f}" if len(vals) > 1 else f"{vals[0]:.2f}"
-
-
-def mark(ok: bool) -> str:
-    return "PASS" if ok else "MISS"
-
-
-def load1() -> float:
-    """The 1-minute load average now."""
-    return os.getloadavg()[0]
-
-
-#: Every figure of the run: (figure, value, goal, ok, peer, load) — the final table.
-FIGURES: list[dict[str, Any]] = []
-
-
-def figure(name: str, value: str, goal: str, ok: bool, peer: str, load: float) -> bool:
-    """Print one figure with its goal, PASS/MISS, the peer's figure and the load; keep it."""
-    busy = load > (os.cpu_count() or 1)
-    FIGURES.append({"figure": name, "value": value, "goal": goal, "ok": ok, "peer": peer,
-                    "load": round(load, 2), "loaded": busy})  # fmt: skip
-    print(f"  => {name}: {value}  [goal {goal}]  {mark(ok)}   peer: {peer}   "
-          f"load {load:.1f}{' (loaded: re-run)' if busy else ''}")  # fmt: skip
-    return ok
-
-
-def table() -> str:
-    """The figures as a Markdown table."""
-    rows = [
-        "| figure | value | goal | | peer, same run | load (1 min) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for f in FIGURES:
-        load = f"{f['load']:.1f}" + (" loaded" if f["loaded"] else "")
-        rows.append(f"| {f['figure']} | {f['value']} | {f['goal']} | {mark(f['ok'])} | "
-                    f"{f['peer']} | {load} |")  # fmt: skip
-    return "\n".join(rows)
 
 
 def version(cmd: list[str]) -> str:
@@ -273,6 +202,9 @@ def bench_sr(
     res["load"] = load
     figure(f"`check` {label}.sr vs sigrok-cli", f"{ratio:.2f}× ({wt:.2f} s; cpu {scpu / wcpu:.2f}×)",
            f"≥ {goal:g}×", ratio >= goal, f"sigrok-cli {st:.2f} s", load)  # fmt: skip
+    if goal >= 8:  # issue 38 judges grbl on CPU (start-up is most of it; wall is load)
+        figure(f"`check` {label}.sr vs sigrok-cli (CPU)", f"{scpu / wcpu:.2f}× faster ({wcpu:.2f} s cpu)",
+               f"≥ {goal:g}×", scpu / wcpu >= goal, f"sigrok-cli {scpu:.2f} s cpu", load)  # fmt: skip
     figure(f"`check` {label}.sr max RSS", f"{rss:.0f} MB", "< 150 MB", rss < 150,
            f"sigrok-cli {res['sigrok_max_rss_mb']:.0f} MB", load)  # fmt: skip
     return res
@@ -890,10 +822,6 @@ SMOOTHIE = (
 )
 
 
-def _cpu(t: dict[str, Any]) -> float:
-    return float(t["user_s"] + t["sys_s"])
-
-
 def _pair(
     a: list[str], b: list[str], runs: int
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], float]:
@@ -990,7 +918,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--only",
-        default="sr,vcd,checks,stepgen,startup,many,memory,stdin,watch,decoder,latency,crosscheck,one_engine,mcu",
+        default="sr,vcd,checks,stepgen,stepgen120,plot,fst,startup,many,memory,stdin,watch,decoder,latency,crosscheck,one_engine,mcu",
         help="sections to run (comma list)",
     )
     args = ap.parse_args()
@@ -1061,6 +989,18 @@ def main() -> int:
         results["stepgen"] = bench_stepgen(args.quick, runs)
         print("\n- the command line, as a process (issue 29)")
         results["stepgen_cli"] = bench_stepgen_cli(args.quick, runs)
+
+    if "stepgen120" in only:
+        print("\n== 4b. stepgen simulate 120 s with a VCD out, as a process (issue 38) ==")
+        results["stepgen120"] = issue38.bench_stepgen_long(args.quick, runs)
+
+    if "plot" in only:
+        print("\n== 4c. check --plot on a tiny capture: CPU added (issue 38) ==")
+        results["plot"] = issue38.bench_plot(runs)
+
+    if "fst" in only:
+        print("\n== 4d. FST against the same run's VCD (issue 38) ==")
+        results["fst"] = issue38.bench_fst(args.quick, runs)
 
     if "startup" in only:
         print("\n== 5. start-up ==")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from stepgen.cli.tune import GAIN_OPTIONS
+from stepgen.cli.pid_options import GAIN_OPTIONS
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import ConfigError
 

@@ -18,11 +18,11 @@ import argparse
 import math
 import sys
 from dataclasses import fields, replace
-from typing import Any
 
 import numpy as np
 
-from stepgen.cli.tune import add_pid_arguments, add_servo_arguments, pid_gains, servo_params
+from stepgen.cli.pid_options import add_servo_loop_arguments
+from stepgen.cli.tune import pid_gains, servo_params
 from stepgen.lateness import catchup_for, parse_latency
 from stepgen.loop import LoopResult, ferror_check, run_loop, step_metrics
 from stepgen.motion import Motion
@@ -41,38 +41,10 @@ from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.capture.vcd.writer import VcdVector, VcdWire
 from wavecheck.capture.vcd.writer import write_vcd as write_vcd_file
 from wavecheck.errors import ConfigError
-from wavecheck.output import atomic_path, figure_file, figure_format
-from wavecheck.units import number_option
+from wavecheck.output import atomic_path, figure_format
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 __all__ = ["add_servo_loop_arguments", "run_servo_loop"]
-
-
-def add_servo_loop_arguments(parser: Any) -> None:
-    """The ``--pid`` option group of ``stepgen simulate``."""
-    g = parser.add_argument_group(
-        "closed loop (--pid: LinuxCNC's pid between the command and the plant)"
-    )
-    g.add_argument("--pid", action="store_true", help="close the loop with pid (see stepgen tune)")
-    g.add_argument(
-        "--plant",
-        choices=("stepgen", "servo"),
-        default="stepgen",
-        help="stepgen: pid.output → stepgen velocity-cmd (default; unset gains are pncconf's "
-        "P = 1/servo period, FF1 = 1); servo: pid.output → amplifier of a motor and load",
-    )
-    add_pid_arguments(g)
-    g.add_argument("--ferror", type=number_option, help="[JOINT_n]FERROR (default 1.0)")
-    g.add_argument("--min-ferror", type=number_option, help="[JOINT_n]MIN_FERROR (default FERROR)")
-    g.add_argument(
-        "--joint-max-velocity", type=number_option, help="[JOINT_n]MAX_VELOCITY (FERROR scaling)"
-    )
-    g.add_argument(
-        "--plot",
-        type=figure_file,
-        help="command, feedback, following error (PNG; .jpg, .svg or .pdf by the file's name)",
-    )
-    add_servo_arguments(parser.add_argument_group("servo plant (--pid --plant servo)"))
 
 
 def _trace(cfg: StepgenConfig, plant: StepgenPlant, n: int, args: argparse.Namespace) -> Trace:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
-from stepgen.cli.servo import add_servo_loop_arguments, run_servo_loop
+from stepgen.cli.pid_options import add_servo_loop_arguments
 from stepgen.lateness import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
 from stepgen.reference import StepgenConfig, update_schedule
@@ -305,6 +305,8 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("give --duration (e.g. 1s) or --periods N")
         n = n_periods_for(cfg, round(motion.natural_duration_s * 1e9))
     if args.pid:  # the closed loop: pid between the position command and the plant
+        from stepgen.cli.servo import run_servo_loop
+
         if args.command_out:
             _write_command(args, cfg, motion, n)
         return run_servo_loop(args, cfg, motion, n)

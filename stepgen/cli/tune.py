@@ -19,6 +19,12 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from stepgen.cli.pid_options import (
+    GAIN_OPTIONS,
+    SERVO_OPTIONS,
+    add_pid_arguments,
+    add_servo_arguments,
+)
 from stepgen.pid import PidGains
 from stepgen.plant import Plant, ServoParams, ServoPlant, StepgenPlant
 from stepgen.reference import StepgenConfig
@@ -37,36 +43,6 @@ __all__ = [
     "time_s",
 ]
 
-#: option dest → PidGains field.
-GAIN_OPTIONS = {
-    "pgain": "Pgain",
-    "igain": "Igain",
-    "dgain": "Dgain",
-    "bias": "bias",
-    "ff0": "FF0",
-    "ff1": "FF1",
-    "ff2": "FF2",
-    "ff3": "FF3",
-    "deadband": "deadband",
-    "maxerror": "maxerror",
-    "maxerror_i": "maxerrorI",
-    "maxerror_d": "maxerrorD",
-    "maxcmd_d": "maxcmdD",
-    "maxcmd_dd": "maxcmdDD",
-    "maxcmd_ddd": "maxcmdDDD",
-    "maxoutput": "maxoutput",
-}
-#: option dest → ServoParams field.
-SERVO_OPTIONS = {
-    "inertia": "inertia",
-    "viscous": "viscous",
-    "torque_constant": "torque_constant",
-    "coulomb": "coulomb",
-    "load": "load",
-    "encoder_counts": "counts_per_unit",
-    "amp_limit": "amp_limit",
-}
-
 
 def time_s(text: str, option: str) -> float:
     """A time option with a unit (``200ms``) in seconds, > 0."""
@@ -77,47 +53,6 @@ def time_s(text: str, option: str) -> float:
     if value <= 0:
         raise ConfigError(f"{option} {text!r} must be > 0")
     return float(value) * 1e-9
-
-
-def add_pid_arguments(group: Any) -> None:
-    """pid's pins as options (LinuxCNC names; unset = the component's or the files' value)."""
-    for dest, pin in GAIN_OPTIONS.items():
-        group.add_argument(
-            "--" + dest.replace("_", "-"), dest=dest, type=number_option, help=f"pid.N.{pin}"
-        )
-    group.add_argument(
-        "--no-error-previous-target",
-        dest="error_previous_target",
-        action="store_false",
-        default=True,
-        help="pid.N.error-previous-target FALSE (default TRUE, as LinuxCNC)",
-    )
-
-
-def add_servo_arguments(group: Any) -> None:
-    """The servo plant's options (``--plant servo``)."""
-    d = ServoParams()
-    group.add_argument("--inertia", type=number_option, default=d.inertia, help="J, F·s²/unit")
-    group.add_argument("--viscous", type=number_option, default=d.viscous, help="B, F·s/unit")
-    group.add_argument(
-        "--torque-constant",
-        type=number_option,
-        default=d.torque_constant,
-        help="Kt, F per amp unit",
-    )
-    group.add_argument("--coulomb", type=number_option, default=0.0, help="Coulomb friction, F")
-    group.add_argument(
-        "--load", type=number_option, default=0.0, help="constant load, F (e.g. gravity)"
-    )
-    group.add_argument(
-        "--encoder-counts",
-        type=number_option,
-        default=0.0,
-        help="encoder counts per unit (0 = exact)",
-    )
-    group.add_argument(
-        "--amp-limit", type=number_option, default=0.0, help="amplifier limit (0 = none)"
-    )
 
 
 def pid_gains(args: argparse.Namespace, defaults: PidGains) -> PidGains:

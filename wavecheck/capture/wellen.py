@@ -124,9 +124,15 @@ def _timebase(w: Any) -> Timebase:
 def _changes(sig: Any, width: int, pos: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
     """Times and value codes of bit ``pos`` (0 = rightmost) of a pywellen signal."""
     pairs = list(sig)
-    times = np.fromiter((t for t, _ in pairs), dtype=np.int64, count=len(pairs))
-    codes = np.empty(len(pairs), dtype=np.int8)
-    for i, (_, v) in enumerate(pairs):
+    n = len(pairs)
+    times = np.fromiter((t for t, _ in pairs), dtype=np.int64, count=n)
+    values = [v for _, v in pairs]
+    if set(map(type, values)) <= {int}:  # every value known: the bits at once
+        return times, (
+            (np.array(values, dtype=object if width > 62 else np.int64) >> pos) & 1
+        ).astype(np.int8)
+    codes = np.empty(n, dtype=np.int8)
+    for i, v in enumerate(values):
         if isinstance(v, int):
             codes[i] = (v >> pos) & 1
         else:

@@ -10,7 +10,6 @@ long captures are thinned for drawing only (every figure in the text and JSON is
 
 from __future__ import annotations
 
-import io
 import math
 import os
 from typing import TYPE_CHECKING, Any
@@ -158,43 +157,46 @@ def _draw_histogram(ax: Axes, s: IntervalStats, distribution: tuple[Any, Any], t
         fontsize=9,
         loc="left",
     )
-    from matplotlib.ticker import FuncFormatter, NullFormatter
+    from matplotlib.ticker import FuncFormatter, NullLocator
 
     ax.xaxis.set_major_formatter(FuncFormatter(_time_label))
-    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.xaxis.set_minor_locator(NullLocator())
     ax.set_xlabel("measured", fontsize=8.5)
     ax.set_ylabel("count", fontsize=8.5)
     _style(ax)
 
 
 def render_measure_png(m: Measurement, dpi: int = 110, fmt: str = "png") -> bytes:
-    """The measurement's figure as PNG bytes (``fmt``: ``jpg``, ``svg``, ``pdf`` instead)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
+    """The measurement's figure as PNG bytes (``fmt``: ``jpg``, ``svg``, ``pdf`` instead), laid
+    out in fixed room (:mod:`wavecheck.report.layout`) on a bare Agg figure."""
     from matplotlib.figure import Figure
 
-    hists: list[tuple[AxisMeasurement, IntervalStats]] = [
-        (a, s) for a in m.axes for s in a.stats if s.count
-    ]
-    hist_rows = math.ceil(len(hists) / 2)
-    heights = [2.6] * (len(m.axes) + hist_rows)
-    fig = Figure(figsize=(11, sum(heights) + 0.8), dpi=dpi, layout="constrained")
-    fig.suptitle(f"wavecheck measure — {os.path.basename(m.capture.path)}", fontsize=12)
-    grid = fig.add_gridspec(len(heights), 2, height_ratios=heights)
-    tb = m.capture.timebase
-    for k, a in enumerate(m.axes):
-        name = "axis" if a.name is None else f"axis {a.name}"
-        unknown = position_unknown(a.step_type, a.interface, a.steps)
-        draw_motion(
-            fig.add_subplot(grid[k, 0]), fig.add_subplot(grid[k, 1]), a.trace, tb, name, unknown
-        )
-    several = len(m.axes) > 1
-    for k, (a, s) in enumerate(hists):
-        row, col = divmod(k, 2)
-        span = slice(None) if k == len(hists) - 1 and col == 0 else col
-        ax = fig.add_subplot(grid[len(m.axes) + row, span])
-        _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
-    buf = io.BytesIO()
-    fig.savefig(buf, format=fmt)
-    return buf.getvalue()
+    from wavecheck.report.layout import (
+        WIDTH_IN,
+        Row,
+        figure_bytes,
+        figure_height,
+        fixed_titles,
+        place_rows,
+        suptitle,
+    )
+
+    with fixed_titles():
+        hists: list[tuple[AxisMeasurement, IntervalStats]] = [
+            (a, s) for a in m.axes for s in a.stats if s.count
+        ]
+        full, last = divmod(len(hists), 2)
+        rows = [Row(1.7, 2)] * (len(m.axes) + full) + [Row(1.7)] * last
+        fig = Figure(figsize=(WIDTH_IN, figure_height(rows, 1)), dpi=dpi)
+        suptitle(fig, f"wavecheck measure — {os.path.basename(m.capture.path)}", fontsize=12)
+        panels = place_rows(fig, rows, 1)
+        tb = m.capture.timebase
+        for (ax_pos, ax_rate), a in zip(panels, m.axes, strict=False):
+            name = "axis" if a.name is None else f"axis {a.name}"
+            unknown = position_unknown(a.step_type, a.interface, a.steps)
+            draw_motion(ax_pos, ax_rate, a.trace, tb, name, unknown)
+        several = len(m.axes) > 1
+        hist_axes = [ax for row in panels[len(m.axes) :] for ax in row]
+        for ax, (a, s) in zip(hist_axes, hists, strict=True):
+            _draw_histogram(ax, s, a.distributions[s.rule], f"{a.name} " if several else "")
+    return figure_bytes(fig, fmt)

@@ -25,7 +25,6 @@ title gives the absolute time in the capture.
 
 from __future__ import annotations
 
-import io
 import math
 import os
 import textwrap
@@ -327,13 +326,13 @@ def _count_label(v: float, _pos: object = None) -> str:
 def _log_x(ax: Axes, lo: float, hi: float, limit: float) -> bool:
     """Set a log time axis (ns, human tick labels) when the lengths span decades (the space
     between pulses of a slow move); True when set."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
+    from matplotlib.ticker import FuncFormatter, NullLocator
 
     if not (lo > 0 and limit > 0 and max(hi, limit) / min(lo, limit) > 50):
         return False
     ax.set_xscale("log")
     ax.xaxis.set_major_formatter(FuncFormatter(_human_ns))
-    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.xaxis.set_minor_locator(NullLocator())  # no unlabelled minor ticks: a third of the drawing
     return True
 
 
@@ -373,7 +372,7 @@ def _bars_binned(ax: Axes, r: RuleResult) -> tuple[str, float, bool, int]:
 
 
 def _draw_histogram(ax: Axes, r: RuleResult) -> None:
-    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
+    from matplotlib.ticker import FuncFormatter, MaxNLocator, NullLocator
 
     assert r.limit_ns is not None
     unit, scale, log_x, top = _bars_binned(ax, r)
@@ -382,7 +381,7 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
         ax.set_yscale("log")
         ax.set_ylim(bottom=0.7)
         ax.yaxis.set_major_formatter(FuncFormatter(_count_label))
-        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_minor_locator(NullLocator())
     else:
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.axvline(lim, color=_FAIL_COLOR, lw=1.6, ls="--")
@@ -415,11 +414,18 @@ def _draw_histogram(ax: Axes, r: RuleResult) -> None:
 
 def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figure:
     """The report's figure: timing diagrams, the motion panel (position and step rate, when
-    there are steps, from the step trace), then histograms."""
-    import matplotlib
+    there are steps, from the step trace), then histograms; laid out in fixed room
+    (:mod:`wavecheck.report.layout`), drawn on a bare Agg figure (no pyplot state)."""
+    from wavecheck.report.layout import fixed_titles
 
-    matplotlib.use("Agg", force=False)
+    with fixed_titles():
+        return _figure(report, max_places, dpi)
+
+
+def _figure(report: Report, max_places: int, dpi: int) -> Figure:
     from matplotlib.figure import Figure
+
+    from wavecheck.report.layout import WIDTH_IN, Row, figure_height, place_rows, suptitle
 
     places = choose_places(report, max_places)
     hist_rules = [
@@ -428,44 +434,38 @@ def figure(report: Report, max_places: int = MAX_PLACES, dpi: int = 110) -> Figu
         if r.limit_ns is not None and (h := r.histogram()) is not None and h.counts
     ]
     n_roles = max(len(report.interface.signals), 1)
-    diag_h = 1.0 + 0.55 * n_roles
     hist_cols = 2 if len(hist_rules) > 1 else 1
-    hist_rows = math.ceil(len(hist_rules) / hist_cols)
     motion = report.trace is not None and report.trace.count > 1
-    heights = [diag_h] * len(places) + [2.4] * motion + [2.6] * hist_rows
-    if not heights:
-        heights = [1.0]
-    fig = Figure(figsize=(11, sum(heights) + 1.0), dpi=dpi, layout="constrained")
+    rows = [Row(0.3 + 0.55 * n_roles)] * len(places) + [Row(1.5, 2)] * motion
+    full, last = divmod(len(hist_rules), hist_cols)
+    rows += [Row(1.7, hist_cols)] * full + [Row(1.7)] * last  # an odd last histogram: whole width
+    nothing = not places and not hist_rules
+    rows += [Row(0.5)] * nothing
     verdict = report.verdict.upper()
     vcolor = {"FAIL": _FAIL_COLOR, "PASS": _PASS_COLOR}.get(verdict, _INDET_COLOR)
     said = not_checked(report)  # "dir_setup, dir_hold not checked: no DIR channel; …"
-    fig.suptitle(
+    title = [
         f"{verdict} — {os.path.basename(report.capture.path)} vs {report.drive.id} "
-        f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)"
-        + "".join(f"\n{line}" for line in textwrap.wrap(f"({said})" if said else "", 110)),
-        fontsize=12,
-        color=vcolor,
-        fontweight="bold",
-    )
-    grid = fig.add_gridspec(len(heights), hist_cols, height_ratios=heights)
+        f"({report.total_violations:,} violation(s), {report.steps.count:,} steps)",
+        *textwrap.wrap(f"({said})" if said else "", 110),
+    ]
+    fig = Figure(figsize=(WIDTH_IN, figure_height(rows, len(title))), dpi=dpi)
+    suptitle(fig, "\n".join(title), fontsize=12, color=vcolor, fontweight="bold")
+    panels = iter(place_rows(fig, rows, len(title)))
     for k, place in enumerate(places):
-        ax = fig.add_subplot(grid[k, :])
-        _draw_place(ax, report, place, k + 1)
+        _draw_place(next(panels)[0], report, place, k + 1)
     if motion:
         from wavecheck.report.measured_plot import draw_motion, position_unknown
 
-        pair = grid[len(places), :].subgridspec(1, 2)
-        ax_pos, ax_rate = fig.add_subplot(pair[0, 0]), fig.add_subplot(pair[0, 1])
+        ax_pos, ax_rate = next(panels)
         assert report.trace is not None
         unknown = position_unknown(report.step_type, report.interface, report.steps)
         draw_motion(ax_pos, ax_rate, report.trace, report.capture.timebase, "steps", unknown)
-    for k, r in enumerate(hist_rules):
-        row, col = divmod(k, hist_cols)
-        span = slice(None) if hist_cols == 1 or (k == len(hist_rules) - 1 and col == 0) else col
-        ax = fig.add_subplot(grid[len(places) + motion + row, span])
+    hist_axes = [ax for row in panels for ax in row]
+    for ax, r in zip(hist_axes, hist_rules, strict=False):
         _draw_histogram(ax, r)
-    if not places and not hist_rules:
-        ax = fig.add_subplot(grid[0, :])
+    if nothing:
+        ax = hist_axes[0]
         ax.axis("off")
         ax.text(0.5, 0.5, "nothing measured", ha="center", va="center")
     return fig
@@ -476,9 +476,9 @@ def render_png(
 ) -> bytes:
     """The report's figure (:func:`figure`) as PNG bytes (``fmt``: another format matplotlib
     writes, ``jpg``, ``svg``, ``pdf``: :data:`wavecheck.output.FIGURE_FORMATS`)."""
-    buf = io.BytesIO()
-    figure(report, max_places, dpi).savefig(buf, format=fmt)
-    return buf.getvalue()
+    from wavecheck.report.layout import figure_bytes
+
+    return figure_bytes(figure(report, max_places, dpi), fmt)
 
 
 def write_plot(report: Report, path: str | os.PathLike[str], max_places: int = MAX_PLACES) -> None:

@@ -74,35 +74,62 @@ class VcdVector:
     initial: int = 0
 
 
-def _changes(
+def _variables(
     wires: Sequence[VcdWire], vectors: Sequence[VcdVector]
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """Every value change sorted by (time, variable): time, variable index, new value."""
-    ts: list[npt.NDArray[np.int64]] = []
-    vs: list[npt.NDArray[np.int64]] = []
-    xs: list[npt.NDArray[np.int64]] = []
-    for i, w in enumerate(wires):
+) -> list[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64] | None]]:
+    """Each variable's change times and values (None for a wire: each edge toggles), checked.
+
+    Raises:
+        ValueError: times that go backwards, or a vector's times and values of other lengths.
+    """
+    out: list[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64] | None]] = []
+    for w in wires:
         e = np.asarray(w.edges, dtype=np.int64)
         if len(e) > 1 and bool((e[1:] < e[:-1]).any()):
             raise ValueError(f"wire {w.name!r}: edge times go backwards")
-        ts.append(e)
-        vs.append(np.full(len(e), i, dtype=np.int64))
-        xs.append((int(w.initial) ^ (np.arange(1, len(e) + 1) & 1)).astype(np.int64))
-    for j, vec in enumerate(vectors, start=len(wires)):
+        out.append((e, None))
+    for vec in vectors:
         t = np.asarray(vec.times, dtype=np.int64)
         if len(t) != len(vec.values):
             raise ValueError(f"vector {vec.name!r}: {len(t)} times but {len(vec.values)} values")
         if len(t) > 1 and bool((t[1:] < t[:-1]).any()):
             raise ValueError(f"vector {vec.name!r}: times go backwards")
-        ts.append(t)
-        vs.append(np.full(len(t), j, dtype=np.int64))
-        xs.append(np.asarray(vec.values, dtype=np.int64))
-    if not ts:
+        out.append((t, np.asarray(vec.values, dtype=np.int64)))
+    return out
+
+
+def _wire_levels(initial: int, a: int, b: int) -> npt.NDArray[np.int64]:
+    """A wire's level after each of its edges ``a`` … ``b − 1`` (each edge toggles)."""
+    return (int(initial) ^ (np.arange(a + 1, b + 1) & 1)).astype(np.int64)
+
+
+def _changes(
+    wires: Sequence[VcdWire], vectors: Sequence[VcdVector]
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Every value change sorted by (time, variable): time, variable index, new value."""
+    variables = _variables(wires, vectors)
+    if not variables:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty, empty
-    t_all, v_all, x_all = np.concatenate(ts), np.concatenate(vs), np.concatenate(xs)
-    order = np.lexsort((v_all, t_all))  # stable: one variable's changes keep their order
-    return t_all[order], v_all[order], x_all[order]
+    return _merged(variables, [w.initial for w in wires], [(0, len(t)) for t, _ in variables])
+
+
+def _merged(
+    variables: Sequence[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64] | None]],
+    initials: Sequence[int],
+    spans: Sequence[tuple[int, int]],
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """The changes ``spans[i]`` (a slice) of each variable merged by (time, variable): each
+    variable's are in time order, so a stable sort by time of them one variable after the
+    other (numpy's timsort merges the runs) keeps a variable's order within one time."""
+    ts, vs, xs = [], [], []
+    for i, ((times, values), (a, b)) in enumerate(zip(variables, spans, strict=True)):
+        ts.append(times[a:b])
+        vs.append(np.full(b - a, i, dtype=np.int64))
+        xs.append(_wire_levels(initials[i], a, b) if values is None else values[a:b])
+    t, v, x = np.concatenate(ts), np.concatenate(vs), np.concatenate(xs)
+    order = np.argsort(t, kind="stable")
+    return t[order], v[order], x[order]
 
 
 def write_vcd(
@@ -132,17 +159,19 @@ def write_vcd(
         ValueError: a time goes backwards (within a signal, or ``end`` before a change), a
             negative time, or a value that does not fit its variable.
     """
-    t, v, x = _changes(wires, vectors)
-    if len(t) and (int(t[0]) < 0 or int(t[-1]) > end):
-        raise ValueError(f"changes at {int(t[0])} … {int(t[-1])} fall outside 0 … end {end}")
-    fast = _fast_covers(wires, vectors, v, x)
+    variables = _variables(wires, vectors)
+    firsts = [int(tv[0][0]) for tv in variables if len(tv[0])]
+    lasts = [int(tv[0][-1]) for tv in variables if len(tv[0])]
+    if firsts and (min(firsts) < 0 or max(lasts) > end):
+        raise ValueError(f"changes at {min(firsts)} … {max(lasts)} fall outside 0 … end {end}")
+    fast = _fast_covers(wires, vectors)
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-        args = (fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
         if fast:
-            _write_fast(*args)
+            _write_fast(fh, wires, vectors, timescale, end, scope, comment, version)
         else:
-            _write_pyvcd(*args)
-    return len(t)
+            t, v, x = _changes(wires, vectors)
+            _write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
+    return sum(len(tv[0]) for tv in variables)
 
 
 def _register(
@@ -199,21 +228,16 @@ def _write_pyvcd(
     return None
 
 
-def _fast_covers(
-    wires: Sequence[VcdWire],
-    vectors: Sequence[VcdVector],
-    v: npt.NDArray[np.int64],
-    x: npt.NDArray[np.int64],
-) -> bool:
+def _fast_covers(wires: Sequence[VcdWire], vectors: Sequence[VcdVector]) -> bool:
     """Whether :func:`_write_fast` writes exactly what pyvcd would for this input."""
     if not 0 < len(wires) + len(vectors) <= _FAST_MAX_VARS:
         return False
     if any(int(w.initial) not in (0, 1) for w in wires):
         return False
-    for j, vec in enumerate(vectors, start=len(wires)):
+    for vec in vectors:
         if vec.var_type not in _VECTOR_TYPES or not 2 <= vec.size <= _FAST_MAX_BITS:
             return False
-        vals = x[v == j]
+        vals = np.asarray(vec.values, dtype=np.int64)
         lo, hi = -(1 << (vec.size - 1)), 1 << vec.size  # what pyvcd accepts
         if len(vals) and (int(vals.min()) < lo or int(vals.max()) >= hi):
             return False
@@ -226,49 +250,67 @@ def _write_fast(
     fh: TextIO,
     wires: Sequence[VcdWire],
     vectors: Sequence[VcdVector],
-    t: npt.NDArray[np.int64],
-    v: npt.NDArray[np.int64],
-    x: npt.NDArray[np.int64],
     timescale: str,
     end: int,
     scope: str,
     comment: str,
     version: str,
 ) -> None:
-    """pyvcd up to time 0 (header, ``$dumpvars``), numpy for the changes after it."""
-    n0 = int(np.searchsorted(t, 0, side="right"))
-    if n0 == len(t):  # nothing after time 0: all pyvcd
+    """pyvcd up to time 0 (header, ``$dumpvars``), then numpy for the changes after it, a
+    block of about ``_FAST_BLOCK`` changes at a time merged from the variables' own arrays (no
+    copy of every change is made)."""
+    variables = _variables(wires, vectors)
+    initials = [int(w.initial) for w in wires]
+    at0 = [int(np.searchsorted(t, 0, side="right")) for t, _ in variables]
+    n0, total = sum(at0), sum(len(t) for t, _ in variables)
+    t, v, x = _merged(variables, initials, [(0, a) for a in at0])
+    if n0 == total:  # nothing after time 0: all pyvcd
         _write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
         return
-    writer, variables = _write_pyvcd(
+    writer, registered = _write_pyvcd(
         fh, wires, vectors, t, v, x, timescale, end, scope, comment, version, upto=n0
     )
     writer.flush()  # the header and "#0 $dumpvars … $end", as the first later change would
     fh.flush()
-    idents = [var.ident.encode("ascii") for var in variables]
+    idents = [var.ident.encode("ascii") for var in registered]
     sizes = [0] * len(wires) + [vec.size for vec in vectors]
-    current_value = [int(var.value) for var in variables]  # after the changes at time 0
-    t, v, x = t[n0:], v[n0:], x[n0:]
-    # pyvcd writes a change only when the value differs from the variable's last one: always
-    # for a wire's edges (each toggles), not for a vector value repeated
-    keep = np.ones(len(t), dtype=bool)
-    for j in range(len(wires), len(variables)):
-        rows = np.flatnonzero(v == j)
-        if len(rows):
-            vals = x[rows]
-            prev = np.concatenate(([current_value[j]], vals[:-1]))
-            keep[rows[vals == prev]] = False
-    if not keep.all():
-        t, v, x = t[keep], v[keep], x[keep]
+    # after time 0, each variable's own changes; pyvcd writes a change only when the value
+    # differs from the variable's last one: always for a wire's edges (each toggles), not for a
+    # vector value repeated
+    rest: list[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64] | None]] = []
+    for j, ((times, values), a) in enumerate(zip(variables, at0, strict=True)):
+        if values is None:
+            rest.append((times[a:], None))
+            continue
+        vals = values[a:]
+        prev = np.concatenate(([int(registered[j].value)], vals[:-1]))
+        keep = vals != prev
+        rest.append((times[a:][keep], vals[keep]) if not keep.all() else (times[a:], vals))
+    for j in range(len(wires)):  # a wire's level after its time-0 edges; its edges renumbered
+        initials[j] = int(wires[j].initial) ^ (at0[j] & 1)
     last_ts = 0  # the "#0" before $dumpvars
     report = current()
-    for a in range(0, len(t), _FAST_BLOCK):
-        b = min(a + _FAST_BLOCK, len(t))
-        text, last_ts = _format_changes(t[a:b], v[a:b], x[a:b], idents, sizes, last_ts)
+    done = n0
+    for spans in _block_spans([times for times, _ in rest]):
+        t, v, x = _merged(rest, initials, spans)
+        if not len(t):
+            continue
+        text, last_ts = _format_changes(t, v, x, idents, sizes, last_ts)
         fh.buffer.write(text)
-        report(n0 + b, n0 + len(t))
+        done += len(t)
+        report(done, total)
     if end != last_ts:
         fh.buffer.write(b"#%d\n" % end)
+
+
+def _block_spans(times: Sequence[npt.NDArray[np.int64]]) -> list[list[tuple[int, int]]]:
+    """Slices of each variable's (sorted) times, block by block in time order: a block ends
+    before a time at which some variable has had ``_FAST_BLOCK`` more changes, so it holds at
+    most that many changes of each variable (more only where one variable changes that often
+    at one time), ~``_FAST_BLOCK`` on average."""
+    cuts = np.unique(np.concatenate([t[_FAST_BLOCK::_FAST_BLOCK] for t in times]))
+    at = [np.concatenate(([0], np.searchsorted(t, cuts), [len(t)])) for t in times]
+    return [[(int(a[k]), int(a[k + 1])) for a in at] for k in range(len(cuts) + 1)]
 
 
 def _format_changes(
