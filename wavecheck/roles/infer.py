@@ -9,6 +9,7 @@ loops over edges in Python.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,7 +21,7 @@ from wavecheck.roles.dirs import DirFit, assign, at_pauses, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
 from wavecheck.roles.names import NAMED_KINDS, NameHint, leaf, name_hint, named_kind
-from wavecheck.roles.phases import PhaseGroup, find_phase_groups
+from wavecheck.roles.phases import BUDGET, PhaseGroup, find_phase_groups
 from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
@@ -79,6 +80,8 @@ class _Inference:
         self.by_name: set[int] = set()  # pulse lines taken as STEP candidates by their names
         self.bus = BusFindings({}, {}, {}, {})
         self.named = False  # the axis is the one check maps by channel names
+        self.res = max(cap.resolution_ticks, 0)
+        self.phase_cut = False  # the phase-group search stopped at its budget
 
     def _refs(self) -> dict[int, str]:
         refs: dict[int, str] = {}
@@ -120,8 +123,15 @@ class _Inference:
         if kind is not None and self._named(kind, chans):
             return self._finish()
         # stepgen's phase outputs change only on its base period, so they can pass as serial
-        for g in find_phase_groups([c for c in chans if len(c.edges)]):
+        search = find_phase_groups([c for c in chans if len(c.edges)], self.res)
+        self.phase_cut = search.cut_short
+        for g in search.groups:
             self._phase_axis(g)
+        for g in search.steady + search.commutation:
+            if g.named:
+                self._phase_axis(g)
+            else:
+                self._phase_refused(g, g in search.steady)
         movers = [
             c
             for c in chans
@@ -170,7 +180,8 @@ class _Inference:
         notes = []
         if kind == "phase-a":
             group = [c for r, c in found if r in pulse_roles]
-            fits = [g for g in find_phase_groups(group) if len(g.channels) == len(group)]
+            found_groups = find_phase_groups(group, self.res).all_groups
+            fits = [g for g in found_groups if len(g.channels) == len(group)]
             number = fits[0].step_type if fits else 0
             if not fits:
                 notes.append(
@@ -257,6 +268,24 @@ class _Inference:
                 "runs the other way); the lowest channel fitting was taken"
             )
         self.axes.append(_Axis("phases", g.step_type, roles, list(g.channels), g.times, notes))
+
+    def _phase_refused(self, g: PhaseGroup, steady: bool) -> None:
+        """Lines that walk a table without evidence of a motor: left out, with why."""
+        if steady:
+            why = (
+                "at one rate, never reversing or pausing: a free-running divider or counter as "
+                "much as a motor at one constant speed (the waveform cannot tell; a phase axis "
+                "only when named so, or with --map)"
+            )
+        else:
+            why = (
+                "the states of a brushless motor's Hall sensors or commutation lines too (a "
+                "phase axis only when named so, or with --map)"
+            )
+        names = ", ".join(self.name_of(c) for c in g.channels)
+        for c in g.channels:
+            self.why[c.index] = f"phase outputs? {names}: {g.evidence()}; {why}"
+            self.taken.add(c.index)
 
     def _demote(self, pulse: list[Channel]) -> list[Channel]:
         """Drop pulse channels whose "pulses" are long enough to hold another line's pulses and
@@ -685,7 +714,10 @@ class _Inference:
             wanted.append(name)
         dup = {n for n in wanted if n is not None and wanted.count(n) > 1}
         used = {n for n in wanted if n is not None and n not in dup}
-        letters = (ch for ch in _AXIS_LETTERS if ch not in used)
+        spare = itertools.chain(
+            _AXIS_LETTERS, (a + b for a in _AXIS_LETTERS for b in _AXIS_LETTERS)
+        )
+        letters = (ch for ch in spare if ch not in used)
         return [n if n is not None and n not in dup else next(letters) for n in wanted]
 
     def _finish(self) -> Proposal:
@@ -727,6 +759,11 @@ class _Inference:
                     why += ": not a pulse train, and not a DIR or ENABLE of any pulse line"
                 elif look.kind == "constant":
                     why += ": an unused probe, or a line that did not change while captured"
+            if self.phase_cut and len(c.edges) >= 8:
+                why += (
+                    f"; whether it is a phase output was not established (the search for phase "
+                    f"groups stopped after {BUDGET:,} groups of lines that change in turns)"
+                )
             unassigned.append(Unassigned(c.name, c.index, why))
         return Proposal(
             axes,

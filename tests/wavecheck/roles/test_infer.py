@@ -141,6 +141,11 @@ def test_golden_traces_with_neutral_names(trace: str) -> None:
     cap = open_capture(GOLDEN / f"{trace}.vcd")
     named = propose(cap).axes[0]
     neutral = propose(renamed(cap, [f"D{c.index}" for c in cap.channels]))
+    if named.step_type in (3, 4):
+        # three lines walking 1,3,2,6,4,5 are also a brushless motor's Hall sensors: named only
+        assert not neutral.axes and not neutral.ambiguous, neutral.text()
+        assert all("Hall sensors" in u.why for u in neutral.unassigned)
+        return
     assert neutral.unambiguous, neutral.text()
     axis = neutral.axes[0]
     assert (axis.kind, axis.step_type) == (named.kind, named.step_type)
