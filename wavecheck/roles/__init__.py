@@ -39,9 +39,10 @@ contradicts. The rules:
   run is another axis), with the same pulse level and width (one step generator drives both).
   If two or more unchanging channels could be the DIRs of two step axes moving one after the
   other, that is a conflict (unless the names say up/down or step).
-- **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables and reverses,
-  pauses or changes rate (:mod:`wavecheck.roles.phases`); a walk at one rate (a divider's nets)
-  or three lines walking a three-wire table (also Hall sensors) only when named so.
+- **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables and reverses or
+  changes rate (:mod:`wavecheck.roles.phases`); a walk at one rate (a divider's nets, a
+  handshake's bursts) or three lines walking a three-wire table (also Hall sensors) only when
+  named so.
 - **ENABLE**: a leftover changing line (no bus clock or data) at one level of which no axis ever
   moves, while some axes move at the other, and that changes only where they stand still
   (before the first and after the last pulse, or in pauses); serving several axes it is a shared

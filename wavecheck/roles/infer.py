@@ -106,7 +106,8 @@ class _Inference:
     ) -> RoleChoice:
         hint = self.hints[ch.index]
         if basis == "waveform" and not hint.neutral and not hint.fits(role):
-            evidence += f" (its name suggests {'/'.join(sorted(hint.roles))}; the waveform decides)"
+            said = "/".join(sorted(hint.roles)) or "another function"
+            evidence += f" (its name suggests {said}; the waveform decides)"
         self.taken.add(ch.index)
         return RoleChoice(role, ch.name, ch.index, self.refs[ch.index], evidence, basis, active)
 
@@ -144,7 +145,31 @@ class _Inference:
         in_pulse = {c.index for c in pulse}
         others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
         dirs = self._dirs(pulse, others)
+        # lines of a few pulses: a STEP only with a DIR of their own among the lines left
+        as_dir = {f.d.index for f in dirs.values()}
+        few = [c for c in movers if self._few_candidate(c) and c.index not in as_dir]
+        if few:
+            rest = [
+                c
+                for c in others
+                if c.index not in as_dir and c.index not in self.taken and c not in few
+            ]
+            few_dirs = self._dirs(few, rest)
+            dirs |= few_dirs
+            pulse += [c for c in few if c.index in few_dirs]
         self._pulse_axes(pulse, dirs)
+        self._unsettled(
+            [c for c in few if c.index not in dirs],
+            "lines with too few pulses to tell a STEP of a short move from a reset, interrupt "
+            "or handshake line",
+            "too few pulses to tell (see below)",
+        )
+        self._unsettled(
+            [c for c in movers if self._named_against(c)],
+            "lines that look like step trains but are named otherwise (a line named DIR, ENABLE "
+            "or another function such as LED or IRQ is never taken as a STEP against its name)",
+            "a step train named otherwise (see below)",
+        )
         self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
         self._enables(
             [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
@@ -238,13 +263,56 @@ class _Inference:
         look = self.looks[c.index]
         if self.bus.no_step(c.index) is not None:
             return False
+        hint = self.hints[c.index]
+        pulse_named = any(hint.fits(r) for r in ("step", "up", "down"))
+        if not hint.neutral and not pulse_named:
+            return False  # named DIR or ENABLE (x_dir): never taken against its name as a STEP
         if look.is_step_like:
             return True
-        hint = self.hints[c.index]
-        if look.step_by_name and any(hint.fits(r) for r in ("step", "up", "down")):
+        if look.step_by_name and pulse_named:
             self.by_name.add(c.index)
             return True
         return False
+
+    def _few_candidate(self, c: Channel) -> bool:
+        """A line with too few pulses to see a motor's rate in (:func:`look_at`'s ``few``),
+        neither named otherwise nor ruled out by a relation: a STEP only with a DIR that changes
+        between its pulses, with pulses at both of its levels."""
+        hint = self.hints[c.index]
+        return (
+            self.looks[c.index].kind == "few"
+            and self.bus.no_step(c.index) is None
+            and (hint.neutral or hint.fits("step"))
+        )
+
+    def _named_against(self, c: Channel) -> bool:
+        """A step train whose name says DIR, ENABLE or another function, left out of the STEP
+        candidates."""
+        hint = self.hints[c.index]
+        return (
+            c.index not in self.taken
+            and self.looks[c.index].is_step_like
+            and self.bus.no_step(c.index) is None
+            and not hint.neutral
+            and not any(hint.fits(r) for r in ("step", "up", "down"))
+        )
+
+    def _unsettled(self, lines: list[Channel], question: str, why: str) -> None:
+        """Lines that may be STEPs without the evidence to say so: when axes were found beside
+        them, a question (checking the axes alone would pass over them silently); else they
+        stay unassigned, named as candidates."""
+        lines = [c for c in lines if c.index not in self.taken]
+        if not lines or not (self.axes or self.conflicts):
+            return
+        self.conflicts.append(
+            Conflict(
+                question,
+                tuple(f"{self.name_of(c)}: {self.looks[c.index].evidence}" for c in lines),
+            )
+        )
+        for c in lines:
+            self.why[c.index] = why
+            self.taken.add(c.index)
 
     def _enable_candidate(self, c: Channel) -> bool:
         """An ENABLE candidate: a changing line that is no bus clock or data (a bus's chip
@@ -273,9 +341,10 @@ class _Inference:
         """Lines that walk a table without evidence of a motor: left out, with why."""
         if steady:
             why = (
-                "at one rate, never reversing or pausing: a free-running divider or counter as "
-                "much as a motor at one constant speed (the waveform cannot tell; a phase axis "
-                "only when named so, or with --map)"
+                "at one rate, never reversing, speeding up or slowing down: a free-running "
+                "divider or counter, or a handshake in bursts, as much as a motor at one "
+                "constant speed (the waveform cannot tell; a phase axis only when named so, or "
+                "with --map)"
             )
         else:
             why = (
@@ -792,7 +861,7 @@ class _Inference:
         """The channels most like a STEP, best first: named so, then by how they look (a step
         train, then pulses at one rate, then coded pulses), then the most pulses; never a line
         the waveform rules out (a clock, PWM, a serial line, a bus's line, a gate)."""
-        rank = {"pulses": 0, "periodic": 1, "bursts": 2, "coded": 3}
+        rank = {"pulses": 0, "periodic": 1, "bursts": 2, "coded": 3, "duty": 4, "few": 5}
         cands = [
             c
             for c in self.cap.channels

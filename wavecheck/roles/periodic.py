@@ -113,13 +113,13 @@ class Timing:
         return ""
 
     def shape(self, resolution: int) -> str:
-        """``"coded"``, ``"pwm"``, ``"clock"``, ``"periodic"``, ``"bursts"`` or ``"steps"``
-        (a rate that changes as a motor's does, or too few pulses to tell); ``resolution`` in
-        ticks."""
+        """``"coded"``, ``"pwm"``, ``"clock"``, ``"periodic"``, ``"bursts"``, ``"few"`` (fewer
+        than 8 periods: too few to see a motor's rate in) or ``"steps"`` (a rate that changes as
+        a motor's does); ``resolution`` in ticks."""
         if self.coded:
             return "coded"
         if not self.one_rate:
-            return "steps"
+            return "few" if self.periods < _MANY else "steps"
         if self.pauses == 0:
             lo, hi = _CLOCK_DUTY
             spread_ticks = self.width_spread * self.duty * self.period

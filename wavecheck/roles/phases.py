@@ -17,9 +17,10 @@ found is not reused. Which channel is phase-A among the
 orders that fit is told by the names when they say, else the lowest channel fits first (an order
 that fits reversed only flips the direction).
 
-A walk is evidence of a motor only when it reverses, pauses or changes its rate: a walk at one
-rate that never turns back is what a free-running divider's or counter's nets do (a Johnson
-counter's two outputs are quadrature; so are the top bits of a Gray counter). Three lines walking
+A walk is evidence of a motor only when it reverses or changes its rate: a walk at one rate that
+never turns back is what a free-running divider's or counter's nets do (a Johnson counter's two
+outputs are quadrature; so are the top bits of a Gray counter), and in bursts what a handshake
+does (a strobe and its acknowledge, EPP's nDataStr and nWait, walk quadrature). Three lines walking
 a three-wire table (types 3, 4) are also a brushless motor's Hall sensors. Both are kept apart
 (:class:`PhaseSearch`): a phase axis only when named so.
 
@@ -214,9 +215,10 @@ class PhaseSearch:
 
     Attributes:
         groups: phase groups with evidence of a motor (they reverse, pause or change rate).
-        steady: groups that walk a table at one rate without reversing: a free-running divider
-            or counter (a Johnson counter's outputs are quadrature) as much as a motor at one
-            constant speed; the waveform cannot tell.
+        steady: groups that walk a table at one rate without reversing, speeding up or slowing
+            down (in bursts or not): a free-running divider or counter (a Johnson counter's
+            outputs are quadrature) or a handshake (strobe and acknowledge walk quadrature) as
+            much as a motor at one constant speed; the waveform cannot tell.
         commutation: three-line groups walking a three-wire table (types 3 and 4): a brushless
             motor's Hall sensors or commutation lines walk the same states.
         looked: partial and whole groups looked at (the work done; at most :data:`BUDGET`).
@@ -247,13 +249,13 @@ class _Budget(Exception):
 
 
 def _one_rate(times: npt.NDArray[np.int64], cycle: int, resolution: int) -> bool:
-    """Cycles at one rate, none a pause, the rate never ramping (a divider of a clock): judged on
-    the time of every ``cycle``-th change, since the states of a cycle need not last alike."""
+    """Cycles at one rate that never speeds up or slows down, with or without pauses (a divider
+    of a clock, a handshake's bursts): judged on the time of every ``cycle``-th change, since
+    the states of a cycle need not last alike."""
     per_cycle = times[::cycle]
     if len(per_cycle) < 4:
         return False
-    t = timing(per_cycle, np.zeros(len(per_cycle), np.int64), resolution)
-    return t.one_rate and t.pauses == 0
+    return timing(per_cycle, np.zeros(len(per_cycle), np.int64), resolution).one_rate
 
 
 def _pairs(

@@ -188,11 +188,16 @@ def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
     assert [u.channel for u in p.unassigned] == ["d"]
 
 
-def test_waveform_beats_the_name() -> None:
+def test_a_line_named_dir_is_never_a_step() -> None:
+    """Issue 33: a generated machine's ``x_dir`` was made the STEP of its own axis. A step
+    train named DIR is left out, and asked about when other axes were found."""
     step = pulses(_move(0, 19), 5 * US)
     p = propose(capture({"X DIR": (0, step), "X STEP": (0, [1003 * US])}))
-    s = p.axes[0].role("step")
-    assert s is not None and s.channel == "X DIR" and "the waveform decides" in s.evidence
+    assert not p.axes and "X DIR" in p.candidates
+    other = pulses(_move(50 * US, 30), 5 * US)
+    p = propose(capture({"X DIR": (0, step), "Y STEP": (0, other)}))
+    assert p.ambiguous and "named otherwise" in p.ambiguous[0].question
+    assert [r.channel for a in p.axes for r in a.roles] == ["Y STEP"]
 
 
 def test_channels_named_after_their_roles_are_what_check_maps() -> None:
@@ -553,9 +558,10 @@ def test_generated_machines_are_mostly_decided() -> None:
         cap, where = _generated_capture(m, rng, "D")
         verdicts.append(_judge(m, where, propose(cap), cap))
     assert not [v for v in verdicts if v.startswith("wrong")]
-    # 62 of 120 (2 axes 27 of 30, 3 axes 17, 4 axes 12, 5 axes 6): the rest are DIRs whose
-    # changes all fall where two or more STEP lines pause (so they fit each), up/down lines that
-    # take turns with more than one other line, and up/down pairs beside two unchanging lines.
-    # Giving such a DIR to the STEP whose pulse is nearest decided 79 of 120, and mapped about
-    # one generated machine in 6,000 wrongly.
-    assert verdicts.count("right") >= 0.5 * len(verdicts), verdicts
+    # 57 of 120: the rest are DIRs whose changes all fall where two or more STEP lines pause (so
+    # they fit each), up/down lines that take turns with more than one other line, up/down pairs
+    # beside two unchanging lines, and (issue 33) lines of fewer than 9 pulses without a DIR of
+    # their own: too few to tell a short move's STEP from a reset or interrupt line (62 of 120
+    # were mapped when such lines were taken as STEPs). Giving an ambiguous DIR to the STEP
+    # whose pulse is nearest decided 79 of 120, and mapped about one machine in 6,000 wrongly.
+    assert verdicts.count("right") >= 0.45 * len(verdicts), verdicts

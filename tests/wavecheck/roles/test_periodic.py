@@ -78,7 +78,7 @@ _IR_PERIODS = np.where(RNG.random(64) < 0.5, 1125, 2250) * 1000  # NEC: 0 and 1 
         # a step train: fixed pulse width, a rate that ramps up and down around its pauses
         ("trapezoid moves", _edges(_moves((200, 5000), (120, 8000), (300, 3000)), 2000), "pulses"),
         ("one short move", _edges(_trapezoid(12, 5000, 4e5), 2000), "pulses"),
-        ("three pulses", _edges([1000, 600_000, 1_200_000], 4000), "pulses"),
+        ("three pulses", _edges([1000, 600_000, 1_200_000], 4000), "few"),
     ],
     ids=lambda v: v if isinstance(v, str) else "",
 )
