@@ -109,6 +109,7 @@ class _Inference:
             said = "/".join(sorted(hint.roles)) or "another function"
             evidence += f" (its name suggests {said}; the waveform decides)"
         self.taken.add(ch.index)
+        self.why.pop(ch.index, None)  # a reason it was left out earlier no longer holds
         return RoleChoice(role, ch.name, ch.index, self.refs[ch.index], evidence, basis, active)
 
     def name_of(self, c: Channel) -> str:
@@ -123,16 +124,20 @@ class _Inference:
         kind = named_kind([c.name for c in self.cap.channels])
         if kind is not None and self._named(kind, chans):
             return self._finish()
+        chans = self._without_copies(chans)
         # stepgen's phase outputs change only on its base period, so they can pass as serial
         search = find_phase_groups([c for c in chans if len(c.edges)], self.res)
         self.phase_cut = search.cut_short
         for g in search.groups:
             self._phase_axis(g)
-        for g in search.steady + search.commutation:
+        for g in search.steady + search.commutation + search.named_other:
             if g.named:
                 self._phase_axis(g)
             else:
-                self._phase_refused(g, g in search.steady)
+                self._phase_refused(
+                    g,
+                    "steady" if g in search.steady else "other" if g in search.named_other else "",
+                )
         movers = [
             c
             for c in chans
@@ -140,29 +145,40 @@ class _Inference:
         ]
         self._buses(chans)
         pulse = [c for c in movers if self._step_candidate(c)]
-        pulse = self._demote(pulse)
+        pulse = self._step_requests(self._demote(pulse))
         self.turns = self._takes_turns(pulse)
         in_pulse = {c.index for c in pulse}
+        # lines of a few pulses: a STEP only with a DIR of their own; they may be DIRs as well
+        few = [c for c in movers if c.index not in in_pulse and self._few_candidate(c)]
         others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
-        dirs = self._dirs(pulse, others)
-        # lines of a few pulses: a STEP only with a DIR of their own among the lines left
+        dirs = self._dirs(pulse + few, others)
         as_dir = {f.d.index for f in dirs.values()}
-        few = [c for c in movers if self._few_candidate(c) and c.index not in as_dir]
-        if few:
-            rest = [
-                c
-                for c in others
-                if c.index not in as_dir and c.index not in self.taken and c not in few
-            ]
-            few_dirs = self._dirs(few, rest)
-            dirs |= few_dirs
-            pulse += [c for c in few if c.index in few_dirs]
+        for c in few:
+            if c.index in as_dir:
+                dirs.pop(c.index, None)  # a DIR itself: its own "DIR" is none
+        pulse += [c for c in few if c.index in dirs]
         self._pulse_axes(pulse, dirs)
         self._unsettled(
-            [c for c in few if c.index not in dirs],
+            [c for c in few if c.index not in dirs and not self._holds_steps(c)],
             "lines with too few pulses to tell a STEP of a short move from a reset, interrupt "
             "or handshake line",
             "too few pulses to tell (see below)",
+        )
+        self._unsettled(
+            [
+                c
+                for c in movers
+                if self.looks[c.index].kind == "coded"
+                and self.bus.no_step(c.index) is None
+                and self.hints[c.index].neutral
+            ],
+            "pulse lines whose rate jumps as a code's does, beside step axes: a STEP of short, "
+            "jerky moves, or a coded line?",
+            "coded pulses, or a STEP (see below)",
+        )
+        self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
+        self._enables(
+            [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
         )
         self._unsettled(
             [c for c in movers if self._named_against(c)],
@@ -170,11 +186,55 @@ class _Inference:
             "or another function such as LED or IRQ is never taken as a STEP against its name)",
             "a step train named otherwise (see below)",
         )
-        self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
-        self._enables(
-            [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
-        )
         return self._finish()
+
+    def _without_copies(self, chans: list[Channel]) -> list[Channel]:
+        """``chans`` without the lines whose waveform is an earlier line's, edge for edge (a
+        simulator dumps a port and the signal it drives as two: GHDL's ``tb.a`` and
+        ``tb.dut.a``); the copies are left out, saying of which line."""
+        first: dict[tuple[int, bytes], Channel] = {}
+        out = []
+        for c in chans:
+            if not len(c.edges):
+                out.append(c)
+                continue
+            key = (c.initial, c.edges.tobytes())
+            if key in first:
+                self.why[c.index] = (
+                    f"the same waveform as {self.name_of(first[key])}, edge for edge (a copy: a "
+                    "port and the signal it drives); only that one is looked at"
+                )
+                self.taken.add(c.index)
+                continue
+            first[key] = c
+            out.append(c)
+        return out
+
+    def _step_requests(self, pulse: list[Channel]) -> list[Channel]:
+        """``pulse`` without the lines whose pulses come with the changes of a phase axis (90 %
+        of them within two pulse widths after one of its pulses): the sequencer's step request
+        or tick, not an axis of its own (a one-hot stepper's prescaler tick)."""
+        phases = [a for a in self.axes if a.kind == "phases"]
+        keep = []
+        for c in pulse:
+            p = self.looks[c.index].pulses
+            assert p is not None
+            reach = 2 * max(int(np.median(p.widths)), self.res, 1)
+            for ph in phases:
+                k = np.searchsorted(p.starts, ph.motion, side="right") - 1
+                near = (k >= 0) & (ph.motion - p.starts[np.maximum(k, 0)] <= reach)
+                if len(ph.motion) and np.count_nonzero(near) >= 0.9 * len(ph.motion):
+                    self.why[c.index] = (
+                        f"{self.looks[c.index].evidence}; the phase outputs "
+                        f"{', '.join(self.name_of(x) for x in ph.channels)} change right after "
+                        f"{np.count_nonzero(near):,} of its pulses (of {len(ph.motion):,} "
+                        "changes): their sequencer's step request or tick, not an axis of its own"
+                    )
+                    self.taken.add(c.index)
+                    break
+            else:
+                keep.append(c)
+        return keep
 
     def _buses(self, chans: list[Channel]) -> None:
         """Bus clocks, data, strobes and gates among the changing lines not yet taken."""
@@ -285,6 +345,24 @@ class _Inference:
             and (hint.neutral or hint.fits("step"))
         )
 
+    def _holds_steps(self, c: Channel) -> bool:
+        """Whether a pulse of ``c`` lasts through two or more steps of a found axis: a level
+        line (a DIR, an ENABLE, a mode), not a STEP of its own; said in its reason."""
+        p = self.looks[c.index].pulses
+        if p is None or not p.count:
+            return False
+        for a in self.axes:
+            inside = np.searchsorted(a.motion, p.ends) - np.searchsorted(a.motion, p.starts)
+            if int(inside.max()) >= 2:
+                self.why.setdefault(
+                    c.index,
+                    f"{self.looks[c.index].evidence}; a pulse of it lasts through "
+                    f"{int(inside.max()):,} steps of {self.name_of(a.channels[0])}: a level line "
+                    "(a DIR, an ENABLE, a mode), not a STEP of its own",
+                )
+                return True
+        return False
+
     def _named_against(self, c: Channel) -> bool:
         """A step train whose name says DIR, ENABLE or another function, left out of the STEP
         candidates."""
@@ -321,8 +399,8 @@ class _Inference:
 
     def _dir_candidate(self, c: Channel) -> bool:
         """A DIR candidate: a changing line that is no bus data (a line that gates another may
-        still be the DIR of a third)."""
-        return c.index not in self.bus.data
+        still be the DIR of a third) and is not named after another function (an LED, a reset)."""
+        return c.index not in self.bus.data and not self.hints[c.index].other
 
     def _phase_axis(self, g: PhaseGroup) -> None:
         roles = [
@@ -337,14 +415,18 @@ class _Inference:
             )
         self.axes.append(_Axis("phases", g.step_type, roles, list(g.channels), g.times, notes))
 
-    def _phase_refused(self, g: PhaseGroup, steady: bool) -> None:
+    def _phase_refused(self, g: PhaseGroup, why_kind: str) -> None:
         """Lines that walk a table without evidence of a motor: left out, with why."""
-        if steady:
+        if why_kind == "steady":
             why = (
-                "at one rate, never reversing, speeding up or slowing down: a free-running "
-                "divider or counter, or a handshake in bursts, as much as a motor at one "
-                "constant speed (the waveform cannot tell; a phase axis only when named so, or "
-                "with --map)"
+                "at one rate, never speeding up or slowing down: a free-running divider or "
+                "counter, or a handshake in bursts, as much as a motor at one constant speed (the "
+                "waveform cannot tell; a phase axis only when named so, or with --map)"
+            )
+        elif why_kind == "other":
+            why = (
+                "a line of it is named after another function: a handshake's strobe and "
+                "acknowledge walk quadrature too (a phase axis only when named so, or with --map)"
             )
         else:
             why = (
@@ -389,6 +471,8 @@ class _Inference:
         for d in others:
             fits = []
             for s in pulse:
+                if s.index == d.index:
+                    continue  # a line of a few pulses is a STEP candidate and a DIR candidate
                 sp = self.looks[s.index].pulses
                 assert sp is not None
                 f = dir_fit(d, s, sp)
@@ -586,8 +670,9 @@ class _Inference:
                         ),
                     )
                 )
-                self.why[s.index] = "a STEP or an up/down line (see below)"
-                self.taken.add(s.index)
+                for c in (s, r):
+                    self.why[c.index] = "a STEP or an up/down line (see below)"
+                    self.taken.add(c.index)
                 return True
         return False
 
@@ -740,6 +825,10 @@ class _Inference:
             # an ENABLE changes where its axes stand still, never while one runs
             if any(sum(at_pauses(e.edges, a.motion)[:2]) < len(e.edges) for a in axes):
                 continue
+            if not self.hints[e.index].fits("enable") and not self._turned_off_between(
+                e, active, np.concatenate([a.motion for a in axes])
+            ):
+                continue
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
                 f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
@@ -769,6 +858,15 @@ class _Inference:
                 a.roles.append(self.choice("enable", e, ev, active=active))
             if len(axes) > 1:
                 self.shared.append((e, ev, axes))
+
+    def _turned_off_between(self, e: Channel, active: int, motion: I64) -> bool:
+        """Whether ``e`` is seen off on both sides of some motion (inactive stretches with steps
+        between them): a line that changed only before the first step or only after the last
+        one (a strobe at start-up, a testbench variable) shows no gating."""
+        starts = np.r_[self.cap.start, e.edges]
+        levels = e.initial ^ (np.arange(len(starts)) & 1)
+        off = starts[levels != active]
+        return len(np.unique(np.searchsorted(np.sort(motion), off))) >= 2
 
     # ---------------------------------------------------------------- result
     def _axis_names(self) -> list[str]:

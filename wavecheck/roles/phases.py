@@ -5,11 +5,15 @@ as phase-A..E,
 
 - every state the group is in is a state of table *N* (:data:`STATE_TABLES`), and every change
   (edges at one tick count as one change) moves to a neighbouring state of the cycle;
-- it keeps going one way: at most a fifth of the changes reverse the previous one. Two STEP lines
-  fail here, since each pulse is a change and its undoing (for quadrature, whose neighbours are all
-  one-bit changes, this is the test that matters);
+- it keeps going one way: at most a fifth of the changes reverse the previous one (two STEP lines
+  fail here, since each pulse is a change and its undoing: for quadrature, whose neighbours are all
+  one-bit changes, this is the test that matters), and it goes a cycle and a half between
+  reversals on average (a state machine's nets that happen to walk a table turn back within a
+  cycle: a gate-level PWM controller's did, 47 changes with 9 reversals in an 8-state table);
 - the time spent in consecutive states is alike (median ratio below 3), as for a motor turning,
-  unlike a pulse train's short pulses and long gaps.
+  unlike a pulse train's short pulses and long gaps; and so is the time spent in the states of
+  one cycle (longest over shortest below 2.5 on median), unlike a handshake's (an EPP strobe
+  and its nWait answer walk quadrature, their states 5.5x apart).
 
 Larger groups are tried first, among channels that pairwise change in turns (each output
 changes twice a cycle, so between two changes of one the others change at most twice); a group
@@ -17,8 +21,8 @@ found is not reused. Which channel is phase-A among the
 orders that fit is told by the names when they say, else the lowest channel fits first (an order
 that fits reversed only flips the direction).
 
-A walk is evidence of a motor only when it reverses or changes its rate: a walk at one rate that
-never turns back is what a free-running divider's or counter's nets do (a Johnson counter's two
+A walk is evidence of a motor only when it changes its rate (speeds up, slows down): a walk at
+one rate is what a free-running divider's or counter's nets do (a Johnson counter's two
 outputs are quadrature; so are the top bits of a Gray counter), and in bursts what a handshake
 does (a strobe and its acknowledge, EPP's nDataStr and nWait, walk quadrature). Three lines walking
 a three-wire table (types 3, 4) are also a brushless motor's Hall sensors. Both are kept apart
@@ -48,6 +52,8 @@ from wavecheck.steptypes import PHASE_NAMES, STATE_TABLES, step_type
 __all__ = ["BUDGET", "PhaseGroup", "PhaseSearch", "find_phase_groups"]
 
 _MAX_REVERSALS = 0.2
+_RUN_CYCLES = 1.5  # a motor's walk goes this many cycles between reversals, on average
+_CYCLE_SPREAD = 2.5  # the longest state of a cycle over its shortest, on median, stays below
 _MAX_DWELL_RATIO = 3.0
 _PREFIX = 512  # changes checked first, for every order and table, before the full check
 
@@ -215,12 +221,14 @@ class PhaseSearch:
 
     Attributes:
         groups: phase groups with evidence of a motor (they reverse, pause or change rate).
-        steady: groups that walk a table at one rate without reversing, speeding up or slowing
-            down (in bursts or not): a free-running divider or counter (a Johnson counter's
+        steady: groups that walk a table at one rate, never speeding up or slowing down (in
+            bursts or not): a free-running divider or counter (a Johnson counter's
             outputs are quadrature) or a handshake (strobe and acknowledge walk quadrature) as
             much as a motor at one constant speed; the waveform cannot tell.
         commutation: three-line groups walking a three-wire table (types 3 and 4): a brushless
             motor's Hall sensors or commutation lines walk the same states.
+        named_other: groups with a line named after another function (``nWait``, ``ACK``: a
+            handshake's lines walk quadrature).
         looked: partial and whole groups looked at (the work done; at most :data:`BUDGET`).
         cut_short: the search stopped at :data:`BUDGET`; lines not grouped may still be phases.
     """
@@ -228,13 +236,14 @@ class PhaseSearch:
     groups: list[PhaseGroup] = field(default_factory=list)
     steady: list[PhaseGroup] = field(default_factory=list)
     commutation: list[PhaseGroup] = field(default_factory=list)
+    named_other: list[PhaseGroup] = field(default_factory=list)
     looked: int = 0
     cut_short: bool = False
 
     @property
     def all_groups(self) -> list[PhaseGroup]:
         """Every group whose states walk a table, established as a motor's or not."""
-        return [*self.groups, *self.steady, *self.commutation]
+        return [*self.groups, *self.steady, *self.commutation, *self.named_other]
 
 
 #: Most groups (partial or whole) one search looks at: each costs a few ``numpy`` passes over
@@ -246,6 +255,22 @@ _THREE_WIRE = frozenset({3, 4})  # also the states of Hall sensors and BLDC comm
 
 class _Budget(Exception):
     pass
+
+
+def _alike(times: npt.NDArray[np.int64], cycle: int) -> bool:
+    """Whether the states of one cycle last alike: over every ``cycle`` consecutive dwells
+    without a pause among them, the longest over the shortest is below :data:`_CYCLE_SPREAD`
+    on median. A motor's steps at one speed last alike (sigrok-dumps' mouse sensor: 1.3-1.6,
+    LinuxCNC's stepgen: 1.0); a handshake's strobe and answer do not (EPP: 5.5)."""
+    dwell = np.diff(times).astype(np.float64)
+    if len(dwell) < cycle:
+        return True
+    windows = np.lib.stride_tricks.sliding_window_view(dwell, cycle)
+    longest, shortest = windows.max(axis=1), windows.min(axis=1)
+    run = longest < 3 * float(np.median(dwell))  # no pause inside
+    if not run.any():
+        return True
+    return float(np.median(longest[run] / np.maximum(shortest[run], 1.0))) < _CYCLE_SPREAD
 
 
 def _one_rate(times: npt.NDArray[np.int64], cycle: int, resolution: int) -> bool:
@@ -353,6 +378,11 @@ def find_phase_groups(
             if fit is None:
                 continue
             order, rev = fit
+            cycle = len(STATE_TABLES[number][1])
+            if len(states) < _RUN_CYCLES * cycle * (rev + 1):
+                continue  # turns back before a cycle and a half on average: no motor's moves
+            if not _alike(times, cycle):
+                continue  # the states of a cycle last unalike: a handshake's strobe and answer
             ordered = tuple(group[k] for k in sorted(range(m), key=lambda k: order[k]))
             named = all(PHASE_NAMES[k] in name_hint(c.name).roles for k, c in enumerate(ordered))
             return PhaseGroup(number, ordered, len(states), rev, times, named)
@@ -364,9 +394,9 @@ def find_phase_groups(
             if g is None:
                 return
             used.update(c.index for c in group)
-            if g.reversals == 0 and _one_rate(
-                g.times, len(STATE_TABLES[g.step_type][1]), resolution
-            ):
+            if any(name_hint(c.name).other for c in g.channels):
+                out.named_other.append(g)
+            elif _one_rate(g.times, len(STATE_TABLES[g.step_type][1]), resolution):
                 out.steady.append(g)
             elif g.step_type in _THREE_WIRE:
                 out.commutation.append(g)
