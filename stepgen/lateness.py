@@ -13,7 +13,7 @@ G = P − J when the run time was left at its default (a shorter run time only m
 shorter: still the worst case), and notes it; a run time given explicitly is kept, with a
 warning saying which length the intervals get instead (see :func:`catchup_for`).
 
-Models (``--latency``; every time carries its unit, README "Numbers and units"; a J, SIGMA or
+Models (``--latency``; every time carries its unit, docs/reference.md "Numbers and units"; a J, SIGMA or
 MAX below 100 ns other than 0 gives a warning):
 
 ``none``                every invocation on time: all edges on the k·P grid.

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import re
 import shlex
 import shutil
 import xml.etree.ElementTree as ET
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.doc_pages import marked
 from wavecheck.cli import main
 
 REPO = Path(__file__).resolve().parent.parent
@@ -20,10 +20,8 @@ pytest_plugins = ["pytester"]
 
 
 def _block(name: str) -> str:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    m = re.search(rf"<!-- readme-test: {name} -->\n```\w+\n(.*?)```", text, re.S)
-    assert m, f"README has no block marked readme-test: {name}"
-    return m.group(1)
+    """The block marked ``readme-test: NAME`` on the README or a page of docs/."""
+    return marked(name)
 
 
 @pytest.fixture
@@ -151,14 +149,19 @@ def test_latency_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         assert tool(argv[1:]) == 0, line
 
 
-def test_latency_example_block(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    ("name", "code"),
+    [("latency-example", 0), ("tour-check", 1)],  # docs/linuxcnc.md; the README's tour (a FAIL)
+)
+def test_transcript_block(
+    name: str, code: int, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """The latency section's worked example: its figures are what the command prints (issue 25)."""
-    lines = _block("latency-example").strip().splitlines()
+    """A shown command and an excerpt of what it prints: each line shown is a line the command
+    prints, as written, and the command ends with the exit code the text implies (issue 25)."""
+    lines = _block(name).strip().splitlines()
     assert lines[0].startswith("$ wavecheck ")
     monkeypatch.chdir(REPO)
-    assert main([*shlex.split(lines[0][2:])[1:], "-q"]) == 0
+    assert main([*shlex.split(lines[0][2:])[1:], "-q"]) == code
     out = capsys.readouterr().out.splitlines()
     for line in lines[1:]:
         assert line in out, line

@@ -1,17 +1,18 @@
-"""Every command block of the README runs as written, from a fresh clone (issue 26).
+"""Every command block of the README and of docs/ runs as written, from a fresh clone (issue 26;
+issue 37 moved most sections from the README to docs/, one page per audience).
 
 The tracked files of the checkout are copied to an empty folder (what ``git clone`` gives) and
-each ``sh`` block's commands run there with bash, in README order, as a reader following the
-README would run them, with the installed ``wavecheck`` and ``stepgen`` on ``PATH``. A command
+each ``sh`` block's commands run there with bash from the clone's root, page by page (README
+first), as a reader following the page would run them, with the installed ``wavecheck`` and ``stepgen`` on ``PATH``. A command
 runs as written when it ends with a verdict's exit code (0 pass, 1 fail, 3 indeterminate, 4 a
 required rule not decided) and says no error: exit 2 (unusable input or usage), a traceback or
-a ``wavecheck: error:`` line is a README that does not work. What each block must *give* is asserted by
+a ``wavecheck: error:`` line is a page that does not work. What each block must *give* is asserted by
 its own test (``readme-test`` markers); this one holds every block to running at all, and every
 other block (Python, TOML) to having such a test.
 
 Skipped, each with its reason (:data:`SKIPPED`): only what needs hardware, a window, or sets up
-the machine. Files a block names that come from elsewhere (:data:`FROM_ELSEWHERE`) are put where
-the README says they come from.
+the machine. Every file a block names ships (the grbl capture in ``captures/real/``). The pages also build as a site: ``mkdocs build --strict``
+(:func:`test_the_docs_build_as_a_site`).
 """
 
 from __future__ import annotations
@@ -26,13 +27,14 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import shared_capture
+from tests.doc_pages import pages
 
 REPO = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
 
 #: Commands not run, by their first words, and why.
 SKIPPED = {
+    ". .venv/bin/activate": "puts .venv/bin on PATH; the installed commands are on it already",
     "make demo": "sets the machine up (a virtual environment, apt-get) before its check",
     "make test": "this suite itself (ruff, mypy, pytest)",
     "make bench": "minutes of benchmarks against other tools (bench/README.md)",
@@ -43,14 +45,9 @@ SKIPPED = {
     "pulseview": "opens PulseView's window (tests/wavecheck/sigrok/test_pulseview.py runs it "
     "under Xvfb)",
 }
-#: Files the README names that do not ship, and where the README says they come from.
-FROM_ELSEWHERE = {
-    # "the grbl capture of sigrok-dumps", the README says (From a pipe)
-    "grbl_cnc_1.sr": "sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr",
-}
 #: What LinuxCNC's latency-test leaves in ~/.latency (one number, ns), for `--latency ~/.latency`.
 DOT_LATENCY_NS = "11000\n"
-#: Exit codes that are verdicts (README "Exit codes").
+#: Exit codes that are verdicts (docs/reference.md, "Exit codes").
 VERDICTS = (0, 1, 3, 4)
 #: The one-line error of either tool (README: "one line naming the file and the place in it").
 ERROR = re.compile(r"^(?:wavecheck|stepgen)(?: \w+)?: error:", re.M)
@@ -58,8 +55,9 @@ ERROR = re.compile(r"^(?:wavecheck|stepgen)(?: \w+)?: error:", re.M)
 
 @dataclass(frozen=True)
 class Block:
-    """A fenced block of the README: its language, the marker before it, its first line."""
+    """A fenced block of a page: its language, the marker before it, its page and first line."""
 
+    page: str
     language: str
     marker: str
     line: int
@@ -73,12 +71,14 @@ class Block:
 
 
 def blocks() -> list[Block]:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    found = re.finditer(r"(?:<!-- ([\w-]+: ?[\w./-]+) -->\n)?```(\w*)\n(.*?)```", text, re.S)
-    return [
-        Block(m.group(2), m.group(1) or "", text[: m.start(2)].count("\n") + 1, m.group(3))
-        for m in found
-    ]
+    """Every fenced block of the README and docs/*.md, page by page."""
+    found = []
+    for page in pages():
+        text = page.read_text(encoding="utf-8")
+        for m in re.finditer(r"(?:<!-- ([\w-]+: ?[\w./-]+) -->\n)?```(\w*)\n(.*?)```", text, re.S):
+            line = text[: m.start(2)].count("\n") + 1
+            found.append(Block(page.name, m.group(2), m.group(1) or "", line, m.group(3)))
+    return found
 
 
 def _synopsis() -> Block:
@@ -96,14 +96,12 @@ def clone(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip("needs git to list the tracked files")
     listed = subprocess.run(["git", "ls-files", "-z"], cwd=REPO, capture_output=True, check=False)
     if listed.returncode != 0:
-        pytest.skip("not a git checkout (an installed wheel): no README commands to run")
+        pytest.skip("not a git checkout (an installed wheel): no page's commands to run")
     root = tmp_path_factory.mktemp("clone")
     for name in listed.stdout.decode().split("\0"):
         if name and (REPO / name).is_file():
             (root / name).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(REPO / name, root / name)
-    for name, rel in FROM_ELSEWHERE.items():
-        shutil.copy2(shared_capture(rel), root / name)
     home = root.parent / "home"
     home.mkdir()
     (home / ".latency").write_text(DOT_LATENCY_NS)
@@ -130,7 +128,7 @@ SHELL = [b for b in blocks() if b.language == "sh"]
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "block", [b for b in SHELL if not b.text.startswith("wavecheck info CAPTURE")],
-    ids=lambda b: f"line{b.line}-{b.marker.split(':')[-1].strip() or 'unmarked'}",
+    ids=lambda b: f"{b.page}:{b.line}-{b.marker.split(':')[-1].strip() or 'unmarked'}",
 )  # fmt: skip
 def test_every_command_runs_as_written(block: Block, clone: Path) -> None:
     ran = 0
@@ -172,14 +170,39 @@ def test_every_other_block_has_its_own_test() -> None:
             continue
         kind, _, name = b.marker.partition(":")
         name = name.strip()
-        assert kind in ("readme-test", "cocotb-example"), (b.line, b.text[:60])
+        assert kind in ("readme-test", "cocotb-example"), (b.page, b.line, b.text[:60])
         if kind == "cocotb-example":
             assert (REPO / name).is_file(), name
         else:
             assert f'"{name}"' in tests or f"readme-test: {name}" in tests, name
 
 
-def test_the_skip_list_only_skips_what_the_readme_has() -> None:
+def test_the_skip_list_only_skips_what_the_pages_have() -> None:
     commands = [c for b in SHELL for c in b.commands]
     for start in SKIPPED:
         assert any(c.startswith(start) for c in commands), start
+
+
+def test_the_docs_build_as_a_site(tmp_path: Path) -> None:
+    """``mkdocs build --strict`` (mkdocs.yml): every page in the navigation, every link between
+    pages and every anchor found; a warning fails the build."""
+    mkdocs = BIN / "mkdocs"
+    if not mkdocs.exists():
+        pytest.skip("mkdocs is not installed (the test extra has it)")
+    built = subprocess.run(
+        [str(mkdocs), "build", "--strict", "-q", "-f", str(REPO / "mkdocs.yml"), "-d", str(tmp_path)],
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert built.returncode == 0, built.stderr
+    listed = {p.name for p in (REPO / "docs").glob("*.md")}
+    nav = set(re.findall(r"^  - [^:]+: (\S+\.md)$", (REPO / "mkdocs.yml").read_text(), re.M))
+    assert nav == listed, listed ^ nav  # every page reachable from the site's navigation
+    assert (tmp_path / "index.html").is_file()
+
+
+def test_the_front_page_stays_short() -> None:
+    """Issue 37: the README is a front page (at most about 250 lines); the rest is in docs/."""
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 250
+    linked = re.findall(r"\]\((docs/[^)#]+)", text)
+    assert len(linked) > 12 and all((REPO / rel).is_file() for rel in linked), linked

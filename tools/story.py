@@ -42,7 +42,7 @@ from wavecheck.api import check as check_report
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import list_drives, load_drive
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.rules import applicable
 from wavecheck.timebase import Timebase
 

@@ -21,8 +21,7 @@ from wavecheck.errors import (
 
 if TYPE_CHECKING:
     from wavecheck.api import Axis, check, check_axes
-    from wavecheck.engine.options import CheckOptions
-    from wavecheck.engine.outcome import MachineReport, Report
+    from wavecheck.engine import CheckOptions, MachineReport, Report
     from wavecheck.timebase import Timebase
 
 __all__ = [
@@ -50,9 +49,9 @@ _LAZY = {
     "Axis": "wavecheck.api",
     "check": "wavecheck.api",
     "check_axes": "wavecheck.api",
-    "CheckOptions": "wavecheck.engine.options",
-    "MachineReport": "wavecheck.engine.outcome",
-    "Report": "wavecheck.engine.outcome",
+    "CheckOptions": "wavecheck.engine",
+    "MachineReport": "wavecheck.engine",
+    "Report": "wavecheck.engine",
     "Timebase": "wavecheck.timebase",
 }
 

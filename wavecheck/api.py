@@ -19,10 +19,16 @@ from fractions import Fraction
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.mapping import AxisMap, axes_from_tables
-from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, DEFAULT_KEEP, CheckOptions
-from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.run import check_source
+from wavecheck.engine import (
+    DEFAULT_BLOCK_EDGES,
+    DEFAULT_KEEP,
+    AxisMap,
+    CheckOptions,
+    MachineReport,
+    Report,
+    axes_from_tables,
+    check_source,
+)
 from wavecheck.errors import RequirementError, UsageError
 from wavecheck.linuxcnc.config import LinuxCNCConfig
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
@@ -62,7 +68,7 @@ def _source(
     from wavecheck.capture.open import open_source
 
     rate = None
-    if isinstance(samplerate, str):  # text needs its unit (README "Numbers and units")
+    if isinstance(samplerate, str):  # text needs its unit (docs/reference.md "Numbers and units")
         rate = parse_option(samplerate, "samplerate", "frequency", SAMPLE_RATE)
     elif samplerate is not None:
         rate = parse_frequency(samplerate, default_unit="Hz")

@@ -48,10 +48,7 @@ from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.mapping import AxisMap
-from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.results import RuleResult
-from wavecheck.engine.run import MachineCheck, machine_for
+from wavecheck.engine import AxisMap, MachineCheck, MachineReport, Report, RuleResult, machine_for
 from wavecheck.errors import UsageError
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns, format_time, parse_option

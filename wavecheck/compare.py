@@ -37,13 +37,17 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.mapping import AxisMap
-from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.resolve import AxisPlan
-from wavecheck.engine.run import check_capture
-from wavecheck.engine.sinks import StepCollector, StepSink
+from wavecheck.engine import (
+    AxisMap,
+    AxisPlan,
+    CheckOptions,
+    MachineReport,
+    Report,
+    StepCollector,
+    StepEvents,
+    StepSink,
+    check_capture,
+)
 from wavecheck.errors import UsageError
 from wavecheck.verdict import overall_verdict
 

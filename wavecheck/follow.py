@@ -45,7 +45,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine.decode import StepEvents
+from wavecheck.engine import StepEvents
 from wavecheck.errors import UsageError
 from wavecheck.units import check_finite
 

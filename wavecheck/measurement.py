@@ -26,14 +26,16 @@ import numpy as np
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine.interface import StepInterface
-from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.primitives import Intervals
-from wavecheck.engine.resolve import AxisPlan
-from wavecheck.engine.results import StepCounts
-from wavecheck.engine.run import start
-from wavecheck.engine.sinks import StepSink
-from wavecheck.engine.trace import StepTrace
+from wavecheck.engine import (
+    AxisPlan,
+    CheckOptions,
+    Intervals,
+    StepCounts,
+    StepInterface,
+    StepSink,
+    StepTrace,
+    start,
+)
 from wavecheck.rules import Rule
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase

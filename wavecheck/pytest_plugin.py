@@ -72,8 +72,7 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 if TYPE_CHECKING:
-    from wavecheck.engine.outcome import MachineReport, Report
-    from wavecheck.engine.results import RuleResult
+    from wavecheck.engine import MachineReport, Report, RuleResult
 
     Checked = Report | MachineReport
 
@@ -197,7 +196,7 @@ class CaptureSpec:
 def _map_of(raw: Any, where: str) -> dict[str, str]:
     """A ``map`` value: a table or ``"role=CH,..."`` text."""
     if isinstance(raw, str):
-        from wavecheck.engine.interface import parse_map
+        from wavecheck.engine import parse_map
 
         return parse_map([raw])
     if isinstance(raw, dict):
@@ -254,8 +253,7 @@ def _axes(
     entry: dict[str, Any], where: str, folder: Path, defaults: AxisSpec, shared: dict[str, str]
 ) -> tuple[AxisSpec, ...]:
     """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
-    from wavecheck.engine.interface import role_name
-    from wavecheck.engine.mapping import axes_from_tables
+    from wavecheck.engine import axes_from_tables, role_name
     from wavecheck.errors import WavecheckError
 
     raw = entry["axes"]
@@ -576,7 +574,7 @@ def _describe_report(report: Report, max_violations: int) -> str:
 
 def _describe(checked: Checked, max_violations: int) -> str:
     """A report's account, or a machine's: its verdict, then each axis that does not pass."""
-    from wavecheck.engine.outcome import MachineReport
+    from wavecheck.engine import MachineReport
 
     if not isinstance(checked, MachineReport):
         return _describe_report(checked, max_violations)
@@ -680,8 +678,7 @@ class AxisCollector(CaptureCollector):
 def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
     """The rules a check against ``drive_ref`` will evaluate, known without reading the capture."""
     from wavecheck.drives.library import load_drive
-    from wavecheck.engine.intervals import planned_rules
-    from wavecheck.engine.resolve import default_step_type
+    from wavecheck.engine import default_step_type, planned_rules
     from wavecheck.steptypes import step_type
 
     drive = load_drive(drive_ref)
@@ -706,7 +703,7 @@ class RuleItem(pytest.Item):
         return self.spec.name if self.axis is None else f"{self.spec.name}::{self.axis.name}"
 
     def runtest(self) -> None:
-        from wavecheck.engine.outcome import MachineReport
+        from wavecheck.engine import MachineReport
 
         checked = _report(self.config_path, self.spec)
         report: Checked = checked
@@ -723,7 +720,7 @@ class RuleItem(pytest.Item):
 
     def _unmet(self, report: Checked) -> str:
         """The required rules (``require``) ``report`` did not decide, as one line ("": none)."""
-        from wavecheck.engine.outcome import MachineReport
+        from wavecheck.engine import MachineReport
         from wavecheck.report.claims import requirement_line
 
         if isinstance(report, MachineReport):  # the capture's verdict: each axis's own require
@@ -745,7 +742,7 @@ class RuleItem(pytest.Item):
             if missing:
                 raise WavecheckFailure(f"{self._where}: {missing}")
             return
-        from wavecheck.engine.outcome import MachineReport
+        from wavecheck.engine import MachineReport
         from wavecheck.report.claims import unmet
 
         assert not isinstance(report, MachineReport)  # rule items belong to one report
@@ -774,7 +771,7 @@ class RuleItem(pytest.Item):
         folder = self.config.getoption("wavecheck_report_dir")
         if not folder:
             return
-        from wavecheck.engine.outcome import MachineReport
+        from wavecheck.engine import MachineReport
         from wavecheck.report.html import write_html
 
         os.makedirs(folder, exist_ok=True)

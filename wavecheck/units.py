@@ -3,7 +3,7 @@
 Every option, rule file and stepgen setting goes through here. Values are exact
 :class:`fractions.Fraction` in SI base units (seconds or hertz); nothing is a float until printed.
 
-Numbers and units, the one policy of both tools (README "Numbers and units"):
+Numbers and units, the one policy of both tools (docs/reference.md "Numbers and units"):
 
 * On the command line and in rule and ``wavecheck.toml`` files a time or a frequency carries its
   unit (``16us``, ``12 MHz``). A bare number is refused with the fix spelled out

@@ -9,7 +9,7 @@ a measurement), and ``--margin`` tightens every figure, as for ``wavecheck check
 (:mod:`wavecheck.drives.overrides`).
 
 Times carry their unit (``11us``, ``15500ns``); a bare number other than 0 is refused with the
-fix spelled out (README "Numbers and units"). A base period below 1 us is refused and a latency
+fix spelled out (docs/reference.md "Numbers and units"). A base period below 1 us is refused and a latency
 below 100 ns warned about, as almost surely a unit slip. ``--latency`` also takes a file (any
 value not written as a number): cyclictest summary or ``-h`` histogram output,
 ``latency-histogram --nox`` output, or latency-test's one-number ``~/.latency`` (ns), each read

@@ -1,7 +1,7 @@
 """``stepgen simulate``: run the LinuxCNC stepgen model under a latency model, write VCD or .sr.
 
 Options are named after LinuxCNC's parameters; every time carries its unit (``25us``, ``5000ns``;
-a bare number other than 0 is refused, README "Numbers and units"), while the numbers in
+a bare number other than 0 is refused, docs/reference.md "Numbers and units"), while the numbers in
 ``--ini``/``--hal`` files stay LinuxCNC's bare ns. A base period below 1 us is refused as a unit
 slip. Exit 0 on success, 2 with a one-line message on bad settings (nothing is written).
 

@@ -192,17 +192,14 @@ def test_quadrature_round_trip() -> None:
 
 def test_readme_servo_block_runs(tmp_path, monkeypatch, capsys) -> None:
     """README "Servo loops": both commands run as written and report what the section says."""
-    import re
     import shlex
-    from pathlib import Path
 
     from stepgen.cli import main
+    from tests.doc_pages import marked
 
-    text = (Path(__file__).resolve().parents[2] / "README.md").read_text()
-    block = re.search(r"<!-- readme-test: servo -->\n```sh\n(.*?)```", text, re.S)
-    assert block
+    block = marked("servo")
     monkeypatch.chdir(tmp_path)
-    for line in block.group(1).strip().splitlines():
+    for line in block.strip().splitlines():
         assert main(shlex.split(line)[1:]) == 0
     out = capsys.readouterr().out
     assert "following-error check pass" in out

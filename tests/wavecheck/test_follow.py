@@ -266,11 +266,10 @@ def test_plot(runs: dict[str, tuple[Path, Path]], tmp_path: Path) -> None:
 
 def test_readme_follow_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys) -> None:
     """README "Following error": the commands run as written and report what it says."""
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    block = re.search(r"<!-- readme-test: follow -->\n```sh\n(.*?)```", text, re.S)
-    assert block
+    from tests.doc_pages import marked
+
     monkeypatch.chdir(tmp_path)
-    for line in block.group(1).strip().splitlines():
+    for line in marked("follow").strip().splitlines():
         argv = shlex.split(line)
         main = stepgen_main if argv[0] == "stepgen" else wavecheck_main
         assert main(argv[1:]) == 0, line

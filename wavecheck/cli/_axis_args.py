@@ -2,57 +2,29 @@
 
 Options added by :func:`add_axis_arguments`: ``--map`` (``[AXIS.]ROLE=CH``), ``--invert``,
 ``--type``, ``--user-step-type``, ``--dir-forward``, ``--pulse-level``, ``--active-edge``.
-:func:`axis_runs` turns them and an opened capture into one :class:`AxisRun` per axis (the
-syntax is :mod:`wavecheck.engine.mapping`); without ``--map`` the roles come from channel names or are
-inferred from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
+:func:`check_options` turns them into the run's options object (the syntax is
+:mod:`wavecheck.engine.mapping`); without ``--map`` the engine takes the roles from channel names or
+infers them from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
 from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
-from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine.mapping import AxisMap, parse_axes, per_axis, split_invert, split_per_axis
-from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, CheckOptions
+from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions, parse_axes, split_per_axis
 from wavecheck.errors import UsageError
 
 __all__ = [
-    "AxisRun",
     "add_axis_arguments",
     "add_engine_arguments",
-    "axes_of",
-    "axis_runs",
     "check_options",
     "pulse_level",
     "required",
     "user_table",
 ]
-
-
-@dataclass(frozen=True)
-class AxisRun:
-    """What one axis of a run is checked or measured with.
-
-    Attributes:
-        name: the axis name (None: the unnamed single axis).
-        roles: role → channel as written (``--map``, or inferred); roles left out are mapped by
-            channel name (:func:`wavecheck.engine.resolve.auto_map`).
-        invert: roles to invert (``--invert`` for this axis, then those found with the roles).
-        step_type: LinuxCNC step type 0–15, None: the drive's (check) or the default (measure).
-        forward_level: the DIR level that means forward (0 low, 1 high).
-        drive: this axis's ``--drive`` value (None when the command takes no drive).
-    """
-
-    name: str | None
-    roles: dict[str, str]
-    invert: list[str]
-    step_type: int | None
-    forward_level: int
-    drive: str | None = None
 
 
 def add_axis_arguments(p: Any, *, drive: bool = True) -> None:
@@ -149,60 +121,6 @@ def _forward(text: str) -> int:
     if text not in ("low", "high"):
         raise UsageError(f"--dir-forward {text!r}: give low or high")
     return 1 if text == "high" else 0
-
-
-def roles_from_waveforms(args: argparse.Namespace, capture: Capture) -> bool:
-    """Whether the roles must be told from the waveforms: no ``--map`` and no channel named
-    after a role (``step``, ``up``, ``phase-A``, as the end of a hierarchical name)."""
-    from wavecheck.engine.run import names_give_roles
-
-    return not args.map and not names_give_roles(capture)
-
-
-def axes_of(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisMap], list[str]]:
-    """The axes of the run and a note on how they were found: ``--map`` as given; without it,
-    as the engine finds them on ``capture`` (:func:`wavecheck.engine.run.axes_for`: channels
-    named after their roles, else the waveforms, which ``capture`` then holds)."""
-    from wavecheck.engine.run import axes_for
-
-    if args.map:
-        return parse_axes(args.map), []
-    return axes_for(CheckOptions(), capture)
-
-
-def axis_runs(args: argparse.Namespace, capture: Capture) -> tuple[list[AxisRun], list[str]]:
-    """Every axis of ``args`` on ``capture`` with its parameters, and the notes on how the axes
-    were found (see :func:`axes_of`). ``args.drive`` (when the command has one) must give every
-    axis a drive.
-
-    Raises:
-        UsageError: a malformed or unmatched per-axis option, an axis without a drive, a bad
-            ``--type`` or ``--dir-forward`` value, roles that cannot be inferred.
-    """
-    axes, found = axes_of(args, capture)
-    names = [a.name for a in axes]
-    has_drive = getattr(args, "drive", None) is not None
-    drives = per_axis(args.drive, "--drive", names) if has_drive else {}
-    types = per_axis(args.type, "--type", names)
-    forward = per_axis(args.dir_forward, "--dir-forward", names)
-    inverts = split_invert(args.invert, names)
-    runs = []
-    for axis in axes:
-        if has_drive and axis.name not in drives:
-            raise UsageError(f"--drive: axis {axis.name} has no drive (add --drive {axis.name}=ID)")
-        runs.append(
-            AxisRun(
-                name=axis.name,
-                roles=axis.roles,
-                invert=[*inverts[axis.name], *axis.invert],
-                step_type=_int_option(types[axis.name], "--type")
-                if axis.name in types
-                else axis.step_type,
-                forward_level=_forward(forward.get(axis.name, "low")),
-                drive=drives.get(axis.name),
-            )
-        )
-    return runs, found
 
 
 def add_engine_arguments(p: Any) -> None:

@@ -35,7 +35,7 @@ from typing import Any
 
 from wavecheck.cli._axis_args import required
 from wavecheck.cli.linuxcnc import add_file_arguments
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file

@@ -12,9 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.capture.blocks import BlockSource
-from wavecheck.engine.mapping import split_per_axis
-from wavecheck.engine.resolve import AxisPlan
-from wavecheck.engine.sinks import StepSink
+from wavecheck.engine import AxisPlan, StepSink, split_per_axis
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of

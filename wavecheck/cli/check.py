@@ -41,8 +41,7 @@ from wavecheck.cli._steps_args import (
     steps_writer,
 )
 from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
-from wavecheck.engine.outcome import MachineReport
-from wavecheck.engine.run import check_source, start
+from wavecheck.engine import MachineReport, check_source, start
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP

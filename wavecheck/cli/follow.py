@@ -25,9 +25,14 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.engine.decode import StepEvents, decode
-from wavecheck.engine.interface import build_interface, find_channel, parse_map
-from wavecheck.engine.resolve import auto_map
+from wavecheck.engine import (
+    StepEvents,
+    auto_map,
+    build_interface,
+    decode_steps,
+    find_channel,
+    parse_map,
+)
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,
@@ -184,7 +189,9 @@ def _decode(
     sub = {r: mapping[r] for r in roles if r in mapping}
     invert = [r for r in args.invert if r in sub or r.lower().replace("_", "-") in sub]
     iface = build_interface(capture, sub, invert)
-    return decode(iface, number, active_edge=args.active_edge, forward_level=args.forward_level)
+    return decode_steps(
+        iface, number, active_edge=args.active_edge, forward_level=args.forward_level
+    )
 
 
 def _describe(mapping: dict[str, str], roles: tuple[str, ...]) -> str:

@@ -27,7 +27,7 @@ from wavecheck.cli._capture_args import (
     capture_from_args,
     resolution_from_args,
 )
-from wavecheck.engine.resolve import resolve_resolution_ns
+from wavecheck.engine import resolve_resolution_ns
 from wavecheck.units import format_frequency, format_time, json_number
 
 __all__ = ["info_dict", "info_text", "register", "run"]

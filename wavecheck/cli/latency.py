@@ -76,8 +76,7 @@ def channel_roles(capture: Capture, args: argparse.Namespace) -> tuple[list[str]
     Raises:
         UsageError: no step channel found, or the axis options do not fit the capture.
     """
-    from wavecheck.engine.resolve import plan_axes
-    from wavecheck.engine.run import axes_for
+    from wavecheck.engine import axes_for, plan_axes
 
     options = check_options(args, with_drive=False)
     axes, _ = axes_for(options, capture)

@@ -27,7 +27,7 @@ from wavecheck.output import output_file
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 if TYPE_CHECKING:
-    from wavecheck.engine.run import MachineCheck
+    from wavecheck.engine import MachineCheck
     from wavecheck.live.learn import RoleLearner
 
 __all__ = ["register", "run"]
@@ -244,7 +244,7 @@ def run(args: argparse.Namespace) -> int:
     found: list[str] = []
     snippets = None
 
-    from wavecheck.engine.run import axes_for, machine_for, needs_waveforms
+    from wavecheck.engine import axes_for, machine_for, needs_waveforms
 
     options = replace(check_options(args), block_edges=LIVE_BLOCK_EDGES)
 

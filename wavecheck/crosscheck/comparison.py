@@ -21,8 +21,7 @@ import numpy as np
 
 from wavecheck.crosscheck.sigrok import DecoderOutput, SigrokInput
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.interface import RoleSignal
+from wavecheck.engine import RoleSignal, StepEvents
 
 __all__ = ["CrosscheckResult", "compare"]
 

@@ -6,7 +6,7 @@ Two independent decoders run on the same capture:
 - ``stepper_motor`` (rising edges only) writes one position line per step *except the last*:
   line k spans [edge k, edge k+1] in samples and shows the position after step k.
 
-Both are compared with :func:`wavecheck.engine.decode.decode` on the same channels:
+Both are compared with :func:`wavecheck.engine.decode_steps` on the same channels:
 :mod:`wavecheck.crosscheck.sigrok` prepares sigrok-cli's input and runs it,
 :mod:`wavecheck.crosscheck.comparison` compares (and explains sigrok's known differences).
 """
@@ -22,8 +22,7 @@ from wavecheck.capture.sigrokcli import find_sigrok_cli
 from wavecheck.crosscheck.comparison import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import prepare_input, run_decoders
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine.decode import decode
-from wavecheck.engine.interface import build_interface
+from wavecheck.engine import build_interface, decode_steps
 from wavecheck.errors import CaptureError, UsageError
 
 __all__ = ["crosscheck"]
@@ -62,8 +61,8 @@ def crosscheck(
     names = [step_sig.channel] + ([dir_sig.channel] if dir_sig else [])
     edges = [step_sig.edges] + ([dir_sig.edges] if dir_sig else [])
     # wavecheck's decode: on the active edge (counter), and on rising edges (stepper_motor)
-    steps = decode(iface, 0, active_edge=active_edge, forward_level=forward_level)
-    rising = steps if active_edge == "rising" else decode(iface, 0, active_edge="rising",
+    steps = decode_steps(iface, 0, active_edge=active_edge, forward_level=forward_level)
+    rising = steps if active_edge == "rising" else decode_steps(iface, 0, active_edge="rising",
                                                           forward_level=forward_level)  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="wavecheck-xc-", dir=workdir) as tmp:
         sr = prepare_input(

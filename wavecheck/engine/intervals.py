@@ -43,17 +43,11 @@ from wavecheck.rules import Rule, applicable
 from wavecheck.steptypes import StepType
 
 __all__ = [
-    "applicable_rules",
     "figure_of",
     "planned_rules",
     "rule_intervals",
     "split_unknown",
 ]
-
-
-def applicable_rules(st: StepType) -> tuple[str, ...]:
-    """The rule ids that apply to step type ``st``, in report order."""
-    return tuple(r.id for r in applicable(st.kind))
 
 
 def _figure(drive: Drive, r: Rule) -> tuple[Fraction, Figure] | None:

@@ -20,8 +20,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine.interface import StepInterface
-from wavecheck.engine.rates import pulse_level
+from wavecheck.engine import StepInterface, pulse_level
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed
 from wavecheck.rules import rate_rule, width_rule
 from wavecheck.steptypes import StepType
@@ -29,7 +28,7 @@ from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict
 
 if TYPE_CHECKING:
-    from wavecheck.engine.outcome import Report
+    from wavecheck.engine import Report
     from wavecheck.measurement import AxisMeasurement
 
 __all__ = [

@@ -147,7 +147,7 @@ def _probe(program: str, driver: str, args: Sequence[str]) -> str:
     if "No devices found" in text:
         raise DeviceError(
             f"sigrok-cli found no device for driver {driver!r} (is it plugged in, and may this "
-            "user open it? see README 'Watching a running machine')"
+            "user open it? see docs/watch.md)"
         )
     if status != 0:
         last = (stderr.strip().splitlines() or ["(no message)"])[-1]

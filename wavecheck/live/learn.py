@@ -15,7 +15,7 @@ from fractions import Fraction
 
 from wavecheck.capture.binary import SampleBlocks, read_binary
 from wavecheck.capture.edges import Capture
-from wavecheck.engine.run import MachineCheck
+from wavecheck.engine import MachineCheck
 
 __all__ = ["FIRST_TRY_S", "RoleLearner"]
 

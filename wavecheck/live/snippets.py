@@ -29,11 +29,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from wavecheck.capture.srzip import EXACT_SECTION, sr_metadata, write_sr
-from wavecheck.engine.mapping import per_axis
+from wavecheck.engine import per_axis
 from wavecheck.errors import UsageError
 
 if TYPE_CHECKING:
-    from wavecheck.engine.resolve import AxisPlan
+    from wavecheck.engine import AxisPlan
 
 __all__ = ["SampleRing", "Snippets", "replay_arguments", "stored_arguments"]
 

@@ -32,8 +32,7 @@ from fractions import Fraction
 from types import FrameType
 
 from wavecheck.capture.binary import SampleBlocks
-from wavecheck.engine.outcome import MachineReport
-from wavecheck.engine.run import MachineCheck
+from wavecheck.engine import MachineCheck, MachineReport
 from wavecheck.errors import DeviceError
 from wavecheck.live import START_GRACE
 from wavecheck.live.acquisition import EXIT_GRACE, STOP_GRACE, Acquisition

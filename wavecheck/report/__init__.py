@@ -1,6 +1,6 @@
 """The check report: its data model and its renderers (text, JSON)."""
 
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.report.json import render_json, report_dict
 from wavecheck.report.text import render_text
 from wavecheck.verdict import overall_verdict

@@ -8,7 +8,7 @@ Each is a default the user can override, so each report says which one it used.
 from __future__ import annotations
 
 from wavecheck.drives.datasheet import STATUS_MARKS
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 
 __all__ = ["assumptions"]
 

@@ -17,8 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.results import RuleResult
+from wavecheck.engine import MachineReport, Report, RuleResult
 from wavecheck.rules import RULE_IDS, rule
 from wavecheck.units import format_ns
 from wavecheck.verdict import (

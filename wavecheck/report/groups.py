@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
-from wavecheck.engine.verdicts import Violation
+from wavecheck.engine import Violation
 
 __all__ = ["ViolationGroup", "group_violations"]
 

@@ -45,7 +45,7 @@ import numpy.typing as npt
 
 from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write
 from wavecheck.report.plot import Place, choose_places

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.drives.datasheet import MARK_LEGEND
-from wavecheck.engine.outcome import Report
+from wavecheck.engine import Report
 from wavecheck.output import atomic_write
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions

@@ -22,9 +22,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
-from wavecheck.engine.outcome import MachineReport, Report
-from wavecheck.engine.results import RuleResult
-from wavecheck.engine.verdicts import Violation
+from wavecheck.engine import MachineReport, Report, RuleResult, Violation
 from wavecheck.linuxcnc.config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions

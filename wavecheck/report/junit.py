@@ -29,9 +29,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
 
-from wavecheck.engine.outcome import Report
-from wavecheck.engine.results import RuleResult
-from wavecheck.engine.verdicts import Violation
+from wavecheck.engine import Report, RuleResult, Violation
 from wavecheck.report import claims
 from wavecheck.units import format_frequency, format_ns
 from wavecheck.verdict import Unmet

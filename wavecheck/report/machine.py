@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from wavecheck.engine.outcome import MachineReport
+from wavecheck.engine import MachineReport
 from wavecheck.report.claims import requirement_line, verdict_line
 
 __all__ = ["machine_dict", "render_machine_text"]

@@ -18,9 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine.interface import StepInterface
-from wavecheck.engine.results import StepCounts
-from wavecheck.engine.trace import StepTrace
+from wavecheck.engine import StepCounts, StepInterface, StepTrace
 from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase

@@ -36,8 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine.outcome import Report
-from wavecheck.engine.results import RuleResult
+from wavecheck.engine import Report, RuleResult
 from wavecheck.output import atomic_write, figure_format
 from wavecheck.report.claims import not_checked
 from wavecheck.units import SI_TIME, format_time
@@ -341,7 +340,7 @@ def _log_x(ax: Axes, lo: float, hi: float, limit: float) -> bool:
 def binned(r: RuleResult) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
     """A rule's fixed bins (:meth:`RuleResult.histogram`, four per octave of ticks) as
     (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
-    from wavecheck.engine.verdicts import Histogram
+    from wavecheck.engine import Histogram
 
     hist = r.histogram()
     pairs = hist.counts if hist is not None else ()

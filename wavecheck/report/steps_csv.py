@@ -37,8 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.mapping import check_axis_names
+from wavecheck.engine import StepEvents, check_axis_names
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
 from wavecheck.timebase import Timebase
@@ -51,7 +50,6 @@ __all__ = [
     "parse_steps_per_unit",
     "steps_per_unit_of",
     "steps_csv_chunks",
-    "write_steps_csv",
 ]
 
 #: Rows formatted at a time.
@@ -391,28 +389,6 @@ def _csv_field(text: str) -> str:
     if any(c in text for c in ',"\n\r'):
         return '"' + text.replace('"', '""') + '"'
     return text
-
-
-def write_steps_csv(
-    target: str | os.PathLike[str],
-    axes: Sequence[AxisSteps],
-    timebase: Timebase,
-    chunk: int = CHUNK,
-) -> int:
-    """Write the steps of ``axes`` to ``target`` (whole or not at all); returns the row count.
-
-    Raises:
-        UsageError: the target is refused or cannot be written.
-    """
-    try:
-        with atomic_path(target) as path, open(path, "w", encoding="utf-8", newline="") as f:
-            for text in steps_csv_chunks(axes, timebase, chunk):
-                f.write(text)
-    except OSError as err:
-        if err.errno == errno.EPIPE:
-            raise
-        raise UsageError(f"{os.fspath(target)}: cannot write ({err.strerror or err})") from None
-    return sum(a.steps.count for a in axes)
 
 
 def steps_per_unit_of(

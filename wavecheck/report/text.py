@@ -12,8 +12,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, cast
 
 from wavecheck.drives.datasheet import MARK_LEGEND
-from wavecheck.engine.outcome import Report
-from wavecheck.engine.results import RuleResult
+from wavecheck.engine import Report, RuleResult
 from wavecheck.report.assumptions import assumptions
 from wavecheck.report.claims import requirement_line, verdict_line
 from wavecheck.report.groups import ViolationGroup, group_violations

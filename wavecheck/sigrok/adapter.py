@@ -33,16 +33,22 @@ from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.overrides import tune_drive
-from wavecheck.engine.interface import build_interface, role_name
-from wavecheck.engine.intervals import figure_of
-from wavecheck.engine.mapping import AxisMap
-from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.rates import pulse_level as level_at_drive
-from wavecheck.engine.resolve import default_step_type
-from wavecheck.engine.results import RuleResult
-from wavecheck.engine.run import MachineCheck, machine_for
-from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS
-from wavecheck.engine.verdicts import _thresholds as engine_thresholds
+from wavecheck.engine import (
+    FAIL,
+    INDETERMINATE,
+    PASS,
+    AxisMap,
+    CheckOptions,
+    MachineCheck,
+    RuleResult,
+    build_interface,
+    default_step_type,
+    figure_of,
+    machine_for,
+    role_name,
+)
+from wavecheck.engine import pulse_level as level_at_drive
+from wavecheck.engine import thresholds as engine_thresholds
 from wavecheck.errors import UsageError
 from wavecheck.rules import Rule, applicable
 from wavecheck.steptypes import StepKind, StepType, step_type

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 from wavecheck.output import output_file
 
 if TYPE_CHECKING:
-    from wavecheck.engine.outcome import Report
+    from wavecheck.engine import Report
 
 __all__ = [
     "Stacked",

@@ -17,6 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.doc_pages import marked
 from tests.wavecheck.capture.srutil import write_sr
 from wavecheck.capture.binary import parse_binary_format, read_binary
 from wavecheck.capture.open import open_capture
@@ -254,17 +255,15 @@ def test_sigrok_binary_pipe_gives_the_files_result(
 def test_readme_pipe_block(grbl_sr: Path, tmp_path: Path) -> None:
     """The README's "From a pipe" block, run by a shell as written (the grbl capture beside it),
     gives the verdict and rule table of checking the ``.sr`` itself."""
-    import re
     import shutil
 
     _need_sigrok()
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    m = re.search(r"<!-- readme-test: pipe -->\n```sh\n(.*?)```", text, re.S)
-    assert m, "README has no block marked readme-test: pipe"
-    (tmp_path / "grbl_cnc_1.sr").symlink_to(grbl_sr)
+    block = marked("pipe")
+    (tmp_path / "captures" / "real").mkdir(parents=True)
+    (tmp_path / "captures" / "real" / "grbl_cnc_1.sr").symlink_to(grbl_sr)
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     assert shutil.which("wavecheck", path=env["PATH"]) is not None
-    piped = subprocess.run(["bash", "-o", "pipefail", "-c", m.group(1)], cwd=tmp_path, env=env,
+    piped = subprocess.run(["bash", "-o", "pipefail", "-c", block], cwd=tmp_path, env=env,
                            capture_output=True, text=True, timeout=300, check=False)  # fmt: skip
     direct = subprocess.run(
         [sys.executable, "-m", "wavecheck", "check", str(grbl_sr), "--drive", "gecko-g202",

@@ -187,9 +187,7 @@ def test_several_axes(tmp_path: Path) -> None:
 
 
 def test_readme_example_is_the_shipped_test() -> None:
-    import re
+    from tests.doc_pages import marked
 
-    readme = (HERE.parents[2] / "README.md").read_text(encoding="utf-8")
-    m = re.search(r"<!-- cocotb-example: (\S+) -->\n```python\n(.*?)```", readme, re.S)
-    assert m and m.group(1) == "tests/wavecheck/cocotb/stepgen_cocotb.py"
-    assert m.group(2) in (HERE / "stepgen_cocotb.py").read_text(encoding="utf-8")
+    example = marked("tests/wavecheck/cocotb/stepgen_cocotb.py", kind="cocotb-example")
+    assert example in (HERE / "stepgen_cocotb.py").read_text(encoding="utf-8")

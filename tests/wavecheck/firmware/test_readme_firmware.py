@@ -1,22 +1,20 @@
-"""The README's firmware commands, run as written from the repository's root on the real
+"""The firmware commands of the docs (docs/firmware.md), run as written from the repository's root on the real
 configurations it ships in ``captures/firmware/`` (issue 26: they named files that did not ship).
 Each file there is byte for byte the one in the shared set the README of that folder names."""
 
 from __future__ import annotations
 
-import re
 import shlex
 from pathlib import Path
 
 import pytest
 
+from tests.doc_pages import marked_all
 from wavecheck.cli import main
 
 REPO = Path(__file__).resolve().parents[3]
 SHIPPED = REPO / "captures" / "firmware"
-BLOCKS = re.findall(
-    r"<!-- readme-test: firmware-(\w+) -->\n```sh\n(.*?)```", (REPO / "README.md").read_text(), re.S
-)
+BLOCKS = marked_all(r"firmware-(\w+)")
 EXPECT = {
     "grbl": "grbl",
     "klipper": "klipper",
@@ -42,7 +40,7 @@ def test_readme_firmware_command(
     assert argv[0] == "wavecheck"
     for arg in argv:
         if arg.startswith("captures/"):
-            assert (REPO / arg).is_file(), f"the README names {arg}, which does not ship"
+            assert (REPO / arg).is_file(), f"the docs name {arg}, which does not ship"
     code = main(argv[1:])
     out = capsys.readouterr().out
     assert code in (0, 1, 3)

@@ -191,13 +191,11 @@ def test_unusable_watch_is_one_line_and_exit_2(
 
 
 def test_the_readme_watch_block_runs_as_written(tmp_path: Path) -> None:
-    import re
     import shlex
 
-    text = (Path(__file__).resolve().parents[3] / "README.md").read_text()
-    m = re.search(r"<!-- readme-test: watch -->\n```sh\n(.*?)```", text, re.S)
-    assert m is not None
-    argv = shlex.split(m.group(1).replace("\\\n", " "))
+    from tests.doc_pages import marked
+
+    argv = shlex.split(marked("watch").replace("\\\n", " "))
     assert argv[:2] == ["wavecheck", "watch"]
     run = _wavecheck(*argv[1:], cwd=tmp_path)
     assert run.returncode == 0, run.stderr
