@@ -220,10 +220,15 @@ def _shape_evidence(cap: Capture, kind: str, p: Pulses, t: Timing) -> str:
             "a step train keeps its pulse width, not its period"
         )
     if kind == "periodic":
+        slower = (
+            f", the longest {t.slowest:.2f}x that (it slows down now and then)"
+            if t.slowest > 1.1
+            else ""
+        )
         return (
-            f"periodic pulses: {p.count:,} pulses, {pct} of periods {rate}, {t.duty:.0%} duty, "
-            "no pause: a sync, frame or PWM line, or steps at one constant speed (the waveform "
-            "cannot tell; a STEP only when named so)"
+            f"periodic pulses: {p.count:,} pulses, {pct} of periods {rate}{slower}, "
+            f"{t.duty:.0%} duty, no pause: a sync, frame or PWM line, or steps at one constant "
+            "speed (the waveform cannot tell; a STEP only when named so)"
         )
     if kind == "few":
         return (

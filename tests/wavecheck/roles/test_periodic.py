@@ -106,3 +106,17 @@ def test_jitter_in_the_periods_only_is_the_rate_jumping() -> None:
     assert _kind(edges) == "coded"
     jitter = RNG.integers(-1500, 1500, len(periods))  # the same periods, the widths jittering
     assert timing(np.cumsum(periods), 19_230 + jitter, 0).width_spread > 0.02
+
+
+def test_a_step_reversing_at_its_top_rate_is_no_free_running_clock() -> None:
+    """Issue 33: a STEP reversing 20 times, periods 4.08 us to 7.89 us, was described as "a
+    free-running clock". A clock never slows down; this line is periodic pulses (a STEP when
+    named so), and its description says how far it slows."""
+    periods = np.full(2400, 4080)
+    for k in range(20):  # the 20 reversals: slowing down to 7.89 us and back
+        periods[k * 119 + 50 : k * 119 + 57] = [4900, 5900, 7000, 7890, 7000, 5900, 4900]
+    starts = np.cumsum(periods)
+    t = timing(starts, np.full(len(starts), 2040), 0)
+    assert t.one_rate and t.shape(0) == "periodic" and t.slowest > 1.9, t
+    clock = timing(np.cumsum(np.full(600, 4080)), np.full(600, 2040), 0)
+    assert clock.shape(0) == "clock"
