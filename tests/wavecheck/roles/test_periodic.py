@@ -31,6 +31,11 @@ def _trapezoid(n: int, top: float, accel: float, t0: int = 1000) -> I64:
     return t0 + np.cumsum(1e9 / np.minimum(v, top)).astype(np.int64)
 
 
+def _tach(periods: I64) -> list[int]:
+    """A line high for half of each period (a tachometer, a Hall sensor)."""
+    return _edges(1000 + np.cumsum(periods), periods // 2)
+
+
 def _moves(*moves: tuple[int, float], pause: int = 20_000_000, accel: float = 4e5) -> I64:
     out: list[int] = []
     t = 1000
@@ -79,6 +84,13 @@ _IR_PERIODS = np.where(RNG.random(64) < 0.5, 1125, 2250) * 1000  # NEC: 0 and 1 
         ("trapezoid moves", _edges(_moves((200, 5000), (120, 8000), (300, 3000)), 2000), "pulses"),
         ("one short move", _edges(_trapezoid(12, 5000, 4e5), 2000), "pulses"),
         ("three pulses", _edges([1000, 600_000, 1_200_000], 4000), "few"),
+        # issue 33: a tachometer (or a Hall sensor) spinning up: one duty, its widths follow
+        # the period; a step generator keeps its width
+        (
+            "tachometer spinning up",
+            _tach(np.linspace(2e6, 1.2e6, 60).astype(np.int64)),
+            "duty",
+        ),
     ],
     ids=lambda v: v if isinstance(v, str) else "",
 )
