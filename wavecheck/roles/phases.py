@@ -13,7 +13,9 @@ as phase-A..E,
 - the time spent in consecutive states is alike (median ratio below 3), as for a motor turning,
   unlike a pulse train's short pulses and long gaps; and so is the time spent in the states of
   one cycle (longest over shortest below 2.5 on median), unlike a handshake's (an EPP strobe
-  and its nWait answer walk quadrature, their states 5.5x apart).
+  and its nWait answer walk quadrature, their states 5.5x apart); and it runs a cycle and a half
+  between pauses on average (a GPIB DAV/NDAC handshake walks one cycle a byte, then waits; the
+  Y lines of sigrok-dumps' mouse sensor, 0.9 cycles a run, are not taken either).
 
 Larger groups are tried first, among channels that pairwise change in turns (each output
 changes twice a cycle, so between two changes of one the others change at most twice); a group
@@ -273,6 +275,15 @@ def _alike(times: npt.NDArray[np.int64], cycle: int) -> bool:
     return float(np.median(longest[run] / np.maximum(shortest[run], 1.0))) < _CYCLE_SPREAD
 
 
+def _per_run(times: npt.NDArray[np.int64]) -> float:
+    """Changes per run between pauses (a change 3x later than the shorter of its neighbours),
+    on average."""
+    if len(times) < 3:
+        return float(len(times))
+    t = timing(times, np.zeros(len(times), np.int64), 0)
+    return (t.periods - t.pauses) / (t.pauses + 1)
+
+
 def _one_rate(times: npt.NDArray[np.int64], cycle: int, resolution: int) -> bool:
     """Cycles at one rate that never speeds up or slows down, with or without pauses (a divider
     of a clock, a handshake's bursts): judged on the time of every ``cycle``-th change, since
@@ -383,6 +394,8 @@ def find_phase_groups(
                 continue  # turns back before a cycle and a half on average: no motor's moves
             if not _alike(times, cycle):
                 continue  # the states of a cycle last unalike: a handshake's strobe and answer
+            if _per_run(times) < _RUN_CYCLES * cycle:
+                continue  # a cycle or so at a time between pauses: a handshake per byte
             ordered = tuple(group[k] for k in sorted(range(m), key=lambda k: order[k]))
             named = all(PHASE_NAMES[k] in name_hint(c.name).roles for k, c in enumerate(ordered))
             return PhaseGroup(number, ordered, len(states), rev, times, named)

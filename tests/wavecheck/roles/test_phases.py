@@ -101,3 +101,25 @@ def test_three_lines_walking_hall_states_need_names() -> None:
             assert not p.axes and all("Hall sensors" in u.why for u in p.unassigned), p.text()
         else:
             assert [(a.kind, a.step_type) for a in p.axes] == [("phases", 4)], p.text()
+
+
+@pytest.mark.parametrize("names", [("DAV", "NRFD", "NDAC"), ("D0", "D1", "D2")])
+def test_a_gpib_handshake_is_no_axis(names: tuple[str, str, str]) -> None:
+    """Issue 33: GPIB's DAV, NRFD and NDAC were taken as three axes. Per byte NRFD rises, DAV
+    falls, NRFD falls, NDAC rises, DAV rises, NDAC falls: DAV and NDAC walk quadrature one
+    cycle a byte, then wait for the next; with or without their names, no axis."""
+    rng = np.random.default_rng(5)
+    dav: list[int] = []
+    nrfd: list[int] = []
+    ndac: list[int] = []
+    t = 100 * US
+    for _ in range(6):  # messages of 8..19 bytes
+        for _ in range(int(rng.integers(8, 20))):
+            a = int(rng.integers(2, 6)) * US
+            nrfd += [t, t + a + US]
+            dav += [t + a, t + a + 4 * US]
+            ndac += [t + a + 3 * US, t + a + 5 * US]
+            t += a + int(rng.integers(8, 30)) * US
+        t += 2000 * US
+    p = propose(capture({names[0]: (1, dav), names[1]: (0, nrfd), names[2]: (0, ndac)}))
+    assert not p.axes and not p.ambiguous, p.text()
