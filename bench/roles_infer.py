@@ -5,7 +5,8 @@ of 55 lines of bus data on one clock, ~8 KB as in the issue (``bench/data/bus55.
 of 100 such lines (``bus100.vcd``), and one of 100 square waves at two periods and random
 offsets (``waves100.vcd``: any two at one period are quadrature). For each it runs ``wavecheck
 info FILE`` with today's tree and with the tree of commit ``--old`` (main before issue 33:
-``git archive`` into ``bench/data/old-COMMIT/``, run with ``PYTHONPATH`` on it; stopped after
+``git archive`` into a temporary folder, removed after the run (an unpacked tree under the
+repository would be scanned by tests/architecture), run with ``PYTHONPATH`` on it; stopped after
 ``--timeout`` seconds), CPU as user + sys of the process, and ``roles.propose`` alone in this
 process (CPU). Goal: inference of 100 lines under 1 s (issue 33). Prints one JSON line a file.
 """
@@ -20,6 +21,7 @@ import resource
 import subprocess
 import sys
 import tarfile
+import tempfile
 import time
 from pathlib import Path
 
@@ -76,18 +78,16 @@ def make_inputs(dest: Path) -> list[Path]:
     ]
 
 
-def old_tree(commit: str) -> Path:
-    """``wavecheck``, ``stepgen`` and ``rules`` of ``commit``, unpacked once into ``bench/data/``."""
-    dest = HERE / "data" / f"old-{commit}"
-    if not (dest / "wavecheck").is_dir():
-        tar = subprocess.run(
-            ["git", "archive", commit, "wavecheck", "stepgen", "rules"],
-            cwd=ROOT,
-            check=True,
-            capture_output=True,
-        ).stdout
-        with tarfile.open(fileobj=io.BytesIO(tar)) as t:
-            t.extractall(dest, filter="data")
+def old_tree(commit: str, dest: Path) -> Path:
+    """``wavecheck``, ``stepgen`` and ``rules`` of ``commit``, unpacked into ``dest``."""
+    tar = subprocess.run(
+        ["git", "archive", commit, "wavecheck", "stepgen", "rules"],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+    ).stdout
+    with tarfile.open(fileobj=io.BytesIO(tar)) as t:
+        t.extractall(dest, filter="data")
     return dest
 
 
@@ -110,7 +110,12 @@ def main() -> int:
     parser.add_argument("--timeout", type=float, default=120.0)
     args = parser.parse_args()
     files = make_inputs(HERE / "data" / "roles")
-    old = old_tree(args.old)
+    with tempfile.TemporaryDirectory(prefix=f"wavecheck-{args.old}-") as tmp:
+        return run(files, old_tree(args.old, Path(tmp)), args)
+
+
+def run(files: list[Path], old: Path, args: argparse.Namespace) -> int:
+    """Time every file with both trees; print one JSON line each."""
     exe = [sys.executable, "-m", "wavecheck", "info"]
     ok = True
     for f in files:

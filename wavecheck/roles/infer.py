@@ -20,6 +20,13 @@ from wavecheck.roles.buses import BusFindings, find_buses
 from wavecheck.roles.dirs import DirFit, assign, at_pauses, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
+from wavecheck.roles.motion import (
+    REQUEST_SHARE,
+    copies,
+    max_steps_inside,
+    off_around,
+    steps_right_after,
+)
 from wavecheck.roles.names import NAMED_KINDS, NameHint, leaf, name_hint, named_kind
 from wavecheck.roles.phases import BUDGET, PhaseGroup, find_phase_groups
 from wavecheck.roles.proposal import (
@@ -189,46 +196,34 @@ class _Inference:
         return self._finish()
 
     def _without_copies(self, chans: list[Channel]) -> list[Channel]:
-        """``chans`` without the lines whose waveform is an earlier line's, edge for edge (a
-        simulator dumps a port and the signal it drives as two: GHDL's ``tb.a`` and
-        ``tb.dut.a``); the copies are left out, saying of which line."""
-        first: dict[tuple[int, bytes], Channel] = {}
-        out = []
-        for c in chans:
-            if not len(c.edges):
-                out.append(c)
-                continue
-            key = (c.initial, c.edges.tobytes())
-            if key in first:
-                self.why[c.index] = (
-                    f"the same waveform as {self.name_of(first[key])}, edge for edge (a copy: a "
-                    "port and the signal it drives); only that one is looked at"
-                )
-                self.taken.add(c.index)
-                continue
-            first[key] = c
-            out.append(c)
-        return out
+        """``chans`` without the lines that repeat an earlier one edge for edge
+        (:func:`~wavecheck.roles.motion.copies`); each copy says of which line."""
+        of = copies(chans)
+        for i, original in of.items():
+            self.why[i] = (
+                f"the same waveform as {self.name_of(original)}, edge for edge (a copy: a port "
+                "and the signal it drives); only that one is looked at"
+            )
+            self.taken.add(i)
+        return [c for c in chans if c.index not in of]
 
     def _step_requests(self, pulse: list[Channel]) -> list[Channel]:
-        """``pulse`` without the lines whose pulses come with the changes of a phase axis (90 %
-        of them within two pulse widths after one of its pulses): the sequencer's step request
-        or tick, not an axis of its own (a one-hot stepper's prescaler tick)."""
+        """``pulse`` without the lines after whose pulses a phase axis changes (90 % of its
+        changes within two pulse widths): the sequencer's step request or tick, not an axis of
+        its own (a one-hot stepper's prescaler tick)."""
         phases = [a for a in self.axes if a.kind == "phases"]
         keep = []
         for c in pulse:
             p = self.looks[c.index].pulses
             assert p is not None
-            reach = 2 * max(int(np.median(p.widths)), self.res, 1)
             for ph in phases:
-                k = np.searchsorted(p.starts, ph.motion, side="right") - 1
-                near = (k >= 0) & (ph.motion - p.starts[np.maximum(k, 0)] <= reach)
-                if len(ph.motion) and np.count_nonzero(near) >= 0.9 * len(ph.motion):
+                n = steps_right_after(p, ph.motion, self.res)
+                if len(ph.motion) and n >= REQUEST_SHARE * len(ph.motion):
                     self.why[c.index] = (
                         f"{self.looks[c.index].evidence}; the phase outputs "
                         f"{', '.join(self.name_of(x) for x in ph.channels)} change right after "
-                        f"{np.count_nonzero(near):,} of its pulses (of {len(ph.motion):,} "
-                        "changes): their sequencer's step request or tick, not an axis of its own"
+                        f"{n:,} of its pulses (of {len(ph.motion):,} changes): their "
+                        "sequencer's step request or tick, not an axis of its own"
                     )
                     self.taken.add(c.index)
                     break
@@ -349,16 +344,16 @@ class _Inference:
         """Whether a pulse of ``c`` lasts through two or more steps of a found axis: a level
         line (a DIR, an ENABLE, a mode), not a STEP of its own; said in its reason."""
         p = self.looks[c.index].pulses
-        if p is None or not p.count:
+        if p is None:
             return False
         for a in self.axes:
-            inside = np.searchsorted(a.motion, p.ends) - np.searchsorted(a.motion, p.starts)
-            if int(inside.max()) >= 2:
+            n = max_steps_inside(p, a.motion)
+            if n >= 2:
                 self.why.setdefault(
                     c.index,
-                    f"{self.looks[c.index].evidence}; a pulse of it lasts through "
-                    f"{int(inside.max()):,} steps of {self.name_of(a.channels[0])}: a level line "
-                    "(a DIR, an ENABLE, a mode), not a STEP of its own",
+                    f"{self.looks[c.index].evidence}; a pulse of it lasts through {n:,} steps of "
+                    f"{self.name_of(a.channels[0])}: a level line (a DIR, an ENABLE, a mode), "
+                    "not a STEP of its own",
                 )
                 return True
         return False
@@ -825,10 +820,11 @@ class _Inference:
             # an ENABLE changes where its axes stand still, never while one runs
             if any(sum(at_pauses(e.edges, a.motion)[:2]) < len(e.edges) for a in axes):
                 continue
-            if not self.hints[e.index].fits("enable") and not self._turned_off_between(
-                e, active, np.concatenate([a.motion for a in axes])
+            motion = np.concatenate([a.motion for a in axes])
+            if not self.hints[e.index].fits("enable") and not off_around(
+                e, active, motion, self.cap.start
             ):
-                continue
+                continue  # never seen off between steps: no gating shown
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
                 f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
@@ -858,15 +854,6 @@ class _Inference:
                 a.roles.append(self.choice("enable", e, ev, active=active))
             if len(axes) > 1:
                 self.shared.append((e, ev, axes))
-
-    def _turned_off_between(self, e: Channel, active: int, motion: I64) -> bool:
-        """Whether ``e`` is seen off on both sides of some motion (inactive stretches with steps
-        between them): a line that changed only before the first step or only after the last
-        one (a strobe at start-up, a testbench variable) shows no gating."""
-        starts = np.r_[self.cap.start, e.edges]
-        levels = e.initial ^ (np.arange(len(starts)) & 1)
-        off = starts[levels != active]
-        return len(np.unique(np.searchsorted(np.sort(motion), off))) >= 2
 
     # ---------------------------------------------------------------- result
     def _axis_names(self) -> list[str]:
