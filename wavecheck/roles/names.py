@@ -100,7 +100,8 @@ def name_hint(name: str) -> NameHint:
                         break
         i += 1
     axis = axes[0] if roles and len(set(axes)) == 1 else None
-    other = not roles and any(w in _OTHER for w in _words(name.rsplit(".", 1)[-1]))
+    leaf_words = words if "." not in name else _words(name.rsplit(".", 1)[-1])
+    other = not roles and any(w in _OTHER for w in leaf_words)
     return NameHint(frozenset(roles), axis, other)
 
 
