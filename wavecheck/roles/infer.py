@@ -157,12 +157,20 @@ class _Inference:
         in_pulse = {c.index for c in pulse}
         # lines of a few pulses: a STEP only with a DIR of their own; they may be DIRs as well
         few = [c for c in movers if c.index not in in_pulse and self._few_candidate(c)]
+        # coded lines compete for DIRs too (a coded STEP's DIR is no other line's), but stay a
+        # question whatever DIR they get
+        coded = [c for c in movers if c.index not in in_pulse and self._coded_candidate(c)]
         others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
-        dirs = self._dirs(pulse + few, others)
+        dirs = self._dirs(pulse + few + coded, others)
         as_dir = {f.d.index for f in dirs.values()}
         for c in few:
             if c.index in as_dir:
                 dirs.pop(c.index, None)  # a DIR itself: its own "DIR" is none
+        for c in coded:
+            fit = dirs.pop(c.index, None)
+            if fit is not None:
+                self.why[fit.d.index] = f"fits as the DIR of {self.name_of(c)} (see below)"
+                self.taken.add(fit.d.index)
         pulse += [c for c in few if c.index in dirs]
         self._pulse_axes(pulse, dirs)
         self._unsettled(
@@ -172,13 +180,7 @@ class _Inference:
             "too few pulses to tell (see below)",
         )
         self._unsettled(
-            [
-                c
-                for c in movers
-                if self.looks[c.index].kind == "coded"
-                and self.bus.no_step(c.index) is None
-                and self.hints[c.index].neutral
-            ],
+            [c for c in movers if self._coded_candidate(c)],
             "pulse lines whose rate jumps as a code's does, beside step axes: a STEP of short, "
             "jerky moves, or a coded line?",
             "coded pulses, or a STEP (see below)",
@@ -338,6 +340,15 @@ class _Inference:
             self.looks[c.index].kind == "few"
             and self.bus.no_step(c.index) is None
             and (hint.neutral or hint.fits("step"))
+        )
+
+    def _coded_candidate(self, c: Channel) -> bool:
+        """A neutrally named line of coded pulses that no relation rules out: a STEP of short,
+        jerky moves or a coded line; asked about when axes are found beside it."""
+        return (
+            self.looks[c.index].kind == "coded"
+            and self.bus.no_step(c.index) is None
+            and self.hints[c.index].neutral
         )
 
     def _holds_steps(self, c: Channel) -> bool:
