@@ -3,7 +3,7 @@ SHELL := /bin/bash
 PY    := .venv/bin/python
 VENV_STAMP := .venv/.installed
 
-.PHONY: demo test setup system-deps lint typecheck bench golden golden-check story fuzz clean
+.PHONY: demo test test-all setup system-deps lint typecheck bench golden golden-check story fuzz clean
 
 setup: $(VENV_STAMP) system-deps
 
@@ -17,7 +17,9 @@ $(VENV_STAMP): pyproject.toml
 # Real components from Debian's packages: sigrok-cli (readers for other formats, cross-checks,
 # the protocol decoder's tests), pulseview (the decoder drawn under Xvfb), chromium (the HTML
 # report test), gtkwave + xvfb (the save-file test; gtkwave's fst2vcd reads FST), iverilog + ghdl
-# (the simulators whose VCD, FST and GHW dumps the format tests compare). Installed when missing.
+# (the simulators whose VCD, FST and GHW dumps the format tests compare), gcc-avr + avr-libc +
+# binutils-avr + libelf-dev + patch (wavecheck simulate: grbl and simavr built from source).
+# Installed when missing.
 system-deps:
 	@missing=""; \
 	command -v sigrok-cli >/dev/null || missing="$$missing sigrok-cli"; \
@@ -27,6 +29,9 @@ system-deps:
 	command -v xvfb-run   >/dev/null || missing="$$missing xvfb xauth"; \
 	command -v iverilog   >/dev/null || missing="$$missing iverilog"; \
 	command -v ghdl       >/dev/null || missing="$$missing ghdl"; \
+	command -v avr-gcc    >/dev/null || missing="$$missing gcc-avr avr-libc binutils-avr"; \
+	test -f /usr/include/libelf.h    || missing="$$missing libelf-dev"; \
+	command -v patch      >/dev/null || missing="$$missing patch"; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "installing from Debian:$$missing"; \
@@ -72,11 +77,17 @@ demo: setup
 	@echo
 	@echo "pictures: out/demo-g202-p20.png (timing diagram + histograms), out/demo-g202-p20.html"
 
-test: setup
-	.venv/bin/ruff check wavecheck stepgen tools tests bench
-	.venv/bin/ruff format --check wavecheck stepgen tools tests bench
-	.venv/bin/mypy
+# make test: lint, types and every test but those marked slow (the corpora, sweeps, installs),
+# within 10 minutes on two quiet cores; its last line says what did not run and why.
+# make test-all (what .ci/run runs): the same and the slow tests too.
+test: setup lint typecheck
+	.venv/bin/pytest -n 2 -q -m "not slow"
+
+test-all: setup lint typecheck
 	.venv/bin/pytest -n 2 -q
+
+typecheck:
+	.venv/bin/mypy
 
 lint:
 	.venv/bin/ruff check wavecheck stepgen tools tests bench

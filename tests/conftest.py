@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import os
+import re
+from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -68,3 +71,108 @@ def write_vcd(
         path, wires, timescale=timescale, end=end if end is not None else last + 1, scope="top"
     )
     return path
+
+
+#: Tests left out of ``make test`` (``-m "not slow"``), by node id or its start, and why: the
+#: slow real corpora, sweeps and block-size matrices (seconds summed over an --durations run of
+#: the whole suite, -n 2 on a loaded 2-core machine). ``make test-all`` and .ci/run run them; the
+#: tests marked ``slow`` in their own files (the lattice sweep, the wheel install, cocotb, the
+#: pages' commands from a clone, PulseView) are left out the same way.
+SLOW = {
+    "tests/wavecheck/engine/test_block_readers.py::test_sr_blocks":
+        "the real grbl .sr read at three block sizes (365 s)",
+    "tests/wavecheck/capture/test_block_sources.py::test_a_block_source_gives_the_whole_reads_capture[vcd through sigrok-cli":
+        "sigrok-cli's conversion at three block sizes (244 s)",
+    "tests/wavecheck/engine/test_windows.py::test_windows_stay_bounded_when_every_interval_fails[1]":
+        "one edge per block over every failing interval (226 s)",
+    "tests/architecture/test_layering.py::test_every_module_imports_alone_in_a_fresh_interpreter":
+        "an interpreter per module (200 s)",
+    "tests/wavecheck/engine/test_block_matrix.py::test_one_block_or_many":
+        "116 options x block sizes against one block (177 s)",
+    "tests/reliability/test_fuzz_run.py::test_bounded_fuzz_in_a_child":
+        "a forked child per fuzz case (99 s)",
+    "tests/wavecheck/engine/test_trace.py::test_real_captures[1]":
+        "the real captures one edge per block (87 s)",
+    "tests/wavecheck/lattice/test_analysis.py::test_every_model_every_rate_period_exact_lateness_within_a_sample":
+        "every latency model x rate x period (33 s)",
+    "tests/wavecheck/report/test_figure_files.py::test_the_file_name_says_the_format":
+        "every figure format rendered (78 s)",
+    "tests/wavecheck/engine/test_windows.py::test_cli_streams_plot_gtkw_and_html":
+        "every picture of a long capture, streamed (59 s)",
+    "tests/reliability/test_fuzz_run.py::test_bounded_fuzz[":
+        "300 mutants of each in-process reader (46 s)",
+    "tests/wavecheck/sigrok/test_sigrok_cli.py::test_golden_captures":
+        "sigrok-cli's run of the decoder on every golden trace (42 s)",
+    "tests/wavecheck/firmware/test_fuzz_firmware.py::test_bounded_fuzz":
+        "200 mutants of each firmware format (37 s)",
+    "tests/wavecheck/engine/test_trace.py::test_cli_streamed_png_has_the_panel":
+        "a long capture's motion panel, streamed (35 s)",
+    "tests/reliability/test_malformed_sr.py::test_fuzz_metadata_values":
+        "fuzzed .sr metadata (26 s)",
+    "tests/wavecheck/firmware/test_fixes_work.py::test_every_printed_fix_works":
+        "every printed fix applied to every corpus file and re-run (3-8 min)",
+}  # fmt: skip
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Mark the tests of :data:`SLOW` slow."""
+    for item in items:
+        if any(item.nodeid.startswith(start) for start in SLOW):
+            item.add_marker(pytest.mark.slow)
+
+
+#: Path-like words in a skip reason (a file that is missing), left out when reasons are grouped.
+_PATHISH = re.compile(r"\S*/\S*")
+
+
+def _why(report: pytest.TestReport) -> str:
+    """A skip's reason, without the paths that would make every missing file a reason of its own."""
+    longrepr = report.longrepr
+    text = longrepr[2] if isinstance(longrepr, tuple) else str(longrepr)
+    text = text.removeprefix("Skipped: ")
+    text = _PATHISH.sub("…", text).strip()
+    return text if len(text) <= 100 else text[:99] + "…"
+
+
+#: How many tests the xdist workers deselected (each collects the whole run: the largest count).
+_WORKERS_DESELECTED = pytest.StashKey[int]()
+
+
+def pytest_deselected(items: list[pytest.Item]) -> None:
+    """In an xdist worker, count what ``-m`` left out for the controller's last line."""
+    if items and hasattr(items[0].config, "workeroutput"):
+        output = items[0].config.workeroutput  # type: ignore[attr-defined]
+        output["deselected"] = output.get("deselected", 0) + len(items)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: Any, error: Any) -> None:
+    """In the xdist controller: keep the workers' count of deselected tests."""
+    count = getattr(node, "workeroutput", {}).get("deselected", 0)
+    stash = node.config.stash
+    stash[_WORKERS_DESELECTED] = max(stash.get(_WORKERS_DESELECTED, 0), count)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """The run's last line: what did not run, and why (issue 37)."""
+    terminalreporter = config.pluginmanager.get_plugin("terminalreporter")
+    if terminalreporter is None or hasattr(config, "workerinput"):  # an xdist worker says nothing
+        return
+    stats = terminalreporter.stats
+    skipped = [r for r in stats.get("skipped", []) if getattr(r, "longrepr", None) is not None]
+    deselected = len(stats.get("deselected", [])) or config.stash.get(_WORKERS_DESELECTED, 0)
+    parts = []
+    if deselected:
+        expr = config.getoption("markexpr") or ""
+        how = f'-m "{expr}": make test-all (.ci/run) runs them' if expr else "deselected"
+        parts.append(f"{deselected} deselected ({how})")
+    if skipped:
+        reasons = Counter(_why(r) for r in skipped).most_common()
+        shown = "; ".join(f"{n} {why}" for why, n in reasons[:4])
+        more = (
+            f"; {sum(n for _, n in reasons[4:])} for {len(reasons) - 4} other reasons"
+            if len(reasons) > 4
+            else ""
+        )
+        parts.append(f"{len(skipped)} skipped: {shown}{more}")
+    terminalreporter.write_line("not run: " + (" | ".join(parts) if parts else "nothing"))

@@ -21,6 +21,7 @@ from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.judge import FAIL, INDETERMINATE, evaluate
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import Report
@@ -29,8 +30,7 @@ from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import check_source
 from wavecheck.engine.sinks import StepCollector, StepSink
-from wavecheck.engine.verdicts import FAIL, INDETERMINATE, evaluate
-from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import Rule
 from wavecheck.units import parse_time
 

@@ -77,8 +77,9 @@ def test_require_block(capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
     (line,) = _block("require").strip().splitlines()
     assert main(shlex.split(line)[1:]) == 4
     first, second = capsys.readouterr().out.splitlines()[:2]
-    assert first == (
-        "verdict: PASS (dir_setup, dir_hold not checked: no DIR channel; "
+    assert first == (  # issue 34: the first line carries the exit code's outcome
+        "verdict: NOT DECIDED (exit 4: required dir_setup, dir_hold not checked: no DIR "
+        "channel); the rules checked: PASS (dir_setup, dir_hold not checked: no DIR channel; "
         "enable_setup not checked: drive drv8825 states no figure)"
     )
     assert second == "required but not decided: dir_setup, dir_hold not checked: no DIR channel"

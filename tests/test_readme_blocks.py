@@ -42,6 +42,10 @@ SKIPPED = {
     "make golden-check": "a make target: sets up .venv in the clone first (pip, from the network)",
     "make fuzz": "a longer fuzz run (minutes); the suite runs a bounded one",
     "wavecheck watch --driver fx2lafw": "needs an FX2 logic analyzer on USB",
+    "wavecheck simulate": "builds grbl and simavr from ../shared/firmware-src, which a clone "
+    "has not (tests/wavecheck/mcu/test_doc.py runs docs/firmware-simulation.md beside it)",
+    "sed 's|^// #define STEP_PULSE_DELAY": "edits grbl's config.h from ../shared/firmware-src "
+    "(tests/wavecheck/mcu/test_doc.py)",
     "pulseview": "opens PulseView's window (tests/wavecheck/sigrok/test_pulseview.py runs it "
     "under Xvfb)",
 }

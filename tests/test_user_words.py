@@ -278,14 +278,16 @@ def test_identical_violations_are_grouped_in_text_worst_first() -> None:
     lines = text.splitlines()
     head = next(i for i, ln in enumerate(lines) if ln.startswith("violations: "))
     assert lines[head] == (
-        "violations: 12 (worst first; the 10 worst shown as 2 groups of identical violations)"
+        "violations: 12 (worst first; the 10 worst shown as 2 groups of identical violations, "
+        "each counted over the whole capture)"
     )
     assert lines[head + 1] == (
         "  8 × step_high  measured 3 us  limit 4.5 us  margin -1.5 us  "
         "first at 0.000020000 s, last at 0.000240000 s"
     )
-    assert lines[head + 2].startswith("  2 × step_high  measured 4 us  limit 4.5 us")
-    assert lines[head + 3] == "  … and 2 more"
+    # issue 34: each group counts every identical violation, not only those shown: 8 and 4
+    assert lines[head + 2].startswith("  4 × step_high  measured 4 us  limit 4.5 us")
+    assert lines[head + 3] == ""  # every violation is in a group shown: no "… and N more"
 
 
 def test_identical_violations_are_grouped_in_html_and_kept_one_by_one_in_json() -> None:

@@ -6,8 +6,9 @@
 A *case* is what a user gives ``wavecheck config``: a Klipper ``.cfg``, a Marlin folder's
 ``Configuration.h``, a LinuxCNC ``.ini``, a Smoothieware ``config``, a grbl dump, an RRF
 ``config.g``, a FluidNC ``.yaml``. Each is read with :func:`wavecheck.firmware.read_firmware` and
-judged against a drive (``leadshine-dm542``); the table gives per family the cases read, those
-refused (grouped by the reason, without paths and numbers) and the ones whose figures differ from
+judged against a drive (``leadshine-dm542``); the table gives per family the cases read (by
+verdict, and the indeterminate rules by reason), those refused (grouped by the reason, without
+paths and numbers) and the ones whose figures differ from
 the hand-read table ``tests/wavecheck/firmware/corpus_figures.toml`` (*wrong*; the table's own
 entries are the only ones a figure can be wrong against), and the slowest case. Any exception
 other than the one-line :class:`~wavecheck.errors.WavecheckError` is a *crash*. Exit 1 when a
@@ -64,6 +65,13 @@ def reason(message: str) -> str:
     text = re.sub(r"\d+(\.\d+)?", "N", text)
     text = re.sub(r"\(([^()]|\([^()]*\))*\)", "(…)", text)
     return text[:90]
+
+
+def _why(note: str) -> str:
+    """An indeterminate rule's reason, short: what decides it (grouping key)."""
+    if "not enforced by the firmware" in note:
+        return "not enforced: " + reason(note.split("); ", 1)[-1])[:60]
+    return reason(note)[:70]
 
 
 def _value(fig: Any) -> Fraction | None:
@@ -142,6 +150,10 @@ class Tally:
     crashed: list[str] = field(default_factory=list)
     checked: int = 0
     wrong: list[str] = field(default_factory=list)
+    verdicts: Counter[str] = field(default_factory=Counter)
+    """Cases per overall verdict against the drive."""
+    indeterminate: Counter[str] = field(default_factory=Counter)
+    """Indeterminate rules (axis x rule) by reason, without paths and numbers."""
     slowest: tuple[float, str] = (0.0, "")
 
 
@@ -161,6 +173,11 @@ def run(corpus: Path, listing: bool = False) -> dict[str, Tally]:
             cfg = read_firmware(path)
             result = evaluate_config(cfg, [(a, drive) for a in cfg.axes])
             t.read += 1
+            t.verdicts[result.verdict] += 1
+            for pair in result.pairs:
+                for row in pair.rows:
+                    if row.verdict == "indeterminate":
+                        t.indeterminate[_why(row.note)] += 1
             line = f"read {cfg.firmware}, {len(cfg.axes)} axes, {result.verdict}"
         except WavecheckError as err:
             t.refused[reason(str(err))] += 1
@@ -210,6 +227,13 @@ def main(argv: list[str] | None = None) -> int:
           f"{sum(len(t.crashed) for t in tallies.values()):7} "
           f"{sum(len(t.wrong) for t in tallies.values()):3} of "
           f"{sum(t.checked for t in tallies.values()):3}")  # fmt: skip
+    for family, t in tallies.items():
+        right = t.checked - len(t.wrong)
+        verdicts = ", ".join(f"{v} {n}" for v, n in sorted(t.verdicts.items()))
+        print(f"  {family}: table cases right {right} of {t.checked}; read cases by verdict: "
+              f"{verdicts}")  # fmt: skip
+        for why, n in t.indeterminate.most_common(6):
+            print(f"    indeterminate rules {n} x {why}")
     for family, t in tallies.items():
         for why, n in t.refused.most_common():
             print(f"  refused {family}: {n} x {why}")

@@ -6,10 +6,11 @@ settings in a temporary ``XDG_CONFIG_HOME``, the decoder from ``SIGROKDECODE_DIR
 the window stops changing, and grabs it (Pillow's X11 grab). :func:`annotation_rows` finds the
 decode trace's annotation rows in a screenshot (for ``tests/wavecheck/sigrok/test_pulseview.py``).
 
-Run as a program it regenerates the README's picture, ``docs/pulseview.png``: the golden trace
-of LinuxCNC's stepgen driving a Gecko G202 with 11 us of latency (``captures/golden/
-g202-p20-worst-dirhold.vcd``, the seed's story), sampled at 1 MHz around its reversal, where the
-DIR hold is 9 us against the G202's 20 us.
+Run as a program it regenerates the README's picture, ``docs/pulseview.png``: the README's trace
+of LinuxCNC's stepgen driving a Gecko G202 with 11 us of latency (the command of ``captures/
+golden/g202-p20-worst-dirhold.toml`` written as a 1 MHz ``.sr``: :func:`readme_trace`), whole,
+at full zoom-out (zoom to fit): its one violation, a DIR hold of 9 us against the G202's 20 us,
+is the red box of the Violation regions row, and the Summary row ends in the verdict.
 """
 
 from __future__ import annotations
@@ -27,14 +28,26 @@ from pathlib import Path
 import numpy as np
 
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import open_capture
 from wavecheck.capture.srzip import write_sr_edges
 
 ROOT = Path(__file__).resolve().parent.parent
 PICTURE = ROOT / "docs" / "pulseview.png"
 GOLDEN = ROOT / "captures" / "golden" / "g202-p20-worst-dirhold.vcd"
-#: The window of the golden trace shown (ns): two steps and the reversal between them.
-WINDOW_NS = (484_970_000, 485_080_000)
+
+
+def readme_trace(folder: Path) -> Path:
+    """The README's G202 trace (the golden trace's stepgen command, written as ``g202.sr``)."""
+    import shlex
+    import tomllib
+
+    argv = shlex.split(tomllib.loads(GOLDEN.with_suffix(".toml").read_text())["command"])
+    sr = folder / "g202.sr"
+    argv[argv.index("-o") + 1] = str(sr)
+    run = subprocess.run([sys.executable, "-m", "stepgen", *argv[1:]], capture_output=True,
+                         text=True)  # fmt: skip
+    if run.returncode != 0:
+        raise RuntimeError(f"{shlex.join(argv)}: {run.stderr.strip()}")
+    return sr
 
 
 def sampled_sr(
@@ -88,9 +101,14 @@ def screenshot(
     input_format: str | None = None,
     timeout: float = 90.0,
     size: str = "1280x720",
+    pointer: tuple[int, int] | None = None,
+    keys: str = "",
 ) -> tuple[object, str]:
     """PulseView's window showing ``capture`` with ``session`` (a PIL image, cropped to the
-    window), and PulseView's log."""
+    window), and PulseView's log. With ``pointer``: once the window has settled, the pointer
+    moves there and ``keys`` are typed (``"f"``: zoom to fit), and the window is grabbed once it
+    has settled again (PulseView draws annotations put after its last repaint, such as the
+    decoder's summary at the end of the input, when it next repaints)."""
     from PIL import ImageChops, ImageGrab
 
     server, display = _xvfb(size)
@@ -105,7 +123,11 @@ def screenshot(
             viewer = subprocess.Popen([*cmd, "-i", str(capture)], env=env, stdout=out,
                                       stderr=subprocess.STDOUT)  # fmt: skip
         try:
-            image = _settled(lambda: ImageGrab.grab(xdisplay=display), ImageChops, timeout)
+            grab = lambda: ImageGrab.grab(xdisplay=display)  # noqa: E731
+            image = _settled(grab, ImageChops, timeout)
+            if pointer is not None:  # the pointer moved over the view: PulseView repaints
+                _x_input(display, pointer, keys)
+                image = _settled(grab, ImageChops, timeout)
         finally:
             viewer.terminate()
             try:
@@ -117,6 +139,62 @@ def screenshot(
         text = log.read_text(errors="replace")
     box = image.getbbox()  # the window: the rest of the screen is black
     return (image.crop(box) if box else image), text
+
+
+def _x_input(display: str, pointer: tuple[int, int], keys: str) -> None:
+    """Move the X pointer of ``display`` to ``pointer`` and type ``keys`` there (the XTEST
+    extension, as a user's mouse and keyboard would: with no window manager, the keyboard
+    goes to the window under the pointer)."""
+    import ctypes
+
+    x11, xtst = ctypes.CDLL("libX11.so.6"), ctypes.CDLL("libXtst.so.6")
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    x11.XFlush.argtypes = x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XSync.argtypes = [ctypes.c_void_p, ctypes.c_int]
+    x11.XDefaultRootWindow.restype = ctypes.c_ulong
+    x11.XDefaultRootWindow.argtypes = [ctypes.c_void_p]
+    x11.XSetInputFocus.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_ulong]
+    ulong_p, int_p = ctypes.POINTER(ctypes.c_ulong), ctypes.POINTER(ctypes.c_int)
+    x11.XQueryPointer.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ulong_p, ulong_p, int_p, int_p,
+                                  int_p, int_p, ctypes.POINTER(ctypes.c_uint)]  # fmt: skip
+    x11.XStringToKeysym.restype = ctypes.c_ulong
+    x11.XStringToKeysym.argtypes = [ctypes.c_char_p]
+    x11.XKeysymToKeycode.restype = ctypes.c_ubyte
+    x11.XKeysymToKeycode.argtypes = [ctypes.c_void_p, ctypes.c_ulong]
+    xtst.XTestFakeMotionEvent.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                                          ctypes.c_int, ctypes.c_ulong]  # fmt: skip
+    xtst.XTestFakeKeyEvent.argtypes = [ctypes.c_void_p, ctypes.c_uint, ctypes.c_int,
+                                       ctypes.c_ulong]  # fmt: skip
+    handle = x11.XOpenDisplay(display.encode())
+    if not handle:
+        raise RuntimeError(f"cannot open X display {display}")
+    try:
+        xtst.XTestFakeMotionEvent(handle, -1, *pointer, 0)
+        x11.XSync(handle, 0)
+        time.sleep(0.5)
+        if keys:  # the keyboard to the window under the pointer (Qt takes keys once focused)
+            root, child, coord, mask = (
+                ctypes.c_ulong(),
+                ctypes.c_ulong(),
+                ctypes.c_int(),
+                ctypes.c_uint(),
+            )
+            x11.XQueryPointer(handle, x11.XDefaultRootWindow(handle), ctypes.byref(root),
+                              ctypes.byref(child), *(ctypes.byref(coord) for _ in range(4)),
+                              ctypes.byref(mask))  # fmt: skip
+            if child.value:
+                x11.XSetInputFocus(handle, child, 2, 0)  # RevertToParent, CurrentTime
+                x11.XSync(handle, 0)
+                time.sleep(0.5)
+        for key in keys:
+            code = x11.XKeysymToKeycode(handle, x11.XStringToKeysym(key.encode()))
+            xtst.XTestFakeKeyEvent(handle, code, 1, 0)
+            xtst.XTestFakeKeyEvent(handle, code, 0, 0)
+        xtst.XTestFakeMotionEvent(handle, -1, 0, 0, 50)  # away: no hover marker in the picture
+        x11.XFlush(handle)
+    finally:
+        x11.XCloseDisplay(handle)
 
 
 def _settled(grab, chops, timeout: float):  # type: ignore[no-untyped-def]
@@ -176,15 +254,13 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         install(work / "decoders")
-        cap = open_capture(str(GOLDEN))
-        tick = cap.timebase.tick_ns
-        window = (int(WINDOW_NS[0] / tick), int(WINDOW_NS[1] / tick))
-        sr = sampled_sr(cap, work / "g202-reversal.sr", 1_000_000, window)
+        sr = readme_trace(work)
         pvs = work / "g202.pvs"
         check = [sys.executable, "-m", "wavecheck", "check", str(sr), "--drive", "gecko-g202",
-                 "--map", "step=step,dir=dir", "--pulseview", str(pvs)]  # fmt: skip
+                 "--pulseview", str(pvs)]  # fmt: skip
         subprocess.run(check, check=False, capture_output=True)
-        image, _ = screenshot(sr, pvs, work / "decoders")
+        # the pointer over the view (a repaint: the summary at the end of the input), zoom to fit
+        image, _ = screenshot(sr, pvs, work / "decoders", pointer=(700, 600), keys="f")
     rows = annotation_rows(image)
     if rows:  # down to the last annotation row, not the empty rest of the window
         image = image.crop((0, 0, image.width, min(image.height, rows[-1][1] + 40)))  # type: ignore[attr-defined]

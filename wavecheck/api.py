@@ -30,7 +30,7 @@ from wavecheck.engine import (
     check_source,
 )
 from wavecheck.errors import RequirementError, UsageError
-from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 from wavecheck.verdict import require_list
 
@@ -88,7 +88,7 @@ def _stepgen(
 ) -> LinuxCNCConfig | None:
     if ini is None and hal is None:
         return None
-    from wavecheck.linuxcnc.config import read_config
+    from wavecheck.linuxcnc.stepgen_config import read_config
 
     hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
     return read_config(ini, hals, channel)

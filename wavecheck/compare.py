@@ -49,6 +49,7 @@ from wavecheck.engine import (
     check_capture,
 )
 from wavecheck.errors import UsageError
+from wavecheck.units import format_ns
 from wavecheck.verdict import overall_verdict
 
 __all__ = [
@@ -158,6 +159,29 @@ class Comparison:
             f"{d.rule} fails where the golden {d.golden_verdict or 'does not evaluate it'}"
             for d in self.rules
             if d.change == "worse" and d.capture_verdict == "fail"
+        ]
+        return out
+
+    def said(self) -> list[str]:
+        """What was compared and found, in words, for the verdict line: the failures; else that
+        the capture matches the golden trace (steps and times, no rule worse), and the rules
+        both fail (a golden that fails is matched by a capture that fails as it does), and any
+        rule indeterminate where the golden passes."""
+        failures = self.failures()
+        if failures:
+            return failures
+        tol = format_ns(self.tolerance_ns)
+        out = [
+            f"matches the golden trace: {self.capture.steps.count} steps, times within ±{tol}, "
+            "no rule worse"
+        ]
+        both = [d.rule for d in self.rules if d.golden_verdict == d.capture_verdict == "fail"]
+        if both:
+            out.append(f"both fail {', '.join(both)}: the capture fails as its golden does")
+        out += [
+            f"{d.rule} {d.capture_verdict} where the golden {d.golden_verdict or 'does not evaluate it'}"
+            for d in self.rules
+            if d.change == "worse"
         ]
         return out
 
@@ -289,6 +313,17 @@ class MachineComparison:
     def verdict(self) -> str:
         """The worst verdict of the axes."""
         return overall_verdict(c.verdict for c in self.axes)
+
+    def said(self) -> list[str]:
+        """:meth:`Comparison.said` of each axis, prefixed ``axis NAME:`` when there are named
+        axes (their failures only, when any axis fails)."""
+        if not self.several:
+            return self.axes[0].said()
+        if self.failures():
+            return self.failures()
+        return ["each axis matches its golden trace"] + [
+            f"axis {c.capture.axis}: {s}" for c in self.axes for s in c.said()[1:]
+        ]
 
     def failures(self) -> list[str]:
         """Each failing line, prefixed ``axis NAME:`` when there are named axes."""

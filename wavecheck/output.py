@@ -20,12 +20,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import io
 import os
 import stat
 import sys
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, BinaryIO, NamedTuple, cast
 
 from wavecheck.errors import UsageError
 
@@ -38,9 +39,12 @@ __all__ = [
     "check_outputs",
     "figure_file",
     "figure_format",
+    "gtkw_file",
+    "open_stream",
     "output_file",
     "protect_inputs",
     "resolve_output",
+    "same_file",
 ]
 
 #: the inputs of the running command: (what it is, path, st_dev, st_ino) of each regular file.
@@ -107,8 +111,24 @@ def figure_file(text: str) -> str:
     return text
 
 
+#: Extensions GTKWave opens as a dump, never as a save file (``gtkwave FILE.vcd``).
+_DUMP_EXTENSIONS = (".vcd", ".fst", ".ghw", ".lxt", ".lxt2", ".vzt", ".evcd")
+
+
+def gtkw_file(text: str) -> str:
+    """argparse ``type=`` of ``--gtkw``: an output (:func:`output_file`) not named like a dump,
+    which GTKWave would open as one (and whose companion VCD would take its name)."""
+    suffix = Path(text).suffix.lower()
+    if suffix in _DUMP_EXTENSIONS:
+        raise argparse.ArgumentTypeError(
+            f"{text}: GTKWave opens a {suffix} file as a dump, not as a save file; name it "
+            f"{Path(text).with_suffix('.gtkw').name} (its VCD, when one is written, goes beside it)"
+        )
+    return text
+
+
 #: The ``type=`` of every output option (:func:`wavecheck.cli._main` checks them all).
-OUTPUT_TYPES = (output_file, figure_file)
+OUTPUT_TYPES = (output_file, figure_file, gtkw_file)
 
 
 def _fd_link(link: Path) -> int | None:
@@ -269,8 +289,10 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
 
     For a regular or new file it is a temporary file in the target's folder, renamed onto the
     target on success and removed on any exception, so a failure never leaves half an output.
-    For a device, FIFO or descriptor it is the target itself, written in place (a descriptor
-    is reopened; :func:`atomic_write` writes through the descriptor instead, at its offset).
+    For a device or FIFO it is the target itself, written in place. For a descriptor of this
+    process (``/dev/stdout``) it is a temporary file whose bytes are then written through the
+    descriptor, at its offset: reopening ``/dev/stdout`` by its name would start at offset 0 of
+    the file the shell redirected it to, over what the report wrote there.
 
     Raises:
         UsageError: the target is refused (a directory, an input, a missing folder …).
@@ -282,10 +304,19 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
             _check_folder(t.path.parent, probe=False)
     except _Refused as why:
         raise UsageError(f"{text}: {why}") from None
-    if t.in_place:
+    if t.in_place and t.fd is None:
         yield t.path
         return
     import tempfile  # here, not at start-up: most commands write nothing
+
+    if t.fd is not None:  # a descriptor: written whole, at its offset, after what it carries
+        with tempfile.TemporaryDirectory(prefix="wavecheck-out-") as folder:
+            staged = Path(folder) / t.path.name
+            yield staged
+            with open(staged, "rb") as f:
+                while block := f.read(1 << 20):
+                    _write_fd(t.fd, block)
+        return
 
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{t.path.name}.", suffix=".tmp", dir=t.path.parent)
@@ -309,6 +340,62 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
         raise
+
+
+class _Stream(io.RawIOBase):
+    """An output written as it comes, never seeked: a descriptor of this process written at
+    its offset, or a device or FIFO. Told unseekable, :mod:`zipfile` streams through it (data
+    descriptors) instead of seeking back, which ``/dev/null`` (whose position is always 0) and a
+    shared descriptor cannot take."""
+
+    def __init__(self, fd: int) -> None:
+        super().__init__()
+        self.fd = fd
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, data: Any) -> int:
+        _write_fd(self.fd, bytes(data))
+        return len(data)
+
+    def close(self) -> None:
+        if not self.closed:
+            os.close(self.fd)
+        super().close()
+
+
+def open_stream(target: str | os.PathLike[str]) -> BinaryIO:
+    """An in-place output (:func:`resolve_output`: a device, FIFO or descriptor) opened to be
+    written as it comes and never seeked; a descriptor (``/dev/stdout``) is written at its own
+    offset, after what was written to it before.
+
+    Raises:
+        UsageError: the target is refused, is a regular file, or cannot be opened.
+    """
+    t = resolve_output(target)
+    if not t.in_place:
+        raise UsageError(f"{os.fspath(target)}: a file, not a stream (write it whole)")
+    try:
+        fd = os.dup(t.fd) if t.fd is not None else os.open(t.path, os.O_WRONLY)
+    except OSError as err:
+        raise UsageError(f"{os.fspath(target)}: cannot open ({err.strerror or err})") from None
+    return cast(BinaryIO, _Stream(fd))
+
+
+def same_file(a: str | os.PathLike[str] | int, b: str | os.PathLike[str] | int) -> bool:
+    """True when ``a`` and ``b`` (paths or descriptors: ``/dev/stdout`` and 1) lead to one
+    regular file (a device such as ``/dev/null``, a pipe or a terminal is no one file)."""
+
+    def key(x: str | os.PathLike[str] | int) -> tuple[int, int] | None:
+        try:
+            st = os.fstat(x) if isinstance(x, int) else os.stat(x)
+        except (OSError, ValueError):
+            return None
+        return (st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+
+    ka = key(a)
+    return ka is not None and ka == key(b)
 
 
 def _utf8(data: str | bytes) -> bytes:

@@ -91,6 +91,9 @@ class Rule:
     """What the engine must keep from one window for the next so that an interval begun there
     is measured whole (:mod:`wavecheck.engine.axis`): ``edges`` the last edge of each signal,
     ``step`` the last step, ``unstepped_dir`` every DIR change while no step came yet."""
+    ends_by_level: bool = False
+    """Where its intervals start depends on the pulse level (an up/down pulse's end): not
+    stated nor seen, both levels are read (:mod:`wavecheck.engine.axis`)."""
     plan: bool = False
     """A figure a stepgen plan needs (``stepgen plan``: steplen, stepspace, dirsetup, dirhold
     are chosen from it; ``wavecheck drives`` marks a drive without it as not plannable)."""
@@ -197,6 +200,7 @@ RULES: tuple[Rule, ...] = (
         roles=("up", "down"),
         listed_by_end=True,
         holds=("edges", "step"),
+        ends_by_level=True,
     ),
     Rule(
         "state_hold",

@@ -1,7 +1,7 @@
 """``stepgen simulate --ini/--hal``: fill the simulate options from LinuxCNC's own files.
 
-The stepgen settings (:func:`~wavecheck.linuxcnc.config.read_config`) and, with ``--pid``,
-the joint's pid and following-error limits (:func:`~wavecheck.linuxcnc.config.read_pid_config`:
+The stepgen settings (:func:`~wavecheck.linuxcnc.stepgen_config.read_config`) and, with ``--pid``,
+the joint's pid and following-error limits (:func:`~wavecheck.linuxcnc.stepgen_config.read_pid_config`:
 ``setp pid.N.Pgain …``, ``[JOINT_n] P, I, D, FF0, FF1, FF2, BIAS, DEADBAND, MAX_OUTPUT, FERROR,
 MIN_FERROR, MAX_VELOCITY``; ``MAX_VELOCITY``/``MAX_ACCELERATION`` also as ``--move``'s limits)
 fill every option not given on the command line.
@@ -16,8 +16,8 @@ from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import ConfigError
 
 if TYPE_CHECKING:  # the readers are imported only when files are given
-    from wavecheck.linuxcnc.config import LinuxCNCConfig
     from wavecheck.linuxcnc.pid_settings import PidConfig
+    from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 
 __all__ = ["add_simulate_arguments", "apply_to_simulate_args"]
 
@@ -64,7 +64,7 @@ def apply_to_simulate_args(args: Any) -> LinuxCNCConfig | None:
     args._linuxcnc_ignored = []
     if not getattr(args, "ini", None) and not getattr(args, "hal", None):
         return None
-    from wavecheck.linuxcnc.config import TIMING_PARAMS, read_config
+    from wavecheck.linuxcnc.stepgen_config import TIMING_PARAMS, read_config
 
     cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
     defaults: dict[str, Any] = getattr(args, "_linuxcnc_defaults", {})

@@ -33,7 +33,7 @@ from typing import Any
 from stepgen.latencyfiles import CAPTURE_SUFFIXES, read_latency_file
 from stepgen.plan import plan
 from stepgen.plan_render import render_hal, render_ini, render_json, render_text
-from wavecheck.cli.config import add_limit_arguments
+from wavecheck.cli._tuning_args import add_limit_arguments
 from wavecheck.errors import ConfigError, UsageError, WavecheckError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.units import BASE_PERIOD, LATENCY, Plausible, is_number, option_ns, shorten
@@ -123,44 +123,27 @@ def parse_time_arg(
 def read_capture_latency(path: str | Path) -> tuple[int, str]:
     """The worst base-thread lateness (ns, rounded up) of a capture's step pins plus one sample
     period (every edge, lateness 0 included, is seen up to a sample late), and where it came
-    from (:mod:`wavecheck.lattice`; the larger reading when the capture cannot tell two apart).
+    from (:mod:`wavecheck.lattice`).
 
     Raises:
-        ConfigError: the lateness is not established: the edges are not on a periodic lattice,
-            or they show lateness of a period or more (only a lower bound).
+        ConfigError: the lateness is not established
+            (:attr:`wavecheck.lattice.LatencyReport.unestablished` says why).
     """
     from wavecheck.cli.latency import latency_of
-    from wavecheck.lattice import ESTABLISH_EDGES
 
     report = latency_of(str(path))
     worst = report.max_lateness_bound_ns
-    if not report.lattice or worst is None:
-        raise ConfigError(f"{path}: no latency to plan from: {report.reason}")
-    if len(report.lateness_num) < ESTABLISH_EDGES:
+    if not report.established or worst is None:
         raise ConfigError(
-            f"{path}: no latency to plan from: only {len(report.lateness_num)} edge times (at "
-            f"least {ESTABLISH_EDGES} are needed to establish a worst lateness); give --latency"
-        )
-    if report.catch_up is not None:
-        raise ConfigError(
-            f"{path}: no latency to plan from: invocations a period or more late (at least "
-            f"{float(report.catch_up.at_least_ns):g} ns, first at "
-            f"{float(report.catch_up.first_ns) * 1e-9:.6g} s): only a lower bound is seen; "
-            "give --latency from latency-test"
+            f"{path}: no latency to plan from: {report.unestablished or report.reason}; give "
+            "--latency (from latency-test or cyclictest)"
         )
     ns = -(-worst.numerator // worst.denominator)
     assert report.max_lateness_ns is not None
-    how = (
-        ""
-        if not report.candidates
-        else (
-            f"; the larger of {len(report.candidates) + 1} readings the capture cannot tell apart"
-        )
-    )
     return ns, (
         f"{path}: worst lateness of the base thread on the step pins, "
         f"{float(report.max_lateness_ns):g} ns + one sample ({float(report.resolution_ns):g} ns), "
-        f"P = {float(report.period_ns or 0):g} ns inferred from the capture{how}"
+        f"P = {float(report.period_ns or 0):g} ns inferred from the capture"
     )
 
 

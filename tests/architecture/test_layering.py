@@ -116,7 +116,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("step times", ("wavecheck.lattice",)),
     ("engine", ("wavecheck.engine",)),
     ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",
-                            "wavecheck.crosscheck", "wavecheck.firmware")),
+                            "wavecheck.crosscheck", "wavecheck.firmware", "wavecheck.mcu")),
     ("report", ("wavecheck.report",)),
     ("entry points", ("wavecheck.api", "wavecheck.live", "wavecheck.cocotb",
                       "wavecheck.pytest_plugin", "wavecheck.sigrok", "wavecheck")),

@@ -16,8 +16,8 @@ import pytest
 from stepgen.cli import main
 from tests.stepgen.pncconf_pid import HAL, INI, line_of, write_pair
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.config import read_config
 from wavecheck.linuxcnc.pid_settings import read_pid_config
+from wavecheck.linuxcnc.stepgen_config import read_config
 
 FW = Path("/work/shared/firmware/linuxcnc")
 

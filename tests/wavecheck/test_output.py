@@ -199,3 +199,35 @@ def test_check_outputs_refuses_inputs_and_duplicates(tmp_path: Path) -> None:
     check_outputs({"-o": "/dev/null", "--html": "/dev/null"})  # devices may repeat
     check_outputs({"-o": str(tmp_path / "new.txt")}, {"--drive": [str(rule)]})
     assert output_file("x.png") == "x.png"  # the argparse marker passes values through
+
+
+def test_steps_csv_to_dev_stdout_keeps_the_report_beside_it(tmp_path: Path) -> None:
+    """Issue 34: ``--steps-csv /dev/stdout > s.txt`` reopened /dev/stdout at offset 0 and the
+    report then wrote over the CSV. Both now go through the one open stream, whole."""
+    import subprocess
+    import sys
+
+    vcd = Path(__file__).resolve().parents[2] / "captures" / "golden" / "stepgen0.vcd"
+    alone = tmp_path / "alone.csv"
+    out = tmp_path / "s.txt"
+    args = [sys.executable, "-m", "wavecheck", "check", str(vcd), "--drive", "gecko-g202"]
+    subprocess.run([*args, "--steps-csv", str(alone)], check=True, capture_output=True)
+    with open(out, "wb") as f:
+        subprocess.run([*args, "--steps-csv", "/dev/stdout"], stdout=f, check=True)
+    text = out.read_text()
+    csv = alone.read_text()
+    assert len(csv.splitlines()) > 1000
+    assert text.startswith(csv)  # the CSV whole, then the report after it
+    assert text[len(csv) :].startswith("verdict: PASS")
+    # appended to what the file held (>>), as a shell redirection means
+    with open(out, "ab") as f:
+        subprocess.run([*args, "--steps-csv", "/dev/stdout", "-q"], stdout=f, check=True)
+    assert out.read_text().startswith(text + csv)
+
+
+def test_output_dash_is_refused_before_any_work(tmp_path: Path) -> None:
+    from wavecheck.cli import main
+
+    vcd = Path(__file__).resolve().parents[2] / "captures" / "golden" / "stepgen0.vcd"
+    assert main(["check", str(vcd), "--drive", "gecko-g202", "-o", "-"]) == 2
+    assert main(["check", str(vcd), "--drive", "gecko-g202", "--steps-csv", "-"]) == 2

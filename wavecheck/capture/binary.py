@@ -25,9 +25,9 @@ from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
+from wavecheck.capture.common import resolution_of
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, EdgeFinder
-from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase

@@ -165,8 +165,9 @@ class Capture:
         default=None, repr=False, compare=False
     )
     """How :meth:`bit` makes a vector's bit a channel (``(full name, vector, declared index)`` →
-    the new channel, numbered after the others); None: read the file again (pywellen). A block
-    reader sets its own, so the bit's edges come with its blocks."""
+    the new channel, numbered after the others). A block reader sets its own, so the bit's edges
+    come with its blocks; :mod:`wavecheck.capture.open` gives a capture read whole that names a
+    :attr:`bit_source` one that reads that file again (pywellen); None: bits cannot be mapped."""
 
     def bit(self, ref: str, bit: int) -> Channel:
         """Bit ``bit`` (an index of the declared range, ``stout[3]``) of the vector ``ref`` as a
@@ -203,12 +204,12 @@ class Capture:
         for ch in self.channels:
             if ch.name == full:
                 return ch
-        if self.bit_reader is not None:
-            ch = self.bit_reader(hits[0], vec, bit)
-        else:
-            from wavecheck.capture.wellen import load_bit
-
-            ch = load_bit(self, hits[0], vec, bit)
+        if self.bit_reader is None:
+            raise UsageError(
+                f"{self.path}: a bit of a vector ({full}) can be mapped only from a file opened "
+                "with wavecheck.capture.open (the vector's changes are read again)"
+            )
+        ch = self.bit_reader(hits[0], vec, bit)
         self.channels.append(ch)
         return ch
 

@@ -1,14 +1,15 @@
 """Open any capture: pick the reader from ``--input-format``, the file's content, or its extension.
 
-``.sr``, VCD, FST and GHW (:mod:`wavecheck.capture.wellen`), raw binary samples
-(:mod:`wavecheck.capture.binary`, sigrok-cli's ``-O binary``) and Saleae Logic 2 exports are read
-natively; every other format sigrok-cli knows (csv, chronovu-la8, logicport, …) is converted by
-sigrok-cli to a temporary ``.sr`` first.
+The formats are the records of :data:`wavecheck.capture.formats.FORMATS` (name, magic bytes,
+extensions, ``read``, ``blocks``); this module only walks them, for a file, a folder, standard
+input or a pipe (a format that cannot read a stream is spooled to a temporary file first), and
+gives a capture read whole the reader of its vectors' bits (:func:`_wired`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import os
 import shutil
@@ -16,13 +17,22 @@ import stat
 import sys
 import tempfile
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
 
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.saleae import HEADER as SALEAE_CSV_HEADER
+from wavecheck.capture.formats import (
+    ZIP_MAGIC,
+    Format,
+    Request,
+    by_content,
+    by_extension,
+    by_folder,
+    by_name,
+    named_formats,
+)
 from wavecheck.errors import CaptureError, UsageError
 
 if TYPE_CHECKING:
@@ -32,29 +42,11 @@ __all__ = [
     "STDIN",
     "detect_format",
     "format_of",
-    "ghw_timescale",
     "is_stream",
     "open_capture",
     "open_source",
-    "path_argument",
 ]
 
-_ALIASES = {"srzip": "sr", "sigrok": "sr", "saleae": "saleae-csv", "saleae-binary": "saleae-bin"}
-_BY_EXTENSION = {
-    ".sr": "sr",
-    ".vcd": "vcd",
-    ".csv": "csv",
-    ".kdt": "chronovu-la8",
-    ".lpf": "logicport",
-    ".fst": "fst",
-    ".ghw": "ghw",
-}
-_ZIP_MAGIC = b"PK\x03\x04"
-_GHW_MAGIC = b"GHDLwave\n"
-#: Saleae Logic 2's binary export (wavecheck.capture.saleae_binary.MAGIC; not imported: numpy).
-_SALEAE_MAGIC = b"<SALEAE>"
-#: An FST file starts with its header block: type 0 and the block's length, 329, big-endian.
-_FST_MAGIC = b"\x00" + (329).to_bytes(8, "big")
 _SNIFF_BYTES = 4096
 #: The capture path that means standard input.
 STDIN = "-"
@@ -71,17 +63,28 @@ def detect_format(path: str | os.PathLike[str]) -> str:
     if not p.exists():
         raise CaptureError(path, None, "no such file")
     if p.is_dir():
-        from wavecheck.capture.saleae_binary import holds_export
-
-        if holds_export(p):
-            return "saleae-bin"
+        if (held := by_folder(p)) is not None:
+            return held.name
         raise CaptureError(path, None, "is a folder, not a capture file")
     try:
         with open(p, "rb") as f:
             head = f.read(_SNIFF_BYTES)
     except OSError as err:
         raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
+    if head.startswith(ZIP_MAGIC):
+        head += _zip_names(p)  # a member named beyond the first bytes (the central directory)
     return format_of(path, head, p.suffix.lower())
+
+
+def _zip_names(path: Path) -> bytes:
+    """The member names of a zip file, one a line (nothing when it cannot be read as a zip)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            return "\n".join(zf.namelist()[:1000]).encode("utf-8", "replace")
+    except (OSError, zipfile.BadZipFile, ValueError, NotImplementedError, EOFError, KeyError):
+        return b""  # the .sr reader says what is wrong with the zip
 
 
 def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
@@ -92,28 +95,20 @@ def format_of(path: str | os.PathLike[str], head: bytes, ext: str) -> str:
     """
     if not head.strip():
         raise CaptureError(path, None, "the file is empty")
-    if head.startswith(_ZIP_MAGIC):
-        return "sr"
-    if head.removeprefix(b"\xef\xbb\xbf").startswith(SALEAE_CSV_HEADER):
-        return "saleae-csv"
-    if head.startswith(_SALEAE_MAGIC):
-        return "saleae-bin"
-    if head.startswith(_GHW_MAGIC):
-        return "ghw"
-    if head.startswith(_FST_MAGIC):
-        return "fst"
-    if head.lstrip().startswith(b"$"):
-        return "vcd"
-    if ext in ("", ".sr", ".vcd") or ext not in _BY_EXTENSION:
-        kind = {".sr": "a sigrok .sr (zip) file", ".vcd": "a VCD file"}.get(ext)
-        what = f"is not {kind}" if kind else "has a format that cannot be told from its content"
+    told = by_content(head)
+    if told is not None:
+        return told.name
+    known = by_extension(ext)
+    if known is None or not known.by_extension:
+        what = (
+            f"is not {known.what}" if known else "has a format that cannot be told from its content"
+        )
         raise CaptureError(
             path,
             None,
-            f"{what} (give --input-format: sr, vcd, fst, ghw, saleae-csv, saleae-bin, "
-            "binary:numchannels=N, or a sigrok-cli format such as csv, chronovu-la8, logicport)",
+            f"{what} (give --input-format: {named_formats()})",
         )
-    return _BY_EXTENSION[ext]
+    return known.name
 
 
 def is_stream(path: str | os.PathLike[str]) -> bool:
@@ -188,8 +183,8 @@ class _Sniffed:
     """A stream whose first bytes told its format: ``stream`` gives them again, then the rest."""
 
     name: str
-    fmt: str
-    kind: str
+    spec: str
+    fmt: Format
     stream: BinaryIO
     raw: BinaryIO
 
@@ -211,70 +206,44 @@ def _sniff_stream(path: str | os.PathLike[str], input_format: str | None) -> _Sn
     try:
         head = _read_head(f, _SNIFF_BYTES)
         if input_format:
-            fmt = input_format.strip()
+            spec = input_format.strip()
+            fmt = by_name(spec)
             if not head.strip():
                 raise CaptureError(name, None, "the input is empty")
         else:
-            fmt = format_of(name, head, "")
+            spec = format_of(name, head, "")
+            fmt = by_name(spec)
     except BaseException:
         if f is not sys.stdin.buffer:
             f.close()
         raise
-    kind = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
     stream = io.BufferedReader(_Prefixed(head, f), buffer_size=1 << 20)
-    return _Sniffed(name, fmt, kind, stream, f)
+    return _Sniffed(name, spec, fmt, stream, f)
 
 
-def _read_stream(
-    sniffed: _Sniffed,
-    *,
-    samplerate: Fraction | None,
-    resolution_s: Fraction | None,
-    require_time: bool,
-    channel_names: Sequence[str] | None,
-) -> Capture:
+def _read_stream(sniffed: _Sniffed, request: Request) -> Capture:
     """Read a capture from standard input or a pipe (its format told: :func:`_sniff_stream`).
 
-    A VCD and raw binary samples are read from the stream itself (raw samples one chunk at a
-    time); a ``.sr`` (a zip, which needs seeking) or a sigrok-cli format is copied to a
-    temporary file first. Messages name the stream (``-`` is named ``<stdin>``).
+    A format that reads a stream (VCD, raw binary samples) reads it itself; any other (a
+    ``.sr``, a zip, needs seeking) is copied to a temporary file first. Messages name the stream
+    (``-`` is named ``<stdin>``).
     """
-    name, fmt, kind, stream = sniffed.name, sniffed.fmt, sniffed.kind, sniffed.stream
+    name, fmt = sniffed.name, sniffed.fmt
     try:
-        if kind == "vcd" and ":" not in fmt:
-            from wavecheck.capture.vcd import read_vcd
-
-            return read_vcd(name, samplerate=samplerate, resolution_s=resolution_s, source=stream)
-        if kind == "binary":
-            from wavecheck.capture.binary import read_binary
-
-            return read_binary(
-                stream,
-                fmt,
-                name=name,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                channel_names=channel_names,
-                require_time=require_time,
-            )
-        suffix = ".sr" if kind == "sr" else f".{kind}"
+        if fmt.streams:
+            return _wired(fmt.read(replace(request, path=name, stream=sniffed.stream)))
+        suffix = (*fmt.extensions, "." + sniffed.spec.partition(":")[0].strip().lower())[0]
         with tempfile.TemporaryDirectory(prefix="wavecheck-stdin-") as tmp:
             spool = Path(tmp) / f"input{suffix}"
             with open(spool, "wb") as out:
-                shutil.copyfileobj(stream, out, 1 << 20)
+                shutil.copyfileobj(sniffed.stream, out, 1 << 20)
             try:
-                cap = open_capture(
-                    spool,
-                    samplerate=samplerate,
-                    resolution_s=resolution_s,
-                    input_format=fmt,
-                    require_time=require_time,
-                )
+                cap = fmt.read(replace(request, path=spool))
             except CaptureError as err:
                 raise CaptureError(name, err.where, err.msg) from None
         cap.path = name
         cap.bit_source = None  # the spooled copy is gone
-        return cap
+        return _wired(cap)
     finally:
         sniffed.close()
 
@@ -285,6 +254,28 @@ def _check_given(samplerate: Fraction | None, resolution_s: Fraction | None) -> 
         raise UsageError(f"--samplerate must be positive, got {samplerate} Hz")
     if resolution_s is not None and resolution_s < 0:
         raise UsageError(f"--resolution must not be negative, got {resolution_s} s")
+
+
+def _wired(cap: Capture) -> Capture:
+    """``cap`` with a reader of its vectors' bits: the file read again with pywellen, when the
+    capture names one and its reader set none (:meth:`Capture.bit`)."""
+    if cap.bit_reader is None and cap.bit_source is not None and cap.vectors:
+        from wavecheck.capture.wellen import load_bit
+
+        cap.bit_reader = functools.partial(load_bit, cap)
+    return cap
+
+
+def _file_request(
+    path: str | os.PathLike[str], input_format: str | None, **values: Any
+) -> tuple[Format, Request]:
+    """The format of the capture file ``path`` (``input_format``, else told by its content and
+    extension) and the read to make."""
+    spec = input_format.strip() if input_format else detect_format(path)
+    fmt = by_name(spec)
+    if input_format and not (fmt.folder is not None and Path(path).is_dir()):
+        detect_path_exists(path)
+    return fmt, Request(path, spec, **values)
 
 
 def open_capture(
@@ -304,8 +295,9 @@ def open_capture(
         samplerate: sample rate in Hz, for files that lack one (a ``.sr`` without it, raw
             binary, csv) or to state a VCD's sampling; overrides the file's value with a note.
         resolution_s: the resolution (sample period) in seconds, overriding the derived one.
-        input_format: ``"sr"``, ``"vcd"``, ``"fst"``, ``"ghw"`` or a sigrok-cli input format (may carry options,
-            ``"binary:numchannels=4"``); default: detected from content and extension. A VCD
+        input_format: a name of :data:`wavecheck.capture.formats.FORMATS` (``"sr"``,
+            ``"vcd"``, ``"fst"``, ``"ghw"``, …) or a sigrok-cli input format, with its options
+            (``"binary:numchannels=4"``); default: detected from content and extension. A VCD
             with options (``"vcd:downsample=10"``) is read through sigrok-cli, which has them.
         require_time: with False, a file that states no sample rate is read anyway, untimed
             (:attr:`Capture.time_known` False: counts in samples; for ``wavecheck info``).
@@ -316,100 +308,17 @@ def open_capture(
         CaptureError: the file cannot be read (the message names the file and the place).
     """
     _check_given(samplerate, resolution_s)
+    values: dict[str, Any] = {
+        "samplerate": samplerate,
+        "resolution_s": resolution_s,
+        "require_time": require_time,
+        "channel_names": channel_names,
+    }
     if is_stream(path):
-        return _read_stream(
-            _sniff_stream(path, input_format),
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            require_time=require_time,
-            channel_names=channel_names,
-        )
-    fmt = input_format.strip() if input_format else detect_format(path)
-    name = _ALIASES.get(fmt.split(":", 1)[0].lower(), fmt.split(":", 1)[0].lower())
-    if input_format and not (name == "saleae-bin" and Path(path).is_dir()):
-        detect_path_exists(path)
-    options = ":" in fmt
-    if name == "sr" and options:
-        raise UsageError(f"--input-format {fmt!r}: sr takes no options (give --input-format sr)")
-    if name == "sr":
-        from wavecheck.capture.sr import read_sr
-
-        return read_sr(
-            path, samplerate=samplerate, resolution_s=resolution_s, require_rate=require_time
-        )
-    if name == "binary":
-        from wavecheck.capture.binary import read_binary
-
-        return read_binary(
-            path,
-            fmt,
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            channel_names=channel_names,
-            require_time=require_time,
-        )
-    if name == "saleae-bin":
-        from wavecheck.capture.saleae_binary import read_saleae_binary
-
-        return read_saleae_binary(path, samplerate=samplerate, resolution_s=resolution_s)
-    if name == "saleae-csv":
-        from wavecheck.capture.saleae import read_saleae_csv
-
-        return read_saleae_csv(path, samplerate=samplerate, resolution_s=resolution_s)
-    if name in ("fst", "ghw"):
-        if options and name == "fst":
-            raise UsageError(f"--input-format {fmt!r}: fst takes no options")
-        from wavecheck.capture.wellen import read_fst, read_wellen
-
-        if name == "fst":
-            return read_fst(path, samplerate=samplerate, resolution_s=resolution_s)
-        return read_wellen(
-            path,
-            kind="ghw",
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            timescale=ghw_timescale(fmt),
-        )
-    if name == "vcd" and not options:  # with options: sigrok-cli's VCD input (below)
-        from wavecheck.capture.vcd import read_vcd
-
-        return read_vcd(path, samplerate=samplerate, resolution_s=resolution_s)
-    from wavecheck.capture.sigrokcli import read_with_sigrok
-
-    return read_with_sigrok(
-        path, fmt, samplerate=samplerate, resolution_s=resolution_s, require_time=require_time
-    )
-
-
-def ghw_timescale(fmt: str) -> Fraction | None:
-    """The tick of a GHW file from ``--input-format ghw:timescale=1ps`` (None: not given).
-
-    Raises:
-        UsageError: another option, or a timescale that is not a positive time.
-    """
-    from wavecheck.units import parse_option
-
-    _, _, options = fmt.partition(":")
-    value = None
-    for item in filter(None, options.split(":")):
-        key, eq, text = item.partition("=")
-        if key.strip() != "timescale" or not eq:
-            raise UsageError(
-                f"--input-format {fmt!r}: ghw takes one option, timescale=TIME (e.g. "
-                "ghw:timescale=1ps: GHDL's --time-resolution of the run)"
-            )
-        value = parse_option(text.strip(), "--input-format ghw:timescale", "time")
-        if value <= 0:
-            raise UsageError(f"--input-format {fmt!r}: the timescale must be positive")
-    return value
-
-
-def path_argument(path: str | os.PathLike[str]) -> str:
-    """``path`` as an argument of another program (fst2vcd, sigrok-cli): a relative path that
-    starts with ``-`` gets ``./`` so that it is never read as an option (``-fother.fst`` is
-    fst2vcd's ``-f other.fst``)."""
-    text = os.fspath(path)
-    return f"./{text}" if text.startswith("-") else text
+        sniffed = _sniff_stream(path, input_format)
+        return _read_stream(sniffed, Request(sniffed.name, sniffed.spec, **values))
+    fmt, request = _file_request(path, input_format, **values)
+    return _wired(fmt.read(request))
 
 
 def detect_path_exists(path: str | os.PathLike[str]) -> None:
@@ -433,134 +342,43 @@ def open_source(
     channel_names: Sequence[str] | None = None,
     chunk_bytes: int | None = None,
 ) -> BlockSource:
-    """A block source for any capture (as :func:`open_capture` reads it): ``.sr``, VCD and timed
-    raw binary samples, from a file or from standard input or a pipe, and FST through
-    ``fst2vcd``, are read block by block in bounded memory; every other input is read whole
-    first and given as one block
-    (:class:`~wavecheck.capture.blocks.MemorySource`).
+    """A block source for any capture (as :func:`open_capture` reads it): a format with
+    ``blocks`` in :data:`~wavecheck.capture.formats.FORMATS` (``.sr``, VCD, timed raw binary
+    samples, FST through ``fst2vcd``), from a file or, where it reads a stream, from standard
+    input or a pipe, is read block by block in bounded memory; every other input is read whole
+    first and given as one block (:class:`~wavecheck.capture.blocks.MemorySource`).
 
     Raises:
         CaptureError: the file cannot be read (the message names the file and the place).
     """
     _check_given(samplerate, resolution_s)
+    values: dict[str, Any] = {
+        "samplerate": samplerate,
+        "resolution_s": resolution_s,
+        "require_time": require_time,
+        "channel_names": channel_names,
+        "chunk_bytes": chunk_bytes,
+    }
     if is_stream(path):
-        return _stream_source(
-            _sniff_stream(path, input_format),
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            require_time=require_time,
-            channel_names=channel_names,
-            chunk_bytes=chunk_bytes,
-        )
-    fmt = (input_format.strip() if input_format else detect_format(path)).lower()
-    if fmt in ("sr", "srzip", "sigrok"):
-        from wavecheck.capture.sr import DEFAULT_CHUNK_BYTES, SrBlocks
-
-        return SrBlocks(
-            path,
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            chunk_bytes=chunk_bytes or DEFAULT_CHUNK_BYTES,
-        )
-    if fmt == "vcd":
-        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
-        from wavecheck.capture.vcd.reader import VcdBlocks
-
-        return VcdBlocks(
-            path,
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            chunk_bytes=chunk_bytes or VCD_CHUNK,
-        )
-    if fmt == "fst" and (tool := shutil.which("fst2vcd")):
-        from wavecheck.capture.wellen import FstBlocks
-
-        return FstBlocks(
-            path,
-            tool,
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            chunk_bytes=chunk_bytes,
-        )
-    if fmt.split(":", 1)[0] == "binary" and input_format:
-        from wavecheck.capture.binary import binary_blocks
-
-        detect_path_exists(path)
-        raw = binary_blocks(
-            path,
-            input_format.strip(),
-            name=str(path),
-            samplerate=samplerate,
-            resolution_s=resolution_s,
-            channel_names=channel_names,
-            chunk_bytes=chunk_bytes,
-        )
-        if raw is not None:
-            return raw
-    whole = open_capture(
-        path,
-        samplerate=samplerate,
-        resolution_s=resolution_s,
-        input_format=input_format,
-        require_time=require_time,
-        channel_names=channel_names,
-    )
+        sniffed = _sniff_stream(path, input_format)
+        request = Request(sniffed.name, sniffed.spec, **values)
+        if sniffed.fmt.streams and sniffed.fmt.blocks is not None:
+            try:
+                source = sniffed.fmt.blocks(replace(request, stream=sniffed.stream))
+            except BaseException:
+                sniffed.close()
+                raise
+            if source is not None:
+                return source
+        whole = _read_stream(sniffed, request)
+        return _one_block(whole, f"{whole.format} from {sniffed.name}")
+    fmt, request = _file_request(path, input_format, **values)
+    if fmt.blocks is not None:
+        source = fmt.blocks(request)
+        if source is not None:
+            return source
+    whole = _wired(fmt.read(request))
     return _one_block(whole, whole.format)
-
-
-def _stream_source(
-    sniffed: _Sniffed,
-    *,
-    samplerate: Fraction | None,
-    resolution_s: Fraction | None,
-    require_time: bool,
-    channel_names: Sequence[str] | None,
-    chunk_bytes: int | None,
-) -> BlockSource:
-    """The block source of standard input or a pipe: a VCD or timed raw samples read block by
-    block from the stream (never held whole); any other format read whole
-    (:func:`_read_stream`), one block."""
-    if sniffed.kind == "vcd" and ":" not in sniffed.fmt:
-        from wavecheck.capture.vcd.reader import DEFAULT_CHUNK_BYTES as VCD_CHUNK
-        from wavecheck.capture.vcd.reader import VcdBlocks
-
-        try:
-            return VcdBlocks(
-                sniffed.name,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                chunk_bytes=chunk_bytes or VCD_CHUNK,
-                source=sniffed.stream,
-            )
-        except BaseException:
-            sniffed.close()
-            raise
-    if sniffed.kind == "binary":
-        from wavecheck.capture.binary import binary_blocks
-
-        try:
-            raw = binary_blocks(
-                sniffed.stream,
-                sniffed.fmt,
-                name=sniffed.name,
-                samplerate=samplerate,
-                resolution_s=resolution_s,
-                channel_names=channel_names,
-                chunk_bytes=chunk_bytes,
-            )
-        except BaseException:
-            sniffed.close()
-            raise
-        if raw is not None:
-            return raw
-    whole = _read_stream(
-        sniffed,
-        samplerate=samplerate,
-        resolution_s=resolution_s,
-        require_time=require_time,
-        channel_names=channel_names,
-    )
-    return _one_block(whole, f"{whole.format} from {sniffed.name}")
 
 
 def _one_block(whole: Capture, what: str) -> BlockSource:

@@ -33,8 +33,8 @@ from typing import BinaryIO
 import numpy as np
 import numpy.typing as npt
 
+from wavecheck.capture.common import resolution_of
 from wavecheck.capture.edges import NEVER, Capture, Channel
-from wavecheck.capture.vcd.header import resolution_of
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
 from wavecheck.units import check_finite, format_frequency

@@ -18,8 +18,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import BinaryIO
 
+from wavecheck.capture.common import path_argument
 from wavecheck.capture.edges import Capture
-from wavecheck.capture.open import path_argument
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.units import parse_frequency
 

@@ -40,7 +40,7 @@ from wavecheck.capture.srzip import EXACT_SECTION
 from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase
-from wavecheck.units import format_frequency, parse_frequency
+from wavecheck.units import SAMPLE_RATE, format_frequency, format_time, parse_frequency
 
 if TYPE_CHECKING:
     from wavecheck.capture.blocks import EdgeBlock
@@ -586,6 +586,40 @@ def _member_blocks(
         raise zipfile.BadZipFile(f"Bad CRC-32 for file {info.filename!r}")
 
 
+#: Below this a stated sample rate is warned about: no logic analyzer samples that slowly, and
+#: none could resolve a step pulse (the same bound refuses ``--samplerate``: units.SAMPLE_RATE).
+UNLIKELY_RATE_HZ = SAMPLE_RATE.refuse_below or Fraction(1000)
+#: A capture said to last longer than this is warned about (a rate written wrong, most likely).
+UNLIKELY_SECONDS = 24 * 3600
+
+
+def _unlikely_rate(meta: SrMetadata, rate: Fraction) -> list[str]:
+    """A warning when the metadata's rate is one no capture has (5 Hz for a 5 MHz SPI
+    capture): the times would be off by the same factor."""
+    seconds = meta.nsamples / rate
+    if rate >= UNLIKELY_RATE_HZ and seconds <= UNLIKELY_SECONDS:
+        return []
+    why = (
+        f"below {format_frequency(UNLIKELY_RATE_HZ)}, which no logic analyzer samples at"
+        if rate < UNLIKELY_RATE_HZ
+        else "an unlikely length for a logic analyzer's capture"
+    )
+    return [
+        f"warning: the metadata states samplerate={meta.samplerate_text}: {meta.nsamples} "
+        f"samples would last {_length(seconds)} ({why}); every time below is scaled by it. "
+        "If the capture was made at another rate, give it: --samplerate RATE"
+    ]
+
+
+def _length(seconds: Fraction) -> str:
+    """A long duration for people: ``4 days``, ``2.5 h``, else :func:`format_time`."""
+    if seconds >= 2 * 86400:
+        return f"{float(seconds / 86400):.3g} days"
+    if seconds >= 2 * 3600:
+        return f"{float(seconds / 3600):.3g} h"
+    return format_time(seconds)
+
+
 def _rate_notes(
     path: str | os.PathLike[str], meta: SrMetadata, samplerate: Fraction | None, require_rate: bool
 ) -> tuple[Fraction | None, list[str]]:
@@ -606,6 +640,8 @@ def _rate_notes(
                 "given by the user"
             )
         rate = samplerate
+    elif rate is not None:
+        notes += _unlikely_rate(meta, rate)
     if rate is None and require_rate:
         raise CaptureError(
             path,

@@ -32,10 +32,10 @@ from typing import TYPE_CHECKING, Any, BinaryIO, cast
 import numpy as np
 import numpy.typing as npt
 
+from wavecheck.capture.common import path_argument, resolution_of
 from wavecheck.capture.edges import Capture, Channel, Vector
 from wavecheck.capture.ghw import DEFAULT_TIME_UNIT, read_ghw_header
-from wavecheck.capture.open import path_argument
-from wavecheck.capture.vcd.header import SignalEdges, resolution_of
+from wavecheck.capture.vcd.header import SignalEdges
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.errors import CaptureError, UsageError
 from wavecheck.timebase import Timebase

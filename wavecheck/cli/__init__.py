@@ -1,4 +1,4 @@
-"""The ``wavecheck`` command: info, check, measure, drives, compare, crosscheck, latency."""
+"""The ``wavecheck`` command: info, check, measure, drives, compare, crosscheck, latency, simulate."""
 
 from __future__ import annotations
 
@@ -46,6 +46,10 @@ COMMANDS = {
     "watch": Command(
         "wavecheck.cli.watch",
         "check a running machine live, from a logic analyzer through sigrok-cli",
+    ),
+    "simulate": Command(
+        "wavecheck.cli.simulate",
+        "run grbl on a simulated MCU: its own STEP/DIR pins from settings and G-code, checked",
     ),
     "sigrok": Command(
         "wavecheck.cli.sigrok",

@@ -153,7 +153,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
     if isinstance(cached, CheckOptions):
         return cached
     from wavecheck.cli._capture_args import resolution_from_args
-    from wavecheck.cli._reports import latency_ns, stepgen_config
+    from wavecheck.cli._stepgen_args import latency_ns, stepgen_config
     from wavecheck.drives.library import load_drive
 
     drives: dict[str | None, Drive] = {}

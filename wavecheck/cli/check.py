@@ -4,9 +4,9 @@ Exit codes: 0 pass, 1 a rule failed, 3 only indeterminate results (or nothing ch
 rule ``--require`` asks for was not decided (unchecked or indeterminate), 2 unusable input or
 usage (one line, no traceback).
 
-The command is a thin layer: options → :func:`wavecheck.engine.run.check_source` → a renderer. New
-outputs register in :data:`RENDERERS` (``--format``); extra side outputs (plots, HTML, GTKWave
-files) can be added as options handled in :func:`write_outputs`.
+The command is a thin layer: options → :func:`wavecheck.engine.check_source` → a renderer. New
+outputs register in :data:`wavecheck.cli._formats.FORMATS` (``--format``); extra side outputs
+(plots, HTML, GTKWave files) are options handled in :func:`wavecheck.cli._reports.write_outputs`.
 """
 
 from __future__ import annotations
@@ -14,56 +14,35 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from collections.abc import Callable
 from typing import Any
 
 from wavecheck.cli._axis_args import (
     add_axis_arguments,
     add_engine_arguments,
-    check_options,
-    required,
 )
-from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
-from wavecheck.cli._reports import (
-    Checked,
-    add_report_arguments,
-    axis_reports,
-    expand_captures,
-    render_json_report,
-    render_junit_report,
-    render_text_report,
-    run_checks,
-)
+from wavecheck.cli._batch import expand_captures, run_checks
+from wavecheck.cli._capture_args import add_capture_arguments
+from wavecheck.cli._check_flow import build_report
+from wavecheck.cli._firmware_args import add_firmware_arguments
+from wavecheck.cli._formats import FORMATS, Checked
+from wavecheck.cli._reports import add_report_arguments, write_outputs
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
     check_steps_arguments,
     steps_csv_path,
-    steps_writer,
 )
-from wavecheck.cli.config import add_firmware_arguments, add_tuning_arguments, check_firmware
-from wavecheck.engine import MachineReport, check_source, start
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import UsageError
-from wavecheck.output import atomic_write, output_file
+from wavecheck.output import output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 from wavecheck.sigrok.session import add_pulseview_argument, check_pulseview
 
 __all__ = [
-    "RENDERERS",
     "build_report",
-    "finish_report",
     "register",
     "run",
-    "write_outputs",
 ]
-
-#: ``--format`` name → renderer(report, args) → text.
-RENDERERS: dict[str, Callable[[Checked, argparse.Namespace], str]] = {
-    # text/json: the plain renderers, plus the stepgen configuration's rates when --ini/--hal
-    "text": render_text_report,
-    "json": render_json_report,
-    "junit": render_junit_report,
-}
 
 
 def register(sub: Any) -> None:
@@ -94,7 +73,7 @@ def register(sub: Any) -> None:
     add_tuning_arguments(p)
     add_firmware_arguments(p)
     add_capture_arguments(p)
-    p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
+    p.add_argument("--format", choices=sorted(FORMATS), default="text", help="report format")
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
@@ -111,65 +90,6 @@ def register(sub: Any) -> None:
     add_steps_arguments(p)
     add_engine_arguments(p)
     p.set_defaults(func=run)
-
-
-def finish_report(args: argparse.Namespace, machine: MachineReport) -> Checked:
-    """Add ``--firmware`` findings; a single unnamed axis as its Report."""
-    for report in machine.axes:
-        if getattr(args, "firmware", None):  # the capture against its own firmware settings
-            report.firmware = check_firmware(args, report)
-    if len(machine.axes) == 1 and machine.axes[0].axis is None:
-        return machine.axes[0]
-    return machine
-
-
-def build_report(args: argparse.Namespace, path: str, steps_csv: str | None = None) -> Checked:
-    """Read ``path`` once and check every axis of ``args`` against its drive (and write the
-    steps to ``steps_csv`` as they are decoded)."""
-    if args.max_violations is not None and args.max_violations < 0:
-        raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
-    options = check_options(args)
-    source = source_from_args(args, path)
-    if steps_csv is None:
-        return finish_report(args, check_source(source, options))
-    writer, sinks = steps_writer(args, steps_csv, source)
-    try:
-        machine, blocks = start(source, options, step_sinks=sinks)
-        for block in blocks:
-            machine.feed(block)
-            writer.settled(machine.settled(block.end))
-        checked = finish_report(args, machine.finish(source.capture()))
-    except BaseException:
-        writer.abort()
-        raise
-    writer.close()
-    return checked
-
-
-def write_outputs(args: argparse.Namespace, report: Checked) -> None:
-    """Render ``report`` in ``--format`` to ``-o`` FILE (a one-line summary on stdout) or stdout."""
-    if getattr(args, "pulseview", None):  # issue 28: the decoder stacked in a PulseView session
-        from wavecheck.sigrok.session import write_pulseview
-
-        for line in write_pulseview(args, axis_reports(report)):
-            print(line, file=sys.stderr)
-    text = RENDERERS[args.format](report, args)
-    if args.output:
-        from wavecheck.report.claims import requirement_line, verdict_line
-
-        atomic_write(args.output, text)
-        if getattr(args, "quiet", False):  # -q: the report file only
-            return
-        steps = sum(r.steps.count for r in axis_reports(report))
-        print(
-            f"{verdict_line(report)}: {report.total_violations} violation(s), {steps} steps; "
-            f"report written to {args.output}"
-        )
-        missing = requirement_line(report, required(args))
-        if missing:
-            print(missing)
-    else:
-        sys.stdout.write(text)
 
 
 class _Refusing(argparse.ArgumentParser):

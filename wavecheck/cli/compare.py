@@ -8,7 +8,8 @@ Several axes: ``--map x.step=5,x.dir=6 --map y.step=3,y.dir=4`` for the capture 
 each capture axis is compared with the golden axis of the same name, ``--drive x=ID`` gives one
 axis its own drive and ``--invert x.step`` inverts one axis's role, as in ``check``. The text has
 a section per axis; the JSON is ``{"capture", "golden", "axes": [{"name", …one comparison…}],
-"failures", "verdict"}``. One unnamed axis keeps the output above exactly.
+"failures", "said", "verdict"}`` (``said``: the verdict line's words, what was compared and
+found: the failures, or "matches the golden trace …" and the rules both fail). One unnamed axis keeps the output above exactly.
 
 Time differences are computed in float64 ns (±0.001 ns at 10⁶ s); the largest is recomputed
 exactly.
@@ -47,8 +48,7 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
             return render_compare_text(c.axes[0])
         first = c.axes[0]
         out = [
-            f"verdict: {c.verdict.upper()} ({len(c.axes)} axes)"
-            + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
+            f"verdict: {c.verdict.upper()} ({len(c.axes)} axes; {'; '.join(c.said())})",
             f"capture: {first.capture.capture.path}",
             f"golden:  {first.golden.capture.path}",
         ]
@@ -57,7 +57,7 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
         return "\n".join(out) + "\n"
     cs, gs = c.capture.steps, c.golden.steps
     out = [
-        f"verdict: {c.verdict.upper()}" + (f" ({'; '.join(c.failures())})" if c.failures() else ""),
+        f"verdict: {c.verdict.upper()} ({'; '.join(c.said())})",
         f"capture: {c.capture.capture.path} ({cs.count} steps, final position {_pos(cs.final_position)})",
         f"golden:  {c.golden.capture.path} ({gs.count} steps, final position {_pos(gs.final_position)})",
         f"drive:   {c.capture.drive.id}",
@@ -108,6 +108,7 @@ def render_compare_json(c: Comparison | MachineComparison) -> str:
             "golden": first.golden.capture.path,
             "axes": [{"name": a.capture.axis, **_compare_dict(a)} for a in c.axes],
             "failures": c.failures(),
+            "said": c.said(),
             "verdict": c.verdict,
         }
     else:
@@ -159,6 +160,7 @@ def _compare_dict(c: Comparison) -> dict[str, Any]:
             for d in c.rules
         ],
         "failures": c.failures(),
+        "said": c.said(),
         "verdict": c.verdict,
     }
 

@@ -11,9 +11,8 @@ pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 someth
 proven from the configuration (measure it), 4 a rule ``--require`` asks for was not decided, 2
 unusable input.
 
-Also here: the options ``check`` shares (``--firmware``, ``--firmware-axis``, ``--limit``,
-``--margin``) and :func:`check_firmware`, which ``check --firmware`` runs on each report and
-``measure --firmware`` on each axis (pairing: :mod:`wavecheck.firmware.pairing`).
+The options it shares with other commands: :mod:`wavecheck.cli._firmware_args` and
+:mod:`wavecheck.cli._tuning_args`.
 """
 
 from __future__ import annotations
@@ -23,15 +22,15 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
+from wavecheck.cli._firmware_args import add_firmware_arguments, read_firmware_args
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.overrides import tune_drive
 from wavecheck.errors import UsageError
-from wavecheck.firmware import FIRMWARES, read_firmware
 from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, output_file
 from wavecheck.rules import RULE_IDS
-from wavecheck.units import parse_frequency, time_ns
 from wavecheck.verdict import (
     check_require,
     require_list,
@@ -41,109 +40,12 @@ from wavecheck.verdict import (
 )
 
 if TYPE_CHECKING:  # imported where used: only with a firmware configuration
-    from wavecheck.firmware.capture import FirmwareCheck
+    pass
 
 __all__ = [
-    "add_firmware_arguments",
-    "add_limit_arguments",
-    "add_tuning_arguments",
-    "check_firmware",
     "register",
     "run",
 ]
-
-
-def add_limit_arguments(p: argparse.ArgumentParser) -> None:
-    """``--limit RULE=VALUE`` (repeatable) and ``--margin 2x|+500ns``: the drive's figures as
-    the user changes them (:func:`wavecheck.drives.overrides.tune_drive`; ``stepgen plan`` too)."""
-    p.add_argument(
-        "--limit",
-        action="append",
-        default=[],
-        metavar="RULE=VALUE",
-        help="override one drive figure (step_high=5us, max_rate=100kHz; repeatable); the "
-        "report shows the datasheet figure beside it",
-    )
-    p.add_argument(
-        "--margin",
-        metavar="2x|+500ns",
-        help="tighten every datasheet figure: a factor (2x, as StepConf advises for 3.3 V "
-        "parallel ports) or an added time (+500ns); --limit figures are taken as given",
-    )
-
-
-def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
-    """:func:`add_limit_arguments` and ``--require RULES|all`` (which rules must be decided)."""
-    add_limit_arguments(p)
-    p.add_argument(
-        "--require",
-        action="append",
-        default=[],
-        metavar="RULES|all",
-        help="rules that must be decided (comma-separated; all: every rule the drive gives a "
-        "figure for): one not checked or indeterminate makes the run exit 4, with a line "
-        "saying why (repeatable)",
-    )
-
-
-def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = False) -> None:
-    """``--firmware FILE`` (unless ``positional``), ``--firmware-format``, ``--axis``,
-    ``--hm2-clock``; LinuxCNC's ``--latency`` comes from the stepgen options where present."""
-    if not positional:
-        p.add_argument(
-            "--firmware",
-            metavar="FILE",
-            help="the firmware configuration that made the capture: a capture violating its "
-            "own configuration is reported apart from the drive rules",
-        )
-        p.add_argument(
-            "--axis",
-            metavar="NAME",
-            help="the axis of --firmware FILE a single unnamed capture axis is (default: the "
-            "only or the first; the report says which)",
-        )
-        p.add_argument(
-            "--firmware-axis",
-            action="append",
-            default=[],
-            metavar="CAPTURE=FIRMWARE",
-            help="pair a capture axis with a firmware axis of another name (y=beta, "
-            "x=stepper_x; repeatable); otherwise axes pair by name",
-        )
-    p.add_argument(
-        "--firmware-format",
-        choices=FIRMWARES,
-        help="the firmware (default: detected from the content)",
-    )
-    p.add_argument(
-        "--hm2-clock", metavar="F", help="Mesa stepgen clock (e.g. 33MHz) for exact rounding"
-    )
-
-
-def _read(args: argparse.Namespace, path: str) -> FirmwareConfig:
-    j = getattr(args, "latency", None)
-    clock = getattr(args, "hm2_clock", None)
-    return read_firmware(
-        path,
-        args.firmware_format,
-        latency_ns=time_ns(j) if j else None,
-        clock_hz=parse_frequency(clock) if clock else None,
-    )
-
-
-def check_firmware(args: argparse.Namespace, subject: Any) -> FirmwareCheck:
-    """``check --firmware`` / ``measure --firmware``: one capture axis (a Report or an
-    :class:`~wavecheck.firmware.capture.Observed`) against its firmware axis."""
-    from wavecheck.firmware.capture import Observed, firmware_check
-    from wavecheck.firmware.pairing import pair_axis, parse_pairs
-
-    cached = getattr(args, "_firmware_config", None)
-    cfg: FirmwareConfig = cached if cached is not None else _read(args, args.firmware)
-    args._firmware_config = cfg
-    name = subject.axis_name if isinstance(subject, Observed) else subject.axis
-    pairing = pair_axis(cfg, name, parse_pairs(getattr(args, "firmware_axis", []) or []),
-                        getattr(args, "axis", None))  # fmt: skip
-    return firmware_check(subject, cfg, pairing.axis, str(pairing))
 
 
 def register(sub: Any) -> None:
@@ -208,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 
     require = require_list(args.require)
     check_require(require, RULE_IDS)
-    cfg = _read(args, args.file)
+    cfg = read_firmware_args(args, args.file)
     result = evaluate_config(cfg, [(cfg.axis(a), d) for a, d in _drives(args, cfg)])
     if not result.pairs:
         raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")

@@ -28,6 +28,7 @@ from wavecheck.cli._capture_args import (
     resolution_from_args,
 )
 from wavecheck.engine import resolve_resolution_ns
+from wavecheck.report.text import note_line
 from wavecheck.units import format_frequency, format_time, json_number
 
 __all__ = ["info_dict", "info_text", "register", "run"]
@@ -121,7 +122,7 @@ def info_text(cap: Capture, resolution_ns: Fraction | None = None) -> str:
         lines.append("(no 1-bit channels)")
     if cap.notes:
         lines.append("")
-        lines += [f"note: {n}" for n in cap.notes]
+        lines += [note_line(n) for n in cap.notes]
     return "\n".join(lines)
 
 

@@ -4,7 +4,8 @@ latency measured on the step pins (see :mod:`wavecheck.lattice`).
 The channels are mapped as ``check`` maps them (``--map [AXIS.]ROLE=CH``, channels named after a
 role, else the roles inferred from the waveforms); every mapped channel of every axis is read,
 since one base thread drives them all. Exit codes: 0 the edges lie on a periodic lattice
-(lateness reported), 3 they do not (not a base thread's timing, or too few edges), 2 unusable
+and the worst lateness is established (reported), 3 it is not (not a base thread's timing, too
+few edges, lateness of a period or more, or readings the capture cannot tell apart), 2 unusable
 input.
 """
 
@@ -102,7 +103,7 @@ def _period_ns(args: argparse.Namespace) -> tuple[Fraction | None, str]:
         except UnitError as err:
             raise UnitError(f"--base-period: {err}") from None
     if args.ini or args.hal:
-        from wavecheck.linuxcnc.config import read_config
+        from wavecheck.linuxcnc.stepgen_config import read_config
 
         cfg = read_config(args.ini, list(args.hal))
         if cfg.base_period_ns is None:
@@ -147,7 +148,7 @@ def render_text(r: LatencyReport, source: str = "") -> str:
     lines.append(f"  {r.reason}")
     if r.lattice and not r.established:
         lines.append(
-            "  the worst lateness is not established (see the notes): plan from no figure here"
+            f"  the worst lateness is not established ({r.unestablished}): plan from no figure here"
         )
     if r.fit is None or not len(r.lateness_num):
         lines.append("  no lateness figures: base-thread latency cannot be read from this capture")
@@ -178,7 +179,7 @@ def render_text(r: LatencyReport, source: str = "") -> str:
     for c in r.candidates:
         lines.append(
             f"    or     {_ns(c.max_lateness_ns)} with P = {_ns(c.period_ns)} ({c.how}): the "
-            "capture cannot tell; plan from the larger"
+            "capture cannot tell"
         )
     worst = r.worst()
     if worst:
@@ -232,6 +233,7 @@ def render_json(r: LatencyReport, source: str = "") -> str:
         "edge_times": r.n_edges,
         "lattice": r.lattice,
         "established": r.established,
+        "not_established": r.unestablished or None,
         "reason": r.reason,
         "resolution_ns": json_number(r.resolution_ns),
         "notes": r.notes,
@@ -356,4 +358,4 @@ def run(args: argparse.Namespace) -> int:
             atomic_write(args.plot, png if fmt == "png" else render_png(report, fmt))
         if args.html:
             atomic_write(args.html, render_html(report, text, png))
-    return EXIT_PASS if report.lattice else EXIT_INDETERMINATE
+    return EXIT_PASS if report.established else EXIT_INDETERMINATE

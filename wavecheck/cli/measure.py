@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
+from wavecheck.cli._firmware_args import add_firmware_arguments, check_firmware
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
-from wavecheck.cli.config import add_firmware_arguments, check_firmware
 from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import QUIET_HELP, activate

@@ -18,12 +18,13 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
-from wavecheck.cli._reports import add_stepgen_arguments
-from wavecheck.cli.check import RENDERERS, finish_report, write_outputs
-from wavecheck.cli.config import add_tuning_arguments
+from wavecheck.cli._formats import FORMATS
+from wavecheck.cli._reports import finish_report, write_outputs
+from wavecheck.cli._stepgen_args import add_stepgen_arguments
+from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import DeviceError, UsageError
 from wavecheck.live import START_GRACE
-from wavecheck.output import output_file
+from wavecheck.output import output_file, resolve_output, same_file
 from wavecheck.units import SAMPLE_RATE, format_frequency, parse_option
 
 if TYPE_CHECKING:
@@ -142,7 +143,7 @@ def register(sub: Any) -> None:
         metavar="FILE.sr",
         help="keep the whole stream as a .sr file, written as it arrives",
     )
-    p.add_argument("--format", choices=sorted(RENDERERS), default="text", help="report format")
+    p.add_argument("--format", choices=sorted(FORMATS), default="text", help="report format")
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
@@ -192,6 +193,20 @@ def _status(mode: str) -> Any:
     return redraw
 
 
+def _refuse_shared_save(save: str, output: str | None) -> None:
+    """Refuse ``--save`` onto the file or stream the report goes to: a zip and a report in one
+    file are neither (``--save /dev/stdout > rec.sr`` with the report on standard output)."""
+    target = resolve_output(save)
+    report = output if output is not None else 1
+    report_fd = resolve_output(output).fd if output is not None else 1
+    if (target.fd is not None and target.fd == report_fd) or same_file(save, report):
+        where = f"-o {output}" if output is not None else "standard output"
+        raise UsageError(
+            f"--save {save}: the report goes there too ({where}); give the report its own "
+            "file (-o FILE) or --save a file"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck watch``; returns the exit code."""
     # the live machinery is imported here, not at start-up (wavecheck --help stays quick)
@@ -212,6 +227,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--max-violations must be 0 or more, got {args.max_violations}")
     if args.max_snippets < 0:
         raise UsageError(f"--max-snippets must be 0 or more, got {args.max_snippets}")
+    if args.save:
+        _refuse_shared_save(args.save, args.output)
     program = sigrok_cli(args.sigrok_cli)
     rate = None
     if args.samplerate is not None:

@@ -93,10 +93,26 @@ def compare(
         )
     if len(counts) and not np.array_equal(counts, np.arange(1, len(counts) + 1)):
         res.disagreements.append("sigrok counter did not count 1, 2, 3, … (a reset or a gap)")
+    if sigrok_input.lost:
+        res.disagreements.append(
+            f"downsample {ds} ticks merges {sigrok_input.lost} STEP/DIR edge(s) into the "
+            "samples of others: sigrok cannot see them (give a --downsample no larger than the "
+            "shortest gap between edges)"
+        )
+    elif ds > 1:
+        res.explanations.append(
+            f"converted with downsample {ds} ticks, at most the shortest gap between STEP/DIR "
+            "edges: no edge is merged into another's sample (none lost)"
+        )
+    if sigrok_input.offset:
+        res.explanations.append(
+            "an edge falls on the first sample, which sigrok takes for the initial level: every "
+            "edge was written one sample later (none lost)"
+        )
     if dir_sig is None:
         res.explanations.append("no DIR mapped: only step counts are compared (no positions)")
         return res
-    samples = rising.ticks // ds
+    samples = rising.ticks // ds + sigrok_input.offset
     n = rising.count
     # the DIR level sigrok reads at each step's sample (changes in that sample included);
     # derived from wavecheck's decode: a known direction gives the level before the edge
@@ -166,10 +182,5 @@ def compare(
         res.explanations.append(
             "stepper_motor counts rising edges only: positions are compared with wavecheck's "
             "rising-edge decode; the counter checks the falling-edge count"
-        )
-    if ds > 1:
-        res.explanations.append(
-            f"the VCD was converted with downsample {ds} ticks, the shortest gap between "
-            "STEP/DIR edges, so no pulse and no STEP/DIR order is lost"
         )
     return res

@@ -57,6 +57,12 @@ class SigrokInput:
     channels: list[str]
     downsample: int
     converted: bool
+    offset: int = 0
+    """Samples every edge was moved later by (1 when an edge would fall on sample 0, where
+    sigrok takes it for the initial level)."""
+    lost: int = 0
+    """Edges the downsample merged into another's sample (lost to sigrok: a given
+    ``--downsample`` above the shortest gap)."""
 
     @property
     def description(self) -> str:
@@ -116,8 +122,15 @@ def _unit_for(tick_s: Fraction) -> tuple[str, int]:
 MAX_SIGROK_DOWNSAMPLE = 2**31 - 1
 
 
+def merged_edges(edges: EdgeArray, ds: int) -> int:
+    """Edges of one channel that share their sample with another after ``// ds`` (two toggles in
+    one sample cancel; of an odd number, one survives)."""
+    _, counts = np.unique(np.asarray(edges, dtype=np.int64) // ds, return_counts=True)
+    return int(np.sum(np.where(counts % 2 == 0, counts, counts - 1)))
+
+
 def _write_mapped_vcd(
-    capture: Capture, names: list[str], out_names: list[str], path: Path, ds: int
+    capture: Capture, names: list[str], out_names: list[str], path: Path, ds: int, offset: int
 ) -> int:
     """The channels ``names`` only (called ``out_names``), already downsampled: each edge at
     sample ``tick // ds`` (distinct edge times stay distinct, as ``ds`` is at most their shortest
@@ -129,14 +142,14 @@ def _write_mapped_vcd(
     above 2^31 here, which sigrok-cli wraps.
     """
     chans = [capture.channel(n) for n in names]
-    last = max([capture.end, *(int(c.edges[-1]) for c in chans if len(c.edges))]) // ds + 1
+    last = max([capture.end, *(int(c.edges[-1]) for c in chans if len(c.edges))]) // ds + 1 + offset
     unit, factor = _unit_for(capture.timebase.tick_s * ds)
     if factor > MAX_SIGROK_DOWNSAMPLE:
         unit, factor = "s", 1  # the sample period cannot be stated: sample numbers stay exact
     write_vcd(
         path,
         [
-            VcdWire(o, c.initial, (np.asarray(c.edges, dtype=np.int64) // ds) * factor)
+            VcdWire(o, c.initial, (np.asarray(c.edges, dtype=np.int64) // ds + offset) * factor)
             for o, c in zip(out_names, chans, strict=True)
         ],
         timescale=f"1 {unit}",
@@ -169,8 +182,8 @@ def prepare_input(
             capture.path, [_sigrok_name(n, capture.path) for n in names], 1, converted=False
         )
     sr = str(tmp / "capture.sr")
-    ds = 1
-    if capture.format == "vcd":
+    ds, offset, lost = 1, 0, 0
+    if capture.format == "vcd" or ":" not in capture.format:  # not read through sigrok-cli
         ds = downsample or pick_downsample(edges)
         if (capture.end // ds) > MAX_SAMPLES:
             raise UsageError(
@@ -179,7 +192,10 @@ def prepare_input(
             )
         sr_names = ["step", "dir"][: len(names)]
         vcd = tmp / "mapped.vcd"
-        factor = _write_mapped_vcd(capture, names, sr_names, vcd, ds)
+        # an edge on sample 0 would be taken for the initial level: every edge a sample later
+        offset = int(any(len(e) and int(np.min(e)) // ds <= 0 for e in edges))
+        lost = sum(merged_edges(e, ds) for e in edges)
+        factor = _write_mapped_vcd(capture, names, sr_names, vcd, ds, offset)
         convert(vcd, sr, input_format=f"vcd:downsample={factor}:skip=0")
     else:
         # the same sigrok-cli input spec the capture was read with (options included)
@@ -198,7 +214,7 @@ def prepare_input(
     info = show(sr)
     if not info.sample_count:
         raise CaptureError(capture.path, "sigrok-cli", "the converted capture has 0 samples")
-    return SigrokInput(sr, sr_names, ds, converted=True)
+    return SigrokInput(sr, sr_names, ds, converted=True, offset=offset, lost=lost)
 
 
 def run_decoders(

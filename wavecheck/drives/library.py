@@ -112,6 +112,15 @@ def list_drives() -> list[Drive]:
     return [_load_file(path) for _, path in sorted(_rule_files().items())]
 
 
+def _file_of(files: dict[str, Path], drive_id: str) -> Path | None:
+    """The rule file of ``drive_id``: ids are case-insensitive (``DRV8825`` is ``drv8825``), an
+    exact match first."""
+    if drive_id in files:
+        return files[drive_id]
+    folded = [path for name, path in files.items() if name.casefold() == drive_id.casefold()]
+    return folded[0] if folded else None
+
+
 def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
     """Load a drive by id (``"gecko-g202"``) or from a TOML file path of the same form.
 
@@ -121,7 +130,7 @@ def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
     """
     text = os.fspath(id_or_path)
     looks_like_path = text.endswith(".toml") or os.sep in text or "/" in text
-    if looks_like_path or (not _ID.match(text) and Path(text).is_file()):
+    if looks_like_path or (not _ID.match(text.lower()) and Path(text).is_file()):
         path = Path(text)
         if not path.is_file():
             raise RuleError(
@@ -129,8 +138,9 @@ def load_drive(id_or_path: str | os.PathLike[str]) -> Drive:
             )
         return _load_file(path, user=not _in_library(path))
     files = _rule_files()
-    if text in files:
-        return _load_file(files[text])
+    found = _file_of(files, text)
+    if found is not None:
+        return _load_file(found)
     close = difflib.get_close_matches(text.lower(), list(files), n=4, cutoff=0.5)
     hint = f"did you mean {', '.join(close)}? " if close else ""
     raise RuleError(text, None, f"unknown drive id ({hint}`wavecheck drives` lists them)")
@@ -206,8 +216,8 @@ def _resolve_extends(path: Path, data: dict[str, Any], seen: tuple[Path, ...]) -
     files = _rule_files()
     if looks_like_path:
         base_path = (path.parent / base_ref) if not Path(base_ref).is_absolute() else Path(base_ref)
-    elif base_ref in files:
-        base_path = files[base_ref]
+    elif (found := _file_of(files, base_ref)) is not None:
+        base_path = found
     else:
         close = difflib.get_close_matches(base_ref, list(files), n=3, cutoff=0.5)
         hint = f" (did you mean {', '.join(close)}?)" if close else ""

@@ -6,7 +6,7 @@ object (:mod:`.options`), its channels and axes named by :mod:`.interface` and :
 :mod:`.run` finds the axes and feeds every axis (:mod:`.axis`) the same blocks; each axis is
 resolved against the capture's channels (:mod:`.resolve`), its steps decoded (:mod:`.decode`),
 every rule's intervals measured (:mod:`.intervals`, :mod:`.primitives`) and judged exactly
-(:mod:`.verdicts`), and merged window by window into one result per rule (:mod:`.results`,
+(:mod:`.judge`), and merged window by window into one result per rule (:mod:`.results`,
 :mod:`.rates`), in memory that follows a window, not the capture. What needs more than the
 results is fed as the engine runs (:mod:`.sinks`, :mod:`.trace`, :mod:`.windows`), and
 :mod:`.outcome` holds the reports.
@@ -48,6 +48,8 @@ if TYPE_CHECKING:
         role_name,
     )
     from wavecheck.engine.intervals import figure_of, planned_rules
+    from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, Histogram, Violation
+    from wavecheck.engine.judge import _thresholds as thresholds
     from wavecheck.engine.mapping import (
         AxisMap,
         axes_from_tables,
@@ -80,11 +82,9 @@ if TYPE_CHECKING:
     )
     from wavecheck.engine.sinks import StepCollector, StepSink
     from wavecheck.engine.trace import StepTrace
-    from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS, Histogram, Violation
-    from wavecheck.engine.verdicts import _thresholds as thresholds
 
 #: The modules of the face, each with the names it gives: the name it has there, but two
-#: (``_RENAMED``): ``thresholds`` is :func:`.verdicts._thresholds`, and ``decode_steps`` is
+#: (``_RENAMED``): ``thresholds`` is :func:`.judge._thresholds`, and ``decode_steps`` is
 #: :func:`.decode.decode` (``decode`` names the module, which importing it sets on the package).
 _MODULES: dict[str, tuple[str, ...]] = {
     "options": ("CheckOptions", "DEFAULT_BLOCK_EDGES", "DEFAULT_KEEP"),
@@ -117,7 +117,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "resolve": ("plan_axes", "AxisPlan", "auto_map", "default_step_type", "resolve_resolution_ns"),
     "outcome": ("Report", "MachineReport"),
     "results": ("RuleResult", "StepCounts"),
-    "verdicts": ("Violation", "Histogram", "PASS", "FAIL", "INDETERMINATE", "thresholds"),
+    "judge": ("Violation", "Histogram", "PASS", "FAIL", "INDETERMINATE", "thresholds"),
     "intervals": ("figure_of", "planned_rules"),
     "rates": ("pulse_level",),
     "decode": ("decode_steps", "StepEvents"),

@@ -3,7 +3,7 @@
 Blocks (:mod:`wavecheck.capture.blocks`) are gathered until about ``block_edges`` edges have come;
 then the window ``[t0, t1)`` (t1 the blocks' end) is checked by the vectorised code
 (:func:`wavecheck.engine.decode.decode`, :func:`wavecheck.engine.intervals.rule_intervals`,
-:func:`wavecheck.engine.verdicts.evaluate`) on the plan's signals holding, per mapped channel, its
+:func:`wavecheck.engine.judge.evaluate`) on the plan's signals holding, per mapped channel, its
 edges from a context tick ``c0`` on (its level at ``c0`` as the initial level) up to ``t1``. An
 interval is kept only in the window where its later event lies (``max(start, end)`` in
 ``[t0, t1)``), so each is counted once; a step, a sequence error, a state change, a step gap and a
@@ -44,7 +44,8 @@ from wavecheck.engine.decode import (
     unknown_stretches,
 )
 from wavecheck.engine.interface import RoleSignal, StepInterface
-from wavecheck.engine.intervals import rule_intervals, split_unknown
+from wavecheck.engine.intervals import either_level, rule_intervals, split_unknown
+from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, evaluate, sequence_result
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.engine.rates import rates_from
@@ -52,7 +53,6 @@ from wavecheck.engine.resolve import AxisPlan, ambiguous_note
 from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.sinks import IntervalSink, StepSink
 from wavecheck.engine.trace import StepTrace
-from wavecheck.engine.verdicts import evaluate, sequence_result
 from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
 from wavecheck.rules import Rule, width_rule
 
@@ -211,6 +211,14 @@ class AxisCheck:
         new = steps.ticks >= t0
         ticks, direction = steps.ticks[new], steps.direction[new]
         self.steps.add(direction, steps.ambiguous[steps.ambiguous >= t0])
+        lost = [
+            t
+            for role in self.st.pulse_roles
+            if role in self.roles
+            for t in self.roles[role].xz_starts
+        ]
+        if lost:
+            self.steps.lose_from(min(lost))
         self.sequence_errors += int(np.count_nonzero(steps.sequence_errors >= t0))
         for sink in self.sinks:
             sink.add(ticks, direction)
@@ -253,23 +261,42 @@ class AxisCheck:
     def _rule(self, r: Rule, iface: StepInterface, steps: StepEvents, t0: int) -> None:
         plan = self.plan
         iv = rule_intervals(r, iface, self.st, steps, plan.active_edge, plan.level)
+        # the end of an up/down pulse depends on its level: not stated nor seen, both are read
+        # (the verdict then depends on the signal at the drive's input only, issue 33)
+        long = None
+        if r.ends_by_level and plan.level_open:
+            other = rule_intervals(r, iface, self.st, steps, plan.active_edge, 1 - plan.level)
+            iv, long, both = either_level(iv, other)
         sel = np.maximum(iv.start, iv.end) >= t0
-        if not sel.all():
-            iv = Intervals(iv.start[sel], iv.end[sel])
         starts, ends = unknown_stretches(iface, r.roles_for(self.st))
         left = _EMPTY
         s = self._judged.get(r.id)
         if len(starts):
             keep, covered = split_unknown(iv, starts, ends)
-            left = iv.start[~keep]
+            if long is not None:
+                keep_long, covered_long = split_unknown(long, starts, ends)
+                keep, covered = keep & keep_long, covered | covered_long
+            left = iv.start[~keep & sel]
             if s is not None:
                 s.covered.update(starts[covered].tolist())
-            iv = Intervals(iv.start[keep], iv.end[keep])
+            sel &= keep
+        if not sel.all():
+            iv = Intervals(iv.start[sel], iv.end[sel])
+            if long is not None:
+                long, both = Intervals(long.start[sel], long.end[sel]), both[sel]
         if self.interval_sink is not None:
             self.interval_sink.add_intervals(r, iv)
         if s is not None:
             assert s.limit_ns is not None
-            s.add(evaluate(r.id, iv, s.limit_ns, self.tb, s.resolution_ns), left)
+            judged = evaluate(r.id, iv, s.limit_ns, self.tb, s.resolution_ns)
+            if long is not None:
+                wide = evaluate(r.id, long, s.limit_ns, self.tb, s.resolution_ns).outcome
+                judged.outcome = np.where(
+                    both & (judged.outcome == PASS),
+                    PASS,
+                    np.where(both & (wide == FAIL), FAIL, INDETERMINATE),
+                ).astype(np.int8)
+            s.add(judged, left)
 
     def _sequence(self, iface: StepInterface, steps: StepEvents, t0: int, s: RuleResult) -> None:
         ticks = phase_states(iface, self.st.outputs)[0]
@@ -287,14 +314,19 @@ class AxisCheck:
         s.add(sequence_result(err, details, int(np.count_nonzero(ticks >= t0))), _EMPTY)
 
     def _rates(self, iface: StepInterface, steps: StepEvents, t0: int) -> None:
+        """The shortest step interval and the pulses, none that touches an unknown stretch of a
+        step line (steps inside it are not seen; the edge ending it may be no step)."""
         t = steps.ticks
+        unknown = unknown_stretches(iface, self.st.pulse_roles)
         if len(t) > 1:
             k = max(int(np.searchsorted(t, t0, side="left")), 1)
             if k < len(t):
                 d = t[k:] - t[k - 1 : -1]
+                if len(unknown[0]):
+                    d = np.where(touches_stretches(t[k - 1 : -1], t[k:], *unknown), NEVER, d)
                 i = int(np.argmin(d))
                 cand = (int(d[i]), int(t[k - 1 + i]))
-                if self.gap is None or cand[0] < self.gap[0]:
+                if cand[0] < NEVER and (self.gap is None or cand[0] < self.gap[0]):
                     self.gap = cand
         if self.st.kind == "phases" or self.plan.active_edge == "both":
             return
@@ -303,7 +335,10 @@ class AxisCheck:
             if sig is None:
                 continue
             p = widths(sig.initial, sig.edges, self.plan.level)
-            w = p.measured[p.end >= t0]
+            sel = p.end >= t0
+            if len(unknown[0]):
+                sel &= ~touches_stretches(p.start, p.end, *unknown)
+            w = p.measured[sel]
             vals, counts = np.unique(w, return_counts=True)
             for v, c in zip(vals.tolist(), counts.tolist(), strict=True):
                 self.pulses[v] = self.pulses.get(v, 0) + c

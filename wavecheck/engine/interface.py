@@ -125,7 +125,8 @@ def _hierarchical(channels: list[Channel], ref: str) -> list[Channel]:
     return hits
 
 
-_BIT = re.compile(r"^(.+?)\s*\[\s*(\d+)\s*\]$")
+#: A bit of a vector: Verilog's ``stout[3]`` or VHDL's ``pins(2)``.
+_BIT = re.compile(r"^(.+?)\s*(?:\[\s*(\d+)\s*\]|\(\s*(\d+)\s*\))$")
 
 
 def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> Channel:
@@ -133,7 +134,8 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
     (``STEP`` for ``step``), else its index (``"3"``), else another name the file gives it, else
     the unique channel whose hierarchical name ends with ``ref``
     (``s2.step`` for ``tb.s2.step``; any case if no exact-case one), else bit ``i`` of a
-    vector for ``name[i]`` (:meth:`Capture.bit`: ``stout[3]``, ``tb.dut.stout[3]``).
+    vector for ``name[i]`` or VHDL's ``name(i)`` (:meth:`Capture.bit`: ``stout[3]``,
+    ``tb.dut.stout[3]``, ``pins(2)``).
 
     Raises:
         UsageError: no such channel (the channels are listed); a name two channels share
@@ -176,7 +178,7 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
             )
     bit = _BIT.match(stripped)
     if bit and capture.vectors:
-        return capture.bit(bit.group(1), int(bit.group(2)))
+        return capture.bit(bit.group(1), int(bit.group(2) or bit.group(3)))
     if not known and ref not in capture.skipped and stripped not in capture.skipped:
         raise UsageError(_not_found(capture, ref, role))
     return capture.channel(ref)

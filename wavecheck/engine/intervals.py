@@ -43,6 +43,7 @@ from wavecheck.rules import Rule, applicable
 from wavecheck.steptypes import StepType
 
 __all__ = [
+    "either_level",
     "figure_of",
     "planned_rules",
     "rule_intervals",
@@ -112,6 +113,23 @@ def _dir_delay(iface: StepInterface, edge: ActiveEdge, level: int) -> Intervals:
     prev_end = ends[k - 1]
     ok = prev_end >= 0
     return Intervals(prev_end[ok], ticks[k[ok]])
+
+
+def either_level(a: Intervals, b: Intervals) -> tuple[Intervals, Intervals, npt.NDArray[np.bool_]]:
+    """Two readings of the same intervals (the same end events; ``dir_delay`` with the pulses at
+    either level): (the shorter, the longer, whether both readings have it) for every end event
+    either has, in time order. An interval only one reading has (the other's pulse had not
+    ended) is both the shorter and the longer, and undecided."""
+    ends = np.union1d(a.end, b.end)
+    ia = np.minimum(np.searchsorted(a.end, ends), max(len(a.end) - 1, 0))
+    ib = np.minimum(np.searchsorted(b.end, ends), max(len(b.end) - 1, 0))
+    in_a = (a.end[ia] == ends) if len(a.end) else np.zeros(len(ends), bool)
+    in_b = (b.end[ib] == ends) if len(b.end) else np.zeros(len(ends), bool)
+    sa = np.where(in_a, a.start[ia] if len(a.end) else 0, -1)
+    sb = np.where(in_b, b.start[ib] if len(b.end) else 0, -1)
+    late = np.where(in_a & in_b, np.maximum(sa, sb), np.where(in_a, sa, sb))
+    early = np.where(in_a & in_b, np.minimum(sa, sb), late)
+    return Intervals(late, ends), Intervals(early, ends), in_a & in_b
 
 
 def _enable_setup(enable: RoleSignal, steps: EdgeArray) -> Intervals:

@@ -20,7 +20,7 @@ from typing import TypeVar
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.engine.mapping import AxisMap
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import RULE_IDS
 from wavecheck.verdict import check_require
 

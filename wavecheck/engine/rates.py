@@ -28,10 +28,10 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.decode import StepEvents
+from wavecheck.engine.decode import StepEvents, touches_stretches, unknown_stretches
 from wavecheck.engine.interface import StepInterface
 from wavecheck.engine.primitives import Intervals, widths
-from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.rules import width_rule
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
@@ -152,13 +152,21 @@ def max_step_rates(
             a fail means no rate would pass.
     """
     gap = None
-    if steps.count > 1:
-        g, i = _diff_extreme(steps.ticks[:-1], steps.ticks[1:], smallest=True)
-        gap = (g, int(steps.ticks[i]))
+    unknown = unknown_stretches(iface, st.pulse_roles)  # no figure from an interval touching one
+    a, b = steps.ticks[:-1], steps.ticks[1:]
+    if len(unknown[0]):
+        keep = ~touches_stretches(a, b, *unknown)
+        a, b = a[keep], b[keep]
+    if len(a):
+        g, i = _diff_extreme(a, b, smallest=True)
+        gap = (g, int(a[i]))
     pulse = None
     if st.kind != "phases" and active_edge != "both":
         sigs = [s for s in (iface.get(r) for r in st.pulse_roles) if s is not None]
         pulses = Intervals.concat([widths(s.initial, s.edges, level) for s in sigs])
+        if len(unknown[0]) and len(pulses):
+            keep = ~touches_stretches(pulses.start, pulses.end, *unknown)
+            pulses = Intervals(pulses.start[keep], pulses.end[keep])
         if len(pulses):
             longest = _diff_extreme(pulses.start, pulses.end, smallest=False)[0]
             pulse = (longest, _median(pulses.start, pulses.end))

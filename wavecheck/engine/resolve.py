@@ -30,7 +30,7 @@ from wavecheck.engine.intervals import figure_of, planned_rules
 from wavecheck.engine.mapping import AxisMap, check_axis_names, split_invert
 from wavecheck.engine.options import CheckOptions, for_axis
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.config import ConfigRates, config_rates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates, config_rates
 from wavecheck.rules import RULE_IDS, Rule, applicable
 from wavecheck.steptypes import StepType, step_type
 from wavecheck.timebase import Timebase

@@ -5,8 +5,8 @@ the same figures whatever the windows (tests/wavecheck/engine hold one window ag
 unknown), the shortest and longest interval and where the shortest is, the worst ``keep``
 violations (ties in the intervals' order), the figures that decide ``decide_samplerate_hz``, and,
 when pictures are asked for (``binned``), a fixed-bin
-:class:`~wavecheck.engine.verdicts.Histogram`. What it does not keep: every interval
-(each window's :class:`~wavecheck.engine.verdicts.Judged` is merged and dropped); the pictures
+:class:`~wavecheck.engine.judge.Histogram`. What it does not keep: every interval
+(each window's :class:`~wavecheck.engine.judge.Judged` is merged and dropped); the pictures
 draw from these results and the signal windows kept around the worst places
 (:mod:`wavecheck.engine.windows`); whatever needs every step or interval is a sink
 (:mod:`wavecheck.engine.sinks`).
@@ -22,7 +22,7 @@ import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import Figure
-from wavecheck.engine.verdicts import (
+from wavecheck.engine.judge import (
     FAIL,
     INDETERMINATE,
     Histogram,
@@ -40,6 +40,9 @@ __all__ = ["FRESH_KEPT", "UNKNOWN_KEPT", "RuleResult", "StepCounts"]
 UNKNOWN_KEPT = 100
 #: Violations of one window handed to :attr:`RuleResult.fresh`.
 FRESH_KEPT = 64
+#: Distinct measured lengths (or ``state_sequence`` details) whose violations are counted with
+#: their first and last time over the whole capture (:meth:`RuleResult.tally`): the shortest.
+TALLY_KEPT = 4096
 
 _Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the intervals' order
 
@@ -75,6 +78,8 @@ class RuleResult:
     _exact: int = 0
     _worst: list[tuple[_Key, int, int, str]] = field(default_factory=list)  # sorted, bounded
     _hist: Histogram = field(default_factory=lambda: Histogram(()))
+    _tally: dict[int | str, list[int]] = field(default_factory=dict)  # key → [n, first, last]
+    _tally_floor: int | None = None  # lengths from this one on are no longer tallied
     covered: set[int] = field(default_factory=set)
     """Start ticks of the unknown stretches an interval left out has touched (so far)."""
     fresh: list[tuple[int, int]] | None = None
@@ -99,6 +104,8 @@ class RuleResult:
             f = np.flatnonzero(part.outcome == FAIL)[:FRESH_KEPT]
             self.fresh.extend(zip(iv.start[f].tolist(), iv.end[f].tolist(), strict=True))
         if self.limit_ns is None:  # state_sequence: errors in time order, no length
+            if len(iv):
+                self._tally_keys(np.asarray(part.details[: len(iv)], dtype=str), iv.start)
             if len(self._worst) < self.keep:
                 for i in range(min(len(iv), self.keep - len(self._worst))):
                     t = int(iv.start[i])
@@ -123,6 +130,58 @@ class RuleResult:
             self._exact += exact
         if fails:
             self._add_worst(part, w, a, b, lo)
+            self._tally_fails(part, w)
+
+    def _tally_fails(self, part: Judged, w: EdgeArray) -> None:
+        """Count the failed intervals by measured length, with the first and last start tick
+        of each length (numpy per window; a Python step per distinct length, the shortest
+        :data:`TALLY_KEPT` only)."""
+        f = np.flatnonzero(part.outcome == FAIL)
+        self._tally_keys(w[f], part.intervals.start[f])
+
+    def _tally_keys(self, keys: np.ndarray, starts: EdgeArray) -> None:
+        """Tally ``keys`` (lengths, or details) with the start ticks ``starts``."""
+        uniq, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+        first = np.full(len(uniq), np.iinfo(np.int64).max, dtype=np.int64)
+        last = np.full(len(uniq), np.iinfo(np.int64).min, dtype=np.int64)
+        np.minimum.at(first, inverse, starts)
+        np.maximum.at(last, inverse, starts)
+        for k, key in enumerate(uniq[:TALLY_KEPT].tolist()):
+            self._count(key, int(first[k]), int(last[k]), int(counts[k]))
+        if len(uniq) > TALLY_KEPT and uniq.dtype.kind == "i":
+            self._evict(int(uniq[TALLY_KEPT]))
+
+    def _count(self, key: int | str, first: int, last: int, n: int) -> None:
+        if isinstance(key, int) and self._tally_floor is not None and key >= self._tally_floor:
+            return
+        if key not in self._tally and len(self._tally) >= TALLY_KEPT:
+            if isinstance(key, str):
+                return
+            longest = max(k for k in self._tally if isinstance(k, int))
+            if key > longest:
+                self._evict(key)
+                return
+            self._evict(longest)
+        got = self._tally.get(key)
+        if got is None:
+            self._tally[key] = [n, first, last]
+        else:
+            got[0] += n
+            got[1] = min(got[1], first)
+            got[2] = max(got[2], last)
+
+    def _evict(self, floor: int) -> None:
+        """Stop tallying lengths from ``floor`` on (they are the least short)."""
+        self._tally_floor = floor if self._tally_floor is None else min(self._tally_floor, floor)
+        for k in [k for k in self._tally if isinstance(k, int) and k >= self._tally_floor]:
+            del self._tally[k]
+
+    def tally(self, key: int | str) -> tuple[int, int, int] | None:
+        """Every violation of measured length ``key`` ticks (``state_sequence``: of detail
+        ``key``) over the whole capture: (count, first start tick, last start tick); None when
+        that length was not tallied (beyond the :data:`TALLY_KEPT` shortest)."""
+        got = self._tally.get(key)
+        return None if got is None else (got[0], got[1], got[2])
 
     def _shortest(self, w: EdgeArray, a: EdgeArray, b: EdgeArray, lo: int) -> None:
         """Keep the shortest interval (``lo`` ticks), ties broken in the intervals' order."""
@@ -299,6 +358,9 @@ class StepCounts:
     ambiguous_count: int = 0
     ambiguous: EdgeArray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     """The first :data:`UNKNOWN_KEPT` steps of ambiguous direction (ticks)."""
+    lost_from: int | None = None
+    """The tick where a step line first went unknown (``x``/``z``) after its level was known:
+    steps inside are not seen, so the position is unknown from there (None: never)."""
 
     @property
     def unknown(self) -> int:
@@ -307,8 +369,13 @@ class StepCounts:
 
     @property
     def final_position(self) -> int | None:
-        """forward − reverse, or None when any step's direction is unknown."""
-        return None if self.unknown else self.forward - self.reverse
+        """forward − reverse, or None when any step's direction is unknown or steps may have
+        been lost in an unknown stretch (:attr:`lost_from`)."""
+        return None if self.unknown or self.lost_from is not None else self.forward - self.reverse
+
+    def lose_from(self, tick: int) -> None:
+        """A step line went unknown at ``tick``: the position is unknown from the earliest."""
+        self.lost_from = tick if self.lost_from is None else min(self.lost_from, tick)
 
     def add(self, direction: np.ndarray, ambiguous: EdgeArray) -> None:
         """Merge one window's steps (their directions) and its ambiguous steps' ticks."""

@@ -130,8 +130,8 @@ def common_timer(ticks: Sequence[EdgeArray], capture: Capture, resolution_ns: Fr
     if period is not None:
         return (
             f"the steps of every axis lie on one common periodic lattice{bound}: one base "
-            f"thread or timer makes them (its period {float(period) / 1000:.6g} us or a whole "
-            "fraction of it)"
+            f"thread or timer makes them (P = {float(period) / 1000:.6g} us, as `wavecheck "
+            "latency` reads these step times)"
         )
     return f"the axes' steps are not on one common periodic lattice ({why}){bound}"
 

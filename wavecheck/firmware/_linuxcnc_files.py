@@ -2,7 +2,8 @@
 (continuations and ``#INCLUDE`` followed, :func:`~wavecheck.linuxcnc.files.read_ini`), every
 ``[HAL] HALFILE`` and ``POSTGUI_HALFILE`` (beside the INI, else in LinuxCNC's HAL library;
 ``LIB:name`` only there; ``.tcl`` files read for their literal HAL commands) and every
-``HALCMD``; or one HAL file given alone.
+``HALCMD``; or one HAL file given alone, read with the INI beside it whose ``HALFILE`` names it
+(LinuxCNC runs a HAL file only from its INI), or alone when no INI names it.
 
 LinuxCNC's HAL library is looked for in ``$HALLIB_DIR``, in the ``lib/hallib`` folder of a
 LinuxCNC tree the INI sits in (``…/configs/…`` beside ``…/lib/hallib``, as a run-in-place build
@@ -39,13 +40,14 @@ __all__ = ["LinuxCNCFiles", "expand_refs", "hallib_dirs", "is_ini", "scan"]
 _INLINE = re.compile(r"\[([^\]]+)\]\(([^)]+)\)")
 _INSTALLED_HALLIB = Path("/usr/share/linuxcnc/hallib")
 _MAX_HAL_FILES = 64
+_MAX_INIS = 64  # INIs beside a HAL file given alone that are read to find the one naming it
 
 
 def is_ini(text: str) -> bool:
     """True for an INI file (section headers and ``KEY = VALUE`` lines, no HAL commands)."""
-    return bool(re.search(r"^\s*(\[[A-Za-z_0-9]+\]|#INCLUDE\s)", text, re.M)) and not re.search(
-        r"^\s*(loadrt|setp|net|addf)\s", text, re.M
-    )
+    return bool(
+        re.search(r"^[ \t]*(\[[A-Za-z_0-9]+\]|#INCLUDE[ \t])", text, re.M)
+    ) and not re.search(r"^[ \t]*(loadrt|setp|net|addf)[ \t]", text, re.M)
 
 
 def expand_refs(text: str, ini: IniFile | None) -> str:
@@ -94,6 +96,8 @@ class LinuxCNCFiles:
     lines: list[HalLine] = field(default_factory=list)
     not_read: list[str] = field(default_factory=list)
     computed: list[str] = field(default_factory=list)
+    found_ini: str = ""
+    """The INI found beside a HAL file given alone (its ``HALFILE`` names the file)."""
 
     def words(self, line: HalLine) -> list[str]:
         """A command's words, inline ``[SECTION](KEY)`` references substituted."""
@@ -167,6 +171,12 @@ def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
     p = Path(path)
     text = read_text(p)
     if not is_ini(text):
+        ini_path = _ini_naming(p)
+        if ini_path is not None:
+            files = scan(ini_path)
+            files.path = str(p)
+            files.found_ini = str(ini_path)
+            return files
         files = LinuxCNCFiles(str(p), None)
         _add(files, p)
         return files
@@ -194,6 +204,44 @@ def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
     for index, (value, _) in enumerate(ini.sections.get("HAL", {}).get("HALCMD", [])):
         files.lines.append(HalLine(value, ini.place("HAL", "HALCMD", index)))
     return files
+
+
+def _ini_naming(hal: Path) -> Path | None:
+    """The INI beside ``hal`` whose ``[HAL] HALFILE`` names it (LinuxCNC runs a HAL file from
+    its INI), None when no INI names it.
+
+    Raises:
+        ConfigError: several INIs name it (each may set other values: the user chooses).
+    """
+    found = []
+    for ini_path in sorted(hal.parent.glob("*.ini"))[:_MAX_INIS]:
+        try:
+            if not is_file(ini_path) or not is_ini(read_text(ini_path)):
+                continue
+            ini = read_ini(ini_path)
+        except ConfigError:
+            continue
+        names = [
+            v.split()[0]
+            for key in ("HALFILE", "POSTGUI_HALFILE")
+            for v, _ in ini.sections.get("HAL", {}).get(key, [])
+            if v.split()
+        ]
+        if any(_same(hal.parent / n, hal) for n in names):
+            found.append(ini_path)
+    if len(found) > 1:
+        raise ConfigError(
+            f"{hal}: a HAL file given alone, and {len(found)} INIs beside it name it as a "
+            f"HALFILE ({', '.join(f.name for f in found[:5])}): give the INI to read"
+        )
+    return found[0] if found else None
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
 
 
 def _find(folder: Path, name: str, libs: list[Path]) -> Path | None:

@@ -170,6 +170,11 @@ def _time(
             "unchecked",
             f"configured {format_ns(configured)} {label}; not measured ({seen.unmeasured.format(rule=rule)})",
         )
+    if fig.status == "not_enforced":
+        return Comparison(what, rule, configured, measured, "ns", at, fig.setting, where,
+                          "unchecked",
+                          f"configured {format_ns(configured)} {label}, which the firmware does "
+                          f"not enforce; shortest measured {format_ns(measured)}")  # fmt: skip
     t = seen.resolution_ns
     exact = (
         "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"

@@ -7,11 +7,14 @@ pulses are high, else the low time. DIR setup/hold count from the drive's active
 is the pulse's trailing edge, setup gains the pulse width and hold is the trailing-edge hold. A
 generator in both-edge mode configures the drive (TMC ``dedge``) to count both edges.
 ``step_period`` compares the axis's configured max step rate with the drive's. The max step rate
-of the pair is min(the drive's max rate, 1 / (pulse + the drive's minimum for the idle level)), or
-1 / the longest of the pulse and the two level minimums in both-edge mode.
+of the pair is the smallest of the generator's max rate, the drive's, and 1 / (pulse + the
+drive's minimum for the idle level), or 1 / the longest of the pulse and the two level minimums
+in both-edge mode.
 
 A figure whose sources disagree (:attr:`Guaranteed.disputed`) is judged under both readings: a
-rule that passes under one and fails under the other is indeterminate, and says so.
+rule that passes under one and fails under the other is indeterminate, and says so. A figure the
+firmware does not enforce (status ``not_enforced``) is never a PASS: it is indeterminate, with the
+note saying why and how to measure it; a setting that asks for too little still FAILs.
 :class:`ConfigResult` holds every pair, the overall verdict (:mod:`wavecheck.verdict`) and the
 rules that were not checked, with why.
 """
@@ -128,7 +131,7 @@ def _mapping(
     hold is the generator's DIR delay or hold (from the trailing edge when the drive's active
     edge ends the pulse); the rate rule the maximum step rate."""
     edge = "both" if g.both_edges else drive.active_edge
-    trailing = edge != g.leading_edge and not g.both_edges
+    trailing = _trailing(g, drive)
     if r.check == "width":
         role: Role = "pulse" if r.level == g.pulse_level else "idle"
         return role, g.figure(role), Fraction(0), ""
@@ -145,6 +148,11 @@ def _mapping(
     if r.figure == "max_rate":
         return "max_rate", g.max_rate, Fraction(0), ""
     return None, None, Fraction(0), _SILENT
+
+
+def _trailing(g: GeneratorGuarantee, drive: Drive) -> bool:
+    """The drive's active edge ends the generator's pulse."""
+    return not g.both_edges and drive.active_edge != g.leading_edge
 
 
 def _as_ns(v: Fraction | None, rate: bool, offset: Fraction) -> Fraction | None:
@@ -184,12 +192,16 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if fig is not None and fig.note
                 else note or "no bound in the configuration"
             )
-            why += "" if why.endswith("measure it") else "; measure it"
+            why += "" if "measure it" in why else "; measure it"
             rows.append(PairRow(r.id, role, None, fig, limit, limit_fig, None, "indeterminate",
                                 note=why))  # fmt: skip
             continue
         margin = value - limit
         verdict = _judge(value, limit)
+        if fig is not None and fig.status == "not_enforced":
+            note = "; ".join(x for x in (note, fig.note) if x)
+            if verdict == "pass":
+                verdict = "indeterminate"  # the setting meets the limit; the firmware need not
         if other is not None:
             second = _judge(other, limit)
             said = f"{format_ns(value)} under the reading used, {format_ns(other)} under the other"
@@ -204,10 +216,8 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if role == "max_rate"
                 else limit - offset
             )
-            if role == "hold" and "trailing" in note and g.pulse.value is not None:
-                need = limit + g.pulse.value  # a trailing-edge hold, as a leading-edge one
-                note += " (inverting STEP would make it the leading edge)"
-            fix = config.fix(g, role, need)
+            fix = config.fix(g, "trailing_hold" if role == "hold" and _trailing(g, drive) else role,
+                             need)  # fmt: skip
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
     notes = list(g.notes)
     if drive.active_edge == "both" and not g.both_edges:
@@ -234,5 +244,6 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
         total = width + (idle_lim or Fraction(0))
         known = idle_lim is not None or pulse is not None
         timing = _GIGA / total if total > 0 and known else None
-    rates = [v for v in (timing, drive.max_rate.value if drive.max_rate else None) if v is not None]
+    drive_rate = drive.max_rate.value if drive.max_rate else None
+    rates = [v for v in (timing, drive_rate, g.max_rate.value) if v is not None]
     return min(rates) if rates else None

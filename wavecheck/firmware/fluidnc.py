@@ -3,7 +3,7 @@
 
 Read with PyYAML (the node tree keeps every value's line): ``stepping:`` ``engine`` (default RMT),
 ``pulse_us`` (default 4, 0..30), ``dir_delay_us`` (default 0, 0..10), ``disable_delay_us``;
-``i2so: min_pulse_us`` (the I2S frame, default 2 µs); per axis ``steps_per_mm``,
+per axis ``steps_per_mm``,
 ``max_rate_mm_per_min`` and ``motor0``/``motor1`` with one driver section that has a
 ``step_pin`` (``standard_stepper``, ``stepstick``, ``tmc_2209`` …; an ``rc_servo`` or other
 motor without one is not a step generator). ``gpio.26:low`` is an inverted pin. FluidNC's own
@@ -17,10 +17,12 @@ What each engine guarantees at the pin:
 - **TIMED**: the CPU raises the pin, spins ``pulse_us`` and lowers it; ``dir_delay_us`` is spun
   after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
   (``uncertain``).
-- **I2S_STATIC / I2S_STREAM**: pins change only at I2S frame boundaries; the pulse is raised to
-  at least one frame, capped at 20 µs, rounded up to whole frames; ``dir_delay_us`` becomes
-  whole frames before the step, rounded down (``i2s_out_push_sample`` divides by the frame;
-  I2S_STREAM pushes at least one), so a delay under one frame may be none on I2S_STATIC.
+- **I2S_STATIC / I2S_STREAM** (one engine under two names in current FluidNC): DIR is shifted
+  out at once and the CPU spins ``dir_delay_us`` before the step (the I2S engine's
+  ``finish_dir``: ``delay_us(dir_delay_us)``); the step is shifted out, the CPU spins until
+  ``pulse_us`` has passed and shifts it back (``finish_step``/``start_unstep``): both are spun,
+  not hardware-timed (``uncertain``). Older builds quantised both to I2S frames; the current
+  engine decides.
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
 after the last pulse's leading edge when the step rate stays under the engine's maximum
@@ -41,10 +43,10 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
-    ceil_to,
+    at_most,
     unknown,
 )
 
@@ -54,19 +56,28 @@ __all__ = ["ENGINES", "looks_like", "read"]
 ENGINES = ("RMT", "TIMED", "I2S_STATIC", "I2S_STREAM")
 _US = Fraction(1000)
 _RMT_TICK_NS = Fraction(250)  # RMT clock 4 ticks/us: a dir_delay of 0 is one tick
-_I2S_MAX_US = 20
-_I2S_FRAME_US = 2
-_NO_SPACE = re.compile(r"^(\s*[A-Za-z0-9_]+)\s*:(?=[^\s])", re.M)
+_NO_SPACE = re.compile(r"^([ \t]*[A-Za-z0-9_]+)[ \t]*:(?=[^\s])", re.M)
 _AXES = "xyzabcuvw"
+
+
+#: Top-level sections only FluidNC machine files have (a file with two of them is FluidNC's,
+#: whether or not it has motors).
+_TOP = re.compile(
+    r"^(stepping|axes|i2so|kinematics|coolant|probe|control|macros|user_outputs|sdcard|spi)"
+    r"[ \t]*:[ \t\r]*(?:#.*)?$",
+    re.M,
+)
 
 
 def looks_like(text: str) -> bool:
     """A FluidNC machine file: YAML with a top-level ``axes:`` mapping holding axis mappings
-    (``  x:``), no ``[section]`` headers (Klipper's ``axes: z`` is a value, not a mapping)."""
-    return (
-        bool(re.search(r"^axes\s*:\s*(#.*)?$", text, re.M))
-        and bool(re.search(r"^\s+[xyzabc]\s*:\s*(#.*)?$", text, re.M))
-        and not re.search(r"^\[[^\]]+\]\s*$", text, re.M)
+    (``  x:``) or two of FluidNC's top-level sections, no ``[section]`` headers (Klipper's
+    ``axes: z`` is a value, not a mapping)."""
+    if re.search(r"^\[[^\]\n]+\][ \t\r]*$", text, re.M):
+        return False
+    found = set(_TOP.findall(text))
+    return len(found) >= 2 or (
+        "axes" in found and bool(re.search(r"^[ \t]+[xyzabc][ \t]*:[ \t\r]*(#.*)?$", text, re.M))
     )
 
 
@@ -98,13 +109,16 @@ def _items(node: yaml.Node | None) -> Iterator[tuple[str, yaml.Node]]:
 
 
 def _child(node: yaml.Node | None, key: str) -> yaml.Node | None:
+    """The section ``key`` of ``node``: the first one when it is repeated."""
     return next((v for k, v in _items(node) if k == key), None)
 
 
 def _scalar(node: yaml.Node | None, key: str) -> _Value | None:
-    found = _child(node, key)
-    if isinstance(found, yaml.ScalarNode):
-        return _Value(str(found.value).strip(), found.start_mark.line + 1)
+    """The value of ``key``: the last one when it is repeated (FluidNC's parser assigns each
+    ``key: value`` line as it reads it, so a later line overwrites an earlier one)."""
+    found = [v for k, v in _items(node) if k == key and isinstance(v, yaml.ScalarNode)]
+    if found:
+        return _Value(str(found[-1].value).strip(), found[-1].start_mark.line + 1)
     return None
 
 
@@ -136,14 +150,16 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     notes = [
         f"stepping engine {engine} ({engine_at}); pulse_us and dir_delay_us apply to every motor"
     ]
-    pulse, frame = _engine_pulse(p, root, engine, pulse, notes)
-    setup = _setup(engine, dir_delay, frame)
+    pulse = _engine_pulse(engine, pulse)
+    setup = _setup(engine, dir_delay)
     engine_max = _engine_rate(engine, pulse, dir_delay)
     axes_node = _child(root, "axes")
     axes: list[GeneratorGuarantee] = []
+    seen: set[str] = set()
     for name, axis_node in _items(axes_node):
-        if name not in _AXES:
-            continue
+        if name not in _AXES or name in seen:
+            continue  # a repeated axis section: the first is read
+        seen.add(name)
         for motor in ("motor0", "motor1"):
             driver = _driver(_child(axis_node, motor))
             if driver is None:
@@ -164,56 +180,32 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )
 
 
-def _engine_pulse(
-    path: str, root: yaml.Node, engine: str, pulse: Guaranteed, notes: list[str]
-) -> tuple[Guaranteed, Fraction | None]:
-    """The pulse as the engine makes it, and the I2S frame (ns) or None."""
-    if not engine.startswith("I2S"):
-        status = "set" if engine == "RMT" else "uncertain"
-        note = (
-            "RMT: hardware-timed"
-            if engine == "RMT"
-            else "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
-        )
-        return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", status, note), None  # type: ignore[arg-type]
-    frame_v = _scalar(_child(root, "i2so"), "min_pulse_us")
-    frame_us = (
-        number(
-            frame_v.text, where(path, frame_v.line), "i2so min_pulse_us", low=1, high=_I2S_MAX_US
-        )
-        if frame_v
-        else Fraction(_I2S_FRAME_US)
+def _engine_pulse(engine: str, pulse: Guaranteed) -> Guaranteed:
+    """The pulse as the engine makes it."""
+    if engine == "RMT":
+        return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", pulse.status,
+                          "RMT: hardware-timed")  # fmt: skip
+    note = (
+        "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
+        if engine == "TIMED"
+        else "I2S: the step is shifted out, the CPU spins pulse_us, then shifts it back"
     )
-    frame = frame_us * _US
-    assert pulse.value is not None
-    wanted = min(max(pulse.value, frame), _I2S_MAX_US * _US)
-    made = ceil_to(wanted, frame)
-    note = f"I2S: pins change on {float(frame_us):g} us frames; pulse {float(made / _US):g} us"
-    if made != pulse.value:
-        notes.append(f"FluidNC adjusts stepping/pulse_us to {float(made / _US):g} us ({note})")
-    return Guaranteed(made, pulse.setting, pulse.where, "us", "derived", note), frame
+    return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", "uncertain", note)
 
 
-def _setup(engine: str, dir_delay: Guaranteed, frame: Fraction | None) -> Guaranteed:
+def _setup(engine: str, dir_delay: Guaranteed) -> Guaranteed:
     dd = dir_delay.value or Fraction(0)
     if engine == "RMT":
         value = dd if dd else _RMT_TICK_NS
         note = "RMT: every pulse starts with dir_delay_us at the idle level (one 0.25 us tick at 0)"
         return Guaranteed(value, dir_delay.setting, dir_delay.where, "us", "set", note)
-    if engine == "TIMED":
-        note = "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
-        return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
-    assert frame is not None
-    frames = dd // frame
-    if engine == "I2S_STREAM" and dd:
-        frames = max(frames, 1)  # i2s_out_push_sample: whole frames, at least one sample
     note = (
-        "I2S: dir_delay_us becomes whole frames before the step (FluidNC's I2SOut.cpp divides "
-        "it by the frame"
-        + (", at least one" if engine == "I2S_STREAM" else "; DIR and STEP may share a frame")
-        + ")"
+        "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
+        if engine == "TIMED"
+        else "I2S: DIR is shifted out at once and the CPU spins dir_delay_us before the step "
+        "(the I2S engine's finish_dir; 0: DIR right before STEP)"
     )
-    return Guaranteed(frames * frame, dir_delay.setting, dir_delay.where, "us", "derived", note)
+    return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
 
 
 def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fraction | None:
@@ -226,8 +218,10 @@ def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fract
 
 
 def _driver(motor: yaml.Node | None) -> tuple[str, yaml.Node] | None:
+    """The motor's driver section with a step pin (``NO_PIN`` is none: no step generator)."""
     for kind, node in _items(motor):
-        if _scalar(node, "step_pin") is not None:
+        pin = _scalar(node, "step_pin")
+        if pin is not None and pin.text.strip().lower() not in ("no_pin", ""):
             return kind, node
     return None
 
@@ -254,7 +248,10 @@ def _axis(
 ) -> GeneratorGuarantee:
     step_pin, step_low = _pin(_scalar(drv, "step_pin"))
     _, dir_low = _pin(_scalar(drv, "direction_pin"))
-    info = {"driver": f"{kind} ({motor}, step_pin {step_pin})"}
+    info = {
+        "driver": f"{kind} ({motor}, step_pin {step_pin})",
+        "engine": engine,
+    }
     spm_v = _scalar(axis_node, "steps_per_mm")
     rate_v = _scalar(axis_node, "max_rate_mm_per_min")
     max_rate = Guaranteed(None, "max_rate_mm_per_min", "", "mm/min", "unknown", "not set")
@@ -300,18 +297,28 @@ def _axis(
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    us = -(-need // _US)
-    if role in ("pulse", "hold"):
-        return f"set `stepping: pulse_us: {us}` (whole us, at most 30)"
-    if role == "setup":
-        return f"set `stepping: dir_delay_us: {us}` (whole us, at most 10)"
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    engine = axis.info.get("engine", "RMT").split(" ")[0]
+    if role in ("pulse", "hold", "setup"):
+        key, top = ("dir_delay_us", 10) if role == "setup" else ("pulse_us", 30)
+        us: Fraction = max(Fraction(-(-need // _US)), Fraction(1 if role != "setup" else 0))
+        if us > top:
+            return (
+                f"FluidNC tops out at {key} {top} us with the {engine} engine: this drive needs "
+                f"{float(us):g} us"
+            )
+        return f"set `stepping: {key}: {us}` (whole us, at most {top})"
+    if role == "trailing_hold":
+        return (
+            "FluidNC may change DIR right after the pulse ends: invert the step pin (add or "
+            f"remove `:low`) of {axis.axis} so that the drive's active edge starts the pulse"
+        )
     if role == "idle" and axis.pulse.value is not None:
         need = Fraction(10**9) / (axis.pulse.value + need)
     spm = axis.info.get("steps/mm", "").split(" ")[0]
     if spm:
         return (
-            f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min` to at most "
-            f"{float(need * 60 / Fraction(spm)):.6g}"
+            f"set `{axis.axis.split('.')[0]}: max_rate_mm_per_min: "
+            f"{at_most(need * 60 / Fraction(spm))}`"
         )
     return f"lower `{axis.axis.split('.')[0]}: max_rate_mm_per_min`"

@@ -12,8 +12,10 @@ names the ESP32 or has settings for more than three axes without them; grbl othe
 without ``$0`` uses the flavour's default, marked as such (grbl 10 µs, grblHAL 5 µs; Grbl_ESP32's
 default is machine-specific: unknown).
 
-Guarantees: the pulse is ≈ ``$0`` (grbl calibrates an interrupt-overhead offset on a 0.5 µs timer;
-grblHAL rounds per driver; Grbl_ESP32 uses RMT or I2S) — status ``uncertain``. DIR is written a
+Guarantees: grbl 1.1's pulse is at least ``$0`` − 562.5 ns (Timer0 loaded with ``$0`` − 2 µs
+for the interrupt overhead, 62.5–562.5 ns short of ``$0`` by the clk/8 prescaler's phase:
+``stepper.c`` 241, 344-345, and cycle-true runs); grblHAL rounds per driver and Grbl_ESP32 uses
+RMT or I2S, so theirs is ≈ ``$0`` (``uncertain``). DIR is written a
 few CPU cycles before STEP (setup ≈ 0) unless grblHAL's ``$29`` is set (Grbl_ESP32 keeps its DIR
 delay outside the numbered settings: unknown); hold after the leading edge ≥ one step tick ≥ the
 pulse. The max step rate of an axis is ``$10n × $11n / 60``; grbl does not enforce its 30 kHz.
@@ -30,9 +32,10 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
     unknown,
 )
 
@@ -50,6 +53,16 @@ FLAVOURS: dict[str, Fraction | None] = {
     "Grbl_ESP32": None,
 }
 _US = 1000
+#: grbl 1.1h's pulse is 62.5-562.5 ns (1-9 cycles at 16 MHz) shorter than $0: stepper.c:241
+#: loads Timer0 with ($0 - 2) us of clk/8 counts for the interrupt overhead, 344-345 start it
+#: after STEP is written, and the free-running clk/8 prescaler makes the first count come 1-8
+#: cycles later; measured on a cycle-true simulator: 151-159 cycles at $0=10, 39-46 at $0=3
+#: (../shared/firmware-src/README.md). The bound is the shortest: $0 - 9 cycles.
+_GRBL_SHORT_NS = Fraction(1125, 2)
+_GRBL_PULSE = (
+    "grbl 1.1h: $0 - 2 us of Timer0 counts plus the interrupt overhead, 62.5-562.5 ns short of "
+    "$0 by the clk/8 prescaler's phase (stepper.c:241, 344-345): at least $0 - 562.5 ns"
+)
 _PULSE_NOTES = {
     "grbl": "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on "
     "a scope, not enforced)",
@@ -150,10 +163,15 @@ def _pulse(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
         if default is None:
             return unknown("$0", f"{flavour}: no $0 in the dump and the default is per machine")
         note = f"{flavour}'s default $0 (the dump has no $0 line): {default} us"
+        if flavour == "grbl":
+            return Guaranteed(default * _US - _GRBL_SHORT_NS, "$0", "firmware default", "us",
+                              "default", f"{note}; {_GRBL_PULSE}")  # fmt: skip
         return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note)
     us0, raw0, line0 = settings[0]
     at = where(path, line0)
     number(raw0, at, "$0 (step pulse)", low=0, high=255, unit="us")
+    if flavour == "grbl":
+        return Guaranteed(us0 * _US - _GRBL_SHORT_NS, "$0", at, "us", "derived", _GRBL_PULSE)
     return Guaranteed(us0 * _US, "$0", at, "us", "uncertain", _PULSE_NOTES[flavour])
 
 
@@ -193,7 +211,7 @@ def _axis(
 ) -> GeneratorGuarantee:
     spm_at = where(path, spm[2])
     number(spm[1], spm_at, f"${100 + bit} (steps/mm)", low=0, high=10**7)
-    info = {"steps/mm": f"{spm[1]} (${100 + bit}, {spm_at})"}
+    info = {"steps/mm": f"{spm[1]} (${100 + bit}, {spm_at})", "$2": f"{step_mask} (step invert)"}
     if rate is not None:
         rate_at = where(path, rate[2])
         number(rate[1], rate_at, f"${110 + bit} (max rate)", low=0, high=10**9, unit="mm/min")
@@ -238,8 +256,9 @@ def _axis(
     )
 
 
-def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
+def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
     hal = flavour == "grblHAL"
+    short = _GRBL_SHORT_NS if flavour == "grbl" else Fraction(0)
 
     def us(ns: Fraction) -> str:
         v = ns / _US
@@ -247,14 +266,21 @@ def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
             return f"{float(-(-v * 10 // 1) / 10):g}"
         return str(-(-v // 1))
 
-    def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         bit = _AXES.index(axis.axis) if axis.axis in _AXES else 0
         if role in ("pulse", "hold"):
-            low = " (grbl refuses values below 3)" if flavour == "grbl" and need < 3000 else ""
-            return f"set `$0` to at least {us(need)} us{low}"
+            value = max(need + short, Fraction(3000) if flavour == "grbl" else Fraction(0))
+            return f"set `$0={us(value)}` (us)"
+        if role == "trailing_hold":
+            mask = int(axis.info.get("$2", "0").split(" ")[0]) ^ (1 << bit)
+            return (
+                f"set `$2={mask}` and `$0={us(max(need + short, Fraction(3000)))}`: grbl may "
+                f"change DIR right after a pulse, so invert {axis.axis}'s STEP to make the "
+                "drive's active edge start the pulse, which grbl holds DIR through"
+            )
         if role == "setup":
             if hal:
-                return f"set `$29` to at least {us(need)} us (drivers that support it)"
+                return f"set `$29={us(need)}` (us; drivers that support it)"
             if flavour == "Grbl_ESP32":
                 return (
                     f"set Grbl_ESP32's direction delay to at least {us(need)} us (a named or "
@@ -268,8 +294,7 @@ def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
         if role == "idle" and axis.pulse.value is not None:
             need = Fraction(10**9) / (axis.pulse.value + need)
         if spm and Fraction(spm) > 0:
-            mm_min = need * 60 / Fraction(spm)
-            return f"lower `${110 + bit}` to at most {float(mm_min):.6g} mm/min"
+            return f"set `${110 + bit}={at_most(need * 60 / Fraction(spm))}` (mm/min)"
         return f"lower `${110 + bit}`"
 
     return fix

@@ -26,6 +26,7 @@ from wavecheck.errors import ConfigError
 
 __all__ = [
     "FIRMWARES",
+    "FixRole",
     "Fixer",
     "FirmwareConfig",
     "GStatus",
@@ -33,7 +34,11 @@ __all__ = [
     "GeneratorGuarantee",
     "Guaranteed",
     "Role",
+    "MEASURE_HOW",
+    "at_least",
+    "at_most",
     "ceil_to",
+    "not_enforced",
     "unknown",
 ]
 
@@ -55,11 +60,16 @@ MAX_AXES = 256
 Role = Literal["pulse", "idle", "setup", "hold", "max_rate"]
 """A generator figure: pulse width, time between pulses, DIR setup/hold, max step rate."""
 
-GStatus = Literal["set", "default", "derived", "uncertain", "unknown"]
+GStatus = Literal["set", "default", "derived", "uncertain", "not_enforced", "unknown"]
 """``set`` = written in the file; ``default`` = the firmware's default (the file says nothing);
 ``derived`` = computed from settings (rounding, rate → low time); ``uncertain`` = the firmware
-aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding); ``unknown`` =
-no bound can be read from the configuration."""
+aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding);
+``not_enforced`` = no code of the firmware keeps it (the value, if any, is what the setting asks
+for: a rule it passes is indeterminate, one it fails still fails); ``unknown`` = no bound can be
+read from the configuration."""
+
+#: How to measure a figure the configuration cannot decide.
+MEASURE_HOW = "capture STEP and DIR, then `wavecheck check --firmware FILE`"
 
 
 @dataclass(frozen=True)
@@ -90,6 +100,15 @@ class Guaranteed:
 def unknown(setting: str, note: str, where: str = "") -> Guaranteed:
     """A figure the configuration cannot prove (``value`` None, status ``unknown``)."""
     return Guaranteed(None, setting, where, "", "unknown", note)
+
+
+def not_enforced(
+    setting: str, why: str, where: str = "", value: Fraction | None = None, unit: str = ""
+) -> Guaranteed:
+    """A figure no code of the firmware keeps (``why`` names the code, file:line): never a
+    PASS. ``value``: what the setting asks for, when it has one (a FAIL under it stands)."""
+    note = f"not enforced by the firmware: measure it ({MEASURE_HOW}); {why}"
+    return Guaranteed(value, setting, where, unit, "not_enforced", note)
 
 
 @dataclass(frozen=True)
@@ -165,13 +184,41 @@ _FIELDS: dict[str, str] = {
     "max_rate": "max_rate",
 }  # fmt: skip
 
-Fixer = Callable[[GeneratorGuarantee, "Role", Fraction], str]
+FixRole = Literal["pulse", "idle", "setup", "hold", "trailing_hold", "max_rate"]
+"""What a fix must reach: a :data:`Role`, or ``trailing_hold`` (DIR hold after the pulse's
+trailing edge, the drive's active edge)."""
+
+Fixer = Callable[[GeneratorGuarantee, FixRole, Fraction], str]
 """(axis, role, value needed: ns, or Hz for ``max_rate``) → the setting to change, in the
-firmware's own words ("set `$0` to at least 5 us")."""
+firmware's own words, the value in backticks as it is written in the file (``set `$0=5```):
+applied as written, it makes that rule pass."""
 
 
-def _no_fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+def _no_fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     return ""
+
+
+def _digits(value: Fraction, up: bool, digits: int = 6) -> str:
+    if value <= 0:
+        return "0"
+    scale = Fraction(10) ** (digits - len(str(int(value))) if value >= 1 else digits)
+    scaled = value * scale
+    whole = (
+        -(-scaled.numerator // scaled.denominator) if up else scaled.numerator // scaled.denominator
+    )
+    text = str(float(Fraction(whole) / scale))  # a 6-digit decimal prints exactly
+    return text[:-2] if text.endswith(".0") else text
+
+
+def at_least(value: Fraction, digits: int = 6) -> str:
+    """``value`` as decimal text rounded *up* to ``digits`` significant digits (a bound a fix
+    must not fall short of)."""
+    return _digits(value, True, digits)
+
+
+def at_most(value: Fraction, digits: int = 6) -> str:
+    """``value`` as decimal text rounded *down* to ``digits`` significant digits."""
+    return _digits(value, False, digits)
 
 
 @dataclass(frozen=True)
@@ -226,7 +273,7 @@ class FirmwareConfig:
         """The axis names, in order."""
         return tuple(a.axis for a in self.axes)
 
-    def fix(self, axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    def fix(self, axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         """The setting to change so that ``role`` reaches ``need``."""
         return self.fixer(axis, role, need)
 

@@ -6,11 +6,12 @@ most 0x3FFF clocks); the firmware holds the pulse and the space N+1 clocks, so
 ``step_high ≥ (⌊steplen·f⌋+1)/f > steplen`` always: without the clock the set value is the bound.
 DIR setup loads N clocks (≈ ⌊dirsetup·f⌋/f, up to one clock short: ``uncertain``).
 
-DIR hold: the man page says dirhold counts "after a step ends", the VHDL
-(``kubstepgenz.vhd``) loads the hold counter when the pulse starts. This reader uses the man
-page's reading — hold from the leading edge = steplen + dirhold, from the trailing edge =
-dirhold — and keeps the VHDL's (dirhold, and dirhold − steplen) as the disputed figure: a rule
-whose verdict differs under the two readings is indeterminate, and the note names both.
+DIR hold is what the hardware does, not what the man page says ("after a step ends"): the VHDL
+(hostmot2 ``kubstepgenz.vhd``, simulated under GHDL with the registers as the hm2 driver writes
+them) loads the hold counter when the pulse starts, so DIR may change max(steplen, dirhold) after
+the leading edge, max(0, dirhold − steplen) after the trailing edge (steplen 2.01 µs, dirhold
+1.02 µs: DIR changed in the clock of STEP's falling edge; dirhold 20 µs, steplen ~4.5 µs: 15.48
+µs after it). Without the clock the trailing figure may be up to two clocks short (``uncertain``).
 Max rate: 1e9/(steplen + stepspace), and maxvel × |position-scale| when maxvel is set. Unset
 parameters start at 0x3FFF clocks.
 """
@@ -22,7 +23,13 @@ from fractions import Fraction
 
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware._text import number
-from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware.guarantee import (
+    FixRole,
+    GeneratorGuarantee,
+    Guaranteed,
+    at_least,
+    at_most,
+)
 from wavecheck.firmware.linuxcnc import joint_of
 from wavecheck.linuxcnc.files import resolve_ref
 
@@ -32,9 +39,9 @@ __all__ = ["STEPGEN", "axes", "fix"]
 STEPGEN = re.compile(r"^(hm2_[^.\s]+\.\d+)\.stepgen\.(\d+)\.([a-z_-]+)$")
 _PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "position-scale", "maxvel", "step_type")
 _REG_MAX = 0x3FFF
-_DISPUTE = (
-    "the man page counts dirhold after the step ends (used here); the VHDL (kubstepgenz.vhd) "
-    "counts it from the step's start"
+_VHDL = (
+    "the hold counter starts with the pulse (hostmot2 kubstepgenz.vhd, as simulated), not after "
+    "the step ends as the man page says"
 )
 
 
@@ -83,7 +90,7 @@ def _axis(
     idle = fig("stepspace", 1, "set")
     setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
     hold_raw = fig("dirhold", 0, "uncertain")
-    hold, trailing = _hold(pulse, hold_raw)
+    hold, trailing = _hold(pulse, hold_raw, f is not None)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
@@ -91,7 +98,7 @@ def _axis(
                           "1e9 / (steplen + stepspace)", pulse.where, "ns", "derived")  # fmt: skip
     mv, scale = params.get("maxvel"), params.get("position-scale")
     if scale:
-        info["position-scale"] = f"{float(scale[0]):g} steps/unit ({scale[1]})"
+        info["position-scale"] = f"{scale[0]} steps/unit ({scale[1]})"
     if mv and scale and mv[0] > 0:
         info["maxvel"] = f"{float(mv[0]):g} units/s ({mv[1]})"
         hz = mv[0] * abs(scale[0])
@@ -121,32 +128,35 @@ def _axis(
     )
 
 
-def _hold(pulse: Guaranteed, hold: Guaranteed) -> tuple[Guaranteed, Guaranteed]:
-    """(from the leading edge, from the trailing edge) under the man page's reading, each with
-    the VHDL's reading as the disputed figure."""
+def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guaranteed, Guaranteed]:
+    """(from the leading edge, from the trailing edge): the hold counter starts with the pulse
+    (kubstepgenz.vhd), so max(steplen, dirhold) and max(0, dirhold - steplen)."""
     if hold.value is None or pulse.value is None:
         return (
-            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note or _DISPUTE),
-            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note or _DISPUTE),
+            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note),
+            Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note),
         )
-    lead = Guaranteed(pulse.value + hold.value, "steplen + dirhold", hold.where, "ns", "uncertain",
-                      f"{_DISPUTE}: VHDL {float(hold.value):g} ns",
-                      disputed=hold.value)  # fmt: skip
-    vhdl_trailing = max(hold.value - pulse.value, Fraction(0))
-    trail = Guaranteed(hold.value, "dirhold", hold.where, "ns", "uncertain",
-                       f"{_DISPUTE}: VHDL {float(vhdl_trailing):g} ns", disputed=vhdl_trailing)  # fmt: skip
+    lead = Guaranteed(max(pulse.value, hold.value), "max(steplen, dirhold)", hold.where, "ns",
+                      hold.status, f"{_VHDL}; {hold.note}" if hold.note else _VHDL)  # fmt: skip
+    short = "" if clocked else "; without the stepgen clock up to two clocks short"
+    trail = Guaranteed(max(hold.value - pulse.value, Fraction(0)), "dirhold - steplen",
+                       hold.where, "ns", "derived" if clocked else "uncertain",
+                       f"{_VHDL}{short}")  # fmt: skip
     return lead, trail
 
 
-def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    """The hm2 setting to change so that ``role`` reaches ``need``."""
+def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    """The hm2 ``setp`` line to add so that ``role`` reaches ``need`` (the INI value the HAL
+    file names, ``STEPLEN`` …, is the other place to change it)."""
+    full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
     name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-            "hold": "dirhold"}.get(role)  # fmt: skip
+            "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
     if name is None:
-        return f"lower hm2_….{axis.axis}.maxvel so that it steps at most {float(need):.6g} steps/s"
-    if role == "hold":
-        # both readings: the VHDL's counts from the step's start, so dirhold alone must reach it
-        return (
-            f"set hm2_….{axis.axis}.dirhold (the INI's DIRHOLD) to at least {int(-(-need // 1))} ns"
-        )
-    return f"set hm2_….{axis.axis}.{name} (the INI's {name.upper()}) to at least {int(-(-need // 1))} ns"
+        scale = axis.info.get("position-scale", "").split(" ")[0]
+        if scale and Fraction(scale):
+            return f"add `setp {full}.maxvel {at_most(need / abs(Fraction(scale)))}` (units/s)"
+        pulse = axis.pulse.value or Fraction(0)
+        return f"add `setp {full}.stepspace {at_least(Fraction(10**9) / need - pulse)}` (ns)"
+    if role == "trailing_hold" and axis.pulse.value is not None:
+        need += axis.pulse.value  # the hold counter starts with the pulse (kubstepgenz.vhd)
+    return f"add `setp {full}.{name} {int(-(-need // 1))}` (ns; the INI's {name.upper()})"

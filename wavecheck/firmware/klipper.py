@@ -12,10 +12,14 @@ stepper; ``[printer] kinematics``, ``max_velocity`` and ``max_z_velocity`` (mm/s
 Klipper's own rules: the default pulse is 2 µs, or 100 ns with both-edge stepping requested
 when a TMC section drives the stepper over UART/SPI; an explicit ``step_pulse_duration`` always
 wins. Both edges are used only for a pulse ≤ 500 ns on an MCU that is not AVR. On the full step
-path (ARM, single edge) pulse, space, DIR setup and DIR hold (from the leading edge) are each ≥
-the duration; on the AVR fast path (pulse ≤ 40 MCU ticks) the pulse is instruction time and on
-the both-edge fast path the MCU enforces no minimum: those figures are ``uncertain`` or unknown.
-The duration is truncated to whole MCU clock ticks (:data:`MCUS`, Klipper's Kconfig clocks).
+path (single edge) pulse, space, DIR setup and DIR hold (from the leading edge) are each ≥ the
+duration (klipper ``src/stepper.c`` 180-206, 111-121), and DIR changes right after the trailing
+edge. Not enforced by the firmware (never a PASS; "measure it"): every figure of the AVR fast
+path (pulse ≤ 40 ticks: both STEP writes in one event, ``stepper_event_avr`` 160-176) and of the
+optimised both-edge path (``step_pulse_ticks`` ≤ ⌈clock / 8 MHz⌉: ``stepper_event_edge`` 138-151,
+DIR toggled right after the last edge). The both-edge full path (longer pulses) keeps each edge,
+DIR setup and hold ≥ the duration (113-120, 184-195). The duration is truncated to whole MCU
+clock ticks (:data:`MCUS`, Klipper's Kconfig clocks).
 
 The MCU of each stepper is read from the chip names in the file's header comments and in its
 ``[mcu]`` section (its ``serial:`` path names the chip), and from its pins (a port pin numbered
@@ -42,9 +46,11 @@ from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     MAX_AXES,
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
+    not_enforced,
     unknown,
 )
 from wavecheck.linuxcnc.files import is_file
@@ -105,8 +111,8 @@ def looks_like(text: str) -> bool:
     """A Klipper config: ``[section]`` headers with ``key: value`` lines, one of them a
     ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section."""
     return bool(
-        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]]*\]", text, re.M)
-    ) and bool(re.search(r"^\w+\s*:", text, re.M))
+        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]\n]*\]", text, re.M)
+    ) and bool(re.search(r"^\w+[ \t]*:", text, re.M))
 
 
 def _parse(
@@ -362,32 +368,64 @@ def _axis(
         return Guaranteed(made, src[0], src[1], src[2], (st or status), text)  # type: ignore[arg-type]
 
     fast_avr = mcu.avr is not False and (
-        any(ns * f / 10**9 <= _AVR_FAST_TICKS for f in mcu.clocks) if mcu.clocks else ns <= 2500
+        any(int(ns * f / 10**9) <= _AVR_FAST_TICKS for f in mcu.clocks)
+        if mcu.clocks
+        else ns <= 2500
     )
     trailing: Guaranteed | None
     if both:
-        pulse = fig("uncertain",
-                    "both-edge fast path: toggles follow the host schedule; the MCU enforces no "
-                    "minimum")  # fmt: skip
-        idle, setup, hold, trailing = pulse, pulse, pulse, pulse
         notes.append(
             f"both-edge stepping ({tmc.name.split()[0] if tmc else ''} dedge): every STEP edge is a step"
         )
+        edge_path = _edge_path(made, mcu)
+        if edge_path is False:
+            # stepper_event_full with SF_SINGLE_SCHED: edges >= step_pulse_ticks apart
+            # (src/stepper.c:184-195), DIR toggled only after that time (113-116) and the next
+            # edge >= step_pulse_ticks after it (117-120)
+            pulse = fig(note="both-edge full path: each edge >= the duration after the last")
+            idle, setup, hold, trailing = pulse, pulse, pulse, pulse
+        else:
+            when = "" if edge_path else "if the MCU uses the optimised edge path (clock unknown): "
+            pulse = not_enforced(
+                "step_pulse_duration",
+                f"{when}stepper_event_edge toggles STEP at the host's schedule with no minimum "
+                "(klipper src/stepper.c:139-150)", src[1])  # fmt: skip
+            idle = pulse
+            setup = not_enforced(
+                "step_pulse_duration",
+                f"{when}DIR is toggled in stepper_load_next and the next edge follows at the "
+                "host's schedule (src/stepper.c:86-89, 126-127)", src[1])  # fmt: skip
+            hold = not_enforced(
+                "step_pulse_duration",
+                f"{when}DIR is toggled right after the move's last STEP toggle "
+                "(src/stepper.c:150 -> stepper_load_next, 126-127)", src[1])  # fmt: skip
+            trailing = hold
     elif fast_avr:
-        what = "AVR" if mcu.avr else "an AVR (the MCU is not identified)"
-        pulse = unknown("step_pulse_duration",
-                        f"on {what} the fast path makes both STEP writes in one event: the pulse "
-                        "is instruction time", src[1])  # fmt: skip
-        idle = fig("uncertain", "the next step is scheduled at least this long after the last one")
-        setup = fig("uncertain")
-        hold = unknown("step_pulse_duration",
-                       f"on {what} the fast path may toggle DIR between the two STEP edges",
-                       src[1])  # fmt: skip
-        trailing = None
+        what = "" if mcu.avr else "if the MCU is an AVR (not identified): "
+        where_ = src[1]
+        pulse = not_enforced(
+            "step_pulse_duration",
+            f"{what}stepper_event_avr writes both STEP edges in one event and never applies "
+            "step_pulse_ticks: the pulse is instruction time (klipper src/stepper.c:163-168, "
+            "238-240)", where_)  # fmt: skip
+        idle = not_enforced(
+            "step_pulse_duration",
+            f"{what}the time to the next step is the host's schedule (src/stepper.c:167)",
+            where_)  # fmt: skip
+        setup = not_enforced(
+            "step_pulse_duration",
+            f"{what}DIR is toggled in stepper_load_next and the next step follows at the host's "
+            "schedule (src/stepper.c:90-94, 126-127)", where_)  # fmt: skip
+        hold = not_enforced(
+            "step_pulse_duration",
+            f"{what}on a move's last step DIR is toggled between the two STEP edges "
+            "(src/stepper.c:173-174)", where_)  # fmt: skip
+        trailing = hold
     else:
         pulse, idle, setup, hold = fig(), fig(), fig(), fig()
         trailing = Guaranteed(Fraction(0), src[0], src[1], src[2], "derived",
-                              "DIR toggles right after the trailing edge")  # fmt: skip
+                              "DIR toggles right after the trailing edge "
+                              "(src/stepper.c:200-201 -> 111-116)")  # fmt: skip
     info: dict[str, str] = {"mcu": f"{mcu.name} ({mcu.why})"}
     spm, spm_text = _steps_per_mm(path, sec)
     if spm_text:
@@ -453,7 +491,26 @@ def _rate(
                       f"{kinematics}: {sec.name} moves {axis} alone")  # fmt: skip
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+def _edge_path(made: Fraction, mcu: _Mcu) -> bool | None:
+    """Does the MCU run both-edge stepping on its optimised edge path (src/stepper.c:233-235:
+    step_pulse_ticks <= EDGE_STEP_TICKS = ceil(clock / 8 MHz), line 132)? None: undecided."""
+    if mcu.clocks:
+        found = {int(made * f / 10**9) <= -(-f // 8_000_000) for f in mcu.clocks}
+        return found.pop() if len(found) == 1 else None
+    if made <= 125:
+        return True
+    return False if made > 250 else None
+
+
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    # whole us: a whole number of ticks of every whole-MHz MCU clock (the host truncates to ticks)
+    us: Fraction = max(Fraction(-(-need // 1000)), Fraction(1))
+    if role == "trailing_hold":
+        return (
+            f"invert step_pin in [{axis.axis}] (add or remove its `!`) and set "
+            f"`step_pulse_duration: {float(us / 10**6):.9g}` in [{axis.axis}]: Klipper changes DIR "
+            "right after the pulse ends, so the drive's active edge must start a pulse that long"
+        )
     if role == "max_rate" or (
         role == "idle"
         and not axis.both_edges
@@ -462,14 +519,17 @@ def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
         and axis.pulse.value >= need
     ):
         rate = need if role == "max_rate" else Fraction(10**9) / ((axis.pulse.value or 0) + need)
+        key = axis.max_rate.setting.split(" x ")[0]
+        speed = axis.info.get("max speed", "").split(" ")[0]
+        if axis.max_rate.value and speed:
+            value = Fraction(speed) * rate / axis.max_rate.value
+            return f"set `{key}: {at_most(value)}` in [printer] ({axis.axis} then steps at most {float(rate):.6g} steps/s)"
         return (
-            f"lower max_velocity in [printer] so that {axis.axis} steps at most "
-            f"{float(rate):.6g} steps/s"
+            f"lower {key} in [printer] so that {axis.axis} steps at most {float(rate):.6g} steps/s"
         )
-    s = float(need / 10**9)
     extra = (
         " (over 0.0000005 this turns both-edge stepping off)"
-        if axis.both_edges and need > _BOTH_EDGE_MAX_NS
+        if axis.both_edges and us * 1000 > _BOTH_EDGE_MAX_NS
         else ""
     )
-    return f"set `step_pulse_duration: {s:.9g}` in [{axis.axis}]{extra}"
+    return f"set `step_pulse_duration: {float(us / 10**6):.9g}` in [{axis.axis}]{extra}"

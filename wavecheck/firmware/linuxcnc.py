@@ -1,11 +1,13 @@
 """LinuxCNC's software stepgen: the channels a configuration loads (``loadrt stepgen``), read by
-:mod:`wavecheck.linuxcnc.config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
+:mod:`wavecheck.linuxcnc.stepgen_config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
 
 stepgen rounds each parameter up to whole base periods ``P``, and any base-thread run may be up to
 ``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on the wire:
 that is the guarantee (``stepgen plan``'s latency-aware answer; ``J`` = 0 when not given, with a
 note). Across a reversal the space between pulses is only dirhold + dirsetup periods; LinuxCNC's
 dirhold counts from the end of the pulse, so the hold from the leading edge is steplen + dirhold.
+DIR setup is what ``dirsetup`` asks for, not a bound stepgen keeps (LinuxCNC issue #2332): a rule
+that passes on it is indeterminate, one that fails still fails.
 
 The output pin: when ``stepgen.N.step`` drives a parallel-port pin (``net … parport.P.pin-NN-out``)
 its ``-invert`` makes pulses low, and with ``-reset 1`` and ``parport.P.reset`` in the base thread
@@ -24,9 +26,16 @@ from fractions import Fraction
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
-from wavecheck.firmware.guarantee import GeneratorGuarantee, Guaranteed, Role, unknown
-from wavecheck.linuxcnc.config import LinuxCNCConfig, read_config_lines
+from wavecheck.firmware.guarantee import (
+    FixRole,
+    GeneratorGuarantee,
+    Guaranteed,
+    at_most,
+    not_enforced,
+    unknown,
+)
 from wavecheck.linuxcnc.files import ini_value, int_ns
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
 
 __all__ = ["PinOut", "axes", "fixer", "joint_of", "pin_out"]
@@ -146,17 +155,22 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         if n["stepspace"] == 0:
             notes.append("stepspace 0 without the parport reset function: STEP stays high at the "
                          "top rate")  # fmt: skip
+    rate = _maxvel_clamp(files, cfg, rate)
     info = {
         "base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
         **{k: f"{v} base periods" for k, v in n.items()},
     }
+    if cfg.floats.get("position-scale"):
+        info["position-scale"] = f"{cfg.floats['position-scale']!r} steps/unit"
+    if step.pin:
+        info["reset"] = ".".join(step.pin.split(".")[:2])
     joint, letter = joint_of(files, f"stepgen.{cfg.channel}")
     aliases = tuple(a for a in (f"joint.{joint}" if joint is not None else "", letter) if a)
     return GeneratorGuarantee(
         axis=f"stepgen.{cfg.channel}",
         pulse=pulse,
         idle=idle,
-        dir_setup=fig(("dirsetup",), "dirsetup"),
+        dir_setup=_collapsible(fig(("dirsetup",), "dirsetup")),
         dir_hold=hold,
         max_rate=rate,
         pulse_level=0 if step.inverted else 1,
@@ -166,6 +180,34 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         notes=tuple(notes),
         aliases=aliases,
     )
+
+
+def _maxvel_clamp(files: LinuxCNCFiles, cfg: LinuxCNCConfig, rate: Guaranteed) -> Guaranteed:
+    """``rate``, or ``maxvel x |position-scale|`` when ``setp stepgen.N.maxvel`` is lower
+    (stepgen.c clamps the commanded velocity to maxvel when it is > 0)."""
+    maxvel, scale = cfg.floats.get("maxvel"), cfg.floats.get("position-scale")
+    if not maxvel or maxvel <= 0 or not scale:
+        return rate
+    hz = Fraction(repr(maxvel)) * abs(Fraction(repr(scale)))
+    if rate.value is not None and hz >= rate.value:
+        return rate
+    at = files.setp.get(f"stepgen.{cfg.channel}.maxvel", ("", ""))[1]
+    return Guaranteed(hz, "maxvel x |position-scale|", at, "units/s", "derived",
+                      f"stepgen clamps the velocity to maxvel {maxvel:g} units/s "
+                      f"(position-scale {scale:g} steps/unit)")  # fmt: skip
+
+
+#: LinuxCNC issue #2332 (open): stepgen.c can start a step sooner than dirsetup after a DIR change.
+DIRSETUP_COLLAPSE = (
+    "the software stepgen can fail to obey dirsetup (LinuxCNC issue #2332: a step follows a DIR "
+    "change sooner than dirsetup)"
+)
+
+
+def _collapsible(setup: Guaranteed) -> Guaranteed:
+    """The configured DIR setup as what stepgen aims at, not a bound it keeps (issue #2332)."""
+    return not_enforced(setup.setting, f"{DIRSETUP_COLLAPSE}; configured {setup.note}",
+                        setup.where, setup.value, setup.unit)  # fmt: skip
 
 
 def _reset(
@@ -180,9 +222,14 @@ def _reset(
                            f"the reset function lowers {step.pin} reset-time after the write "
                            f"(clamped to P/4 = {p // 4} ns)")  # fmt: skip
     width = pulse.value or Fraction(0)
-    idle = Guaranteed(max(p - width - j, Fraction(0)), "BASE_PERIOD - reset-time",
-                      src.get("BASE_PERIOD", ""), "ns", "derived",
-                      "the pin is written once per period: the rest of the period is idle, less J")  # fmt: skip
+    # a step starts at most every steplen + stepspace periods; with steplen > 1 the pin is set
+    # again each period of the step, so pulses are one period apart
+    apart = n["steplen"] + n["stepspace"] if n["steplen"] <= 1 else 1
+    idle = Guaranteed(max(max(apart, 1) * p - width - j, Fraction(0)),
+                      "(steplen + stepspace) x BASE_PERIOD - reset-time",
+                      src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
+                      "the pin is written once per step and reset within the period: the rest "
+                      "until the next step is idle, less J")  # fmt: skip
     lead = n["steplen"] + n["dirhold"]
     hold = Guaranteed(max(lead * p - j, Fraction(0)), "steplen + dirhold", src.get("dirhold", ""),
                       "ns", "derived", f"{lead} x {p} ns - J from the write that starts the pulse")  # fmt: skip
@@ -226,26 +273,49 @@ def _letter(files: LinuxCNCFiles, joint: int) -> str:
     return coords[joint].lower() if joint < len(coords) else ""
 
 
-def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
-    """How to say which stepgen setting to change, at latency ``j``."""
+def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+    """How to say which stepgen setting to change, at latency ``j``: a ``setp`` line to add
+    after the configuration's own (the last ``setp`` of a parameter wins)."""
 
-    def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         p = int(axis.info.get("base period", "0 ns").split(" ")[0])
         name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-                "hold": "dirhold"}.get(role)  # fmt: skip
-        if name is None or p <= 0:
-            return (
-                f"lower the joint's MAX_VELOCITY so that {axis.axis} steps at most "
-                f"{float(need):.6g} steps/s"
-            )
+                "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
+        if p <= 0:
+            return ""
+        if name is None:  # the rate: maxvel clamps it (stepgen.c), else steplen + stepspace
+            scale = axis.info.get("position-scale", "").split(" ")[0]
+            if scale and Fraction(scale):
+                vel = at_most(need / abs(Fraction(scale)))
+                return f"add `setp {axis.axis}.maxvel {vel}` (units/s; stepgen clamps to it)"
+            steplen = int(axis.info.get("steplen", "0").split(" ")[0])
+            periods = max(-(-Fraction(10**9) // (need * p)) - steplen, 1)
+            return f"add `setp {axis.axis}.stepspace {periods * p}` ({periods} base periods)"
         if role == "pulse" and axis.pulse.setting == "parport reset-time":
-            return f"set the parport reset-time to at least {int(-(-need // 1))} ns (at most P/4)"
+            value = int(-(-need // 1))
+            if value > p // 4:
+                return (
+                    f"the parport reset pulse is at most P/4 = {p // 4} ns: raise BASE_PERIOD to "
+                    f"at least {4 * value} ns"
+                )
+            return f"add `setp {axis.info.get('reset', 'parport.0')}.reset-time {value}` (ns)"
         if role == "hold":
             need -= int(axis.info.get("steplen", "0").split(" ")[0]) * p
+        if role == "idle" and axis.pulse.setting == "parport reset-time":
+            # (1 + stepspace) periods - reset-time - J (steplen 1, as StepConf sets it)
+            space = periods_needed(need + (axis.pulse.value or 0), j, p) - 1
+            return f"add `setp {axis.axis}.stepspace {space * p}` ({space} base periods of {p} ns)"
         periods = periods_needed(max(need, Fraction(0)), j, p)
-        return (
-            f"set {axis.axis}.{name} to at least {periods * p} ns ({periods} base periods of "
-            f"{p} ns at J = {float(j):g} ns)"
-        )
+        at_j = f"({periods} base periods of {p} ns at J = {float(j):g} ns)"
+        if role == "idle":  # across a reversal the space is dirhold + dirsetup
+            n = {k: int(axis.info.get(k, "0").split(" ")[0]) for k in ("dirhold", "dirsetup")}
+            if n["dirhold"] + n["dirsetup"] < periods:
+                hold = (periods - n["dirsetup"]) * p
+                return (
+                    f"add `setp {axis.axis}.stepspace {periods * p}` and "
+                    f"`setp {axis.axis}.dirhold {hold}` {at_j}: across a reversal the space is "
+                    "dirhold + dirsetup"
+                )
+        return f"add `setp {axis.axis}.{name} {periods * p}` {at_j}"
 
     return fix

@@ -22,7 +22,7 @@ from fractions import Fraction
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import hm2, linuxcnc
 from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles, is_ini, scan
-from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Role
+from wavecheck.firmware.guarantee import FirmwareConfig, FixRole, GeneratorGuarantee
 
 __all__ = ["UNMODELLED", "looks_like", "read"]
 
@@ -43,12 +43,12 @@ def looks_like(text: str) -> bool:
     if is_ini(text):
         return bool(
             re.search(
-                r"^\s*(\[(EMCMOT|HAL|KINS|TRAJ|EMCIO|EMC|DISPLAY|RS274NGC)\]|#INCLUDE\s)",
+                r"^[ \t]*(\[(EMCMOT|HAL|KINS|TRAJ|EMCIO|EMC|DISPLAY|RS274NGC)\]|#INCLUDE[ \t])",
                 text,
                 re.M,
             )
         )
-    return len(re.findall(r"^\s*(loadrt|setp|net|addf)\s", text, re.M)) >= 2
+    return len(re.findall(r"^[ \t]*(loadrt|setp|net|addf)[ \t]", text, re.M)) >= 2
 
 
 def read(
@@ -69,6 +69,9 @@ def read(
     if not soft and not hw:
         raise ConfigError(_none(files, "stepgen or hostmot2 stepgen"))
     notes = list(files.not_read)
+    if files.found_ini:
+        notes.insert(0, f"a HAL file given alone: read with {files.found_ini}, whose [HAL] "
+                        "HALFILE names it")  # fmt: skip
     unsupported = []
     for module, at in files.loads:
         if module in UNMODELLED:
@@ -98,7 +101,7 @@ def read(
         firmware="hm2" if hw and not soft else "linuxcnc",
         path=str(path),
         axes=tuple(soft + hw),
-        files=(str(path), *files.hal_files),
+        files=tuple(dict.fromkeys((str(path), *filter(None, [files.found_ini]), *files.hal_files))),
         unsupported=tuple(dict.fromkeys(unsupported)),
         notes=tuple(notes),
         fixer=_fixer({id(a) for a in hw}, linuxcnc.fixer(j)),
@@ -132,9 +135,9 @@ def _none(files: LinuxCNCFiles, what: str) -> str:
 
 
 def _fixer(
-    hw: set[int], soft: Callable[[GeneratorGuarantee, Role, Fraction], str]
-) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
-    def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    hw: set[int], soft: Callable[[GeneratorGuarantee, FixRole, Fraction], str]
+) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         return hm2.fix(axis, role, need) if id(axis) in hw else soft(axis, role, need)
 
     return fix

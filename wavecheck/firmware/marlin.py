@@ -40,9 +40,9 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import read_text
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
     unknown,
 )
 from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
@@ -243,6 +243,10 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
     return out
 
 
+#: The drivers Marlin 2.0.0's HAS_TRINAMIC counts (HAS_DRIVER of each; not the standalone ones).
+_TRINAMIC_200 = {"TMC2130", "TMC2160", "TMC2208", "TMC2209", "TMC2660", "TMC5130", "TMC5160"}
+
+
 def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
     """What Marlin's own headers derive from ``Configuration.h`` before ``Configuration_adv.h``
     (``drivers.h``, ``Conditionals``): ``HAS_DRIVER(T)``, ``AXIS_IS_TMC(A)``,
@@ -269,6 +273,11 @@ def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
         "HAS_TRINAMIC_CONFIG": any_axis(config),
         "HAS_TRINAMIC_STANDALONE": any_axis(lambda t: t.startswith("TMC") and not config(t)),
     }
+    version = h.definition("CONFIGURATION_H_VERSION")
+    if version is not None and (version.value or "").strip() == "020000":
+        # Marlin 2.0.0's name for it (src/inc/Conditionals_post.h): HAS_TRINAMIC, the drivers
+        # configured over UART/SPI
+        derived["HAS_TRINAMIC"] = any_axis(lambda t: t in _TRINAMIC_200)
     ext = h.definition("EXTRUDERS")
     if ext is not None:
         n = evaluate(h, ext.value or "")
@@ -616,11 +625,11 @@ def _axis_rate(
                       "derived", f"{float(s):g} steps/unit x {float(f):g} mm/s")  # fmt: skip
 
 
-def _fixer(old: bool) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
+def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
     def ns(v: Fraction) -> int:
         return int(-(-v // 1))
 
-    def fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         if role == "pulse":
             if old:
                 return f"Marlin: define MINIMUM_STEPPER_PULSE {int(-(-need // 1000))} (us)"
@@ -628,7 +637,9 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
         if role == "idle":
             p = axis.pulse.value or Fraction(0)
             if need > p:
-                return f"Marlin: define MAXIMUM_STEPPER_RATE {int(_GIGA / (p + need))} (or lower)"
+                # low = 1e9 / rate - pulse, or 5e8 / rate with the pulse 0 or unset: both hold
+                rate = min(_GIGA / (p + need), _GIGA / 2 / need)
+                return f"Marlin: define MAXIMUM_STEPPER_RATE {int(rate)} (or lower)"
             if old:
                 return f"Marlin: define MINIMUM_STEPPER_PULSE {int(-(-need // 1000))} (us)"
             return f"Marlin: define MINIMUM_STEPPER_PULSE_NS {ns(need)}"
@@ -637,12 +648,24 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, Role, Fraction], str]:
             if axis.dir_hold_trailing is not None and "1.1.x" in axis.dir_hold_trailing.setting:
                 name = "MINIMUM_STEPPER_DIR_DELAY"
             return f"Marlin: define {name} {ns(need)}"
+        no_pre = axis.dir_hold_trailing is not None and "1.1.x" in axis.dir_hold_trailing.setting
         if role == "hold":
             p = axis.pulse.value or Fraction(0)
+            if no_pre:  # 1.1.x writes DIR right after the pulse: only the pulse holds it
+                return f"Marlin: define MINIMUM_STEPPER_PULSE {int(-(-need // 1000))} (us)"
             return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(max(need - p, Fraction(0)))}"
+        if role == "trailing_hold":
+            if no_pre:
+                pin = f"INVERT_{axis.axis[0]}_STEP_PIN"
+                return (
+                    f"Marlin: define {pin} {'false' if axis.pulse_level == 0 else 'true'} and "
+                    f"define MINIMUM_STEPPER_PULSE {int(-(-need // 1000))} (us): 1.1.x has no "
+                    "DIR hold after the pulse, so the drive's edge must start a pulse that long"
+                )
+            return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(need)}"
         return (
-            f"Marlin: lower DEFAULT_MAX_FEEDRATE for {axis.axis} so that it steps at most "
-            f"{float(need):.6g} steps/s, or define MAXIMUM_STEPPER_RATE {int(need)}"
+            f"Marlin: define MAXIMUM_STEPPER_RATE {int(need)}, or lower DEFAULT_MAX_FEEDRATE for "
+            f"{axis.axis} so that it steps at most {float(need):.6g} steps/s"
         )
 
     return fix

@@ -29,9 +29,11 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_least,
+    at_most,
     unknown,
 )
 from wavecheck.linuxcnc.files import is_file
@@ -52,8 +54,8 @@ def looks_like(text: str) -> bool:
     """A ``config.g``: ``M569``/``M584``/``M92``/``M350``/``M203`` commands, or a file of
     ``M98 P"….g"`` includes."""
     return (
-        len(re.findall(r"^\s*M(569|584|92|350|203)\b", text, re.M)) >= 2
-        or len(re.findall(r"^\s*M98\s+P\"[^\"]+\.g\"", text, re.M)) >= 2
+        len(re.findall(r"^[ \t]*M(569|584|92|350|203)\b", text, re.M)) >= 2
+        or len(re.findall(r"^[ \t]*M98[ \t]+P\"[^\"\n]+\.g\"", text, re.M)) >= 2
     )
 
 
@@ -304,6 +306,11 @@ def _axis(
         info["steps/mm"] = f"{float(st.spm[name][0]):g} (M92, {st.spm[name][1]})"
     if name in st.speed:
         info["max speed"] = f"{float(st.speed[name][0]):g} mm/min (M203, {st.speed[name][1]})"
+    if name[0] == "E" and name[1:].isdigit() and int(name[1:]) > 0:
+        # M203 E sets the extruders in order: a fix must repeat the ones before this one
+        before = [st.speed.get(f"E{i}", (None, ""))[0] for i in range(int(name[1:]))]
+        if all(v is not None for v in before):
+            info["M203 E before"] = ":".join(at_most(v) for v in before if v is not None)
     if name in st.coupled:
         rate = unknown("M203", f"kinematics {st.coupled[name]} couple {name} with other axes: "
                        "its motor may step faster than M92 x M203 / 60")  # fmt: skip
@@ -331,12 +338,26 @@ def _hold(pulse: Guaranteed, hold_t: Guaranteed) -> Guaranteed:
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
-    us = float(-(-need // 100)) / 10
-    drivers = axis.info.get("drivers", "?").split(",")[0]
-    field_no = {"pulse": 1, "idle": 2, "setup": 3, "hold": 4}.get(role)
-    if field_no == 4 and axis.pulse.value is not None:
-        us = float(-(-(need - axis.pulse.value) // 100)) / 10
-    if field_no is None:
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    drivers = [d for d in axis.info.get("drivers", "").split(",") if d]
+    field_no = {"pulse": 0, "idle": 1, "setup": 2, "trailing_hold": 3, "hold": 3}.get(role)
+    if field_no is None or not drivers:
+        spm = axis.info.get("steps/mm", "").split(" ")[0]
+        if spm and Fraction(spm) > 0:
+            value = at_most(need * 60 / Fraction(spm))
+            if axis.axis[0] == "E" and axis.axis != "E0":
+                before = axis.info.get("M203 E before")
+                if before is None:
+                    return f"lower M203 E for {axis.axis} to at most {value} mm/min"
+                return f"add `M203 E{before}:{value}` (mm/min, {axis.axis} last)"
+            return f"add `M203 {axis.axis[0] if axis.axis == 'E0' else axis.axis}{value}` (mm/min)"
         return f"lower M203 {axis.axis} so that it steps at most {float(need):.6g} steps/s"
-    return f"M569 P{drivers} T a:b:c:d with field {field_no} at least {max(us, 0):g} (us)"
+    trailing = axis.dir_hold_trailing
+    current = [axis.pulse.value, axis.idle.value, axis.dir_setup.value,
+               trailing.value if trailing is not None else None]  # fmt: skip
+    fields = [v or Fraction(0) for v in current]
+    if role == "hold":
+        need -= fields[0]  # field 4 counts from the falling edge
+    fields[field_no] = max(fields[field_no], need)
+    t = ":".join(at_least(f / 1000) for f in fields)
+    return "add " + " and ".join(f"`M569 P{d} T{t}`" for d in drivers) + " (us)"

@@ -1,14 +1,17 @@
 """Smoothieware: ``config`` (reference ``firmware-timing.md`` §6).
 
 Read: ``microseconds_per_step_pulse`` (default 1 µs), ``base_stepping_frequency`` (default
-100 kHz), ``alpha/beta/gamma/delta…_steps_per_mm``, ``…_max_rate`` (mm/min, default 30000),
-``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``. The pulse
-is the setting plus interrupt time (≥ the setting); each motor steps at most once per base
-tick, so the low time is ≥ one tick − the pulse and the rate ≤ the base frequency (an axis whose
-max_rate × steps/mm reaches it is lowered at start-up). DIR is written when a block starts,
-≈ one tick before the first pulse (uncertain); DIR hold after the leading edge is only code time
-(unknown). On an arm solution other than cartesian the motors are coupled (corexy, delta,
-scara…): steps/mm × max_rate does not bound their rate, so only the base frequency does.
+100 kHz), ``alpha/beta/gamma/delta/epsilon/zeta_steps_per_mm``, ``…_max_rate`` (mm/min, default
+30000), ``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``, and
+each enabled ``extruder.NAME`` module (``step_pin``, ``dir_pin``, ``steps_per_mm`` default 1,
+``max_speed`` mm/s default 1000: Extruder.cpp ``config_load`` makes a stepper motor of it). A key
+given twice keeps its last value (ConfigCache ``replace_or_push_back``). The pulse is the setting
+plus interrupt time (≥ the setting); each motor steps at most once per base tick, so the low
+time is ≥ one tick − the pulse and the rate ≤ the base frequency. Robot.cpp ``append_milestone``
+clamps every actuator to its own ``max_rate`` (any arm solution, deltas included), so a motor's
+rate is ≤ min(base frequency, steps/mm × max_rate). DIR is written when a block starts, ≈ one
+tick before the first pulse (uncertain); DIR hold after the leading edge is only code time
+(unknown).
 """
 
 from __future__ import annotations
@@ -21,9 +24,10 @@ from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
+    FixRole,
     GeneratorGuarantee,
     Guaranteed,
-    Role,
+    at_most,
     unknown,
 )
 
@@ -32,17 +36,20 @@ __all__ = ["looks_like", "read"]
 _MOTORS = ("alpha", "beta", "gamma", "delta", "epsilon", "zeta")
 _CARTESIAN_AXIS = {"alpha": "x", "beta": "y", "gamma": "z"}
 _LINE = re.compile(r"^\s*([A-Za-z0-9_.]+)\s+(\S+)")
-_COUPLED = {
-    "corexy": ("alpha", "beta"),
-    "corexz": ("alpha", "beta"),
-    "hbot": ("alpha", "beta"),
-    "morgan": ("alpha", "beta"),
-}
+_EXTRUDER = re.compile(r"extruder\.(\w+)\.step_pin")
 
 
 def looks_like(text: str) -> bool:
-    """A Smoothieware config: ``alpha_steps_per_mm`` or ``alpha_step_pin`` lines."""
-    return bool(re.search(r"^\s*alpha_(steps_per_mm|step_pin)\s", text, re.M))
+    """A Smoothieware config: a motor's ``…_steps_per_mm`` or ``…_step_pin`` line (``alpha``
+    … ``zeta``, ``extruder.NAME.``), space-separated."""
+    return bool(
+        re.search(
+            r"^[ \t]*((alpha|beta|gamma|delta|epsilon|zeta)_|extruder\.\w+\.)"
+            r"(steps_per_mm|step_pin)[ \t]",
+            text,
+            re.M,
+        )
+    )
 
 
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
@@ -52,7 +59,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     for no, line in enumerate(read_text(path).splitlines(), 1):
         m = _LINE.match(line.split("#")[0])
         if m:
-            keys.setdefault(m.group(1), (m.group(2), where(p, no)))
+            keys[m.group(1)] = (m.group(2), where(p, no))  # the last one wins
 
     def get(name: str, default: str, low: int, high: int, unit: str) -> tuple[Fraction, str, str]:
         if name in keys:
@@ -64,10 +71,6 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     f, f_at, _ = get("base_stepping_frequency", "100000", 1, 10**7, "Hz")
     tick = Fraction(10**9) / f
     arm = keys.get("arm_solution", ("cartesian", "firmware default"))
-    solution = arm[0].lower()
-    coupled: tuple[str, ...] = _COUPLED.get(solution, ()) if solution != "cartesian" else ()
-    if solution not in ("cartesian", *_COUPLED):
-        coupled = _MOTORS
     pulse = Guaranteed(us * 1000, "microseconds_per_step_pulse", us_at, "us", us_st,  # type: ignore[arg-type]
                        "the pulse is this plus interrupt time (about 3 us at 1 us set)")  # fmt: skip
     idle = Guaranteed(max(tick - us * 1000, Fraction(0)), "base_stepping_frequency", f_at, "Hz",
@@ -78,11 +81,24 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                        "pulse")  # fmt: skip
     axes = []
     for motor in _MOTORS:
-        if f"{motor}_step_pin" not in keys and f"{motor}_steps_per_mm" not in keys:
+        pin = keys.get(f"{motor}_step_pin", ("nc", ""))[0].lower()
+        if pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
             continue
-        axes.append(_axis(motor, keys, get, f, f_at, pulse, idle, setup, motor in coupled, arm))
+        axes.append(_axis(motor, f"{motor}_", "max_rate", keys, get, f, f_at, pulse, idle, setup,
+                          arm))  # fmt: skip
+    for name in dict.fromkeys(m.group(1) for k in keys if (m := _EXTRUDER.fullmatch(k))):
+        base = f"extruder.{name}."
+        if keys.get(base + "enable", ("false", ""))[0].lower() not in ("true", "1"):
+            continue  # ExtruderMaker loads only enabled modules
+        if keys[base + "step_pin"][0].lower() == "nc":
+            continue
+        axes.append(_axis(f"extruder.{name}", base, "max_speed", keys, get, f, f_at, pulse, idle,
+                          setup, arm))  # fmt: skip
     if not axes:
-        raise ConfigError(f"{p}: no alpha/beta/gamma motor settings (a snippet: nothing to check)")
+        raise ConfigError(
+            f"{p}: no motor with a step pin (alpha … zeta, extruder.NAME): a snippet, nothing "
+            "to check"
+        )
     return FirmwareConfig(
         firmware="smoothieware",
         path=p,
@@ -98,33 +114,35 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
 
 
 def _axis(  # type: ignore[no-untyped-def]
-    motor: str, keys, get, f, f_at, pulse, idle, setup, coupled: bool, arm
+    motor: str, prefix: str, rate_key: str, keys, get, f, f_at, pulse, idle, setup, arm
 ) -> GeneratorGuarantee:
-    step_pin = keys.get(f"{motor}_step_pin", ("", ""))[0]
-    dir_pin = keys.get(f"{motor}_dir_pin", ("", ""))[0]
+    step_pin = keys.get(f"{prefix}step_pin", ("", ""))[0]
+    dir_pin = keys.get(f"{prefix}dir_pin", ("", ""))[0]
     info: dict[str, str] = {}
     rate = Guaranteed(f, "base_stepping_frequency", f_at, "Hz", "derived",
                       "one step per base tick at most")  # fmt: skip
-    if f"{motor}_steps_per_mm" in keys:
-        spm, at, _ = get(f"{motor}_steps_per_mm", "0", 0, 10**7, "steps/mm")
-        info["steps/mm"] = f"{float(spm):g} ({motor}_steps_per_mm, {at})"
-        mr, mr_at, _ = get(f"{motor}_max_rate", "30000", 0, 10**9, "mm/min")
-        info["max rate"] = f"{float(mr):g} mm/min ({motor}_max_rate, {mr_at})"
-        hz = spm * mr / 60
-        if coupled:
-            rate = Guaranteed(f, "base_stepping_frequency", f_at, "Hz", "derived",
-                              f"arm_solution {arm[0]} couples the motors: only the base "
-                              "frequency bounds the rate")  # fmt: skip
-        elif hz < f:
-            rate = Guaranteed(hz, f"{motor}_steps_per_mm x {motor}_max_rate / 60", mr_at,
-                              "mm/min", "derived")  # fmt: skip
+    extruder = rate_key == "max_speed"
+    if f"{prefix}steps_per_mm" in keys or extruder:
+        spm, at, _ = get(f"{prefix}steps_per_mm", "1" if extruder else "0", 0, 10**7, "steps/mm")
+        raw = keys.get(f"{prefix}steps_per_mm", ("1", ""))[0]
+        info["steps/mm"] = f"{raw} ({prefix}steps_per_mm, {at})"
+        default, unit, per_s = ("1000", "mm/s", 1) if extruder else ("30000", "mm/min", 60)
+        mr, mr_at, _ = get(f"{prefix}{rate_key}", default, 0, 10**9, unit)
+        info["max rate"] = f"{float(mr):g} {unit} ({prefix}{rate_key}, {mr_at})"
+        hz = spm * mr / per_s
+        if hz < f:
+            rate = Guaranteed(hz, f"{prefix}steps_per_mm x {prefix}{rate_key}", mr_at, unit,
+                              "derived", "Robot.cpp append_milestone clamps each actuator to "
+                              "its max rate")  # fmt: skip
     alias = _CARTESIAN_AXIS.get(motor) if arm[0].lower() == "cartesian" else None
+    if extruder:
+        alias = "e" if motor == "extruder.hotend" else None
     return GeneratorGuarantee(
         axis=motor,
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
-        dir_hold=unknown(f"{motor}_dir_pin", "DIR may change while STEP is still high: measure it"),
+        dir_hold=unknown(f"{prefix}dir_pin", "DIR may change while STEP is still high: measure it"),
         max_rate=rate,
         pulse_level=0 if "!" in step_pin else 1,
         dir_inverted="!" in dir_pin,
@@ -133,13 +151,19 @@ def _axis(  # type: ignore[no-untyped-def]
     )
 
 
-def _fix(axis: GeneratorGuarantee, role: Role, need: Fraction) -> str:
+def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     if role == "pulse":
         return f"set `microseconds_per_step_pulse {-(-need // 1000)}`"
     if role in ("idle", "setup"):
         p = axis.pulse.value or Fraction(0)
         extra = p if role == "idle" else Fraction(0)
-        return f"lower `base_stepping_frequency` to at most {int(Fraction(10**9) / (need + extra))}"
+        return f"set `base_stepping_frequency {int(Fraction(10**9) / (need + extra))}` (or lower)"
     if role == "max_rate":
-        return f"lower `{axis.axis}_max_rate` so that it steps at most {float(need):.6g} steps/s"
+        spm = axis.info.get("steps/mm", "").split(" ")[0]
+        extruder = axis.axis.startswith("extruder.")
+        key = f"{axis.axis}.max_speed" if extruder else f"{axis.axis}_max_rate"
+        if spm and Fraction(spm) > 0:
+            value = need / Fraction(spm) * (1 if extruder else 60)
+            return f"set `{key} {at_most(value)}` ({'mm/s' if extruder else 'mm/min'})"
+        return f"lower `{key}` so that it steps at most {float(need):.6g} steps/s"
     return "Smoothieware has no DIR hold setting"

@@ -68,9 +68,7 @@ from wavecheck.lattice.period import (
     MAX_PERIOD_NS,
     MIN_PERIOD_NS,
     WINDOW_EDGES,
-    coarse,
     densest,
-    exact,
     grow,
     infer,
     limits,
@@ -79,6 +77,7 @@ from wavecheck.lattice.period import (
 from wavecheck.lattice.reading import (
     MAX_LOG10_CHANCE,
     MIN_EDGES,
+    MIN_GAP_FRACTION,
     EdgeKinds,
     Evaluation,
     Floats,
@@ -90,6 +89,7 @@ from wavecheck.lattice.reading import (
     catch_up,
     evaluate,
     significance,
+    widest_gap,
 )
 from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.progress import ProgressCallback, no_progress
@@ -213,10 +213,35 @@ class LatencyReport:
     rule: str = ""
 
     @property
+    def unestablished(self) -> str:
+        """Why the worst lateness is not established ("" when it is): no lattice, lateness of a
+        period or more (a lower bound only), fewer than :data:`ESTABLISH_EDGES` edge times, or
+        readings the capture cannot tell apart."""
+        if not self.lattice:
+            return self.reason
+        if self.catch_up is not None:
+            return (
+                f"invocations a period or more late (at least "
+                f"{format_ns(self.catch_up.at_least_ns)}, first at "
+                f"{float(self.catch_up.first_ns) * 1e-9:.6g} s): only a lower bound is seen"
+            )
+        if len(self.lateness_num) < ESTABLISH_EDGES:
+            return (
+                f"only {len(self.lateness_num)} edge times (at least {ESTABLISH_EDGES} are needed "
+                "to establish a worst lateness)"
+            )
+        if self.candidates:
+            figures = [self.max_lateness_ns] + [c.max_lateness_ns for c in self.candidates]
+            return (
+                f"the capture cannot tell {len(figures)} readings of the lattice apart (worst "
+                f"lateness {' or '.join(format_ns(f) for f in figures)})"
+            )
+        return ""
+
+    @property
     def established(self) -> bool:
-        """The worst lateness is known: a lattice, no lateness of a period or more, and at least
-        :data:`ESTABLISH_EDGES` edge times."""
-        return self.lattice and self.catch_up is None and len(self.lateness_num) >= ESTABLISH_EDGES
+        """The worst lateness is known (:attr:`unestablished` gives no reason against it)."""
+        return not self.unestablished
 
     # -- exact figures ----------------------------------------------------------------------
     def lateness_ns_at(self, i: int) -> Fraction:
@@ -371,6 +396,9 @@ def analyse_times(
     times = np.asarray(times, dtype=np.int64)
     mask = np.ones(len(times), np.int64) if channel_mask is None else channel_mask
     res_ticks = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
+    grid = sample_grid(times, tick_ns, res_ticks)
+    if grid:  # the analyzer's sample period, or exact times that all fall on it: the same figures
+        res_ticks, resolution_ns = grid, grid * tick_ns
     report = LatencyReport(
         path=path,
         tick_ns=tick_ns,
@@ -388,7 +416,7 @@ def analyse_times(
             f"{2 if given else MIN_EDGES} are needed{'' if given else ' to infer a period'})"
         )
         return report
-    pmin, pmax = limits(tick_ns, res_ticks)
+    pmin, pmax = limits(tick_ns, res_ticks)  # a lattice of the sample grid is none
     if period_ns is not None:
         period = Fraction(period_ns) / tick_ns
         ev = evaluate(times, period, res_ticks, kinds)
@@ -406,7 +434,26 @@ def analyse_times(
             report.reason = _not_lattice(why.format(period=format_ns(p_ticks * tick_ns)))
             return report
         ev, env = found, float(found.fold.period)
+    if grid:
+        report.notes.append(
+            f"every edge time is a whole multiple of {format_ns(resolution_ns)} apart: taken as "
+            "the analyzer's sample period, which the file does not state (each figure is exact to "
+            "± that; a lattice of that grid is the analyzer's, not a thread's)"
+        )
     return _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
+
+
+def sample_grid(times: Ints, tick_ns: Fraction, res_ticks: int) -> int:
+    """The analyzer's sample period (ticks) when the file states none (an export with 1 ns
+    times, a VCD without a sample rate) but every edge time is a multiple of it apart, it is
+    shorter than any base period, and at least :data:`ESTABLISH_EDGES` edges show it (fewer
+    may share a grid by chance); else 0. A 500 kHz analyzer's 2 µs grid exported with 1 ns
+    times is such a grid: a lattice commensurate with it is the analyzer's, not a thread's.
+    (So is an exact simulation whose P and latency are whole µs: its figures widen by the µs.)"""
+    if res_ticks or len(times) < ESTABLISH_EDGES:  # a stated sample period is the analyzer's
+        return 0
+    g = int(np.gcd.reduce(np.diff(times)))
+    return g if g > 1 and g * tick_ns < MIN_PERIOD_NS else 0
 
 
 def _fill(
@@ -454,6 +501,13 @@ def _fill(
             f"{float(report.period_ns):.6g} ns; more edges are needed when lateness is this "
             "close to a period)"
         )
+    gap, need = widest_gap(lat, fold.a), max(MIN_GAP_FRACTION * fold.a, 2 * q * fold.b)
+    if gap < need:
+        bad.append(
+            f"no empty arc between the edges' phases at {float(report.period_ns):.6g} ns (the "
+            f"widest is {gap / fold.a:.1%} of the period, at least {need / fold.a:.1%} is needed): "
+            "a thread that is never a period late leaves part of each period without edges"
+        )
     collisions = reading.collisions
     if collisions > allowance(len(times)) + int(np.count_nonzero(bursts(times, pmin))):
         bad.append(
@@ -498,8 +552,8 @@ def _fill(
         report.candidates.append(Candidate(fold.period * tick, r.max_lateness * tick, _how(r)))
     if report.candidates:
         report.notes.append(
-            "the capture cannot tell these readings apart; the figures are those of the one "
-            "with the largest lateness, the one to plan from"
+            "the capture cannot tell these readings apart (so the worst lateness is not "
+            "established); the figures are those of the one with the largest lateness"
         )
     if given and abs(env - float(fold.period)) * span_p > q + float(fit.p99):
         drift = (env / float(fold.period) - 1) * 1e6
@@ -553,29 +607,13 @@ def common_period(
     times: Ints, tick_ns: Fraction, resolution_ns: Fraction
 ) -> tuple[Fraction | None, str]:
     """Whether edge ``times`` (ticks, sorted, unique: the steps of several axes) lie on one
-    periodic lattice, one timer's or thread's, as cheaply as that can be told: the comb's best
-    period (8 harmonics), refined, and the chance of its fit. (P in ns or None, why not.)
-    The edges of one timer interrupt may be written one after another, so two write times in a
-    period do not refuse it; the period may be the thread's or a multiple or submultiple."""
-    res = int(math.ceil(resolution_ns / tick_ns)) if resolution_ns else 0
-    if len(times) < MIN_EDGES:
-        return None, f"too few steps ({len(times)})"
-    pmin, pmax = limits(tick_ns, res)
-    combs = coarse(times, pmin, pmax, harmonics=8, keep=1, edges=1024, bins=1 << 16)
-    if not combs:
-        return None, "no periodic comb in the steps' timing"
-    i, j = densest(times, int(64 * WINDOW_EDGES * combs[0]))
-    p, err = grow(times, combs[0], (i + j) // 2, float(max(res, 1)), no_progress, 0.0)
-    if not pmin <= p <= pmax:
-        return None, "no base-thread period fits"
-    ev = evaluate(times, exact(p, err, times), res, None, 1 << 14, False)
-    fold = ev.fold
-    lat = fold.lateness(ev.readings[0].anchor)[1]
-    span = int(ev.slots.max() - ev.slots.min()) if len(ev.slots) else 1
-    _, _, f, chance = significance(lat, fold.b, max(res, 1), fold.period, span)
-    if chance > MAX_LOG10_CHANCE:
-        return None, f"the best lattice could be chance (10^{chance:.1f})"
-    return fold.period * tick_ns, ""
+    periodic lattice: the one analysis ``wavecheck latency`` makes (:func:`analyse_times`, its
+    evidence rules included), so ``check``'s note and ``latency`` give one answer on the same
+    edges. (P in ns or None, why not.)"""
+    r = analyse_times(times, tick_ns=tick_ns, resolution_ns=resolution_ns)
+    if not r.lattice or r.period_ns is None:
+        return None, r.reason
+    return r.period_ns, ""
 
 
 def _signatures(capture: Capture, roles: dict[str, str]) -> Signatures:

@@ -37,6 +37,7 @@ __all__ = [
     "WINDOW_EDGES",
     "coarse",
     "densest",
+    "dither",
     "exact",
     "grow",
     "infer",
@@ -61,6 +62,12 @@ WINDOW_EDGES = 1 << 14
 
 #: Edges the comb search looks at, and refines its periods on (exact harmonic sums).
 COMB_EDGES = 2048
+
+
+#: Submultiples p/m of a comb's period tried as the thread's: a constant step rate a/b of the
+#: thread's repeats every b periods (a cruise at 0.3 of the top rate: 3 steps in 10 periods), and
+#: the comb may find that pattern's period.
+SUBMULTIPLES = 8
 
 
 #: Edges of the first window P is refined on: enough that the widest empty arc of their phases
@@ -366,7 +373,7 @@ def _down(
     times: Ints, coarse: list[float], res: int, kinds: EdgeKinds | None, pmin: float, pmax: float
 ) -> float | None:
     """The thread among the ``coarse`` periods, their submultiples p/m and the multiples of the
-    best of those (m ≤ 8), on a stretch of edges. Among those with no more double writes than
+    best of those (m ≤ :data:`SUBMULTIPLES`), on a stretch of edges. Among those with no more double writes than
     the fewest: when some read as a worst-case pattern (whose exact structure chance does not
     make), the longest of those (at P/m the pattern repeats with J wrapped); otherwise the one
     with the least mean lateness, the longest among equals (within half a sample): a stepgen
@@ -396,7 +403,9 @@ def _down(
 
     # each submultiple refined on its own: a lattice at a multiple of the thread's period
     # (its step pattern) does not fit well enough to refine P there
-    starts = [p0 / m for p0 in coarse for m in range(1, 9) if m == 1 or p0 / m >= pmin]
+    starts = [
+        p0 / m for p0 in coarse for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin
+    ]
     subs: list[float] = []
     for p0 in sorted(starts, reverse=True):
         if all(abs(p0 - s) > 1e-3 * s for s in subs):
@@ -450,21 +459,69 @@ def _up(
 def exact(p: float, err: float, times: Ints) -> Fraction:
     """The rational with the smallest denominator within ``err`` ticks of ``p`` (at least a
     millionth of a tick; the nearest of them), its denominator small enough for exact int64
-    arithmetic over the capture."""
-    half = Fraction(max(err, 1e-6)).limit_denominator(10**9)
+    arithmetic over the capture. An ``err`` that is not finite (the floor of the lateness gave
+    no line to refine on) leaves ``p`` as it is, to that denominator."""
+    if not math.isfinite(p) or p <= 0:
+        raise ValueError(f"a period must be finite and positive, got {p} ticks")
     centre = Fraction(p).limit_denominator(10**12)
+    bmax = max(1, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4)
+    if not math.isfinite(err):
+        return centre.limit_denominator(bmax)
+    half = Fraction(max(err, 1e-6)).limit_denominator(10**9)
     lo, hi = max(centre - half, Fraction(1, 10**9)), centre + half
     b = simplest_between(lo, hi).denominator
     exact = Fraction(round(centre * b), b)  # the nearest with that denominator
     if not lo <= exact <= hi:
         exact = simplest_between(lo, hi)
-    bmax = max(1, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4)
     return exact if exact.denominator <= bmax else centre.limit_denominator(bmax)
 
 
 def limits(tick_ns: Fraction, res_ticks: int) -> tuple[float, float]:
     pmin = max(MIN_PERIOD_NS / float(tick_ns), MIN_PERIOD_SAMPLES * max(res_ticks, 1))
     return pmin, MAX_PERIOD_NS / float(tick_ns)
+
+
+def dither(times: Ints, res: int) -> Ints:
+    """``times`` each moved later by a fixed pseudo-random part of a sample (``res`` ticks; none
+    when a sample is a tick): the comb of a sample grid coarser than the tick is gone, a thread's
+    lattice stays (an edge is seen up to a sample late anyway), the order too."""
+    if res <= 1:
+        return times
+    return times + np.random.default_rng(0).integers(0, res, len(times))
+
+
+def _rival(times: Ints, ev: Evaluation, res: int, pmin: float) -> str | None:
+    """A fraction k/m (2 ≤ k < m ≤ 16) of ``ev``'s period whose lattice, refined, reads the edges
+    ``times`` (a bounded stretch) with no more double writes and at most two thirds of the
+    mean lateness (and a tenth of its period and two samples less: a few spikes do not decide),
+    which the thread's own period would: a constant step rate a/b of the
+    thread's repeats every b periods, and a lattice at a fraction of that pattern fits it too
+    (``k/m`` as text), else None."""
+    mine = _spread(evaluate(times, ev.fold.period, res, None, 1 << 14, False))
+    if mine is None or ev.readings[0].rule:  # a worst-case pattern's structure decides
+        return None
+    p = float(ev.fold.period)
+    q = float(max(res, 1))
+    seen: set[Fraction] = set()
+    for m in range(3, 17):
+        for k in range(2, m):  # P/m itself: _up's judgement (spikes read less late there)
+            f = Fraction(k, m)
+            if f.numerator == 1 or f in seen or p * k / m < pmin:
+                continue
+            seen.add(f)
+            p2, err = grow(times, p * k / m, len(times) // 2, q, no_progress, 0.0)
+            if not math.isfinite(err) or abs(p2 / (p * k / m) - 1) > 0.01:
+                continue
+            theirs = evaluate(times, exact(p2, err, times), res, None, 1 << 14, False)
+            spread = _spread(theirs)
+            if (
+                spread is not None
+                and theirs.collisions <= ev.collisions + allowance(len(times))
+                and spread[0] <= 2 * mine[0] / 3
+                and mine[0] - spread[0] >= max(2 * q, 0.1 * p2)
+            ):
+                return f"{k}/{m}"
+    return None
 
 
 def infer(
@@ -490,7 +547,7 @@ def infer(
         )
     if len(times) < MIN_EDGES:
         return None, 0.0, "too few edges outside catch-up runs", Fraction(0)
-    combs = coarse(times, pmin, pmax)
+    combs = coarse(dither(times, res), pmin, pmax)
     if not combs:
         return None, 0.0, "no periodic comb in the edges' timing", Fraction(0)
     i, j = densest(times, int(64 * WINDOW_EDGES * max(combs)))
@@ -510,6 +567,14 @@ def infer(
             Fraction(p).limit_denominator(10**6),
         )  # fmt: skip
     ev = _up(times, exact(p, err, times), res, kinds, pmax, slice(i, j))
+    rival = _rival(times[i:j], ev, res, pmin) if ev.readings else None
+    if rival is not None:
+        return (
+            None, 0.0,
+            f"a lattice at {rival} of the best period, {{period}}, reads the edges with far "
+            "less lateness: which period the thread runs at is not established",
+            ev.fold.period,
+        )  # fmt: skip
     if ev.readings and burst.any():
         ev = evaluate(every, ev.fold.period, res, whole)
     if ev.readings:

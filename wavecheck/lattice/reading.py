@@ -25,6 +25,7 @@ from wavecheck.linuxcnc.worstcase import union
 
 __all__ = [
     "MAX_LOG10_CHANCE",
+    "MIN_GAP_FRACTION",
     "MIN_EDGES",
     "EdgeKinds",
     "Evaluation",
@@ -37,6 +38,7 @@ __all__ = [
     "evaluate",
     "significance",
     "two_point",
+    "widest_gap",
 ]
 
 #: Fewest distinct edge times from which a period is inferred.
@@ -403,6 +405,24 @@ def significance(
         if 0 < f < 1 and n > k:
             best = min(best, trials + k * math.log10(n) + (n - k) * math.log10(f))
     return p99, in_arc, f99, best
+
+
+#: The empty arc a lattice must show (fraction of P; and at least two samples): invocations
+#: that are never more than a bounded time late leave the rest of each period without edges.
+#: Non-uniform phases alone (a step rate folded at a period it beats with) are no lattice.
+MIN_GAP_FRACTION = 0.03
+
+
+def widest_gap(lat: Ints, a: int) -> int:
+    """The widest arc (units) between two edges' phases (``lat`` modulo ``a`` units) with at
+    most ``max(2, n // 500)`` edges inside it (late spikes), measured edge to edge."""
+    x = np.sort(np.mod(lat, a))
+    n = len(x)
+    if not n:
+        return a
+    c = min(max(2, n // 500), n - 1)
+    circle = np.concatenate([x, x + a])
+    return int((circle[c + 1 : c + 1 + n] - x).max())
 
 
 def catch_up(fold: Fold, reading: Reading) -> tuple[Ints, Ints, int]:

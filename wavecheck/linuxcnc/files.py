@@ -199,7 +199,10 @@ def resolve_ref(value: str, ini: IniFile | None, where: str) -> str:
     if not m:
         return value
     if ini is None:
-        raise ConfigError(f"{where}: {value} refers to the INI file (give --ini FILE)")
+        raise ConfigError(
+            f"{where}: {value} refers to an INI file and none was read: give the INI whose "
+            "[HAL] HALFILE runs this file"
+        )
     found = ini.get(m.group(1), m.group(2) or m.group(3))
     if found is None:
         raise ConfigError(f"{where}: {value} is not in {ini.path}")

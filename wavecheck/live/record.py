@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from wavecheck.errors import UsageError
-from wavecheck.output import resolve_output
+from wavecheck.output import open_stream, resolve_output
 
 __all__ = ["CHECKPOINT_SECONDS", "SrRecorder"]
 
@@ -137,8 +137,8 @@ class SrRecorder:
         self._member: IO[bytes] | None = None
         self.path = self.target  # the file being written
         self.replaces: Path | None = None  # the existing file it replaces at the end
-        if where.in_place:  # a device or FIFO: streamed, no checkpoints
-            self._stream = open(self.target, "wb")  # noqa: SIM115 - closed in close/discard
+        if where.in_place:  # a device, FIFO or descriptor: streamed, no checkpoints
+            self._stream = open_stream(target)  # never seeked (/dev/null, /dev/stdout)
             self._zip = zipfile.ZipFile(self._stream, "w")
             self._write_head(metadata)
             return

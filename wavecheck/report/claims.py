@@ -16,11 +16,13 @@ one mechanism for both. Why a rule was not checked, in order:
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from wavecheck.engine import MachineReport, Report, RuleResult
 from wavecheck.rules import RULE_IDS, rule
 from wavecheck.units import format_ns
 from wavecheck.verdict import (
+    EXIT_REQUIRED,
     RuleStatus,
     Unmet,
     check_require,
@@ -35,7 +37,9 @@ from wavecheck.verdict import (
 __all__ = [
     "exit_code",
     "not_checked",
+    "outcome_line",
     "requirement_line",
+    "required_dict",
     "rule_statuses",
     "statuses",
     "unchecked",
@@ -124,6 +128,19 @@ def verdict_line(checked: Checked) -> str:
     return qualified_verdict(checked.verdict, unchecked(checked), lead)
 
 
+def outcome_line(checked: Checked, require: Sequence[str] = ()) -> str:
+    """The verdict line with the run's outcome first: as :func:`verdict_line`, or, when a
+    required rule was not decided and the run exits 4, ``NOT DECIDED (exit 4: required dir_hold
+    not checked: no DIR channel); the rules checked: PASS (…)`` — the first line of a report
+    says what its exit code says."""
+    line = verdict_line(checked)
+    missing = unmet(checked, require)
+    if required_exit_code(checked.exit_code, missing) != EXIT_REQUIRED:
+        return line
+    what = required_line(missing, statuses(checked)).removeprefix("required but not decided: ")
+    return f"NOT DECIDED (exit {EXIT_REQUIRED}: required {what}); the rules checked: {line}"
+
+
 def unmet(checked: Checked, require: Sequence[str]) -> tuple[Unmet, ...]:
     """The required rules (``--require``) that ``checked`` did not decide."""
     check_require(require, RULE_IDS)
@@ -140,3 +157,13 @@ def exit_code(checked: Checked, require: Sequence[str] = ()) -> int:
     """The run's exit code: the verdict's, or 4 when a required rule was not decided
     (:func:`wavecheck.verdict.required_exit_code`)."""
     return required_exit_code(checked.exit_code, unmet(checked, require))
+
+
+def required_dict(require: Sequence[str], unmet: Sequence[Unmet]) -> dict[str, Any]:
+    """``{"rules": [...], "unmet": [{rule, axis, verdict, why}]}`` of ``--require``."""
+    return {
+        "rules": list(require),
+        "unmet": [
+            {"rule": u.rule, "axis": u.axis, "verdict": u.verdict, "why": u.why} for u in unmet
+        ],
+    }

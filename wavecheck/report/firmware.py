@@ -24,7 +24,7 @@ __all__ = [
     "guaranteed_dict",
 ]
 
-_MARK = {"uncertain": "?", "default": "*", "unknown": ""}
+_MARK = {"uncertain": "?", "not_enforced": "!", "default": "*", "unknown": ""}
 
 
 def _g(fig: Guaranteed | None, rate: bool = False) -> str:
@@ -103,7 +103,8 @@ def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
         out += [f"  note: {n}" for n in res.notes]
     out += [
         "",
-        "* = firmware default, ? = not enforced exactly by the firmware (measure it)",
+        "* = firmware default, ? = not enforced exactly by the firmware, ! = not enforced by the "
+        "firmware (measure it)",
         f"verdict: {result.verdict_line}",
     ]
     unmet = unmet_requirements(result.statuses, require)
@@ -149,7 +150,7 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
 
 def config_dict(result: ConfigResult, require: Sequence[str] = ()) -> dict[str, Any]:
     """The JSON report of ``wavecheck config`` (``require``: ``--require``)."""
-    from wavecheck.report.json import required_dict
+    from wavecheck.report.claims import required_dict
 
     cfg, results = result.config, result.pairs
     unmet = unmet_requirements(result.statuses, require)

@@ -133,15 +133,28 @@ def _companion_mark(save: Path) -> str:
     return f"wavecheck: companion of {save.name}:"
 
 
+def _same_path(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name one file (by name, or the same file when both exist)."""
+    if os.path.abspath(a) == os.path.abspath(b) or a.resolve() == b.resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
 def companion_vcd(save: str | os.PathLike[str]) -> Path:
     """Where the VCD of the save file ``save`` (``FILE.gtkw``) goes: ``FILE.vcd`` when it does
     not exist or is the companion wavecheck wrote for this same save file before; else the
     first free ``FILE-2.vcd``, ``FILE-3.vcd`` … A file wavecheck did not write (a capture, a
-    symbolic link to one) is never replaced."""
+    symbolic link to one) is never replaced, and the save file itself is never its companion
+    (``--gtkw FILE.vcd`` gets ``FILE-2.vcd``)."""
     save = Path(save)
     mark = _companion_mark(save).encode()
     for k in range(1, 10_000):
         candidate = save.with_name(f"{save.stem}{'' if k == 1 else f'-{k}'}.vcd")
+        if _same_path(candidate, save):  # --gtkw FILE.vcd: the save file is not its companion
+            continue
         if not os.path.lexists(candidate):
             return candidate
         try:

@@ -119,7 +119,7 @@ def _violations_table(report: Report, limit: int) -> str:
         "<th>measured</th><th>limit</th><th>margin</th></tr>"
     )
     shown = report.violations(limit)
-    groups = group_violations(shown)
+    groups = group_violations(shown, report.rules)
     marks = {r.rule: r.figure.mark for r in report.rules if r.figure is not None}
     rows = []
     for k, g in enumerate(groups, 1):
@@ -132,12 +132,13 @@ def _violations_table(report: Report, limit: int) -> str:
                 f'<td class="num">{_ns(v.limit_ns)}{_e(marks.get(v.rule, ""))}</td>'
                 f'<td class="num">{_ns(v.margin_ns, signed=True)}</td>'
             )
-        last = "–" if g.count == 1 else f"{float(g.last.time_s):.9f}"
+        last = "–" if g.count == 1 else f"{float(g.last_s):.9f}"
         rows.append(
             f'<tr><td class="num">{k}</td><td>{_e(v.rule)}</td><td class="num">{g.count:,}</td>'
-            f'<td class="num">{float(v.time_s):.9f}</td><td class="num">{last}</td>{cells}</tr>'
+            f'<td class="num">{float(g.first_s):.9f}</td><td class="num">{last}</td>{cells}</tr>'
         )
-    more = f'<p class="note">… and {total - len(shown):,} more.</p>' if total > len(shown) else ""
+    told = sum(g.count for g in groups)
+    more = f'<p class="note">… and {total - told:,} more.</p>' if total > told else ""
     grouped = (
         f" The {len(shown):,} worst are shown as {len(groups):,} "
         f"group{'' if len(groups) == 1 else 's'} of identical violations (count, first and last "
@@ -205,7 +206,7 @@ def _rates_table(report: Report) -> str:
 
 def _verdict_lines(report: Report, require: Sequence[str]) -> list[str]:
     """The verdict line (rules not checked and why) and the required rules not decided."""
-    out = [f'<p class="verdict-line">Verdict: {_e(claims.verdict_line(report))}</p>']
+    out = [f'<p class="verdict-line">Verdict: {_e(claims.outcome_line(report, require))}</p>']
     line = claims.requirement_line(report, require)
     return out + ([f'<p class="required">{_e(line)}</p>'] if line else [])
 

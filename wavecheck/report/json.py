@@ -2,6 +2,8 @@
 
 Top-level keys: ``capture``, ``drive``, ``steps``, ``rules``, ``violations`` (capped, worst first),
 ``violations_total`` (the uncapped count; added beside the design's keys so the cap is visible),
+``violations_listed`` (how many ``violations`` lists) and ``violations_truncated`` (true when it
+lists fewer than ``violations_total``: raise ``--max-violations`` to list more),
 ``max_step_rate_hz``, ``verdict``; beside them what the verdict claims (:mod:`wavecheck.report.claims`):
 ``verdict_line`` (``PASS (dir_setup, dir_hold not checked: no DIR channel)``), ``unchecked``
 (``[{why, rules}]``, as ``config``'s JSON), ``required`` (``{rules, unmet: [{rule, axis, verdict,
@@ -23,17 +25,16 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
 from wavecheck.engine import MachineReport, Report, RuleResult, Violation
-from wavecheck.linuxcnc.config import ConfigRates
+from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
 from wavecheck.units import json_number
-from wavecheck.verdict import Unmet
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict", "required_dict"]
+__all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict"]
 
 DEFAULT_VIOLATION_CAP = 1000
 
@@ -88,18 +89,8 @@ def claims_dict(checked: Report | MachineReport, require: Sequence[str] = ()) ->
     return {
         "verdict_line": claims.verdict_line(checked),
         "unchecked": [{"why": why, "rules": list(rules)} for why, rules in unchecked.items()],
-        "required": required_dict(require, claims.unmet(checked, require)),
+        "required": claims.required_dict(require, claims.unmet(checked, require)),
         "exit_code": claims.exit_code(checked, require),
-    }
-
-
-def required_dict(require: Sequence[str], unmet: Sequence[Unmet]) -> dict[str, Any]:
-    """``{"rules": [...], "unmet": [{rule, axis, verdict, why}]}`` of ``--require``."""
-    return {
-        "rules": list(require),
-        "unmet": [
-            {"rule": u.rule, "axis": u.axis, "verdict": u.verdict, "why": u.why} for u in unmet
-        ],
     }
 
 
@@ -111,6 +102,7 @@ def report_dict(
     mapped = {sig.channel: role for role, sig in report.interface.signals.items()}
     steps = report.steps
     rates = report.rates
+    listed = [_violation(v) for v in report.violations(violation_cap)]
     return {
         "capture": {
             "path": cap.path,
@@ -157,10 +149,15 @@ def report_dict(
             "unknown_direction": steps.unknown,
             "ambiguous": steps.ambiguous_count,
             "final_position": steps.final_position,
+            "position_unknown_from_s": None
+            if steps.lost_from is None
+            else json_number(report.capture.timebase.seconds(steps.lost_from)),
         },
         "rules": [_rule(r) for r in report.rules],
-        "violations": [_violation(v) for v in report.violations(violation_cap)],
+        "violations": listed,
         "violations_total": report.total_violations,
+        "violations_listed": len(listed),
+        "violations_truncated": len(listed) < report.total_violations,
         "max_step_rate_hz": {
             "drive": json_number(rates.drive),
             "drive_limited_by": rates.drive_limited_by,

@@ -3,7 +3,8 @@
 The JSON of such a run keeps ``capture`` and ``verdict`` at the top level and lists the axes::
 
     {"capture": {...}, "axes": [{"name", "drive", "map", "steps", "rules", "violations",
-     "violations_total", "max_step_rate_hz", "verdict", "verdict_line", "unchecked"}, ...],
+     "violations_total", "violations_listed", "violations_truncated", "max_step_rate_hz",
+     "verdict", "verdict_line", "unchecked"}, ...],
      "cross_axis": {...}, "verdict", "verdict_line", "unchecked", "required", "exit_code"}
 
 A single-axis run keeps the plain report's keys exactly (:func:`wavecheck.report.json.report_dict`).
@@ -18,7 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from wavecheck.engine import MachineReport
-from wavecheck.report.claims import requirement_line, verdict_line
+from wavecheck.report.claims import outcome_line, requirement_line
 
 __all__ = ["machine_dict", "render_machine_text"]
 
@@ -46,6 +47,8 @@ def machine_dict(
                 "rules": d["rules"],
                 "violations": d["violations"],
                 "violations_total": d["violations_total"],
+                "violations_listed": d["violations_listed"],
+                "violations_truncated": d["violations_truncated"],
                 "max_step_rate_hz": d["max_step_rate_hz"],
                 "verdict": d["verdict"],
                 "verdict_line": d["verdict_line"],
@@ -96,7 +99,7 @@ def render_machine_text(m: MachineReport, max_violations: int, require: Sequence
         )
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     out = [
-        f"verdict: {verdict_line(m)}",
+        f"verdict: {outcome_line(m, require)}",
         *[line for line in [requirement_line(m, require)] if line],
         f"capture: {cap.path}",
         "",

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, cast
 from wavecheck.drives.datasheet import MARK_LEGEND
 from wavecheck.engine import Report, RuleResult
 from wavecheck.report.assumptions import assumptions
-from wavecheck.report.claims import requirement_line, verdict_line
+from wavecheck.report.claims import outcome_line, requirement_line
 from wavecheck.report.groups import ViolationGroup, group_violations
 from wavecheck.rules import rule
 from wavecheck.units import format_frequency, format_ns, format_rate, format_time
@@ -22,9 +22,15 @@ from wavecheck.units import format_frequency, format_ns, format_rate, format_tim
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["DEFAULT_TEXT_VIOLATIONS", "rate_lines", "render_text"]
+__all__ = ["DEFAULT_TEXT_VIOLATIONS", "note_line", "rate_lines", "render_text"]
 
 DEFAULT_TEXT_VIOLATIONS = 20
+
+
+def note_line(note: str) -> str:
+    """A capture's note as a report line: ``note: …``, or as it is when it is a warning (a
+    reader's ``warning: …``, such as a sample rate no capture has)."""
+    return note if note.startswith("warning: ") else f"note: {note}"
 
 
 def _ns(v: Fraction | None, signed: bool = False) -> str:
@@ -70,21 +76,24 @@ def _mark(r: RuleResult) -> str:
 
 
 def _violation_lines(report: Report, max_violations: int) -> list[str]:
-    """The worst ``max_violations`` violations, identical ones grouped on one line."""
+    """The worst ``max_violations`` violations, identical ones grouped on one line; a group
+    counts every identical violation of the capture, and spans from the first to the last."""
     total = report.total_violations
     shown = report.violations(max_violations)
-    groups = group_violations(shown)
+    groups = group_violations(shown, report.rules)
     marks = {r.rule: _mark(r) for r in report.rules}
     head = f"violations: {total} (worst first"
     if len(groups) < len(shown):
         head += (
             f"; the {len(shown)} worst shown as {len(groups)} "
-            f"group{'' if len(groups) == 1 else 's'} of identical violations"
+            f"group{'' if len(groups) == 1 else 's'} of identical violations, each counted over "
+            "the whole capture"
         )
     out = ["", head + ")"]
     out += [_group_line(g, marks.get(g.rule, "")) for g in groups]
-    if total > len(shown):
-        out.append(f"  … and {total - len(shown)} more")
+    told = sum(g.count for g in groups)
+    if total > told:
+        out.append(f"  … and {total - told} more, not identical to these")
     return out
 
 
@@ -103,7 +112,7 @@ def _group_line(g: ViolationGroup, mark: str) -> str:
             f"  margin {_ns(v.margin_ns, signed=True)}"
         )
     if g.count > 1:
-        line += f"  first at {float(v.time_s):.9f} s, last at {float(g.last.time_s):.9f} s"
+        line += f"  first at {float(g.first_s):.9f} s, last at {float(g.last_s):.9f} s"
     return line
 
 
@@ -122,7 +131,7 @@ def render_text(
     line says which required rules were not decided."""
     cap = report.capture
     drive = report.drive
-    out: list[str] = [f"verdict: {verdict_line(report)}"]
+    out: list[str] = [f"verdict: {outcome_line(report, require)}"]
     out += [line for line in [requirement_line(report, require)] if line]
     res = "exact" if report.resolution_ns == 0 else f"T = {_ns(report.resolution_ns)}"
     rate = f"{format_frequency(cap.samplerate_hz)}, " if cap.samplerate_hz else ""
@@ -145,6 +154,11 @@ def render_text(
         line += " (direction unknown: no DIR mapped)"
     else:
         pos = "unknown" if s.final_position is None else f"{s.final_position:+d}"
+        if s.lost_from is not None:
+            pos = (
+                f"unknown from {format_time(report.capture.timebase.seconds(s.lost_from))} (steps "
+                "inside an unknown stretch of a step line are not seen)"
+            )
         line += f" (forward {s.forward}, reverse {s.reverse}"
         if s.unknown:
             line += f", unknown {s.unknown}"
@@ -209,7 +223,7 @@ def render_text(
         out += _violation_lines(report, max_violations)
     rates, *configured = rate_lines(report)
     out += ["", rates]
-    out += [f"note: {note}" for note in report.notes]
+    out += [note_line(n) for n in report.notes]
     out += [f"note: {a}" for a in assumptions(report)]
     out += configured
     if report.firmware is not None:  # check --firmware

@@ -6,6 +6,8 @@
   limits, the block engine's summary): the one module to re-point when the engine changes;
 - :mod:`wavecheck.sigrok.judge` — each interval judged at the edge that decides it (PulseView
   never tells a decoder that the capture has ended), held equal to the engine by the tests;
+- :mod:`wavecheck.sigrok.regions` — runs of violations merged into regions a whole-capture view
+  shows (issue 36);
 - :mod:`wavecheck.sigrok.session` — PulseView session files with the decoder stacked
   (``wavecheck check --pulseview FILE``).
 """

@@ -22,6 +22,7 @@ engine's names change, this is the one place to follow them.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
@@ -54,7 +55,6 @@ from wavecheck.rules import Rule, applicable
 from wavecheck.steptypes import StepKind, StepType, step_type
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency, format_ns, parse_option
-from wavecheck.verdict import Verdict, overall_verdict
 
 __all__ = [
     "CHANNEL_ROLES",
@@ -87,6 +87,11 @@ UNITS = ("auto", "ns", "us", "ms", "samples")
 _UNIT_NS = {"ns": 1, "us": 10**3, "ms": 10**6}
 #: Edges the decoder gathers before handing them to the block engine.
 FEED_EDGES = 4096
+#: The shortest ``pause`` taken (s): a summary so far after every pause shorter than this would
+#: come every few edges (one grbl capture: 251,359 summaries with ``pause=1fs``).
+PAUSE_FLOOR_S = Fraction(1, 1000)
+#: The longest ``pause`` taken (s): a day (libsigrokdecode counts samples in 64 bits).
+PAUSE_CEILING_S = Fraction(86_400)
 
 
 @dataclass(frozen=True)
@@ -94,7 +99,7 @@ class RuleSpec:
     """One rule of the table as the decoder measures it: its limit and the engine's thresholds.
 
     ``pass_min``/``fail_max`` (samples): pass ⟺ W ≥ pass_min, fail ⟺ W ≤ fail_max, pass tested
-    first (:func:`wavecheck.engine.verdicts.evaluate`); None when the rule is only measured.
+    first (:func:`wavecheck.engine.judge.evaluate`); None when the rule is only measured.
     """
 
     rule: Rule
@@ -245,10 +250,13 @@ class Check:
     plan: Plan
     engine: MachineCheck | None = None
     skeleton: Capture | None = None
+    pause: int = 0
+    """The ``pause`` option in samples (0: none): a summary so far after each pause that long."""
     _parts: list[list[int]] = field(default_factory=list)
     _pending: int = 0
     _first: dict[int, tuple[int, int]] | None = None
     _end: int = 0
+    _counts: dict[str, int] = field(default_factory=dict)
 
     def start(self, levels: Sequence[int]) -> None:
         """The raw level of each mapped channel at sample 0 (in the mapped roles' order)."""
@@ -281,22 +289,17 @@ class Check:
 
     def summary(self, end: int, *, final: bool) -> list[list[str]]:
         """The summary row's texts (each a list of long-to-short variants): the overall line,
-        then one per rule; ``final``: the capture has ended (else: so far, up to ``end``)."""
+        then one per rule, as ``check`` gives them for the input up to ``end`` (a copy of the
+        engine finishes there: more input may follow); ``final``: the input has ended (else the
+        lines say "so far")."""
         if self.engine is None or self.skeleton is None:
             return []
         self._end = max(self._end, end)
         self._feed()
-        axis = self.engine.axes[0]
-        rules: Sequence[RuleResult]
-        verdict: Verdict
-        if final:
-            report = self.engine.finish(replace(self.skeleton, end=self._end)).axes[0]
-            rules, steps, verdict, rates = report.rules, report.steps, report.verdict, report.rates
-        else:
-            if axis.pending:  # every edge so far, however few (MachineCheck.flush may wait)
-                axis.window(self._end)
-            rules, steps, rates = axis.results, axis.steps, None
-            verdict = overall_verdict([r.verdict for r in rules])
+        engine = copy.deepcopy(self.engine)
+        report = engine.finish(replace(self.skeleton, end=self._end)).axes[0]
+        rules, steps, verdict, rates = report.rules, report.steps, report.verdict, report.rates
+        self._counts = {r.rule: r.violations for r in rules}
         assert self.plan.drive is not None
         fails = sum(r.violations for r in rules)
         head = "" if final else "so far: "
@@ -315,10 +318,8 @@ class Check:
         return format_ns(self.plan.resolution_ns) if self.plan.resolution_ns is not None else "-"
 
     def violations(self) -> dict[str, int]:
-        """Violations per rule as the block engine counted them (after :meth:`summary`)."""
-        if self.engine is None:
-            return {}
-        return {r.rule: r.fails for r in self.engine.axes[0].results}
+        """Violations per rule as the block engine counted them (at the last :meth:`summary`)."""
+        return dict(self._counts)
 
 
 def _rule_line(r: RuleResult) -> list[str]:
@@ -392,7 +393,26 @@ def open_check(
         st, roles, inverted, edge, int(forward), level, rules, tb, resolution_ns, unit, drive,
         tuple(notes),
     )  # fmt: skip
-    return Check(plan, engine, skeleton)
+    return Check(plan, engine, skeleton, _pause(options, timebase if known else None))
+
+
+def _pause(options: Mapping[str, object], timebase: Timebase | None) -> int:
+    """The ``pause`` option in samples (0: not given, or no sample rate to count it in)."""
+    text = _text(options, "pause")
+    if not text:
+        return 0
+    seconds = parse_option(text, "pause", "time")
+    if seconds < PAUSE_FLOOR_S:
+        raise UsageError(
+            f"pause {text}: below the floor of {format_ns(PAUSE_FLOOR_S * 10**9)} (a summary "
+            "after every shorter pause would come every few edges): give e.g. 100ms, or "
+            "nothing for a summary at the end only"
+        )
+    if seconds > PAUSE_CEILING_S:
+        raise UsageError(f"pause {text}: above the ceiling of a day: give e.g. 100ms")
+    if timebase is None:
+        return 0
+    return max(1, int(seconds / timebase.tick_s))
 
 
 def _spec(

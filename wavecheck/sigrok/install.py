@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -101,8 +102,9 @@ class Installed:
 
     @property
     def env_line(self) -> str:
-        """The ``SIGROKDECODE_DIR`` line for a directory libsigrokdecode does not search."""
-        return f"export SIGROKDECODE_DIR={self.folder.parent}"
+        """The ``SIGROKDECODE_DIR`` line for a directory libsigrokdecode does not search, quoted
+        for a POSIX shell (a space or ``;`` in the path stays part of it)."""
+        return f"export SIGROKDECODE_DIR={shlex.quote(str(self.folder.parent))}"
 
 
 def install(directory: str | os.PathLike[str] | None = None) -> Installed:

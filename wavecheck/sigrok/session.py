@@ -167,7 +167,6 @@ def stacked_from_report(report: Report, args: argparse.Namespace, ids: Sequence[
         "limit": " ".join(getattr(args, "limit", None) or []),
         "margin": getattr(args, "margin", None) or "",
         "resolution": _resolution(report, args),
-        "pause": "100ms",
     }
     name = "wavecheck" if report.axis is None else f"wavecheck {report.axis}"
     return Stacked(name, channels, options)

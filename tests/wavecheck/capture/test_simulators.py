@@ -261,3 +261,29 @@ def test_fst_through_pywellen_offers_no_bits_it_cannot_place(bus_dumps: dict[str
     assert any("fst2vcd" in n for n in cap.notes)
     with pytest.raises(UsageError, match="no channel 'rev.0.'"):
         find_channel(cap, "rev[0]")
+
+
+@pytest.mark.parametrize("dump", ["ghdl-vcd", "ghdl-fst", "ghdl-ghw", "icarus-vcd"])
+def test_a_bit_in_vhdl_spelling_maps(bus_dumps: dict[str, Path], dump: str) -> None:
+    """Issue 34: ``--map step=pins(2)``, VHDL's index spelling, names the bit ``pins[2]`` does."""
+    if dump not in bus_dumps:
+        pytest.skip("needs iverilog and ghdl (make system-deps)")
+    cap = open_capture(bus_dumps[dump])
+    for name, edges in BUS_EDGES.items():
+        vhdl = name.replace("[", "(").replace("]", ")")
+        assert len(find_channel(cap, vhdl).edges) == edges, vhdl
+        assert find_channel(cap, vhdl.replace("(", " ( ")) is find_channel(cap, name)
+    with pytest.raises(UsageError, match="has no bit 1 .bits 2 to 5"):
+        find_channel(cap, "off(1)")
+
+
+def test_the_cli_maps_a_bit_in_vhdl_spelling(bus_dumps: dict[str, Path]) -> None:
+    if "ghdl-vcd" not in bus_dumps:
+        pytest.skip("needs ghdl (make system-deps)")
+    from wavecheck.cli import main
+
+    args = ["info", str(bus_dumps["ghdl-vcd"])]
+    assert main(args) == 0
+    common = ["check", str(bus_dumps["ghdl-vcd"]), "--drive", "gecko-g202", "--format", "json"]
+    assert main([*common, "--map", "step=off(5),dir=off(2)"]) in (0, 1)
+    assert main([*common, "--map", "step=off(9),dir=off(2)"]) == 2

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.bounds import HANG_GUARD_S
 from tests.conftest import write_vcd
 from tests.wavecheck.capture.srutil import write_sr
 from wavecheck.capture.blocks import assemble
@@ -163,7 +164,7 @@ def test_a_fifo_without_a_writer_says_so_and_ends_on_ctrl_c(
     )  # fmt: skip
     os.close(slave)
     seen = b""
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_GUARD_S  # a guard against a hang (tests/bounds.py)
     while b"waiting for data on FIFO" not in seen and time.monotonic() < deadline:
         if select.select([master], [], [], 1.0)[0]:
             seen += os.read(master, 4096)

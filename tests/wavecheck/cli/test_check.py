@@ -157,4 +157,19 @@ def test_real_capture_cli(smoothie_sr: Path, capsys) -> None:
         capsys, "check", str(smoothie_sr), "--drive", "gecko-g202", "--map", "step=5,dir=6"
     )
     assert code == 1
-    assert "steps:   739" in out and "… and 510 more" in out
+    assert "steps:   739" in out and "… and 361 more, not identical to these" in out
+    assert "169 × step_high" in out  # the whole capture's count of the group shown
+
+
+def test_json_says_how_many_violations_it_lists_of_how_many(capsys) -> None:
+    """Issue 34: the JSON listed 1000 of 5054 violations without saying so in the document."""
+    from tests.conftest import shared_capture
+
+    grbl = str(shared_capture("sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr"))
+    args = ["check", grbl, "--drive", "drv8825", "--map", "step=1", "--limit", "step_high=10us"]
+    for extra, listed, cut in (([], 1000, True), (["--max-violations", "6000"], 5054, False)):
+        assert main([*args, "--format", "json", *extra]) == 1
+        doc = json.loads(capsys.readouterr().out)
+        assert doc["violations_total"] == 5054
+        assert doc["violations_listed"] == len(doc["violations"]) == listed
+        assert doc["violations_truncated"] is cut

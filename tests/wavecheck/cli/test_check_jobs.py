@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import write_vcd
-from wavecheck.cli import _reports, main
+from wavecheck.cli import _batch, main
 from wavecheck.drives import library
 from wavecheck.report import plot
 from wavecheck.report.html import render_html
@@ -204,10 +204,10 @@ def test_workers_send_back_no_reports(tmp_path: Path, capsys: pytest.CaptureFixt
 
     paths = [str(p) for p in _runs(tmp_path, 4)]
     args = _parse(["check", *paths, *ARGS, "--format", "json"])
-    outcomes = list(_reports._outcomes(args, build_report, paths, 2))
+    outcomes = list(_batch._outcomes(args, build_report, paths, 2))
     assert sorted(o.index for o in outcomes) == [0, 1, 2, 3]
     assert all(isinstance(o.piece, str) for o in outcomes)
-    assert [f.name for f in dataclasses.fields(_reports._Outcome)] == [
+    assert [f.name for f in dataclasses.fields(_batch._Outcome)] == [
         "index", "path", "summary", "code", "verdict", "piece", "counts", "error",
     ]  # fmt: skip
 
@@ -273,14 +273,14 @@ def test_the_parent_keeps_no_piece_of_the_document(
 ) -> None:
     """Each capture's piece of the document goes to the spool (a file) as it arrives: when the
     document is written, the outcomes held in memory carry only their summary line."""
-    seen: list[list[_reports._Outcome]] = []
-    write = _reports._write_many
+    seen: list[list[_batch._Outcome]] = []
+    write = _batch._write_many
 
     def watched(args: argparse.Namespace, outcomes: list[Any], spool: Any, code: int) -> None:
         seen.append(list(outcomes))
         write(args, outcomes, spool, code)
 
-    monkeypatch.setattr(_reports, "_write_many", watched)
+    monkeypatch.setattr(_batch, "_write_many", watched)
     _runs(tmp_path, 5)
     for jobs in ("1", "2"):
         main(["check", str(tmp_path / "*.vcd"), *ARGS, "--format", "json", "-j", jobs])

@@ -10,7 +10,7 @@ import pytest
 
 from tests.wavecheck.report.traces import write_stepgen_vcd
 from wavecheck.cli import main
-from wavecheck.cli._reports import expand_captures
+from wavecheck.cli._batch import expand_captures
 from wavecheck.verdict import worst_exit_code
 
 

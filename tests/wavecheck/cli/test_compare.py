@@ -166,3 +166,31 @@ def test_tolerance_needs_a_time_with_its_unit(golden: Path, capsys, tolerance: s
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--tolerance" in err[0]
+
+
+def test_a_failing_capture_against_its_failing_golden_says_both_fail(capsys) -> None:
+    """Issue 34: compare of a failing capture against a failing golden printed a bare
+    ``verdict: PASS``. The line says what was compared: it matches the golden trace, and both
+    fail the rule."""
+    from wavecheck.cli import main
+
+    golden = Path(__file__).resolve().parents[3] / "captures" / "golden"
+    bad = str(golden / "g202-p20-worst-dirhold.vcd")
+    assert main(["check", bad, "--drive", "gecko-g202"]) == 1  # the golden itself fails
+    capsys.readouterr()
+    assert main(["compare", bad, bad, "--drive", "gecko-g202"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first == (
+        "verdict: PASS (matches the golden trace: 4 steps, times within ±2 us, no rule worse; "
+        "both fail dir_hold: the capture fails as its golden does)"
+    )
+    assert main(["compare", bad, bad, "--drive", "gecko-g202", "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["said"][1] == "both fail dir_hold: the capture fails as its golden does"
+    good = str(golden / "a4988-spike.vcd")
+    assert main(["compare", good, good, "--drive", "a4988"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert (
+        first.startswith("verdict: PASS (matches the golden trace: 800 steps")
+        and "both" not in first
+    )

@@ -36,7 +36,8 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str]:
 
 def test_the_example_against_itself_passes(capsys: pytest.CaptureFixture[str]) -> None:
     code, out = _run(capsys, str(TWO_AXIS), str(TWO_AXIS), "--drive", "gecko-g202", *MAPS)
-    assert code == 0 and out.startswith("verdict: PASS (2 axes)\n")
+    # issue 34: the line says what was compared (the example's golden fails dir_hold on x)
+    assert code == 0 and out.startswith("verdict: PASS (2 axes; each axis matches its golden trace")
     assert "== axis x ==" in out and "== axis y ==" in out
     # x fails dir_hold in both files: a golden failing a rule is matched by the capture failing it
     x = out.split("== axis x ==")[1].split("== axis y ==")[0]
@@ -52,14 +53,14 @@ def test_one_axis_short_of_a_step_fails_naming_it(
     )
     data = json.loads(out)
     assert code == 1 and data["verdict"] == "fail"
-    assert set(data) == {"capture", "golden", "axes", "failures", "verdict"}
+    assert set(data) == {"capture", "golden", "axes", "failures", "said", "verdict"}
     assert {a["name"]: a["verdict"] for a in data["axes"]} == {"x": "pass", "y": "fail"}
     y = next(a for a in data["axes"] if a["name"] == "y")
     assert y["steps"]["count"] == {"capture": 3, "golden": 4}
     assert "axis y: step count 3 vs 4" in data["failures"]
     assert not any(f.startswith("axis x") for f in data["failures"])
     code, out = _run(capsys, str(cap), str(TWO_AXIS), "--drive", "gecko-g202", *MAPS)
-    assert code == 1 and out.startswith("verdict: FAIL (2 axes) (axis y: step count 3 vs 4")
+    assert code == 1 and out.startswith("verdict: FAIL (2 axes; axis y: step count 3 vs 4")
 
 
 def test_golden_map_and_per_axis_drive(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -135,7 +136,8 @@ def test_one_axis_keeps_todays_output(capsys: pytest.CaptureFixture[str]) -> Non
         "step=y_step,dir=y_dir",
     ]
     code, out = _run(capsys, *argv)
-    assert code == 0 and out.startswith("verdict: PASS\ncapture: ") and "== axis" not in out
+    assert code == 0 and out.startswith("verdict: PASS (matches the golden trace: ")
+    assert "\ncapture: " in out and "== axis" not in out
     code, out = _run(capsys, *argv, "--format", "json")
     assert set(json.loads(out)) == {
         "capture",
@@ -145,5 +147,6 @@ def test_one_axis_keeps_todays_output(capsys: pytest.CaptureFixture[str]) -> Non
         "timing",
         "rules",
         "failures",
+        "said",
         "verdict",
     }

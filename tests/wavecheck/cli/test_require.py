@@ -43,6 +43,11 @@ def test_require_all_fails_the_run_with_exit_4_and_says_why(grbl_sr: Path, capsy
         capsys, "check", grbl_sr, "--map", "step=1", "--drive", "drv8825", "--require", "all"
     )
     assert code == 4
+    # issue 34: the first line says what the exit code says, not "verdict: PASS"
+    assert out.splitlines()[0] == (
+        f"verdict: NOT DECIDED (exit 4: required {NO_DIR}); the rules checked: "
+        f"PASS ({NO_DIR}; enable_setup not checked: drive drv8825 states no figure)"
+    )
     assert out.splitlines()[1] == f"required but not decided: {NO_DIR}"
     # all = every rule the drive gives a figure for: the DRV8825 states no enable_setup
     code, out, _ = _run(
@@ -67,7 +72,10 @@ def test_json_and_junit_carry_the_same_claims(grbl_sr: Path, tmp_path: Path, cap
     }
     xml = tmp_path / "out.xml"
     code, out, _ = _run(capsys, *args, "--format", "junit", "-o", xml)
-    assert code == 4 and out.splitlines()[0].startswith(f"PASS ({NO_DIR}")
+    assert code == 4 and out.splitlines()[0].startswith(
+        "NOT DECIDED (exit 4: required dir_hold not checked: no DIR channel); "
+        f"the rules checked: PASS ({NO_DIR}"
+    )
     assert out.splitlines()[1] == "required but not decided: dir_hold not checked: no DIR channel"
     suite = ET.parse(xml).getroot().find("testsuite")
     assert suite is not None
@@ -141,5 +149,8 @@ def test_html_says_what_was_not_checked(grbl_sr: Path, tmp_path: Path, capsys) -
     )  # fmt: skip
     html = page.read_text()
     assert code == 4
-    assert f'<p class="verdict-line">Verdict: PASS ({NO_DIR};' in html
+    assert (
+        f'<p class="verdict-line">Verdict: NOT DECIDED (exit 4: required {NO_DIR}); '
+        f"the rules checked: PASS ({NO_DIR};" in html
+    )
     assert f'<p class="required">required but not decided: {NO_DIR}</p>' in html

@@ -282,3 +282,25 @@ def test_wheel_ships_the_rules_through_the_package_symlink() -> None:
     # pyproject's package-data takes wavecheck/_rules/*.toml; the symlink must reach rules/.
     link = Path(__file__).resolve().parents[3] / "wavecheck" / "_rules"
     assert link.is_symlink() and link.resolve() == rules_dir().resolve()
+
+
+@pytest.mark.parametrize("spelling", ["DRV8825", "Drv8825", "drv8825"])
+def test_drive_ids_are_case_insensitive(spelling: str) -> None:
+    """Issue 34: ``--drive DRV8825`` was refused while the error suggested ``drv8825``."""
+    assert load_drive(spelling).id == "drv8825"
+
+
+def test_a_drive_extends_an_id_in_any_case(tmp_path: Path) -> None:
+    own = tmp_path / "mine.toml"
+    own.write_text('extends = "GECKO-G202"\nid = "mine"\n')
+    assert load_drive(str(own)).limit_ns("step_high") == load_drive("gecko-g202").limit_ns(
+        "step_high"
+    )
+
+
+def test_the_cli_takes_a_drive_id_in_capitals() -> None:
+    from wavecheck.cli import main
+
+    vcd = Path(__file__).resolve().parents[3] / "captures" / "golden" / "stepgen0.vcd"
+    assert main(["check", str(vcd), "--drive", "GECKO-G202", "--format", "json"]) in (0, 1)
+    assert main(["check", str(vcd), "--drive", "GECKO-G2O2"]) == 2  # letter O: still unknown

@@ -131,10 +131,17 @@ def test_up_down_dir_delay() -> None:
     up += pulses([43 * US], 2 * US)  # DOWN ended 42 µs → UP at 43 µs: delay 1 µs
     cap = capture({"UP": (0, up), "DOWN": (0, down)})
     d = drive("rising", interface="up-down", dir_delay=2 * US, step_high=1 * US, step_low=1 * US)
-    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1, pulse_level=1)
     r = report.rule("dir_delay")
     assert r is not None and r.measured_ticks.tolist() == [3 * US, 1 * US] and r.violations == 1
     assert report.steps.final_position == 1
+    # the pulse level not stated (two pulses a line do not show it): low pulses would end at
+    # the rising edges (5 us and 3 us), so the 1 us switch is undecided, not a fail (issue 33:
+    # the verdict depends on the signal at the drive's input, not on an assumed level)
+    unstated = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    r = unstated.rule("dir_delay")
+    assert r is not None and r.measured_ticks.tolist() == [3 * US, 1 * US]
+    assert (r.violations, r.indeterminate, r.verdict) == (0, 1, "indeterminate")
     low = report.rule("step_low")
     assert low is not None and low.checked == 3  # 12-20 on UP, 22-43 on UP, 27-40 on DOWN
 
@@ -159,7 +166,9 @@ def test_up_down_dir_delay_falling_edge_drive(inverted: bool, expected_us: list[
     cap = capture({"UP": (0, up), "DOWN": (0, down)}, end=200 * US)
     d = drive("falling", interface="up-down", dir_delay=5 * US)
     invert = ("up", "down") if inverted else ()
-    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, invert, step_type_number=1)
+    report = run_check(
+        cap, d, {"up": "UP", "down": "DOWN"}, invert, step_type_number=1, pulse_level=1
+    )  # the generator's pulses stated high (issue 33: an unstated level is not assumed)
     r = report.rule("dir_delay")
     assert r is not None
     assert r.measured_ticks.tolist() == [v * US for v in expected_us]
@@ -168,15 +177,19 @@ def test_up_down_dir_delay_falling_edge_drive(inverted: bool, expected_us: list[
 
 def test_up_down_dir_delay_pulses_longer_than_gaps() -> None:
     """Issue 12: with 2.5 µs pulses and 0.5 µs gaps, duty-cycle statistics took the gaps for the
-    pulses and measured the switch from the START of the last UP pulse (2.5 µs, PASS). The pulse
-    level comes from the interface (high pulses, not inverted): the switch is 0.5 µs, a fail."""
+    pulses and measured the switch from the START of the last UP pulse (2.5 µs, PASS). With the
+    generator's pulses stated high the switch is 0.5 µs, a fail; unstated, the waveform (one
+    speed) does not show the level, and it is undecided (issue 33), never a pass."""
     up = pulses([0, 3 * US, 6 * US], 2500)  # last UP pulse 6.0-8.5 µs
     down = pulses([9 * US, 12 * US], 2500)  # first DOWN pulse at 9.0 µs: 0.5 µs after UP ends
     cap = capture({"UP": (0, up), "DOWN": (0, down)}, end=20 * US)
     d = drive("rising", interface="up-down", dir_delay=2 * US, step_high=1 * US, step_low=100)
-    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1, pulse_level=1)
     r = report.rule("dir_delay")
     assert r is not None and r.measured_ticks.tolist() == [500] and r.verdict == "fail"
+    report = run_check(cap, d, {"up": "UP", "down": "DOWN"}, step_type_number=1)
+    r = report.rule("dir_delay")
+    assert r is not None and r.measured_ticks.tolist() == [500] and r.verdict == "indeterminate"
 
 
 def test_phase_types_state_hold_and_sequence() -> None:

@@ -72,3 +72,27 @@ def test_step_unknown_before_a_dir_change_that_no_step_precedes_may_hide_a_hold(
     hold, setup = r.rule("dir_hold"), r.rule("dir_setup")
     assert hold is not None and hold.unknown == 1 and hold.checked == 0
     assert setup is not None and setup.unknown == 1  # 8 -> 20 touches the x up to 10
+
+
+def test_no_step_rate_from_an_interval_touching_unknown_and_position_unknown_from_there(
+    tmp_path: Path,
+) -> None:
+    """Issue 33: steps 10 us apart, STEP x from 33 to 36 (a step may hide there), then steps
+    again. The step at 36 (where STEP comes back high) is 6 us after the last before the x: that
+    interval touches the unknown and gives no rate (the known ones give 100 kHz, not 166.7 kHz);
+    the final position is unknown from 33 us, not +6."""
+    body = (
+        '#0\n0!\n0"\n#10\n1!\n#12\n0!\n#20\n1!\n#22\n0!\n#30\n1!\n#32\n0!\n#33\nx!\n'
+        "#36\n1!\n#38\n0!\n#48\n1!\n#50\n0!\n#58\n1!\n#60\n0!\n#80\n"
+    )
+    r = run_check(open_capture(_vcd(tmp_path, body)), drive("rising", step_high=1000))
+    assert r.report.rates.observed == 100_000  # 1 / 10 us, exact hertz
+    assert r.steps.counts.lost_from == 33 and r.steps.counts.final_position is None
+    assert r.steps.counts.count == 6  # the steps seen; one more may hide in 33..36
+
+
+def test_a_leading_unknown_stretch_leaves_the_position_exact(tmp_path: Path) -> None:
+    """x until the first write (a simulator's reset): the position counts from there."""
+    body = '#0\nx!\n0"\n#5\n0!\n#10\n1!\n#12\n0!\n#20\n1!\n#22\n0!\n#40\n'
+    r = run_check(open_capture(_vcd(tmp_path, body)), drive("rising", step_high=1000))
+    assert r.steps.counts.lost_from is None and r.steps.counts.final_position == 2

@@ -94,7 +94,7 @@ def test_margin_doubles_and_fix_names_the_setting(capsys: pytest.CaptureFixture[
         "--limit",
         "step_high=12us",
     )
-    assert _rule(doc, "X", "step_high")["fix"] == "set `$0` to at least 12 us"
+    assert _rule(doc, "X", "step_high")["fix"] == "set `$0=13` (us)"  # 12 us + 562.5 ns short
 
 
 def test_per_axis_drives_and_text(capsys: pytest.CaptureFixture[str]) -> None:

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.bounds import HANG_GUARD_S
 from tests.wavecheck.firmware.fuzz_firmware import FORMATS
 
 REPO = Path(__file__).resolve().parents[3]
@@ -28,8 +29,8 @@ def _limit_memory() -> None:
 def test_bounded_fuzz(name: str, tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "tests.wavecheck.firmware.fuzz_firmware", "--reader", name,
-         "-n", "200", "--seed", "1", "--max-seconds", "10", "--out", str(tmp_path)],
-        capture_output=True, text=True, timeout=300, cwd=REPO, check=False,
+         "-n", "200", "--seed", "1", "--max-seconds", str(HANG_GUARD_S), "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=None, cwd=REPO, check=False,
         preexec_fn=_limit_memory, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"},
     )  # fmt: skip
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]

@@ -23,7 +23,7 @@ def test_grbl_settings_md() -> None:
     cfg = read_firmware(FW / "grbl/settings.md")
     assert cfg.firmware == "grbl" and cfg.axis_names == ("X", "Y", "Z")
     x = cfg.axis("X")
-    assert v(x.pulse) == 10_000  # line 32: $0=10 (us)
+    assert v(x.pulse) == 9437.5  # line 32: $0=10 (us), less 562.5 ns (grbl stepper.c:241)
     assert x.pulse.where.endswith("settings.md:32")
     assert x.pulse_level == 1  # line 34: $2=0
     assert not x.dir_inverted  # line 35: $3=0
@@ -33,7 +33,7 @@ def test_grbl_settings_md() -> None:
 
 def test_grbl_user_dumps() -> None:
     cfg = read_firmware(FW / "grbl/GRBL-config.md")  # first dump, lines 6-39
-    assert v(cfg.axis("X").pulse) == 10_000  # line 6: $0=10
+    assert v(cfg.axis("X").pulse) == 9437.5  # line 6: $0=10, less 562.5 ns
     assert [a.dir_inverted for a in cfg.axes] == [True, False, True]  # line 9: $3=5 (X, Z)
     assert v(cfg.axis("X").max_rate) == F(800 * 1000, 60)  # lines 28, 31: $100=800, $110=1000
     assert v(cfg.axis("Y").max_rate) == F(800 * 800, 60)  # lines 29, 32: $101=800, $111=800
@@ -44,10 +44,12 @@ def test_grbl_user_dumps() -> None:
 def test_klipper_skr_mini_e3_tmc_uart_both_edges() -> None:
     cfg = read_firmware(FW / "klipper/generic-bigtreetech-skr-mini-e3-v2.0.cfg")
     x = cfg.axis("stepper_x")
-    # [tmc2209 stepper_x] line 25, uart_pin: 100 ns, truncated to MCU ticks (klippy/mcu.py) of
-    # an STM32F103 (header comment), 72 MHz or 64 MHz (Klipper's src/stm32/Kconfig): 6 ticks at
-    # 64 MHz = 93.75 ns is the smaller
-    assert v(x.pulse) == F(375, 4) and x.pulse.status == "uncertain"
+    # [tmc2209 stepper_x] line 25, uart_pin: 100 ns (klippy/extras/tmc.py:487) = 6 or 7 ticks of
+    # an STM32F103 (header comment) at 64/72 MHz, <= EDGE_STEP_TICKS = ceil(clock / 8 MHz) = 8/9
+    # (klipper src/stepper.c:132, 233-235): the optimised edge path, which enforces no time
+    # between edges (src/stepper.c:139-150)
+    assert x.pulse.value is None and x.pulse.status == "not_enforced"
+    assert x.dir_hold.value is None and "stepper_load_next" in (x.dir_hold.note)
     assert x.both_edges and x.active_edge == "both"
     assert x.dir_inverted  # line 16: dir_pin: !PB12
     assert not cfg.axis("stepper_z").dir_inverted  # line 52: dir_pin: PC5
@@ -64,9 +66,9 @@ def test_klipper_mellow_explicit_duration_wins() -> None:
     assert not x.both_edges  # 4 us > 500 ns: the TMC section's both-edge request is refused
     assert v(x.dir_setup) == 4000 and v(x.dir_hold) == 4000
     ext = cfg.axis("extruder")
-    # [tmc2209 extruder] line 134, no duration: 100 ns = 16.8 ticks of the STM32F407's 168 MHz,
-    # truncated to 16 ticks (klippy/mcu.py; Klipper's src/stm32/Kconfig)
-    assert v(ext.pulse) == F(16 * 10**9, 168_000_000) and ext.both_edges
+    # [tmc2209 extruder] line 134, no duration: 100 ns = 16 ticks of the STM32F407's 168 MHz,
+    # <= EDGE_STEP_TICKS 21 (src/stepper.c:132): the edge path, nothing enforced
+    assert ext.pulse.value is None and ext.pulse.status == "not_enforced" and ext.both_edges
 
 
 def test_klipper_duet3_6xd_default_2us() -> None:
@@ -161,9 +163,8 @@ def test_hm2_5i20() -> None:
     assert cfg.firmware == "hm2" and cfg.axis_names == ("stepgen.00", "stepgen.01", "stepgen.02")
     s = cfg.axes[0]  # 5i20.ini:123-126 DIRSETUP 200, DIRHOLD 200, STEPLEN 40000, STEPSPACE 40000
     assert (v(s.pulse), v(s.idle), v(s.dir_setup)) == (40000, 40000, 200)
-    # DIR hold: the man page counts dirhold after the step ends (steplen + dirhold from the
-    # leading edge); the VHDL counts it from the step's start (200 ns): both are kept
-    assert v(s.dir_hold) == 40200 and s.dir_hold.disputed == 200
+    # DIR hold: the hold counter starts with the pulse (kubstepgenz.vhd): max(40000, 200)
+    assert v(s.dir_hold) == 40000 and v(s.dir_hold_trailing) == 0
     assert s.pulse.where.endswith("hm2-stepper.hal:84")
     assert v(s.max_rate) == 12 * 1000  # 5i20.ini:106 STEPGEN_MAX_VEL 12 x :110 SCALE 1000
 

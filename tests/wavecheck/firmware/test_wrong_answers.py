@@ -63,7 +63,8 @@ def test_parport_reset_makes_the_pulse(capsys: pytest.CaptureFixture[str]) -> No
     code, doc = _config(capsys, str(ini), "--drive", "gecko-g540")
     assert _rule(doc, "stepgen.0", "step_low")["generator_ns"] == 22000
     assert _rule(doc, "stepgen.0", "step_high")["generator_ns"] == 1000
-    assert _rule(doc, "stepgen.0", "step_low")["verdict"] == "pass" and code == 0
+    assert _rule(doc, "stepgen.0", "step_low")["verdict"] == "pass"
+    assert code == 3  # dir_setup rests on dirsetup, which stepgen may not keep (LinuxCNC #2332)
 
 
 def test_ini_continuations_and_includes_are_read() -> None:
@@ -105,18 +106,17 @@ def test_hm2_without_a_hostmot2_section_is_hm2(tmp_path: Path) -> None:
     assert cfg.axes[0].pulse.value == 40000  # STEPLEN, not a 1 ms software-stepgen period
 
 
-def test_hm2_dir_hold_names_both_readings(capsys: pytest.CaptureFixture[str]) -> None:
-    """5i20 (DIRHOLD 200, STEPLEN 40000): against a falling-edge drive the hold was
-    INDETERMINATE with no figure, against a rising-edge one FAIL at 200 ns where the man page
-    gives steplen + dirhold. Now: the man page's figure with the VHDL's beside it (FT §8)."""
+def test_hm2_dir_hold_is_what_the_hardware_does(capsys: pytest.CaptureFixture[str]) -> None:
+    """5i20 (DIRHOLD 200, STEPLEN 40000): the hold counter starts with the pulse
+    (kubstepgenz.vhd under GHDL, issue 32): max(steplen, dirhold) = 40 us after the leading edge
+    (was steplen + dirhold, indeterminate), max(0, dirhold - steplen) = 0 after the trailing."""
     ini = str(FW / "linuxcnc/hm2-stepper/5i20.ini")
     _, doc = _config(capsys, ini, "--drive", "drv8825")  # rising edge, 650 ns hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
-    assert hold["generator_ns"] == 40200 and hold["verdict"] == "indeterminate"
-    assert "the readings give different verdicts" in hold["note"] and "200 ns" in hold["note"]
+    assert hold["generator_ns"] == 40000 and hold["verdict"] == "pass"
     _, doc = _config(capsys, ini, "--drive", "gecko-g202")  # falling edge, 20 us hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
-    assert hold["generator_ns"] == 200 and hold["verdict"] == "fail"  # both readings fail
+    assert hold["generator_ns"] == 0 and hold["verdict"] == "fail"
 
 
 # -- Marlin ----------------------------------------------------------------------------------
@@ -208,8 +208,8 @@ def test_klipper_truncation_note_only_where_true() -> None:
     spider = read_firmware(CORPUS / "klipper/generic-fysetc-spider.cfg")
     assert not any("truncated" in n for n in spider.notes)
     assert "truncated" not in spider.axis("stepper_x").pulse.note
-    skr = read_firmware(CORPUS / "klipper/generic-bigtreetech-skr-mini-e3-v2.0.cfg")
-    assert "truncated" in skr.axis("stepper_x").pulse.note
+    made = read_firmware(FW / "klipper/generic-mellow-fly-e3-v2.cfg")  # 4 us on the STM32F407
+    assert "truncated" not in made.axis("stepper_x").pulse.note  # 672 whole ticks
 
 
 # -- RRF, grbl, FluidNC ------------------------------------------------------------------------
@@ -236,7 +236,7 @@ def test_grbl_dump_without_0_uses_the_default(tmp_path: Path) -> None:
     text = (CORPUS / "grbl/tiago-rorke+wandering-gaze/grbl_settings.txt").read_text()
     (tmp_path / "dump.txt").write_text(re.sub(r"^\$0=.*\n", "", text, flags=re.M))
     x = read_firmware(tmp_path / "dump.txt").axis("X")
-    assert x.pulse.value == 10_000 and x.pulse.status == "default"
+    assert x.pulse.value == 9437.5 and x.pulse.status == "default"  # 10 us - 562.5 ns
 
 
 def test_fluidnc_is_read() -> None:

@@ -7,9 +7,9 @@ changes changes at its one moment k·P + l_k, l_k ≥ 0; the model's worst case 
 of RULE's intervals on time and every other invocation J late. Required: a lattice at exactly P,
 and a maximum lateness never below the true one (the bound: measured + one sample) and within a
 sample of it. Where the capture cannot tell two readings apart (a few edges a sample before the
-bulk at 95 % of P and 1 MHz), both are reported: the true one must be among them, the figures
-(the larger) never below it. The worst-case seed picks the rule: 1 step_high, 2 dir_hold,
-3 step_period.
+bulk at 95 % of P and 1 MHz), both are reported and the worst lateness is not established
+(issue 33): the true one must be among them, the figures (the larger) never below it. The
+worst-case seed picks the rule: 1 step_high, 2 dir_hold, 3 step_period.
 """
 
 from __future__ import annotations
@@ -49,7 +49,8 @@ def test_sweep(period_us: int, fraction: float, kind: str, seed: int) -> None:
         sample = Fraction(10**9, rate)
         r = analyse(capture(trace, rate), list(trace.pins), roles=roles(trace))
         where = (trace.latency.text, rate, r.reason, r.candidates)
-        assert r.lattice and r.established, where
+        # two readings the capture cannot tell apart (95 % of P): not established (issue 33)
+        assert r.lattice and r.established != bool(r.candidates), where
         bound = r.max_lateness_bound_ns
         assert bound is not None and r.max_lateness_ns is not None
         assert bound >= truth, where  # never under-reported

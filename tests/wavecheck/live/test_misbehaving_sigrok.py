@@ -1,5 +1,5 @@
 """``wavecheck watch`` against a sigrok-cli that misbehaves (issue 27): it never hangs, always
-ends within ``--time`` plus the stated grace (or soon after Ctrl-C), kills the acquisition's
+ends by the watchdog meant to end it (each says so), kills the acquisition's
 whole process group, and gives one error line with exit 2 when the acquisition failed.
 
 The fake sigrok-cli is a script first on ``PATH`` (``FAKE`` below); its misbehaviour is chosen by
@@ -20,12 +20,10 @@ from pathlib import Path
 
 import pytest
 
-from wavecheck.live import START_GRACE
-from wavecheck.live.acquisition import EXIT_GRACE, PROBE_TIMEOUT, STOP_GRACE
+from tests.bounds import HANG_GUARD_S
+from wavecheck.live.acquisition import PROBE_TIMEOUT, STOP_GRACE
 
 REPO = Path(__file__).resolve().parents[3]
-#: Seconds a run may take beyond its bound on a loaded machine (Python start-up included).
-SLACK = 8.0
 
 FAKE = r"""#!/usr/bin/env python3
 import os, signal, subprocess, sys, time
@@ -93,17 +91,16 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
-def _finish(
-    tmp: Path, proc: subprocess.Popen[str], bound: float, started: float
-) -> tuple[int, str, str]:
+def _finish(tmp: Path, proc: subprocess.Popen[str]) -> tuple[int, str, str]:
+    """The watch's exit code and output once it ends, and no process of the acquisition left.
+    What ended it is asserted by its words (each watchdog says that it fired); the wait is only
+    a guard against a hang (tests/bounds.py), not a bound on time."""
     try:
-        out, err = proc.communicate(timeout=bound + SLACK)
+        out, err = proc.communicate(timeout=HANG_GUARD_S)
     except subprocess.TimeoutExpired:
         proc.kill()
         out, err = proc.communicate()
-        pytest.fail(f"watch still running {bound + SLACK:g} s after its bound: {err[-400:]}")
-    took = time.monotonic() - started
-    assert took <= bound + SLACK, took
+        pytest.fail(f"watch still running after {HANG_GUARD_S:g} s, a hang: {err[-400:]}")
     time.sleep(0.5)
     pids = [int(p) for p in (tmp / "pids").read_text().split()] if (tmp / "pids").exists() else []
     left = [p for p in pids if _alive(p)]
@@ -122,23 +119,22 @@ def _error_line(err: str) -> str:
 
 
 @pytest.mark.parametrize(
-    ("mode", "args", "bound", "says"),
+    ("mode", "args", "says"),
     [
-        ("silent", ["--time", "200ms"], 0.2 + START_GRACE, "no samples arrived"),
-        ("orphan", [], EXIT_GRACE + 2, "ended by itself (status 0) before it was asked to stop"),
-        ("early-exit", [], 2, "ended by itself (status 0) before it was asked to stop"),
-        ("show-garbage", [], 2, "--show lists no channels"),
-        ("show-huge", [], 2, "printed more than"),
-        ("show-many-channels", [], 2, "not a device's channel list"),
-        ("show-hang", [], PROBE_TIMEOUT, "--show: no answer in"),
-        ("rate-40-digits", [], 2, "--get samplerate says '9999"),
+        ("silent", ["--time", "200ms"], "no samples arrived"),
+        ("orphan", [], "ended by itself (status 0) before it was asked to stop"),
+        ("early-exit", [], "ended by itself (status 0) before it was asked to stop"),
+        ("show-garbage", [], "--show lists no channels"),
+        ("show-huge", [], "printed more than"),
+        ("show-many-channels", [], "not a device's channel list"),
+        ("show-hang", [], f"--show: no answer in {PROBE_TIMEOUT:g} s"),
+        ("rate-40-digits", [], "--get samplerate says '9999"),
     ],
 )
-def test_a_failing_acquisition_ends_in_time_with_one_error_line(
-    tmp_path: Path, mode: str, args: list[str], bound: float, says: str
+def test_a_failing_acquisition_ends_with_one_error_line(
+    tmp_path: Path, mode: str, args: list[str], says: str
 ) -> None:
-    started = time.monotonic()
-    code, out, err = _finish(tmp_path, _start(tmp_path, mode, *args), bound, started)
+    code, out, err = _finish(tmp_path, _start(tmp_path, mode, *args))
     assert code == 2, (out, err[-600:])
     line = _error_line(err)
     assert says in line, line
@@ -147,7 +143,7 @@ def test_a_failing_acquisition_ends_in_time_with_one_error_line(
 
 def _wait_for_data(proc: subprocess.Popen[str]) -> None:
     assert proc.stderr is not None
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG_GUARD_S  # a guard against a hang (tests/bounds.py)
     while time.monotonic() < deadline:
         line = proc.stderr.readline()
         if "samples" in line and " 0 samples" not in line:
@@ -160,9 +156,8 @@ def test_ctrl_c_ends_a_sigrok_cli_that_ignores_the_stop(tmp_path: Path) -> None:
     the samples up to then are the report (exit 0/1/3, not a failure), and it says so."""
     proc = _start(tmp_path, "ignore-stop")
     _wait_for_data(proc)
-    started = time.monotonic()
     proc.send_signal(signal.SIGINT)
-    code, out, err = _finish(tmp_path, proc, STOP_GRACE, started)
+    code, out, err = _finish(tmp_path, proc)
     assert code in (0, 1, 3), err[-600:]
     assert f"did not end within {STOP_GRACE:g} s of being asked to stop" in out
     assert "(interrupted)" in err
@@ -173,18 +168,17 @@ def test_a_second_ctrl_c_kills_at_once(tmp_path: Path) -> None:
     _wait_for_data(proc)
     proc.send_signal(signal.SIGINT)
     time.sleep(0.3)
-    started = time.monotonic()
     proc.send_signal(signal.SIGINT)
-    code, _, err = _finish(tmp_path, proc, 1.0, started)
+    code, out, err = _finish(tmp_path, proc)
     assert code in (0, 1, 3), err[-600:]
+    assert "did not end within" not in out  # the second Ctrl-C ended it, not the stop grace
 
 
 def test_exactly_time_s_samples_from_a_sigrok_cli_that_ignores_samples(tmp_path: Path) -> None:
     """--time 100ms is --samples 20000 at 200 kHz: the 20,000 are checked, the rest not read,
     and the acquisition that goes on is killed."""
-    started = time.monotonic()
     proc = _start(tmp_path, "ignore-samples", "--time", "100ms")
-    code, out, err = _finish(tmp_path, proc, 0.1 + STOP_GRACE + 2, started)
+    code, out, err = _finish(tmp_path, proc)
     assert code in (0, 1, 3), err[-600:]
     assert "watched 20,000 samples" in err
     assert "did not end within" in out

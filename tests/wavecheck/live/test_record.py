@@ -106,3 +106,42 @@ def test_what_arrived_reads_back_edge_for_edge(
     bit0 = (raw & 1).astype(np.int8)
     assert got.end == 10_000
     assert got.channels[0].edges.tolist() == (np.flatnonzero(np.diff(bit0)) + 1).tolist()
+
+
+def test_a_fast_stream_to_dev_null_records_without_error() -> None:
+    """Issue 34: ``watch --save /dev/null`` ended in ``struct.error: argument out of range``:
+    zipfile seeked back on /dev/null, whose position is always 0. A stream is never seeked."""
+    rec = SrRecorder("/dev/null", META, unitsize=2)
+    piece = bytes(range(256)) * 4096
+    for _ in range(64):  # 64 MiB, members of several MiB
+        rec.add(piece)
+        rec._end_member()  # noqa: SLF001 - a member boundary, as a checkpoint makes
+    rec.close()
+    assert rec.bytes == 64 * len(piece)
+
+
+_SCRIPT = """
+import sys
+from wavecheck.capture.srzip import sr_metadata
+from wavecheck.live.record import SrRecorder
+print("report line before", flush=True)
+rec = SrRecorder("/dev/stdout", sr_metadata(["A"], samplerate=1000), unitsize=1)
+rec.add(bytes([0, 1, 1, 0]) * 1000)
+rec.close()
+"""
+
+
+def test_dev_stdout_is_written_at_its_offset(tmp_path: Path) -> None:
+    """Issue 34: ``--save /dev/stdout > rec.sr`` reopened /dev/stdout at offset 0, over what
+    standard output held. The zip now follows it in the same open stream, and reads back."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "rec.bin"
+    with open(out, "wb") as f:
+        subprocess.run([sys.executable, "-c", _SCRIPT], stdout=f, check=True)
+    data = out.read_bytes()
+    head = b"report line before\n"
+    assert data.startswith(head)
+    with zipfile.ZipFile(io.BytesIO(data[len(head) :])) as z:
+        assert z.testzip() is None and z.read("logic-1-1") == bytes([0, 1, 1, 0]) * 1000

@@ -14,7 +14,7 @@ from lxml import etree
 import wavecheck
 from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
-from wavecheck.linuxcnc.config import LinuxCNCConfig
+from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.report.html import render_html
 from wavecheck.report.json import report_dict
 from wavecheck.report.junit import render_junit

@@ -218,3 +218,35 @@ def test_the_companion_vcd_never_replaces_a_file_wavecheck_did_not_write(
     main(argv)
     assert f"its signals are in {tmp_path / 'X-3.vcd'}" in capsys.readouterr().err
     assert target.read_bytes() == before and capture.read_bytes() == before
+
+
+@pytest.mark.parametrize("name", ["view.vcd", "view.FST", "view.ghw"])
+def test_gtkw_named_like_a_dump_is_refused_before_any_work(
+    tmp_path: Path, name: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 34: ``--gtkw FILE.vcd`` gave the save file and its companion one name: the save
+    file replaced the VCD and named itself as the dump (and GTKWave opens a .vcd as a dump)."""
+    from wavecheck.cli import main
+
+    vcd = Path(__file__).resolve().parents[3] / "captures" / "golden" / "stepgen0.vcd"
+    with pytest.raises(SystemExit) as done:  # argparse's usage error, before any work
+        main(["check", str(vcd), "--drive", "gecko-g202", "--gtkw", str(tmp_path / name)])
+    assert done.value.code == 2
+    err = capsys.readouterr().err
+    assert "opens a" in err and "name it view.gtkw" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_api_never_makes_a_save_file_its_own_companion(tmp_path: Path) -> None:
+    """write_gtkw given a FILE.vcd save path: the companion is FILE-2.vcd, and a second write
+    reuses it, replacing nothing else."""
+    vcd = write_stepgen_vcd(tmp_path / "src.vcd")
+    cap = open_capture(vcd)
+    cap.format = "sr"  # as if read from a .sr: a VCD is written beside the save file
+    report = run_check(cap, g202(), {"step": "STEP", "dir": "DIR"}, invert=["step"], pictures=True)
+    save = tmp_path / "view.vcd"
+    for _ in range(2):
+        assert write_gtkw(report, save) == tmp_path / "view-2.vcd"
+    assert sorted(p.name for p in tmp_path.glob("view*")) == ["view-2.vcd", "view.vcd"]
+    assert f'[dumpfile] "{tmp_path / "view-2.vcd"}"' in save.read_text()
+    assert [c.name for c in open_capture(tmp_path / "view-2.vcd").channels] == ["step", "dir"]

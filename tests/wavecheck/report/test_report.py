@@ -46,6 +46,7 @@ def test_json_keys_and_values() -> None:
         "rules",
         "violations",
         "violations_total",
+        *("violations_listed", "violations_truncated"),  # issue 34: the document says it
         "max_step_rate_hz",
         "verdict",
         *("verdict_line", "unchecked", "required", "exit_code"),  # issue 26: what it claims
@@ -65,6 +66,9 @@ def test_json_keys_and_values() -> None:
             "verdict",
         } <= set(r)
     assert len(data["violations"]) == 3 and data["violations_total"] == 9
+    assert data["violations_listed"] == 3 and data["violations_truncated"] is True
+    whole = json.loads(render_json(report, violation_cap=100))
+    assert whole["violations_listed"] == 9 and whole["violations_truncated"] is False
     v = data["violations"][0]
     assert v == {
         "rule": "step_high",

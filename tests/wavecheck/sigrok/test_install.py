@@ -126,3 +126,27 @@ def test_the_decoder_needs_wavecheck_only_when_it_runs() -> None:
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.stdout.strip() == "[]", run.stderr
+
+
+@pytest.mark.parametrize("name", ["PATH WITH SPACE", "a;touch PWNED", "it's $HOME `id`"])
+def test_the_export_line_is_quoted_for_the_shell(tmp_path: Path, name: str) -> None:
+    """Issue 34: ``sigrok install --dir "PATH WITH SPACE"`` printed an unquoted export line; with
+    a ``;`` in the path, pasting it ran a command. The printed line, run by a real shell, sets
+    the variable to the path and runs nothing else."""
+    target = tmp_path / name
+    run = subprocess.run(
+        [sys.executable, "-m", "wavecheck", "sigrok", "install", "--dir", str(target)],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode in (0, 1), run.stderr  # 1: no sigrok-cli to probe with
+    line = next(ln.strip() for ln in run.stdout.splitlines() if "SIGROKDECODE_DIR=" in ln)
+    shell = subprocess.run(
+        ["sh", "-c", f'{line}\nprintf %s "$SIGROKDECODE_DIR"'],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert shell.returncode == 0, shell.stderr
+    assert shell.stdout == str(target)
+    assert not (tmp_path / "PWNED").exists()

@@ -124,7 +124,8 @@ def test_several_captures_or_a_foreign_format_are_refused(tmp_path: Path, capsys
 def test_violations_are_red_in_pulseview() -> None:
     """PulseView 0.4.2 gives an annotation the hue of the decode signal (the session's green,
     120°) + 20° per row + 55° per class (pv/views/trace/decodetrace.cpp): the classes are ordered
-    so that a violation is red and an indeterminate interval orange."""
+    so that a violation and a violation region are red, an indeterminate interval orange, and
+    nothing else within 50° of red."""
     classes = [c for c, _ in ANNOTATIONS]
     row_of = {cls: r for r, (_, _, members) in enumerate(ANNOTATION_ROWS) for cls in members}
 
@@ -133,6 +134,7 @@ def test_violations_are_red_in_pulseview() -> None:
         return (120 + 20 * row_of[k] + 55 * k) % 360
 
     assert min(hue("fail"), 360 - hue("fail")) <= 15
+    assert min(hue("region"), 360 - hue("region")) <= 15
     assert 30 <= hue("indeterminate") <= 60
-    reds = [c for c in classes if min(hue(c), 360 - hue(c)) <= 20]
-    assert sorted(reds) == ["fail", "message"]
+    reds = [c for c in classes if min(hue(c), 360 - hue(c)) <= 50]
+    assert sorted(reds) == ["fail", "indeterminate", "region"]

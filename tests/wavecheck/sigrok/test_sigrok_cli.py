@@ -14,6 +14,7 @@ import sys
 import tomllib
 from collections import Counter
 from fractions import Fraction
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,7 @@ pytestmark = pytest.mark.sigrok
 ROOT = Path(__file__).resolve().parents[3]
 _FAIL = re.compile(r"^(\w+): measured (\S+ \S+), limit (\S+ \S+), margin (\S+ \S+)$")
 _SEQUENCE = re.compile(r"^(state_sequence): state (\d+) → (\d+)$")
+_REGION = re.compile(r"^(\d+) violations?: (.*)$")
 #: The decoder's channel ids for each role (pd.py's channels).
 _CHANNEL = {"step": "step", "up": "step", "phase-A": "step", "dir": "dir", "down": "dir",
             "phase-B": "dir", "enable": "enable", "phase-C": "c", "phase-D": "d", "phase-E": "e"}  # fmt: skip
@@ -65,7 +67,7 @@ def decoder_violations(decoded: Decoded, rate: int) -> Seen:
     wavecheck's own formatting of the exact samples."""
     seen: Seen = Counter()
     for ann in decoded.annotations:
-        if "indeterminate" in ann.text:
+        if "indeterminate" in ann.text or _REGION.match(ann.text):
             continue
         seq = _SEQUENCE.match(ann.text)
         if seq:
@@ -90,6 +92,7 @@ def _same(decoded: Decoded, doc: dict, rate: int) -> Seen:  # type: ignore[type-
         f"decoder only: {sorted((got - want).elements())[:5]}; "
         f"check only: {sorted((want - got).elements())[:5]}"
     )
+    _regions_hold(decoded, got)
     limits = {r["id"]: r["limit_ns"] for r in doc["rules"]}
     for ann in decoded.annotations:
         m = _FAIL.match(ann.text)
@@ -135,10 +138,27 @@ def _decoder_options(argv: list[str]) -> tuple[dict[str, str], dict[str, str]]:
     return channels, options
 
 
+def _regions_hold(decoded: Decoded, seen: Seen) -> None:
+    """The Violation regions row (when asked for): every violation in exactly one region, each
+    region's counts per rule those of the violations in it (issue 36)."""
+    regions = [(a, _REGION.match(a.text)) for a in decoded.annotations]
+    regions = [(a, m) for a, m in regions if m]
+    if "regions" not in " ".join(decoded.command):
+        return
+    assert sum(int(m.group(1)) for _, m in regions) == sum(seen.values())
+    for a, m in regions:
+        inside: Counter[str] = Counter()
+        for (rule, start, width), n in seen.items():
+            if a.start <= min(start, start + width) and max(start, start + width) <= a.end:
+                inside[rule] += n
+        counts = {r: int(n) for r, n in re.findall(r"(\w+) ×(\d+)", m.group(2))}
+        assert counts == dict(inside), (a, inside)
+
+
 def _compare(run_decoder: RunDecoder, path: Path, argv: list[str], rate: int) -> Seen:
     doc = check_json(path, argv)
     channels, options = _decoder_options(argv)
-    return _same(run_decoder(path, channels, options), doc, rate)
+    return _same(run_decoder(path, channels, options, rows="violations:regions"), doc, rate)
 
 
 # -- the golden captures -----------------------------------------------------------------------
@@ -271,13 +291,16 @@ _RULE_LINE = re.compile(
 @pytest.mark.slow
 def test_summary_is_checks_table(run_decoder: RunDecoder) -> None:
     """The summary row at the end of the input: per rule the verdict, intervals checked,
-    violations, indeterminate ones and the minimum margin of ``check --format json``."""
+    violations, indeterminate ones and the minimum margin of ``check --format json``, side by
+    side over the input after the extent it covers, then the overall verdict at its end."""
     path = shared_capture("sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr")
     argv = ["--drive", "gecko-g202", "--map", "step=3,dir=4", "--limit", "step_low=107.25us"]
     doc = check_json(path, argv)
     channels, options = _decoder_options(argv)
     out = run_decoder(path, channels, options, rows="summary")
-    first, *lines = out.annotations
+    extent, *lines, first = out.annotations
+    assert extent.start == 0 and extent.text.startswith("summary of 0 s – ")
+    assert all(a.end <= b.start for a, b in pairwise(out.annotations))
     assert first.text.startswith(f"{doc['verdict'].upper()} against gecko-g202: ")
     assert f"{doc['violations_total']} violation(s), {doc['steps']['count']} steps" in first.text
     rules = {r["id"]: r for r in doc["rules"]}
@@ -295,18 +318,44 @@ def test_summary_is_checks_table(run_decoder: RunDecoder) -> None:
 
 
 def test_pause_gives_a_summary_so_far(run_decoder: RunDecoder, tmp_path: Path) -> None:
-    """With ``pause=``, a summary of what came so far over each pause that long (PulseView never
-    signals the end of a capture); the last one at the end of the input as always."""
+    """With ``pause=``, a summary of what came so far after each pause that long, and the last
+    one at the end of the input: each covers the input since the one before, its lines side by
+    side (the overall verdict last), so no two summary annotations overlap."""
     # 1 MHz: three 2-sample pulses 20 samples apart, 400 ms idle, then two more
     step = [100, 102, 120, 122, 140, 142, 400_140, 400_142, 400_160, 400_162]
     path = tmp_path / "pause.sr"
     write_sr_edges(path, ["STEP"], [np.array(step, np.int64)], [0], 400_300, samplerate=1_000_000)
     out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202", "pause": "100ms"},
                       rows="summary")  # fmt: skip
+    spans = [(a.start, a.end) for a in out.annotations]
+    assert spans == sorted(spans) and all(a[1] <= b[0] for a, b in pairwise(spans))
     heads = [a for a in out.annotations if "against gecko-g202" in a.text]
-    assert [(a.start, a.end) for a in heads] == [(142, 100_142), (0, 400_162)]
+    assert [a.end for a in heads] == [100_142, 400_162]  # the pause; the last edge (tail < tick)
+    assert spans[0][0] == 0 and spans[len(spans) // 2][0] == 100_142
     assert heads[0].text.startswith("so far: FAIL against gecko-g202: 3 violation(s), 3 steps")
     assert heads[1].text.startswith("FAIL against gecko-g202: 5 violation(s), 5 steps")
+
+
+@pytest.mark.parametrize(
+    "pause, says",
+    [("abc", "pause abc: not a quantity"), ("nan", "pause nan: not a quantity"),
+     ("1e400s", "pause 1e400s: out of range"), ("0", "pause 0: below the floor of 1 ms"),
+     ("-1s", "pause -1s: below the floor of 1 ms"), ("1fs", "pause 1fs: below the floor of 1 ms"),
+     ("90000s", "pause 90000s: above the ceiling of a day")],
+)  # fmt: skip
+def test_a_bad_pause_is_an_option_error(
+    run_decoder: RunDecoder, tmp_path: Path, pause: str, says: str
+) -> None:
+    """A pause that is no time, or below the floor (a summary every few edges: issue 36), is one
+    option error on the Messages row and stderr, not an internal error."""
+    path = tmp_path / "p.sr"
+    write_sr_edges(path, ["STEP"], [np.array([10, 12, 30, 32], np.int64)], [0], 50,
+                   samplerate=1_000_000)  # fmt: skip
+    out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202", "pause": pause},
+                      rows="messages:violations:summary")  # fmt: skip
+    (message,) = out.annotations
+    assert message.text.startswith(f"wavecheck decoder: {says}"), message.text
+    assert "internal error" not in message.text and message.text in out.stderr
 
 
 @pytest.mark.parametrize(
@@ -368,3 +417,18 @@ def test_bad_options_are_one_message(
     (message,) = out.annotations
     assert message.text.startswith("wavecheck decoder: ") and says in message.text
     assert message.text in out.stderr
+
+
+@pytest.mark.parametrize("tail", [0, 1, 5_000, 400_000])
+def test_the_summary_reaches_the_end(run_decoder: RunDecoder, tmp_path: Path, tail: int) -> None:
+    """However short the tail after the last edge, the summary covers the input to within the
+    decoder's tick (max(1024, samples // 1024), pd.py) of its end: the last edge when the tail
+    is shorter than that."""
+    step = np.array([1000, 1002, 3000, 3002], np.int64)
+    n = int(step[-1]) + 1 + tail
+    path = tmp_path / "tail.sr"
+    write_sr_edges(path, ["STEP"], [step], [0], n, samplerate=1_000_000)
+    out = run_decoder(path, {"step": "STEP"}, {"drive": "gecko-g202"}, rows="summary")
+    last = out.annotations[-1]
+    assert last.text.startswith("FAIL against gecko-g202: 2 violation(s), 2 steps")
+    assert int(step[-1]) <= last.end <= n - 1 and n - 1 - last.end < max(1024, n // 1024)

@@ -8,9 +8,13 @@ embedded Python does not see the virtual environment wavecheck lives in).
 
 Per edge (``wait()`` on an edge of any assigned channel) the judge
 (:mod:`wavecheck.sigrok.judge`) decides the intervals that edge closes and the decoder puts
-them at once: nothing tells a decoder that the capture has ended (module doc of the judge). The
-edges also go to the block engine, whose summary is put when libsigrokdecode ends the input
-(sigrok-cli) and, optionally, at every pause of ``pause`` without an edge (PulseView).
+them at once. The edges also go to the block engine, whose summary (side by side on the Summary
+row, the overall verdict last) and the violation regions (:mod:`wavecheck.sigrok.regions`) are
+put when the input ends: sigrok-cli ends it (``wait()`` raises), PulseView 0.4.2 never says so
+(module doc of the judge), so a watcher thread (:class:`_Watch`) takes the input as ended when
+none has come for :data:`IDLE_S` seconds; the decoder also wakes at least every 0.1 % of the
+input without an edge (:data:`TICK_SHARE`), so the summary reaches the capture's end however
+short the tail after the last edge. With ``pause``, also a summary so far after each pause.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import json
 import os
 import sys
 import threading
+import time
 from typing import Any
 
 try:
@@ -32,6 +37,13 @@ _Base: Any = srd.Decoder if srd is not None else object
 #: an installed copy older or newer than the wavecheck it imports says so instead of failing.
 API = 1
 _HERE = os.path.dirname(os.path.abspath(__file__))
+#: Without an edge, the decoder looks up at least every max(TICK_MIN, samples so far //
+#: TICK_SHARE) samples: the input it knows of ends within 0.1 % of where the capture ends
+#: (a pixel at PulseView's full zoom-out), at a few thousand extra wake-ups per capture.
+TICK_MIN = 1024
+TICK_SHARE = 1024
+#: Seconds of no input after which the decoder takes the input as ended (:class:`_Watch`).
+IDLE_S = 1.5
 _LOCK = threading.Lock()
 _ADAPTER: dict[str, Any] = {}
 
@@ -42,33 +54,40 @@ OPTIONAL_CHANNELS = (
     {"id": "dir", "name": "DIR/DOWN/B", "desc": "DIR (type 0), DOWN (type 1) or phase B"},
     {"id": "enable", "name": "ENABLE", "desc": "ENABLE (active high; invert=enable if low)"},
 )
-#: Annotation classes. PulseView 0.4.2 colours a class by the hue of the decode signal (green
-#: for the first) + 20° per row + 55° per class index: this order makes a violation red and an
-#: indeterminate one orange, and nothing else red but the messages.
+#: Annotation classes. PulseView 0.4.2 colours a class by the hue of the decode signal (120°, the
+#: green of the first) + 20° per row index + 55° per class index (decodetrace.cpp): this order
+#: makes a violation and a violation region red (10°, 5°), an indeterminate one orange (40°) and
+#: every other class at least 55° away from red (``test_pulseview.py`` checks the screen).
 ANNOTATIONS = (
     ("high", "STEP high time"),
-    ("low", "STEP low time"),
     ("setup", "DIR setup"),
     ("hold", "DIR hold"),
+    ("low", "STEP low time"),
+    ("indeterminate", "Indeterminate at this sample rate"),
     ("rate", "Step rate"),
     ("enable", "ENABLE setup"),
+    ("message", "Message"),
     ("state", "Phase state held"),
     ("delay", "UP/DOWN switch delay"),
-    ("position", "Position"),
-    ("message", "Message"),
     ("fail", "Violation"),
-    ("indeterminate", "Indeterminate at this sample rate"),
+    ("region", "Violation region"),
+    ("position", "Position"),
     ("rule", "Summary"),
 )
 _CLASS = {name: k for k, (name, _) in enumerate(ANNOTATIONS)}
 ANNOTATION_ROWS = (
-    ("widths", "Pulse widths", (0, 1, 6)),
-    ("dir", "DIR and ENABLE timing", (2, 3, 5, 7)),
-    ("violations", "Violations", (10, 11)),
-    ("steps", "Position", (8,)),
-    ("rates", "Step rate", (4,)),
-    ("summary", "Summary", (12,)),
-    ("messages", "Messages", (9,)),
+    ("regions", "Violation regions", (_CLASS["region"],)),
+    ("widths", "Pulse widths", tuple(_CLASS[c] for c in ("high", "low", "state"))),
+    (
+        "dir",
+        "DIR and ENABLE timing",
+        tuple(_CLASS[c] for c in ("setup", "hold", "enable", "delay")),
+    ),
+    ("violations", "Violations", (_CLASS["fail"], _CLASS["indeterminate"])),
+    ("steps", "Position", (_CLASS["position"],)),
+    ("rates", "Step rate", (_CLASS["rate"],)),
+    ("summary", "Summary", (_CLASS["rule"],)),
+    ("messages", "Messages", (_CLASS["message"],)),
 )
 OPTIONS = (
     {"id": "drive", "desc": "Drive id (wavecheck drives) or rule file", "default": ""},
@@ -109,7 +128,7 @@ OPTIONS = (
     },
     {
         "id": "pause",
-        "desc": "Summary after a pause of (e.g. 200ms; empty: at the end)",
+        "desc": "Also a summary so far after each pause of (1ms or more; empty: at the end only)",
         "default": "",
     },
 )
@@ -298,6 +317,15 @@ class _Run:
         self.last_step: int | None = None
         self.steps = 0
         self.counts: dict[str, int] = {}
+        # the summary: the input seen up to sample ``seen``; violations not yet in a region
+        # (starts, ends, rules); the end of the last summary (None: none yet); edges since it
+        self.seen = 0
+        self.fails: tuple[list[int], list[int], list[str]] = ([], [], [])
+        self.summed: int | None = None
+        self.pending = False
+        # the decoder holds the lock but while it waits in wait(); wakes counts the waits
+        self.lock = threading.Lock()
+        self.wakes = 0
         self.texts: dict[tuple[int, int], list[str]] = {}  # (rule, samples) → texts: they repeat
         self.ids = [_CLASS[c] for c in self.classes]
 
@@ -317,46 +345,52 @@ class _Run:
         return texts
 
     def loop(self) -> None:
-        """Wait for an edge of any assigned channel (or, with ``pause``, that long without one),
-        judge and annotate it; the summary when the input ends."""
+        """Wait for an edge of any assigned channel, or a tick without one; judge and annotate
+        each edge. The summary and the violation regions come when the input ends: at the end
+        of input (sigrok-cli), when no input has come for :data:`IDLE_S` (:class:`_Watch`:
+        PulseView), and with ``pause`` also after each pause that long (so far)."""
         pd, judge, show, feed, chans = self.pd, self.judge, self._show, self.check.edge, self.chans
         pins = pd.wait()
-        raw = [pins[k] for k in chans]
-        judge.start(raw)
-        self.check.start(raw)
-        pause = self._pause()
+        judge.start([pins[k] for k in chans])
+        self.check.start([pins[k] for k in chans])
+        pause, lock = self.check.pause, self.lock
         edges: list[dict[Any, Any]] = [{k: "e"} for k in chans]
-        waiting = edges + [{"skip": pause}] if pause else edges
-        conds, last = edges, 0
+        last = None  # the last edge
+        watch = _Watch(self)
+        watch.start()
+        lock.acquire()
         try:
             while True:
-                pins = pd.wait(conds)
-                t = pd.samplenum
-                if conds is not edges and pd.matched[-1]:  # a pause: the summary so far
-                    self._summary(last, t, final=False)
-                    conds = edges
+                skip = max(TICK_MIN, self.seen // TICK_SHARE)
+                if pause and self.pending and last is not None:
+                    skip = min(skip, max(1, last + pause - self.seen))
+                self.wakes += 1
+                lock.release()
+                try:
+                    pins = pd.wait([*edges, {"skip": skip}])
+                finally:
+                    lock.acquire()
+                self.wakes += 1
+                t = self.seen = pd.samplenum
+                if not any(pd.matched[:-1]):  # a tick: no edge
+                    if pause and self.pending and last is not None and t - last >= pause:
+                        self._finish(t, final=False)
                     continue
-                if last == 0:
+                if last is None:
                     for note in self.plan.notes:
                         pd._message("wavecheck: " + note, until=t)
                 for out in judge.at(t, [pins[k] for k in chans]):
                     show(out)
                 feed(t, judge.changed)
-                conds, last = waiting, t
+                last, self.pending = t, True
         except (EOFError, SystemError) as end:  # libsigrokdecode ends the input (module doc)
             if isinstance(end, SystemError) and "wait" not in str(end):
                 raise
-        self._summary(0, last, final=True)
-
-    def _pause(self) -> int:
-        options: Any = self.pd.options  # libsigrokdecode's dict of option values
-        text = str(options.get("pause", "")).strip()
-        if not text or self.plan.timebase is None or self.check.engine is None:
-            return 0
-        from wavecheck.units import parse_option
-
-        seconds = parse_option(text, "pause", "time")
-        return max(1, int(seconds / self.plan.timebase.tick_s))
+        finally:
+            watch.stop = True
+            lock.release()
+        with lock:
+            self._finish(self.seen, final=True)
 
     def _show(self, out: tuple[int, int, int, int, int]) -> None:
         kind = out[0]
@@ -385,6 +419,13 @@ class _Run:
             rule = plan.rules[k].rule.id
             self.counts[rule] = self.counts.get(rule, 0) + 1
             pd._put(t, t, "fail", [f"{rule}: state {before} → {after}", rule, "!"])
+            self._keep(t, t, rule)
+
+    def _keep(self, start: int, end: int, rule: str) -> None:
+        """A violation for the next violation regions."""
+        self.fails[0].append(start)
+        self.fails[1].append(end)
+        self.fails[2].append(rule)
 
     def _violation(self, spec: Any, start: int, end: int, w: int, outcome: int) -> None:
         """A failed interval (``check``'s words: rule, measured, limit, margin), or one this
@@ -401,6 +442,7 @@ class _Run:
                 "!",
             ]
             self.pd._put(start, end, "fail", texts)
+            self._keep(start, end, rule)
         else:
             res = self.check.resolution()
             texts = [
@@ -410,10 +452,29 @@ class _Run:
             ]
             self.pd._put(start, end, "indeterminate", texts)
 
-    def _summary(self, start: int, end: int, *, final: bool) -> None:
-        """The block engine's summary, over ``start``..``end`` (so far: over a pause)."""
-        for texts in self.check.summary(end + 1, final=final):
-            self.pd._put(start, end, "rule", texts)
+    def _finish(self, end: int, *, final: bool, say: bool = False) -> None:
+        """The summary and the violation regions of the input since the last summary, up to
+        sample ``end`` (the caller holds :attr:`lock`); ``say``: the summary lines also on
+        stderr (PulseView's log: the input was taken as ended)."""
+        if self.summed is not None and end <= self.summed and not self.pending:
+            return  # nothing new since the summary before
+        begin = 0 if self.summed is None else self.summed
+        from wavecheck.sigrok.regions import regions
+
+        for region in regions(*self.fails, begin, end):
+            self.pd._put(region.start, region.end, "region", region.texts())
+        self.fails = ([], [], [])
+        lines = self.check.summary(end + 1, final=final)
+        if lines:  # side by side, the overall verdict last (at the end): none hides another
+            # first what the figures cover, the input from its start (under the row's title)
+            extent = f"{self.plan.interval(0)} – {self.plan.interval(end)}"
+            lines = [[f"summary of {extent}", extent], *lines[1:], lines[0]]
+            n, span = len(lines), max(end - begin, len(lines))
+            for k, texts in enumerate(lines):
+                self.pd._put(begin + span * k // n, begin + span * (k + 1) // n, "rule", texts)
+                if say:
+                    sys.stderr.write(f"wavecheck decoder: summary to sample {end}: {texts[0]}\n")
+        self.summed, self.pending = end, False
         engine = self.check.violations()
         if final and engine and engine != {r: self.counts.get(r, 0) for r in engine}:
             text = (
@@ -422,6 +483,36 @@ class _Run:
             )
             self.pd._message(text, until=end)
             sys.stderr.write(text + "\n")
+
+
+class _Watch(threading.Thread):
+    """Ends the input for the decoder when none has come for :data:`IDLE_S` (PulseView 0.4.2
+    never says that the input has ended: the decoder waits in ``wait()`` for samples that do
+    not come). The summary and the regions it puts show at PulseView's next repaint (the pointer
+    moving over the view); if more input comes after all (a live capture), the decoder goes on
+    and the next summary covers what came since."""
+
+    def __init__(self, run: _Run) -> None:
+        super().__init__(name="wavecheck-idle", daemon=True)
+        self.run_ = run
+        self.stop = False
+
+    def run(self) -> None:
+        r = self.run_
+        wakes, since = -1, time.monotonic()
+        while not self.stop:
+            time.sleep(IDLE_S / 4)
+            if r.wakes != wakes:  # input came
+                wakes, since = r.wakes, time.monotonic()
+                continue
+            # the lock is free only while the decoder waits in wait()
+            if time.monotonic() - since < IDLE_S or not r.lock.acquire(blocking=False):
+                continue
+            try:
+                if r.wakes == wakes and not self.stop:
+                    r._finish(r.seen, final=True, say=True)
+            finally:
+                r.lock.release()
 
 
 def _class_of(rule: Any) -> str:

@@ -10,9 +10,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tests.engine_probe import FullRule
+from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, Histogram, evaluate
 from wavecheck.engine.primitives import Intervals
 from wavecheck.engine.results import RuleResult
-from wavecheck.engine.verdicts import FAIL, INDETERMINATE, PASS, Histogram, evaluate
 from wavecheck.timebase import Timebase
 
 

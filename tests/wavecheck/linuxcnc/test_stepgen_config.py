@@ -9,8 +9,8 @@ import pytest
 
 from tests.wavecheck.waves import g202
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.config import config_rates, read_config
 from wavecheck.linuxcnc.files import read_ini
+from wavecheck.linuxcnc.stepgen_config import config_rates, read_config
 
 INI = """\
 # a LinuxCNC configuration

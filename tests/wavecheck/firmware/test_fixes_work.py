@@ -1,0 +1,79 @@
+"""Every fix ``wavecheck config`` prints works (issue 32, class 5): over the whole development
+corpus, each fix printed against a demanding drive (the DM542 and the falling-edge G202 with
+every timing figure raised) is applied mechanically to a copy of the file
+(:mod:`.fixapply`); on the re-run, that rule of that axis no longer fails."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+from tests.wavecheck.firmware.fixapply import ADVICE, NotAnEdit, apply, copy_case
+from tools.firmware_corpus import CORPUS, cases
+from wavecheck.drives.datasheet import Drive
+from wavecheck.drives.library import load_drive
+from wavecheck.drives.overrides import tune_drive
+from wavecheck.errors import WavecheckError
+from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
+
+pytestmark = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
+_TIGHT = ["step_high=30us", "step_low=30us", "dir_setup=30us", "dir_hold=30us", "max_rate=1kHz"]
+
+
+def _drives() -> list[Drive]:
+    return [
+        tune_drive(load_drive("leadshine-dm542"), _TIGHT, None),
+        tune_drive(load_drive("gecko-g202"), _TIGHT, None),
+        load_drive("leadshine-dm542"),
+    ]
+
+
+FAMILIES = sorted({family for family, _ in cases(CORPUS)}) if CORPUS.is_dir() else []
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_every_printed_fix_works(family: str, tmp_path: Path) -> None:
+    drives = _drives()
+    broken: list[str] = []
+    applied = 0
+    for n, (fam, path) in enumerate(cases(CORPUS)):
+        if fam != family:
+            continue
+        try:
+            cfg = read_firmware(path)
+        except WavecheckError:
+            continue
+        # each distinct fix is applied once; the rules that printed it, per drive
+        by_fix: dict[str, list[tuple[int, str, str]]] = defaultdict(list)
+        for d_no, drive in enumerate(drives):
+            result = evaluate_config(cfg, [(a, drive) for a in cfg.axes])
+            for pair in result.pairs:
+                for row in pair.rows:
+                    if row.verdict == "fail" and row.fix and not ADVICE.search(row.fix):
+                        by_fix[row.fix].append((d_no, pair.axis.axis, row.rule))
+        for f_no, (fix, rules) in enumerate(by_fix.items()):
+            copy = copy_case(cfg, CORPUS, tmp_path / f"{n}-{f_no}")
+            try:
+                apply(cfg.firmware, copy, fix, cfg)
+                again = read_firmware(copy)
+            except (NotAnEdit, WavecheckError) as err:
+                broken.append(f"{path.relative_to(CORPUS)}: {fix!r}: {err}")
+                continue
+            applied += 1
+            for d_no in sorted({d for d, _, _ in rules}):
+                drive = drives[d_no]
+                result2 = evaluate_config(again, [(a, drive) for a in again.axes])
+                verdicts = {(p.axis.axis, r.rule): r.verdict for p in result2.pairs for r in p.rows}
+                still = [
+                    f"{a}.{r}" for d, a, r in rules if d == d_no and verdicts.get((a, r)) == "fail"
+                ]
+                if still:
+                    broken.append(
+                        f"{path.relative_to(CORPUS)} ({drive.id}): {fix!r} leaves {still} failing"
+                    )
+    assert broken == [], f"{len(broken)} of {applied + len(broken)} fixes:\n" + "\n".join(
+        broken[:30]
+    )

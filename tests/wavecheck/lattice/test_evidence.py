@@ -1,0 +1,89 @@
+"""Issue 33: a lattice is reported only with positive evidence, else "not established" (exit 3).
+
+Facts checked: a base thread runs every P and is never a period late (stepgen reference §2.1,
+stepgen/lateness.py), so part of each period holds no edges; an analyzer's sample grid puts every
+edge on it, which is no thread's lattice; one capture, one answer (``latency`` and ``stepgen plan
+--latency-from`` read the same report).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from stepgen.cli import main as stepgen_main
+from stepgen.vcdout import write_vcd
+from tests.wavecheck.lattice.captures import roles, run
+from tests.wavecheck.lattice.sweep import grid_capture
+from wavecheck.cli import main as wavecheck_main
+from wavecheck.lattice import analyse, analyse_times, common_period
+from wavecheck.lattice.period import exact
+from wavecheck.lattice.reading import widest_gap
+
+
+def _ramp_timer(n: int = 3000, seed: int = 1) -> np.ndarray:
+    """A step timer's edges (grbl-like: a ramp of step intervals, a 10 us pulse), exact ns."""
+    rng = np.random.default_rng(seed)
+    iv = np.linspace(400_000, 30_000, n).astype(np.int64) + rng.integers(0, 700, n)
+    rise = np.cumsum(iv)
+    return np.unique(np.concatenate([rise, rise + 10_000]))
+
+
+def test_a_timer_on_an_unstated_sample_grid_is_no_lattice() -> None:
+    # a 500 kHz analyzer exported with 1 ns times: every edge on a 2 us grid; before issue 33
+    # the grid made a lattice of P = 6 us (3 samples)
+    grid = -(-_ramp_timer() // 2000) * 2000
+    r = analyse_times(np.unique(grid), tick_ns=Fraction(1), resolution_ns=Fraction(0))
+    assert not r.lattice and not r.established
+    period, _ = common_period(np.unique(grid), Fraction(1), Fraction(0))
+    assert period is None
+
+
+def test_a_thread_on_an_unstated_sample_grid_reads_at_the_grid_s_resolution() -> None:
+    trace = run(25_000, "uniform:6us", 2)
+    r = analyse(grid_capture(trace), list(trace.pins), roles=roles(trace))
+    # 25 us is 12.5 samples of 2 us: the grid is the analyzer's, taken as the resolution
+    assert r.established and r.period_ns == 25_000 and r.resolution_ns == 2000
+    assert any("sample period" in n for n in r.notes)
+
+
+def test_widest_gap_allows_a_few_late_spikes() -> None:
+    lat = np.concatenate([np.arange(0, 300), [900, 950]])  # 2 spikes in a 1000-unit period
+    assert widest_gap(lat, 1000) == 1000 - 299  # from 299 to the next period's 0
+    assert widest_gap(np.arange(0, 1000, 10), 1000) == 10 * 3  # c = 2 edges inside
+
+
+def test_no_empty_arc_is_no_lattice() -> None:
+    # phases over the whole period: whatever P is given, no thread's lattice
+    rng = np.random.default_rng(3)
+    k = np.sort(rng.choice(200_000, 4000, replace=False))
+    times = np.unique(k * 25_000 + rng.integers(0, 24_900, 4000))
+    r = analyse_times(
+        times, tick_ns=Fraction(1), resolution_ns=Fraction(0), period_ns=Fraction(25_000)
+    )
+    assert not r.lattice and not r.established and "no empty arc" in " ".join(r.notes)
+
+
+def test_exact_without_an_uncertainty_keeps_the_period() -> None:
+    # issue 33: OverflowError: cannot convert Infinity to integer ratio (the common-timer note)
+    times = np.array([0, 10**9], np.int64)
+    assert exact(25_000.25, float("inf"), times) == Fraction(100001, 4)
+    with pytest.raises(ValueError, match="finite"):
+        exact(float("inf"), 1.0, times)
+
+
+def test_too_few_edges_exit_3_and_plan_refuses(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # issue 34: "latency with too few edges exits 0"; README: exit 3
+    trace = run(25_000, "uniform:5us", 1, moves="0.012", periods=3000)
+    vcd = tmp_path / "few.vcd"
+    write_vcd(trace, vcd)
+    assert wavecheck_main(["latency", "-q", str(vcd)]) == 3
+    out = capsys.readouterr().out
+    assert "not established (only" in out and "plan from no figure here" in out
+    assert stepgen_main(["plan", "--drive", "gecko-g202", "--latency-from", str(vcd)]) == 2
+    assert "no latency to plan from: only" in capsys.readouterr().err
