@@ -508,6 +508,8 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
                 return f"wrong: {a.name}.{r.role}={r.channel} is truly {truly}"
     if p.ambiguous:
         return "ambiguous"
+    if not p.axes:  # nothing checked: check refuses, naming the candidates (a few pulses)
+        return "ambiguous"
     if found != set(range(len(m.axes))):
         return f"wrong: axes missing {sorted(set(range(len(m.axes))) - found)}"
     for a in p.axes:
