@@ -14,8 +14,18 @@ contradicts. The rules:
   :mod:`wavecheck.roles.periodic`). A clock (one period, about 50 % duty, no pause) and PWM (one
   period, varying width) never are; pulses at one period without a pause, bursts at one rate
   without speeding up or slowing down, and coded pulses (periods that jump between neighbours)
-  are a STEP only when named so. Serial lines (UART, SWO) never are: their intervals are whole
-  multiples of one bit time with runs of several bits at both levels.
+  are a STEP only when named so, and so are fewer than 9 pulses (too few to see a motor's rate:
+  a reset or interrupt line pulses so too; such a line is a STEP with a DIR of its own) and
+  pulses whose widths follow the period (a tachometer, a Hall sensor, a STEP toggled once a
+  step). A clock never slows down, even once. Serial lines (UART, SWO) never are: their
+  intervals are whole multiples of one bit time with runs of several bits at both levels. A
+  line named DIR, ENABLE or another function (LED, RST, IRQ, nWait; not CLK, a drive's STEP
+  input) is never a STEP on its waveform. Lines that may be STEPs without that evidence (a few
+  pulses, coded pulses, a step train named otherwise) are a question when axes were found
+  beside them: checking those axes alone would pass over them.
+- **copies and step requests**: a line whose waveform is an earlier line's edge for edge (a
+  simulator's port and the signal it drives) is looked at once; a pulse line after whose pulses
+  a phase axis changes is that sequencer's step request or tick, no axis.
 - **buses** (:mod:`wavecheck.roles.buses`): a line that changes in step with one edge of
   another, at most once a period, is data of that bus clock; neither is a STEP, the data no DIR.
   A line every change of a busier line falls inside, at one of its levels, gates it (an ENABLE,
@@ -39,11 +49,14 @@ contradicts. The rules:
   run is another axis), with the same pulse level and width (one step generator drives both).
   If two or more unchanging channels could be the DIRs of two step axes moving one after the
   other, that is a conflict (unless the names say up/down or step).
-- **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables
-  (:mod:`wavecheck.roles.phases`).
+- **phases**: 2..5 channels whose combined state walks one of LinuxCNC's tables and reverses or
+  changes rate (:mod:`wavecheck.roles.phases`); a walk at one rate (a divider's nets, a
+  handshake's bursts) or three lines walking a three-wire table (also Hall sensors) only when
+  named so.
 - **ENABLE**: a leftover changing line (no bus clock or data) at one level of which no axis ever
   moves, while some axes move at the other, and that changes only where they stand still
-  (before the first and after the last pulse, or in pauses); serving several axes it is a shared
+  (before the first and after the last pulse, or in pauses), seen off on both sides of some
+  motion unless named so (a strobe at start-up is none); serving several axes it is a shared
   line.
 - a **DIR that never changes** has no waveform evidence: a channel named like the axis's DIR is
   taken by name; else, when every STEP without a DIR is followed by an unchanging, neutrally named

@@ -34,6 +34,8 @@ from wavecheck.units import format_frequency, format_time
 __all__ = ["BY_NAME_ONLY", "KIND_WORDS", "ChannelLook", "Pulses", "look_at", "pulses_of"]
 
 _WIDTH_SPREAD = 1.6  # p90/p10 of a pulse train's pulse widths stays below this
+_FOLLOW_SPREAD = 1.15  # pulse widths varying this much (p90/p10) may follow the period …
+_FOLLOW_R = 0.9  # … when their logarithms correlate this well with the period's
 _SERIAL_FRAME_BITS = 10.5  # intervals up to this many bit times belong to a frame
 _SERIAL_ON_GRID = 0.9  # share of in-frame intervals within a quarter bit of a whole multiple
 
@@ -80,11 +82,13 @@ KIND_WORDS: dict[str, str] = {
     "periodic": "periodic pulses",
     "bursts": "bursts at one rate",
     "coded": "coded pulses",
+    "few": "a few pulses",
+    "duty": "pulses at one duty",
     "pulses": "pulse train",
     "other": "other",
 }
 #: Kinds that are a STEP only when the channel's name says so (the waveform cannot tell).
-BY_NAME_ONLY = frozenset({"periodic", "bursts", "coded"})
+BY_NAME_ONLY = frozenset({"periodic", "bursts", "coded", "few", "duty"})
 
 
 @dataclass(frozen=True)
@@ -216,10 +220,20 @@ def _shape_evidence(cap: Capture, kind: str, p: Pulses, t: Timing) -> str:
             "a step train keeps its pulse width, not its period"
         )
     if kind == "periodic":
+        slower = (
+            f", the longest {t.slowest:.2f}x that (it slows down now and then)"
+            if t.slowest > 1.1
+            else ""
+        )
         return (
-            f"periodic pulses: {p.count:,} pulses, {pct} of periods {rate}, {t.duty:.0%} duty, "
-            "no pause: a sync, frame or PWM line, or steps at one constant speed (the waveform "
-            "cannot tell; a STEP only when named so)"
+            f"periodic pulses: {p.count:,} pulses, {pct} of periods {rate}{slower}, "
+            f"{t.duty:.0%} duty, no pause: a sync, frame or PWM line, or steps at one constant "
+            "speed (the waveform cannot tell; a STEP only when named so)"
+        )
+    if kind == "few":
+        return (
+            f"a few pulses: {p.count} pulses, too few to see a motor's rate in (a reset, an "
+            "interrupt or a handshake line pulses so too; a STEP only when named so)"
         )
     if kind == "bursts":
         return (
@@ -230,6 +244,35 @@ def _shape_evidence(cap: Capture, kind: str, p: Pulses, t: Timing) -> str:
     return (
         f"coded pulses: {p.count:,} pulses, {t.coded_why()}: no motor's rate changes so fast "
         "(a STEP only when named so)"
+    )
+
+
+def _follows_period(p: Pulses) -> str | None:
+    """Evidence that the pulse widths follow the period (one duty at a changing rate: a
+    tachometer, a Hall sensor, an encoder, a STEP toggled once a step), or None. A step
+    generator's pulses keep their width whatever the rate."""
+    if p.count < 8:
+        return None
+    w = p.widths[:-1].astype(np.float64)
+    per = np.diff(p.starts).astype(np.float64)
+    keep = per < 3 * np.median(per)  # pauses say nothing of the duty
+    w, per = w[keep], per[keep]
+    if len(w) < 8 or np.min(w) <= 0:
+        return None
+    lw, lp = np.log(w), np.log(per)
+    lo, hi = np.percentile(w, [10, 90])
+    if hi < _FOLLOW_SPREAD * lo or np.std(lp) == 0 or np.std(lw) == 0:
+        return None  # widths nearly constant: what a step generator makes
+    r = float(np.corrcoef(lw, lp)[0, 1])
+    slope = float(np.polyfit(lp, lw, 1)[0])
+    if r < _FOLLOW_R or not 0.5 <= slope <= 1.5:
+        return None
+    duty = float(np.median(w / per))
+    return (
+        f"pulses at one duty: the widths ({hi / lo:.2f}x from p10 to p90) follow the period "
+        f"(correlation {r:.2f}), duty about {duty:.0%}: a tachometer, a Hall sensor or an "
+        "encoder, or a STEP toggled once a step (TMC dedge); a step generator keeps its pulse "
+        "width (a STEP only when named so)"
     )
 
 
@@ -263,6 +306,9 @@ def look_at(ch: Channel, cap: Capture) -> ChannelLook:
             kind = t.shape(res)
             if kind != "steps":
                 return ChannelLook(ch, kind, p, _shape_evidence(cap, kind, p, t), t)
+        follows = _follows_period(p) if steady and short else None
+        if follows is not None:
+            return ChannelLook(ch, "duty", p, follows, t)
         if steady and short:
             periods = np.diff(p.starts)
             rate = ""

@@ -9,6 +9,7 @@ loops over edges in Python.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,8 +20,15 @@ from wavecheck.roles.buses import BusFindings, find_buses
 from wavecheck.roles.dirs import DirFit, assign, at_pauses, dir_fit
 from wavecheck.roles.dirs import plural as _plural
 from wavecheck.roles.features import ChannelLook, Pulses, look_at
+from wavecheck.roles.motion import (
+    REQUEST_SHARE,
+    copies,
+    max_steps_inside,
+    off_around,
+    steps_right_after,
+)
 from wavecheck.roles.names import NAMED_KINDS, NameHint, leaf, name_hint, named_kind
-from wavecheck.roles.phases import PhaseGroup, find_phase_groups
+from wavecheck.roles.phases import BUDGET, PhaseGroup, find_phase_groups
 from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
@@ -79,6 +87,8 @@ class _Inference:
         self.by_name: set[int] = set()  # pulse lines taken as STEP candidates by their names
         self.bus = BusFindings({}, {}, {}, {})
         self.named = False  # the axis is the one check maps by channel names
+        self.res = max(cap.resolution_ticks, 0)
+        self.phase_cut = False  # the phase-group search stopped at its budget
 
     def _refs(self) -> dict[int, str]:
         refs: dict[int, str] = {}
@@ -103,8 +113,10 @@ class _Inference:
     ) -> RoleChoice:
         hint = self.hints[ch.index]
         if basis == "waveform" and not hint.neutral and not hint.fits(role):
-            evidence += f" (its name suggests {'/'.join(sorted(hint.roles))}; the waveform decides)"
+            said = "/".join(sorted(hint.roles)) or "another function"
+            evidence += f" (its name suggests {said}; the waveform decides)"
         self.taken.add(ch.index)
+        self.why.pop(ch.index, None)  # a reason it was left out earlier no longer holds
         return RoleChoice(role, ch.name, ch.index, self.refs[ch.index], evidence, basis, active)
 
     def name_of(self, c: Channel) -> str:
@@ -119,9 +131,20 @@ class _Inference:
         kind = named_kind([c.name for c in self.cap.channels])
         if kind is not None and self._named(kind, chans):
             return self._finish()
+        chans = self._without_copies(chans)
         # stepgen's phase outputs change only on its base period, so they can pass as serial
-        for g in find_phase_groups([c for c in chans if len(c.edges)]):
+        search = find_phase_groups([c for c in chans if len(c.edges)], self.res)
+        self.phase_cut = search.cut_short
+        for g in search.groups:
             self._phase_axis(g)
+        for g in search.steady + search.commutation + search.named_other:
+            if g.named:
+                self._phase_axis(g)
+            else:
+                self._phase_refused(
+                    g,
+                    "steady" if g in search.steady else "other" if g in search.named_other else "",
+                )
         movers = [
             c
             for c in chans
@@ -129,17 +152,86 @@ class _Inference:
         ]
         self._buses(chans)
         pulse = [c for c in movers if self._step_candidate(c)]
-        pulse = self._demote(pulse)
+        pulse = self._step_requests(self._demote(pulse))
         self.turns = self._takes_turns(pulse)
         in_pulse = {c.index for c in pulse}
+        # lines of a few pulses: a STEP only with a DIR of their own; they may be DIRs as well
+        few = [c for c in movers if c.index not in in_pulse and self._few_candidate(c)]
+        # coded lines compete for DIRs too (a coded STEP's DIR is no other line's), but stay a
+        # question whatever DIR they get
+        coded = [c for c in movers if c.index not in in_pulse and self._coded_candidate(c)]
         others = [c for c in movers if c.index not in in_pulse and self._dir_candidate(c)]
-        dirs = self._dirs(pulse, others)
+        dirs = self._dirs(pulse + few + coded, others)
+        as_dir = {f.d.index for f in dirs.values()}
+        for c in few:
+            if c.index in as_dir:
+                dirs.pop(c.index, None)  # a DIR itself: its own "DIR" is none
+        for c in coded:
+            fit = dirs.pop(c.index, None)
+            if fit is not None:
+                self.why[fit.d.index] = f"fits as the DIR of {self.name_of(c)} (see below)"
+                self.taken.add(fit.d.index)
+        pulse += [c for c in few if c.index in dirs]
         self._pulse_axes(pulse, dirs)
+        self._unsettled(
+            [c for c in few if c.index not in dirs and not self._holds_steps(c)],
+            "lines with too few pulses to tell a STEP of a short move from a reset, interrupt "
+            "or handshake line",
+            "too few pulses to tell (see below)",
+        )
+        self._unsettled(
+            [c for c in movers if self._coded_candidate(c)],
+            "pulse lines whose rate jumps as a code's does, beside step axes: a STEP of short, "
+            "jerky moves, or a coded line?",
+            "coded pulses, or a STEP (see below)",
+        )
         self._constant_dirs([c for c in chans if self.looks[c.index].kind == "constant"])
         self._enables(
             [c for c in movers if c.index not in self.taken and self._enable_candidate(c)]
         )
+        self._unsettled(
+            [c for c in movers if self._named_against(c)],
+            "lines that look like step trains but are named otherwise (a line named DIR, ENABLE "
+            "or another function such as LED or IRQ is never taken as a STEP against its name)",
+            "a step train named otherwise (see below)",
+        )
         return self._finish()
+
+    def _without_copies(self, chans: list[Channel]) -> list[Channel]:
+        """``chans`` without the lines that repeat an earlier one edge for edge
+        (:func:`~wavecheck.roles.motion.copies`); each copy says of which line."""
+        of = copies(chans)
+        for i, original in of.items():
+            self.why[i] = (
+                f"the same waveform as {self.name_of(original)}, edge for edge (a copy: a port "
+                "and the signal it drives); only that one is looked at"
+            )
+            self.taken.add(i)
+        return [c for c in chans if c.index not in of]
+
+    def _step_requests(self, pulse: list[Channel]) -> list[Channel]:
+        """``pulse`` without the lines after whose pulses a phase axis changes (90 % of its
+        changes within two pulse widths): the sequencer's step request or tick, not an axis of
+        its own (a one-hot stepper's prescaler tick)."""
+        phases = [a for a in self.axes if a.kind == "phases"]
+        keep = []
+        for c in pulse:
+            p = self.looks[c.index].pulses
+            assert p is not None
+            for ph in phases:
+                n = steps_right_after(p, ph.motion, self.res)
+                if len(ph.motion) and n >= REQUEST_SHARE * len(ph.motion):
+                    self.why[c.index] = (
+                        f"{self.looks[c.index].evidence}; the phase outputs "
+                        f"{', '.join(self.name_of(x) for x in ph.channels)} change right after "
+                        f"{n:,} of its pulses (of {len(ph.motion):,} changes): their "
+                        "sequencer's step request or tick, not an axis of its own"
+                    )
+                    self.taken.add(c.index)
+                    break
+            else:
+                keep.append(c)
+        return keep
 
     def _buses(self, chans: list[Channel]) -> None:
         """Bus clocks, data, strobes and gates among the changing lines not yet taken."""
@@ -170,7 +262,8 @@ class _Inference:
         notes = []
         if kind == "phase-a":
             group = [c for r, c in found if r in pulse_roles]
-            fits = [g for g in find_phase_groups(group) if len(g.channels) == len(group)]
+            found_groups = find_phase_groups(group, self.res).all_groups
+            fits = [g for g in found_groups if len(g.channels) == len(group)]
             number = fits[0].step_type if fits else 0
             if not fits:
                 notes.append(
@@ -227,13 +320,83 @@ class _Inference:
         look = self.looks[c.index]
         if self.bus.no_step(c.index) is not None:
             return False
+        hint = self.hints[c.index]
+        pulse_named = any(hint.fits(r) for r in ("step", "up", "down"))
+        if not hint.neutral and not pulse_named:
+            return False  # named DIR or ENABLE (x_dir): never taken against its name as a STEP
         if look.is_step_like:
             return True
-        hint = self.hints[c.index]
-        if look.step_by_name and any(hint.fits(r) for r in ("step", "up", "down")):
+        if look.step_by_name and pulse_named:
             self.by_name.add(c.index)
             return True
         return False
+
+    def _few_candidate(self, c: Channel) -> bool:
+        """A line with too few pulses to see a motor's rate in (:func:`look_at`'s ``few``),
+        neither named otherwise nor ruled out by a relation: a STEP only with a DIR that changes
+        between its pulses, with pulses at both of its levels."""
+        hint = self.hints[c.index]
+        return (
+            self.looks[c.index].kind == "few"
+            and self.bus.no_step(c.index) is None
+            and (hint.neutral or hint.fits("step"))
+        )
+
+    def _coded_candidate(self, c: Channel) -> bool:
+        """A neutrally named line of coded pulses that no relation rules out: a STEP of short,
+        jerky moves or a coded line; asked about when axes are found beside it."""
+        return (
+            self.looks[c.index].kind == "coded"
+            and self.bus.no_step(c.index) is None
+            and self.hints[c.index].neutral
+        )
+
+    def _holds_steps(self, c: Channel) -> bool:
+        """Whether a pulse of ``c`` lasts through two or more steps of a found axis: a level
+        line (a DIR, an ENABLE, a mode), not a STEP of its own; said in its reason."""
+        p = self.looks[c.index].pulses
+        if p is None:
+            return False
+        for a in self.axes:
+            n = max_steps_inside(p, a.motion)
+            if n >= 2:
+                self.why.setdefault(
+                    c.index,
+                    f"{self.looks[c.index].evidence}; a pulse of it lasts through {n:,} steps of "
+                    f"{self.name_of(a.channels[0])}: a level line (a DIR, an ENABLE, a mode), "
+                    "not a STEP of its own",
+                )
+                return True
+        return False
+
+    def _named_against(self, c: Channel) -> bool:
+        """A step train whose name says DIR, ENABLE or another function, left out of the STEP
+        candidates."""
+        hint = self.hints[c.index]
+        return (
+            c.index not in self.taken
+            and self.looks[c.index].is_step_like
+            and self.bus.no_step(c.index) is None
+            and not hint.neutral
+            and not any(hint.fits(r) for r in ("step", "up", "down"))
+        )
+
+    def _unsettled(self, lines: list[Channel], question: str, why: str) -> None:
+        """Lines that may be STEPs without the evidence to say so: when axes were found beside
+        them, a question (checking the axes alone would pass over them silently); else they
+        stay unassigned, named as candidates."""
+        lines = [c for c in lines if c.index not in self.taken]
+        if not lines or not (self.axes or self.conflicts):
+            return
+        self.conflicts.append(
+            Conflict(
+                question,
+                tuple(f"{self.name_of(c)}: {self.looks[c.index].evidence}" for c in lines),
+            )
+        )
+        for c in lines:
+            self.why[c.index] = why
+            self.taken.add(c.index)
 
     def _enable_candidate(self, c: Channel) -> bool:
         """An ENABLE candidate: a changing line that is no bus clock or data (a bus's chip
@@ -242,8 +405,8 @@ class _Inference:
 
     def _dir_candidate(self, c: Channel) -> bool:
         """A DIR candidate: a changing line that is no bus data (a line that gates another may
-        still be the DIR of a third)."""
-        return c.index not in self.bus.data
+        still be the DIR of a third) and is not named after another function (an LED, a reset)."""
+        return c.index not in self.bus.data and not self.hints[c.index].other
 
     def _phase_axis(self, g: PhaseGroup) -> None:
         roles = [
@@ -257,6 +420,29 @@ class _Inference:
                 "runs the other way); the lowest channel fitting was taken"
             )
         self.axes.append(_Axis("phases", g.step_type, roles, list(g.channels), g.times, notes))
+
+    def _phase_refused(self, g: PhaseGroup, why_kind: str) -> None:
+        """Lines that walk a table without evidence of a motor: left out, with why."""
+        if why_kind == "steady":
+            why = (
+                "at one rate, never speeding up or slowing down: a free-running divider or "
+                "counter, or a handshake in bursts, as much as a motor at one constant speed (the "
+                "waveform cannot tell; a phase axis only when named so, or with --map)"
+            )
+        elif why_kind == "other":
+            why = (
+                "a line of it is named after another function: a handshake's strobe and "
+                "acknowledge walk quadrature too (a phase axis only when named so, or with --map)"
+            )
+        else:
+            why = (
+                "the states of a brushless motor's Hall sensors or commutation lines too (a "
+                "phase axis only when named so, or with --map)"
+            )
+        names = ", ".join(self.name_of(c) for c in g.channels)
+        for c in g.channels:
+            self.why[c.index] = f"phase outputs? {names}: {g.evidence()}; {why}"
+            self.taken.add(c.index)
 
     def _demote(self, pulse: list[Channel]) -> list[Channel]:
         """Drop pulse channels whose "pulses" are long enough to hold another line's pulses and
@@ -291,6 +477,8 @@ class _Inference:
         for d in others:
             fits = []
             for s in pulse:
+                if s.index == d.index:
+                    continue  # a line of a few pulses is a STEP candidate and a DIR candidate
                 sp = self.looks[s.index].pulses
                 assert sp is not None
                 f = dir_fit(d, s, sp)
@@ -488,8 +676,9 @@ class _Inference:
                         ),
                     )
                 )
-                self.why[s.index] = "a STEP or an up/down line (see below)"
-                self.taken.add(s.index)
+                for c in (s, r):
+                    self.why[c.index] = "a STEP or an up/down line (see below)"
+                    self.taken.add(c.index)
                 return True
         return False
 
@@ -642,6 +831,11 @@ class _Inference:
             # an ENABLE changes where its axes stand still, never while one runs
             if any(sum(at_pauses(e.edges, a.motion)[:2]) < len(e.edges) for a in axes):
                 continue
+            motion = np.concatenate([a.motion for a in axes])
+            if not self.hints[e.index].fits("enable") and not off_around(
+                e, active, motion, self.cap.start
+            ):
+                continue  # never seen off between steps: no gating shown
             n_events = sum(per_axis[k][active] for k in served[active])
             ev = (
                 f"changes {_plural(len(e.edges), 'time')}; all {n_events:,} steps of "
@@ -685,7 +879,10 @@ class _Inference:
             wanted.append(name)
         dup = {n for n in wanted if n is not None and wanted.count(n) > 1}
         used = {n for n in wanted if n is not None and n not in dup}
-        letters = (ch for ch in _AXIS_LETTERS if ch not in used)
+        spare = itertools.chain(
+            _AXIS_LETTERS, (a + b for a in _AXIS_LETTERS for b in _AXIS_LETTERS)
+        )
+        letters = (ch for ch in spare if ch not in used)
         return [n if n is not None and n not in dup else next(letters) for n in wanted]
 
     def _finish(self) -> Proposal:
@@ -727,6 +924,11 @@ class _Inference:
                     why += ": not a pulse train, and not a DIR or ENABLE of any pulse line"
                 elif look.kind == "constant":
                     why += ": an unused probe, or a line that did not change while captured"
+            if self.phase_cut and len(c.edges) >= 8:
+                why += (
+                    f"; whether it is a phase output was not established (the search for phase "
+                    f"groups stopped after {BUDGET:,} groups of lines that change in turns)"
+                )
             unassigned.append(Unassigned(c.name, c.index, why))
         return Proposal(
             axes,
@@ -755,7 +957,7 @@ class _Inference:
         """The channels most like a STEP, best first: named so, then by how they look (a step
         train, then pulses at one rate, then coded pulses), then the most pulses; never a line
         the waveform rules out (a clock, PWM, a serial line, a bus's line, a gate)."""
-        rank = {"pulses": 0, "periodic": 1, "bursts": 2, "coded": 3}
+        rank = {"pulses": 0, "periodic": 1, "bursts": 2, "coded": 3, "duty": 4, "few": 5}
         cands = [
             c
             for c in self.cap.channels

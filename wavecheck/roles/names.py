@@ -9,6 +9,9 @@ digit, and between letters and digits):
   DIR: ``dir``, ``direction``; ``cw``/``ccw`` fit a DIR or, on pulse lines, UP/DOWN;
   UP/DOWN: ``up``, ``down``, ``dn``; ENABLE: ``en``, ``ena``, ``enable``, ``enbl``;
   phases: ``phase``/``ph`` followed by a letter A..E (``phase-A``, ``PHB``).
+- Another function (``LED``, ``RST``, ``IRQ``, ``CS``, ``nWait``, ``DAV``, ``HALL``, ``TACH``;
+  :data:`_OTHER`), in the last dotted part of a name without a role word: never a STEP on its
+  waveform alone.
 - The axis is a single letter X Y Z A B C U V W, or a number (LinuxCNC's ``stepgen.2.step`` →
   axis ``"2"``), written apart from the role word or glued to it (``X_STEP``, ``xstep``,
   ``STEP (Y axis)``, ``dirz``). A name gives an axis only together with a role word, so ``D3``,
@@ -31,6 +34,14 @@ _KEYWORDS: dict[str, frozenset[str]] = {
     **dict.fromkeys(("down", "dn"), frozenset({"down"})),
     **dict.fromkeys(("en", "ena", "enable", "enbl"), frozenset({"enable"})),
 }
+#: Words that name another function (a reset, an interrupt, a bus or handshake line, an LED, a
+#: sensor): a line so named is never taken as a STEP on its waveform (``clk`` is not here: a
+#: drive's STEP input is called CLK too).
+_OTHER = frozenset(
+    "led rst reset nrst irq int intr cs ss ncs sck sclk mosi miso sda scl tx rx txd rxd wait "
+    "nwait strobe str ack nack busy dav nrfd ndac eoi atn ifc srq ren sync pwm hall tach fg "
+    "latch load".split()
+)
 _AXES = "xyzabcuvw"
 _NOISE = {"axis", "stepgen", "joint", "motor", "out", "pin"}
 
@@ -41,6 +52,8 @@ class NameHint:
 
     roles: frozenset[str]
     axis: str | None
+    other: bool = False
+    """The name names no role but another function (``LED``, ``RST``, ``IRQ``, ``nWait``)."""
 
     def fits(self, role: str) -> bool:
         """True when the name names ``role``."""
@@ -48,8 +61,8 @@ class NameHint:
 
     @property
     def neutral(self) -> bool:
-        """True when the name names no role."""
-        return not self.roles
+        """True when the name names no role and no other function."""
+        return not self.roles and not self.other
 
 
 def _words(name: str) -> list[str]:
@@ -87,7 +100,9 @@ def name_hint(name: str) -> NameHint:
                         break
         i += 1
     axis = axes[0] if roles and len(set(axes)) == 1 else None
-    return NameHint(frozenset(roles), axis)
+    leaf_words = words if "." not in name else _words(name.rsplit(".", 1)[-1])
+    other = not roles and any(w in _OTHER for w in leaf_words)
+    return NameHint(frozenset(roles), axis, other)
 
 
 def leaf(name: str) -> str:

@@ -3,8 +3,9 @@
 A motor's step rate is continuous: it speeds up from rest and slows down to rest, and changes
 little from one step to the next. The pulse trains of other protocols do not:
 
-- a **clock** runs at one period with about 50 % duty and never pauses (a free-running clock is
-  never a STEP);
+- a **clock** runs at one period with about 50 % duty, never pauses and never slows down (a
+  free-running clock is never a STEP; a line at one period that slows down now and then, as a
+  STEP reversing at its top rate does, is periodic pulses: a STEP when named so);
 - a **PWM** line keeps its period and varies its pulse width (a step train keeps its width);
 - a **periodic** line (a frame sync, a PWM carrier at fixed duty) keeps one period and never
   pauses: the waveform cannot tell it from steps at one constant speed;
@@ -51,6 +52,7 @@ _ZIGZAGS = 0.05  # share of there-and-back jumps that makes a line coded
 _STEADY = 0.9  # share of periods at the median that makes one rate
 _STEADY_TOL = 0.01  # … within this fraction of the median, plus two ticks of resolution
 _CLOCK_DUTY = (0.4, 0.6)  # duty of a clock
+_CLOCK_SLOW = 0.1  # a clock's longest period within runs is at most this much over its median
 _PWM_SPREAD = 0.05  # width spread (p95 - p5) beyond this fraction of the median: PWM
 
 
@@ -83,6 +85,8 @@ class Timing:
     zigzags: float
     duty: float
     width_spread: float
+    slowest: float = 1.0
+    """The longest period within runs over :attr:`period` (a clock's stays at 1)."""
 
     @property
     def one_rate(self) -> bool:
@@ -113,19 +117,20 @@ class Timing:
         return ""
 
     def shape(self, resolution: int) -> str:
-        """``"coded"``, ``"pwm"``, ``"clock"``, ``"periodic"``, ``"bursts"`` or ``"steps"``
-        (a rate that changes as a motor's does, or too few pulses to tell); ``resolution`` in
-        ticks."""
+        """``"coded"``, ``"pwm"``, ``"clock"``, ``"periodic"``, ``"bursts"``, ``"few"`` (fewer
+        than 8 periods: too few to see a motor's rate in) or ``"steps"`` (a rate that changes as
+        a motor's does); ``resolution`` in ticks."""
         if self.coded:
             return "coded"
         if not self.one_rate:
-            return "steps"
+            return "few" if self.periods < _MANY else "steps"
         if self.pauses == 0:
             lo, hi = _CLOCK_DUTY
             spread_ticks = self.width_spread * self.duty * self.period
             if spread_ticks > max(2 * resolution + 2, _PWM_SPREAD * self.duty * self.period):
                 return "pwm"
-            return "clock" if lo <= self.duty <= hi else "periodic"
+            free = self.slowest <= 1 + _CLOCK_SLOW  # a clock never slows down, even once
+            return "clock" if lo <= self.duty <= hi and free else "periodic"
         return "bursts"
 
 
@@ -178,6 +183,17 @@ def timing(starts: npt.NDArray[np.int64], widths: npt.NDArray[np.int64], resolut
     ramps = int(np.count_nonzero(up | down))
     runs = int(np.count_nonzero(long_run))
     duty = mid_w / period if period > 0 else 0.0
+    slowest = float(inrun.max() - tol) / period if period > 0 and len(inrun) else 1.0
     return Timing(
-        len(per), period, steady, int(pause.sum()), ramps, runs, jumps, zigzags, duty, spread
+        len(per),
+        period,
+        steady,
+        int(pause.sum()),
+        ramps,
+        runs,
+        jumps,
+        zigzags,
+        duty,
+        spread,
+        max(slowest, 1.0),
     )

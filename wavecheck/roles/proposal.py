@@ -141,6 +141,8 @@ _SUMMARY: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("periodic pulses", ("periodic pulses",)),
     ("bursts at one rate", ("bursts at one rate",)),
     ("coded pulses", ("coded pulses",)),
+    ("pulses at one duty", ("pulses at one duty",)),
+    ("a few pulses", ("a few pulses",)),
     ("pulse train", ("pulse train",)),
     ("enable/select", ("enable/select",)),
     ("phase output", ("phase output",)),

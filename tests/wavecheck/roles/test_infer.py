@@ -141,6 +141,11 @@ def test_golden_traces_with_neutral_names(trace: str) -> None:
     cap = open_capture(GOLDEN / f"{trace}.vcd")
     named = propose(cap).axes[0]
     neutral = propose(renamed(cap, [f"D{c.index}" for c in cap.channels]))
+    if named.step_type in (3, 4):
+        # three lines walking 1,3,2,6,4,5 are also a brushless motor's Hall sensors: named only
+        assert not neutral.axes and not neutral.ambiguous, neutral.text()
+        assert all("Hall sensors" in u.why for u in neutral.unassigned)
+        return
     assert neutral.unambiguous, neutral.text()
     axis = neutral.axes[0]
     assert (axis.kind, axis.step_type) == (named.kind, named.step_type)
@@ -183,11 +188,16 @@ def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
     assert [u.channel for u in p.unassigned] == ["d"]
 
 
-def test_waveform_beats_the_name() -> None:
+def test_a_line_named_dir_is_never_a_step() -> None:
+    """Issue 33: a generated machine's ``x_dir`` was made the STEP of its own axis. A step
+    train named DIR is left out, and asked about when other axes were found."""
     step = pulses(_move(0, 19), 5 * US)
     p = propose(capture({"X DIR": (0, step), "X STEP": (0, [1003 * US])}))
-    s = p.axes[0].role("step")
-    assert s is not None and s.channel == "X DIR" and "the waveform decides" in s.evidence
+    assert not p.axes and "X DIR" in p.candidates
+    other = pulses(_move(50 * US, 30), 5 * US)
+    p = propose(capture({"X DIR": (0, step), "Y STEP": (0, other)}))
+    assert p.ambiguous and "named otherwise" in p.ambiguous[0].question
+    assert [r.channel for a in p.axes for r in a.roles] == ["Y STEP"]
 
 
 def test_channels_named_after_their_roles_are_what_check_maps() -> None:
@@ -438,14 +448,21 @@ def _machine(rng: np.random.Generator, n_axes: int, with_enable: bool, unused: i
 def _generated_capture(
     m: Machine, rng: np.random.Generator, style: str
 ) -> tuple[Capture, list[int]]:
-    """The machine's lines in a shuffled order with neutral names; returns the capture and, per
+    """The machine's lines in a shuffled order with neutral names (style ``"xy"``: named after
+    their axes and roles, ``x_step``, ``x_dir``, ``y_up``, ``en``); returns the capture and, per
     generated line, its channel index."""
     order = rng.permutation(len(m.lines))
     where = [0] * len(m.lines)
     signals: dict[str, tuple[int, list[int]]] = {}
+    role_names = {m.enable: "en"} if m.enable is not None else {}
+    for k, t in enumerate(m.axes):
+        role_names |= {line: f"{'xyzabc'[k]}_{role}" for role, line in t.roles.items()}
     for pos, line in enumerate(order):
         where[int(line)] = pos
-        name = {"D": f"D{pos}", "ch": f"ch{pos}", "num": str(pos)}[style]
+        if style == "xy":
+            name = role_names.get(int(line), f"D{pos}")
+        else:
+            name = {"D": f"D{pos}", "ch": f"ch{pos}", "num": str(pos)}[style]
         initial, edges = m.lines[int(line)]
         signals[name] = (initial, edges)
     last = max(e for _, ee in m.lines for e in ee)
@@ -491,6 +508,8 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
                 return f"wrong: {a.name}.{r.role}={r.channel} is truly {truly}"
     if p.ambiguous:
         return "ambiguous"
+    if not p.axes:  # nothing checked: check refuses, naming the candidates (a few pulses)
+        return "ambiguous"
     if found != set(range(len(m.axes))):
         return f"wrong: axes missing {sorted(set(range(len(m.axes))) - found)}"
     for a in p.axes:
@@ -517,12 +536,14 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
 @example(seed=3055679293, n_axes=4, with_enable=False, unused=1, style="D")
 @example(seed=845507753, n_axes=3, with_enable=False, unused=2, style="num")
 @example(seed=4117852037, n_axes=4, with_enable=True, unused=0, style="num")
+# a DIR change given to the wrong STEP of five (a.dir=D1 was truly the DIR of axis 2): now refused
+@example(seed=21651, n_axes=5, with_enable=False, unused=0, style="D")
 @given(
     seed=st.integers(0, 2**32 - 1),
     n_axes=st.integers(2, 5),
     with_enable=st.booleans(),
     unused=st.integers(0, 2),
-    style=st.sampled_from(["D", "ch", "num"]),
+    style=st.sampled_from(["D", "ch", "num", "xy"]),
 )
 def test_generated_machines_are_mapped_right_or_refused(
     seed: int, n_axes: int, with_enable: bool, unused: int, style: str
@@ -552,9 +573,30 @@ def test_generated_machines_are_mostly_decided() -> None:
         cap, where = _generated_capture(m, rng, "D")
         verdicts.append(_judge(m, where, propose(cap), cap))
     assert not [v for v in verdicts if v.startswith("wrong")]
-    # 62 of 120 (2 axes 27 of 30, 3 axes 17, 4 axes 12, 5 axes 6): the rest are DIRs whose
-    # changes all fall where two or more STEP lines pause (so they fit each), up/down lines that
-    # take turns with more than one other line, and up/down pairs beside two unchanging lines.
-    # Giving such a DIR to the STEP whose pulse is nearest decided 79 of 120, and mapped about
-    # one generated machine in 6,000 wrongly.
+    # 57 of 120: the rest are DIRs whose changes all fall where two or more STEP lines pause (so
+    # they fit each), up/down lines that take turns with more than one other line, up/down pairs
+    # beside two unchanging lines, and (issue 33) lines of fewer than 9 pulses without a DIR of
+    # their own: too few to tell a short move's STEP from a reset or interrupt line, and coded
+    # lines beside found axes (70 of 120 were mapped, none wrongly, when such lines were taken
+    # as STEPs or left out unsaid; commit 2839247). Giving an ambiguous DIR to the STEP
+    # whose pulse is nearest decided 79 of 120, and mapped about one machine in 6,000 wrongly.
+    assert verdicts.count("right") >= 0.45 * len(verdicts), verdicts
+
+
+def test_generated_machines_named_after_their_roles() -> None:
+    """Issue 33: in two of 120 simulated machines ``x_dir`` was made the STEP of its own axis and
+    ``x_step`` lost its DIR. With the lines named ``x_step``, ``x_dir`` … no DIR is ever a STEP,
+    and no axis is wrong."""
+    rng = np.random.default_rng(33)
+    verdicts = []
+    for i in range(120):
+        m = _machine(rng, 2 + i % 4, bool(i % 2))
+        cap, where = _generated_capture(m, rng, "xy")
+        p = propose(cap)
+        verdicts.append(_judge(m, where, p, cap))
+        for a in p.axes:
+            for r in a.roles:
+                if r.role in ("step", "up", "down"):
+                    assert not r.channel.endswith(("_dir", "en")), p.text()
+    assert not [v for v in verdicts if v.startswith("wrong")], verdicts
     assert verdicts.count("right") >= 0.5 * len(verdicts), verdicts

@@ -31,6 +31,11 @@ def _trapezoid(n: int, top: float, accel: float, t0: int = 1000) -> I64:
     return t0 + np.cumsum(1e9 / np.minimum(v, top)).astype(np.int64)
 
 
+def _tach(periods: I64) -> list[int]:
+    """A line high for half of each period (a tachometer, a Hall sensor)."""
+    return _edges(1000 + np.cumsum(periods), periods // 2)
+
+
 def _moves(*moves: tuple[int, float], pause: int = 20_000_000, accel: float = 4e5) -> I64:
     out: list[int] = []
     t = 1000
@@ -78,7 +83,14 @@ _IR_PERIODS = np.where(RNG.random(64) < 0.5, 1125, 2250) * 1000  # NEC: 0 and 1 
         # a step train: fixed pulse width, a rate that ramps up and down around its pauses
         ("trapezoid moves", _edges(_moves((200, 5000), (120, 8000), (300, 3000)), 2000), "pulses"),
         ("one short move", _edges(_trapezoid(12, 5000, 4e5), 2000), "pulses"),
-        ("three pulses", _edges([1000, 600_000, 1_200_000], 4000), "pulses"),
+        ("three pulses", _edges([1000, 600_000, 1_200_000], 4000), "few"),
+        # issue 33: a tachometer (or a Hall sensor) spinning up: one duty, its widths follow
+        # the period; a step generator keeps its width
+        (
+            "tachometer spinning up",
+            _tach(np.linspace(2e6, 1.2e6, 60).astype(np.int64)),
+            "duty",
+        ),
     ],
     ids=lambda v: v if isinstance(v, str) else "",
 )
@@ -106,3 +118,17 @@ def test_jitter_in_the_periods_only_is_the_rate_jumping() -> None:
     assert _kind(edges) == "coded"
     jitter = RNG.integers(-1500, 1500, len(periods))  # the same periods, the widths jittering
     assert timing(np.cumsum(periods), 19_230 + jitter, 0).width_spread > 0.02
+
+
+def test_a_step_reversing_at_its_top_rate_is_no_free_running_clock() -> None:
+    """Issue 33: a STEP reversing 20 times, periods 4.08 us to 7.89 us, was described as "a
+    free-running clock". A clock never slows down; this line is periodic pulses (a STEP when
+    named so), and its description says how far it slows."""
+    periods = np.full(2400, 4080)
+    for k in range(20):  # the 20 reversals: slowing down to 7.89 us and back
+        periods[k * 119 + 50 : k * 119 + 57] = [4900, 5900, 7000, 7890, 7000, 5900, 4900]
+    starts = np.cumsum(periods)
+    t = timing(starts, np.full(len(starts), 2040), 0)
+    assert t.one_rate and t.shape(0) == "periodic" and t.slowest > 1.9, t
+    clock = timing(np.cumsum(np.full(600, 4080)), np.full(600, 2040), 0)
+    assert clock.shape(0) == "clock"

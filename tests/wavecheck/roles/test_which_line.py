@@ -140,8 +140,9 @@ def test_info_and_check_agree_on_an_icarus_dump(
     # the same lines under neutral names: the waveforms alone find step and dir, not the clock
     neutral = _icarus(tmp_path, "neutral", "NEUTRAL")
     code, out, _ = _run(capsys, "info", str(neutral), "--format", "json")
-    # (the reset, low through every step, is taken as the ENABLE: nothing in it says otherwise)
-    assert json.loads(out)["roles"]["map_args"] == "--map step=s,dir=d,enable=rst"
+    # the reset, low through every step, is no ENABLE: it changes once, before the first step,
+    # and is never seen off between steps (issue 33: it was taken as the ENABLE)
+    assert json.loads(out)["roles"]["map_args"] == "--map step=s,dir=d"
 
 
 def test_the_map_hint_names_the_best_candidate(
