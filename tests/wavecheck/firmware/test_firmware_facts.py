@@ -225,3 +225,27 @@ def test_fluidnc_i2s_dir_delay_follows_the_current_engine() -> None:
     frame model said one 2 us frame)."""
     x = read_firmware(FLUIDNC).axis("x")
     assert x.dir_setup.value == 1000 and "finish_dir" in x.dir_setup.note
+
+
+# -- RepRapFirmware ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("m584", "axes", "noted"),
+    [
+        ("", ("X", "Y", "Z", "E0"), True),
+        ("M584 X0 Y1 Z2 E3:4\n", ("X", "Y", "Z", "E0", "E1"), False),
+    ],
+)
+def test_rrf_default_extruders_are_not_decided_by_the_file(
+    tmp_path: Path, m584: str, axes: tuple[str, ...], noted: bool
+) -> None:
+    """Without M584 E, RRF's extruder count is its default: 3.x GCodes::Init sets numExtruders =
+    NumDefaultExtruders (Duet3D/RepRapFirmware:src/GCodes/GCodes.cpp @ fa22ccf), per board 0 to
+    3; 2.0x the smart drivers minus 3. E1's values were dropped without a word; the report now
+    says E0 on driver 3 is an assumption the file does not decide."""
+    cfg_g = tmp_path / "config.g"
+    cfg_g.write_text(f"{m584}M92 X80 Y80 Z400 E420:430\nM203 X6000 Y6000 Z180 E1200:1200\n")
+    cfg = read_firmware(cfg_g)
+    assert cfg.axis_names == axes
+    assert any(n.startswith("no M584 E: E0 on driver 3 assumed") for n in cfg.notes) == noted
