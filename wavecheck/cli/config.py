@@ -60,7 +60,7 @@ def register(sub: Any) -> None:
         metavar="INI",
         nargs="?",
         help="LinuxCNC: the INI that runs FILE, a HAL file (either order; default: the INI "
-        "beside FILE whose [HAL] HALFILE names it)",
+        "beside FILE whose HALFILE names it)",
     )
     p.add_argument(
         "--drive",
