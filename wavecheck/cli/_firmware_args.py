@@ -52,7 +52,9 @@ def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = Fal
     )
 
 
-def read_firmware_args(args: argparse.Namespace, path: str) -> FirmwareConfig:
+def read_firmware_args(
+    args: argparse.Namespace, path: str, ini: str | None = None
+) -> FirmwareConfig:
     j = getattr(args, "latency", None)
     clock = getattr(args, "hm2_clock", None)
     return read_firmware(
@@ -60,6 +62,7 @@ def read_firmware_args(args: argparse.Namespace, path: str) -> FirmwareConfig:
         args.firmware_format,
         latency_ns=time_ns(j) if j else None,
         clock_hz=parse_frequency(clock) if clock else None,
+        ini=ini,
     )
 
 

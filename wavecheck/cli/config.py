@@ -4,7 +4,7 @@ the drive? No capture needed.
 FILE is a grbl/grblHAL/Grbl_ESP32 ``$$`` dump, a Klipper ``printer.cfg``, a Marlin
 ``Configuration.h`` (its ``Configuration_adv.h`` is read beside it), a RepRapFirmware ``config.g``,
 a Smoothieware ``config``, a FluidNC ``config.yaml``, or a LinuxCNC INI (software stepgen or Mesa
-hm2 stepgen, decided by what its HALFILEs load). The
+hm2 stepgen, decided by what its HALFILEs load) or HAL file, with the INI as a second file. The
 format is detected by content (``--firmware-format`` forces it). For every axis and every rule:
 the generator's guaranteed figure, the drive's limit, the margin, pass/fail, the max step rate the
 pair allows and the setting to change. Exit 0 all pass, 1 a rule fails, 3 something cannot be
@@ -55,6 +55,13 @@ def register(sub: Any) -> None:
         description=__doc__.split("\n\n")[0] if __doc__ else None,
     )
     p.add_argument("file", metavar="FILE", help="the firmware configuration file")
+    p.add_argument(
+        "ini",
+        metavar="INI",
+        nargs="?",
+        help="LinuxCNC: the INI that runs FILE, a HAL file (either order; default: the INI "
+        "beside FILE whose HALFILE names it)",
+    )
     p.add_argument(
         "--drive",
         action="append",
@@ -110,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
 
     require = require_list(args.require)
     check_require(require, RULE_IDS)
-    cfg = read_firmware_args(args, args.file)
+    cfg = read_firmware_args(args, args.file, args.ini)
     result = evaluate_config(cfg, [(cfg.axis(a), d) for a, d in _drives(args, cfg)])
     if not result.pairs:
         raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")

@@ -84,15 +84,23 @@ def read_firmware(
     *,
     latency_ns: Fraction | None = None,
     clock_hz: Fraction | None = None,
+    ini: str | os.PathLike[str] | None = None,
 ) -> FirmwareConfig:
     """Read ``path`` as ``fmt`` (default: detected). ``latency_ns`` is LinuxCNC's J,
-    ``clock_hz`` the hm2 stepgen clock."""
+    ``clock_hz`` the hm2 stepgen clock, ``ini`` a LinuxCNC INI given beside a HAL file."""
     name = fmt or detect(path)
     if name not in FIRMWARES:
         raise ConfigError(f"unknown firmware format {name!r} (one of {', '.join(FIRMWARES)})")
     reader = _reader(_MODULE[name])
     if _MODULE[name] == "linuxcnc_config":
-        cfg: FirmwareConfig = reader.read(path, latency_ns=latency_ns, clock_hz=clock_hz, want=fmt)
+        cfg: FirmwareConfig = reader.read(
+            path, latency_ns=latency_ns, clock_hz=clock_hz, want=fmt, ini=ini
+        )
+    elif ini is not None:
+        raise ConfigError(
+            f"{ini}: a second file is read only with a LinuxCNC HAL file (its INI); "
+            f"{path} is a {name} configuration"
+        )
     else:
         cfg = reader.read(path)
     return cfg

@@ -2,8 +2,10 @@
 (continuations and ``#INCLUDE`` followed, :func:`~wavecheck.linuxcnc.files.read_ini`), every
 ``[HAL] HALFILE`` and ``POSTGUI_HALFILE`` (beside the INI, else in LinuxCNC's HAL library;
 ``LIB:name`` only there; ``.tcl`` files read for their literal HAL commands) and every
-``HALCMD``; or one HAL file given alone, read with the INI beside it whose ``HALFILE`` names it
-(LinuxCNC runs a HAL file only from its INI), or alone when no INI names it.
+``HALCMD``; or one HAL file, read with the INI given beside it (``wavecheck config HAL INI``) or
+else the INI beside it whose ``HALFILE`` names it (LinuxCNC runs a HAL file only from its INI), or
+alone when no INI names it. An INI given whose ``HALFILE`` does not name the HAL file only
+supplies its ``[SECTION]KEY`` values, as ``halcmd -i INI -f HAL`` does.
 
 LinuxCNC's HAL library is looked for in ``$HALLIB_DIR``, in the ``lib/hallib`` folder of a
 LinuxCNC tree the INI sits in (``…/configs/…`` beside ``…/lib/hallib``, as a run-in-place build
@@ -97,7 +99,9 @@ class LinuxCNCFiles:
     not_read: list[str] = field(default_factory=list)
     computed: list[str] = field(default_factory=list)
     found_ini: str = ""
-    """The INI found beside a HAL file given alone (its ``HALFILE`` names the file)."""
+    """The INI a HAL file is read with (found beside it, or given)."""
+    ini_note: str = ""
+    """How the HAL file was read with :attr:`found_ini` (a note for the report)."""
 
     def words(self, line: HalLine) -> list[str]:
         """A command's words, inline ``[SECTION](KEY)`` references substituted."""
@@ -166,16 +170,23 @@ class LinuxCNCFiles:
         return value[0], self.ini.place(section, key)
 
 
-def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
-    """Read the configuration at ``path`` (an INI, or one HAL/Tcl file)."""
+def scan(
+    path: str | os.PathLike[str], given: str | os.PathLike[str] | None = None
+) -> LinuxCNCFiles:
+    """Read the configuration at ``path`` (an INI, or one HAL/Tcl file; with ``given``, a HAL
+    file and its INI in either order)."""
     p = Path(path)
     text = read_text(p)
+    if given is not None:
+        return _with_ini(p, text, Path(given))
     if not is_ini(text):
         ini_path = _ini_naming(p)
         if ini_path is not None:
             files = scan(ini_path)
             files.path = str(p)
             files.found_ini = str(ini_path)
+            files.ini_note = (f"a HAL file given alone: read with {ini_path}, whose [HAL] "
+                              "HALFILE names it")  # fmt: skip
             return files
         files = LinuxCNCFiles(str(p), None)
         _add(files, p)
@@ -206,6 +217,45 @@ def scan(path: str | os.PathLike[str]) -> LinuxCNCFiles:
     return files
 
 
+def _with_ini(first: Path, first_text: str, second: Path) -> LinuxCNCFiles:
+    """A HAL file and the INI given with it (either order): the whole configuration when the
+    INI's ``HALFILE`` runs the HAL file, else the HAL file alone with the INI's values."""
+    second_is_ini = is_ini(read_text(second))
+    if is_ini(first_text) == second_is_ini:
+        kind = "INIs" if second_is_ini else "HAL files"
+        raise ConfigError(
+            f"{first} and {second}: two {kind}; give one HAL file and the INI that runs it "
+            "(wavecheck config HAL INI)"
+        )
+    hal, ini_path = (first, second) if second_is_ini else (second, first)
+    ini = read_ini(ini_path)
+    if _resolved(hal) in _named_hal_files(ini, ini_path):
+        files = scan(ini_path)
+        files.path = str(hal)
+        files.found_ini = str(ini_path)
+        files.ini_note = f"{hal.name} read with the INI given, {ini_path}, whose HALFILE runs it"
+        return files
+    files = LinuxCNCFiles(str(hal), ini)
+    files.found_ini = str(ini_path)
+    files.ini_note = (
+        f"{hal.name} read alone with the INI given, {ini_path}, for its [SECTION]KEY values "
+        "(as halcmd -i INI -f HAL): that INI's HALFILEs do not name it, so they are not read"
+    )
+    _add(files, hal)
+    return files
+
+
+def _named_hal_files(ini: IniFile, ini_path: Path) -> set[Path]:
+    """The files the INI's ``HALFILE``/``POSTGUI_HALFILE`` name beside it, resolved."""
+    out = set()
+    for key in ("HALFILE", "POSTGUI_HALFILE"):
+        for value, _ in ini.sections.get("HAL", {}).get(key, []):
+            named = _resolved(ini_path.parent / value.split()[0]) if value.split() else None
+            if named is not None:
+                out.add(named)
+    return out
+
+
 def _ini_naming(hal: Path) -> Path | None:
     """The INI beside ``hal`` whose ``[HAL] HALFILE`` names it (LinuxCNC runs a HAL file from
     its INI), None when no INI names it.
@@ -221,27 +271,22 @@ def _ini_naming(hal: Path) -> Path | None:
             ini = read_ini(ini_path)
         except ConfigError:
             continue
-        names = [
-            v.split()[0]
-            for key in ("HALFILE", "POSTGUI_HALFILE")
-            for v, _ in ini.sections.get("HAL", {}).get(key, [])
-            if v.split()
-        ]
-        if any(_same(hal.parent / n, hal) for n in names):
+        if _resolved(hal) in _named_hal_files(ini, ini_path):
             found.append(ini_path)
     if len(found) > 1:
         raise ConfigError(
             f"{hal}: a HAL file given alone, and {len(found)} INIs beside it name it as a "
-            f"HALFILE ({', '.join(f.name for f in found[:5])}): give the INI to read"
+            f"HALFILE ({', '.join(f.name for f in found[:5])}): give the INI to read as a "
+            f"second file (wavecheck config {hal.name} {found[0].name} …)"
         )
     return found[0] if found else None
 
 
-def _same(a: Path, b: Path) -> bool:
+def _resolved(path: Path) -> Path | None:
     try:
-        return a.resolve() == b.resolve()
+        return path.resolve()
     except OSError:
-        return False
+        return None
 
 
 def _find(folder: Path, name: str, libs: list[Path]) -> Path | None:

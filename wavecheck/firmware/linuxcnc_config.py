@@ -57,10 +57,12 @@ def read(
     latency_ns: Fraction | None = None,
     clock_hz: Fraction | None = None,
     want: str | None = None,
+    ini: str | os.PathLike[str] | None = None,
 ) -> FirmwareConfig:
     """Read the step generators of the configuration at ``path`` (see the module doc);
-    ``want`` ``"hm2"`` or ``"linuxcnc"`` is what ``--firmware-format`` asked for."""
-    files = scan(path)
+    ``want`` ``"hm2"`` or ``"linuxcnc"`` is what ``--firmware-format`` asked for; ``ini`` the
+    INI given beside a HAL file."""
+    files = scan(path, ini)
     modules = {m for m, _ in files.loads}
     soft = linuxcnc.axes(files, latency_ns) if "stepgen" in modules else []
     hw = hm2.axes(files, clock_hz) if any(_HM2.match(m) for m in modules) else []
@@ -69,9 +71,8 @@ def read(
     if not soft and not hw:
         raise ConfigError(_none(files, "stepgen or hostmot2 stepgen"))
     notes = list(files.not_read)
-    if files.found_ini:
-        notes.insert(0, f"a HAL file given alone: read with {files.found_ini}, whose [HAL] "
-                        "HALFILE names it")  # fmt: skip
+    if files.ini_note:
+        notes.insert(0, files.ini_note)
     unsupported = []
     for module, at in files.loads:
         if module in UNMODELLED:

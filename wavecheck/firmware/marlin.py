@@ -18,7 +18,7 @@ machine from the slowest driver type present on any axis. Until 2.1.2 a pulse of
 and LV8729 default, or a user's 0) is "not set", so high = low = 5e8 / rate; from 2.1.3 a
 defined ``MINIMUM_STEPPER_PULSE_NS 0`` is 0. Low time = max(1e9 / rate − pulse, pulse) when both
 are set. Before 2.1, a driver whose ``X_DRIVER_TYPE`` is not defined is an A4988 (the files say
-so). Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up to ½ tick
+so), except in 2.0.0, whose ``drivers.h`` matches it to no type: the ``#else`` defaults. Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up to ½ tick
 short: it is ``uncertain``. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
 ``_STANDALONE``) makes every STEP edge a step.
 
@@ -212,8 +212,25 @@ class _Driver:
     """(driver type, where, depends) for each possible type."""
 
 
+#: The kind of a stepper whose ``…_DRIVER_TYPE`` is not defined where Marlin matches it to no
+#: driver type: every ``HAS_DRIVER(T)`` is false, so the ``#else`` defaults apply.
+_UNTYPED = "no driver type"
+#: Marlin 2.0.0's test of a driver type (MarlinFirmware/Marlin:Marlin/src/core/drivers.h:51
+#: @ ae1cc796, a 2019 bugfix-2.0.x snapshot; the 2.0.0 tag itself is not in the searched
+#: corpus): ``(defined(A##_DRIVER_TYPE) && …)``, so a missing type matches none, despite the
+#: file's comment "A4988 is assumed". Later releases add a fallback ``#define X_DRIVER_TYPE
+#: A4988`` (Conditionals_LCD.h); from which release is not established, so only 2.0.0 is here.
+_UNTYPED_VERSIONS = ("020000",)
+
+
 def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
+    version = h.definition("CONFIGURATION_H_VERSION")
+    untyped = version is not None and (version.value or "").strip() in _UNTYPED_VERSIONS
     assumed = era.name != ERAS[0].name or "A4988 is assumed for unspecified drivers" in texts
+    fallback, why = ("A4988", "Marlin's default: A4988 is assumed for unspecified drivers")
+    if untyped:
+        fallback, why = (_UNTYPED, "not defined: Marlin 2.0.0's drivers.h tests "
+                         "defined(A##_DRIVER_TYPE), so the #else defaults apply")  # fmt: skip
     extruders = 1
     e = h.definition("EXTRUDERS")
     if e is not None:
@@ -233,11 +250,9 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
             axis.startswith("E") and int(axis[1:]) < extruders))  # fmt: skip
         if options and any(d.value is None for d in h.candidates(f"{axis}_DRIVER_TYPE")):
             if implied:
-                options.append(("A4988", "assumed (not defined)", options[0][2]))
+                options.append((fallback, f"not defined: {why}", options[0][2]))
         if not options and implied:
-            options.append(
-                ("A4988", "Marlin's default: A4988 is assumed for unspecified drivers", ())
-            )
+            options.append((fallback, why, ()))
         if options:
             out.append(_Driver(axis, tuple(options)))
     return out
@@ -421,7 +436,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         )
     unknown_types = sorted(
         {k for d in drivers for k, _, _ in d.options
-         if not any(_present(row, {k}) for row, _ in era.tables[0].rate_hz)}
+         if k != _UNTYPED and not any(_present(row, {k}) for row, _ in era.tables[0].rate_hz)}
     )  # fmt: skip
     unsupported = [f"driver type {t}: no Marlin default timing is modelled" for t in unknown_types]
     figs = _figures(results, dims, era, pulse_name, post_name)

@@ -59,12 +59,25 @@ def looks_like(text: str) -> bool:
     )
 
 
+#: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide:
+#: RRF 3.x ``GCodes::Init`` sets ``numExtruders = NumDefaultExtruders`` (Duet3D/RepRapFirmware:
+#: src/GCodes/GCodes.cpp @ fa22ccf), a per-board constant (0 to 3 in the boards' Pins files);
+#: 2.0x set ``min(MaxExtruders, GetNumSmartDrivers() - XYZ_AXES)`` (a 2.0x GCodes.cpp in the
+#: searched corpus, its repository not named).
+_DEFAULT_EXTRUDERS = (
+    "no M584 E: E0 on driver 3 assumed, other extruders not read; RepRapFirmware's default "
+    "extruders depend on its version and board (3.x: the board's NumDefaultExtruders, 0 to 3; "
+    "2.0x: the smart drivers minus 3): give M584 E… to decide"
+)
+
+
 @dataclass
 class _State:
     axis_drivers: dict[str, list[str]] = field(
         default_factory=lambda: {"X": ["0.0"], "Y": ["0.1"], "Z": ["0.2"]}
     )
     extruders: list[str] = field(default_factory=lambda: ["0.3"])
+    extruders_given: bool = False  # an M584 E… seen
     timing: dict[str, tuple[list[Fraction], str]] = field(default_factory=dict)
     micro: dict[str, Fraction] = field(default_factory=dict)
     spm: dict[str, tuple[Fraction, str]] = field(default_factory=dict)
@@ -111,7 +124,7 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
                 if value and not value.startswith("{"):
                     drivers = [_driver(d) for d in value.split(":") if d]
                     if letter == "E":
-                        st.extruders = drivers
+                        st.extruders, st.extruders_given = drivers, True
                     elif letter in _AXES:
                         st.axis_drivers[letter] = drivers
         elif code == "569":
@@ -250,6 +263,8 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     ]
     if st.board_6xd:
         notes.insert(0, f"{st.board_6xd}: every driver 2.5 us per field unless T says more")
+    if not st.extruders_given and any(k.startswith("E") for k in (*st.spm, *st.speed)):
+        notes.append(_DEFAULT_EXTRUDERS)
     return FirmwareConfig(
         firmware="reprapfirmware",
         path=path,

@@ -126,7 +126,7 @@ def test_marlin_2_0_pulse_0_falls_back_to_the_rate(capsys: pytest.CaptureFixture
     """Renkforce RF100 (2.0.0) sets MINIMUM_STEPPER_PULSE 0: reported as a 0 s pulse (FAIL);
     in 2.0.x a 0 pulse is "not set", high = low = 5e8 / rate (FT §4, stepper.h of 2.0.9)."""
     cfg = read_firmware(CORPUS / "marlin/200/Renkforce/RF100/Configuration.h")
-    assert cfg.axis("X").pulse.value == 1000  # 5e8 / 500 kHz (A4988 assumed)
+    assert cfg.axis("X").pulse.value == 2000  # 5e8 / 250 kHz (no driver type: #else rate)
     assert any("Marlin 2.0" in n for n in cfg.notes)  # the version inferred is stated
     code, doc = _config(capsys, str(CORPUS / "marlin/200/Renkforce/RF100/Configuration.h"),
                         "--drive", "a4988")  # fmt: skip
@@ -145,6 +145,33 @@ def test_marlin_unspecified_drivers_are_a4988() -> None:
     drivers", the file says) were "not a Marlin Configuration.h"."""
     cfg = read_firmware(CORPUS / "marlin/119/Creality/Ender-3/Configuration.h")
     assert cfg.axis_names == ("X", "Y", "Z", "E0") and "A4988" in cfg.axis("X").info["driver type"]
+
+
+@pytest.mark.parametrize(
+    ("file", "pulse_ns", "setup_ns", "idle_ns"),
+    [
+        # MINIMUM_STEPPER_PULSE, _POST_DIR_DELAY, _RATE all unset: the #else defaults 2 us,
+        # 0 ns, 250 kHz (the 2.0.x tables, not A4988's 1 us, 200 ns, 500 kHz): low =
+        # max(1e9 / 250 kHz - 2000, 2000)
+        ("marlin/200/Anet/A8/Configuration.h", 2000, 0, 2000),
+        # MINIMUM_STEPPER_PULSE 0 is "not set" before 2.1.3: high = low = 5e8 / 250 kHz
+        ("marlin/200/Renkforce/RF100/Configuration.h", 2000, 0, 2000),
+    ],
+)
+def test_marlin_2_0_0_without_driver_types_uses_the_else_defaults(
+    file: str, pulse_ns: int, setup_ns: int, idle_ns: int
+) -> None:
+    """Marlin 2.0.0 files with every X_DRIVER_TYPE commented out were read as A4988s (the
+    file's comment says so). The code decides otherwise: drivers.h of bugfix-2.0.x in 2019
+    (MarlinFirmware/Marlin:Marlin/src/core/drivers.h:51 @ ae1cc796) tests
+    ``defined(A##_DRIVER_TYPE) && …``, so no HAS_DRIVER(T) holds and Conditionals_post.h's
+    ``#else`` branches give the defaults."""
+    cfg = read_firmware(CORPUS / file)
+    x = cfg.axis("X")
+    assert "A4988" not in x.info["driver type"]
+    assert (x.pulse.value, x.dir_setup.value) == (pulse_ns, setup_ns)
+    assert x.idle.value == idle_ns
+    assert not cfg.unsupported
 
 
 def test_marlin_steps_per_unit_expressions_do_not_refuse_the_file() -> None:
