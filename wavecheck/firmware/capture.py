@@ -155,7 +155,9 @@ def _time(
             fig.setting,
             where,
             "unchecked",
-            f"the configuration guarantees no {label}",
+            f"the firmware does not enforce a {label}: measure it"
+            if fig.status == "not_enforced"
+            else f"the configuration guarantees no {label}",
         )
     if measured is None:
         return Comparison(

@@ -36,6 +36,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_most,
+    not_enforced,
     unknown,
 )
 
@@ -189,12 +190,17 @@ def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
             "Grbl_ESP32 keeps its DIR delay outside the numbered $ settings (compile-time or a "
             "named setting): not in this dump",
         )
-    return Guaranteed(
-        Fraction(0), "$29" if flavour == "grblHAL" else "STEP_PULSE_DELAY", "firmware default",
-        "us", "default",
-        "DIR is written a few CPU cycles before STEP in the same interrupt: no setup time is "
-        "guaranteed" + ("" if flavour == "grblHAL" else " (STEP_PULSE_DELAY is compile-time, "
-                        "not in $$)"),
+    # grbl 1.1h stepper.c:323-333: DIR is written, then STEP, in the same interrupt, with no
+    # delay unless STEP_PULSE_DELAY is compiled in: the setup is the instructions between the two
+    # port writes (6 cycles, 375 ns at 16 MHz, in the disassembly and under `wavecheck simulate
+    # grbl`), which no setting keeps: neither 0 s nor a guarantee.
+    return not_enforced(
+        "$29" if flavour == "grblHAL" else "STEP_PULSE_DELAY",
+        "DIR is written a few CPU cycles before STEP in the same interrupt (grbl 1.1h "
+        "stepper.c:323-333; 6 cycles, 375 ns at 16 MHz, under `wavecheck simulate grbl`)"
+        + ("" if flavour == "grblHAL" else "; STEP_PULSE_DELAY (compile-time, not in $$) "
+           "would enforce a delay"),
+        "firmware default",
     )  # fmt: skip
 
 

@@ -47,18 +47,21 @@ def test_json_carries_the_verdict_line(capsys: pytest.CaptureFixture[str]) -> No
 
 def test_junit(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "config.xml"
-    code = main(["config", str(GRBL), "--drive", "leadshine-dm542", "--format", "junit",
-                 "-o", str(out)])  # fmt: skip
-    assert code == 1  # grbl: no DIR setup against the DM542's 5 us
+    code = main(["config", str(GRBL), "--drive", "leadshine-dm542", "--limit", "step_high=10us",
+                 "--format", "junit", "-o", str(out)])  # fmt: skip
+    assert code == 1  # grbl's $0=10 is 9.4375 us at the pin, under the 10 us limit given
     assert capsys.readouterr().out.startswith("FAIL (")
     root = ET.parse(out).getroot()
     suites = root.findall("testsuite")
     assert [s.get("name", "").split("[")[1] for s in suites] == [
         f"axis {a}, drive leadshine-dm542]" for a in "XYZ"]  # fmt: skip
     x = {c.get("name"): c for c in suites[0].findall("testcase")}
-    failure = x["dir_setup"].find("failure")
+    failure = x["step_high"].find("failure")
     assert failure is not None and failure.get("type") == "fail"
-    assert x["step_high"].find("failure") is None and x["step_high"].find("skipped") is None
+    # grbl keeps no DIR setup (stepper.c:323-333): not enforced, so not proven, never a pass
+    undecided = x["dir_setup"].find("failure")
+    assert undecided is not None and undecided.get("type") == "indeterminate"
+    assert x["step_low"].find("failure") is None and x["step_low"].find("skipped") is None
     skipped = x["enable_setup"].find("skipped")
     assert skipped is not None and "says nothing" in skipped.get("message", "")
     assert root.get("failures") == str(sum(int(s.get("failures", "0")) for s in suites))
