@@ -21,7 +21,8 @@ settings.register_profile("wavecheck", deadline=None, derandomize=os.environ.get
 settings.load_profile("wavecheck")
 
 REPO = Path(__file__).resolve().parent.parent
-SHARED_CAPTURES = REPO.parent / "shared" / "captures"
+SHARED = REPO.parent / "shared"
+SHARED_CAPTURES = SHARED / "captures"
 
 
 def shared_capture(relpath: str) -> Path:

@@ -14,12 +14,13 @@ from pathlib import Path
 import pytest
 
 from stepgen.cli import main
+from tests.conftest import SHARED
 from tests.stepgen.pncconf_pid import HAL, INI, line_of, write_pair
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.pid_settings import read_pid_config
 from wavecheck.linuxcnc.stepgen_config import read_config
 
-FW = Path("/work/shared/firmware/linuxcnc")
+FW = SHARED / "firmware/linuxcnc"
 
 
 @pytest.mark.parametrize(

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from wavecheck.cli import main
 
-FW = Path("/work/shared/firmware")
+FW = SHARED / "firmware"
 pytestmark = pytest.mark.skipif(not FW.is_dir(), reason="shared firmware files not present")
 
 ORTUR = FW / "marlin/Ortur_4_release-2.0.9.7/Configuration.h"

@@ -10,12 +10,13 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from wavecheck.cli import main
 from wavecheck.drives.library import load_drive
 from wavecheck.firmware import read_firmware
 from wavecheck.firmware.evaluate import evaluate_config
 
-GRBL = Path("/work/shared/firmware/grbl/settings.md")
+GRBL = SHARED / "firmware/grbl/settings.md"
 pytestmark = pytest.mark.skipif(not GRBL.is_file(), reason="shared firmware files not present")
 
 

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import write_vcd
+from tests.conftest import SHARED, write_vcd
 from wavecheck.cli import main
 
-GRBL = Path("/work/shared/firmware/grbl/settings.md")  # line 32: $0=10 (us); X max 2083.3 Hz
+GRBL = SHARED / "firmware/grbl/settings.md"  # line 32: $0=10 (us); X max 2083.3 Hz
 pytestmark = pytest.mark.skipif(not GRBL.is_file(), reason="shared firmware files not present")
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from tools.firmware_corpus import CORPUS
 from wavecheck.cli import main
 from wavecheck.firmware import read_firmware
@@ -117,7 +118,7 @@ def test_hm2_dir_hold_counts_from_the_pulse_start(
     """Class 2: DIR may change max(steplen, dirhold) after the leading edge (the hold counter is
     loaded when the pulse starts), max(0, dirhold - steplen) after the trailing one; at 100 MHz
     the pulse is steplen clocks + 1 (here 2020 / 4510 ns)."""
-    src = Path("/work/shared/firmware/linuxcnc/hm2-stepper")
+    src = SHARED / "firmware/linuxcnc/hm2-stepper"
     for f in src.iterdir():
         text = f.read_text()
         if f.suffix == ".ini":

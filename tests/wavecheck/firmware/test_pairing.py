@@ -10,14 +10,14 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import write_vcd
+from tests.conftest import SHARED, write_vcd
 from wavecheck.cli import main
 
-FW = Path("/work/shared/firmware")
+FW = SHARED / "firmware"
 #: GRBL-config.md, first dump: $100=$101=800 steps/mm (lines 28-29), $110=1000 (line 31),
 #: $111=800 mm/min (line 32): X may step at 13333 Hz, Y only at 10667 Hz.
 GRBL = FW / "grbl/GRBL-config.md"
-SMOOTHIE_DELTA = Path("/work/shared/firmware-corpus/smoothie/AzteegX5Mini.delta/Version3/config")
+SMOOTHIE_DELTA = SHARED / "firmware-corpus/smoothie/AzteegX5Mini.delta/Version3/config"
 pytestmark = pytest.mark.skipif(not GRBL.is_file(), reason="shared firmware files not present")
 
 

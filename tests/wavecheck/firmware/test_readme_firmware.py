@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from tests.doc_pages import marked_all
 from wavecheck.cli import main
 
@@ -50,7 +51,7 @@ def test_readme_firmware_command(
     assert out.startswith(f"{EXPECT[name]} configuration") and "\nverdict: " in out
 
 
-SHARED = Path("/work/shared")
+SHARED = SHARED
 
 
 @pytest.mark.skipif(not SHARED.is_dir(), reason="shared firmware files not present")

@@ -1,16 +1,16 @@
-"""Each real configuration in /work/shared/firmware/ is read: the figures a person reads off the
+"""Each real configuration in ../shared/firmware/ is read: the figures a person reads off the
 file by hand (the line they come from is named beside each), as wavecheck reads them."""
 
 from __future__ import annotations
 
 from fractions import Fraction
-from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from wavecheck.firmware import detect, read_firmware
 
-FW = Path("/work/shared/firmware")
+FW = SHARED / "firmware"
 pytestmark = pytest.mark.skipif(not FW.is_dir(), reason="shared firmware files not present")
 F = Fraction
 

@@ -12,12 +12,13 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from tools.firmware_corpus import CORPUS
 from wavecheck.cli import main
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import read_firmware
 
-FW = Path("/work/shared/firmware")
+FW = SHARED / "firmware"
 LCNC = CORPUS / "linuxcnc/configs"
 pytestmark = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
 

@@ -24,6 +24,7 @@ from stepgen.motion import Motion, parse_moves
 from stepgen.reference import StepgenConfig
 from stepgen.simulate import Trace, simulate
 from stepgen.vcdout import write_vcd
+from tests.conftest import SHARED
 from tests.wavecheck.lattice.captures import capture, roles, run, true_lateness
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
@@ -36,7 +37,7 @@ CAPTURES = (
     Path(__file__).resolve().parents[4] / "shared" / "captures" / "sigrok-dumps" / "stepper_motor"
 )
 if not CAPTURES.exists():
-    CAPTURES = Path("/work/shared/captures/sigrok-dumps/stepper_motor")
+    CAPTURES = SHARED / "captures/sigrok-dumps/stepper_motor"
 ROOT = Path(__file__).resolve().parents[3]
 
 P_NS = 25_000
