@@ -345,7 +345,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck latency``; returns the exit code."""
     _, source = _period_ns(args)
     report = capture_latency(args, args.capture)
-    text = render_text(report, source)
+    text = render_text(report, source) if args.format == "text" or args.html else ""
     out = render_json(report, source) if args.format == "json" else text
     if args.output:
         atomic_write(args.output, out)

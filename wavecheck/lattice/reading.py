@@ -33,6 +33,7 @@ __all__ = [
     "Reading",
     "Signatures",
     "allowance",
+    "ascending",
     "bursts",
     "catch_up",
     "evaluate",
@@ -132,7 +133,9 @@ class Fold:
         cover = np.zeros(2 * self.nb + 2, np.int64)
         if len(close):
             first = self.x[close] // self.w + 1
-            last = (self.x[close] + d[close]) // self.w
+            end = self.x[close] + d[close]  # past the period: the next period's bins (the
+            # last bin is shorter than w when w does not divide the period)
+            last = np.where(end >= self.a, self.nb + (end - self.a) // self.w, end // self.w)
             np.add.at(cover, first, 1)
             np.add.at(cover, last + 1, -1)
         c = np.cumsum(cover)
@@ -397,7 +400,8 @@ def significance(
             continue
         kl = a * math.log(a / f) + ((1 - a) * math.log((1 - a) / (1 - f)) if a < 1 else 0.0)
         best = min(best, trials - n * kl / math.log(10))
-    values = union(lat)
+    counts = _counts(lat)
+    values = np.flatnonzero(counts) if len(counts) else union(lat)  # sorted, distinct
     a_units = float(period) * b
     gaps = np.sort(np.diff(np.append(values, values[0] + a_units)))[::-1][:8]
     for k in range(1, len(gaps) + 1):
@@ -413,10 +417,25 @@ def significance(
 MIN_GAP_FRACTION = 0.03
 
 
+def _counts(values: Ints) -> Ints:
+    """How often each value 0 … max occurs in ``values`` (non-negative): the sorted values in
+    linear time, when that range is at most a few times their number (else empty)."""
+    top = int(values.max()) + 1 if len(values) else 0
+    if not len(values) or top > 4 * len(values) + (1 << 16):
+        return np.zeros(0, np.int64)
+    return np.bincount(values, minlength=top)
+
+
+def ascending(values: Ints) -> Ints:
+    """``values`` (non-negative integers) sorted: counted when their range allows (linear)."""
+    counts = _counts(values)
+    return np.repeat(np.arange(len(counts)), counts) if len(counts) else np.sort(values)
+
+
 def widest_gap(lat: Ints, a: int) -> int:
     """The widest arc (units) between two edges' phases (``lat`` modulo ``a`` units) with at
     most ``max(2, n // 500)`` edges inside it (late spikes), measured edge to edge."""
-    x = np.sort(np.mod(lat, a))
+    x = ascending(np.mod(lat, a))
     n = len(x)
     if not n:
         return a
