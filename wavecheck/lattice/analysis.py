@@ -486,11 +486,11 @@ def _fill(
     k, lat, moved = catch_up(fold, reading)
     span_p = max(int(k.max() - k.min()), 1)
     q = max(res, 1)
-    p99, in_arc, f, _ = significance(lat, fold.b, q, fold.period, span_p)
-    # the evidence for the lattice: the most plausible reading's (the first)
-    _, _, _, chance = significance(
-        fold.lateness(ev.readings[0].anchor)[1], fold.b, q, fold.period, span_p
-    )
+    p99, in_arc, f, chance = significance(lat, fold.b, q, fold.period, span_p)
+    if ev.readings[0] is not reading or moved:  # the evidence: the most plausible reading's
+        _, _, _, chance = significance(
+            fold.lateness(ev.readings[0].anchor)[1], fold.b, q, fold.period, span_p
+        )
     fit = LatticeFit(
         period=fold.period,
         phase=Fraction(int(times[0])) + Fraction(reading.anchor, fold.b),

@@ -96,10 +96,13 @@ def simplest_between(lo: Fraction, hi: Fraction) -> Fraction:
 
 
 def densest(times: Ints, span: int) -> tuple[int, int]:
-    """[i, j) of the stretch of at most ``span`` ticks holding the most edges."""
-    ends = np.searchsorted(times, times + span, side="left")
-    i = int(np.argmax(ends - np.arange(len(times))))
-    return i, int(ends[i])
+    """[i, j) of the stretch of at most ``span`` ticks holding the most edges (starting at one
+    of 2^16 edges spread evenly over a longer capture)."""
+    step = max(1, len(times) >> 16)
+    starts = np.arange(0, len(times), step)
+    ends = np.searchsorted(times, times[starts] + span, side="left")
+    at = int(np.argmax(ends - starts))
+    return int(starts[at]), int(ends[at])
 
 
 def coarse(
@@ -184,16 +187,17 @@ def combs_and_lines(
     return found, [_refine_comb(w, length / (flo + g), 0.6 / (flo + g)) for g in strong]
 
 
-def _refine_comb(t: Ints, p: float, width: float) -> float:
-    """``p`` refined to where the summed power of the first 12 harmonics of edge times ``t``
-    peaks, within ±``width`` (relative), in two passes of 25 periods (the second 8× finer)."""
+def _refine_comb(t: Ints, p: float, width: float, harmonics: int = 12) -> float:
+    """``p`` refined to where the summed power of the first ``harmonics`` harmonics of edge
+    times ``t`` peaks, within ±``width`` (relative), in two passes of 25 periods (the second 8×
+    finer)."""
     rel = (t - t[len(t) // 2]).astype(np.float64)
     for w in (width, width / 8):
         grid = p * (1 + np.linspace(-w, w, 25))
         z = np.exp(2j * np.pi * rel[None, :] / grid[:, None])
         zh = np.ones_like(z)
         total = np.zeros(len(grid))
-        for _ in range(12):  # harmonics 1..12
+        for _ in range(harmonics):
             zh *= z
             total += np.abs(zh.sum(axis=1)) ** 2
         p = float(grid[int(np.argmax(total))])
@@ -455,13 +459,18 @@ def _down(
     a lattice at P/2 fits P's edges with the same lateness. None: no lattice better than chance.
     """
     q = float(max(res, 1))
+    if len(times) > TRY_EDGES:  # the edges the candidates are read on (:func:`_tries`)
+        i = (len(times) - TRY_EDGES) // 2
+        kinds = _window_kinds(kinds, times, i, i + TRY_EDGES)
+        times = times[i : i + TRY_EDGES]
     # each start refined on its own: a lattice at a multiple of the thread's period (its step
     # pattern) does not fit well enough to refine P there
-    starts = [
-        p0 / m for p0 in combs for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin
-    ] + [p0 for p0 in lines if pmin <= p0 <= pmax]
+    starts = sorted(
+        (p0 / m for p0 in combs for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin),
+        reverse=True,
+    ) + [p0 for p0 in lines if pmin <= p0 <= pmax]  # a line after the combs: it may be a sidelobe
     subs: list[Fraction] = []
-    for p0 in sorted(starts, reverse=True):
+    for p0 in starts:
         if all(abs(p0 - float(s)) > 1e-3 * float(s) for s in subs):
             p, err = grow(times, p0, len(times) // 2, q, no_progress, 0.0)
             subs.append(exact(p, err, times, res))

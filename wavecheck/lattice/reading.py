@@ -125,6 +125,7 @@ class Fold:
         self.bins = self.x // self.w
         self.hist = np.bincount(self.bins, minlength=self.nb)
         self.n = len(times)
+        self._last: tuple[int, tuple[Ints, Ints]] | None = None
 
     def collisions(self) -> Ints:
         """For each anchor bin: pairs of successive edge times in one period."""
@@ -155,9 +156,12 @@ class Fold:
         return start + int(np.min(np.mod(self.x - start, self.a)))
 
     def lateness(self, anchor: int) -> tuple[Ints, Ints]:
-        """(invocation, lateness in units) of every edge."""
-        k = np.floor_divide(self.units - anchor, self.a)
-        return k, self.units - anchor - k * self.a
+        """(invocation, lateness in units) of every edge (the last anchor's kept: the same
+        reading is asked for several times)."""
+        if self._last is None or self._last[0] != anchor:
+            k = np.floor_divide(self.units - anchor, self.a)
+            self._last = anchor, (k, self.units - anchor - k * self.a)
+        return self._last[1]
 
     def reading(self, bin_: int, collisions: Ints) -> Reading:
         anchor = self.anchor_at(bin_)
