@@ -64,7 +64,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.errors import UsageError
-from wavecheck.lattice.evidence import MIN_MOTION_SHARE, MIN_PAIRS, motion_share
+from wavecheck.lattice.evidence import MIN_MOTION_SHARE, MIN_PAIRS, motion_share, steady_pulse
 from wavecheck.lattice.period import (
     MAX_PERIOD_NS,
     MIN_PERIOD_NS,
@@ -449,12 +449,14 @@ def analyse_times(
     report = _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
     if report.lattice and not given and kinds is not None:
         share, pairs = motion_share(report.invocation, kinds.bits, 2 * len(kinds.names))
-        if share < MIN_MOTION_SHARE or pairs < MIN_PAIRS:
+        pulse = steady_pulse(report.invocation, kinds.bits, len(kinds.names))
+        if pulse is None and (share < MIN_MOTION_SHARE or pairs < MIN_PAIRS):
             report.no_motion = (
-                f"the lattice is not shown to be a step generator's thread: {share:.0%} of "
-                f"{pairs} successive step intervals change gradually, as a motion's do (at "
-                f"least {MIN_MOTION_SHARE:.0%} of {MIN_PAIRS} or more are needed; another "
-                "periodic clock, such as a sensor's frame clock, makes such edges too)"
+                f"the lattice is not shown to be a step generator's thread: no line's pulses "
+                f"last one whole number of periods, and {share:.0%} of {pairs} successive step "
+                f"intervals change gradually, as a motion's do (at least {MIN_MOTION_SHARE:.0%}"
+                f" of {MIN_PAIRS} or more are needed); another periodic clock, such as a "
+                "sensor's frame clock, makes such edges too"
             )
     return report
 

@@ -23,7 +23,7 @@ from tests.wavecheck.lattice.captures import roles, run
 from tests.wavecheck.lattice.sweep import grid_capture
 from wavecheck.cli import main as wavecheck_main
 from wavecheck.lattice import analyse, analyse_times, common_period
-from wavecheck.lattice.evidence import MIN_MOTION_SHARE, motion_share
+from wavecheck.lattice.evidence import MIN_MOTION_SHARE, motion_share, steady_pulse
 from wavecheck.lattice.period import exact
 from wavecheck.lattice.reading import evaluate, widest_gap
 
@@ -95,8 +95,8 @@ def test_too_few_edges_exit_3_and_plan_refuses(
 
 def test_a_sensor_frame_clock_is_no_thread(capsys: pytest.CaptureFixture[str]) -> None:
     # issue 33: the ADNS-2051 optical mouse sensor's quadrature outputs (sigrok-dumps) lie on a
-    # 487.8 us lattice, its frame clock; they follow a hand's motion, not a step generator's
-    # (79 % of successive intervals gradual): exit 3, no figure to plan from
+    # 487.8 us lattice, its frame clock; no line has pulses of one length in periods, and 79 %
+    # of successive intervals change gradually (a hand's motion): exit 3, nothing to plan from
     path = shared_capture(
         "sigrok-dumps/mouse_sensors/avago_adns_2051/avago_adns_2051_move_mouse_left_right.sr"
     )
@@ -158,3 +158,27 @@ def test_p_is_simplest_in_samples() -> None:
     assert exact(34_000.9, 1.5, times) == 34_001
     assert exact(34_000.9, 1.5, times, 2000) == 34_000
     assert exact(25_000.9, 1.5, times, 2000) == 25_000  # 12.5 samples
+
+
+def _kinds_of(rise: np.ndarray, fall: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(invocations, kind bits) of one line's rises (bit 1) and falls (bit 0)."""
+    k = np.concatenate([rise, fall])
+    bits = np.concatenate([np.full(len(rise), 2), np.full(len(fall), 1)]).astype(np.int64)
+    order = np.argsort(k, kind="stable")
+    return k[order], bits[order]
+
+
+def test_step_pulses_of_steplen_periods_are_a_step_generator_s() -> None:
+    # types 0/1: STEP high for exactly steplen periods at every rate (timer1 = steplen), the
+    # spaces following the ramp
+    rise = _dds(np.linspace(0.02, 0.3, 20_000))  # at most 1 / (steplen + stepspace)
+    for steplen in (1, 2):
+        k, bits = _kinds_of(rise, rise + steplen)
+        assert steady_pulse(k, bits, 1) == (0, 1, steplen)
+    # a quadrature line (A of a pair: high for two steps, low for two) has no such level
+    steps = _dds(np.linspace(0.02, 0.4, 20_000))
+    k, bits = _kinds_of(steps[0::4], steps[2::4])
+    assert steady_pulse(k, bits, 1) is None
+    # nor a square wave at one rate: its spaces do not vary
+    k, bits = _kinds_of(np.arange(0, 4000, 4), np.arange(2, 4000, 4))
+    assert steady_pulse(k, bits, 1) is None

@@ -49,13 +49,8 @@ def test_sweep_table_reads_most() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 33 not met yet (2026-11-28, 600 cases: 499 ok, 86 not established = 14 %, "
-    "15 wrong, 0 below the truth): P a tick off on the unstated 2 us grid (6), a type-2 cruise "
-    "at 0.3 of the top rate read at 10P/7 with lateness 70-90 % of P (8), 2P for a type-2 ramp (1)",
-)
 def test_whole_sweep() -> None:
+    # `python -m tests.wavecheck.lattice.sweep` prints the figures (2026-11-29: see the commit)
     results = [(c.name, *judge(c)) for c in cases()]
     bad = [r for r in results if r[1] in ("wrong", "below")]
     assert not bad, bad
