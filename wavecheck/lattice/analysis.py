@@ -448,8 +448,12 @@ def analyse_times(
         )
     report = _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
     if report.lattice and not given and kinds is not None:
-        share, pairs = motion_share(report.invocation, kinds.bits, 2 * len(kinds.names))
         pulse = steady_pulse(report.invocation, kinds.bits, len(kinds.names))
+        share, pairs = (
+            motion_share(report.invocation, kinds.bits, 2 * len(kinds.names))
+            if pulse is None
+            else (1.0, 0)
+        )
         if pulse is None and (share < MIN_MOTION_SHARE or pairs < MIN_PAIRS):
             report.no_motion = (
                 f"the lattice is not shown to be a step generator's thread: no line's pulses "

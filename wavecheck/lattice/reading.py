@@ -122,7 +122,7 @@ class Fold:
         self.w = max(1, -(-self.a // bins))
         self.nb = -(-self.a // self.w)
         self.q = max(res, 1) * self.b  # one sample in units
-        self.bins = self.x // self.w
+        self.bins = self.x // self.w if self.w > 1 else self.x
         self.hist = np.bincount(self.bins, minlength=self.nb)
         self.n = len(times)
         self._last: tuple[int, tuple[Ints, Ints]] | None = None
@@ -217,9 +217,12 @@ def _kind_dependence(fold: Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
         return None
     best: tuple[int, float] | None = None
     worst_v: dict[int, float] = {}
+    # the edges grouped by what changed at them (a few combinations): one count per offset
+    combos, group = _groups(kinds.bits)
     for offset in (0, fold.a // (2 * nbk)):
         bins = np.mod((fold.x + offset) * nbk // fold.a, nbk)
-        hists = {c: np.bincount(bins[((kinds.bits >> c) & 1) == 1], minlength=nbk) for c in present}
+        per = np.bincount(group * nbk + bins, minlength=len(combos) * nbk).reshape(-1, nbk)
+        hists = {c: per[((combos >> c) & 1) == 1].sum(axis=0) for c in present}
         total = np.sum(list(hists.values()), axis=0)
         n_all = int(total.sum())
         for c, h in hists.items():
@@ -237,6 +240,19 @@ def _kind_dependence(fold: Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
         if v > 0 and (best is None or v > best[1]):
             best = (c, v)
     return best
+
+
+def _groups(bits: Ints) -> tuple[Ints, Ints]:
+    """(the distinct values of ``bits``, each element's index among them): counted when the
+    values are small (a few channels), else sorted."""
+    if int(bits.max()) < 1 << 16:
+        seen = np.bincount(bits)
+        combos = np.flatnonzero(seen)
+        index = np.zeros(len(seen), np.int64)
+        index[combos] = np.arange(len(combos))
+        return combos, index[bits]
+    combos, group = np.unique(bits, return_inverse=True)
+    return combos, group.reshape(-1)
 
 
 def _rule_of(times: Ints, on_time: npt.NDArray[np.bool_], kinds: EdgeKinds | None) -> str:
