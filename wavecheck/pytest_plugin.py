@@ -71,6 +71,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
+from wavecheck.options import OPTIONS
+
 if TYPE_CHECKING:
     from wavecheck.engine import MachineReport, Report, RuleResult
 
@@ -90,31 +92,8 @@ __all__ = [
 ]
 
 VERDICTS = ("pass", "fail", "indeterminate")
-_KEYS = {
-    "name",
-    "path",
-    "drive",
-    "map",
-    "invert",
-    "type",
-    "resolution",
-    "samplerate",
-    "input_format",
-    "dir_forward",
-    "expect",
-    "expect_rules",
-    "ini",
-    "hal",
-    "channel",
-    "latency",
-    "axes",
-    "user_step_type",
-    "pulse_level",
-    "active_edge",
-    "limit",
-    "margin",
-    "require",
-}
+#: Keys of a ``[[capture]]`` entry: its own, and the check options' (:data:`wavecheck.options.OPTIONS`).
+_KEYS = {"name", "path", "expect", "expect_rules", "axes"} | {o.toml for o in OPTIONS if o.toml}
 #: Keys of an axis table besides its roles.
 _AXIS_KEYS = {"map", "drive", "type", "invert", "dir_forward", "expect", "expect_rules", "require"}
 

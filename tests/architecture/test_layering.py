@@ -115,6 +115,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("roles", ("wavecheck.roles",)),
     ("step times", ("wavecheck.lattice",)),
     ("engine", ("wavecheck.engine",)),
+    ("options as users spell them", ("wavecheck.options",)),
     ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",
                             "wavecheck.crosscheck", "wavecheck.firmware", "wavecheck.mcu")),
     ("report", ("wavecheck.report",)),

@@ -143,15 +143,12 @@ def add_engine_arguments(p: Any) -> None:
 
 def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> CheckOptions:
     """The options object (:class:`~wavecheck.engine.options.CheckOptions`) of the mapping,
-    capture, rule and configuration options of ``args``; built once and kept on ``args``.
-    ``with_drive=False``: a command without a drive (``measure``).
+    capture, rule and configuration options of ``args`` (read each time: a command builds it
+    once, before any capture). ``with_drive=False``: a command without a drive (``measure``).
 
     Raises:
         UsageError: a malformed option (the axes are checked against the capture later).
     """
-    cached = getattr(args, "_check_options", None)
-    if isinstance(cached, CheckOptions):
-        return cached
     from wavecheck.cli._capture_args import resolution_from_args
     from wavecheck.cli._stepgen_args import latency_ns, stepgen_config
     from wavecheck.drives.library import load_drive
@@ -172,7 +169,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         for axis, text in split_per_axis(args.dir_forward, "--dir-forward").items()
     }
     block = WHOLE if getattr(args, "no_stream", False) else getattr(args, "block_edges", None)
-    options = CheckOptions(
+    return CheckOptions(
         drive=drives,
         axes=tuple(parse_axes(args.map)) if args.map else (),
         invert=tuple(args.invert),
@@ -191,8 +188,6 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
         require=required(args),
     )
-    args._check_options = options
-    return options
 
 
 def required(args: argparse.Namespace) -> tuple[str, ...]:

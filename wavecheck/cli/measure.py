@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
-from wavecheck.cli._firmware_args import add_firmware_arguments, check_firmware
+from wavecheck.cli._firmware_args import add_firmware_arguments, check_firmware, firmware_config
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
 from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
@@ -91,11 +91,12 @@ def build_measurement(args: argparse.Namespace) -> Measurement:
 def firmware_checks(args: argparse.Namespace, m: Measurement) -> list[FirmwareCheck]:
     """``--firmware``: every measured axis against the configured axis (``--axis``, default the
     first), compared as ``check --firmware`` compares a report (empty without ``--firmware``)."""
-    if not args.firmware:
+    cfg = firmware_config(args)
+    if cfg is None:
         return []
     from wavecheck.firmware.capture import observed_in_measurement
 
-    return [check_firmware(args, observed_in_measurement(a, m.resolution_ns)) for a in m.axes]
+    return [check_firmware(args, cfg, observed_in_measurement(a, m.resolution_ns)) for a in m.axes]
 
 
 def run(args: argparse.Namespace) -> int:
