@@ -20,16 +20,10 @@ from typing import Unpack
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine import (
-    AxisMap,
-    CheckOptions,
-    MachineReport,
-    Report,
-    axes_from_tables,
-    check_source,
-)
+from wavecheck.engine import CheckOptions, MachineReport, Report, check_source
 from wavecheck.errors import RequirementError, UsageError
 from wavecheck.options import CheckKeywords, options_from_keywords
+from wavecheck.steps.mapping import AxisMap, axes_from_tables
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
 
 __all__ = ["Axis", "check", "check_axes", "require_met"]

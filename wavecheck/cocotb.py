@@ -49,7 +49,6 @@ from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
 from wavecheck.drives.datasheet import Drive
 from wavecheck.engine import (
-    AxisMap,
     CheckOptions,
     MachineCheck,
     MachineReport,
@@ -59,6 +58,7 @@ from wavecheck.engine import (
 )
 from wavecheck.errors import UsageError
 from wavecheck.options import CheckKeywords, options_from_keywords
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns, format_time, parse_option
 

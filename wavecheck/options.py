@@ -20,8 +20,9 @@ from fractions import Fraction
 from typing import Any, TypedDict
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine import AxisMap, CheckOptions
+from wavecheck.engine import CheckOptions
 from wavecheck.errors import UsageError
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.units import parse_option
 from wavecheck.verdict import require_list
 

@@ -175,7 +175,7 @@ class CaptureSpec:
 def _map_of(raw: Any, where: str) -> dict[str, str]:
     """A ``map`` value: a table or ``"role=CH,..."`` text."""
     if isinstance(raw, str):
-        from wavecheck.engine import parse_map
+        from wavecheck.steps.interface import parse_map
 
         return parse_map([raw])
     if isinstance(raw, dict):
@@ -232,8 +232,9 @@ def _axes(
     entry: dict[str, Any], where: str, folder: Path, defaults: AxisSpec, shared: dict[str, str]
 ) -> tuple[AxisSpec, ...]:
     """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
-    from wavecheck.engine import axes_from_tables, role_name
     from wavecheck.errors import WavecheckError
+    from wavecheck.steps.interface import role_name
+    from wavecheck.steps.mapping import axes_from_tables
 
     raw = entry["axes"]
     if not isinstance(raw, dict) or not raw or not all(isinstance(v, dict) for v in raw.values()):

@@ -114,6 +114,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("capture", ("wavecheck.capture",)),
     ("roles", ("wavecheck.roles",)),
     ("step times", ("wavecheck.lattice",)),
+    ("step interface", ("wavecheck.steps",)),
     ("engine", ("wavecheck.engine",)),
     ("options as users spell them", ("wavecheck.options",)),
     ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",

@@ -3,7 +3,7 @@
 Options added by :func:`add_axis_arguments`: ``--map`` (``[AXIS.]ROLE=CH``), ``--invert``,
 ``--type``, ``--user-step-type``, ``--dir-forward``, ``--pulse-level``, ``--active-edge``.
 :func:`check_options` turns them into the run's options object (the syntax is
-:mod:`wavecheck.engine.mapping`); without ``--map`` the engine takes the roles from channel names or
+:mod:`wavecheck.steps.mapping`); without ``--map`` the engine takes the roles from channel names or
 infers them from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
 """
 
@@ -14,8 +14,9 @@ from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions, parse_axes, split_per_axis
+from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions
 from wavecheck.errors import UsageError
+from wavecheck.steps.mapping import parse_axes, split_per_axis
 
 __all__ = [
     "add_axis_arguments",

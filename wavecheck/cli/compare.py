@@ -28,9 +28,9 @@ from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.compare import Comparison, MachineComparison, compare_axes
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
+from wavecheck.steps.mapping import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.units import format_ns, format_time, json_number, option_ns
 from wavecheck.verdict import exit_code
 

@@ -25,14 +25,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.engine import (
-    StepEvents,
-    auto_map,
-    build_interface,
-    decode_steps,
-    find_channel,
-    parse_map,
-)
+from wavecheck.engine import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,
@@ -43,6 +36,9 @@ from wavecheck.follow import (
     read_command,
 )
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.decode import decode as decode_steps
+from wavecheck.steps.interface import build_interface, find_channel, parse_map
 from wavecheck.steptypes import step_type
 from wavecheck.units import number_option, parse_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS

@@ -22,8 +22,9 @@ from wavecheck.capture.sigrokcli import find_sigrok_cli
 from wavecheck.crosscheck.comparison import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import prepare_input, run_decoders
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import build_interface, decode_steps
 from wavecheck.errors import CaptureError, UsageError
+from wavecheck.steps.decode import decode as decode_steps
+from wavecheck.steps.interface import build_interface
 
 __all__ = ["crosscheck"]
 

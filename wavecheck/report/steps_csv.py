@@ -37,9 +37,10 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine import StepEvents, check_axis_names
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.mapping import check_axis_names
 from wavecheck.timebase import Timebase
 
 __all__ = [
@@ -394,5 +395,5 @@ def _csv_field(text: str) -> str:
 def steps_per_unit_of(
     values: Mapping[str | None, str], option: str = "--steps-per-unit"
 ) -> dict[str | None, Fraction]:
-    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.engine.mapping.per_axis`) as numbers."""
+    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.steps.mapping.per_axis`) as numbers."""
     return {axis: parse_steps_per_unit(text, option) for axis, text in values.items()}

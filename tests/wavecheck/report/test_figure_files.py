@@ -142,9 +142,10 @@ def test_measure_says_it_too(grbl_sr: Path) -> None:
     from matplotlib.figure import Figure
 
     from wavecheck.capture.open import open_source
-    from wavecheck.engine import AxisMap, CheckOptions
+    from wavecheck.engine import CheckOptions
     from wavecheck.measurement import measure
     from wavecheck.report.measured_plot import draw_motion, position_unknown
+    from wavecheck.steps.mapping import AxisMap
 
     m = measure(open_source(grbl_sr), CheckOptions(axes=(AxisMap(None, {"step": "1"}),)))
     (a,) = m.axes

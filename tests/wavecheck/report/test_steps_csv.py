@@ -16,13 +16,13 @@ from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 from wavecheck.cli import main
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.decode import StepEvents
 from wavecheck.report.steps_csv import (
     AxisSteps,
     decimal_digits,
     format_times,
     steps_csv_chunks,
 )
+from wavecheck.steps.decode import StepEvents
 from wavecheck.timebase import Timebase
 
 REPO = Path(__file__).resolve().parents[3]
