@@ -13,6 +13,7 @@ import argparse
 from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
+from wavecheck.cli._tuning_args import required
 from wavecheck.drives.datasheet import Drive
 from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions
 from wavecheck.errors import UsageError
@@ -23,7 +24,6 @@ __all__ = [
     "add_engine_arguments",
     "check_options",
     "pulse_level",
-    "required",
     "user_table",
 ]
 
@@ -189,13 +189,6 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
         require=required(args),
     )
-
-
-def required(args: argparse.Namespace) -> tuple[str, ...]:
-    """``--require`` as rule ids (and ``all``), each once (checked by :class:`CheckOptions`)."""
-    from wavecheck.verdict import require_list
-
-    return require_list(getattr(args, "require", None))
 
 
 def kept_violations(args: argparse.Namespace) -> int:

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from wavecheck.cli._axis_args import required
 from wavecheck.cli._formats import FORMATS, Checked, Part, axis_reports
 from wavecheck.cli._reports import Asked, asked
+from wavecheck.cli._tuning_args import required
 from wavecheck.engine import MachineReport, Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import atomic_write, figure_format

@@ -13,10 +13,11 @@ import argparse
 import sys
 from dataclasses import dataclass
 
-from wavecheck.cli._axis_args import check_options, required
+from wavecheck.cli._axis_args import check_options
 from wavecheck.cli._firmware_args import check_firmware, firmware_config
 from wavecheck.cli._formats import FORMATS, Checked, axis_reports
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
+from wavecheck.cli._tuning_args import required
 from wavecheck.engine import CheckOptions, MachineReport
 from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, figure_file, gtkw_file, output_file

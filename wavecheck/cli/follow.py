@@ -25,6 +25,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._formats import Formats
 from wavecheck.engine import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
@@ -146,7 +147,7 @@ def register(sub: Any) -> None:
         metavar="COUNTS",
         help="exit 1 when |following error| exceeds this (counts)",
     )
-    o.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    FORMATS.add_argument(o)
     o.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report here")
     o.add_argument(
         "--plot",
@@ -439,11 +440,15 @@ def render_png(r: FollowReport, fmt: str = "png") -> bytes:
     return buf.getvalue()
 
 
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": render_text, "json": render_json})
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck follow``; returns the exit code."""
     report, fb, _ = analyse(args)
     fails = failures(report, args.max_error, len(fb.sequence_errors))
-    out = render_json(report, fails) if args.format == "json" else render_text(report, fails)
+    out = FORMATS.render(args.format, report, fails)
     if args.output:
         atomic_write(args.output, out)
     else:
