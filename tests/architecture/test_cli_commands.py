@@ -68,3 +68,19 @@ def test_the_format_test_sees_a_branch(tmp_path: Path) -> None:
     probe = tmp_path / "probe.py"
     probe.write_text("def f(args):\n    return 1 if args.format == 'json' else 2\n")
     assert _format_branches(probe) == [2]
+
+
+def test_no_library_module_imports_the_command_line() -> None:
+    """The command lines (wavecheck/cli, stepgen/cli) sit on the library, never under it:
+    ``stepgen plan --latency-from`` reads a capture's latency through wavecheck.step_latency,
+    not through ``wavecheck latency``'s module."""
+    reached = {}
+    for top in ("wavecheck", "stepgen"):
+        for path in sorted((ROOT / top).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            if rel.startswith(("wavecheck/cli/", "stepgen/cli/")) or path.stem == "__main__":
+                continue
+            found = {n for n in _imports(path) if n.startswith(("wavecheck.cli", "stepgen.cli"))}
+            if found:
+                reached[rel] = sorted(found)
+    assert not reached, reached

@@ -118,6 +118,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("engine", ("wavecheck.engine",)),
     ("options as users spell them", ("wavecheck.options",)),
     ("uses of the engine", ("wavecheck.measurement", "wavecheck.compare", "wavecheck.follow",
+                            "wavecheck.step_latency",
                             "wavecheck.crosscheck", "wavecheck.firmware", "wavecheck.mcu")),
     ("report", ("wavecheck.report",)),
     ("entry points", ("wavecheck.api", "wavecheck.live", "wavecheck.cocotb",

@@ -33,7 +33,7 @@ from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
 if TYPE_CHECKING:  # imported where used: only `wavecheck latency` needs it
     from wavecheck.lattice import LatencyReport
 
-__all__ = ["capture_latency", "latency_of", "register", "render_json", "render_text", "run"]
+__all__ = ["capture_latency", "register", "render_json", "render_text", "run"]
 
 
 def register(sub: Any) -> None:
@@ -125,14 +125,6 @@ def capture_latency(args: argparse.Namespace, path: str) -> LatencyReport:
     names, roles = channel_roles(capture, args)
     with activate("finding the lattice", quiet=getattr(args, "quiet", False), unit="edges"):
         return analyse(capture, names, period, roles, progress=current())
-
-
-def latency_of(path: str) -> LatencyReport:
-    """What ``wavecheck latency PATH`` finds with no options: the channels mapped as ``check``
-    maps them, P inferred (``stepgen plan --latency-from``)."""
-    parser = argparse.ArgumentParser(prog="wavecheck")
-    register(parser.add_subparsers())
-    return capture_latency(parser.parse_args(["latency", "-q", "--", str(path)]), str(path))
 
 
 def _ns(v: Fraction | None) -> str:
