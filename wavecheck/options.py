@@ -14,7 +14,7 @@ and Python keyword give the same options object and the same report).
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any, TypedDict
@@ -150,24 +150,31 @@ def _time(value: str | Fraction | None, name: str) -> Fraction | None:
     return None if value is None else Fraction(value)
 
 
-#: keyword → (field, the field's value of the keyword's value); the stepgen files apart.
-_SIMPLE: dict[str, tuple[str, Any]] = {
-    "invert": ("invert", tuple),
-    "step_type": ("step_type", lambda v: {} if v is None else {None: v}),
-    "forward_level": ("forward_level", lambda v: {None: v}),
-    "user_table": ("user_table", lambda v: None if v is None else tuple(v)),
-    "pulse_level": ("pulse_level", lambda v: v),
-    "active_edge": ("active_edge", lambda v: v),
-    "resolution": ("resolution", lambda v: _time(v, "resolution")),
-    "limit": ("limits", tuple),
-    "margin": ("margin", lambda v: v),
-    "latency": ("latency_ns", lambda v: None if v is None else _time(v, "latency") * 10**9),  # type: ignore[operator]
-    "pictures": ("pictures", bool),
-    "keep_violations": ("keep_violations", int),
-    "block_edges": ("block_edges", int),
-    "require": ("require", require_list),
+def _latency_ns(value: str | Fraction | None) -> Fraction | None:
+    seconds = _time(value, "latency")
+    return None if seconds is None else seconds * 10**9
+
+
+#: keyword → its field's value of its value (the field: :data:`OPTIONS`); ``ini``, ``hal`` and
+#: ``channel`` together are one LinuxCNC configuration (``stepgen``).
+_CONVERT: dict[str, Callable[[Any], Any]] = {
+    "invert": tuple,
+    "step_type": lambda v: {} if v is None else {None: v},
+    "forward_level": lambda v: {None: v},
+    "user_table": lambda v: None if v is None else tuple(v),
+    "pulse_level": lambda v: v,
+    "active_edge": lambda v: v,
+    "resolution": lambda v: _time(v, "resolution"),
+    "limit": tuple,
+    "margin": lambda v: v,
+    "latency": _latency_ns,
+    "pictures": bool,
+    "keep_violations": int,
+    "block_edges": int,
+    "require": require_list,
 }
 _STEPGEN = ("ini", "hal", "channel")
+_FIELD = {o.keyword: o.field for o in OPTIONS if o.keyword}
 
 
 def options_from_keywords(
@@ -185,9 +192,9 @@ def options_from_keywords(
         UsageError: an unknown keyword, a bad value (:class:`CheckOptions` checks them).
     """
     given = dict(keywords or {})
-    unknown = sorted(set(given) - set(_SIMPLE) - set(_STEPGEN))
+    unknown = sorted(set(given) - set(_CONVERT) - set(_STEPGEN))
     if unknown:
-        known = ", ".join(sorted([*_SIMPLE, *_STEPGEN]))
+        known = ", ".join(sorted([*_CONVERT, *_STEPGEN]))
         raise UsageError(f"unknown check option(s) {', '.join(unknown)} (known: {known})")
     fields: dict[str, Any] = {}
     if drive is not None:
@@ -201,9 +208,8 @@ def options_from_keywords(
         hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
         fields["stepgen"] = read_config(given.get("ini"), hals, given.get("channel", 0))
     for key, value in given.items():
-        if key in _SIMPLE:
-            name, convert = _SIMPLE[key]
-            fields[name] = convert(value)
+        if key in _CONVERT:
+            fields[_FIELD[key]] = _CONVERT[key](value)
     if base is None:
         return CheckOptions(**fields)
     return replace(base, **fields)

@@ -72,6 +72,12 @@ def test_every_option_has_a_row() -> None:
     assert set(ROWS) == {o.name for o in OPTIONS}
 
 
+def test_every_keyword_is_converted() -> None:
+    from wavecheck.options import _CONVERT, _STEPGEN, CheckKeywords
+
+    assert set(_CONVERT) | set(_STEPGEN) == set(CheckKeywords.__annotations__)
+
+
 def _files(tmp: Path, words: Any) -> Any:
     (tmp / "m.ini").write_text(INI)
     (tmp / "m.hal").write_text(HAL)
