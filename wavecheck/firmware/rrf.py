@@ -34,6 +34,7 @@ from wavecheck.firmware.guarantee import (
     Guaranteed,
     at_least,
     at_most,
+    not_enforced,
     unknown,
 )
 from wavecheck.linuxcnc.files import is_file
@@ -59,6 +60,13 @@ def looks_like(text: str) -> bool:
     )
 
 
+#: A driver without T (or with every field at most 0.2 us) is "fast": DDA::StepDrivers raises
+#: its STEP pin, computes the next step times, lowers it, with no wait for any field
+#: (Duet3D/RepRapFirmware:src/Movement/DDA.cpp, the branch after ``if ((driversStepping &
+#: p.GetSlowDriversBitmap()) != 0)``; on SAME70 a ``__DSB()`` "without this the step pulse can
+#: be far too short"). The 0.2 us RRF assumes is not a wait.
+_FAST = ("a fast driver (no T over 0.2 us): DDA::StepDrivers raises and lowers STEP with no "
+         "wait between, DIR with none before or after")  # fmt: skip
 #: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide:
 #: RRF 3.x ``GCodes::Init`` sets ``numExtruders = NumDefaultExtruders`` (Duet3D/RepRapFirmware:
 #: src/GCodes/GCodes.cpp @ fa22ccf), a per-board constant (0 to 3 in the boards' Pins files);
@@ -242,8 +250,10 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
     axes = []
     for name, drivers in logical:
-        if name not in st.spm and name not in st.speed and not any(d in st.timing for d in drivers):
-            continue
+        configured = name in st.spm or name in st.speed
+        if not configured and (name[0] == "E" and not st.extruders_given
+                               or not any(d in st.timing for d in drivers)):  # fmt: skip
+            continue  # a default extruder the file gives no M92/M203 for is not assumed
         axes.append(_axis(name, drivers, st, slow, worst))
     if not axes:
         missing = [u for u in st.unsupported if " M98 " in u]
@@ -283,6 +293,9 @@ def _worst(slow: dict[str, tuple[list[Fraction], str]]) -> list[Guaranteed]:
             break
         drv, (fields, at) = max(slow.items(), key=lambda kv: kv[1][0][i])
         note = "largest over all slow drivers; rounded up to step clocks"
+        if not fields[i]:
+            out.append(_zero(at, i))
+            continue
         out.append(Guaranteed(fields[i], f"M569 P{drv} T (field {i + 1})", at, "us", "set", note))
     return out
 
@@ -300,20 +313,22 @@ def _axis(
         fields, at = st.timing[expansion[0]]
         note = f"expansion board driver {expansion[0]}: its own firmware applies T"
         pulse, idle, setup, hold_t = (
-            Guaranteed(f, "M569 T", at, "us", "uncertain", note) for f in fields
+            Guaranteed(f, "M569 T", at, "us", "uncertain", note) if f else _zero(at, i)
+            for i, f in enumerate(fields)
         )
         hold = _hold(pulse, hold_t)
     elif any(d in slow for d in drivers) and worst:
         pulse, idle, setup, hold_t = worst
         hold = _hold(pulse, hold_t)
     else:
-        note = "no T: a fast driver; the firmware assumes >= 0.2 us high and low"
+        why = _FAST
         if expansion:
-            note = f"expansion board driver {expansion[0]} without T: its own firmware's timing"
-        pulse = Guaranteed(_FAST_NS, "M569 T", "firmware default", "us", "uncertain", note)
+            why = (f"expansion board driver {expansion[0]} without T: its own firmware's "
+                   "timing, not in this file")  # fmt: skip
+        pulse = not_enforced("M569 T", why, "firmware default", unit="us")
         idle = pulse
-        setup = unknown("M569 T", "fast driver: no DIR setup wait; measure it")
-        hold = unknown("M569 T", "fast driver: no DIR hold wait; measure it")
+        setup = not_enforced("M569 T", f"no DIR setup wait: {why}", "firmware default")
+        hold = not_enforced("M569 T", f"no DIR hold wait: {why}", "firmware default")
         hold_t = None
     info = {"drivers": ",".join(d.removeprefix("0.") for d in drivers)}
     rate = Guaranteed(None, "M203", "", "mm/min", "unknown", "no M92/M203 for this axis")
@@ -345,12 +360,20 @@ def _axis(
     )
 
 
+def _zero(at: str, field_no: int) -> Guaranteed:
+    """A T field of 0: RRF waits 0 clocks for it (not enforced)."""
+    return not_enforced(f"M569 T (field {field_no + 1})", "a 0 us field is no wait", at,
+                        unit="us")  # fmt: skip
+
+
 def _hold(pulse: Guaranteed, hold_t: Guaranteed) -> Guaranteed:
-    assert pulse.value is not None and hold_t.value is not None
+    """DIR changes only after STEP went low (DDA::StepDrivers lowers the pins before the
+    direction is updated) and after field 4 from that: from the rising edge, field 1 + 4."""
     note = "hold counts from the falling edge: from the rising edge add the high time"
-    return Guaranteed(
-        pulse.value + hold_t.value, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note
-    )
+    total = (pulse.value or Fraction(0)) + (hold_t.value or Fraction(0))
+    if not total:
+        return not_enforced("M569 T fields 1 + 4", "both 0: no wait", hold_t.where)
+    return Guaranteed(total, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note)
 
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
