@@ -171,7 +171,7 @@ _KINEMATIC = {
     # SCARA arms, polar and polargraph couple X and Y; Z passes through (scara.cpp
     # inverse_kinematics: delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z))
     "DELTA": "XYZ", "MORGAN_SCARA": "XY", "MP_SCARA": "XY", "AXEL_TPARA": "XYZ",
-    "POLARGRAPH": "XY", "POLAR": "XY",
+    "POLARGRAPH": "XY", "POLAR": "XY", "HANGPRINTER": "XYZ",
 }  # fmt: skip
 #: Trinamic types driven by STEP/DIR alone: Marlin/src/core/drivers.h @ 04e8baa9 lines 97-101
 #: leave TMC2100 out of HAS_TRINAMIC_CONFIG (and AXIS_IS_TMC) and 106-111 put it in
@@ -282,7 +282,7 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
             v = evaluate(h, d.value)
             kind = v if isinstance(v, str) else (d.value.split() or ["?"])[0]
             options.append((kind, d.where, d.depends))
-        implied = assumed and (axis in ("X", "Y", "Z") or (
+        implied = assumed and (axis in ("X", "Y", "Z", *_extra_steppers(h)) or (
             axis.startswith("E") and int(axis[1:]) < extruders))  # fmt: skip
         if options and any(d.value is None for d in h.candidates(f"{axis}_DRIVER_TYPE")):
             if implied:
@@ -292,6 +292,25 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
         if options:
             out.append(_Driver(axis, tuple(options)))
     return out
+
+
+def _extra_steppers(h: Headers) -> tuple[str, ...]:
+    """The second X/Y and extra Z steppers the options make (DUAL_X_CARRIAGE and
+    X_DUAL_STEPPER_DRIVERS: X2; Y_DUAL_STEPPER_DRIVERS: Y2; Z_DUAL_STEPPER_DRIVERS,
+    Z_TRIPLE_STEPPER_DRIVERS or NUM_Z_STEPPER_DRIVERS: Z2-Z4), which need a driver type too."""
+    out = []
+    if h.enabled("DUAL_X_CARRIAGE") or h.enabled("X_DUAL_STEPPER_DRIVERS"):
+        out.append("X2")
+    if h.enabled("Y_DUAL_STEPPER_DRIVERS"):
+        out.append("Y2")
+    n = evaluate(h, "NUM_Z_STEPPER_DRIVERS") if h.definition("NUM_Z_STEPPER_DRIVERS") else None
+    zs = int(n.value) if isinstance(n, Num) and 1 <= n.value <= 4 else 1
+    if h.enabled("Z_TRIPLE_STEPPER_DRIVERS"):
+        zs = max(zs, 3)
+    elif h.enabled("Z_DUAL_STEPPER_DRIVERS"):
+        zs = max(zs, 2)
+    out += [f"Z{i}" for i in range(2, zs + 1)]
+    return tuple(out)
 
 
 #: The drivers Marlin 2.0.0's HAS_TRINAMIC counts (HAS_DRIVER of each; not the standalone ones).
@@ -653,7 +672,8 @@ def _axis(
         if dd is not None:
             level = 0 if (dd.value or "").strip() in ("LOW", "true", "1") else 1
     inv_def = h.definition(f"INVERT_{axis}_DIR") or h.definition(f"INVERT_{letter}_DIR")
-    inv = inv_def is not None and (inv_def.value or "").strip() in ("true", "1")
+    inv_v = evaluate(h, inv_def.value or "") if inv_def is not None else None
+    inv = isinstance(inv_v, Num) and inv_v.value != 0  # true, 1 or a macro naming one
     kind = " or ".join(f"{k} ({w})" for k, w, _ in d.options)
     info = {"driver type": kind}
     rate = _axis_rate(h, axis, drivers, figs.rate, info)
@@ -692,7 +712,9 @@ def _axis_rate(
     linear = [a for a in _LINEAR if any(d.axis == a for d in drivers)]
     if base == "E":
         distinct = h.enabled("DISTINCT_E_FACTORS") is True
-        index = len(linear) + (int(axis[1:]) if distinct else 0)
+        # 1.1.9's HANGPRINTER has four anchors A-D before E in the arrays
+        first_e = 4 if h.enabled("HANGPRINTER") else len(linear)
+        index = first_e + (int(axis[1:]) if distinct else 0)
     else:
         index = _LINEAR.index(base) if base in linear else len(linear)
         index = linear.index(base) if base in linear else index

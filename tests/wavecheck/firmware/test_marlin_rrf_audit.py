@@ -74,6 +74,17 @@ def test_marlin_2_0_9_tmc_hold_uses_the_documented_table() -> None:
     assert (x.pulse.value, x.dir_setup.value, x.dir_hold.value) == (100, 20, 120)
 
 
+def test_marlin_dual_steppers_and_macro_dir_inversion(tmp_path: Path) -> None:
+    """Found by the hand sample: 200/Formbot/T_Rex_3 (adv 548 DUAL_X_CARRIAGE, X2 type left
+    out) lost its X2 stepper; 119/hangprinter (986 ``INVERT_Y_DIR INVERT_B_DIR``) lost Y's DIR
+    inversion because the value names a macro."""
+    path = _marlin(tmp_path, "020000",
+                   "#define INVERT_B true\n#define INVERT_Y_DIR INVERT_B\n" + _MOTION,
+                   "#define DUAL_X_CARRIAGE\n")  # fmt: skip
+    cfg = read_firmware(path)
+    assert "X2" in cfg.axis_names and cfg.axis("Y").dir_inverted
+
+
 def test_rrf_expansion_driver_without_t_is_not_enforced() -> None:
     """idx_13963938548 lines 25-27: E0/E1 on tool boards 20.0/21.0 without T. Their boards run
     their own firmware; nothing in the file bounds the pulse (it was a 0.2 us 'uncertain')."""
