@@ -94,6 +94,7 @@ class _State:
     files: list[str] = field(default_factory=list)
     board_6xd: str = ""
     coupled: dict[str, str] = field(default_factory=dict)  # axis → why its rate is unknown
+    backwards: dict[str, bool] = field(default_factory=dict)  # driver → M569 S0
 
 
 def _words(line: str) -> list[tuple[str, str]]:
@@ -161,6 +162,11 @@ def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: 
 
 
 def _m569(words: dict[str, str], at: str, st: _State) -> None:
+    s = words.get("S", "")
+    if "P" in words and re.fullmatch(r"[01]", s):
+        # GCodes ConfigureDriver: platform.SetDirectionValue(drive, S != 0): S0 runs backwards
+        for drv in words["P"].split(":"):
+            st.backwards[_driver(drv)] = s == "0"
     if "P" not in words or "T" not in words or not words["T"]:
         return
     if words["T"].startswith("{"):
@@ -355,6 +361,7 @@ def _axis(
         dir_hold=hold,
         max_rate=rate,
         dir_hold_trailing=hold_t,
+        dir_inverted=st.backwards.get(drivers[0], False),
         info=info,
         aliases=("E",) if name == "E0" else (),
     )
