@@ -150,7 +150,7 @@ _UNTYPED_SOURCE = ("Marlin/drivers.h:43 @ 268245c6 (1.1.x) and Marlin/src/core/d
 #: Marlin's eras, newest first.
 ERAS: tuple[Era, ...] = (
     Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
-        "Conditionals-4-adv.h @ 00354a11 (firmware-timing.md §4)"),
+        "Marlin/src/inc/Conditionals-4-adv.h @ 00354a11, 'Driver Timings (in nanoseconds)'"),
     Era("2.0.1 to 2.1.2", (2, 0, 1), (_T2019, _T2021, _T2022), True, False,
         "Conditionals_post.h (2019), 2.0.9.x's documented defaults and Conditionals_adv.h "
         "(2022): the tables of these releases; the smallest figure of them"),
