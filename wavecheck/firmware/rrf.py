@@ -14,7 +14,9 @@ without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits for
 setup and hold cannot be read from the file. On a Duet 3 MB6XD (named in the file's comments)
 every driver defaults to 2.5 µs per field and the largest of all drivers applies to all. An
 expansion board applies T with its own firmware (``uncertain``). Meta-commands (``if``, ``var``,
-``{expressions}``) are not evaluated: a value written as an expression is not read (named).
+``{expressions}``) are not evaluated: a value written as an expression is not read (named), and
+the motion commands of an ``if``/``elif``/``else``/``while`` block are not read either (the
+block is named), since whether they run is not decided by the file.
 """
 
 from __future__ import annotations
@@ -47,6 +49,10 @@ _WORD = re.compile(
     r"([A-Za-z])\s*(\"[^\"]*\"|\{[^}]*\}|[-+]?(?:(?i:nan|inf(?:inity)?)\b|[-+0-9.:eE]+))?"
 )
 _AXES = "XYZUVWABCD"
+#: A meta-command that opens a block: the lines indented under it run only when it says so.
+_BLOCK = re.compile(r"^\s*(if|elif|else|while)\b")
+#: The M-codes the reader takes figures from (M98 too: an include may hold them).
+_MOTION = {"98", "584", "569", "665", "667", "669", "350", "92", "203"}
 _MAX_INCLUDES = 64
 _US = 1000
 
@@ -120,12 +126,38 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
     text = read_text(path)
     if not st.board_6xd and re.search(r"\b(MB\s*)?6XD\b", text, re.I):
         st.board_6xd = f"{path} names a Duet 3 MB6XD"
+    block: tuple[int, str] | None = None  # (indent, where) of the outermost if/while open
+    skipped = ""  # the block whose commands were left out (noted once)
     for no, line in enumerate(text.splitlines(), 1):
+        code_part = line.split(";")[0].expandtabs(4)
+        if not code_part.strip():
+            continue  # blank lines and comments do not end a block
+        indent = len(code_part) - len(code_part.lstrip())
+        keyword = _BLOCK.match(code_part)
+        if (
+            block is not None
+            and indent <= block[0]
+            and not (keyword and keyword.group(1) in ("elif", "else") and indent == block[0])
+        ):
+            block = None
+        if keyword and block is None:
+            block = (indent, where(path, no))
+            continue
         words = _words(line)
         if not words or words[0][0] != "M":
             continue
         code, rest = words[0][1], words[1:]
         at = where(path, no)
+        if block is not None and indent > block[0]:
+            if code in _MOTION and skipped != block[1]:
+                skipped = block[1]
+                st.unsupported.append(
+                    f"{at}: M{code} inside the `if`/`while` block of {block[1]}: RepRapFirmware "
+                    "runs it only when the condition holds, which the file does not decide; "
+                    "the block's motion commands are not read"
+                )
+            if code in _MOTION:
+                continue
         if code == "98":
             _include(path, sys_dir, dict(rest).get("P", ""), at, st, seen)
         elif code == "584":
@@ -149,6 +181,9 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
 def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: set[Path]) -> None:
     name = target.strip('"')
     if not name:
+        return
+    if name.startswith("{"):
+        st.unsupported.append(f"{at}: M98 P{name} names its file by an expression; not read")
         return
     rel = re.sub(r"^(\d+:)?/?(sys/)?", "", name)
     inc = sys_dir / rel

@@ -99,3 +99,19 @@ def test_rrf_default_extruder_needs_m92_or_m203() -> None:
     are the version's default (2.0x: smart drivers - 3; 3.x NumDefaultExtruders): no E axis is
     assumed unless the file gives it M92 or M203 values."""
     assert read_firmware(CORPUS / "rrf/idx_2226796419/config.g").axis_names == ("X", "Y", "Z")
+
+
+def test_rrf_commands_inside_an_if_block_are_not_taken_as_run(tmp_path: Path) -> None:
+    """GenMachine lines 19-35: M584 W50.0 A51.0 and M92 W/A run only ``if (global.closedLoop)``;
+    RepRapFirmware's meta-commands are not evaluated here, so the W/A axes (closed-loop CAN
+    drivers) were claimed unconditionally. The block's motion commands are now left out, and
+    said so; the lines after the block (back at its indentation) are read again."""
+    cfg_g = tmp_path / "config.g"
+    cfg_g.write_text(
+        "M584 X0 Y1 Z2 E3\nif (global.closedLoop)\n    M584 W50.0\n    M92 W26.667\n"
+        "else\n    M92 X100\nM92 X80 Y80 Z400 E420\nM203 X6000 Y6000 Z180 E1200\n"
+    )
+    cfg = read_firmware(cfg_g)
+    assert cfg.axis_names == ("X", "Y", "Z", "E0")
+    assert cfg.axis("X").max_rate.value == 80 * 6000 / 60
+    assert any("block of" in u and ":2" in u for u in cfg.unsupported)
