@@ -73,15 +73,20 @@ def looks_like(text: str) -> bool:
 #: be far too short"). The 0.2 us RRF assumes is not a wait.
 _FAST = ("a fast driver (no T over 0.2 us): DDA::StepDrivers raises and lowers STEP with no "
          "wait between, DIR with none before or after")  # fmt: skip
-#: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide:
-#: RRF 3.x ``GCodes::Init`` sets ``numExtruders = NumDefaultExtruders`` (Duet3D/RepRapFirmware:
-#: src/GCodes/GCodes.cpp @ fa22ccf), a per-board constant (0 to 3 in the boards' Pins files);
-#: 2.0x set ``min(MaxExtruders, GetNumSmartDrivers() - XYZ_AXES)`` (a 2.0x GCodes.cpp in the
-#: searched corpus, its repository not named).
+#: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide.
+#: Per version, from RepRapFirmware's own code (Duet3D/RepRapFirmware and its 2.0x sources, as
+#: indexed): 2.0x ``GCodes::Init``: ``numExtruders = min<size_t>(MaxExtruders,
+#: platform.GetNumSmartDrivers() - XYZ_AXES)`` with smart drivers ("don't default dumb drivers
+#: to extruders"), ``MaxExtruders`` without (a Duet 2 alone has 5 smart drivers: 2 extruders,
+#: on drivers 3 and 4; a DueX adds more); 3.x: ``numExtruders = NumDefaultExtruders``
+#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0, 1 or 2 in the
+#: indexed ones); the latest Pins files (Pins_DuetNG.h @ 17a42594, Pins_Duet3_MB6HC.h @
+#: 0ab87481) define none. Which of these applies needs the version and board, so only an E0 the
+#: file gives M92/M203 values is read (on driver 3, the first after X/Y/Z), with this note.
 _DEFAULT_EXTRUDERS = (
     "no M584 E: E0 on driver 3 assumed, other extruders not read; RepRapFirmware's default "
-    "extruders depend on its version and board (3.x: the board's NumDefaultExtruders, 0 to 3; "
-    "2.0x: the smart drivers minus 3): give M584 E… to decide"
+    "extruders depend on its version and board (2.0x: the smart drivers minus 3, 2 on a Duet 2; "
+    "3.x: the board's NumDefaultExtruders, 0 to 2; later releases: not established): give M584 E… to decide"
 )
 
 
