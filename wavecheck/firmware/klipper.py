@@ -107,12 +107,21 @@ class _Mcu:
     why: str
 
 
+#: Section headers only a Klipper file has (lower-case module names; LinuxCNC's are upper-case).
+_KLIPPER_SECTION = (
+    r"^\[(stepper_\w+|printer|extruder\w*|mcu|gcode_macro|display_glyph|pwm_tool|output_pin"
+    r"|bed_mesh|safe_z_home|heater_bed|temperature_sensor|probe|bltouch)\b[^\]\n]*\]"
+)
+
+
 def looks_like(text: str) -> bool:
     """A Klipper config: ``[section]`` headers with ``key: value`` lines, one of them a
-    ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section."""
-    return bool(
-        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]\n]*\]", text, re.M)
-    ) and bool(re.search(r"^\w+[ \t]*:", text, re.M))
+    ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section, or one of the add-on
+    sections only Klipper names (``[gcode_macro …]``, ``[display_glyph …]``, ``[pwm_tool …]`` …:
+    such a file is Klipper's, and is refused because it has no stepper)."""
+    return bool(re.search(_KLIPPER_SECTION, text, re.M)) and bool(
+        re.search(r"^\w+[ \t]*:", text, re.M)
+    )
 
 
 def _parse(
