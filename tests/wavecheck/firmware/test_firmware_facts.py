@@ -67,6 +67,33 @@ def test_klipper_add_on_files_are_refused_for_the_true_reason(name: str) -> None
         read_firmware(CORPUS / "klipper" / name)
 
 
+@pytest.mark.parametrize(
+    "name", ["sample-bigtreetech-ebb-canbus-v1.2.cfg", "sample-huvud-v0.61.cfg"]
+)
+def test_klipper_toolhead_sample_header_names_its_mcu(name: str) -> None:
+    """A toolhead board's sample has no [mcu] section: its header names the board's chip
+    (STM32G0B1, STM32F103), so the TMC2209's 100 ns both-edge stepping is decided (klippy/
+    stepper.py:88-110; src/stepper.c:233-235 edge path). It was 'AVR possible', both edges off."""
+    e = read_firmware(CORPUS / "klipper" / name).axis("extruder")
+    assert e.both_edges and "named in the file" in e.info["mcu"]
+
+
+@pytest.mark.parametrize(
+    ("name", "axis", "hz"),
+    [
+        ("example-hybrid-corexy.cfg", "stepper_y", 300 * 80),
+        ("example-hybrid-corexz.cfg", "stepper_z", 25 * 400),
+    ],
+)
+def test_klipper_hybrid_kinematics_cartesian_rails_have_a_rate(
+    name: str, axis: str, hz: int
+) -> None:
+    """hybrid_corexy.py:21-22 and hybrid_corexz.py:21-22 set up y and z with
+    cartesian_stepper_alloc: each moves one axis alone, bounded by max_velocity (max_z_velocity
+    for z) x steps/mm (was unknown)."""
+    assert read_firmware(CORPUS / "klipper" / name).axis(axis).max_rate.value == hz
+
+
 # -- Smoothieware ---------------------------------------------------------------------------------
 
 
