@@ -29,7 +29,9 @@ What each engine guarantees at the pin:
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
 after the last pulse's leading edge when the step rate stays under the engine's maximum
-(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``.
+(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
+its steps are at least 1 / min(2 × that, the fastest axis's) apart (grbl's Bresenham, kept by
+FluidNC's ``Stepper.cpp``: :func:`wavecheck.firmware.grbl.bresenham_spacing`).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ import yaml
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
+from wavecheck.firmware.grbl import bresenham_spacing
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -164,6 +167,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     axes_node = _child(root, "axes")
     axes: list[GeneratorGuarantee] = []
     seen: set[str] = set()
+    fastest = _fastest(p, axes_node)
     for name, axis_node in _items(axes_node):
         if name not in _AXES or name in seen:
             continue  # a repeated axis section: the first is read
@@ -174,7 +178,9 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 continue
             kind, drv = driver
             axes.append(
-                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine)
+                _axis(
+                    p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine, fastest
+                )  # fmt: skip
             )
     if not axes:
         raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
@@ -244,6 +250,26 @@ def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fract
     return Fraction(10**9) / (2 * p) if p else None
 
 
+def _fastest(path: str, axes_node: yaml.Node | None) -> Fraction | None:
+    """The highest max step rate of the axes with a motor (None when one has no rate)."""
+    rates = []
+    seen: set[str] = set()
+    for name, axis_node in _items(axes_node):
+        if name not in _AXES or name in seen:
+            continue
+        seen.add(name)
+        if all(_driver(_child(axis_node, m)) is None for m in ("motor0", "motor1")):
+            continue
+        spm_v = _scalar(axis_node, "steps_per_mm")
+        rate_v = _scalar(axis_node, "max_rate_mm_per_min")
+        if spm_v is None or rate_v is None:
+            return None
+        spm = number(spm_v.text, where(path, spm_v.line), "steps_per_mm", low=0)
+        mm_min = number(rate_v.text, where(path, rate_v.line), "max_rate_mm_per_min", low=0)
+        rates.append(spm * mm_min / 60)
+    return max(rates) if rates else None
+
+
 def _driver(motor: yaml.Node | None) -> tuple[str, yaml.Node] | None:
     """The motor's driver section with a step pin (``NO_PIN`` is none: no step generator)."""
     for kind, node in _items(motor):
@@ -272,6 +298,7 @@ def _axis(
     setup: Guaranteed,
     engine_max: Fraction | None,
     engine: str,
+    fastest: Fraction | None,
 ) -> GeneratorGuarantee:
     step_pin, step_low = _pin(_scalar(drv, "step_pin"))
     _, dir_low = _pin(_scalar(drv, "direction_pin"))
@@ -295,11 +322,13 @@ def _axis(
             note += f"; the {engine} engine makes at most {float(engine_max):.6g} steps/s"
         max_rate = Guaranteed(hz, "steps_per_mm x max_rate_mm_per_min / 60", rate_at,
                               "mm/min", "derived", note)  # fmt: skip
-        if hz > 0 and pulse.value is not None:
-            gap = Fraction(10**9) / hz - pulse.value
+        if hz > 0 and pulse.value is not None and fastest:
+            gap = bresenham_spacing(hz, fastest) - pulse.value
             idle = Guaranteed(
                 max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at, "mm/min", "uncertain",
-                "1 / (max step rate) - pulse: the step timer spaces the steps",
+                "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: FluidNC's "
+                "Stepper.cpp keeps grbl's Bresenham, which puts the steps on the dominant axis's "
+                "ticks",
             )  # fmt: skip
     hold_note = "DIR changes at a later step event: at least one pulse after the leading edge"
     return GeneratorGuarantee(
@@ -351,7 +380,8 @@ def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
             f"remove `:low`) of {axis.axis} so that the drive's active edge starts the pulse"
         )
     if role == "idle" and axis.pulse.value is not None:
-        need = Fraction(10**9) / (axis.pulse.value + need)
+        # twice this axis's rate under 1 / (pulse + low): no dominant axis can crowd its steps
+        need = Fraction(10**9) / (axis.pulse.value + need) / 2
     spm = axis.info.get("steps/mm", "").split(" ")[0]
     if spm:
         return (

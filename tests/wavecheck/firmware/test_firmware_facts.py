@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.wavecheck.firmware.fixapply import apply
 from tools.firmware_corpus import CORPUS
 from wavecheck.cli import main
 from wavecheck.errors import ConfigError
@@ -54,6 +55,55 @@ def test_fluidnc_without_step_pins_says_so(tmp_path: Path) -> None:
     )
     with pytest.raises(ConfigError, match="no axis has a motor with a step_pin"):
         read_firmware(tmp_path / "m.yaml")
+
+
+# -- grbl ---------------------------------------------------------------------------------------
+GRBL = CORPUS / "grbl/siredmar+grbl_settings/grbl_settings.txt"
+
+
+def test_grbl_slow_axis_steps_on_the_fast_axis_ticks(tmp_path: Path) -> None:
+    """grbl 1.1h stepper.c:413-440: every step lands on a tick of the dominant axis; a slow axis
+    steps floor(dominant / its rate) ticks apart, which tends to one tick of a dominant just under
+    twice its rate. X 40 kHz, Z 400 x 300 mm/min = 2 kHz: Z's steps are >= 1 / 4 kHz apart (the
+    reader said 1 / 2 kHz, less the pulse)."""
+    (tmp_path / "d.txt").write_text("$0=10\n$100=80\n$101=80\n$102=400\n$110=30000\n"
+                                    "$111=30000\n$112=300\n")  # fmt: skip
+    cfg = read_firmware(tmp_path / "d.txt")
+    pulse = F(10_000) - F(1125, 2)
+    assert cfg.axis("Z").idle.value == F(250_000) - pulse
+    assert cfg.axis("X").idle.value == F(25_000) - pulse  # the fastest axis: one of its ticks
+
+
+@pytest.mark.parametrize(
+    ("path", "hold"),
+    [
+        (GRBL, 46875),  # every axis 21333 Hz: one tick, 46.875 us
+        (CORPUS / "grbl/bullestock+krydsogtrolle/grbl-settings.txt", 62500),  # 2 kHz: AMASS tick
+    ],
+)
+def test_grbl_dir_hold_is_one_interrupt_tick(path: Path, hold: int) -> None:
+    """The new block's DIR is written at the tick after its last step (stepper.c:323-324,
+    358-375): one tick, at least min(1 / the fastest axis's rate, 62.5 us of AMASS: 50,
+    1021-1026), whatever $0 is (the reader said the pulse)."""
+    assert read_firmware(path).axis("X").dir_hold.value == hold
+
+
+def test_grbl_dir_hold_fix_lowers_the_rates(tmp_path: Path) -> None:
+    cfg = read_firmware(GRBL)
+    x = cfg.axis("X")
+    assert "tops out" in cfg.fix(x, "hold", F(70_000))
+    fix = cfg.fix(x, "hold", F(50_000))
+    copy = tmp_path / "grbl_settings.txt"
+    copy.write_bytes(GRBL.read_bytes())
+    apply("grbl", copy, fix, cfg)
+    assert read_firmware(copy).axis("X").dir_hold.value >= 50_000
+
+
+def test_fluidnc_slow_axis_steps_on_the_fast_axis_ticks() -> None:
+    """FluidNC's Stepper.cpp keeps grbl's Bresenham: 4x_2209_xyyz_pwm z 395.8 x 1000 / 60 Hz
+    (lines 122-123) beside x 28590 Hz: z steps >= 1 / (2 x 6596.7 Hz) apart, less the 4 us pulse."""
+    cfg = read_firmware(CORPUS / "fluidnc/contributed/4x_2209/4x_2209_xyyz_pwm.yaml")
+    assert cfg.axis("z").idle.value == F(10**9) / (2 * F(19790, 3)) - 4000
 
 
 # -- Klipper ------------------------------------------------------------------------------------
