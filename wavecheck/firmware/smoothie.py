@@ -14,7 +14,8 @@ pulse (not enforced: the real pulse is longer by ISR time). Robot.cpp ``append_m
 every actuator to its own ``max_rate`` (any arm solution, deltas included), so a motor's rate is
 ≤ min(base frequency, steps/mm × max_rate); where steps/mm × max_rate exceeds the base frequency,
 Robot::check_max_actuator_speeds first lowers max_rate to floor(base / steps/mm) mm/s (extruders
-excepted). DIR is written when a block starts, about one tick before the first pulse (not
+excepted). The motors after gamma need their step and dir pins and are taken in order, the first
+one missing ending them (Robot::load_config). DIR is written when a block starts, about one tick before the first pulse (not
 enforced: there is no DIR delay); DIR hold after the leading edge is only code time (unknown).
 """
 
@@ -93,10 +94,16 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
         "later, less the ISR's own time: about one base tick, no DIR delay setting",
         f_at, tick, "Hz",
     )  # fmt: skip
-    axes = []
+    axes: list[GeneratorGuarantee] = []
     for motor in _MOTORS:
         pin = keys.get(f"{motor}_step_pin", ("nc", ""))[0].lower()
-        if pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
+        if motor not in _CARTESIAN_AXIS and any(a.axis == "gamma" for a in axes):
+            # Robot::load_config: after gamma, a motor needs its step and dir pins and the
+            # motors are taken in order, the first one missing ending them
+            dir_pin = keys.get(f"{motor}_dir_pin", ("nc", ""))[0].lower()
+            if "nc" in (pin, dir_pin):
+                break
+        elif pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
             continue
         axes.append(_axis(motor, f"{motor}_", "max_rate", keys, get, f, f_at, pulse, idle, setup,
                           arm))  # fmt: skip

@@ -209,6 +209,29 @@ def test_smoothie_low_time_and_dir_setup_are_not_enforced(
         assert row["verdict"] == "indeterminate" and "not enforced" in row["note"], row
 
 
+@pytest.mark.parametrize(
+    ("extra", "axes"),
+    [
+        ("delta_step_pin 2.3\ndelta_dir_pin 0.22\n", ("alpha", "beta", "gamma", "delta")),
+        ("epsilon_step_pin 2.8\nepsilon_dir_pin 2.13\n", ("alpha", "beta", "gamma")),
+        ("delta_step_pin 2.3\n", ("alpha", "beta", "gamma")),
+    ],
+)
+def test_smoothie_motors_after_gamma_are_contiguous(
+    tmp_path: Path, extra: str, axes: tuple[str, ...]
+) -> None:
+    """Robot::load_config: a motor needs its step and dir pins, and the motors after gamma are
+    taken in order, the first one missing ending them (an epsilon without a delta is no motor)."""
+    (tmp_path / "config").write_text(
+        "".join(
+            f"{m}_steps_per_mm 80\n{m}_step_pin 2.{i}\n{m}_dir_pin 0.{i}\n"
+            for i, m in enumerate(("alpha", "beta", "gamma"))
+        )
+        + extra  # fmt: skip
+    )
+    assert read_firmware(tmp_path / "config").axis_names == axes
+
+
 def test_smoothie_repeated_key_keeps_the_last(tmp_path: Path) -> None:
     """ConfigCache::replace_or_push_back: a key read again replaces the earlier value."""
     (tmp_path / "config").write_text(
