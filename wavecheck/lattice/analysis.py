@@ -330,9 +330,9 @@ class LatencyReport:
         nb = max(1, min(bins, len(t)))
         width = (hi - lo) / nb or 1.0
         idx = np.minimum(((t - lo) / width).astype(np.int64), nb - 1)
-        mx = np.full(nb, -np.inf)
-        np.maximum.at(mx, idx, self.lateness_ns)
-        mx[np.isinf(mx)] = np.nan
+        mx = np.full(nb, np.nan)
+        starts = np.flatnonzero(np.diff(idx, prepend=-1))  # idx rises with time: runs
+        mx[idx[starts]] = np.maximum.reduceat(self.lateness_ns, starts)
         return (lo + np.arange(nb) * width).astype(np.float64), mx
 
     def spikes(self) -> list[Spike]:

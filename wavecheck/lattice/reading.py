@@ -131,14 +131,14 @@ class Fold:
         """For each anchor bin: pairs of successive edge times in one period."""
         d = np.diff(self.units)
         close = np.flatnonzero(d < self.a)
-        cover = np.zeros(2 * self.nb + 2, np.int64)
+        size = 2 * self.nb + 2
+        cover = np.zeros(size, np.int64)
         if len(close):
             first = self.x[close] // self.w + 1
             end = self.x[close] + d[close]  # past the period: the next period's bins (the
             # last bin is shorter than w when w does not divide the period)
             last = np.where(end >= self.a, self.nb + (end - self.a) // self.w, end // self.w)
-            np.add.at(cover, first, 1)
-            np.add.at(cover, last + 1, -1)
+            cover = np.bincount(first, minlength=size) - np.bincount(last + 1, minlength=size)
         c = np.cumsum(cover)
         covered = c[: self.nb] + c[self.nb : 2 * self.nb]
         return len(close) - covered
