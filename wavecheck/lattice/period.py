@@ -187,17 +187,16 @@ def combs_and_lines(
     return found, [_refine_comb(w, length / (flo + g), 0.6 / (flo + g)) for g in strong]
 
 
-def _refine_comb(t: Ints, p: float, width: float, harmonics: int = 12) -> float:
-    """``p`` refined to where the summed power of the first ``harmonics`` harmonics of edge
-    times ``t`` peaks, within ±``width`` (relative), in two passes of 25 periods (the second 8×
-    finer)."""
+def _refine_comb(t: Ints, p: float, width: float) -> float:
+    """``p`` refined to where the summed power of the first 12 harmonics of edge times ``t``
+    peaks, within ±``width`` (relative), in two passes of 25 periods (the second 8× finer)."""
     rel = (t - t[len(t) // 2]).astype(np.float64)
     for w in (width, width / 8):
         grid = p * (1 + np.linspace(-w, w, 25))
         z = np.exp(2j * np.pi * rel[None, :] / grid[:, None])
         zh = np.ones_like(z)
         total = np.zeros(len(grid))
-        for _ in range(harmonics):
+        for _ in range(12):  # harmonics 1..12
             zh *= z
             total += np.abs(zh.sum(axis=1)) ** 2
         p = float(grid[int(np.argmax(total))])
@@ -418,13 +417,18 @@ def _alike(a: tuple[float, float], b: tuple[float, float], q: float) -> bool:
 Tried = tuple[int, tuple[float, float], Fraction, bool]
 
 
+def _middle(times: Ints, kinds: EdgeKinds | None) -> tuple[Ints, EdgeKinds | None]:
+    """The middle :data:`TRY_EDGES` edges of ``times`` (all when fewer) and their ``kinds``."""
+    if len(times) <= TRY_EDGES:
+        return times, kinds
+    i = (len(times) - TRY_EDGES) // 2
+    return times[i : i + TRY_EDGES], _window_kinds(kinds, times, i, i + TRY_EDGES)
+
+
 def _tries(times: Ints, periods: list[Fraction], res: int, kinds: EdgeKinds | None) -> list[Tried]:
     """Each exact period read quickly (:func:`evaluate` of the middle :data:`TRY_EDGES` edges
     on at most 2^14 phase bins, the pin not judged), those better than chance kept."""
-    if len(times) > TRY_EDGES:
-        i = (len(times) - TRY_EDGES) // 2
-        kinds = _window_kinds(kinds, times, i, i + TRY_EDGES)
-        times = times[i : i + TRY_EDGES]
+    times, kinds = _middle(times, kinds)
     out = []
     bmax = max(1, min(1 << 20, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4))
     for p in periods:
@@ -459,10 +463,7 @@ def _down(
     a lattice at P/2 fits P's edges with the same lateness. None: no lattice better than chance.
     """
     q = float(max(res, 1))
-    if len(times) > TRY_EDGES:  # the edges the candidates are read on (:func:`_tries`)
-        i = (len(times) - TRY_EDGES) // 2
-        kinds = _window_kinds(kinds, times, i, i + TRY_EDGES)
-        times = times[i : i + TRY_EDGES]
+    times, kinds = _middle(times, kinds)  # the edges the candidates are read on
     # each start refined on its own: a lattice at a multiple of the thread's period (its step
     # pattern) does not fit well enough to refine P there
     starts = sorted(
@@ -477,10 +478,9 @@ def _down(
     tried = _tries(times, subs, res, kinds)
     if not tried:
         return None
-    n = min(len(times), TRY_EDGES)
-    p1 = _best(tried, n, q)
+    p1 = _best(tried, len(times), q)
     more = [p1 * m for m in range(2, 9) if float(p1) * m <= pmax]
-    return _best(tried + _tries(times, more, res, kinds), n, q)
+    return _best(tried + _tries(times, more, res, kinds), len(times), q)
 
 
 def _reads_as_well(ev: Evaluation, big: Evaluation, m: int, sample: slice) -> bool:
