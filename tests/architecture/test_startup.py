@@ -106,6 +106,13 @@ def test_short_commands_load_no_numpy_and_one_subcommand(
     assert sorted(SUBCOMMAND_MODULES & loaded) == ([module] if module else [])
 
 
+def test_the_drive_table_loads_no_python_toml_parser() -> None:
+    """``wavecheck drives`` (issue 38): the rule files are parsed by rtoml, tomllib only for a
+    file rtoml refuses; json only for ``--format json``; difflib only for an error's hint."""
+    assert sorted({"tomllib", "json", "difflib"} & _loaded_after(["drives"])) == []
+    assert "json" in _loaded_after(["drives", "--format", "json"])  # the probe sees it
+
+
 def test_the_probe_sees_numpy_and_the_subcommand_when_they_load() -> None:
     loaded = _loaded_after(["check", str(TINY), "--drive", "gecko-g202"])
     assert "numpy" in loaded
