@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from fractions import Fraction
 from typing import Any
 
@@ -30,15 +31,15 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """List or show drives; returns 0 (a bad id or file raises RuleError → exit 2)."""
-    drive = load_drive(args.drive) if args.drive else None
-    drives = [] if drive else list_drives()
-    if args.format == "json":
-        import json  # here: the text table, the default, needs none
-
-        data = drive_json(drive) if drive else {"drives": [drive_json(d) for d in drives]}
-        print(json.dumps(data, indent=2))
+    if args.drive:
+        drive = load_drive(args.drive)
+        print(json.dumps(drive_json(drive), indent=2) if args.format == "json" else _show(drive))
     else:
-        print(_show(drive) if drive else _table(drives))
+        drives = list_drives()
+        if args.format == "json":
+            print(json.dumps({"drives": [drive_json(d) for d in drives]}, indent=2))
+        else:
+            print(_table(drives))
     return 0
 
 
