@@ -124,6 +124,7 @@ def run_fast(
     phased = kind.kind == "phases"
     describe = desc.extend
     steady = False
+    limits: tuple[float, float] | None = None  # (max_freq, max_ac) once steady and unchanging
 
     # the channel state, as locals (synced with ``ch`` around reference calls)
     accum = ch.accum
@@ -158,27 +159,33 @@ def run_fast(
             u += 1
             if steady:
                 # ---- update-freq, steps 5-9 of §4, inlined (same operations as the model) ----
-                max_freq = 1.0 / (min_step_period * 0.000000001)
-                if maxvel <= 0.0:
-                    maxvel = 0.0
-                else:
-                    desired_freq = maxvel * abs_scale
-                    if desired_freq > max_freq:
-                        if not ch.printed_error:
-                            to_ch()
-                            ch.pos_cmd = ch.vel_cmd = value
-                            comp.update_freq(servo)  # the model prints its warning
-                            raise AssertionError("unreachable: maxvel clamp after settling")
-                        maxvel = max_freq / abs_scale
+                if limits is None:  # the clamps; the same every period once they leave
+                    was = (maxvel, maxaccel)  # maxvel and maxaccel as they are (a fixed point)
+                    max_freq = 1.0 / (min_step_period * 0.000000001)
+                    if maxvel <= 0.0:
+                        maxvel = 0.0
                     else:
-                        max_freq = desired_freq
-                max_ac = max_freq * recip_dt
-                if maxaccel <= 0.0:
-                    maxaccel = 0.0
-                elif maxaccel * abs_scale > max_ac:
-                    maxaccel = max_ac / abs_scale
+                        desired_freq = maxvel * abs_scale
+                        if desired_freq > max_freq:
+                            if not ch.printed_error:
+                                to_ch()
+                                ch.pos_cmd = ch.vel_cmd = value
+                                comp.update_freq(servo)  # the model prints its warning
+                                raise AssertionError("unreachable: maxvel clamp after settling")
+                            maxvel = max_freq / abs_scale
+                        else:
+                            max_freq = desired_freq
+                    max_ac = max_freq * recip_dt
+                    if maxaccel <= 0.0:
+                        maxaccel = 0.0
+                    elif maxaccel * abs_scale > max_ac:
+                        maxaccel = max_ac / abs_scale
+                    else:
+                        max_ac = maxaccel * abs_scale
+                    if was == (maxvel, maxaccel):
+                        limits = (max_freq, max_ac)
                 else:
-                    max_ac = maxaccel * abs_scale
+                    max_freq, max_ac = limits
                 if pos_mode:
                     pos_cmd = value * pos_scale
                     new_vel = follow_position(
