@@ -1,8 +1,8 @@
 """One command run by an older tree and by this one, interleaved, in the same minutes: the fair
 before/after on a machine shared with other users (``make bench`` rows each come from one run).
 
-The older tree is ``git archive COMMIT`` unpacked once into ``bench/data/tree-COMMIT/`` (and
-compiled); both run with this checkout's interpreter and packages, the tree's own directory
+The older tree is ``git archive COMMIT`` unpacked once into ``$TMPDIR/wavecheck-tree-COMMIT/``
+(and compiled; outside the checkout, whose tests scan every module in it); both run with this checkout's interpreter and packages, the tree's own directory
 first on ``sys.path``. CPU is the child's user + sys from ``wait4`` (µs, not ``time``'s 10 ms),
 best and median of ``--runs``; the load (1 min) is printed at the start and the end.
 
@@ -20,6 +20,7 @@ import os
 import shlex
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -30,7 +31,7 @@ def tree(commit: str) -> Path:
     """The tree of ``commit``, unpacked (and compiled) once."""
     rev = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", commit],
                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
-    dest = HERE / "data" / f"tree-{rev}"
+    dest = Path(tempfile.gettempdir()) / f"wavecheck-tree-{rev}"
     if not (dest / "wavecheck").is_dir():
         dest.mkdir(parents=True, exist_ok=True)
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev],
