@@ -124,7 +124,7 @@ def run_fast(
     phased = kind.kind == "phases"
     describe = desc.extend
     steady = False
-    limits: tuple[float, float] | None = None  # (max_freq, max_ac) once steady and unchanging
+    limits: tuple[float, float] | None = None  # (max_freq, max_ac) once the clamps settle
 
     # the channel state, as locals (synced with ``ch`` around reference calls)
     accum = ch.accum
@@ -159,8 +159,10 @@ def run_fast(
             u += 1
             if steady:
                 # ---- update-freq, steps 5-9 of §4, inlined (same operations as the model) ----
-                if limits is None:  # the clamps; the same every period once they leave
-                    was = (maxvel, maxaccel)  # maxvel and maxaccel as they are (a fixed point)
+                # the clamps, evaluated until one evaluation leaves maxvel and maxaccel as they
+                # were: from then on they give the same limits every period
+                if limits is None:
+                    was = (maxvel, maxaccel)
                     max_freq = 1.0 / (min_step_period * 0.000000001)
                     if maxvel <= 0.0:
                         maxvel = 0.0

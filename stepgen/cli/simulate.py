@@ -279,7 +279,7 @@ def _keep_freed_memory() -> None:
 
     try:
         mallopt = ctypes.CDLL(None).mallopt
-    except (AttributeError, OSError):
+    except (AttributeError, OSError, TypeError):  # no mallopt (not glibc), no C library
         return
     mallopt(-1, 1 << 30)  # M_TRIM_THRESHOLD
     mallopt(-2, 64 << 20)  # M_TOP_PAD
