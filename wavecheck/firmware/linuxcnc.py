@@ -1,20 +1,28 @@
 """LinuxCNC's software stepgen: the channels a configuration loads (``loadrt stepgen``), read by
 :mod:`wavecheck.linuxcnc.stepgen_config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
 
-stepgen rounds each parameter up to whole base periods ``P``, and any base-thread run may be up to
-``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on the wire:
-that is the guarantee (``stepgen plan``'s latency-aware answer; ``J`` = 0 when not given, with a
-note). Across a reversal the space between pulses is only dirhold + dirsetup periods; LinuxCNC's
-dirhold counts from the end of the pulse, so the hold from the leading edge is steplen + dirhold.
-DIR setup is what ``dirsetup`` asks for, not a bound stepgen keeps (LinuxCNC issue #2332): a rule
-that passes on it is indeterminate, one that fails still fails.
+Line numbers are LinuxCNC's ``src/hal/components/stepgen.c`` at git f1270d6ed7 (Debian's
+2.9.0~pre1; the algorithm is unchanged since 2007). Each timing parameter defaults to 1 ns
+(1149-1161) and is rounded up to whole base periods ``P`` (``ulceil``, 757-763, applied at
+833-860; steplen 0 becomes 1, and dirhold 1 when dirhold + dirsetup is 0). Any base-thread run may
+be up to ``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on
+the wire (``J`` = 0 when not given, with a note). A step starts timer1 = steplen, timer2 =
+timer1 + dirhold and timer3 = timer2 + dirsetup (651-658); DIR changes only when timer2 has run
+out (643-649): LinuxCNC's dirhold counts from the end of the pulse, so the hold from the leading
+edge is steplen + dirhold. A reversal holds the DDS until timer3 has run out (617-625), so across
+a reversal the space between pulses is only dirhold + dirsetup periods. DIR setup is what
+``dirsetup`` asks for, not a bound stepgen keeps: when the velocity changes sign after timer3 has
+run out, DIR and the next step can change in the same period (LinuxCNC issue #2332): a rule that
+passes on it is indeterminate, one that fails still fails. The rate is clamped to 1 / (steplen +
+stepspace) and, when ``maxvel`` > 0, to maxvel × |position-scale| (876-902).
 
 The output pin: when ``stepgen.N.step`` drives a parallel-port pin (``net … parport.P.pin-NN-out``)
 its ``-invert`` makes pulses low, and with ``-reset 1`` and ``parport.P.reset`` in the base thread
-the pin is written high each period and reset after ``parport.P.reset-time`` ns (at most P/4,
-hal_parport clamps it): the pulse on the pin is the reset time and the rest of the period is idle,
-whatever ``stepspace`` is (StepConf's "doublestep": ``steplen 1``, ``stepspace 0``, one step per
-period; reference ``stepgen-linuxcnc.md`` §2.3, hal_parport's man page).
+the pin is written high each period and reset ``parport.P.reset-time`` ns later, at most P/4
+(``src/hal/drivers/hal_parport.c`` 368-385, the clamp at 371): the pulse on the pin is the reset
+time and the rest of the period is idle, whatever ``stepspace`` is (StepConf's "doublestep":
+``steplen 1``, ``stepspace 0``, one step per period). ``sim_parport``'s reset does nothing
+(``sim_parport.comp``:28): there the pulse is steplen.
 """
 
 from __future__ import annotations
@@ -60,6 +68,8 @@ class PinOut:
     reset_ns: Fraction | None = None
     reset_where: str = ""
     reset_unknown: str = ""
+    simulated: bool = False
+    """The port is ``sim_parport``, whose ``reset`` function does nothing (sim_parport.comp:28)."""
 
 
 def _true(value: str) -> bool:
@@ -76,6 +86,9 @@ def pin_out(files: LinuxCNCFiles, output: str, period_ns: int) -> PinOut:
     inverted = _true(files.setp.get(f"{pin}-invert", ("0", ""))[0])
     if not _true(files.setp.get(f"{pin}-reset", ("0", ""))[0]):
         return PinOut(pin, inverted)
+    modules = {m for m, _ in files.loads}
+    if "sim_parport" in modules and "hal_parport" not in modules:
+        return PinOut(pin, inverted, simulated=True)
     funct = f"parport.{port}.reset"
     if funct not in files.thread_of:
         return PinOut(
@@ -134,6 +147,9 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         notes.append(f"step_type {cfg.step_type}: only step/dir (0) is modelled here")
     if step.pin:
         notes.append(f"STEP drives {step.pin}" + (" (inverted)" if step.inverted else ""))
+    if step.simulated:
+        notes.append(f"{step.pin}-reset is set, but the port is sim_parport, whose reset function "
+                     "does nothing (sim_parport.comp:28): the pulse is steplen")  # fmt: skip
     if step.reset_ns is not None or step.reset_unknown:
         pulse, idle, hold, trailing, rate = _reset(cfg, step, p, n, j, notes)
     else:

@@ -105,7 +105,7 @@ def read(
         files=tuple(dict.fromkeys((str(path), *filter(None, [files.found_ini]), *files.hal_files))),
         unsupported=tuple(dict.fromkeys(unsupported)),
         notes=tuple(notes),
-        fixer=_fixer({id(a) for a in hw}, linuxcnc.fixer(j)),
+        fixer=_fixer({id(a) for a in hw}, hm2.fixer(clock_hz), linuxcnc.fixer(j)),
     )
 
 
@@ -135,10 +135,11 @@ def _none(files: LinuxCNCFiles, what: str) -> str:
     )
 
 
-def _fixer(
-    hw: set[int], soft: Callable[[GeneratorGuarantee, FixRole, Fraction], str]
-) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+_Fix = Callable[[GeneratorGuarantee, FixRole, Fraction], str]
+
+
+def _fixer(hw: set[int], hard: _Fix, soft: _Fix) -> _Fix:
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
-        return hm2.fix(axis, role, need) if id(axis) in hw else soft(axis, role, need)
+        return hard(axis, role, need) if id(axis) in hw else soft(axis, role, need)
 
     return fix

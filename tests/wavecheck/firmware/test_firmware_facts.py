@@ -129,16 +129,19 @@ def _figures(doc: dict[str, object]) -> object:
     return doc["axes"], doc["pairs"], doc["exit_code"]
 
 
-@pytest.mark.parametrize("order", ["hal ini", "ini hal"])
+@pytest.mark.parametrize("order", ["hal ini", "ini hal", "hal --drive ini"])
 def test_a_hal_file_with_its_ini_as_a_second_file(
     capsys: pytest.CaptureFixture[str], order: str
 ) -> None:
     """stepper_xyza.hal is named by two INIs beside it: `config` refused it and took no second
-    file. Given with Sherline4Axis_inch.ini (either order), it reads what the INI alone gives:
+    file. Given with Sherline4Axis_inch.ini (either order, also after the options: `config HAL
+    --drive X INI` was refused as an unrecognised argument), it reads what the INI alone gives:
     the INI's [HAL] HALFILE runs it."""
-    hal, ini = SHERLINE / "stepper_xyza.hal", SHERLINE / "Sherline4Axis_inch.ini"
-    files = [hal, ini] if order == "hal ini" else [ini, hal]
-    code = main(["config", *map(str, files), "--drive", "gecko-g540", "--format", "json"])
+    hal, ini = str(SHERLINE / "stepper_xyza.hal"), str(SHERLINE / "Sherline4Axis_inch.ini")
+    drive = ["--drive", "gecko-g540", "--format", "json"]
+    argv = {"hal ini": [hal, ini, *drive], "ini hal": [ini, hal, *drive],
+            "hal --drive ini": [hal, *drive, ini]}[order]  # fmt: skip
+    code = main(["config", *argv])
     doc = json.loads(capsys.readouterr().out)
     assert code in (0, 1, 3)
     assert any("read with the INI given" in n for n in doc["notes"])

@@ -1,0 +1,74 @@
+"""hm2 figures and fixes at a known stepgen clock (``--hm2-clock``, issue 32).
+
+The hm2 driver turns each ns parameter into a register with C doubles, truncating, at most 0x3FFF
+(LinuxCNC ``src/hal/drivers/mesa-hostmot2/stepgen.c`` 348-387 at git f1270d6ed7), so a printed
+fix is a ns value the driver turns into the clocks the rule needs; applied to a copy, the rule
+no longer fails at that clock."""
+
+from __future__ import annotations
+
+from fractions import Fraction as F
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from tests.wavecheck.firmware.fixapply import apply, copy_case
+from tests.wavecheck.firmware.test_fixes_work import _drives
+from tools.firmware_corpus import CORPUS
+from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
+from wavecheck.firmware.hm2 import ns_for, register
+
+MESA = CORPUS / "linuxcnc/configs/by_interface/mesa"
+HM2 = [MESA / "plasma-5i20/plasma-5i20.ini", MESA / "hm2-modbus/7i96s-modbus-bldc.ini"]
+CLOCKS = [F(33_000_000), F(50_000_000), F(100_000_000), F(40_000_000)]
+
+
+@given(st.integers(0, 0x3FFF), st.sampled_from(CLOCKS + [F(48_000_000), F(125_000_000)]))
+def test_ns_for_gives_the_register(clocks: int, f: F) -> None:
+    """The ns printed is the smallest whole ns the driver's double arithmetic turns into
+    exactly ``clocks`` (``reg = ns * (f / 1e9)``, truncated: stepgen.c 381)."""
+    ns = ns_for(clocks, f)
+    assert register(F(ns), f) == clocks and (ns == 0 or register(F(ns - 1), f) < clocks)
+    assert int(float(ns) * (float(f) / 1e9)) == clocks  # the C expression, with doubles
+
+
+def test_figures_at_the_clock() -> None:
+    """plasma-5i20 at 33 MHz: STEPLEN 1000 -> 33 clocks, held 34; STEPSPACE 2000 -> 66 -> 67;
+    DIRHOLD 200 -> 6 clocks, DIR may change 7 clocks after the rising edge (kubstepgenz.vhd
+    212-219) while STEP is still high: 0 from the trailing edge."""
+    s = read_firmware(HM2[0], clock_hz=F(33_000_000)).axis("stepgen.00")
+    f = F(33_000_000)
+    assert s.pulse.value == 34 * 10**9 / f and s.idle.value == 67 * 10**9 / f
+    assert s.dir_hold.value == 7 * 10**9 / f and s.dir_hold_trailing is not None
+    assert s.dir_hold_trailing.value == 0 and "while STEP is high" in s.dir_hold_trailing.note
+
+
+@pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
+@pytest.mark.parametrize("clock", CLOCKS, ids=lambda f: f"{int(f) // 10**6}MHz")
+@pytest.mark.parametrize("ini", HM2, ids=lambda p: p.name)
+def test_every_fix_at_the_clock_works(ini: Path, clock: F, tmp_path: Path) -> None:
+    """Each fix printed at ``clock`` names whole ns the driver makes into the clocks it says,
+    and applied to a copy it makes the rule pass at that clock (issue 32, class 5)."""
+    cfg = read_firmware(ini, clock_hz=clock)
+    checked = 0
+    for d_no, drive in enumerate(_drives()):
+        result = evaluate_config(cfg, [(a, drive) for a in cfg.axes])
+        for pair in result.pairs:
+            for row in pair.rows:
+                if row.verdict != "fail" or not row.fix or "maxvel" in row.fix:
+                    continue
+                assert "clocks at" in row.fix, row.fix
+                words = row.fix.split("`")[1].split()
+                clocks = int(row.fix.split("(ns: ")[1].split(" clocks")[0])
+                assert register(F(words[2]), clock) == clocks, row.fix
+                copy = copy_case(cfg, CORPUS, tmp_path / f"{d_no}-{checked}")
+                apply(cfg.firmware, copy, row.fix, cfg)
+                again = read_firmware(copy, clock_hz=clock)
+                rows = evaluate_config(again, [(a, drive) for a in again.axes]).pairs
+                verdict = {(p.axis.axis, r.rule): r.verdict for p in rows for r in p.rows}
+                assert verdict[(pair.axis.axis, row.rule)] != "fail", (drive.id, row.fix)
+                checked += 1
+    assert checked >= 4
