@@ -34,7 +34,6 @@ import re
 from collections.abc import Callable
 from fractions import Fraction
 
-from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware._text import number
 from wavecheck.firmware.guarantee import (
     FixRole,
@@ -43,7 +42,7 @@ from wavecheck.firmware.guarantee import (
     at_least,
     at_most,
 )
-from wavecheck.firmware.linuxcnc import joint_of
+from wavecheck.linuxcnc.configuration import LinuxCNCFiles
 from wavecheck.linuxcnc.files import resolve_ref
 
 __all__ = ["STEPGEN", "axes", "fixer", "ns_for", "register"]
@@ -139,7 +138,7 @@ def _axis(
     if "step_type" in params and params["step_type"][0] != 0:
         notes = (f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir "
                  "(0) is modelled",)  # fmt: skip
-    joint, letter = joint_of(files, f"{board}.stepgen.{nn}")
+    joint, letter = files.joint_of(f"{board}.stepgen.{nn}")
     aliases = tuple(
         a
         for a in (f"{board}.stepgen.{nn}", f"joint.{joint}" if joint is not None else "", letter)

@@ -27,13 +27,11 @@ time and the rest of the period is idle, whatever ``stepspace`` is (StepConf's "
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware.guarantee import (
     FixRole,
     GeneratorGuarantee,
@@ -42,11 +40,12 @@ from wavecheck.firmware.guarantee import (
     not_enforced,
     unknown,
 )
+from wavecheck.linuxcnc.configuration import LinuxCNCFiles
 from wavecheck.linuxcnc.files import ini_value, int_ns
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
 
-__all__ = ["PinOut", "axes", "fixer", "joint_of", "pin_out"]
+__all__ = ["PinOut", "axes", "fixer", "pin_out"]
 
 _MAX_CHANNELS = 16
 
@@ -180,7 +179,7 @@ def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGu
         info["position-scale"] = f"{cfg.floats['position-scale']!r} steps/unit"
     if step.pin:
         info["reset"] = ".".join(step.pin.split(".")[:2])
-    joint, letter = joint_of(files, f"stepgen.{cfg.channel}")
+    joint, letter = files.joint_of(f"stepgen.{cfg.channel}")
     aliases = tuple(a for a in (f"joint.{joint}" if joint is not None else "", letter) if a)
     return GeneratorGuarantee(
         axis=f"stepgen.{cfg.channel}",
@@ -260,33 +259,6 @@ def _reset(
         notes.append(f"steplen is {n['steplen']} periods with the reset function: each step makes "
                      f"{n['steplen']} pulses on {step.pin} (StepConf sets steplen 1)")  # fmt: skip
     return pulse, idle, hold, trailing, rate
-
-
-def joint_of(files: LinuxCNCFiles, gen: str) -> tuple[int | None, str]:
-    """(the joint whose command drives ``gen``, that joint's axis letter or "")."""
-    joint = None
-    for pin in (f"{gen}.position-cmd", f"{gen}.velocity-cmd"):
-        for other in files.on_signal(pin):
-            m = re.fullmatch(
-                r"joint\.(\d{1,3})\.motor-pos-cmd|axis\.(\d{1,3})\.motor-pos-cmd", other
-            )
-            if m:
-                joint = int(m.group(1) or m.group(2))
-    if joint is None:
-        return None, ""
-    return joint, _letter(files, joint)
-
-
-def _letter(files: LinuxCNCFiles, joint: int) -> str:
-    kins = files.ini_setting("KINS", "KINEMATICS")
-    coords = ""
-    if kins:
-        m = re.search(r"coordinates=(\w+)", kins[0])
-        coords = m.group(1) if m else ""
-    if not coords:
-        traj = files.ini_setting("TRAJ", "COORDINATES")
-        coords = "".join(traj[0].split()) if traj else ""
-    return coords[joint].lower() if joint < len(coords) else ""
 
 
 def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:

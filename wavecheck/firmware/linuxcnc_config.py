@@ -21,8 +21,8 @@ from fractions import Fraction
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import hm2, linuxcnc
-from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles, is_ini, scan
 from wavecheck.firmware.guarantee import FirmwareConfig, FixRole, GeneratorGuarantee
+from wavecheck.linuxcnc.configuration import LinuxCNCFiles, is_ini, scan
 
 __all__ = ["UNMODELLED", "looks_like", "read"]
 
