@@ -40,8 +40,8 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_least,
-    at_most,
 )
+from wavecheck.firmware.linuxcnc_stepgen import PARAMETER, maxvel_fix
 from wavecheck.linuxcnc.configuration import LinuxCNCFiles
 from wavecheck.linuxcnc.files import resolve_ref
 
@@ -185,12 +185,11 @@ def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, F
 
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
-        name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-                "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
+        name = PARAMETER.get(role)
         if name is None:
-            scale = axis.info.get("position-scale", "").split(" ")[0]
-            if scale and Fraction(scale):
-                return f"add `setp {full}.maxvel {at_most(need / abs(Fraction(scale)))}` (units/s)"
+            clamp = maxvel_fix(full, axis, need)
+            if clamp:
+                return clamp
             pulse = axis.pulse.value or Fraction(0)
             return f"add `setp {full}.stepspace {at_least(Fraction(10**9) / need - pulse)}` (ns)"
         if clock_hz is None:

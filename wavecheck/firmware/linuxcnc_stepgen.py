@@ -45,7 +45,7 @@ from wavecheck.linuxcnc.files import ini_value, int_ns
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config_lines
 from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
 
-__all__ = ["PinOut", "axes", "fixer", "pin_out"]
+__all__ = ["PARAMETER", "PinOut", "axes", "fixer", "maxvel_fix", "pin_out"]
 
 _MAX_CHANNELS = 16
 
@@ -261,21 +261,33 @@ def _reset(
     return pulse, idle, hold, trailing, rate
 
 
+#: The stepgen parameter that makes each figure (the software stepgen's and hm2's alike).
+PARAMETER: dict[str, str] = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
+                             "hold": "dirhold", "trailing_hold": "dirhold"}  # fmt: skip
+
+
+def maxvel_fix(gen: str, axis: GeneratorGuarantee, need: Fraction, why: str = "") -> str:
+    """The ``setp GEN.maxvel`` line that lowers the step rate to ``need`` (both stepgens clamp
+    the velocity to maxvel; stepgen.c 884-902), "" when the position-scale is not known."""
+    scale = axis.info.get("position-scale", "").split(" ")[0]
+    if not scale or not Fraction(scale):
+        return ""
+    return f"add `setp {gen}.maxvel {at_most(need / abs(Fraction(scale)))}` (units/s{why})"
+
+
 def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
     """How to say which stepgen setting to change, at latency ``j``: a ``setp`` line to add
     after the configuration's own (the last ``setp`` of a parameter wins)."""
 
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         p = int(axis.info.get("base period", "0 ns").split(" ")[0])
-        name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-                "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
+        name = PARAMETER.get(role)
         if p <= 0:
             return ""
         if name is None:  # the rate: maxvel clamps it (stepgen.c), else steplen + stepspace
-            scale = axis.info.get("position-scale", "").split(" ")[0]
-            if scale and Fraction(scale):
-                vel = at_most(need / abs(Fraction(scale)))
-                return f"add `setp {axis.axis}.maxvel {vel}` (units/s; stepgen clamps to it)"
+            clamp = maxvel_fix(axis.axis, axis, need, "; stepgen clamps to it")
+            if clamp:
+                return clamp
             steplen = int(axis.info.get("steplen", "0").split(" ")[0])
             periods = max(-(-Fraction(10**9) // (need * p)) - steplen, 1)
             return f"add `setp {axis.axis}.stepspace {periods * p}` ({periods} base periods)"
