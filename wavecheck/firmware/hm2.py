@@ -18,7 +18,8 @@ clocks, steplen 201: DIR changed 103 clocks after the rising edge, while STEP wa
 at 202); dirhold 2000, steplen 450: DIR changed 2001 clocks after the rising edge, 1550 after
 the falling one. So the hold is dirhold (+1 clock) from the leading edge and dirhold − steplen
 from the trailing edge; when dirhold < steplen DIR can change during the pulse, and a drive that
-counts the trailing edge may count that step in the new direction (hold 0). Without the clock
+counts the trailing edge may count that step in the new direction (hold 0, and only steplen −
+dirhold from the DIR change to that edge: ``dir_setup_trailing``). Without the clock
 the trailing figure may be a clock short (``uncertain``).
 
 Max rate: the driver clamps the velocity to 1e9/(steplen + stepspace) steps/s and to maxvel ×
@@ -121,6 +122,7 @@ def _axis(
     setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
     hold_raw = fig("dirhold", 1, "set")
     hold, trailing = _hold(pulse, hold_raw, f is not None)
+    setup_trailing = _setup_trailing(pulse, setup, hold)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
@@ -152,6 +154,7 @@ def _axis(
         dir_hold=hold,
         max_rate=rate,
         dir_hold_trailing=trailing,
+        dir_setup_trailing=setup_trailing,
         info=info,
         notes=notes,
         aliases=aliases,
@@ -178,6 +181,17 @@ def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guarantee
     return lead, trail
 
 
+def _setup_trailing(pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed) -> Guaranteed | None:
+    """DIR change → the trailing edge when DIR may change during the pulse (dirhold <
+    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise."""
+    if pulse.value is None or hold.value is None or setup.value is None:
+        return None
+    if hold.value >= pulse.value:
+        return None
+    value = min(pulse.value - hold.value, setup.value + pulse.value)
+    return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "uncertain", _DURING)
+
+
 def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
     """How to say which hm2 setting to change: a ``setp`` line to add (the INI value the HAL
     file names, ``STEPLEN`` …, is the other place), with a ns value the driver turns into enough
@@ -185,6 +199,8 @@ def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, F
 
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
+        if role == "trailing_setup":  # DIR must not change during the pulse
+            return _whole_pulse(full, axis, need, clock_hz)
         name = PARAMETER.get(role)
         if name is None:
             clamp = maxvel_fix(full, axis, need)
@@ -209,3 +225,21 @@ def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, F
                 f"{float(clock_hz):g} Hz; the INI's {name.upper()})")  # fmt: skip
 
     return fix
+
+
+def _whole_pulse(full: str, axis: GeneratorGuarantee, need: Fraction, f: Fraction | None) -> str:
+    """The ``setp`` lines that keep DIR through the pulse (dirhold >= steplen) and, where the
+    dirsetup set falls short, give ``need`` from a DIR change to the trailing edge (dirsetup +
+    steplen)."""
+    pulse = axis.pulse.value or Fraction(0)
+    short = max(need - pulse, Fraction(0))
+    if f is None:
+        hold, setup = int(-(-pulse // 1)), int(-(-short // 1))
+    else:
+        hold = ns_for(int(pulse * f / 10**9) - 1, f)  # the pulse is steplen clocks + 1
+        setup = ns_for(int(-(-short * f / 10**9 // 1)), f)
+    lines = f"`setp {full}.dirhold {hold}`"
+    if short > (axis.dir_setup.value or 0):
+        lines += f" and `setp {full}.dirsetup {setup}`"
+    return (f"add {lines} (ns): DIR then waits for the end of the pulse (kubstepgenz.vhd "
+            "212-219), and the trailing edge comes dirsetup + steplen after a DIR change")  # fmt: skip

@@ -7,6 +7,7 @@ no longer fails at that clock."""
 
 from __future__ import annotations
 
+import json
 from fractions import Fraction as F
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from hypothesis import strategies as st
 from tests.wavecheck.firmware.fixapply import apply, copy_case
 from tests.wavecheck.firmware.test_fixes_work import _drives
 from tools.firmware_corpus import CORPUS
+from wavecheck.cli import main
 from wavecheck.firmware import read_firmware
 from wavecheck.firmware.evaluate import evaluate_config
 from wavecheck.firmware.hm2 import ns_for, register
@@ -60,10 +62,11 @@ def test_every_fix_at_the_clock_works(ini: Path, clock: F, tmp_path: Path) -> No
             for row in pair.rows:
                 if row.verdict != "fail" or not row.fix or "maxvel" in row.fix:
                     continue
-                assert "clocks at" in row.fix, row.fix
-                words = row.fix.split("`")[1].split()
-                clocks = int(row.fix.split("(ns: ")[1].split(" clocks")[0])
-                assert register(F(words[2]), clock) == clocks, row.fix
+                values = [w.split()[2] for w in row.fix.split("`")[1::2]]
+                assert all(v.isdigit() for v in values), row.fix  # whole ns, as u32 params
+                if "clocks at" in row.fix:
+                    clocks = int(row.fix.split("(ns: ")[1].split(" clocks")[0])
+                    assert register(F(values[0]), clock) == clocks, row.fix
                 copy = copy_case(cfg, CORPUS, tmp_path / f"{d_no}-{checked}")
                 apply(cfg.firmware, copy, row.fix, cfg)
                 again = read_firmware(copy, clock_hz=clock)
@@ -72,3 +75,16 @@ def test_every_fix_at_the_clock_works(ini: Path, clock: F, tmp_path: Path) -> No
                 assert verdict[(pair.axis.axis, row.rule)] != "fail", (drive.id, row.fix)
                 checked += 1
     assert checked >= 4
+
+
+def test_dir_change_during_the_pulse_is_a_setup_for_a_trailing_edge_drive(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """plasma-5i20 (STEPLEN 1000, DIRHOLD 200, DIRSETUP 200): DIR may change 200 ns into the
+    1 us pulse (kubstepgenz.vhd 212-219), so a G202, which counts the falling edge, sees DIR
+    change only 800 ns before it (was dirsetup + steplen = 1.2 us, a PASS against 1 us)."""
+    code = main(["config", str(HM2[0]), "--drive", "gecko-g202", "--format", "json"])
+    doc = json.loads(capsys.readouterr().out)
+    setup = next(r for r in doc["pairs"][0]["rules"] if r["rule"] == "dir_setup")
+    assert code == 1 and setup["generator_ns"] == 800 and setup["verdict"] == "fail"
+    assert "dirhold 1000" in setup["fix"]  # keep DIR through the pulse
