@@ -88,3 +88,23 @@ def test_dir_change_during_the_pulse_is_a_setup_for_a_trailing_edge_drive(
     setup = next(r for r in doc["pairs"][0]["rules"] if r["rule"] == "dir_setup")
     assert code == 1 and setup["generator_ns"] == 800 and setup["verdict"] == "fail"
     assert "dirhold 1000" in setup["fix"]  # keep DIR through the pulse
+
+
+def test_a_capture_of_what_the_hardware_does_is_no_finding(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """STEP 1 us high every 4 us, DIR changed 200 ns into a pulse, as kubstepgenz.vhd does with
+    plasma-5i20's STEPLEN 1000, DIRHOLD 200: 800 ns from the DIR change to the falling edge a
+    G202 counts. `check --firmware` compared it with dirsetup + steplen = 1.2 us and called the
+    capture a violation of its own configuration; the configured figure is steplen - dirhold."""
+    events = sorted([(t, "1s") for t in range(1000, 41000, 4000)]
+                    + [(t + 1000, "0s") for t in range(1000, 41000, 4000)] + [(17200, "1d")])  # fmt: skip
+    head = "$timescale 1ns $end\n$scope module top $end\n$var wire 1 s STEP $end\n"
+    head += "$var wire 1 d DIR $end\n$upscope $end\n$enddefinitions $end\n#0\n0s\n0d\n"
+    vcd = tmp_path / "midpulse.vcd"
+    vcd.write_text(head + "".join(f"#{t}\n{v}\n" for t, v in events) + "#42000\n")
+    main(["check", str(vcd), "--drive", "gecko-g202", "--firmware", str(HM2[0]),
+          "--axis", "stepgen.00", "--format", "json"])  # fmt: skip
+    fw = json.loads(capsys.readouterr().out)["firmware"]
+    setup = next(c for c in fw["comparisons"] if c["what"] == "dir_setup")
+    assert (setup["configured"], setup["measured"], setup["verdict"]) == (800, 800, "pass")
