@@ -6,7 +6,7 @@
 guarantee with a drive (``wavecheck config``); :mod:`.capture` compares it with a checked capture
 (``wavecheck check --firmware``); :mod:`.pairing` pairs capture axes with firmware axes.
 
-Every file is read with a bound (:func:`~wavecheck.linuxcnc.files.read_text`: devices, FIFOs
+Every file is read with a bound (:func:`~wavecheck.config_text.read_text`: devices, FIFOs
 and files over 4 MiB are refused) and every number with one (:func:`._text.number`).
 """
 

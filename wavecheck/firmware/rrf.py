@@ -26,7 +26,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._text import number, read_text, where
+from wavecheck.firmware._text import is_file, number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -36,7 +36,6 @@ from wavecheck.firmware.guarantee import (
     at_most,
     unknown,
 )
-from wavecheck.linuxcnc.files import is_file
 
 __all__ = ["looks_like", "read"]
 

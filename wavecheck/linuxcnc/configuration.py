@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
+from wavecheck.config_text import is_file, read_text
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.files import (
     HalLine,
@@ -33,9 +34,7 @@ from wavecheck.linuxcnc.files import (
     hal_lines,
     hal_words,
     ini_value,
-    is_file,
     read_ini,
-    read_text,
 )
 
 __all__ = ["LinuxCNCFiles", "expand_refs", "hallib_dirs", "is_ini", "scan"]
