@@ -8,7 +8,8 @@ published in IgorYeremin/hostmot2-firmware@8a8dcbd; line numbers below are that 
 STEP high N+1 clocks and low N+1 clocks (the pulse counter is loaded at the step, 210-211, and
 STEP cleared a clock after it reaches 0, 199-201), so ``step_high ≥ (⌊steplen·f⌋+1)/f >
 steplen``: without the clock the set value is the bound. DIR setup loads N clocks (216-219:
-≈ ⌊dirsetup·f⌋/f, up to one clock short: ``uncertain``).
+⌊dirsetup·f⌋/f; under GHDL the next step came N + 2 clocks after the DIR change, 300 -> 302;
+kept ``uncertain``, one run being no proof).
 
 DIR hold is what the hardware does, not what the man page says ("after a step ends"): the hold
 counter is loaded with the pulse (212-213), and DIR may change as soon as it has run out
@@ -119,7 +120,8 @@ def _axis(
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
-    setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
+    setup = fig("dirsetup", 0, "uncertain", "the setup counter loads N clocks (kubstepgenz.vhd "
+                "216-219; under GHDL the next step came N + 2 clocks after DIR)")  # fmt: skip
     hold_raw = fig("dirhold", 1, "set")
     hold, trailing = _hold(pulse, hold_raw, f is not None)
     setup_trailing = _setup_trailing(pulse, setup, hold)
