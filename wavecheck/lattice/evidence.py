@@ -66,7 +66,7 @@ def steady_pulse(invocation: Ints, bits: Ints, channels: int) -> tuple[int, int,
             (1, gaps[up[:-1]], gaps[~up[:-1]]),
             (0, gaps[~up[:-1]], gaps[up[:-1]]),
         ):
-            if len(pulse) < MIN_PAIRS or len(np.unique(space)) < 2:
+            if len(pulse) < MIN_PAIRS or not len(space) or space.min() == space.max():
                 continue
             counts = np.bincount(pulse - pulse.min())
             if counts.max() >= 0.99 * len(pulse):
