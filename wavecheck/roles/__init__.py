@@ -70,12 +70,13 @@ Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x
 took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
-from wavecheck.roles.infer import best_channel, propose
+from wavecheck.roles.infer import PULSE_NAMES, best_channel, name_conflicts, propose
 from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,
     LineLook,
+    NameRefused,
     Proposal,
     RoleChoice,
     SharedLine,
@@ -83,14 +84,17 @@ from wavecheck.roles.proposal import (
 )
 
 __all__ = [
+    "PULSE_NAMES",
     "AxisProposal",
     "Basis",
     "Conflict",
     "LineLook",
+    "NameRefused",
     "Proposal",
     "RoleChoice",
     "SharedLine",
     "Unassigned",
     "best_channel",
+    "name_conflicts",
     "propose",
 ]

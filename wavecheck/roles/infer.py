@@ -10,6 +10,7 @@ loops over edges in Python.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,6 +35,7 @@ from wavecheck.roles.proposal import (
     Basis,
     Conflict,
     LineLook,
+    NameRefused,
     Proposal,
     RoleChoice,
     SharedLine,
@@ -41,9 +43,14 @@ from wavecheck.roles.proposal import (
 )
 from wavecheck.roles.updown import UpDownFit, up_down
 
-__all__ = ["best_channel", "propose"]
+__all__ = ["PULSE_NAMES", "best_channel", "name_conflicts", "propose"]
 
 _AXIS_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+#: Roles whose line must make pulses: a channel named so is refused when its waveform says it
+#: makes none (:meth:`_Inference._no_pulse_line`).
+PULSE_NAMES = ("step", "up", "down")
+#: Other lines most like a STEP that a refused name's question offers.
+_OTHER_CANDIDATES = 4
 
 I64 = npt.NDArray[np.int64]
 
@@ -269,6 +276,14 @@ class _Inference:
                 notes.append(
                     "the phase outputs walk no LinuxCNC table: give the step type (--type)"
                 )
+        refused = self._name_conflicts(found)
+        if refused:  # a name is a hint: the waveform says this line is no such pulse line
+            self.conflicts += [r.conflict for r in refused]
+            for _, c in found:
+                self.why.setdefault(c.index, "named after a role (see below)")
+                self.taken.add(c.index)
+            self.named = True
+            return True
         choices = []
         for role, c in found:
             look = self.looks[c.index]
@@ -299,6 +314,46 @@ class _Inference:
         self.axes.append(_Axis(axis_kind, number, choices, pulse, motion, notes))
         self.named = True
         return True
+
+    def _no_pulse_line(self, c: Channel) -> str:
+        """What in the waveform of ``c`` says it is no STEP, UP or DOWN line whatever its name
+        (empty when nothing does): a bus's clock, data or gate, a clock, PWM, a serial line, a
+        line that never changes or never makes one whole pulse. Pulses the waveform cannot tell
+        from steps (a few, at one rate, coded) do not contradict a name."""
+        look = self.looks[c.index]
+        no = self.bus.no_step(c.index)
+        if no is not None:
+            return no
+        if look.kind in ("clock", "pwm", "serial", "constant"):
+            return look.evidence
+        if len(c.edges) < 2:
+            return f"{look.evidence}: not one whole pulse"
+        return ""
+
+    def _name_conflicts(self, found: list[tuple[str, Channel]]) -> list[NameRefused]:
+        """The pulse roles (STEP, UP, DOWN) of ``found`` (role, channel named so) whose waveform
+        says the line is none (:meth:`_no_pulse_line`), each with the reason and the other lines
+        most like a STEP. Needs the bus findings."""
+        out = []
+        named = {c.index for _, c in found}
+        for role, c in found:
+            if role not in PULSE_NAMES or not (why := self._no_pulse_line(c)):
+                continue
+            others = [x for x in self._candidates() if x.index not in named][:_OTHER_CANDIDATES]
+            conflict = Conflict(
+                f"{self.name_of(c)} is named {role.upper()}, but its waveform is no "
+                f"{role.upper()} line ({why}); a name is no evidence against the waveform",
+                (
+                    f"{role}={self.refs[c.index]}: named so; {self.looks[c.index].evidence}",
+                    *(
+                        f"{role}={self.refs[x.index]}: {self.looks[x.index].evidence}"
+                        for x in others
+                    ),
+                ),
+            )
+            refs = tuple(self.refs[x.index] for x in others)
+            out.append(NameRefused(role, self.refs[c.index], refs, conflict))
+        return out
 
     def _against(self, c: Channel, role: str) -> str:
         """What in the waveform of ``c`` says it is no ``role`` (empty when nothing does)."""
@@ -867,9 +922,9 @@ class _Inference:
                 self.shared.append((e, ev, axes))
 
     # ---------------------------------------------------------------- result
-    def _axis_names(self) -> list[str]:
+    def _axis_names(self, axes: list[_Axis]) -> list[str]:
         wanted: list[str | None] = []
-        for a in self.axes:
+        for a in axes:
             hints = {self.hints[c.index].axis for c in a.channels}
             name = hints.pop() if len(hints) == 1 else None
             if name is None:
@@ -887,26 +942,17 @@ class _Inference:
 
     def _finish(self) -> Proposal:
         self.axes.sort(key=lambda a: min(c.index for c in a.channels))
-        names = self._axis_names()
+        names = self._axis_names(self.axes)
         by_axis = {id(a): n for a, n in zip(self.axes, names, strict=True)}
         shared = tuple(
             SharedLine("enable", e.name, e.index, tuple(by_axis[id(a)] for a in axes), ev)
             for e, ev, axes in self.shared
         )
-        axes = tuple(
-            AxisProposal(
-                name,
-                "step-dir"
-                if a.kind == "step-dir"
-                else "up-down"
-                if a.kind == "up-down"
-                else "phases",
-                a.step_type,
-                tuple(a.roles),
-                tuple(a.notes),
-            )
-            for a, name in zip(self.axes, names, strict=True)
-        )
+        axes = self._proposed(self.axes, names)
+        suggested: tuple[AxisProposal, ...] = ()
+        if not self.axes and not self.conflicts:
+            maybe = self._suggested()
+            suggested = self._proposed(maybe, self._axis_names(maybe))
         unassigned = []
         for c in self.cap.channels:
             if c.index in self.taken and c.index not in self.why:
@@ -938,7 +984,67 @@ class _Inference:
             tuple(self._looks()),
             tuple(self.refs[c.index] for c in self._candidates()),
             self.named,
+            suggested,
         )
+
+    @staticmethod
+    def _proposed(axes: list[_Axis], names: list[str]) -> tuple[AxisProposal, ...]:
+        return tuple(
+            AxisProposal(
+                name,
+                "step-dir"
+                if a.kind == "step-dir"
+                else "up-down"
+                if a.kind == "up-down"
+                else "phases",
+                a.step_type,
+                tuple(a.roles),
+                tuple(a.notes),
+            )
+            for a, name in zip(axes, names, strict=True)
+        )
+
+    def _suggested(self) -> list[_Axis]:
+        """The axes to check *if* the lines most like a STEP are STEPs (no axis was found): every
+        line of a few pulses (each may be a short move's STEP), else the best candidate; each
+        with a DIR named like its axis's, else the unchanging, neutrally named channel right
+        after it (by layout), so that no DIR the capture may have is dropped."""
+        cands = self._candidates()
+        few = sorted((c for c in cands if self.looks[c.index].kind == "few"), key=_index)
+        steps = few or cands[:1]
+        chosen = {c.index for c in steps}
+        out = []
+        for s in steps:
+            look = self.looks[s.index]
+            roles = [RoleChoice("step", s.name, s.index, self.refs[s.index], look.evidence)]
+            d = self._still_dir(s, chosen)
+            if d is not None:
+                chosen.add(d[0].index)
+                roles.append(
+                    RoleChoice("dir", d[0].name, d[0].index, self.refs[d[0].index], d[1], d[2])
+                )
+            motion = look.pulses.starts if look.pulses is not None else np.zeros(0, np.int64)
+            out.append(_Axis("step-dir", 0, roles, [s], motion, []))
+        return out
+
+    def _still_dir(self, s: Channel, taken: set[int]) -> tuple[Channel, str, Basis] | None:
+        """An unchanging channel for the DIR of STEP ``s``: the one named like its axis's DIR,
+        else the neutrally named one right after it; with its evidence and basis."""
+        axis = self.hints[s.index].axis
+        still = [
+            c
+            for c in self.cap.channels
+            if self.looks[c.index].kind == "constant" and c.index not in taken
+        ]
+        named = [c for c in still if self.hints[c.index].fits("dir")]
+        named = [c for c in named if axis is None or self.hints[c.index].axis == axis]
+        if len(named) == 1:
+            return named[0], f"{self.looks[named[0].index].evidence}; named like a DIR", "name"
+        nxt = next((c for c in still if c.index == s.index + 1), None)
+        if nxt is not None and self.hints[nxt.index].neutral:
+            why = f"{self.looks[nxt.index].evidence}; the channel after {self.name_of(s)}"
+            return nxt, why, "layout"
+        return None
 
     def _looks(self) -> list[LineLook]:
         phase = {c.index for a in self.axes if a.kind == "phases" for c in a.channels}
@@ -974,6 +1080,10 @@ class _Inference:
         return sorted(cands, key=key)
 
 
+def _index(c: Channel) -> int:
+    return c.index
+
+
 def propose(capture: Capture) -> Proposal:
     """Propose axes and roles for ``capture``'s channels from their waveforms.
 
@@ -982,6 +1092,19 @@ def propose(capture: Capture) -> Proposal:
     conflicts.
     """
     return _Inference(capture).run()
+
+
+def name_conflicts(capture: Capture, named: Mapping[str, int]) -> tuple[NameRefused, ...]:
+    """The names a mapping by channel names must not follow: ``named`` is role → channel index
+    (the lines :func:`wavecheck.engine.auto_map` maps by their names); for each STEP, UP or DOWN
+    whose waveform says it makes no step pulses (a clock, a bus line, PWM, a serial line, no
+    pulse at all), a :class:`~wavecheck.roles.proposal.NameRefused` with the reason and the lines
+    most like a STEP. Empty when no name is contradicted. ``capture`` holds the edges (or its
+    first part)."""
+    inference = _Inference(capture)
+    inference._buses([c for c in capture.channels if len(c.xz_times) == 0])
+    found = [(role, capture.channels[index]) for role, index in named.items()]
+    return tuple(inference._name_conflicts(found))
 
 
 def best_channel(capture: Capture, role: str) -> str | None:

@@ -202,14 +202,13 @@ def test_a_line_named_dir_is_never_a_step() -> None:
 
 def test_channels_named_after_their_roles_are_what_check_maps() -> None:
     """Issue 26: a channel called ``step`` is the STEP ``check`` maps without --map
-    (engine.auto_map); the proposal is that mapping, with what the waveform says against it."""
+    (engine.auto_map); the proposal is that mapping, with what the waveform says against it (a
+    step train named DIR; a STEP whose waveform is none is refused: test_named.py)."""
     step = pulses(_move(0, 19), 5 * US)
-    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
+    p = propose(capture({"DIR": (0, step), "STEP": (0, pulses([1003 * US], 5 * US))}))
     assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
     assert all(r.basis == "name" for r in p.axes[0].roles)
-    (note,) = p.axes[0].notes
-    assert note.startswith("step 1='STEP' is taken by its name, but its waveform says it is no ")
-    assert "check checks it as named" in note
+    assert p.axes[0].role("step").evidence == "named 'STEP'; its waveform: changes 2 times"
 
 
 def _reversing_axis(
