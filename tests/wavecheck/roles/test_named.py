@@ -6,7 +6,6 @@ both by :func:`wavecheck.roles.propose` (``info``) and by :func:`wavecheck.engin
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from tests.engine_probe import run_check
@@ -17,15 +16,7 @@ from wavecheck.roles import name_conflicts, propose
 from wavecheck.steptypes import step_type
 
 from ..waves import capture, drive, pulses
-
-US = 1000  # ticks (ns) per µs
-
-
-def _move(t0: int, n: int, period: int = 100 * US) -> list[int]:
-    """Pulse starts of one move that speeds up and slows down over three steps each end."""
-    ramp = (3.7, 1.55, 1.2)
-    factors = [ramp[min(k, n - 1 - k)] if min(k, n - 1 - k) < 3 else 1.0 for k in range(n)]
-    return [t0 + int(x) for x in np.cumsum(factors) * period]
+from .moves import US, move
 
 
 def _clock(n: int, half: int = 5 * US) -> list[int]:
@@ -49,7 +40,7 @@ def _pwm(n: int, period: int = 20 * US) -> list[int]:
 
 _UART = "".join(f"0{v:08b}1" + "1" * (k % 3) for k, v in enumerate(b"step and dir bytes " * 3))
 #: a step train beside the named line: the line most like a STEP
-_TRAIN = pulses(_move(0, 30), 5 * US)
+_TRAIN = pulses(move(0, 30), 5 * US)
 
 #: (the waveform of the line named ``step``, refused?, words of the reason)
 NAMED_STEP = [
@@ -58,7 +49,7 @@ NAMED_STEP = [
     ("one edge", (0, [1003 * US]), True, "not one whole pulse"),
     ("serial line", (1, _serial(_UART)), True, "serial line"),
     ("PWM", (0, _pwm(60)), True, "PWM"),
-    ("step train", (0, pulses(_move(0, 19), 5 * US)), False, ""),
+    ("step train", (0, pulses(move(0, 19), 5 * US)), False, ""),
     ("three pulses", (0, pulses([100 * US, 400 * US, 900 * US], 5 * US)), False, ""),
     ("pulses at one rate", (0, pulses([k * 50 * US for k in range(1, 40)], 5 * US)), False, ""),
 ]
@@ -139,6 +130,17 @@ def test_auto_map_judges_only_with_the_waveforms() -> None:
 
 
 def test_check_of_a_named_step_train_is_unchanged() -> None:
-    cap = capture({"step": (0, pulses(_move(0, 19), 5 * US)), "dir": (0, [])})
+    cap = capture({"step": (0, pulses(move(0, 19), 5 * US)), "dir": (0, [])})
     r = run_check(cap, drive("rising", step_high=1000)).report
     assert r.steps.count == 19
+
+
+def test_channels_named_after_their_roles_are_what_check_maps() -> None:
+    """Issue 26: a channel called ``step`` is the STEP ``check`` maps without --map
+    (engine.auto_map); the proposal is that mapping, with what the waveform says against it (a
+    step train named DIR; a STEP whose waveform is none is refused: test_named.py)."""
+    step = pulses(move(0, 19), 5 * US)
+    p = propose(capture({"DIR": (0, step), "STEP": (0, pulses([1003 * US], 5 * US))}))
+    assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
+    assert all(r.basis == "name" for r in p.axes[0].roles)
+    assert p.axes[0].role("step").evidence == "named 'STEP'; its waveform: changes 2 times"
