@@ -63,8 +63,8 @@ def auto_map(
     ``taken`` (the channels the user mapped, by name) is never mapped again to another role.
 
     A name is a hint, not evidence: given ``waveforms`` (the capture's edges, or its first
-    part), a STEP, UP or DOWN so mapped whose waveform makes no step pulses (a clock, a bus
-    line, PWM, a serial line, no pulse at all; :func:`wavecheck.roles.name_conflicts`) is
+    part), a STEP, UP or DOWN so mapped whose waveform makes no step pulses (a free-running
+    clock, a bus line, not one whole pulse; :func:`wavecheck.roles.name_conflicts`) is
     refused with the reason and the lines most like a STEP.
 
     Raises:

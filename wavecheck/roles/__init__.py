@@ -10,8 +10,8 @@ contradicts. The rules:
   ``up`` or ``phase-A`` (the end of a hierarchical name, any case), the axis is the one
   ``check`` maps by those names without ``--map``; what the waveforms say against it goes into
   its notes. A name is a hint, not evidence: a STEP, UP or DOWN so named whose waveform makes
-  no step pulses (a bus's clock, data or gate, a clock, PWM, a serial line, not one whole pulse)
-  is refused, with the reason and the lines most like a STEP (:func:`name_conflicts`, which
+  no step pulses (a bus's clock, data or gate, a free-running clock, not one whole pulse) is
+  refused, with the reason and the lines most like a STEP (:func:`name_conflicts`, which
   ``check`` asks too).
 - **STEP**: a step train: many pulses at one level with nearly constant width, no longer than
   the gaps, at a rate that changes as a motor's does (:mod:`wavecheck.roles.features`,

@@ -1,7 +1,7 @@
 """Channels named after their roles (``step``, ``up``, ``phase-A``): the axis ``check`` maps by
 those names without ``--map`` (:func:`wavecheck.engine.auto_map`), with what the waveforms say
 of each line. A name is a hint, not evidence: a STEP, UP or DOWN whose waveform makes no step
-pulses (a clock, a bus's line, PWM, a serial line, not one whole pulse) is refused with the
+pulses (a free-running clock, a bus's line, not one whole pulse) is refused with the
 reason and the lines most like a STEP; pulses the waveform cannot tell from steps keep the name."""
 
 from __future__ import annotations
@@ -96,14 +96,16 @@ class NamedAxis(State):
 
     def _no_pulse_line(self, c: Channel) -> str:
         """What in the waveform of ``c`` says it is no STEP, UP or DOWN line whatever its name
-        (empty when nothing does): a bus's clock, data or gate, a clock, PWM, a serial line, a
-        line that never changes or never makes one whole pulse. Pulses the waveform cannot tell
-        from steps (a few, at one rate, coded) do not contradict a name."""
+        (empty when nothing does): a bus's clock, data or gate, a free-running clock, a line
+        that never changes or never makes one whole pulse. Pulses the waveform cannot tell from
+        steps (a few, at one rate, coded) do not contradict a name, and neither do PWM or a
+        serial line's look: a base thread's step generator puts every edge on its period's
+        lattice, and its latency varies the widths (``stepgen simulate`` is read so)."""
         look = self.looks[c.index]
         no = self.bus.no_step(c.index)
         if no is not None:
             return no
-        if look.kind in ("clock", "pwm", "serial", "constant"):
+        if look.kind in ("clock", "constant"):
             return look.evidence
         if len(c.edges) < 2:
             return f"{look.evidence}: not one whole pulse"
