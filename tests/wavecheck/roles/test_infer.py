@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 from tests.bounds import lines_run, peak_bytes
 from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
-from wavecheck.engine.interface import build_interface, parse_map
 from wavecheck.roles import Proposal, propose
+from wavecheck.steps.interface import build_interface, parse_map
 
 from ..waves import capture, pulses, renamed
 from .moves import US, reversing_axis, roles_of
@@ -28,7 +28,7 @@ GOLDEN = Path(__file__).resolve().parents[3] / "captures" / "golden"
 # ---------------------------------------------------------------- real captures
 
 
-def test_grbl_step_is_step_en_is_enable_serial_lines_are_notroles_of(grbl_sr: Path) -> None:
+def test_grbl_step_is_step_en_is_enable_serial_lines_are_not_roles(grbl_sr: Path) -> None:
     p = propose(open_capture(grbl_sr))
     assert p.unambiguous, p.text()
     assert roles_of(p) == {"y": {"step": "STEP (Y axis)", "enable": "EN"}}
@@ -420,7 +420,7 @@ def test_generated_machines_are_mostly_decided() -> None:
     assert verdicts.count("right") >= 0.45 * len(verdicts), verdicts
 
 
-def test_generated_machines_named_after_theirroles_of() -> None:
+def test_generated_machines_named_after_their_roles() -> None:
     """Issue 33: in two of 120 simulated machines ``x_dir`` was made the STEP of its own axis and
     ``x_step`` lost its DIR. With the lines named ``x_step``, ``x_dir`` … no DIR is ever a STEP,
     and no axis is wrong."""
