@@ -251,6 +251,10 @@ class Proposal:
         """The ``--map`` options that give this mapping, ready to paste into a shell."""
         return axes_map_args(self.axes)
 
+    def suggested_map_args(self) -> str:
+        """The ``--map`` options of :attr:`suggested` (empty when none)."""
+        return axes_map_args(self.suggested) if self.suggested else ""
+
     def hint(self) -> str:
         """What a refusal without axes says of the lines most like a STEP (:attr:`suggested`):
         which they are, what is missing, and the ``--map`` that checks them anyway with every
@@ -266,7 +270,7 @@ class Proposal:
         return (
             f"the lines most like a STEP are no step train on their waveform: {lines}, and no "
             "line changes between their pulses as a DIR would; to check them anyway: "
-            f"{axes_map_args(self.suggested)}{words}"
+            f"{self.suggested_map_args()}{words}"
         )
 
     def type_args(self) -> str:
@@ -324,7 +328,7 @@ class Proposal:
             "lines": [{"channel": k.channel, "index": k.index, "look": k.word} for k in self.looks],
             "candidates": list(self.candidates),
             "map_args": self.map_args() if self.axes else None,
-            "suggested_map_args": axes_map_args(self.suggested) if self.suggested else None,
+            "suggested_map_args": self.suggested_map_args() or None,
         }
 
     def text(self) -> str:

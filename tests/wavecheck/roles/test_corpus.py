@@ -11,7 +11,7 @@ from fractions import Fraction
 import pytest
 
 from tests.conftest import SHARED_CAPTURES
-from tools.roles_corpus import _expected, judge
+from tools.roles_corpus import _expected, dirs_kept, judge
 from wavecheck.capture.open import open_capture
 from wavecheck.errors import WavecheckError
 from wavecheck.roles import propose
@@ -42,6 +42,7 @@ def test_no_role_the_waveform_contradicts(rel: str) -> None:
     p = propose(cap)
     carries, verdict = judge(rel, p)
     assert verdict != "wrong"
+    assert dirs_kept(rel, p) is not False, p.text()  # a (suggested) map drops no README DIR
     if carries == "quadrature":
         assert verdict == "right"
     if carries == "steps" and verdict != "right":
