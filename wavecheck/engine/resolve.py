@@ -100,9 +100,9 @@ def _refuse_contradicted_names(waveforms: Capture, mapping: Mapping[str, str]) -
         "to check this line anyway",
         tuple(
             line
-            for r in refused
+            for k, r in enumerate(refused)
             for line in (
-                f"{r.conflict.question}:",
+                "candidates:" if k == 0 else f"{r.conflict.question}:",
                 *(f"  - {cand}" for cand in r.conflict.candidates),
             )
         ),

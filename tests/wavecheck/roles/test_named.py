@@ -6,10 +6,14 @@ both by :func:`wavecheck.roles.propose` (``info``) and by :func:`wavecheck.engin
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+from tests.conftest import write_vcd
 from tests.engine_probe import run_check
 from wavecheck.capture.edges import Capture
+from wavecheck.cli import main
 from wavecheck.engine import auto_map
 from wavecheck.errors import UsageError
 from wavecheck.roles import name_conflicts, propose
@@ -145,3 +149,26 @@ def test_channels_named_after_their_roles_are_what_check_maps() -> None:
     assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
     assert all(r.basis == "name" for r in p.axes[0].roles)
     assert p.axes[0].role("step").evidence == "named 'STEP'; its waveform: changes 2 times"
+
+
+def test_the_user_sees_the_refusal_and_the_candidates(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``wavecheck check`` of a VCD whose ``step`` is a clock: exit 2, one error line naming
+    the line, the reason and both --map choices, the candidates below; ``info`` asks the same."""
+    vcd = write_vcd(
+        tmp_path / "named.vcd", {"step": (0, _clock(200)), "dir": (0, []), "X": (0, _TRAIN)}
+    )
+    assert main(["check", str(vcd), "--drive", "gecko-g202"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith(f"wavecheck: error: {vcd}: 0='step' is named STEP, but its wave")
+    assert "(e.g. --map step=X), or --map step=step to check this line anyway" in err[0]
+    assert err[1:] == [
+        "  candidates:",
+        "    - step=step: named so; clock: 200 pulses, every period 10 us (100 kHz), 50% duty, "
+        "no pause: a free-running clock, not a step signal",
+        "    - step=X: pulse train: 30 high pulses of 5 us, gaps 95 us–365 us, rate up to 10 kHz",
+    ]
+    assert main(["info", str(vcd)]) == 0
+    assert "ambiguous: 0='step' is named STEP" in capsys.readouterr().out
+    assert main(["check", str(vcd), "--drive", "gecko-g202", "--map", "step=X"]) in (0, 1)
