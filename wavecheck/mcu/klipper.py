@@ -1,0 +1,321 @@
+"""Klipper on a simulated AVR: its build, its host's batch output made fit for a fresh MCU, its pins.
+
+The host (klippy, run as a separate process in batch mode: ``klippy.py printer.cfg -i job.gcode
+-o job.serial -d klipper.dict``) turns the G-code into the message blocks it would send. Facts
+from Klipper's source (Klipper3d/klipper 84104bb) that decide how they are fed to the MCU:
+- batch mode numbers its blocks from 1 (``klippy/chelper/serialqueue.c``, ``send_seq = 1``); a
+  freshly reset MCU expects 0 (``src/command.c:16``, ``next_sequence = MESSAGE_DEST``) and
+  discards the others: the blocks are renumbered from 0;
+- batch mode assumes the MCU has 500 move-queue slots (``klippy/mcu.py:1036-1038``), but the MCU
+  has what its RAM leaves (``src/basecmd.c:170-177``: ``alloc_chunks``), and a command that finds
+  no free slot shuts it down (``basecmd.c:88-90``, "Move queue overflow"). Each
+  ``queue_step`` (``src/stepper.c``, ``command_queue_step``), ``queue_digital_out``
+  (``src/gpiocmds.c:148``) and ``queue_pwm_out`` (``src/pwmcmds.c:86``) takes one; the runner
+  sends a block only when the MCU's free list (``basecmd.c:61``, ``move_free_list``) holds as
+  many as the block needs;
+- the MCU's clock is Timer1 at clk/1 (``src/avr/timer.c:100``), so a clock in a command is a CPU
+  cycle; a stepper's first step comes ``interval`` after its last step time (0 after
+  ``config_stepper``, or the ``reset_step_clock`` clock), each next one ``interval + k*add`` later
+  (``src/stepper.c:60-118``): the job's last event is known from the blocks.
+"""
+
+from __future__ import annotations
+
+import configparser
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from wavecheck.errors import ConfigError, UsageError
+from wavecheck.mcu.klipper_msg import Dictionary, decode_block, renumber, split_blocks
+from wavecheck.mcu.run import MCUS, SimRun
+
+__all__ = [
+    "DEFAULT_KCONFIG",
+    "Job",
+    "Stepper",
+    "batch",
+    "free_list_address",
+    "job",
+    "outcome",
+    "steppers",
+]
+
+#: The build wavecheck makes when no .config is given: an ATmega644P at 16 MHz, serial on
+#: USART0 at 250000 baud (Klipper's defaults for it: src/avr/Kconfig, src/Kconfig).
+DEFAULT_KCONFIG = b"CONFIG_MACH_AVR=y\nCONFIG_MACH_atmega644p=y\nCONFIG_AVR_FREQ_16000000=y\n"
+#: Commands that take a move-queue slot (see the module's docstring).
+MOVE_COMMANDS = frozenset({"queue_step", "queue_digital_out", "queue_pwm_out"})
+#: Responses after which the MCU does nothing more (``src/sched.c``: shutdown).
+STOP_RESPONSES = ("shutdown", "is_shutdown")
+#: The symbol of the MCU's free-list head (``src/basecmd.c:61``); LTO adds a suffix.
+FREE_LIST = "move_free_list"
+#: Wall-time bound of klippy's batch run, s.
+_KLIPPY_TIMEOUT_S = 600
+#: Hints for the MCU's shutdown reasons (``static_string_id``) a simulation can cause.
+_SHUTDOWN_HINTS = {
+    "Move queue overflow": ": more moves in flight than the MCU's move queue holds",
+    "Timer too close": ": the MCU could not keep up with the step rate",
+    "Rescheduled timer in the past": ": the MCU could not keep up with the step rate",
+}
+
+
+@dataclass(frozen=True)
+class Stepper:
+    """A stepper of printer.cfg: its section and its pins (``PORT.BIT``), the enable's polarity."""
+
+    section: str
+    name: str
+    step: str
+    dir: str
+    enable: str | None
+    enable_active_low: bool
+
+
+@dataclass(frozen=True)
+class Job:
+    """The blocks to send (renumbered, with the move slots each takes) and what they command."""
+
+    blocks: tuple[bytes, ...]
+    needs: tuple[int, ...]
+    last_event: int  # the MCU clock of the last step or scheduled output
+    steps: dict[int, int]  # oid -> steps commanded
+    stop_prefixes: tuple[bytes, ...]
+
+    def lines(self) -> list[str]:
+        """The runner's input: ``NEED HEX`` per block."""
+        return [f"{n} {b.hex()}" for n, b in zip(self.needs, self.blocks, strict=True)]
+
+
+_PIN = re.compile(r"^[\^~!\s]*(?:(\w+)\s*:\s*)?[\^~!\s]*P([A-L])([0-7])\s*$", re.I)
+
+
+def _pin(value: str, where: str) -> tuple[str, bool]:
+    m = _PIN.match(value)
+    if m is None or (m.group(1) or "mcu").lower() != "mcu":
+        raise UsageError(
+            f"{where}: pin '{value}': expected an AVR pin of the main MCU, e.g. PD7 or !PD6"
+        )
+    return f"{m.group(2).upper()}.{m.group(3)}", "!" in value
+
+
+def steppers(config: Path) -> list[Stepper]:
+    """The steppers of a Klipper printer.cfg (``[stepper_*]`` and ``[extruder*]`` sections).
+
+    Raises:
+        UsageError: unreadable, not INI, no stepper, a pin that is not one of the MCU's.
+    """
+    parser = configparser.RawConfigParser(
+        strict=False, inline_comment_prefixes=("#", ";"), delimiters=(":", "=")
+    )
+    try:
+        parser.read_string(config.read_text(encoding="utf-8"), str(config))
+    except OSError as err:
+        raise UsageError(f"{config}: cannot read it: {err.strerror}") from None
+    except (configparser.Error, UnicodeDecodeError) as err:
+        first = str(err).splitlines()[0]
+        raise UsageError(f"{config}: not a Klipper config: {first}") from None
+    out = []
+    for section in parser.sections():
+        kind = section.split(" ")[0]
+        if not (kind.startswith("stepper_") or kind.startswith("extruder")):
+            continue
+        if not parser.has_option(section, "step_pin"):
+            continue
+        where = f"{config} [{section}]"
+        step, _ = _pin(parser.get(section, "step_pin"), where)
+        direction, _ = _pin(parser.get(section, "dir_pin", fallback=""), where)
+        enable, low = None, False
+        if parser.has_option(section, "enable_pin"):
+            enable, low = _pin(parser.get(section, "enable_pin"), where)
+        name = kind.removeprefix("stepper_").replace("extruder", "e").upper()
+        out.append(Stepper(section, name, step, direction, enable, low))
+    if not out:
+        raise UsageError(f"{config}: no [stepper_*] or [extruder] section with a step_pin")
+    return out
+
+
+def batch(klippy: Path, config: Path, gcode: Path, dictionary: Path) -> bytes:
+    """klippy's batch output for the job (the blocks it would send to the MCU).
+
+    Raises:
+        ConfigError: klippy refused the config or the G-code (its own words, and the G-code
+            line where it names a command), or ran over its time bound.
+    """
+    with tempfile.TemporaryDirectory(prefix="wavecheck-klippy-") as tmp:
+        out, log = Path(tmp) / "job.serial", Path(tmp) / "klippy.log"
+        cmd = [sys.executable, str(klippy), str(config.resolve()), "-i", str(gcode.resolve())]
+        cmd += ["-o", str(out), "-d", str(dictionary.resolve()), "-l", str(log)]
+        try:
+            done = subprocess.run(
+                cmd,
+                capture_output=True,
+                text=True,
+                timeout=_KLIPPY_TIMEOUT_S,
+                env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+                check=False,
+            )
+        except subprocess.TimeoutExpired:
+            raise ConfigError(
+                f"{gcode}: klippy's batch run took over {_KLIPPY_TIMEOUT_S} s"
+            ) from None
+        text = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
+        if done.returncode:
+            raise ConfigError(_klippy_error(text + done.stderr, config, gcode))
+        return out.read_bytes()
+
+
+def _klippy_error(text: str, config: Path, gcode: Path) -> str:
+    """One line from klippy's log: the config error, or the G-code error and its line."""
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    if not lines:
+        return f"{gcode}: klippy's batch run failed and said nothing"
+    if "ModuleNotFoundError" in text or "ImportError" in text:
+        missing = re.findall(r"No module named '(\w+)'", text)
+        return (
+            f"klippy cannot start: no Python module {', '.join(missing) or '?'}: "
+            "pip install 'wavecheck[klipper]'"
+        )
+    config_err = next((ln for ln in lines if ln.startswith(("Config error", "Option "))), None)
+    if config_err is not None:
+        detail = lines[lines.index(config_err) + 1] if config_err == "Config error" else ""
+        return f"{config}: klippy refused the config: {detail or config_err}"
+    # the last line after the configuration dump that is not an info line
+    said = lines[-1]
+    unknown = re.match(r'Unknown command:"(\S+)"', said)
+    where = str(gcode)
+    if unknown:
+        for k, raw in enumerate(gcode.read_text(errors="replace").splitlines(), 1):
+            if raw.split(";")[0].strip().upper().split(" ")[:1] == [unknown.group(1).upper()]:
+                where = f"{gcode}:{k}"
+                break
+    return f"{where}: klippy rejected the job: {said}"
+
+
+def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
+    """The blocks of klippy's batch output made ready for a freshly reset MCU.
+
+    Raises:
+        UsageError: not a stream of message blocks, or a command the dictionary lacks.
+    """
+    raw = split_blocks(serial, where)
+    if not raw:
+        raise UsageError(f"{where}: klippy sent nothing to the MCU")
+    blocks, needs = [], []
+    next_step: dict[int, int] = {}
+    steps: dict[int, int] = {}
+    last = 0
+    for k, block in enumerate(raw):
+        try:
+            messages = decode_block(block, dictionary)
+        except (ValueError, IndexError) as err:
+            raise UsageError(f"{where}: block {k}: {err}") from None
+        need = 0
+        for m in messages:
+            need += m.name in MOVE_COMMANDS
+            a = m.args
+            if m.name == "config_stepper":
+                next_step[int(a["oid"])] = 0
+                steps.setdefault(int(a["oid"]), 0)
+            elif m.name == "reset_step_clock":
+                next_step[int(a["oid"])] = int(a["clock"])
+            elif m.name == "queue_step":
+                oid, n, iv, add = (int(a[x]) for x in ("oid", "count", "interval", "add"))
+                end = next_step.get(oid, 0) + n * iv + add * n * (n - 1) // 2
+                next_step[oid] = end
+                steps[oid] = steps.get(oid, 0) + n
+                last = max(last, end)
+            elif m.name in ("queue_digital_out", "queue_pwm_out"):
+                last = max(last, int(a["clock"]))
+        blocks.append(renumber(block, k))
+        needs.append(need)
+    # a last block asks the MCU for its configuration: its answer tells its move-queue size
+    payload = dictionary.encode_id("get_config")
+    blocks.append(renumber(bytes([len(payload) + 5, 0]) + payload + bytes(3), len(blocks)))
+    needs.append(0)
+    stops = tuple(dictionary.encode_id(n) for n in STOP_RESPONSES)
+    return Job(tuple(blocks), tuple(needs), last, steps, stops)
+
+
+def free_list_address(elf: Path) -> int:
+    """The data-space address of the MCU's move free-list head, from the ELF's symbols.
+
+    Raises:
+        ConfigError: the ELF has no such symbol (stripped, or not Klipper).
+    """
+    from elftools.elf.elffile import ELFFile
+    from elftools.elf.sections import SymbolTableSection
+
+    with elf.open("rb") as f:
+        for section in ELFFile(f).iter_sections():
+            if not isinstance(section, SymbolTableSection):
+                continue
+            for sym in section.iter_symbols():
+                if sym.name == FREE_LIST or sym.name.startswith(FREE_LIST + "."):
+                    return int(sym["st_value"]) & 0xFFFF  # data space is at 0x800000
+    raise ConfigError(
+        f"{elf}: no symbol {FREE_LIST} (src/basecmd.c): a stripped ELF, or not Klipper; "
+        "give the unstripped out/klipper.elf"
+    )
+
+
+def mcu_of(dictionary: Dictionary, where: Path) -> tuple[str, int]:
+    """The MCU and clock the build is for (its dictionary's ``MCU`` and ``CLOCK_FREQ``).
+
+    Raises:
+        UsageError: an MCU the simulation does not have.
+    """
+    mcu = str(dictionary.constants.get("MCU", "?"))
+    clock = int(dictionary.constants.get("CLOCK_FREQ", 0))
+    if mcu not in MCUS or mcu == "atmega328p":
+        raise UsageError(
+            f"{where}: a Klipper build for {mcu}; the simulation runs the atmega644p and the "
+            "atmega2560 (CONFIG_MACH_atmega644p or CONFIG_MACH_atmega2560)"
+        )
+    return mcu, clock
+
+
+def outcome(run: SimRun, dictionary: Dictionary) -> int:
+    """The MCU's move-queue size (its answer to the last block, ``get_config``), after checking
+    that the run went through.
+
+    Raises:
+        ConfigError: no answer, a nak, a shutdown (with its reason), or the job unfinished.
+    """
+    move_count = 0
+    reasons = dictionary.names("static_string_id")
+    shutdown = None
+    for p in run.printed:
+        try:
+            messages = decode_block(bytes.fromhex(p.text), dictionary)
+        except (ValueError, IndexError):
+            continue
+        for m in messages:
+            if m.name == "config":
+                move_count = int(m.args["move_count"])
+            if m.name in STOP_RESPONSES and shutdown is None:
+                shutdown = (p.cycle, reasons.get(int(m.args["static_string_id"]), "?"))
+    at = f"{run.end_cycle / run.clock_hz:.6f} s"
+    if run.end == "noanswer":
+        raise ConfigError(
+            "the MCU never answered the first message block within the simulated time: not a "
+            "Klipper build for this MCU, or another clock or baud rate"
+        )
+    if shutdown is not None:
+        cycle, why = shutdown
+        raise ConfigError(
+            f"the simulated MCU shut down at {cycle / run.clock_hz:.6f} s: "
+            f"'{why}'{_SHUTDOWN_HINTS.get(why, '')}"
+        )
+    if run.end == "nak":
+        raise ConfigError(f"the MCU refused a message block (out of sequence) at {at}")
+    if run.end != "done" or not move_count:
+        raise ConfigError(
+            f"the job did not finish within the simulated time limit ({at}): "
+            "raise --max-time, or shorten the job"
+        )
+    return move_count
