@@ -34,7 +34,10 @@ def dictionary(tmp_path: Path) -> Dictionary:
             "config_endstop oid=%c pin=%c pull_up=%c": 26,
             "get_config": 100,
         },
-        "responses": {"shutdown clock=%u static_string_id=%hu": -13, "is_shutdown static_string_id=%hu": 114},
+        "responses": {
+            "shutdown clock=%u static_string_id=%hu": -13,
+            "is_shutdown static_string_id=%hu": 114,
+        },
         "enumerations": {"pin": {"PA0": [0, 8], "PC0": [16, 8]}, "static_string_id": {"Hi": 3}},
         "config": {"MCU": "atmega644p", "CLOCK_FREQ": 16000000},
         "version": "v",
