@@ -3,9 +3,9 @@
 The host (klippy, run as a separate process in batch mode: ``klippy.py printer.cfg -i job.gcode
 -o job.serial -d klipper.dict``) turns the G-code into the message blocks it would send. Facts
 from Klipper's source (Klipper3d/klipper 84104bb) that decide how they are fed to the MCU:
-- batch mode numbers its blocks from 1 (``klippy/chelper/serialqueue.c``, ``send_seq = 1``); a
+- batch mode numbers its blocks from 1 (``klippy/chelper/serialqueue.c:736``, ``send_seq = 1``); a
   freshly reset MCU expects 0 (``src/command.c:16``, ``next_sequence = MESSAGE_DEST``) and
-  discards the others: the blocks are renumbered from 0;
+  discards the others: the blocks are numbered anew from 0;
 - batch mode assumes the MCU has 500 move-queue slots (``klippy/mcu.py:1036-1038``), but the MCU
   has what its RAM leaves (``src/basecmd.c:170-177``: ``alloc_chunks``), and a command that finds
   no free slot shuts it down (``basecmd.c:88-90``, "Move queue overflow"). Each
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wavecheck.errors import ConfigError, UsageError
-from wavecheck.mcu.klipper_msg import Dictionary, decode_block, renumber, split_blocks
+from wavecheck.mcu.klipper_msg import Dictionary, decode_block, pack, split_blocks
 from wavecheck.mcu.run import MCUS, SimRun
 
 __all__ = [
@@ -197,7 +197,12 @@ def _klippy_error(text: str, config: Path, gcode: Path) -> str:
 
 
 def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
-    """The blocks of klippy's batch output made ready for a freshly reset MCU.
+    """The commands of klippy's batch output made ready for a freshly reset MCU: packed anew
+    into blocks numbered from 0, and a ``get_config`` after them.
+
+    klippy packs commands into blocks as its real-time clock goes, so two batch runs of one job
+    give the same commands in different blocks; packing them anew (as many as fit, in order)
+    makes a rerun feed the MCU the same bytes at the same cycles, hence the same VCD.
 
     Raises:
         UsageError: not a stream of message blocks, or a command the dictionary lacks.
@@ -205,38 +210,35 @@ def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
     raw = split_blocks(serial, where)
     if not raw:
         raise UsageError(f"{where}: klippy sent nothing to the MCU")
-    blocks, needs = [], []
+    messages = []
+    for k, block in enumerate(raw):
+        try:
+            messages += decode_block(block, dictionary)
+        except (ValueError, IndexError) as err:
+            raise UsageError(f"{where}: block {k}: {err}") from None
     next_step: dict[int, int] = {}
     steps: dict[int, int] = {}
     last = 0
-    for k, block in enumerate(raw):
-        try:
-            messages = decode_block(block, dictionary)
-        except (ValueError, IndexError) as err:
-            raise UsageError(f"{where}: block {k}: {err}") from None
-        need = 0
-        for m in messages:
-            need += m.name in MOVE_COMMANDS
-            a = m.args
-            if m.name == "config_stepper":
-                next_step[int(a["oid"])] = 0
-                steps.setdefault(int(a["oid"]), 0)
-            elif m.name == "reset_step_clock":
-                next_step[int(a["oid"])] = int(a["clock"])
-            elif m.name == "queue_step":
-                oid, n, iv, add = (int(a[x]) for x in ("oid", "count", "interval", "add"))
-                end = next_step.get(oid, 0) + n * iv + add * n * (n - 1) // 2
-                next_step[oid] = end
-                steps[oid] = steps.get(oid, 0) + n
-                last = max(last, end)
-            elif m.name in ("queue_digital_out", "queue_pwm_out"):
-                last = max(last, int(a["clock"]))
-        blocks.append(renumber(block, k))
-        needs.append(need)
-    # a last block asks the MCU for its configuration: its answer tells its move-queue size
-    payload = dictionary.encode_id("get_config")
-    blocks.append(renumber(bytes([len(payload) + 5, 0]) + payload + bytes(3), len(blocks)))
-    needs.append(0)
+    for m in messages:
+        a = m.args
+        if m.name == "config_stepper":
+            next_step[int(a["oid"])] = 0
+            steps.setdefault(int(a["oid"]), 0)
+        elif m.name == "reset_step_clock":
+            next_step[int(a["oid"])] = int(a["clock"])
+        elif m.name == "queue_step":
+            oid, n, iv, add = (int(a[x]) for x in ("oid", "count", "interval", "add"))
+            end = next_step.get(oid, 0) + n * iv + add * n * (n - 1) // 2
+            next_step[oid] = end
+            steps[oid] = steps.get(oid, 0) + n
+            last = max(last, end)
+        elif m.name in ("queue_digital_out", "queue_pwm_out"):
+            last = max(last, int(a["clock"]))
+    # the last block asks the MCU for its configuration: its answer tells its move-queue size
+    blocks = pack([m.raw for m in messages] + [dictionary.encode_id("get_config")])
+    needs = []
+    for block in blocks:
+        needs.append(sum(m.name in MOVE_COMMANDS for m in decode_block(block, dictionary)))
     stops = tuple(dictionary.encode_id(n) for n in STOP_RESPONSES)
     return Job(tuple(blocks), tuple(needs), last, steps, stops)
 

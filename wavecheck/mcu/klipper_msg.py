@@ -33,6 +33,7 @@ __all__ = [
     "Message",
     "block_crc",
     "decode_block",
+    "pack",
     "renumber",
     "split_blocks",
     "vlq",
@@ -108,10 +109,12 @@ def vlq(value: int) -> bytes:
 
 @dataclass(frozen=True)
 class Message:
-    """A command or response: its name and its arguments (integers, or bytes for strings)."""
+    """A command or response: its name, its arguments (integers, or bytes for strings) and the
+    bytes it is sent as."""
 
     name: str
     args: dict[str, int | bytes]
+    raw: bytes
 
 
 @dataclass(frozen=True)
@@ -177,6 +180,7 @@ def decode_block(block: bytes, d: Dictionary) -> list[Message]:
     """
     payload, pos, out = block[2:-3], 0, []
     while pos < len(payload):
+        start = pos
         ident, pos = _vlq(payload, pos)
         fmt = d.formats.get(ident)
         if fmt is None:
@@ -191,5 +195,21 @@ def decode_block(block: bytes, d: Dictionary) -> list[Message]:
                 pos += 1 + n
             else:
                 args[key], pos = _vlq(payload, pos)
-        out.append(Message(name, args))
+        if pos > len(payload):
+            raise ValueError(f"{name}: the block ends inside its arguments")
+        out.append(Message(name, args, bytes(payload[start:pos])))
     return out
+
+
+def pack(commands: list[bytes]) -> list[bytes]:
+    """Commands (their bytes, in order) in as few blocks as fit, numbered from 0: each block
+    takes the next commands while its payload stays within 59 bytes (64 - 5)."""
+    payloads: list[bytes] = []
+    for cmd in commands:
+        if payloads and len(payloads[-1]) + len(cmd) <= BLOCK_MAX - BLOCK_MIN:
+            payloads[-1] += cmd
+        else:
+            payloads.append(cmd)
+    return [
+        renumber(bytes([len(p) + BLOCK_MIN, 0]) + p + bytes(3), k) for k, p in enumerate(payloads)
+    ]
