@@ -14,10 +14,6 @@ from wavecheck.errors import UsageError
 
 __all__ = ["run_klipper"]
 
-#: The runner sends nothing before this fraction of a second: Klipper enables its UART's
-#: receiver during start-up (src/avr/serial.c, serial_init), and a byte before it is lost.
-_START_S = 100
-
 
 def _read(path: str, option: str) -> bytes:
     try:
@@ -28,10 +24,10 @@ def _read(path: str, option: str) -> bytes:
 
 def run_klipper(args: argparse.Namespace) -> int:
     """Build, batch, simulate, record, check; returns ``check``'s exit code."""
-    from wavecheck.mcu import klipper, klipper_kconfig
-    from wavecheck.mcu.build import build_firmware, build_klippy, build_runner
+    from wavecheck.mcu import klipper
+    from wavecheck.mcu.build import build_klippy, build_runner
     from wavecheck.mcu.klipper_msg import Dictionary
-    from wavecheck.mcu.run import check_elf, simulate
+    from wavecheck.mcu.run import check_elf
 
     if args.config is None:
         raise UsageError("simulate klipper needs --config printer.cfg (klippy's configuration)")
@@ -60,51 +56,32 @@ def run_klipper(args: argparse.Namespace) -> int:
         elf, dict_path = Path(args.elf), Path(args.dict)
     else:
         assert src is not None
-        kconfig = _read(args.kconfig, "--kconfig") if args.kconfig else klipper.DEFAULT_KCONFIG
-        replace = {
-            ".config": kconfig,
-            "lib/kconfiglib/genconfig.py": klipper_kconfig.GENCONFIG,
-            "lib/kconfiglib/olddefconfig.py": klipper_kconfig.OLDDEFCONFIG,
-        }
-        python = f"PYTHON={sys.executable}"
-        elf = build_firmware(
-            src,
-            "src/stepper.c",
-            replace,
-            [python],
-            "out/klipper.elf",
-            before=[[python, "olddefconfig"]],
-            also=["out/klipper.dict"],
-        )
-        dict_path = elf.parent / "klipper.dict"
+        kconfig = _read(args.kconfig, "--kconfig") if args.kconfig else None
+        elf, dict_path = klipper.build(src, kconfig)
     dictionary = Dictionary.load(dict_path)
-    mcu, clock = klipper.mcu_of(dictionary, dict_path)
+    mcu, _ = klipper.mcu_of(dictionary, dict_path)
     check_elf(elf, mcu)
     host = build_klippy(src or source(args, "klipper_src"), sys.executable)
     serial = klipper.batch(host, config, gcode, dict_path)
     sent = klipper.job(serial, dictionary, f"{gcode} (klippy's batch output)")
-    pins: dict[str, str] = {}
-    for s in steppers:
-        pins[f"{s.name}_STEP"] = s.step
-        pins[f"{s.name}_DIR"] = s.dir
-        if s.enable:
-            pins[f"{s.name}_ENABLE"] = s.enable
-    options = [f"--blocks={klipper.free_list_address(elf)}", f"--start={clock // _START_S}"]
-    options += [f"--until={sent.last_event}"] + [f"--stop={p.hex()}" for p in sent.stop_prefixes]
-    simulate(
+    limits = (float(max_s), float(tail_s), float(wall_s))
+    signals = klipper.pins(steppers)
+    done = klipper.run(
         runner,
         elf,
-        mcu,
-        clock,
+        dictionary,
+        sent,
         args.vcd,
-        pins,
-        "",
-        sent.lines(),
-        int(max_s * clock),
-        int(tail_s * clock),
-        float(wall_s),
+        signals,
+        limits,
         lambda r: klipper.outcome(r, dictionary),
-        options,
+    )
+    steps = sum(sent.steps.values())
+    print(
+        f"simulate klipper: {mcu}, {len(sent.blocks)} message blocks, {steps} steps commanded; "
+        f"the MCU has {klipper.outcome(done, dictionary)} move-queue slots (klippy's batch mode "
+        f"assumes {klipper.BATCH_MOVE_SLOTS})",
+        file=sys.stderr,
     )
     args.capture = [args.vcd]
     if not args.map:

@@ -13,6 +13,8 @@ from Klipper's source (Klipper3d/klipper 84104bb) that decide how they are fed t
   (``src/gpiocmds.c:148``) and ``queue_pwm_out`` (``src/pwmcmds.c:86``) takes one; the runner
   sends a block only when the MCU's free list (``basecmd.c:61``, ``move_free_list``) holds as
   many as the block needs;
+- nothing is sent in the first 10 ms: Klipper enables its UART's receiver while it starts
+  (``src/avr/serial.c``, ``serial_init``), and simavr drops a byte that comes before;
 - the MCU's clock is Timer1 at clk/1 (``src/avr/timer.c:100``), so a clock in a command is a CPU
   cycle; a stepper's first step comes ``interval`` after its last step time (0 after
   ``config_stepper``, or the ``reset_step_clock`` clock), each next one ``interval + k*add`` later
@@ -27,35 +29,49 @@ import re
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from wavecheck.errors import ConfigError, UsageError
-from wavecheck.mcu.klipper_msg import Dictionary, decode_block, pack, split_blocks
-from wavecheck.mcu.run import MCUS, SimRun
+from wavecheck.mcu.klipper_msg import Dictionary, Message, decode_block, pack, split_blocks
+from wavecheck.mcu.run import MCUS, SimRun, simulate
 
 __all__ = [
+    "BATCH_MOVE_SLOTS",
     "DEFAULT_KCONFIG",
     "Job",
     "Stepper",
     "batch",
+    "build",
     "free_list_address",
     "job",
     "outcome",
+    "pins",
+    "run",
     "steppers",
 ]
 
 #: The build wavecheck makes when no .config is given: an ATmega644P at 16 MHz, serial on
 #: USART0 at 250000 baud (Klipper's defaults for it: src/avr/Kconfig, src/Kconfig).
 DEFAULT_KCONFIG = b"CONFIG_MACH_AVR=y\nCONFIG_MACH_atmega644p=y\nCONFIG_AVR_FREQ_16000000=y\n"
+#: The move-queue slots klippy's batch mode assumes (klippy/mcu.py:1036-1038).
+BATCH_MOVE_SLOTS = 500
 #: Commands that take a move-queue slot (see the module's docstring).
 MOVE_COMMANDS = frozenset({"queue_step", "queue_digital_out", "queue_pwm_out"})
 #: Responses after which the MCU does nothing more (``src/sched.c``: shutdown).
 STOP_RESPONSES = ("shutdown", "is_shutdown")
 #: The symbol of the MCU's free-list head (``src/basecmd.c:61``); LTO adds a suffix.
 FREE_LIST = "move_free_list"
-#: Wall-time bound of klippy's batch run, s.
+#: Wall-time bound of one klippy batch run, s.
 _KLIPPY_TIMEOUT_S = 600
+#: The line wavecheck adds after the job: klippy logs its answer ("toolhead: X:…",
+#: klippy/extras/gcode_move.py:261-290; klippy/gcode.py:250-253 logs what it answers), which
+#: shows that it read the job to its end.
+SENTINEL = "GET_POSITION"
+_SENTINEL_ANSWER = re.compile(r"^toolhead: X:", re.M)
+#: klippy batch runs tried before the job is refused for a dropped end.
+_KLIPPY_TRIES = 3
 #: Hints for the MCU's shutdown reasons (``static_string_id``) a simulation can cause.
 _SHUTDOWN_HINTS = {
     "Move queue overflow": ": more moves in flight than the MCU's move queue holds",
@@ -142,67 +158,102 @@ def steppers(config: Path) -> list[Stepper]:
 def batch(klippy: Path, config: Path, gcode: Path, dictionary: Path) -> bytes:
     """klippy's batch output for the job (the blocks it would send to the MCU).
 
+    klippy logs to its standard error with each message's level (no ``-l``: klippy/klippy.py
+    then sets up Python's logging as it is): a G-code error is a WARNING
+    (``klippy/gcode.py:255-262``, ``_respond_error``), a config error an ERROR ("Config error",
+    then the traceback). klippy's exit status is not enough: an error raised while the end of
+    the input is being read still exits 0. klippy ignores a command it does not know (it logs
+    ``Unknown command:"FOO"`` as information); wavecheck refuses the job instead.
+
+    The job goes to klippy with :data:`SENTINEL` after its last line, and an output is taken only
+    if klippy logged the sentinel's answer: klippy's batch mode sometimes drops the end of its
+    input (a 600-move job lost the moves after its first 4096 bytes in 2 runs of about 40 on a
+    busy machine: 24,847 of 38,400 steps, and no error). Such a run is repeated, at most
+    :data:`_KLIPPY_TRIES` times.
+
     Raises:
         ConfigError: klippy refused the config or the G-code (its own words, and the G-code
-            line where it names a command), or ran over its time bound.
+            line where its words quote it), ran over its time bound, or kept dropping the end.
     """
+    try:
+        job = gcode.read_bytes()
+    except OSError as err:
+        raise UsageError(f"{gcode}: cannot read the G-code: {err.strerror}") from None
     with tempfile.TemporaryDirectory(prefix="wavecheck-klippy-") as tmp:
-        out, log = Path(tmp) / "job.serial", Path(tmp) / "klippy.log"
-        cmd = [sys.executable, str(klippy), str(config.resolve()), "-i", str(gcode.resolve())]
-        cmd += ["-o", str(out), "-d", str(dictionary.resolve()), "-l", str(log)]
-        try:
-            done = subprocess.run(
-                cmd,
-                capture_output=True,
-                text=True,
-                timeout=_KLIPPY_TIMEOUT_S,
-                env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
-                check=False,
-            )
-        except subprocess.TimeoutExpired:
-            raise ConfigError(
-                f"{gcode}: klippy's batch run took over {_KLIPPY_TIMEOUT_S} s"
-            ) from None
-        text = log.read_text(encoding="utf-8", errors="replace") if log.exists() else ""
-        if done.returncode:
-            raise ConfigError(_klippy_error(text + done.stderr, config, gcode))
-        return out.read_bytes()
+        sent, out = Path(tmp) / "job.gcode", Path(tmp) / "job.serial"
+        sent.write_bytes(job + f"\n{SENTINEL}\n".encode())
+        cmd = [sys.executable, str(klippy), str(config.resolve()), "-i", str(sent)]
+        cmd += ["-o", str(out), "-d", str(dictionary.resolve())]
+        for _ in range(_KLIPPY_TRIES):
+            try:
+                done = subprocess.run(
+                    cmd,
+                    capture_output=True,
+                    text=True,
+                    timeout=_KLIPPY_TIMEOUT_S,
+                    env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+                    check=False,
+                )
+            except subprocess.TimeoutExpired:
+                raise ConfigError(
+                    f"{gcode}: klippy's batch run took over {_KLIPPY_TIMEOUT_S} s"
+                ) from None
+            problem = _klippy_error(done.stderr, config, gcode)
+            if problem is None and done.returncode:
+                problem = f"{gcode}: klippy's batch run failed (exit status {done.returncode})"
+            if problem is not None:
+                raise ConfigError(problem)
+            if _SENTINEL_ANSWER.search(done.stderr):
+                return out.read_bytes()
+    raise ConfigError(
+        f"{gcode}: klippy's batch mode dropped the end of the job in {_KLIPPY_TRIES} runs "
+        f"(it did not answer the {SENTINEL} wavecheck adds after the last line)"
+    )
 
 
-def _klippy_error(text: str, config: Path, gcode: Path) -> str:
-    """One line from klippy's log: the config error, or the G-code error and its line."""
-    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
-    if not lines:
-        return f"{gcode}: klippy's batch run failed and said nothing"
-    if "ModuleNotFoundError" in text or "ImportError" in text:
-        missing = re.findall(r"No module named '(\w+)'", text)
+def _klippy_error(log: str, config: Path, gcode: Path) -> str | None:
+    """One line from klippy's log: the config error, the G-code error and its line, or None."""
+    lines = log.splitlines()
+    if "No module named" in log:
+        missing = sorted(set(re.findall(r"No module named '(\w+)'", log)))
         return (
-            f"klippy cannot start: no Python module {', '.join(missing) or '?'}: "
+            f"klippy cannot start: no Python module {', '.join(missing)}: "
             "pip install 'wavecheck[klipper]'"
         )
-    config_err = next((ln for ln in lines if ln.startswith(("Config error", "Option "))), None)
-    if config_err is not None:
-        detail = lines[lines.index(config_err) + 1] if config_err == "Config error" else ""
-        return f"{config}: klippy refused the config: {detail or config_err}"
-    # the last line after the configuration dump that is not an info line
-    said = lines[-1]
-    unknown = re.match(r'Unknown command:"(\S+)"', said)
-    where = str(gcode)
-    if unknown:
+    for k, line in enumerate(lines):
+        level, _, said = line.partition(":root:")
+        if level == "ERROR" and said.startswith("Config error"):
+            detail = next((ln.split("Error: ", 1)[1] for ln in lines[k:] if "Error: " in ln), said)
+            return f"{config}: klippy refused the config: {detail}"
+        if level in ("WARNING", "ERROR", "CRITICAL"):
+            return f"{_where(gcode, said)}: klippy rejected the job: {said}"
+        if level == "INFO" and said.startswith("Unknown command:"):
+            return f"{_where(gcode, said)}: klippy does not know the command ({said}; it would skip it)"
+    return None
+
+
+def _where(gcode: Path, said: str) -> str:
+    """``FILE:LINE`` of the first G-code line that starts with what klippy quotes, else FILE."""
+    quoted = re.search(r"""["']([^"']+)["']""", said)
+    if quoted:
+        word = quoted.group(1).strip().upper()
         for k, raw in enumerate(gcode.read_text(errors="replace").splitlines(), 1):
-            if raw.split(";")[0].strip().upper().split(" ")[:1] == [unknown.group(1).upper()]:
-                where = f"{gcode}:{k}"
-                break
-    return f"{where}: klippy rejected the job: {said}"
+            if raw.split(";")[0].strip().upper().startswith(word):
+                return f"{gcode}:{k}"
+    return str(gcode)
 
 
 def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
-    """The commands of klippy's batch output made ready for a freshly reset MCU: packed anew
-    into blocks numbered from 0, and a ``get_config`` after them.
+    """The commands of klippy's batch output made ready for a freshly reset MCU: in a canonical
+    order, packed anew into blocks numbered from 0, and a ``get_config`` after them.
 
-    klippy packs commands into blocks as its real-time clock goes, so two batch runs of one job
-    give the same commands in different blocks; packing them anew (as many as fit, in order)
-    makes a rerun feed the MCU the same bytes at the same cycles, hence the same VCD.
+    klippy interleaves the commands of its queues, and packs them into blocks, as its real-time
+    clock goes: two batch runs of one job gave the same commands in other orders and other
+    blocks, hence other serial timing and step times 3 cycles apart. Here the timed commands
+    between two others (configuration) are ordered by the clock they act at (a move's first
+    step, an output's clock; a stepper's direction or clock reset goes with its next move), each
+    object's own commands staying in their order, then packed as many to a block as fit: a rerun
+    feeds the MCU the same bytes at the same cycles, hence the same VCD.
 
     Raises:
         UsageError: not a stream of message blocks, or a command the dictionary lacks.
@@ -219,28 +270,86 @@ def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
     next_step: dict[int, int] = {}
     steps: dict[int, int] = {}
     last = 0
+    keys: list[int | None] = []
     for m in messages:
         a = m.args
+        key: int | None = None
         if m.name == "config_stepper":
             next_step[int(a["oid"])] = 0
             steps.setdefault(int(a["oid"]), 0)
         elif m.name == "reset_step_clock":
             next_step[int(a["oid"])] = int(a["clock"])
+            key = -1  # takes its next move's key below
+        elif m.name == "set_next_step_dir":
+            key = -1
         elif m.name == "queue_step":
             oid, n, iv, add = (int(a[x]) for x in ("oid", "count", "interval", "add"))
+            key = next_step.get(oid, 0) + iv
             end = next_step.get(oid, 0) + n * iv + add * n * (n - 1) // 2
             next_step[oid] = end
             steps[oid] = steps.get(oid, 0) + n
             last = max(last, end)
         elif m.name in ("queue_digital_out", "queue_pwm_out"):
-            last = max(last, int(a["clock"]))
+            key = int(a["clock"])
+            last = max(last, key)
+        keys.append(key)
+    ordered = _canonical(messages, keys)
     # the last block asks the MCU for its configuration: its answer tells its move-queue size
-    blocks = pack([m.raw for m in messages] + [dictionary.encode_id("get_config")])
+    blocks = pack([m.raw for m in ordered] + [dictionary.encode_id("get_config")])
     needs = []
     for block in blocks:
         needs.append(sum(m.name in MOVE_COMMANDS for m in decode_block(block, dictionary)))
     stops = tuple(dictionary.encode_id(n) for n in STOP_RESPONSES)
     return Job(tuple(blocks), tuple(needs), last, steps, stops)
+
+
+def _canonical(messages: list[Message], keys: list[int | None]) -> list[Message]:
+    """Runs of timed commands (key not None) sorted by (clock, object, own order); a key of -1
+    takes the key of its object's next timed command."""
+    keys = list(keys)
+    following: dict[int, int] = {}
+    for k in range(len(messages) - 1, -1, -1):
+        if keys[k] is None:
+            continue
+        oid = int(messages[k].args.get("oid", -1))
+        if keys[k] == -1:
+            keys[k] = following.get(oid, 0)
+        following[oid] = keys[k] or 0
+    out: list[Message] = []
+    run: list[tuple[int, int, int, Message]] = []
+    for k, (m, key) in enumerate(zip(messages, keys, strict=True)):
+        if key is None:
+            out += [r[3] for r in sorted(run, key=lambda r: r[:3])]
+            run = []
+            out.append(m)
+        else:
+            run.append((key, int(m.args.get("oid", -1)), k, m))
+    out += [r[3] for r in sorted(run, key=lambda r: r[:3])]
+    return out
+
+
+def build(src: Path, kconfig: bytes | None) -> tuple[Path, Path]:
+    """Klipper built from ``src`` with ``kconfig`` (a ``.config``; None: :data:`DEFAULT_KCONFIG`),
+    cached: its ``klipper.elf`` and ``klipper.dict``."""
+    from wavecheck.mcu.build import build_firmware
+    from wavecheck.mcu.klipper_kconfig import GENCONFIG, OLDDEFCONFIG
+
+    replace = {
+        ".config": DEFAULT_KCONFIG if kconfig is None else kconfig,
+        "lib/kconfiglib/genconfig.py": GENCONFIG,
+        "lib/kconfiglib/olddefconfig.py": OLDDEFCONFIG,
+    }
+    python = f"PYTHON={sys.executable}"
+    elf = build_firmware(
+        src,
+        "src/stepper.c",
+        replace,
+        [python],
+        "out/klipper.elf",
+        before=[[python, "olddefconfig"]],
+        also=["out/klipper.dict"],
+    )
+    return elf, elf.parent / "klipper.dict"
 
 
 def free_list_address(elf: Path) -> int:
@@ -279,6 +388,53 @@ def mcu_of(dictionary: Dictionary, where: Path) -> tuple[str, int]:
             "atmega2560 (CONFIG_MACH_atmega644p or CONFIG_MACH_atmega2560)"
         )
     return mcu, clock
+
+
+def pins(chosen: list[Stepper]) -> dict[str, str]:
+    """The VCD's signals: ``X_STEP``, ``X_DIR``, ``X_ENABLE`` … → ``PORT.BIT``."""
+    out: dict[str, str] = {}
+    for s in chosen:
+        out[f"{s.name}_STEP"] = s.step
+        out[f"{s.name}_DIR"] = s.dir
+        if s.enable:
+            out[f"{s.name}_ENABLE"] = s.enable
+    return out
+
+
+def run(
+    runner: Path,
+    elf: Path,
+    dictionary: Dictionary,
+    sent: Job,
+    vcd: str,
+    signals: dict[str, str],
+    limits: tuple[float, float, float],
+    accept: Callable[[SimRun], object],
+    *,
+    paced: bool = True,
+) -> SimRun:
+    """Simulate the job (``limits``: simulated time, tail after the last event, wall time, in
+    seconds); ``accept`` judges the run before the VCD is kept (:func:`outcome` does).
+    ``paced=False`` feeds the blocks as fast as the MCU answers, as if its queue were endless."""
+    mcu, clock = mcu_of(dictionary, elf)
+    max_s, tail_s, wall_s = limits
+    options = [f"--blocks={free_list_address(elf) if paced else 0}", f"--start={clock // 100}"]
+    options += [f"--until={sent.last_event}"] + [f"--stop={p.hex()}" for p in sent.stop_prefixes]
+    return simulate(
+        runner,
+        elf,
+        mcu,
+        clock,
+        vcd,
+        signals,
+        "",
+        sent.lines(),
+        int(max_s * clock),
+        int(tail_s * clock),
+        wall_s,
+        accept,
+        options,
+    )
 
 
 def outcome(run: SimRun, dictionary: Dictionary) -> int:
