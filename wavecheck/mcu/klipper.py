@@ -9,16 +9,16 @@ from Klipper's source (Klipper3d/klipper 84104bb) that decide how they are fed t
 - batch mode assumes the MCU has 500 move-queue slots (``klippy/mcu.py:1036-1038``), but the MCU
   has what its RAM leaves (``src/basecmd.c:170-177``: ``alloc_chunks``), and a command that finds
   no free slot shuts it down (``basecmd.c:88-90``, "Move queue overflow"). Each
-  ``queue_step`` (``src/stepper.c``, ``command_queue_step``), ``queue_digital_out``
+  ``queue_step`` (``src/stepper.c:259-262``), ``queue_digital_out``
   (``src/gpiocmds.c:148``) and ``queue_pwm_out`` (``src/pwmcmds.c:86``) takes one; the runner
   sends a block only when the MCU's free list (``basecmd.c:61``, ``move_free_list``) holds as
   many as the block needs;
 - nothing is sent in the first 10 ms: Klipper enables its UART's receiver while it starts
-  (``src/avr/serial.c``, ``serial_init``), and simavr drops a byte that comes before;
+  (``src/avr/serial.c:56-62``, ``serial_init``), and simavr drops a byte that comes before;
 - the MCU's clock is Timer1 at clk/1 (``src/avr/timer.c:100``), so a clock in a command is a CPU
   cycle; a stepper's first step comes ``interval`` after its last step time (0 after
   ``config_stepper``, or the ``reset_step_clock`` clock), each next one ``interval + k*add`` later
-  (``src/stepper.c:60-118``): the job's last event is known from the blocks.
+  (``src/stepper.c:63-127,259-285``): the job's last event is known from the blocks.
 """
 
 from __future__ import annotations
@@ -63,8 +63,6 @@ MOVE_COMMANDS = frozenset({"queue_step", "queue_digital_out", "queue_pwm_out"})
 STOP_RESPONSES = ("shutdown", "is_shutdown")
 #: The symbol of the MCU's free-list head (``src/basecmd.c:61``); LTO adds a suffix.
 FREE_LIST = "move_free_list"
-#: Wall-time bound of one klippy batch run, s.
-_KLIPPY_TIMEOUT_S = 600
 #: The line wavecheck adds after the job: klippy logs its answer ("toolhead: X:…",
 #: klippy/extras/gcode_move.py:261-290; klippy/gcode.py:250-253 logs what it answers), which
 #: shows that it read the job to its end.
@@ -155,7 +153,9 @@ def steppers(config: Path) -> list[Stepper]:
     return out
 
 
-def batch(klippy: Path, config: Path, gcode: Path, dictionary: Path) -> bytes:
+def batch(
+    klippy: Path, config: Path, gcode: Path, dictionary: Path, timeout_s: float = 600.0
+) -> bytes:
     """klippy's batch output for the job (the blocks it would send to the MCU).
 
     klippy logs to its standard error with each message's level (no ``-l``: klippy/klippy.py
@@ -169,7 +169,7 @@ def batch(klippy: Path, config: Path, gcode: Path, dictionary: Path) -> bytes:
     if klippy logged the sentinel's answer: klippy's batch mode sometimes drops the end of its
     input (a 600-move job lost the moves after its first 4096 bytes in 2 runs of about 40 on a
     busy machine: 24,847 of 38,400 steps, and no error). Such a run is repeated, at most
-    :data:`_KLIPPY_TRIES` times.
+    :data:`_KLIPPY_TRIES` times, each bounded by ``timeout_s`` of wall time.
 
     Raises:
         ConfigError: klippy refused the config or the G-code (its own words, and the G-code
@@ -190,13 +190,14 @@ def batch(klippy: Path, config: Path, gcode: Path, dictionary: Path) -> bytes:
                     cmd,
                     capture_output=True,
                     text=True,
-                    timeout=_KLIPPY_TIMEOUT_S,
+                    timeout=timeout_s,
                     env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
                     check=False,
                 )
             except subprocess.TimeoutExpired:
                 raise ConfigError(
-                    f"{gcode}: klippy's batch run took over {_KLIPPY_TIMEOUT_S} s"
+                    f"{gcode}: klippy's batch run took over {timeout_s:g} s of wall time "
+                    "(raise --timeout, or shorten the job)"
                 ) from None
             problem = _klippy_error(done.stderr, config, gcode)
             if problem is None and done.returncode:

@@ -115,9 +115,24 @@ def test_a_job_longer_than_the_simulated_time_limit(
 
 
 @slow
-def test_a_run_over_its_wall_time(klipper_build, klippy, runner, tmp_path, capsys):
+def test_klippy_over_the_wall_time(klipper_build, klippy, runner, tmp_path, capsys):
     _run(tmp_path, ZIGZAG, "--timeout", "0.2s")
-    assert "ran over 0.2 s of wall time" in _error(capsys)
+    assert "klippy's batch run took over 0.2 s of wall time" in _error(capsys)
+
+
+@slow
+def test_the_simulation_over_the_wall_time(klipper_build, klippy, runner, tmp_path):
+    from wavecheck.mcu import klipper
+    from wavecheck.mcu.klipper_msg import Dictionary
+
+    elf, dict_path = klipper_build
+    dictionary = Dictionary.load(dict_path)
+    sent = klipper.job(klipper.batch(klippy, CONFIG, ZIGZAG, dict_path), dictionary, "zigzag")
+    vcd = tmp_path / "slow.vcd"
+    signals = klipper.pins(klipper.steppers(CONFIG))
+    with pytest.raises(ConfigError, match="ran over 0.2 s of wall time"):
+        klipper.run(runner, elf, dictionary, sent, str(vcd), signals, (60, 0.05, 0.2), print)
+    assert not vcd.exists()
 
 
 @slow

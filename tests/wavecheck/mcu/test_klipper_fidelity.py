@@ -55,7 +55,7 @@ CYCLES = {"st": 2, "ldd": 2, "std": 2, "sbiw": 2, "brne": 2, "add": 1, "adc": 1}
 
 def step_pulse_cycles(elf: Path) -> int:
     """The step pulse from the code: the timer interrupt (__vector_13, TIMER1_COMPA) runs the
-    stepper's event inline (CONFIG_INLINE_STEPPER_HACK); stepper_event_avr (src/stepper.c:150-166)
+    stepper's event inline (CONFIG_INLINE_STEPPER_HACK); stepper_event_avr (src/stepper.c:158-176)
     toggles the step pin (an ST to the PIN register: gpio_out_toggle_noirq), counts, adds the
     interval to the wake time and toggles it again. From the first ST through the instructions
     before the second, the count not being 0: the BRNE over the RJMP to stepper_load_next is
@@ -96,9 +96,9 @@ def test_the_last_pulse_of_each_queued_move_is_long_and_dir_changes_inside_it(zi
     rises = rising(step)
     widths = high_widths(step)
     # stepper_event_avr calls stepper_load_next between its two toggles when the move's count
-    # is done (src/stepper.c:161-164), and stepper_load_next toggles DIR there when the next
-    # move reverses (stepper.c:113-115); after the job's last step the queue is empty and
-    # stepper_load_next returns at once (stepper.c:62-66)
+    # is done (src/stepper.c:173-174), and stepper_load_next toggles DIR there when the next
+    # move reverses (stepper.c:125-127); after the job's last step the queue is empty and
+    # stepper_load_next returns at once (stepper.c:65-69)
     assert widths[-1] == 107
     long = [w for w in widths[:-1] if w != 42]
     assert min(long) == 248 and max(long) == 270  # 15.5 .. 16.875 us
