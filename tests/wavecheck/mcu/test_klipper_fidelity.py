@@ -130,3 +130,33 @@ def test_a_rerun_gives_the_same_vcd(zigzag, tmp_path):
     _, first, _ = zigzag
     code, again, _ = simulate(tmp_path, DOCS / "zigzag.gcode", "gecko-g202", name="again")
     assert code == 1 and again.read_bytes() == first.read_bytes()
+
+
+def test_the_atmega2560_build(klippy, runner, tmp_path, capsys):
+    """The same job on an ATmega2560 build (--kconfig): every step, the same 42-cycle pulse
+    (the step path has no call), and the long pulses 2 cycles longer than the 644P's: with its
+    3-byte PC, CALL and RET to stepper_load_next take 5 cycles each, not 4 (AVR Instruction Set
+    Manual, CALL and RET)."""
+    cfg = DOCS / "printer-mega2560.cfg"
+    vcd, report = tmp_path / "mega.vcd", tmp_path / "mega.json"
+    code = main(
+        ["simulate", "klipper", "--config", str(cfg), "--gcode", str(DOCS / "zigzag.gcode")]
+        + ["--kconfig", str(DOCS / "mega2560.config"), "--vcd", str(vcd), "--drive", "drv8825"]
+        + ["--klipper-src", str(KLIPPER_SRC), "--simavr-src", str(SIMAVR_SRC)]
+        + ["--format", "json", "-o", str(report)]
+    )
+    assert code == 0
+    assert "atmega2560" in capsys.readouterr().err
+    changes, _ = vcd_changes(vcd)
+    widths = high_widths(changes["X_STEP"])
+    assert len(widths) == ZIGZAG_STEPS and min(widths) == 42
+    long = [w for w in widths[:-1] if w != 42]
+    assert min(long) == 248 + 2 and max(long) == 270 + 2
+
+
+def test_one_move_there_and_back(klippy, klipper_build, runner, tmp_path):
+    """G1 X110 and back: 2 x 10 mm x 80 steps/mm; one reversal, so the G202 ends 2 steps off."""
+    code, vcd, report = simulate(tmp_path, DOCS / "there-and-back.gcode", "gecko-g202")
+    changes, _ = vcd_changes(vcd)
+    assert len(rising(changes["X_STEP"])) == 2 * 10 * STEPS_PER_MM == 1600
+    assert code == 1 and report["steps"]["final_position"] == 2
