@@ -59,7 +59,7 @@ DEFAULT_KCONFIG = b"CONFIG_MACH_AVR=y\nCONFIG_MACH_atmega644p=y\nCONFIG_AVR_FREQ
 BATCH_MOVE_SLOTS = 500
 #: Commands that take a move-queue slot (see the module's docstring).
 MOVE_COMMANDS = frozenset({"queue_step", "queue_digital_out", "queue_pwm_out"})
-#: Responses after which the MCU does nothing more (``src/sched.c``: shutdown).
+#: The MCU's shutdown reports (``src/sched.c:310,318``): after them it makes no step.
 STOP_RESPONSES = ("shutdown", "is_shutdown")
 #: The symbol of the MCU's free-list head (``src/basecmd.c:61``); LTO adds a suffix.
 FREE_LIST = "move_free_list"
@@ -257,7 +257,7 @@ def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
     feeds the MCU the same bytes at the same cycles, hence the same VCD.
 
     Raises:
-        UsageError: not a stream of message blocks, or a command the dictionary lacks.
+        UsageError: not a stream of message blocks, a command the dictionary lacks, no step.
     """
     raw = split_blocks(serial, where)
     if not raw:
@@ -294,6 +294,11 @@ def job(serial: bytes, dictionary: Dictionary, where: str) -> Job:
             key = int(a["clock"])
             last = max(last, key)
         keys.append(key)
+    if not any(steps.values()):
+        raise UsageError(
+            f"{where}: klippy commands no step: the job moves no stepper (no move, or only "
+            "moves to where the machine is)"
+        )
     ordered = _canonical(messages, keys)
     # the last block asks the MCU for its configuration: its answer tells its move-queue size
     blocks = pack([m.raw for m in ordered] + [dictionary.encode_id("get_config")])

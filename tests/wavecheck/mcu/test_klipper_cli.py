@@ -102,7 +102,8 @@ SILENT = "void *move_free_list;\nint main(void) { for (;;) {} }\n"
 def test_a_build_that_never_answers(klipper_build, klippy, runner, tmp_path, capsys):
     elf = build_avr(tmp_path, "silent", SILENT, mcu="atmega644p")
     _, dictionary = klipper_build
-    _run(tmp_path, START, "--elf", str(elf), "--dict", str(dictionary), "--max-time", "2s")
+    job = START + "G1 X110 F6000\n"
+    _run(tmp_path, job, "--elf", str(elf), "--dict", str(dictionary), "--max-time", "2s")
     assert "never answered the first message block" in _error(capsys)
 
 
@@ -165,3 +166,9 @@ def test_fed_all_at_once_the_mcu_overflows_before_its_first_step(
     changes, _ = vcd_changes(vcd)
     assert rising(changes["X_STEP"]) == []
     assert sum(sent.needs) > 500  # the job's slots: more than either figure
+
+
+@slow
+def test_a_job_without_a_step(klipper_build, klippy, runner, tmp_path, capsys):
+    g = _run(tmp_path, START + "G1 X100 F6000\n")  # where it already is
+    assert f"{g} (klippy's batch output): klippy commands no step" in _error(capsys)
