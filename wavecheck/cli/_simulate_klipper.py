@@ -62,7 +62,7 @@ def run_klipper(args: argparse.Namespace) -> int:
     mcu, _ = klipper.mcu_of(dictionary, dict_path)
     check_elf(elf, mcu)
     host = build_klippy(src or source(args, "klipper_src"), sys.executable)
-    serial = klipper.batch(host, config, gcode, dict_path, float(wall_s))
+    serial = klipper.batch(host, config, gcode, dict_path, float(wall_s), dictionary)
     sent = klipper.job(serial, dictionary, f"{gcode} (klippy's batch output)")
     limits = (float(max_s), float(tail_s), float(wall_s))
     signals = klipper.pins(steppers)

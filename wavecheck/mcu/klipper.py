@@ -63,6 +63,8 @@ MOVE_COMMANDS = frozenset({"queue_step", "queue_digital_out", "queue_pwm_out"})
 STOP_RESPONSES = ("shutdown", "is_shutdown")
 #: The symbol of the MCU's free-list head (``src/basecmd.c:61``); LTO adds a suffix.
 FREE_LIST = "move_free_list"
+#: klippy's batch mode under a wrapper that lets its serial queue drain before exit (GPL-3.0).
+KLIPPY_BATCH = Path(__file__).resolve().parent / "simavr" / "klippy_batch.py"
 #: The line wavecheck adds after the job: klippy logs its answer ("toolhead: X:…",
 #: klippy/extras/gcode_move.py:261-290; klippy/gcode.py:250-253 logs what it answers), which
 #: shows that it read the job to its end.
@@ -154,7 +156,12 @@ def steppers(config: Path) -> list[Stepper]:
 
 
 def batch(
-    klippy: Path, config: Path, gcode: Path, dictionary: Path, timeout_s: float = 600.0
+    klippy: Path,
+    config: Path,
+    gcode: Path,
+    dictionary: Path,
+    timeout_s: float = 600.0,
+    decoder: Dictionary | None = None,
 ) -> bytes:
     """klippy's batch output for the job (the blocks it would send to the MCU).
 
@@ -165,11 +172,18 @@ def batch(
     the input is being read still exits 0. klippy ignores a command it does not know (it logs
     ``Unknown command:"FOO"`` as information); wavecheck refuses the job instead.
 
-    The job goes to klippy with :data:`SENTINEL` after its last line, and an output is taken only
-    if klippy logged the sentinel's answer: klippy's batch mode sometimes drops the end of its
-    input (a 600-move job lost the moves after its first 4096 bytes in 2 runs of about 40 on a
-    busy machine: 24,847 of 38,400 steps, and no error). Such a run is repeated, at most
-    :data:`_KLIPPY_TRIES` times, each bounded by ``timeout_s`` of wall time.
+    klippy runs under :data:`KLIPPY_BATCH` (GPL, beside the simavr runner), which lets its serial
+    queue write what it holds before exit: on a busy machine klippy's batch output lacked the
+    end of the job (24,847 of a zigzag's 38,400 steps, 2 runs in about 40) or everything after
+    the configuration (3 of 18 runs of a one-move job, 6 at a time), with its log showing the
+    whole job and exit status 0. An output is taken only if it reaches klippy's exit: klippy
+    logged the answer to :data:`SENTINEL`, added after the job's last line, and (with
+    ``decoder``) the output ends with what klippy sends at exit (:func:`_ends_at_exit`). Else
+    the run is repeated, at most :data:`_KLIPPY_TRIES` times, each bounded by ``timeout_s`` of
+    wall time; outputs that answered the sentinel but lack the exit's commands are taken only
+    if every run gave the same bytes (a job that moves nothing switches no motor on, so klippy
+    has none to switch off). klippy packs the same commands into other blocks run to run, so
+    outputs are compared by their commands.
 
     Raises:
         ConfigError: klippy refused the config or the G-code (its own words, and the G-code
@@ -182,8 +196,10 @@ def batch(
     with tempfile.TemporaryDirectory(prefix="wavecheck-klippy-") as tmp:
         sent, out = Path(tmp) / "job.gcode", Path(tmp) / "job.serial"
         sent.write_bytes(job + f"\n{SENTINEL}\n".encode())
-        cmd = [sys.executable, str(klippy), str(config.resolve()), "-i", str(sent)]
+        cmd = [sys.executable, str(KLIPPY_BATCH), str(klippy.parent), str(config.resolve())]
+        cmd += ["-i", str(sent)]
         cmd += ["-o", str(out), "-d", str(dictionary.resolve())]
+        seen: dict[bytes, bytes] = {}
         for _ in range(_KLIPPY_TRIES):
             try:
                 done = subprocess.run(
@@ -204,12 +220,45 @@ def batch(
                 problem = f"{gcode}: klippy's batch run failed (exit status {done.returncode})"
             if problem is not None:
                 raise ConfigError(problem)
+            serial = out.read_bytes() if out.exists() else b""
             if _SENTINEL_ANSWER.search(done.stderr):
-                return out.read_bytes()
+                if _ends_at_exit(serial, decoder):
+                    return serial
+                seen[_commands(serial, decoder)] = serial
+        if len(seen) == 1:  # the same commands each time: a job that switches nothing on
+            return seen.popitem()[1]
     raise ConfigError(
-        f"{gcode}: klippy's batch mode dropped the end of the job in {_KLIPPY_TRIES} runs "
-        f"(it did not answer the {SENTINEL} wavecheck adds after the last line)"
+        f"{gcode}: klippy's batch output lacked the end of the job in {_KLIPPY_TRIES} runs "
+        f"(no answer to the {SENTINEL} wavecheck adds after the last line, or no output "
+        "switched off at its exit after the last step)"
     )
+
+
+def _commands(serial: bytes, decoder: Dictionary | None) -> bytes:
+    """The commands of an output, without their blocks' framing (the output if undecodable)."""
+    if decoder is None:
+        return serial
+    try:
+        return b"".join(m.raw for b in split_blocks(serial, "") for m in decode_block(b, decoder))
+    except (UsageError, ValueError, IndexError):
+        return serial
+
+
+def _ends_at_exit(serial: bytes, decoder: Dictionary | None) -> bool:
+    """Whether klippy's output reaches its exit: at exit klippy switches the steppers' enable
+    pins off (klippy/gcode.py:352-361 sends gcode:request_restart; extras/stepper_enable.py:
+    125-126 turns the motors off) after the last move, so the last command written is a
+    scheduled output at or after the last step. A config with no output to switch leaves
+    nothing to check (True)."""
+    if decoder is None:
+        return True
+    try:
+        messages = [m for b in split_blocks(serial, "") for m in decode_block(b, decoder)]
+    except (UsageError, ValueError, IndexError):
+        return False
+    if not any(m.name.startswith("config_digital_out") for m in messages):
+        return True
+    return bool(messages) and messages[-1].name in ("queue_digital_out", "queue_pwm_out")
 
 
 def _klippy_error(log: str, config: Path, gcode: Path) -> str | None:

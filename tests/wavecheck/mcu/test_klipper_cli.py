@@ -128,7 +128,9 @@ def test_the_simulation_over_the_wall_time(klipper_build, klippy, runner, tmp_pa
 
     elf, dict_path = klipper_build
     dictionary = Dictionary.load(dict_path)
-    sent = klipper.job(klipper.batch(klippy, CONFIG, ZIGZAG, dict_path), dictionary, "zigzag")
+    sent = klipper.job(
+        klipper.batch(klippy, CONFIG, ZIGZAG, dict_path, decoder=dictionary), dictionary, "zigzag"
+    )
     vcd = tmp_path / "slow.vcd"
     signals = klipper.pins(klipper.steppers(CONFIG))
     with pytest.raises(ConfigError, match="ran over 0.2 s of wall time"):
@@ -147,7 +149,9 @@ def test_fed_all_at_once_the_mcu_overflows_before_its_first_step(
 
     elf, dict_path = klipper_build
     dictionary = Dictionary.load(dict_path)
-    sent = klipper.job(klipper.batch(klippy, CONFIG, ZIGZAG, dict_path), dictionary, "zigzag")
+    sent = klipper.job(
+        klipper.batch(klippy, CONFIG, ZIGZAG, dict_path, decoder=dictionary), dictionary, "zigzag"
+    )
     vcd = tmp_path / "unpaced.vcd"
     signals = klipper.pins(klipper.steppers(CONFIG))
     done = klipper.run(
