@@ -20,18 +20,18 @@ from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.decode import StepEvents
 from wavecheck.engine.judge import FAIL, INDETERMINATE, evaluate
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import Report
-from wavecheck.engine.primitives import Intervals
 from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import check_source
 from wavecheck.engine.sinks import StepCollector, StepSink
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import Rule
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.mapping import AxisMap
+from wavecheck.steps.primitives import Intervals
 from wavecheck.units import parse_time
 
 __all__ = ["FullReport", "FullRule", "options", "run_check"]
@@ -185,8 +185,8 @@ def decoded(capture: Capture, report: Report | FullReport) -> StepEvents:
     """Every step of ``capture`` as the engine's one window decodes it for ``report``'s axis
     (its mapping, inversions, step type, active edge and DIR level), sequence errors with their
     states included."""
-    from wavecheck.engine.decode import decode
-    from wavecheck.engine.interface import build_interface
+    from wavecheck.steps.decode import decode
+    from wavecheck.steps.interface import build_interface
 
     st = report.step_type
     iface = build_interface(capture, report.mapping, report.inverted)

@@ -112,6 +112,12 @@ def test_python_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None
     assert capsys.readouterr().out == "fail 9000 20000\n"
 
 
+def test_python_options_block(workdir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """An options object handed whole, a keyword replacing its margin (issue 37)."""
+    exec(compile(_block("python-options"), "docs/python.md", "exec"), {})
+    assert capsys.readouterr().out == "21000\n"
+
+
 def test_pytest_blocks(pytester: pytest.Pytester) -> None:
     shutil.copytree(REPO / "captures" / "golden", pytester.path / "captures" / "golden")
     (pytester.path / "wavecheck.toml").write_text(_block("toml"))

@@ -13,28 +13,20 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
+from typing import Unpack
 
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture
-from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine import (
-    DEFAULT_BLOCK_EDGES,
-    DEFAULT_KEEP,
-    AxisMap,
-    CheckOptions,
-    MachineReport,
-    Report,
-    axes_from_tables,
-    check_source,
-)
+from wavecheck.drives.datasheet import Drive
+from wavecheck.engine import CheckOptions, MachineReport, Report, check_source
 from wavecheck.errors import RequirementError, UsageError
-from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
+from wavecheck.options import CheckKeywords, options_from_keywords
+from wavecheck.steps.mapping import AxisMap, axes_from_tables
 from wavecheck.units import SAMPLE_RATE, parse_frequency, parse_option
-from wavecheck.verdict import require_list
 
-__all__ = ["Axis", "build_options", "check", "check_axes", "require_met"]
+__all__ = ["Axis", "check", "check_axes", "require_met"]
 
 PathOrText = str | os.PathLike[str]
 
@@ -83,78 +75,6 @@ def _drive(drive: PathOrText | Drive) -> Drive:
     return load_drive(drive)
 
 
-def _stepgen(
-    ini: PathOrText | None, hal: PathOrText | Sequence[PathOrText] | None, channel: int
-) -> LinuxCNCConfig | None:
-    if ini is None and hal is None:
-        return None
-    from wavecheck.linuxcnc.stepgen_config import read_config
-
-    hals = [hal] if isinstance(hal, (str, os.PathLike)) else list(hal or [])
-    return read_config(ini, hals, channel)
-
-
-def _latency_ns(latency: str | Fraction | None) -> Fraction | None:
-    if latency is None:
-        return None
-    seconds = (
-        parse_option(latency, "latency", "time") if isinstance(latency, str) else Fraction(latency)
-    )
-    return seconds * 10**9
-
-
-def _resolution(resolution: str | Fraction | None) -> Fraction | None:
-    if isinstance(resolution, str):
-        return parse_option(resolution, "resolution", "time")
-    return None if resolution is None else Fraction(resolution)
-
-
-def build_options(
-    drive: Mapping[str | None, Drive],
-    axes: tuple[AxisMap, ...] = (),
-    *,
-    invert: Iterable[str] = (),
-    step_type: Mapping[str | None, int] | None = None,
-    forward_level: Mapping[str | None, int] | None = None,
-    user_table: tuple[int, ...] | None = None,
-    pulse_level: int | None = None,
-    active_edge: ActiveEdge | None = None,
-    resolution: str | Fraction | None = None,
-    limit: Iterable[str] = (),
-    margin: str | None = None,
-    ini: PathOrText | None = None,
-    hal: PathOrText | Sequence[PathOrText] | None = None,
-    channel: int = 0,
-    latency: str | Fraction | None = None,
-    pictures: bool = False,
-    keep_violations: int = DEFAULT_KEEP,
-    block_edges: int = DEFAULT_BLOCK_EDGES,
-    require: str | Iterable[str] = (),
-) -> CheckOptions:
-    """The :class:`~wavecheck.engine.options.CheckOptions` of the Python entry points'
-    arguments (:func:`check`, :func:`check_axes`, :class:`wavecheck.cocotb.StepMonitor`):
-    times as text with their unit or exact seconds, LinuxCNC files read."""
-    return CheckOptions(
-        drive=drive,
-        axes=axes,
-        invert=tuple(invert),
-        step_type=dict(step_type or {}),
-        forward_level=dict(forward_level or {}),
-        user_table=None if user_table is None else tuple(user_table),
-        pulse_level=pulse_level,
-        active_edge=active_edge,
-        resolution=_resolution(resolution),
-        limits=tuple(limit),
-        margin=margin,
-        stepgen=_stepgen(ini, hal, channel),
-        latency_ns=_latency_ns(latency),
-        pictures=pictures,
-        keep_violations=keep_violations,
-        block_edges=block_edges,
-        require=require_list(require),
-    )
-
-
 def require_met(checked: Report | MachineReport, require: Sequence[str]) -> None:
     """Raise :class:`~wavecheck.errors.RequirementError` (holding the report) when a rule of
     ``require`` was not decided (unchecked or indeterminate; :mod:`wavecheck.report.claims`)."""
@@ -169,29 +89,14 @@ def require_met(checked: Report | MachineReport, require: Sequence[str]) -> None
 
 
 def check(
-    capture: str | os.PathLike[str] | Capture,
-    drive: str | os.PathLike[str] | Drive,
+    capture: PathOrText | Capture,
+    drive: PathOrText | Drive | None = None,
     *,
     map: Mapping[str, str] | None = None,  # noqa: A002 - mirrors the CLI's --map
-    invert: Iterable[str] = (),
-    step_type: int | None = None,
-    resolution: str | Fraction | None = None,
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
-    forward_level: int = 0,
-    pulse_level: int | None = None,
-    active_edge: ActiveEdge | None = None,
-    user_table: tuple[int, ...] | None = None,
-    ini: str | os.PathLike[str] | None = None,
-    hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
-    channel: int = 0,
-    latency: str | Fraction | None = None,
-    limit: Iterable[str] = (),
-    margin: str | None = None,
-    pictures: bool = False,
-    keep_violations: int = DEFAULT_KEEP,
-    block_edges: int = DEFAULT_BLOCK_EDGES,
-    require: str | Iterable[str] = (),
+    options: CheckOptions | None = None,
+    **keywords: Unpack[CheckKeywords],
 ) -> Report:
     """Check a capture against a drive and return the :class:`~wavecheck.report.Report`.
 
@@ -200,29 +105,13 @@ def check(
             :class:`~wavecheck.capture.edges.Capture`.
         drive: a drive id from ``rules/``, a rule file path, or a :class:`Drive`.
         map: role → channel name or index (``{"step": "STEP (Y axis)"}``).
-        invert: roles to invert.
-        step_type: LinuxCNC step type 0–15 (default: the drive's, else 0).
-        resolution: T, a time (``"500ns"``) or exact seconds; default the capture's.
         samplerate: sample rate for a file without one (``"12MHz"`` or exact Hz).
         input_format: force a reader (``"sr"``, ``"vcd"``, a sigrok-cli format).
-        forward_level: DIR level that means forward (0 or 1).
-        pulse_level: level of the generator's step pulses at its output (1 high, 0 low;
-            None: as the waveform shows it, else high).
-        active_edge: override the drive's active edge.
-        user_table: the state table of step type 15.
-        ini: a LinuxCNC INI file (BASE_PERIOD) for the ``config`` and ``latency_safe`` rates.
-        hal: LinuxCNC HAL file(s) with the stepgen settings.
-        channel: the stepgen channel of the HAL files.
-        latency: the worst base-thread latency ``J`` (``"11us"`` or exact seconds) for
-            ``latency_safe`` (needs ``ini``/``hal``).
-        limit: ``"RULE=T"`` figures replacing the drive's (``--limit``).
-        margin: ``"2x"`` or ``"+500ns"`` tightening every figure (``--margin``).
-        pictures: keep what :func:`wavecheck.report.plot.render_plot` and the HTML/GTKWave
-            outputs draw (signal windows around the worst places, a thinned step trace).
-        keep_violations: the worst violations kept per rule (the counts are exact).
-        block_edges: edges gathered before a window is checked (memory follows it).
-        require: rules that must be decided (``"dir_setup,dir_hold"``, ``["all"]``: every rule
-            the drive gives a figure for), as ``--require``.
+        options: the options object to start from (``wavecheck check``'s, say); ``drive``,
+            ``map`` and the keywords replace what they give.
+        keywords: the options of :class:`~wavecheck.options.CheckKeywords` (``invert``,
+            ``step_type``, ``resolution``, ``limit``, ``ini``, ``latency``, ``require`` …;
+            every spelling of each: :data:`wavecheck.options.OPTIONS`).
 
     Raises:
         RequirementError: a rule of ``require`` is unchecked or indeterminate (exit code 4;
@@ -234,26 +123,13 @@ def check(
             f"map {dict(map)}: roles named after an axis (x.step) are several axes: "
             "use wavecheck.check_axes(capture, {'x': {'step': ...}, ...})"
         )
-    options = build_options(
-        {None: _drive(drive)},
-        (AxisMap(None, dict(map)),) if map else (),
-        invert=invert,
-        step_type=None if step_type is None else {None: step_type},
-        forward_level={None: forward_level},
-        user_table=user_table,
-        pulse_level=pulse_level,
-        active_edge=active_edge,
-        resolution=resolution,
-        limit=limit,
-        margin=margin,
-        ini=ini,
-        hal=hal,
-        channel=channel,
-        latency=latency,
-        pictures=pictures,
-        keep_violations=keep_violations,
-        block_edges=block_edges,
-        require=require,
+    if drive is None and (options is None or not options.drive):
+        raise UsageError("check needs a drive (drive= or options=)")
+    options = options_from_keywords(
+        None if drive is None else {None: _drive(drive)},
+        None if map is None else ((AxisMap(None, dict(map)),) if map else ()),
+        keywords,
+        base=options,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)
     if len(machine.axes) != 1 or machine.axes[0].axis is not None:
@@ -271,25 +147,10 @@ def check_axes(
     drive: PathOrText | Drive | None = None,
     *,
     map: Mapping[str, str] | None = None,  # noqa: A002 - mirrors the CLI's --map
-    invert: Iterable[str] = (),
-    step_type: int | None = None,
-    resolution: str | Fraction | None = None,
     samplerate: str | Fraction | None = None,
     input_format: str | None = None,
-    forward_level: int = 0,
-    pulse_level: int | None = None,
-    active_edge: ActiveEdge | None = None,
-    user_table: tuple[int, ...] | None = None,
-    ini: PathOrText | None = None,
-    hal: PathOrText | Sequence[PathOrText] | None = None,
-    channel: int = 0,
-    latency: str | Fraction | None = None,
-    limit: Iterable[str] = (),
-    margin: str | None = None,
-    pictures: bool = False,
-    keep_violations: int = DEFAULT_KEEP,
-    block_edges: int = DEFAULT_BLOCK_EDGES,
-    require: str | Iterable[str] = (),
+    options: CheckOptions | None = None,
+    **keywords: Unpack[CheckKeywords],
 ) -> MachineReport:
     """Check every axis of a capture, read once, each against its drive (``wavecheck check
     --map x.step=5,x.dir=6 --map y.step=3,y.dir=4``); the report has one
@@ -301,10 +162,9 @@ def check_axes(
             own drive and options.
         drive: the drive of every axis that does not name its own.
         map: roles shared by every axis (only ``enable``: one ENABLE line for the machine).
-        invert, step_type, forward_level: for every axis that does not give its own.
-        resolution, samplerate, input_format, pulse_level, active_edge, user_table, ini, hal,
-            channel, latency, limit, margin, pictures, keep_violations, block_edges, require: as
-            :func:`check`, for every axis.
+        samplerate, input_format, options: as :func:`check`.
+        keywords: as :func:`check`, for every axis; ``invert``, ``step_type`` and
+            ``forward_level`` for every axis that does not give its own.
 
     Raises:
         RequirementError: a rule of ``require`` is unchecked or indeterminate on an axis.
@@ -317,6 +177,8 @@ def check_axes(
     drives: dict[str | None, Drive] = {}
     for name, a in given.items():
         ref = a.drive if a.drive is not None else drive
+        if ref is None and options is not None and options.drive:
+            continue  # the options' drive
         if ref is None:
             raise UsageError(f"axis {name} has no drive (give drive= or Axis(..., drive=...))")
         if isinstance(ref, Drive):
@@ -326,34 +188,28 @@ def check_axes(
         if key not in loaded:
             loaded[key] = _drive(ref)
         drives[name] = loaded[key]
-    types = {n: a.step_type if a.step_type is not None else step_type for n, a in given.items()}
-    options = build_options(
-        drives,
-        tuple(maps),
-        invert=[
-            f"{n}.{role}"
-            for n, a in given.items()
-            for role in (invert if a.invert is None else a.invert)
-        ],
-        step_type={n: t for n, t in types.items() if t is not None},
+    invert = keywords.get("invert")
+    step_type: dict[str | None, int | None] = {None: keywords.get("step_type")}
+    step_type.update((n, a.step_type) for n, a in given.items())
+    forward: dict[str | None, int | None] = {None: keywords.get("forward_level")}
+    forward.update((n, a.forward_level) for n, a in given.items())
+    per_axis = ("invert", "step_type", "forward_level")
+    shared = {k: v for k, v in keywords.items() if k not in per_axis}
+    base = {} if options is None else dict(options.drive)
+    options = options_from_keywords({**base, **drives}, tuple(maps), shared, base=options)
+    inverted = [
+        f"{n}.{role}"
+        for n, a in given.items()
+        for role in (a.invert if a.invert is not None else invert or ())
+    ]
+    options = replace(
+        options,
+        invert=(options.invert if invert is None else ()) + tuple(inverted),
+        step_type={**options.step_type, **{n: t for n, t in step_type.items() if t is not None}},
         forward_level={
-            n: forward_level if a.forward_level is None else a.forward_level
-            for n, a in given.items()
+            **options.forward_level,
+            **{n: f for n, f in forward.items() if f is not None},
         },
-        user_table=user_table,
-        pulse_level=pulse_level,
-        active_edge=active_edge,
-        resolution=resolution,
-        limit=limit,
-        margin=margin,
-        ini=ini,
-        hal=hal,
-        channel=channel,
-        latency=latency,
-        pictures=pictures,
-        keep_violations=keep_violations,
-        block_edges=block_edges,
-        require=require,
     )
     machine = check_source(_source(capture, samplerate, input_format), options)
     require_met(machine, options.require)

@@ -29,10 +29,10 @@ cocotb (>= 2.0, the ``cocotb`` extra) is imported only by this module.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
 
@@ -43,13 +43,22 @@ try:
 except ImportError as err:  # pragma: no cover - the extra is part of the test install
     raise ImportError("wavecheck.cocotb needs cocotb 2: pip install 'wavecheck[cocotb]'") from err
 
-from wavecheck.api import build_options, require_met
+from wavecheck.api import require_met
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.vcd.reader import EdgeBuilder
-from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine import AxisMap, MachineCheck, MachineReport, Report, RuleResult, machine_for
+from wavecheck.drives.datasheet import Drive
+from wavecheck.engine import (
+    CheckOptions,
+    MachineCheck,
+    MachineReport,
+    Report,
+    RuleResult,
+    machine_for,
+)
 from wavecheck.errors import UsageError
+from wavecheck.options import CheckKeywords, options_from_keywords
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns, format_time, parse_option
 
@@ -100,18 +109,16 @@ class StepMonitor:
             (``{"x": {"step": dut.xs, "dir": dut.xd}, "y": {...}}``); an axis may give its own
             ``"drive"`` in the same table. :meth:`finish` then returns a
             :class:`~wavecheck.report.machine.MachineReport`.
-        invert, step_type, forward_level, pulse_level, active_edge, resolution, user_table,
-            limit, margin, ini, hal, channel, latency, pictures: as :func:`wavecheck.check`
-            (for every axis).
+        options: the options object to start from; the keywords replace what they give.
+        keywords: as :func:`wavecheck.check` (for every axis; :class:`~wavecheck.options.
+            CheckKeywords`), but ``block_edges``: a window per batch. With ``require``,
+            :meth:`finish` raises :class:`~wavecheck.errors.RequirementError` when a rule it
+            names is unchecked or indeterminate (with or without ``fail_on_violation``).
         fail_on_violation: raise :class:`WavecheckViolation` as soon as a batch has a failed
             rule (failing the test at that simulation time), and in :meth:`finish`.
-        require: rules that must be decided, as :func:`wavecheck.check`'s: :meth:`finish`
-            raises :class:`~wavecheck.errors.RequirementError` when one is unchecked or
-            indeterminate (with or without ``fail_on_violation``).
         batch: value changes gathered before they are checked.
         batch_time: also check once this much simulated time has passed since the last check
             (``"100us"`` or exact seconds; None: by ``batch`` only).
-        keep_violations: violations kept per rule in the report.
 
     Raises:
         WavecheckError: an unknown drive; at :meth:`start`, an unusable mapping.
@@ -128,25 +135,11 @@ class StepMonitor:
         down: Handle | None = None,
         signals: Mapping[str, Handle] | None = None,
         axes: Mapping[str, Mapping[str, Any]] | None = None,
-        invert: Iterable[str] = (),
-        step_type: int | None = None,
-        forward_level: int = 0,
-        pulse_level: int | None = None,
-        active_edge: ActiveEdge | None = None,
-        resolution: str | Fraction | None = None,
-        user_table: tuple[int, ...] | None = None,
-        limit: Iterable[str] = (),
-        margin: str | None = None,
-        ini: str | os.PathLike[str] | None = None,
-        hal: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
-        channel: int = 0,
-        latency: str | Fraction | None = None,
-        pictures: bool = False,
-        require: str | Iterable[str] = (),
         fail_on_violation: bool = True,
         batch: int = DEFAULT_BATCH,
         batch_time: str | Fraction | None = None,
-        keep_violations: int = 1000,
+        options: CheckOptions | None = None,
+        **keywords: Unpack[CheckKeywords],
     ) -> None:
         given = {"step": step, "dir": dir, "enable": enable, "up": up, "down": down}
         roles = {r: h for r, h in given.items() if h is not None}
@@ -161,30 +154,16 @@ class StepMonitor:
         self._drives: dict[str | None, Drive] = {}
         for name, table in tables.items():
             ref = table.pop("drive", None) or drive
+            if ref is None and options is not None and options.drive:
+                ref = options.drive.get(name, options.drive.get(None))
             if ref is None:
                 raise UsageError(f"axis {name} has no drive (give drive= or its 'drive')")
             self._drives[name] = _drive(ref)
         self._tables: dict[str | None, dict[str, Handle]] = tables
         self.several = bool(axes)
-        self._options = build_options(  # a bad option fails here, not at start
-            self._drives,
-            invert=invert,
-            step_type=None if step_type is None else {None: step_type},
-            forward_level={None: forward_level},
-            user_table=user_table,
-            pulse_level=pulse_level,
-            active_edge=active_edge,
-            resolution=resolution,
-            limit=limit,
-            margin=margin,
-            ini=ini,
-            hal=hal,
-            channel=channel,
-            latency=latency,
-            pictures=pictures,
-            keep_violations=keep_violations,
+        self._options = replace(  # a bad option fails here, not at start
+            options_from_keywords(self._drives, keywords=keywords, base=options),
             block_edges=1,  # a window per batch: the batches are this monitor's
-            require=require,
         )
         self.fail_on_violation = fail_on_violation
         self.batch = max(1, batch)

@@ -38,17 +38,17 @@ import numpy as np
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import Drive
 from wavecheck.engine import (
-    AxisMap,
     AxisPlan,
     CheckOptions,
     MachineReport,
     Report,
     StepCollector,
-    StepEvents,
     StepSink,
     check_capture,
 )
 from wavecheck.errors import UsageError
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.units import format_ns
 from wavecheck.verdict import overall_verdict
 

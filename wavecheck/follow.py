@@ -2,7 +2,7 @@
 
 The *command* is a trajectory: a CSV of time and position, LinuxCNC ``halsampler`` output of a
 position or count pin, or a STEP/DIR (up/down) train in the capture itself (a servo drive's
-step input). The *feedback* is the position decoded from the capture (:mod:`wavecheck.engine.decode`):
+step input). The *feedback* is the position decoded from the capture (:mod:`wavecheck.steps.decode`):
 a stepper's STEP/DIR, or a quadrature encoder's A/B (step type 2).
 
 Positions are in feedback counts (steps or encoder counts); a command in position units is
@@ -45,8 +45,8 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine import StepEvents
 from wavecheck.errors import UsageError
+from wavecheck.steps.decode import StepEvents
 from wavecheck.units import check_finite
 
 __all__ = [
@@ -260,7 +260,7 @@ def command_from_steps(
 ) -> Command:
     """A step train in the capture (ticks ``start`` … ``end``) as the command: counts from 0,
     each position held until the next step; steps of unknown direction count 0, as in
-    :class:`~wavecheck.engine.decode.StepEvents`."""
+    :class:`~wavecheck.steps.decode.StepEvents`."""
     pos = events.position.astype(np.float64)
     last = float(pos[-1]) if len(pos) else 0.0
     times = np.concatenate([[start], events.ticks, [max(end, start)]]).astype(np.int64)

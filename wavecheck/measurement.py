@@ -26,17 +26,10 @@ import numpy as np
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import (
-    AxisPlan,
-    CheckOptions,
-    Intervals,
-    StepCounts,
-    StepInterface,
-    StepSink,
-    StepTrace,
-    start,
-)
+from wavecheck.engine import AxisPlan, CheckOptions, StepCounts, StepSink, StepTrace, start
 from wavecheck.rules import Rule
+from wavecheck.steps.interface import StepInterface
+from wavecheck.steps.primitives import Intervals
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 

@@ -71,6 +71,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
+from wavecheck.options import OPTIONS
+
 if TYPE_CHECKING:
     from wavecheck.engine import MachineReport, Report, RuleResult
 
@@ -90,31 +92,8 @@ __all__ = [
 ]
 
 VERDICTS = ("pass", "fail", "indeterminate")
-_KEYS = {
-    "name",
-    "path",
-    "drive",
-    "map",
-    "invert",
-    "type",
-    "resolution",
-    "samplerate",
-    "input_format",
-    "dir_forward",
-    "expect",
-    "expect_rules",
-    "ini",
-    "hal",
-    "channel",
-    "latency",
-    "axes",
-    "user_step_type",
-    "pulse_level",
-    "active_edge",
-    "limit",
-    "margin",
-    "require",
-}
+#: Keys of a ``[[capture]]`` entry: its own, and the check options' (:data:`wavecheck.options.OPTIONS`).
+_KEYS = {"name", "path", "expect", "expect_rules", "axes"} | {o.toml for o in OPTIONS if o.toml}
 #: Keys of an axis table besides its roles.
 _AXIS_KEYS = {"map", "drive", "type", "invert", "dir_forward", "expect", "expect_rules", "require"}
 
@@ -196,7 +175,7 @@ class CaptureSpec:
 def _map_of(raw: Any, where: str) -> dict[str, str]:
     """A ``map`` value: a table or ``"role=CH,..."`` text."""
     if isinstance(raw, str):
-        from wavecheck.engine import parse_map
+        from wavecheck.steps.interface import parse_map
 
         return parse_map([raw])
     if isinstance(raw, dict):
@@ -253,8 +232,9 @@ def _axes(
     entry: dict[str, Any], where: str, folder: Path, defaults: AxisSpec, shared: dict[str, str]
 ) -> tuple[AxisSpec, ...]:
     """The ``axes`` table of an entry, ``defaults`` (the entry's own values) filling the gaps."""
-    from wavecheck.engine import axes_from_tables, role_name
     from wavecheck.errors import WavecheckError
+    from wavecheck.steps.interface import role_name
+    from wavecheck.steps.mapping import axes_from_tables
 
     raw = entry["axes"]
     if not isinstance(raw, dict) or not raw or not all(isinstance(v, dict) for v in raw.values()):

@@ -129,7 +129,7 @@ def read_capture_latency(path: str | Path) -> tuple[int, str]:
         ConfigError: the lateness is not established
             (:attr:`wavecheck.lattice.LatencyReport.unestablished` says why).
     """
-    from wavecheck.cli.latency import latency_of
+    from wavecheck.step_latency import latency_of
 
     report = latency_of(str(path))
     worst = report.max_lateness_bound_ns

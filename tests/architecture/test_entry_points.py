@@ -1,9 +1,9 @@
-"""Every entry point accepts the same options (issue 23): each field of the one options object,
-:class:`wavecheck.engine.options.CheckOptions`, is something the command line (``check``,
-``watch``), :func:`wavecheck.check` / :func:`wavecheck.check_axes`, the pytest plugin's
-``wavecheck.toml`` and the cocotb ``StepMonitor`` take, each in its own spelling; a field an entry
-point cannot take says why here. A field added to CheckOptions fails this test until every entry
-point takes it (or says why not)."""
+"""Every entry point accepts the same options (issue 23), as the one table of their spellings
+says (:data:`wavecheck.options.OPTIONS`, issue 37): each field of the one options object,
+:class:`wavecheck.engine.CheckOptions`, is set by an option of the table, and the command line
+(``check``, ``watch``), :func:`wavecheck.check` / :func:`wavecheck.check_axes`, the cocotb
+``StepMonitor``, the pytest plugin's ``wavecheck.toml`` and the PulseView decoder take each
+option in the spelling the table gives it. An entry point that cannot take one says why here."""
 
 from __future__ import annotations
 
@@ -15,61 +15,24 @@ from pathlib import Path
 
 import pytest
 
-from wavecheck.engine.options import CheckOptions
+from wavecheck.engine import CheckOptions
+from wavecheck.options import OPTIONS, CheckKeywords
 
-#: field → its spelling per entry point (a CLI option, a keyword, a TOML key); a string
-#: starting with "n/a: " says why that entry point has none.
-SPELLINGS: dict[str, dict[str, tuple[str, ...] | str]] = {
-    "drive": {"check": ("--drive",), "watch": ("--drive",), "api": ("drive",),
-              "toml": ("drive",), "cocotb": ("drive",)},
-    "axes": {"check": ("--map",), "watch": ("--map",), "api": ("map",), "toml": ("map", "axes"),
-             "cocotb": ("step", "dir", "axes")},
-    "invert": {"check": ("--invert",), "watch": ("--invert",), "api": ("invert",),
-               "toml": ("invert",), "cocotb": ("invert",)},
-    "step_type": {"check": ("--type",), "watch": ("--type",), "api": ("step_type",),
-                  "toml": ("type",), "cocotb": ("step_type",)},
-    "forward_level": {"check": ("--dir-forward",), "watch": ("--dir-forward",),
-                      "api": ("forward_level",), "toml": ("dir_forward",),
-                      "cocotb": ("forward_level",)},
-    "user_table": {"check": ("--user-step-type",), "watch": ("--user-step-type",),
-                   "api": ("user_table",), "toml": ("user_step_type",),
-                   "cocotb": ("user_table",)},
-    "pulse_level": {"check": ("--pulse-level",), "watch": ("--pulse-level",),
-                    "api": ("pulse_level",), "toml": ("pulse_level",), "cocotb": ("pulse_level",)},
-    "active_edge": {"check": ("--active-edge",), "watch": ("--active-edge",),
-                    "api": ("active_edge",), "toml": ("active_edge",), "cocotb": ("active_edge",)},
-    "resolution": {"check": ("--resolution",), "watch": ("--resolution",),
-                   "api": ("resolution",), "toml": ("resolution",), "cocotb": ("resolution",)},
-    "limits": {"check": ("--limit",), "watch": ("--limit",), "api": ("limit",),
-               "toml": ("limit",), "cocotb": ("limit",)},
-    "margin": {"check": ("--margin",), "watch": ("--margin",), "api": ("margin",),
-               "toml": ("margin",), "cocotb": ("margin",)},
-    "stepgen": {"check": ("--ini", "--hal", "--channel", "--base-period"),
-                "watch": ("--ini", "--hal", "--channel", "--base-period"),
-                "api": ("ini", "hal", "channel"), "toml": ("ini", "hal", "channel"),
-                "cocotb": ("ini", "hal", "channel")},
-    "latency_ns": {"check": ("--latency",), "watch": ("--latency",), "api": ("latency",),
-                   "toml": ("latency",), "cocotb": ("latency",)},
-    "keep_violations": {"check": ("--max-violations",), "watch": ("--max-violations",),
-                        "api": ("keep_violations",),
-                        "toml": "n/a: a test item shows the few worst; --wavecheck-max-violations",
-                        "cocotb": ("keep_violations",)},
-    "block_edges": {"check": ("--block-edges",),
-                    "watch": "n/a: a live watch checks what arrived every few tenths of a second",
-                    "api": ("block_edges",),
-                    "toml": "n/a: a test capture is checked with the engine's default blocks",
-                    "cocotb": ("batch",)},
-    "pictures": {"check": ("--plot", "--html", "--gtkw"),
-                 "watch": "n/a: a live watch keeps --snippets of the violations instead",
-                 "api": ("pictures",),
-                 "toml": "n/a: the plugin draws a failing capture's page itself (--wavecheck-html)",
-                 "cocotb": ("pictures",)},
-    "require": {p: ("--require",) if p in ("check", "watch") else ("require",)
-                for p in ("check", "watch", "api", "toml", "cocotb")},
-    "infer_edges": {p: "n/a: the engine's own bound on what it reads to tell roles"
-                    for p in ("check", "watch", "api", "toml", "cocotb")},
-}  # fmt: skip
-ENTRY_POINTS = ("check", "watch", "api", "toml", "cocotb")
+#: option → why ``wavecheck watch`` has no spelling of it.
+NOT_WATCH = {
+    "block_edges": "a live watch checks what arrived every few tenths of a second",
+    "pictures": "a live watch keeps --snippets of the violations instead",
+    "samplerate": "the device's --samplerate is the acquisition's (another option)",
+    "input_format": "a live device is read by sigrok-cli",
+}
+#: option → why the cocotb ``StepMonitor`` has no keyword of it.
+NOT_COCOTB = {
+    "map": "the roles are the DUT's handles: step=, dir=, axes=",
+    "samplerate": "the simulator's time precision is the time base",
+    "input_format": "no file is read",
+}
+#: CheckOptions fields no user option sets.
+ENGINE_ONLY = {"infer_edges": "the engine's own bound on what it reads to tell roles"}
 
 
 def _cli_options(command: str) -> set[str]:
@@ -79,44 +42,57 @@ def _cli_options(command: str) -> set[str]:
     return {o for a in sub.choices[command]._actions for o in a.option_strings}
 
 
-def _accepted(entry: str) -> set[str]:
-    if entry in ("check", "watch"):
-        return _cli_options(entry)
-    if entry == "api":
-        from wavecheck.api import check, check_axes
+def _keywords(function: object) -> set[str]:
+    """The keywords ``function`` takes: its parameters and its ``**keywords``' TypedDict."""
+    parameters = inspect.signature(function).parameters  # type: ignore[arg-type]
+    named = {n for n, p in parameters.items() if p.kind is not p.VAR_KEYWORD}
+    if any(p.kind is p.VAR_KEYWORD for p in parameters.values()):
+        named |= set(CheckKeywords.__annotations__)
+    return named
 
-        a, b = inspect.signature(check).parameters, inspect.signature(check_axes).parameters
-        return set(a) & set(b) | {"map"}
-    if entry == "toml":
-        from wavecheck.pytest_plugin import _KEYS
 
-        return set(_KEYS)
+def test_every_field_is_set_by_an_option() -> None:
+    names = {f.name for f in fields(CheckOptions)}
+    set_by_options = {o.field for o in OPTIONS if o.field}
+    assert set_by_options | set(ENGINE_ONLY) == names
+    assert len({o.name for o in OPTIONS}) == len(OPTIONS)
+
+
+def test_the_keywords_typed_are_the_table_s() -> None:
+    own_parameters = {"drive", "map", "samplerate", "input_format"}
+    assert set(CheckKeywords.__annotations__) == {o.keyword for o in OPTIONS if o.keyword} - (
+        own_parameters
+    )
+
+
+@pytest.mark.parametrize("command", ["check", "watch"])
+def test_the_command_line_takes_every_option(command: str) -> None:
+    accepted = _cli_options(command)
+    skip = NOT_WATCH if command == "watch" else {}
+    missing = [f for o in OPTIONS if o.name not in skip for f in o.cli if f not in accepted]
+    assert not missing, f"wavecheck {command} does not take {missing}"
+    assert all(o.cli for o in OPTIONS), "every option has a command-line spelling"
+
+
+def test_the_python_entry_points_take_every_keyword() -> None:
+    from wavecheck.api import check, check_axes
     from wavecheck.cocotb import StepMonitor
 
-    return set(inspect.signature(StepMonitor).parameters)
+    for entry, skip in ((check, {}), (check_axes, {}), (StepMonitor, NOT_COCOTB)):
+        accepted = _keywords(entry)
+        missing = [o.keyword for o in OPTIONS if o.keyword and o.name not in skip]
+        assert not [k for k in missing if k not in accepted], entry
 
 
-def test_the_table_covers_every_field() -> None:
-    names = {f.name for f in fields(CheckOptions)}
-    assert set(SPELLINGS) >= names, (
-        "a CheckOptions field no entry point was checked for: add it to SPELLINGS"
-    )
-    assert set(SPELLINGS) <= names
-    for field, per in SPELLINGS.items():
-        assert set(per) == set(ENTRY_POINTS), field
+def test_the_plugin_and_the_decoder_take_their_spellings() -> None:
+    from wavecheck.pytest_plugin import _KEYS
+    from wavecheck.sigrok.decoder.pd import OPTIONS as DECODER
 
-
-@pytest.mark.parametrize("entry", ENTRY_POINTS)
-def test_every_entry_point_takes_every_field(entry: str) -> None:
-    accepted = _accepted(entry)
-    missing = []
-    for field, per in SPELLINGS.items():
-        spelling = per[entry]
-        if isinstance(spelling, str):
-            assert spelling.startswith("n/a: "), (field, entry)
-            continue
-        missing += [f"{field} as {s}" for s in spelling if s not in accepted]
-    assert not missing, f"{entry} does not take: {', '.join(missing)}"
+    assert {o.toml for o in OPTIONS if o.toml} <= _KEYS
+    ids = {d["id"] for d in DECODER}
+    assert {o.decoder for o in OPTIONS if o.decoder} <= ids
+    # the decoder's other options are its own (how it shows what it finds)
+    assert ids - {o.decoder for o in OPTIONS} == {"unit", "pause"}
 
 
 def test_options_that_cannot_apply_are_refused_alike() -> None:

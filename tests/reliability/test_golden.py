@@ -14,8 +14,8 @@ from vcd.reader import TokenKind, tokenize
 from tests.reliability.vcdedit import VcdText
 from wavecheck.api import check
 from wavecheck.capture.vcd import read_vcd
-from wavecheck.engine.decode import decode
-from wavecheck.engine.interface import build_interface
+from wavecheck.steps.decode import decode
+from wavecheck.steps.interface import build_interface
 
 GOLDEN = Path(__file__).resolve().parents[2] / "captures" / "golden"
 VCDS = sorted(GOLDEN.glob("*.vcd"))

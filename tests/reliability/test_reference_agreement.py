@@ -146,7 +146,7 @@ def test_the_comparison_has_teeth(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
     import numpy as np
 
     import wavecheck.engine.intervals as compiled
-    from wavecheck.engine.primitives import Intervals
+    from wavecheck.steps.primitives import Intervals
 
     w = {
         "step": (0, [10, 12, 20, 22]), "dir": (0, [20]), "end": 30,

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from stepgen.cli import main as stepgen_main
-from wavecheck.cli.latency import latency_of
+from wavecheck.step_latency import latency_of
 
 
 def test_plan_from_capture_equals_plan_from_the_figure(

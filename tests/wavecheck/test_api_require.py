@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 import wavecheck
-from wavecheck.api import build_options
-from wavecheck.engine.options import CheckOptions
+from wavecheck.engine import CheckOptions
 from wavecheck.errors import RequirementError, UsageError
+from wavecheck.options import options_from_keywords
 
 REPO = Path(__file__).resolve().parents[2]
 TWO_AXES = REPO / "captures" / "examples" / "two-axis.vcd"
@@ -22,7 +22,10 @@ def test_options_check_the_rule_ids() -> None:
     assert CheckOptions(require=("all", "dir_hold")).require == ("all", "dir_hold")
     with pytest.raises(UsageError, match="'dir_hld' is not a rule"):
         CheckOptions(require=("dir_hld",))
-    assert build_options({}, require="dir_setup, dir_hold").require == ("dir_setup", "dir_hold")
+    assert options_from_keywords(keywords={"require": "dir_setup, dir_hold"}).require == (
+        "dir_setup",
+        "dir_hold",
+    )
 
 
 def test_check_raises_when_a_required_rule_is_not_checked() -> None:

@@ -181,8 +181,8 @@ def test_step_dir_command_with_an_encoder(
     # 2 counts per step) as the feedback, both in one capture
     vcd, _ = runs["none"]
     cap = open_capture(vcd)
-    from wavecheck.engine.decode import decode
-    from wavecheck.engine.interface import build_interface
+    from wavecheck.steps.decode import decode
+    from wavecheck.steps.interface import build_interface
 
     ev = decode(build_interface(cap, {"step": "step", "dir": "dir"}), 0)
     t = np.repeat(ev.ticks + 2_000_000, 2) + np.tile([0, 500], len(ev.ticks))

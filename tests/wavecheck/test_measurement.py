@@ -15,12 +15,12 @@ from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.overrides import tune_drive
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
-from wavecheck.engine.primitives import Intervals
 from wavecheck.engine.trace import StepTrace
 from wavecheck.measurement import IntervalCounts, _exact_sum, measure
 from wavecheck.rules import TIME_RULES, rule
+from wavecheck.steps.mapping import AxisMap
+from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
 
 REPO = Path(__file__).resolve().parents[2]

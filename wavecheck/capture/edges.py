@@ -244,7 +244,7 @@ class Capture:
         """
         if isinstance(ref, str):
             same = self._by_name().get(ref, [])
-            if len(same) > 1:  # never the first of several silently (wavecheck.engine.interface)
+            if len(same) > 1:  # never the first of several silently (wavecheck.steps.interface)
                 raise UsageError(
                     f"{self.path}: channel {ref!r} is ambiguous: indices "
                     f"{', '.join(str(c.index) for c in same)} share the name; map by index"

@@ -3,7 +3,7 @@
 Options added by :func:`add_axis_arguments`: ``--map`` (``[AXIS.]ROLE=CH``), ``--invert``,
 ``--type``, ``--user-step-type``, ``--dir-forward``, ``--pulse-level``, ``--active-edge``.
 :func:`check_options` turns them into the run's options object (the syntax is
-:mod:`wavecheck.engine.mapping`); without ``--map`` the engine takes the roles from channel names or
+:mod:`wavecheck.steps.mapping`); without ``--map`` the engine takes the roles from channel names or
 infers them from the waveforms (:func:`wavecheck.roles.propose`) when that is unambiguous.
 """
 
@@ -13,16 +13,17 @@ import argparse
 from typing import Any
 
 from wavecheck.capture.blocks import WHOLE
+from wavecheck.cli._tuning_args import required
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions, parse_axes, split_per_axis
+from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions
 from wavecheck.errors import UsageError
+from wavecheck.steps.mapping import parse_axes, split_per_axis
 
 __all__ = [
     "add_axis_arguments",
     "add_engine_arguments",
     "check_options",
     "pulse_level",
-    "required",
     "user_table",
 ]
 
@@ -143,15 +144,12 @@ def add_engine_arguments(p: Any) -> None:
 
 def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> CheckOptions:
     """The options object (:class:`~wavecheck.engine.options.CheckOptions`) of the mapping,
-    capture, rule and configuration options of ``args``; built once and kept on ``args``.
-    ``with_drive=False``: a command without a drive (``measure``).
+    capture, rule and configuration options of ``args`` (read each time: a command builds it
+    once, before any capture). ``with_drive=False``: a command without a drive (``measure``).
 
     Raises:
         UsageError: a malformed option (the axes are checked against the capture later).
     """
-    cached = getattr(args, "_check_options", None)
-    if isinstance(cached, CheckOptions):
-        return cached
     from wavecheck.cli._capture_args import resolution_from_args
     from wavecheck.cli._stepgen_args import latency_ns, stepgen_config
     from wavecheck.drives.library import load_drive
@@ -172,7 +170,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         for axis, text in split_per_axis(args.dir_forward, "--dir-forward").items()
     }
     block = WHOLE if getattr(args, "no_stream", False) else getattr(args, "block_edges", None)
-    options = CheckOptions(
+    return CheckOptions(
         drive=drives,
         axes=tuple(parse_axes(args.map)) if args.map else (),
         invert=tuple(args.invert),
@@ -191,15 +189,6 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
         require=required(args),
     )
-    args._check_options = options
-    return options
-
-
-def required(args: argparse.Namespace) -> tuple[str, ...]:
-    """``--require`` as rule ids (and ``all``), each once (checked by :class:`CheckOptions`)."""
-    from wavecheck.verdict import require_list
-
-    return require_list(getattr(args, "require", None))
 
 
 def kept_violations(args: argparse.Namespace) -> int:

@@ -25,9 +25,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from wavecheck.cli._axis_args import required
 from wavecheck.cli._formats import FORMATS, Checked, Part, axis_reports
-from wavecheck.cli._stepgen_args import latency_ns, stepgen_config
+from wavecheck.cli._reports import Asked, asked
+from wavecheck.cli._tuning_args import required
 from wavecheck.engine import MachineReport, Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import atomic_write, figure_format
@@ -37,7 +37,10 @@ from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 from wavecheck.units import format_time
 from wavecheck.verdict import worst_exit_code
 
-__all__ = ["expand_captures", "run_checks", "summary_line"]
+__all__ = ["Builder", "expand_captures", "run_checks", "summary_line"]
+
+Builder = Callable[[argparse.Namespace, Asked, str], Checked]
+"""Checks one capture (the path) as the arguments and what they ask say."""
 
 
 def expand_captures(patterns: list[str]) -> list[str]:
@@ -234,29 +237,24 @@ class _Outcome:
     error: str | None = None
 
 
-_WORKER: (
-    tuple[argparse.Namespace, Callable[[argparse.Namespace, str], Checked], _SideOutputs | None]
-    | None
-) = None
+_WORKER: tuple[argparse.Namespace, Asked, Builder, _SideOutputs | None] | None = None
 
 
 def _init_worker(
-    args: argparse.Namespace,
-    build_report: Callable[[argparse.Namespace, str], Checked],
-    side: _SideOutputs | None,
+    args: argparse.Namespace, what: Asked, build_report: Builder, side: _SideOutputs | None
 ) -> None:
     global _WORKER
-    _WORKER = (args, build_report, side)
+    _WORKER = (args, what, build_report, side)
 
 
 def _check_one(index: int, path: str) -> _Outcome:
     """Check one capture of several (in a worker process, or in this one with its side
     outputs)."""
     assert _WORKER is not None
-    args, build_report, side = _WORKER
+    args, what, build_report, side = _WORKER
     try:
         with activate(f"reading {path}", quiet=args.quiet or side is None, unit="bytes"):
-            checked = build_report(args, path)
+            checked = build_report(args, what, path)
     except WavecheckError as err:
         text = str(err)
         line = f"{'ERROR':<13} {text if text.startswith(path) else f'{path}: {text}'}"
@@ -277,7 +275,8 @@ def _check_one(index: int, path: str) -> _Outcome:
 
 def _outcomes(
     args: argparse.Namespace,
-    build_report: Callable[[argparse.Namespace, str], Checked],
+    what: Asked,
+    build_report: Builder,
     paths: list[str],
     jobs: int,
     side: _SideOutputs | None = None,
@@ -285,7 +284,7 @@ def _outcomes(
     """Every capture's outcome, as each finishes (in input order with one job, in this process
     with ``side`` written as each is checked)."""
     if jobs == 1:
-        _init_worker(args, build_report, side or _SideOutputs(args, several=True))
+        _init_worker(args, what, build_report, side or _SideOutputs(args, several=True))
         for k, path in enumerate(paths):
             yield _check_one(k, path)
         return
@@ -299,7 +298,10 @@ def _outcomes(
     size = max(1, min(_MAX_BATCH, len(paths) // (jobs * 4)))
     batches = [list(range(k, min(k + size, len(paths)))) for k in range(0, len(paths), size)]
     with ProcessPoolExecutor(
-        jobs, mp_context=context, initializer=_init_worker, initargs=(args, build_report, None)
+        jobs,
+        mp_context=context,
+        initializer=_init_worker,
+        initargs=(args, what, build_report, None),
     ) as pool:
         futures = [pool.submit(_check_batch, [(k, paths[k]) for k in b]) for b in batches]
         for future in as_completed(futures):
@@ -316,7 +318,7 @@ def _check_batch(batch: list[tuple[int, str]]) -> list[_Outcome]:
 
 def run_checks(
     args: argparse.Namespace,
-    build_report: Callable[[argparse.Namespace, str], Checked],
+    build_report: Builder,
     write_outputs: Callable[[argparse.Namespace, Checked], None],
 ) -> int:
     """Check every capture of ``args.capture`` and write every requested output.
@@ -328,11 +330,10 @@ def run_checks(
     """
     patterns = args.capture if isinstance(args.capture, list) else [args.capture]
     paths = expand_captures(patterns)
-    stepgen_config(args)  # a bad INI/HAL file is reported before any capture is read
-    latency_ns(args)
+    what = asked(args)  # once: a bad option or INI/HAL file before any capture is read
     if len(paths) == 1:
         with activate(f"reading {paths[0]}", quiet=args.quiet, unit="bytes"):
-            report = build_report(args, paths[0])
+            report = build_report(args, what, paths[0])
         write_outputs(args, report)
         side = _SideOutputs(args, several=False)
         side.add(report)
@@ -348,7 +349,7 @@ def run_checks(
     done: list[_Outcome | None] = [None] * len(paths)
     spool = _Spool()
     try:
-        for outcome in _outcomes(args, build_report, paths, jobs, side):
+        for outcome in _outcomes(args, what, build_report, paths, jobs, side):
             if outcome.error is not None:
                 print(f"wavecheck: error: {outcome.error}", file=sys.stderr, flush=True)
             if stream is not None:

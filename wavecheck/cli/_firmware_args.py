@@ -15,7 +15,7 @@ from wavecheck.units import parse_frequency, time_ns
 if TYPE_CHECKING:  # imported where used: only with a firmware configuration
     from wavecheck.firmware.capture import FirmwareCheck
 
-__all__ = ["add_firmware_arguments", "check_firmware", "read_firmware_args"]
+__all__ = ["add_firmware_arguments", "check_firmware", "firmware_config", "read_firmware_args"]
 
 
 def add_firmware_arguments(p: argparse.ArgumentParser, *, positional: bool = False) -> None:
@@ -66,15 +66,19 @@ def read_firmware_args(
     )
 
 
-def check_firmware(args: argparse.Namespace, subject: Any) -> FirmwareCheck:
+def firmware_config(args: argparse.Namespace) -> FirmwareConfig | None:
+    """The configuration ``--firmware FILE`` names, read (None without ``--firmware``)."""
+    path = getattr(args, "firmware", None)
+    return read_firmware_args(args, path) if path else None
+
+
+def check_firmware(args: argparse.Namespace, cfg: FirmwareConfig, subject: Any) -> FirmwareCheck:
     """``check --firmware`` / ``measure --firmware``: one capture axis (a Report or an
-    :class:`~wavecheck.firmware.capture.Observed`) against its firmware axis."""
+    :class:`~wavecheck.firmware.capture.Observed`) against its axis of ``cfg`` (paired by
+    ``--axis``/``--firmware-axis``)."""
     from wavecheck.firmware.capture import Observed, firmware_check
     from wavecheck.firmware.pairing import pair_axis, parse_pairs
 
-    cached = getattr(args, "_firmware_config", None)
-    cfg: FirmwareConfig = cached if cached is not None else read_firmware_args(args, args.firmware)
-    args._firmware_config = cfg
     name = subject.axis_name if isinstance(subject, Observed) else subject.axis
     pairing = pair_axis(cfg, name, parse_pairs(getattr(args, "firmware_axis", []) or []),
                         getattr(args, "axis", None))  # fmt: skip

@@ -1,31 +1,49 @@
-"""The report formats of ``--format`` (``check``, ``watch``): one record per format, and nothing
-else branches on the format.
+"""The report formats of ``--format``: one renderer per format, and nothing else branches on
+the format.
 
-Each :class:`ReportFormat` gives the document of one capture (:attr:`~ReportFormat.render`), a
-capture's piece of the document of several, rendered where the capture was checked (a worker
-process; :attr:`~ReportFormat.piece`), and the document of several joined from those pieces in
-input order (:attr:`~ReportFormat.join`). A new format is one more entry in :data:`FORMATS`.
+``check`` and ``watch``: each :class:`ReportFormat` gives the document of one capture
+(:attr:`~ReportFormat.render`), a capture's piece of the document of several, rendered where the
+capture was checked (a worker process; :attr:`~ReportFormat.piece`), and the document of several
+joined from those pieces in input order (:attr:`~ReportFormat.join`). A new format is one more
+entry in :data:`FORMATS`.
+
+The other commands (``compare``, ``config``, ``crosscheck``, ``drives``, ``follow``, ``info``,
+``latency``, ``measure``) each have a :class:`Formats`: format name → the renderer of the
+command's result; it adds ``--format`` and renders the one asked for. :func:`json_text` makes the
+JSON renderer of a function giving the document's dictionary, :func:`lazy` a renderer whose
+module loads only when a document is rendered (``wavecheck --help`` stays light).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import itertools
 import json
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Generic, ParamSpec, TypeAlias
 
-from wavecheck.cli._axis_args import required
-from wavecheck.engine import MachineReport, Report
-from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
-from wavecheck.report.machine import machine_dict, render_machine_text
-from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
+from wavecheck.cli._tuning_args import required
 from wavecheck.verdict import overall_verdict
 
-__all__ = ["FORMATS", "Checked", "Part", "ReportFormat", "axis_reports"]
+if TYPE_CHECKING:  # the reports load numpy: imported where used (wavecheck drives has none)
+    from wavecheck.engine import MachineReport, Report
 
-Checked = Report | MachineReport
+__all__ = [
+    "FORMATS",
+    "Checked",
+    "Formats",
+    "Part",
+    "ReportFormat",
+    "axis_reports",
+    "json_text",
+    "lazy",
+]
+
+P = ParamSpec("P")
+
+Checked: TypeAlias = "Report | MachineReport"
 """What one capture gives: a report, or one per axis."""
 
 #: JUnit's counts of a piece: tests, failures, errors, skipped.
@@ -37,6 +55,8 @@ _NESTED = " " * 4
 
 def axis_reports(checked: Checked) -> list[Report]:
     """The reports of ``checked``: its axes, or itself."""
+    from wavecheck.engine import MachineReport
+
     return checked.axes if isinstance(checked, MachineReport) else [checked]
 
 
@@ -71,6 +91,10 @@ class ReportFormat:
 # -- text ------------------------------------------------------------------------------------------
 def render_text_report(report: Checked, args: argparse.Namespace) -> str:
     """The text report (``--max-violations`` listed)."""
+    from wavecheck.engine import MachineReport
+    from wavecheck.report.machine import render_machine_text
+    from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS, render_text
+
     cap = DEFAULT_TEXT_VIOLATIONS if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
         return render_machine_text(report, cap, required(args))
@@ -92,6 +116,10 @@ def _text_join(
 
 # -- JSON ------------------------------------------------------------------------------------------
 def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
+    from wavecheck.engine import MachineReport
+    from wavecheck.report.json import DEFAULT_VIOLATION_CAP, report_dict
+    from wavecheck.report.machine import machine_dict
+
     cap = DEFAULT_VIOLATION_CAP if args.max_violations is None else args.max_violations
     if isinstance(report, MachineReport):
         return machine_dict(report, cap, required(args))
@@ -168,3 +196,40 @@ FORMATS: dict[str, ReportFormat] = {
     "json": ReportFormat(render_json_report, _json_piece, _json_join),
     "junit": ReportFormat(render_junit_report, _junit_piece, _junit_join),
 }
+
+
+# -- the other commands ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Formats(Generic[P]):
+    """The ``--format`` of a command: format name → the renderer of its result (the first is
+    the default)."""
+
+    renderers: Mapping[str, Callable[P, str]]
+    help: str = "report format"
+
+    def add_argument(self, p: Any) -> None:
+        """Add ``--format`` (its choices: the formats, in order) to ``p``."""
+        names = tuple(self.renderers)
+        p.add_argument("--format", choices=names, default=names[0], help=self.help)
+
+    def render(self, name: str, *args: P.args, **kwargs: P.kwargs) -> str:
+        """The document in format ``name``."""
+        return self.renderers[name](*args, **kwargs)
+
+
+def json_text(doc: Callable[P, Any]) -> Callable[P, str]:
+    """The JSON renderer of ``doc`` (the document's dictionary): indented, characters kept."""
+
+    def render(*args: P.args, **kwargs: P.kwargs) -> str:
+        return json.dumps(doc(*args, **kwargs), indent=2, ensure_ascii=False) + "\n"
+
+    return render
+
+
+def lazy(module: str, name: str) -> Callable[..., Any]:
+    """``module.name``, imported when first called (a renderer of a heavy module)."""
+
+    def call(*args: Any, **kwargs: Any) -> Any:
+        return getattr(importlib.import_module(module), name)(*args, **kwargs)
+
+    return call

@@ -11,16 +11,34 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import dataclass
 
-from wavecheck.cli._axis_args import required
-from wavecheck.cli._firmware_args import check_firmware
+from wavecheck.cli._axis_args import check_options
+from wavecheck.cli._firmware_args import check_firmware, firmware_config
 from wavecheck.cli._formats import FORMATS, Checked, axis_reports
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
+from wavecheck.cli._tuning_args import required
+from wavecheck.engine import CheckOptions, MachineReport
+from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, figure_file, gtkw_file, output_file
 from wavecheck.progress import QUIET_HELP
-from wavecheck.report.machine import MachineReport
 
-__all__ = ["add_report_arguments", "finish_report", "write_outputs"]
+__all__ = ["Asked", "add_report_arguments", "asked", "finish_report", "write_outputs"]
+
+
+@dataclass(frozen=True)
+class Asked:
+    """What a check is asked, read from its arguments once, before any capture (a bad option
+    or file is reported before any capture is read): the options object and the firmware
+    configuration of ``--firmware`` (None without it)."""
+
+    options: CheckOptions
+    firmware: FirmwareConfig | None = None
+
+
+def asked(args: argparse.Namespace) -> Asked:
+    """The :class:`Asked` of ``check``'s (or ``simulate``'s) arguments."""
+    return Asked(check_options(args), firmware_config(args))
 
 
 def add_report_arguments(p: argparse.ArgumentParser) -> None:
@@ -61,11 +79,14 @@ def add_report_arguments(p: argparse.ArgumentParser) -> None:
     add_stepgen_arguments(p)
 
 
-def finish_report(args: argparse.Namespace, machine: MachineReport) -> Checked:
-    """Add ``--firmware`` findings; a single unnamed axis as its Report."""
+def finish_report(
+    args: argparse.Namespace, machine: MachineReport, firmware: FirmwareConfig | None = None
+) -> Checked:
+    """Add the findings against ``firmware`` (``--firmware``); a single unnamed axis as its
+    Report."""
     for report in machine.axes:
-        if getattr(args, "firmware", None):  # the capture against its own firmware settings
-            report.firmware = check_firmware(args, report)
+        if firmware is not None:  # the capture against its own firmware settings
+            report.firmware = check_firmware(args, firmware, report)
     if len(machine.axes) == 1 and machine.axes[0].axis is None:
         return machine.axes[0]
     return machine

@@ -1,6 +1,6 @@
 """The LinuxCNC stepgen configuration options of ``check`` and ``watch``: ``--ini``, ``--hal``,
 ``--channel``, ``--base-period``, ``--steplen`` …, ``--latency``, for the ``config`` and
-``latency_safe`` max step rates; each read once and kept on ``args``."""
+``latency_safe`` max step rates (read into the options object: :mod:`wavecheck.cli._axis_args`)."""
 
 from __future__ import annotations
 
@@ -48,11 +48,7 @@ _CONFIG_OPTIONS = {
 
 
 def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
-    """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given);
-    read once and kept on ``args``."""
-    if hasattr(args, "_linuxcnc_config"):
-        cached: LinuxCNCConfig | None = args._linuxcnc_config
-        return cached
+    """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given)."""
     cfg = None
     given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
     if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):
@@ -73,23 +69,17 @@ def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
         raise UsageError(
             "--latency needs the stepgen configuration: give --ini/--hal or --base-period"
         )
-    args._linuxcnc_config = cfg
     return cfg
 
 
 def latency_ns(args: argparse.Namespace) -> Fraction | None:
-    """``--latency`` in exact ns (None when not given); read (and warned about) once, kept on
-    ``args``."""
-    if hasattr(args, "_latency_ns"):
-        cached: Fraction | None = args._latency_ns
-        return cached
+    """``--latency`` in exact ns (None when not given; a warning below 100 ns)."""
     text = getattr(args, "latency", None)
     j = None
     if text is not None:
         j = option_ns(text, "--latency", LATENCY, _warn)
         if j < 0:
             raise UsageError(f"--latency {text}: must not be negative")
-    args._latency_ns = j
     return j
 
 

@@ -12,10 +12,11 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.capture.blocks import BlockSource
-from wavecheck.engine import AxisPlan, StepSink, split_per_axis
+from wavecheck.engine import AxisPlan, StepSink
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of
+from wavecheck.steps.mapping import split_per_axis
 
 __all__ = ["add_steps_arguments", "check_steps_arguments", "steps_csv_path", "steps_writer"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["add_limit_arguments", "add_tuning_arguments"]
+__all__ = ["add_limit_arguments", "add_tuning_arguments", "required"]
 
 
 def add_limit_arguments(p: argparse.ArgumentParser) -> None:
@@ -39,3 +39,10 @@ def add_tuning_arguments(p: argparse.ArgumentParser) -> None:
         "figure for): one not checked or indeterminate makes the run exit 4, with a line "
         "saying why (repeatable)",
     )
+
+
+def required(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--require`` as rule ids (and ``all``), each once (checked by the options object)."""
+    from wavecheck.verdict import require_list
+
+    return require_list(getattr(args, "require", None))

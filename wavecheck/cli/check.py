@@ -25,7 +25,7 @@ from wavecheck.cli._capture_args import add_capture_arguments
 from wavecheck.cli._check_flow import build_report
 from wavecheck.cli._firmware_args import add_firmware_arguments
 from wavecheck.cli._formats import FORMATS, Checked
-from wavecheck.cli._reports import add_report_arguments, write_outputs
+from wavecheck.cli._reports import Asked, add_report_arguments, write_outputs
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
     check_steps_arguments,
@@ -147,9 +147,9 @@ def run(args: argparse.Namespace) -> int:
     several = len(expand_captures(patterns)) > 1
     used: set[str] = set()
 
-    def build_and_export(a: argparse.Namespace, path: str) -> Checked:
+    def build_and_export(a: argparse.Namespace, what: Asked, path: str) -> Checked:
         """:func:`build_report`, the capture's steps written to ``--steps-csv`` meanwhile."""
         target = steps_csv_path(a.steps_csv, path, used) if several else a.steps_csv
-        return build_report(a, path, target)
+        return build_report(a, what, path, target)
 
     return run_checks(args, build_and_export, write_outputs)

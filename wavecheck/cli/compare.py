@@ -18,23 +18,30 @@ exactly.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from fractions import Fraction
 from typing import Any
 
 from wavecheck.capture.open import open_capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._formats import Formats, json_text
 from wavecheck.compare import Comparison, MachineComparison, compare_axes
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
-from wavecheck.engine import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
+from wavecheck.steps.mapping import AxisMap, parse_axes, per_axis, split_invert
 from wavecheck.units import format_ns, format_time, json_number, option_ns
 from wavecheck.verdict import exit_code
 
-__all__ = ["register", "render_compare_json", "render_compare_text", "run"]
+__all__ = [
+    "FORMATS",
+    "compare_doc",
+    "register",
+    "render_compare_json",
+    "render_compare_text",
+    "run",
+]
 
 
 def _pos(v: int | None) -> str:
@@ -98,7 +105,7 @@ def render_compare_text(c: Comparison | MachineComparison) -> str:
     return "\n".join(out) + "\n"
 
 
-def render_compare_json(c: Comparison | MachineComparison) -> str:
+def compare_doc(c: Comparison | MachineComparison) -> dict[str, Any]:
     """The comparison as JSON (keys: capture, golden, drive, steps, timing, rules, failures,
     verdict; named axes: capture, golden, axes, failures, verdict)."""
     if isinstance(c, MachineComparison) and c.several:
@@ -113,7 +120,12 @@ def render_compare_json(c: Comparison | MachineComparison) -> str:
         }
     else:
         data = _compare_dict(c.axes[0] if isinstance(c, MachineComparison) else c)
-    return json.dumps(data, indent=2, ensure_ascii=False) + "\n"
+    return data
+
+
+render_compare_json = json_text(compare_doc)
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": render_compare_text, "json": render_compare_json})
 
 
 def _compare_dict(c: Comparison) -> dict[str, Any]:
@@ -225,7 +237,7 @@ def register(sub: Any) -> None:
         help="align times on each file's first step (default) or on each file's time 0",
     )
     add_capture_arguments(p)
-    p.add_argument("--format", choices=("text", "json"), default="text")
+    FORMATS.add_argument(p)
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
         "-o", "--output", type=output_file, metavar="FILE", help="write the comparison to FILE"
     )
@@ -266,7 +278,7 @@ def run(args: argparse.Namespace) -> int:
         step_type=args.type,
         forward_level=1 if args.dir_forward == "high" else 0,
     )
-    text = render_compare_json(result) if args.format == "json" else render_compare_text(result)
+    text = FORMATS.render(args.format, result)
     if args.output:
         atomic_write(args.output, text)
         print(f"{result.verdict}: compared with {args.golden}; written to {args.output}")

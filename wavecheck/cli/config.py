@@ -18,11 +18,11 @@ The options it shares with other commands: :mod:`wavecheck.cli._firmware_args` a
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._firmware_args import add_firmware_arguments, read_firmware_args
+from wavecheck.cli._formats import Formats, json_text, lazy
 from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import load_drive
@@ -72,16 +72,23 @@ def register(sub: Any) -> None:
     add_tuning_arguments(p)
     add_firmware_arguments(p, positional=True)
     p.add_argument("--latency", metavar="J", help="LinuxCNC: worst base-thread latency (e.g. 11us)")
-    p.add_argument(
-        "--format",
-        choices=("text", "json", "junit"),
-        default="text",
-        help="report format (junit: one test case per axis and rule, for CI)",
-    )
+    FORMATS.add_argument(p)
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
     p.set_defaults(func=run)
+
+
+_REPORT = "wavecheck.report.firmware"  # loaded when a report is written
+#: ``--format``: text, JSON, or JUnit (one test case per axis and rule, for CI).
+FORMATS = Formats(
+    {
+        "text": lazy(_REPORT, "config_text"),
+        "json": json_text(lazy(_REPORT, "config_dict")),
+        "junit": lazy(_REPORT, "config_junit"),
+    },
+    help="report format (junit: one test case per axis and rule, for CI)",
+)
 
 
 def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Drive]]:
@@ -113,7 +120,6 @@ def _drives(args: argparse.Namespace, cfg: FirmwareConfig) -> list[tuple[str, Dr
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck config``; returns the exit code."""
     from wavecheck.firmware.evaluate import evaluate_config
-    from wavecheck.report.firmware import config_dict, config_junit, config_text
 
     require = require_list(args.require)
     check_require(require, RULE_IDS)
@@ -122,12 +128,7 @@ def run(args: argparse.Namespace) -> int:
     if not result.pairs:
         raise UsageError("no axis has a drive: give --drive ID or --drive AXIS=ID")
     unmet = unmet_requirements(result.statuses, require)
-    if args.format == "json":
-        text = json.dumps(config_dict(result, require), indent=2, ensure_ascii=False) + "\n"
-    elif args.format == "junit":
-        text = config_junit(result, require)
-    else:
-        text = config_text(result, require)
+    text = FORMATS.render(args.format, result, require)
     if args.output:
         atomic_write(args.output, text)
         print(

@@ -7,14 +7,14 @@ listed), 1 they disagree, 2 unusable input (or sigrok-cli missing / failing).
 from __future__ import annotations
 
 import argparse
-import json
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._formats import Formats, json_text
 from wavecheck.cli._main import EXIT_FAIL, EXIT_PASS
-from wavecheck.engine import parse_map
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
+from wavecheck.steps.interface import parse_map
 
 if TYPE_CHECKING:  # imported by run(): the sigrok-cli layer only when used
     from wavecheck.crosscheck import CrosscheckResult
@@ -51,7 +51,7 @@ def register(sub: Any) -> None:
         "--downsample", type=int, metavar="N",
         help="VCD only: ticks per sigrok sample (default: the shortest gap between STEP/DIR edges)",
     )  # fmt: skip
-    p.add_argument("--format", choices=("text", "json"), default="text")
+    FORMATS.add_argument(p)
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
         "-o", "--output", type=output_file, metavar="FILE", help="write the result to FILE"
     )
@@ -80,7 +80,7 @@ def _text(r: CrosscheckResult) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _json(r: CrosscheckResult) -> str:
+def _doc(r: CrosscheckResult) -> dict[str, Any]:
     keys = (
         "path", "step_channel", "dir_channel", "active_edge", "sigrok_input", "downsample",
         "wavecheck_steps", "sigrok_count", "rising_steps", "sigrok_position_lines",
@@ -89,7 +89,11 @@ def _json(r: CrosscheckResult) -> str:
     )  # fmt: skip
     doc = {k: getattr(r, k) for k in keys}
     doc["agree"] = r.agree
-    return json.dumps(doc, indent=2) + "\n"
+    return doc
+
+
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": _text, "json": json_text(_doc)})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -107,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         downsample=args.downsample,
         input_format=args.input_format,
     )
-    text = _json(result) if args.format == "json" else _text(result)
+    text = FORMATS.render(args.format, result)
     if args.output:
         atomic_write(args.output, text)
     else:

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
+import sys
 from fractions import Fraction
 from typing import Any
 
+from wavecheck.cli._formats import Formats, json_text
 from wavecheck.drives.datasheet import MARK_LEGEND, TIME_RULES, Drive, Figure
 from wavecheck.drives.library import list_drives, load_drive
 from wavecheck.rules import PLAN_RULES
@@ -25,21 +26,16 @@ def register(sub: Any) -> None:
         "drive's figures with their status and full sources.",
     )
     p.add_argument("drive", nargs="?", metavar="ID", help="drive id or path to a .toml rule file")
-    p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    SHOW.add_argument(p)  # the same formats as LIST
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """List or show drives; returns 0 (a bad id or file raises RuleError → exit 2)."""
     if args.drive:
-        drive = load_drive(args.drive)
-        print(json.dumps(drive_json(drive), indent=2) if args.format == "json" else _show(drive))
+        sys.stdout.write(SHOW.render(args.format, load_drive(args.drive)))
     else:
-        drives = list_drives()
-        if args.format == "json":
-            print(json.dumps({"drives": [drive_json(d) for d in drives]}, indent=2))
-        else:
-            print(_table(drives))
+        sys.stdout.write(LIST.render(args.format, list_drives()))
     return 0
 
 
@@ -140,3 +136,12 @@ def _show(d: Drive) -> str:
     out.append("  sources:")
     out += [f"    [{k}] {v}" for k, v in d.sources.items()]
     return "\n".join(out)
+
+
+def _library_json(drives: list[Drive]) -> dict[str, Any]:
+    return {"drives": [drive_json(d) for d in drives]}
+
+
+#: ``--format`` of one drive (``wavecheck drives ID``) and of the library: text or JSON.
+SHOW = Formats({"text": lambda d: _show(d) + "\n", "json": json_text(drive_json)}, "output format")
+LIST = Formats({"text": lambda ds: _table(ds) + "\n", "json": json_text(_library_json)})

@@ -25,14 +25,8 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
-from wavecheck.engine import (
-    StepEvents,
-    auto_map,
-    build_interface,
-    decode_steps,
-    find_channel,
-    parse_map,
-)
+from wavecheck.cli._formats import Formats
+from wavecheck.engine import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,
@@ -43,6 +37,9 @@ from wavecheck.follow import (
     read_command,
 )
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.decode import decode as decode_steps
+from wavecheck.steps.interface import build_interface, find_channel, parse_map
 from wavecheck.steptypes import step_type
 from wavecheck.units import number_option, parse_option
 from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
@@ -150,7 +147,7 @@ def register(sub: Any) -> None:
         metavar="COUNTS",
         help="exit 1 when |following error| exceeds this (counts)",
     )
-    o.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    FORMATS.add_argument(o)
     o.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report here")
     o.add_argument(
         "--plot",
@@ -443,11 +440,15 @@ def render_png(r: FollowReport, fmt: str = "png") -> bytes:
     return buf.getvalue()
 
 
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": render_text, "json": render_json})
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck follow``; returns the exit code."""
     report, fb, _ = analyse(args)
     fails = failures(report, args.max_error, len(fb.sequence_errors))
-    out = render_json(report, fails) if args.format == "json" else render_text(report, fails)
+    out = FORMATS.render(args.format, report, fails)
     if args.output:
         atomic_write(args.output, out)
     else:

@@ -16,10 +16,9 @@ with why, the ambiguities, and the ``--map`` line to copy (``map_args``).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import (
@@ -27,9 +26,13 @@ from wavecheck.cli._capture_args import (
     capture_from_args,
     resolution_from_args,
 )
+from wavecheck.cli._formats import Formats, json_text
 from wavecheck.engine import resolve_resolution_ns
 from wavecheck.report.text import note_line
 from wavecheck.units import format_frequency, format_time, json_number
+
+if TYPE_CHECKING:  # imported where used: the roles load numpy
+    from wavecheck.roles import Proposal
 
 __all__ = ["info_dict", "info_text", "register", "run"]
 
@@ -41,7 +44,7 @@ def register(sub: Any) -> None:
         "and per channel its name, initial level and number of edges.",
     )
     p.add_argument("capture", metavar="CAPTURE", help=".sr, VCD, or any sigrok-cli input format")
-    p.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    FORMATS.add_argument(p)
     add_capture_arguments(p)
     p.set_defaults(func=run)
 
@@ -134,21 +137,29 @@ def run(args: argparse.Namespace) -> int:
     seconds = resolution_from_args(args)  # kept exact, as check keeps it
     res_ns = None if seconds is None else resolve_resolution_ns(cap, seconds)[0]
     proposal = propose(cap) if cap.time_known else None
-    if args.format == "json":
-        data = info_dict(cap, res_ns)
-        if proposal is not None:
-            data["roles"] = {**proposal.as_dict(), "map_args": proposal.map_args()}
-        json.dump(data, sys.stdout, indent=2)
-        sys.stdout.write("\n")
-    else:
-        print(info_text(cap, res_ns))
-        if proposal is not None:
-            print()
-            print(
-                "roles (channels named after their roles, as check maps them without --map; "
-                "what the waveforms say of them):"
-                if proposal.named
-                else "proposed roles (from the waveforms; names only help):"
-            )
-            print(proposal.text().rstrip("\n"))
+    sys.stdout.write(FORMATS.render(args.format, cap, res_ns, proposal))
     return 0
+
+
+def _info_doc(cap: Capture, res_ns: Fraction | None, proposal: Proposal | None) -> dict[str, Any]:
+    data = info_dict(cap, res_ns)
+    if proposal is not None:
+        data["roles"] = {**proposal.as_dict(), "map_args": proposal.map_args()}
+    return data
+
+
+def _info_text(cap: Capture, res_ns: Fraction | None, proposal: Proposal | None) -> str:
+    text = info_text(cap, res_ns) + "\n"
+    if proposal is None:
+        return text
+    head = (
+        "roles (channels named after their roles, as check maps them without --map; "
+        "what the waveforms say of them):"
+        if proposal.named
+        else "proposed roles (from the waveforms; names only help):"
+    )
+    return f"{text}\n{head}\n{proposal.text().rstrip(chr(10))}\n"
+
+
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": _info_text, "json": json_text(_info_doc)}, "output format")

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._axis_args import add_axis_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
+from wavecheck.cli._formats import Formats
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
 from wavecheck.progress import activate, current
@@ -32,7 +33,7 @@ from wavecheck.verdict import EXIT_INDETERMINATE, EXIT_PASS
 if TYPE_CHECKING:  # imported where used: only `wavecheck latency` needs it
     from wavecheck.lattice import LatencyReport
 
-__all__ = ["capture_latency", "latency_of", "register", "render_json", "render_text", "run"]
+__all__ = ["capture_latency", "register", "render_json", "render_text", "run"]
 
 
 def register(sub: Any) -> None:
@@ -55,7 +56,7 @@ def register(sub: Any) -> None:
     p.add_argument("--ini", metavar="FILE", help="LinuxCNC INI: [EMCMOT]BASE_PERIOD")
     p.add_argument("--hal", action="append", default=[], metavar="FILE", help="LinuxCNC HAL file")
     add_capture_arguments(p)
-    p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    FORMATS.add_argument(p)
     p.add_argument("-o", "--output", type=output_file, metavar="FILE", help="write the report here")
     p.add_argument(
         "--plot",
@@ -124,14 +125,6 @@ def capture_latency(args: argparse.Namespace, path: str) -> LatencyReport:
     names, roles = channel_roles(capture, args)
     with activate("finding the lattice", quiet=getattr(args, "quiet", False), unit="edges"):
         return analyse(capture, names, period, roles, progress=current())
-
-
-def latency_of(path: str) -> LatencyReport:
-    """What ``wavecheck latency PATH`` finds with no options: the channels mapped as ``check``
-    maps them, P inferred (``stepgen plan --latency-from``)."""
-    parser = argparse.ArgumentParser(prog="wavecheck")
-    register(parser.add_subparsers())
-    return capture_latency(parser.parse_args(["latency", "-q", "--", str(path)]), str(path))
 
 
 def _ns(v: Fraction | None) -> str:
@@ -341,12 +334,15 @@ def render_html(r: LatencyReport, text: str, png: bytes) -> str:
     )
 
 
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": render_text, "json": render_json})
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``wavecheck latency``; returns the exit code."""
     _, source = _period_ns(args)
     report = capture_latency(args, args.capture)
-    text = render_text(report, source)
-    out = render_json(report, source) if args.format == "json" else text
+    out = FORMATS.render(args.format, report, source)
     if args.output:
         atomic_write(args.output, out)
     else:
@@ -357,5 +353,5 @@ def run(args: argparse.Namespace) -> int:
             fmt = figure_format(args.plot)
             atomic_write(args.plot, png if fmt == "png" else render_png(report, fmt))
         if args.html:
-            atomic_write(args.html, render_html(report, text, png))
+            atomic_write(args.html, render_html(report, render_text(report, source), png))
     return EXIT_PASS if report.established else EXIT_INDETERMINATE

@@ -15,13 +15,13 @@ configured maximum; a capture that violates its own configuration exits 1.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._axis_args import add_axis_arguments, add_engine_arguments, check_options
 from wavecheck.cli._capture_args import add_capture_arguments, source_from_args
-from wavecheck.cli._firmware_args import add_firmware_arguments, check_firmware
+from wavecheck.cli._firmware_args import add_firmware_arguments, check_firmware, firmware_config
+from wavecheck.cli._formats import Formats, json_text
 from wavecheck.cli._steps_args import add_steps_arguments, check_steps_arguments, steps_writer
 from wavecheck.measurement import Measurement, measure
 from wavecheck.output import atomic_write, figure_file, figure_format, output_file
@@ -50,7 +50,7 @@ def register(sub: Any) -> None:
     add_axis_arguments(p, drive=False)
     add_firmware_arguments(p)
     add_capture_arguments(p)
-    p.add_argument("--format", choices=("text", "json"), default="text", help="report format")
+    FORMATS.add_argument(p)
     p.add_argument(  # output_file: checked before any work (wavecheck.output)
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
@@ -91,11 +91,39 @@ def build_measurement(args: argparse.Namespace) -> Measurement:
 def firmware_checks(args: argparse.Namespace, m: Measurement) -> list[FirmwareCheck]:
     """``--firmware``: every measured axis against the configured axis (``--axis``, default the
     first), compared as ``check --firmware`` compares a report (empty without ``--firmware``)."""
-    if not args.firmware:
+    cfg = firmware_config(args)
+    if cfg is None:
         return []
     from wavecheck.firmware.capture import observed_in_measurement
 
-    return [check_firmware(args, observed_in_measurement(a, m.resolution_ns)) for a in m.axes]
+    return [check_firmware(args, cfg, observed_in_measurement(a, m.resolution_ns)) for a in m.axes]
+
+
+def _measure_doc(m: Measurement, own: list[FirmwareCheck]) -> dict[str, Any]:
+    """The measurement's JSON, each axis with its ``--firmware`` findings."""
+    doc = measurement_dict(m)
+    if own:
+        from wavecheck.report.firmware import firmware_check_dict
+
+        for axis, fc in zip(doc["axes"], own, strict=True):
+            axis["firmware"] = firmware_check_dict(fc)
+    return doc
+
+
+def _measure_text(m: Measurement, own: list[FirmwareCheck]) -> str:
+    """The measurement's text, each axis's ``--firmware`` findings after it."""
+    text = render_measure_text(m)
+    if own:
+        from wavecheck.report.firmware import firmware_check_lines
+
+        for a, fc in zip(m.axes, own, strict=True):
+            head = [] if a.name is None else [f"axis {a.name}:"]
+            text += "\n" + "\n".join([*head, *firmware_check_lines(fc)]) + "\n"
+    return text
+
+
+#: ``--format``: text or JSON.
+FORMATS = Formats({"text": _measure_text, "json": json_text(_measure_doc)})
 
 
 def run(args: argparse.Namespace) -> int:
@@ -104,22 +132,7 @@ def run(args: argparse.Namespace) -> int:
     with activate(f"reading {args.capture}", quiet=args.quiet, unit="bytes"):
         m = build_measurement(args)
     own = firmware_checks(args, m)
-    if args.format == "json":
-        doc = measurement_dict(m)
-        if own:
-            from wavecheck.report.firmware import firmware_check_dict
-
-            for axis, fc in zip(doc["axes"], own, strict=True):
-                axis["firmware"] = firmware_check_dict(fc)
-        text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
-    else:
-        text = render_measure_text(m)
-        if own:
-            from wavecheck.report.firmware import firmware_check_lines
-
-            for a, fc in zip(m.axes, own, strict=True):
-                head = [] if a.name is None else [f"axis {a.name}:"]
-                text += "\n" + "\n".join([*head, *firmware_check_lines(fc)]) + "\n"
+    text = FORMATS.render(args.format, m, own)
     if args.output:
         atomic_write(args.output, text)
     if args.output and not args.quiet:

@@ -21,7 +21,8 @@ import numpy as np
 
 from wavecheck.crosscheck.sigrok import DecoderOutput, SigrokInput
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import RoleSignal, StepEvents
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.interface import RoleSignal
 
 __all__ = ["CrosscheckResult", "compare"]
 

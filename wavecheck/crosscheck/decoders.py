@@ -6,7 +6,7 @@ Two independent decoders run on the same capture:
 - ``stepper_motor`` (rising edges only) writes one position line per step *except the last*:
   line k spans [edge k, edge k+1] in samples and shows the position after step k.
 
-Both are compared with :func:`wavecheck.engine.decode_steps` on the same channels:
+Both are compared with :func:`wavecheck.steps.decode.decode` on the same channels:
 :mod:`wavecheck.crosscheck.sigrok` prepares sigrok-cli's input and runs it,
 :mod:`wavecheck.crosscheck.comparison` compares (and explains sigrok's known differences).
 """
@@ -22,8 +22,9 @@ from wavecheck.capture.sigrokcli import find_sigrok_cli
 from wavecheck.crosscheck.comparison import CrosscheckResult, compare
 from wavecheck.crosscheck.sigrok import prepare_input, run_decoders
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import build_interface, decode_steps
 from wavecheck.errors import CaptureError, UsageError
+from wavecheck.steps.decode import decode as decode_steps
+from wavecheck.steps.interface import build_interface
 
 __all__ = ["crosscheck"]
 

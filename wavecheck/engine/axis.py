@@ -2,7 +2,7 @@
 
 Blocks (:mod:`wavecheck.capture.blocks`) are gathered until about ``block_edges`` edges have come;
 then the window ``[t0, t1)`` (t1 the blocks' end) is checked by the vectorised code
-(:func:`wavecheck.engine.decode.decode`, :func:`wavecheck.engine.intervals.rule_intervals`,
+(:func:`wavecheck.steps.decode.decode`, :func:`wavecheck.engine.intervals.rule_intervals`,
 :func:`wavecheck.engine.judge.evaluate`) on the plan's signals holding, per mapped channel, its
 edges from a context tick ``c0`` on (its level at ``c0`` as the initial level) up to ``t1``. An
 interval is kept only in the window where its later event lies (``max(start, end)`` in
@@ -34,7 +34,17 @@ import numpy.typing as npt
 
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, EdgeArray
-from wavecheck.engine.decode import (
+from wavecheck.engine.intervals import either_level, rule_intervals, split_unknown
+from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, evaluate, sequence_result
+from wavecheck.engine.outcome import Report
+from wavecheck.engine.rates import rates_from
+from wavecheck.engine.resolve import AxisPlan, ambiguous_note
+from wavecheck.engine.results import RuleResult, StepCounts
+from wavecheck.engine.sinks import IntervalSink, StepSink
+from wavecheck.engine.trace import StepTrace
+from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
+from wavecheck.rules import Rule, width_rule
+from wavecheck.steps.decode import (
     StepEvents,
     active_edges,
     decode,
@@ -43,18 +53,8 @@ from wavecheck.engine.decode import (
     touches_stretches,
     unknown_stretches,
 )
-from wavecheck.engine.interface import RoleSignal, StepInterface
-from wavecheck.engine.intervals import either_level, rule_intervals, split_unknown
-from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, evaluate, sequence_result
-from wavecheck.engine.outcome import Report
-from wavecheck.engine.primitives import Intervals, widths
-from wavecheck.engine.rates import rates_from
-from wavecheck.engine.resolve import AxisPlan, ambiguous_note
-from wavecheck.engine.results import RuleResult, StepCounts
-from wavecheck.engine.sinks import IntervalSink, StepSink
-from wavecheck.engine.trace import StepTrace
-from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
-from wavecheck.rules import Rule, width_rule
+from wavecheck.steps.interface import RoleSignal, StepInterface
+from wavecheck.steps.primitives import Intervals, widths
 
 __all__ = ["AxisCheck"]
 

@@ -31,15 +31,15 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
-from wavecheck.engine.decode import (
+from wavecheck.rules import Rule, applicable
+from wavecheck.steps.decode import (
     StepEvents,
     active_edges,
     phase_states,
     touches_stretches,
 )
-from wavecheck.engine.interface import RoleSignal, StepInterface
-from wavecheck.engine.primitives import Intervals, holds, periods, setups, widths
-from wavecheck.rules import Rule, applicable
+from wavecheck.steps.interface import RoleSignal, StepInterface
+from wavecheck.steps.primitives import Intervals, holds, periods, setups, widths
 from wavecheck.steptypes import StepType
 
 __all__ = [

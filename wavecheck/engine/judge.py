@@ -23,7 +23,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine.primitives import Intervals
+from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
 
 __all__ = [

@@ -18,10 +18,10 @@ from fractions import Fraction
 from typing import TypeVar
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import RULE_IDS
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.verdict import check_require
 
 __all__ = [
@@ -59,7 +59,7 @@ class CheckOptions:
     Attributes:
         drive: the drive of each axis (``{None: drive}`` for one drive); empty: no limit
             (``wavecheck measure``: every interval measured, nothing judged).
-        axes: the mapping, one :class:`~wavecheck.engine.mapping.AxisMap` per axis (``--map``); empty:
+        axes: the mapping, one :class:`~wavecheck.steps.mapping.AxisMap` per axis (``--map``); empty:
             channels named after their roles, else the roles told from the waveforms.
         invert: roles to invert, ``AXIS.ROLE`` or a bare role for every axis.
         step_type: LinuxCNC step type 0–15 per axis (default: found with the roles, else the

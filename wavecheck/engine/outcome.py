@@ -17,12 +17,12 @@ from typing import Protocol
 
 from wavecheck.capture.edges import Capture
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.engine.judge import Violation
 from wavecheck.engine.rates import MaxStepRates
 from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.trace import StepTrace
 from wavecheck.engine.windows import SignalWindows
+from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
 

@@ -28,11 +28,11 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.engine.decode import StepEvents, touches_stretches, unknown_stretches
-from wavecheck.engine.interface import StepInterface
-from wavecheck.engine.primitives import Intervals, widths
 from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.rules import width_rule
+from wavecheck.steps.decode import StepEvents, touches_stretches, unknown_stretches
+from wavecheck.steps.interface import StepInterface
+from wavecheck.steps.primitives import Intervals, widths
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 

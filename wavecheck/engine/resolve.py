@@ -20,18 +20,18 @@ import numpy as np
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
 from wavecheck.drives.overrides import tune_drive
-from wavecheck.engine.interface import (
+from wavecheck.engine.intervals import figure_of, planned_rules
+from wavecheck.engine.options import CheckOptions, for_axis
+from wavecheck.errors import UsageError
+from wavecheck.linuxcnc.stepgen_config import ConfigRates, config_rates
+from wavecheck.rules import RULE_IDS, Rule, applicable
+from wavecheck.steps.interface import (
     StepInterface,
     build_interface,
     leaf_name,
     mapped_channel_names,
 )
-from wavecheck.engine.intervals import figure_of, planned_rules
-from wavecheck.engine.mapping import AxisMap, check_axis_names, split_invert
-from wavecheck.engine.options import CheckOptions, for_axis
-from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.stepgen_config import ConfigRates, config_rates
-from wavecheck.rules import RULE_IDS, Rule, applicable
+from wavecheck.steps.mapping import AxisMap, check_axis_names, split_invert
 from wavecheck.steptypes import StepType, step_type
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_time
@@ -239,7 +239,7 @@ def pulse_level_seen(plan: AxisPlan, capture: Capture, before: int) -> int | Non
 
     At one constant speed both levels hold still and the waveform does not decide (a burst of
     long pulses with short gaps stays the generator's own statement: high at its output)."""
-    from wavecheck.engine.primitives import widths
+    from wavecheck.steps.primitives import widths
 
     seen: set[int] = set()
     for role in plan.step_type.pulse_roles:

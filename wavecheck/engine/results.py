@@ -350,7 +350,7 @@ class RuleResult:
 @dataclass
 class StepCounts:
     """Step counts merged window by window: what the reports read of
-    :class:`wavecheck.engine.decode.StepEvents` (which keeps every step)."""
+    :class:`wavecheck.steps.decode.StepEvents` (which keeps every step)."""
 
     count: int = 0
     forward: int = 0

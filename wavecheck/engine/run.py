@@ -23,13 +23,13 @@ import numpy as np
 from wavecheck.capture.blocks import BlockSource, EdgeBlock, MemorySource, assemble
 from wavecheck.capture.edges import NEVER, Capture, EdgeArray
 from wavecheck.engine.axis import AxisCheck
-from wavecheck.engine.interface import leaf_name
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport
 from wavecheck.engine.resolve import LEVEL_EDGES, AxisPlan, plan_axes, settle_level, with_found
 from wavecheck.engine.sinks import IntervalSink, StepSink, TimerSample
 from wavecheck.errors import UsageError
+from wavecheck.steps.interface import leaf_name
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.units import format_time
 
 __all__ = [

@@ -14,9 +14,9 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.primitives import Intervals
 from wavecheck.rules import Rule
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.primitives import Intervals
 
 __all__ = ["IntervalSink", "StepCollector", "StepSink", "TimerSample"]
 

@@ -9,7 +9,7 @@ doubles, the origin stays) until it fits, so the memory does not depend on the c
 Each bucket keeps, from the steps in it (ticks exact, positions exact):
 
 - the first and the last step's tick and the position after each (forward − reverse, steps of
-  unknown direction counting 0, as :attr:`wavecheck.engine.decode.StepEvents.position`): points on
+  unknown direction counting 0, as :attr:`wavecheck.steps.decode.StepEvents.position`): points on
   the position curve of every step; and the lowest and highest position reached in the bucket;
 - the fastest and the slowest step (the shortest and the longest time since the step before,
   that step's tick, the earliest on ties): points on the step-rate curve of every step, each

@@ -30,8 +30,8 @@ from fractions import Fraction
 import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine.interface import RoleSignal
 from wavecheck.engine.results import RuleResult
+from wavecheck.steps.interface import RoleSignal
 
 __all__ = [
     "BACK_EDGES",
@@ -100,7 +100,7 @@ class SignalWindows:
 
     Attributes:
         signals: role → its signal with the windows' edges only (as
-            :attr:`wavecheck.engine.interface.StepInterface.signals`; gaps hold the level).
+            :attr:`wavecheck.steps.interface.StepInterface.signals`; gaps hold the level).
         count: windows kept.
         cut: windows with edges cut (more than :data:`SIDE_EDGES` on one side).
     """

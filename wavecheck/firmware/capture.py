@@ -20,9 +20,10 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import StepInterface, pulse_level
+from wavecheck.engine import pulse_level
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed
 from wavecheck.rules import rate_rule, width_rule
+from wavecheck.steps.interface import StepInterface
 from wavecheck.steptypes import StepType
 from wavecheck.units import format_ns, format_rate, format_time
 from wavecheck.verdict import Verdict, overall_verdict

@@ -17,16 +17,21 @@ What each engine guarantees at the pin:
 - **TIMED**: the CPU raises the pin, spins ``pulse_us`` and lowers it; ``dir_delay_us`` is spun
   after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
   (``uncertain``).
-- **I2S_STATIC / I2S_STREAM** (one engine under two names in current FluidNC): DIR is shifted
-  out at once and the CPU spins ``dir_delay_us`` before the step (the I2S engine's
-  ``finish_dir``: ``delay_us(dir_delay_us)``); the step is shifted out, the CPU spins until
-  ``pulse_us`` has passed and shifts it back (``finish_step``/``start_unstep``): both are spun,
-  not hardware-timed (``uncertain``). Older builds quantised both to I2S frames; the current
-  engine decides.
+- **I2S_STATIC / I2S_STREAM** (both names find the one ``I2S`` engine in current FluidNC:
+  ``Stepping.cpp`` ``find_engine`` matches the name's start): every output is a sample of the
+  I2S FIFO, one sample per frame of ``i2so: min_pulse_us`` (1, 2 or 4 µs, default 2:
+  ``I2SOBus``). The step is ``ceil(pulse_us / frame)`` frames, at least one, ``pulse_us`` capped
+  at 20 µs (``i2s_engine.cpp`` ``init_engine``, ``I2S_MAX_USEC_PER_PULSE``): hardware-timed. A
+  DIR change is pushed as one sample before the step's samples and the CPU then spins
+  ``dir_delay_us`` (``finish_dir``); the spin only widens the gap when the FIFO has run dry, so
+  the DIR setup the engine guarantees is one frame, whatever ``dir_delay_us`` says. Max rate
+  1e6 / (2 × pulse frames × frame) (``max_pulses_per_sec``).
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
 after the last pulse's leading edge when the step rate stays under the engine's maximum
-(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``.
+(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
+its steps are at least 1 / min(2 × that, the fastest axis's) apart (grbl's Bresenham, kept by
+FluidNC's ``Stepper.cpp``: :func:`wavecheck.firmware.grbl.bresenham_spacing`).
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ import yaml
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import number, read_text, where
+from wavecheck.firmware.grbl import bresenham_spacing
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -56,6 +62,8 @@ __all__ = ["ENGINES", "looks_like", "read"]
 ENGINES = ("RMT", "TIMED", "I2S_STATIC", "I2S_STREAM")
 _US = Fraction(1000)
 _RMT_TICK_NS = Fraction(250)  # RMT clock 4 ticks/us: a dir_delay of 0 is one tick
+_FRAMES_US = (1, 2, 4)  # i2so min_pulse_us values (I2SOBus pulseUsValues)
+_I2S_MAX_PULSE_NS = Fraction(20) * _US  # i2s_out.h I2S_MAX_USEC_PER_PULSE
 _NO_SPACE = re.compile(r"^([ \t]*[A-Za-z0-9_]+)[ \t]*:(?=[^\s])", re.M)
 _AXES = "xyzabcuvw"
 
@@ -150,12 +158,16 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     notes = [
         f"stepping engine {engine} ({engine_at}); pulse_us and dir_delay_us apply to every motor"
     ]
-    pulse = _engine_pulse(engine, pulse)
-    setup = _setup(engine, dir_delay)
+    frame = _frame(p, root) if engine.startswith("I2S") else None
+    if frame is not None and frame.value is not None:
+        notes.append(f"I2S frame {frame.value / _US} us (i2so: min_pulse_us, {frame.where})")
+    pulse = _engine_pulse(engine, pulse, frame)
+    setup = _setup(engine, dir_delay, frame)
     engine_max = _engine_rate(engine, pulse, dir_delay)
     axes_node = _child(root, "axes")
     axes: list[GeneratorGuarantee] = []
     seen: set[str] = set()
+    fastest = _fastest(p, axes_node)
     for name, axis_node in _items(axes_node):
         if name not in _AXES or name in seen:
             continue  # a repeated axis section: the first is read
@@ -166,7 +178,9 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 continue
             kind, drv = driver
             axes.append(
-                _axis(p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine)
+                _axis(
+                    p, name, motor, kind, drv, axis_node, pulse, setup, engine_max, engine, fastest
+                )  # fmt: skip
             )
     if not axes:
         raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
@@ -180,31 +194,52 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )
 
 
-def _engine_pulse(engine: str, pulse: Guaranteed) -> Guaranteed:
+def _frame(path: str, root: yaml.Node) -> Guaranteed:
+    """The I2S frame: ``i2so: min_pulse_us``, one of 1, 2, 4 µs (FluidNC's ``I2SOBus``
+    ``pulseUsValues``), default 2."""
+    found = _scalar(_child(root, "i2so"), "min_pulse_us")
+    if found is None:
+        return Guaranteed(2 * _US, "min_pulse_us", "firmware default", "us", "default")
+    at = where(path, found.line)
+    value = number(found.text, at, "min_pulse_us", low=1, high=4, unit="us")
+    if value not in _FRAMES_US:
+        raise ConfigError(
+            f"{at}: i2so min_pulse_us {found.text} is not one FluidNC takes (1, 2 or 4)"
+        )
+    return Guaranteed(value * _US, "min_pulse_us", at, "us", "set")
+
+
+def _engine_pulse(engine: str, pulse: Guaranteed, frame: Guaranteed | None) -> Guaranteed:
     """The pulse as the engine makes it."""
     if engine == "RMT":
         return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", pulse.status,
                           "RMT: hardware-timed")  # fmt: skip
-    note = (
-        "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
-        if engine == "TIMED"
-        else "I2S: the step is shifted out, the CPU spins pulse_us, then shifts it back"
-    )
+    if frame is not None and frame.value is not None and pulse.value is not None:
+        asked = min(max(pulse.value, frame.value), _I2S_MAX_PULSE_NS)
+        frames = -(-asked // frame.value)
+        note = (
+            f"I2S: {frames} FIFO frame(s) of {frame.value / _US} us (pulse_us rounded up to "
+            "whole frames, at least one, at most 20 us: i2s_engine.cpp init_engine)"
+        )
+        return Guaranteed(frames * frame.value, pulse.setting, pulse.where, "us", "derived", note)
+    note = "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
     return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", "uncertain", note)
 
 
-def _setup(engine: str, dir_delay: Guaranteed) -> Guaranteed:
+def _setup(engine: str, dir_delay: Guaranteed, frame: Guaranteed | None) -> Guaranteed:
     dd = dir_delay.value or Fraction(0)
     if engine == "RMT":
         value = dd if dd else _RMT_TICK_NS
         note = "RMT: every pulse starts with dir_delay_us at the idle level (one 0.25 us tick at 0)"
         return Guaranteed(value, dir_delay.setting, dir_delay.where, "us", "set", note)
-    note = (
-        "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
-        if engine == "TIMED"
-        else "I2S: DIR is shifted out at once and the CPU spins dir_delay_us before the step "
-        "(the I2S engine's finish_dir; 0: DIR right before STEP)"
-    )
+    if frame is not None:
+        note = (
+            "I2S: a DIR change is one FIFO frame ahead of the step (i2s_engine.cpp finish_dir); "
+            f"the dir_delay_us spin after it ({float(dd / _US):g} us) widens the gap only when "
+            "the FIFO has run dry, so one frame is what the engine guarantees"
+        )
+        return Guaranteed(frame.value, frame.setting, frame.where, "us", "derived", note)
+    note = "TIMED: the CPU spins dir_delay_us after a DIR change (0: DIR right before STEP)"
     return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
 
 
@@ -212,9 +247,27 @@ def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fract
     p, dd = pulse.value or Fraction(0), dir_delay.value or Fraction(0)
     if engine == "RMT":
         return Fraction(10**9) / (2 * p + dd) if 2 * p + dd else None
-    if engine.startswith("I2S"):
-        return Fraction(10**9) / (2 * p) if p else None
     return Fraction(10**9) / (2 * p) if p else None
+
+
+def _fastest(path: str, axes_node: yaml.Node | None) -> Fraction | None:
+    """The highest max step rate of the axes with a motor (None when one has no rate)."""
+    rates = []
+    seen: set[str] = set()
+    for name, axis_node in _items(axes_node):
+        if name not in _AXES or name in seen:
+            continue
+        seen.add(name)
+        if all(_driver(_child(axis_node, m)) is None for m in ("motor0", "motor1")):
+            continue
+        spm_v = _scalar(axis_node, "steps_per_mm")
+        rate_v = _scalar(axis_node, "max_rate_mm_per_min")
+        if spm_v is None or rate_v is None:
+            return None
+        spm = number(spm_v.text, where(path, spm_v.line), "steps_per_mm", low=0)
+        mm_min = number(rate_v.text, where(path, rate_v.line), "max_rate_mm_per_min", low=0)
+        rates.append(spm * mm_min / 60)
+    return max(rates) if rates else None
 
 
 def _driver(motor: yaml.Node | None) -> tuple[str, yaml.Node] | None:
@@ -245,6 +298,7 @@ def _axis(
     setup: Guaranteed,
     engine_max: Fraction | None,
     engine: str,
+    fastest: Fraction | None,
 ) -> GeneratorGuarantee:
     step_pin, step_low = _pin(_scalar(drv, "step_pin"))
     _, dir_low = _pin(_scalar(drv, "direction_pin"))
@@ -268,11 +322,13 @@ def _axis(
             note += f"; the {engine} engine makes at most {float(engine_max):.6g} steps/s"
         max_rate = Guaranteed(hz, "steps_per_mm x max_rate_mm_per_min / 60", rate_at,
                               "mm/min", "derived", note)  # fmt: skip
-        if hz > 0 and pulse.value is not None:
-            gap = Fraction(10**9) / hz - pulse.value
+        if hz > 0 and pulse.value is not None and fastest:
+            gap = bresenham_spacing(hz, fastest) - pulse.value
             idle = Guaranteed(
                 max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at, "mm/min", "uncertain",
-                "1 / (max step rate) - pulse: the step timer spaces the steps",
+                "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: FluidNC's "
+                "Stepper.cpp keeps grbl's Bresenham, which puts the steps on the dominant axis's "
+                "ticks",
             )  # fmt: skip
     hold_note = "DIR changes at a later step event: at least one pulse after the leading edge"
     return GeneratorGuarantee(
@@ -299,8 +355,18 @@ def _axis(
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     engine = axis.info.get("engine", "RMT").split(" ")[0]
+    i2s = engine.startswith("I2S")
+    if role == "setup" and i2s:
+        frame = next((f for f in _FRAMES_US if f * _US >= need), None)
+        if frame is None:
+            return (
+                f"FluidNC's I2S engine tops out at one {_FRAMES_US[-1]} us frame of DIR setup: "
+                f"this drive needs {float(need / _US):g} us (the RMT or TIMED engine spins "
+                "dir_delay_us)"
+            )
+        return f"set `i2so: min_pulse_us: {frame}` (the I2S frame: 1, 2 or 4 us)"
     if role in ("pulse", "hold", "setup"):
-        key, top = ("dir_delay_us", 10) if role == "setup" else ("pulse_us", 30)
+        key, top = ("dir_delay_us", 10) if role == "setup" else ("pulse_us", 20 if i2s else 30)
         us: Fraction = max(Fraction(-(-need // _US)), Fraction(1 if role != "setup" else 0))
         if us > top:
             return (
@@ -314,7 +380,8 @@ def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
             f"remove `:low`) of {axis.axis} so that the drive's active edge starts the pulse"
         )
     if role == "idle" and axis.pulse.value is not None:
-        need = Fraction(10**9) / (axis.pulse.value + need)
+        # twice this axis's rate under 1 / (pulse + low): no dominant axis can crowd its steps
+        need = Fraction(10**9) / (axis.pulse.value + need) / 2
     spm = axis.info.get("steps/mm", "").split(" ")[0]
     if spm:
         return (

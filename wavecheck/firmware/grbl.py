@@ -17,8 +17,17 @@ for the interrupt overhead, 62.5–562.5 ns short of ``$0`` by the clk/8 prescal
 ``stepper.c`` 241, 344-345, and cycle-true runs); grblHAL rounds per driver and Grbl_ESP32 uses
 RMT or I2S, so theirs is ≈ ``$0`` (``uncertain``). DIR is written a
 few CPU cycles before STEP (setup ≈ 0) unless grblHAL's ``$29`` is set (Grbl_ESP32 keeps its DIR
-delay outside the numbered settings: unknown); hold after the leading edge ≥ one step tick ≥ the
-pulse. The max step rate of an axis is ``$10n × $11n / 60``; grbl does not enforce its 30 kHz.
+delay outside the numbered settings: unknown). The max step rate of an axis is
+``$10n × $11n / 60`` (the planner limits each axis to it); grbl does not enforce its 30 kHz.
+
+Spacing (stepper.c 413-440, 1017-1027): every step lands on a tick of the interrupt, whose rate
+is the move's dominant axis's step rate (at most the fastest axis's max rate), doubled up to 3
+times by AMASS only below 8 kHz (ticks then ≥ 62.5 µs). An axis whose max rate is R, in a machine
+whose fastest axis steps at up to F, steps at least 1 / min(2R, F) apart: Bresenham puts its steps
+floor(dominant / its rate) ticks apart, which tends to one tick of a dominant just under twice its
+rate (so its low time is that less the pulse, not 1/R − pulse). DIR changes at the tick after a
+block's last step (the new block's DIR is written at the next interrupt, 323-324, 358-375): the
+hold after the leading edge is one tick, at least min(1 / F, 62.5 µs), whatever ``$0`` is.
 """
 
 from __future__ import annotations
@@ -40,7 +49,7 @@ from wavecheck.firmware.guarantee import (
     unknown,
 )
 
-__all__ = ["FLAVOURS", "looks_like", "read"]
+__all__ = ["FLAVOURS", "bresenham_spacing", "looks_like", "read"]
 
 _LINE = re.compile(r"^\s*\$(\d{1,4})\s*=\s*(\S+)\s*(?:\((.*)\))?\s*$")
 _AXES = "XYZABC"
@@ -64,6 +73,20 @@ _GRBL_PULSE = (
     "grbl 1.1h: $0 - 2 us of Timer0 counts plus the interrupt overhead, 62.5-562.5 ns short of "
     "$0 by the clk/8 prescaler's phase (stepper.c:241, 344-345): at least $0 - 562.5 ns"
 )
+#: The shortest interrupt tick under AMASS (stepper.c:50, 1021-1026): it doubles the interrupt rate
+#: only when the step takes AMASS_LEVEL1 = F_CPU / 8000 cycles (125 us) or more, so a tick is
+#: then at least 62.5 us.
+_AMASS_TICK_NS = Fraction(62500)
+
+
+def bresenham_spacing(rate: Fraction, fastest: Fraction) -> Fraction:
+    """The shortest time (ns) between two steps of an axis whose max rate is ``rate`` (Hz) when
+    the dominant axis of a move steps at up to ``fastest`` Hz (grbl's Bresenham, and FluidNC's,
+    its heir): floor(dominant / rate) ticks, which tends to one tick of a dominant just under
+    twice the rate: 1 / min(2 x rate, fastest)."""
+    return Fraction(10**9) / min(2 * rate, max(fastest, rate))
+
+
 _PULSE_NOTES = {
     "grbl": "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on "
     "a scope, not enforced)",
@@ -131,13 +154,20 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
 
     step_mask, dir_mask = mask(2), mask(3)
     setup = _setup(p, flavour, settings)
+    rates = {
+        bit: settings[100 + bit][0] * settings[110 + bit][0] / 60
+        for bit in range(len(_AXES))
+        if 100 + bit in settings and 110 + bit in settings
+    }
+    with_steps = [bit for bit in range(len(_AXES)) if 100 + bit in settings]
+    fastest = max(rates.values()) if rates and all(b in rates for b in with_steps) else None
     axes = []
     for bit, axis in enumerate(_AXES):
         spm = settings.get(100 + bit)
         if spm is None:
             continue
         axes.append(_axis(p, bit, axis, spm, settings.get(110 + bit), pulse, setup,
-                          step_mask, dir_mask))  # fmt: skip
+                          step_mask, dir_mask, fastest))  # fmt: skip
     if not axes:
         raise ConfigError(f"{p}: no $100.. (steps/mm) lines: no axis to check")
     known = {0, 2, 3, 29, *range(100, 106), *range(110, 116)}
@@ -154,7 +184,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             + " to every axis; $2/$3 bit 0 = X, 1 = Y, 2 = Z",
             *notes,
         ),
-        fixer=_fixer(flavour),
+        fixer=_fixer(flavour, {bit: (settings[100 + bit][0], hz) for bit, hz in rates.items()}),
     )
 
 
@@ -214,6 +244,7 @@ def _axis(
     setup: Guaranteed,
     step_mask: int,
     dir_mask: int,
+    fastest: Fraction | None,
 ) -> GeneratorGuarantee:
     spm_at = where(path, spm[2])
     number(spm[1], spm_at, f"${100 + bit} (steps/mm)", low=0, high=10**7)
@@ -225,27 +256,33 @@ def _axis(
         hz = spm[0] * rate[0] / 60
         max_rate = Guaranteed(hz, f"${100 + bit} x ${110 + bit} / 60", rate_at, "mm/min",
                               "derived", "grbl claims up to 30 kHz but does not enforce it")  # fmt: skip
-        gap = Fraction(10**9) / hz - pulse.value if hz > 0 and pulse.value else None
+        spacing = bresenham_spacing(hz, fastest) if hz > 0 and fastest else None
+        gap = spacing - pulse.value if spacing is not None and pulse.value else None
     else:
         max_rate = Guaranteed(None, f"${110 + bit}", "", "mm/min", "unknown", "not in the dump")
         gap = None
     idle = Guaranteed(
         None if gap is None else max(gap, Fraction(0)), f"${110 + bit}", max_rate.where,
         "mm/min", "uncertain" if gap is not None else "unknown",
-        "1 / (max step rate) - pulse: the step interrupt spaces steps (Bresenham, AMASS)",
+        "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: Bresenham puts its steps "
+        "on the dominant axis's ticks (stepper.c:413-440)"
+        if gap is not None
+        else "an axis's max rate is not in the dump: the interrupt's tick is not bounded",
     )  # fmt: skip
+    tick = min(Fraction(10**9) / fastest, _AMASS_TICK_NS) if fastest else None
     return GeneratorGuarantee(
         axis=axis,
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
         dir_hold=Guaranteed(
-            pulse.value,
-            "$0",
-            pulse.where,
-            "us",
-            "uncertain",
-            "DIR changes at the next step tick, at least one pulse after the leading edge",
+            tick,
+            "$11n",
+            max_rate.where,
+            "mm/min",
+            "uncertain" if tick is not None else "unknown",
+            "DIR changes one interrupt tick after a block's last step: at least min(1 / the "
+            "fastest axis's max rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)",
         ),  # fmt: skip
         max_rate=max_rate,
         pulse_level=0 if step_mask >> bit & 1 else 1,
@@ -262,7 +299,10 @@ def _axis(
     )
 
 
-def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+def _fixer(
+    flavour: str, rates: dict[int, tuple[Fraction, Fraction]]
+) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+    """The fixes; ``rates``: bit -> (steps/mm, max rate Hz) of each axis with both."""
     hal = flavour == "grblHAL"
     short = _GRBL_SHORT_NS if flavour == "grbl" else Fraction(0)
 
@@ -274,9 +314,22 @@ def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, FixRole, Fraction], st
 
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         bit = _AXES.index(axis.axis) if axis.axis in _AXES else 0
-        if role in ("pulse", "hold"):
+        if role == "pulse":
             value = max(need + short, Fraction(3000) if flavour == "grbl" else Fraction(0))
             return f"set `$0={us(value)}` (us)"
+        if role == "hold":
+            if need > _AMASS_TICK_NS:
+                return (
+                    "grbl tops out at one AMASS tick (62.5 us) of DIR hold after a step's "
+                    f"leading edge: this drive needs {float(need) / _US:g} us"
+                )
+            top = Fraction(10**9) / need  # every axis at most this many steps/s
+            edits = [
+                f"`${110 + b}={at_most(top * 60 / spm)}`"
+                for b, (spm, hz) in sorted(rates.items())
+                if hz > top and spm > 0
+            ]
+            return f"set {' '.join(edits)} (mm/min): DIR changes one interrupt tick after a step"
         if role == "trailing_hold":
             mask = int(axis.info.get("$2", "0").split(" ")[0]) ^ (1 << bit)
             return (
@@ -298,7 +351,8 @@ def _fixer(flavour: str) -> Callable[[GeneratorGuarantee, FixRole, Fraction], st
             )
         spm = axis.info.get("steps/mm", "").split(" ")[0]
         if role == "idle" and axis.pulse.value is not None:
-            need = Fraction(10**9) / (axis.pulse.value + need)
+            # twice this axis's rate under 1 / (pulse + low): no dominant can crowd its steps
+            need = Fraction(10**9) / (axis.pulse.value + need) / 2
         if spm and Fraction(spm) > 0:
             return f"set `${110 + bit}={at_most(need * 60 / Fraction(spm))}` (mm/min)"
         return f"lower `${110 + bit}`"

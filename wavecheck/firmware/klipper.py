@@ -107,12 +107,21 @@ class _Mcu:
     why: str
 
 
+#: Section headers only a Klipper file has (lower-case module names; LinuxCNC's are upper-case).
+_KLIPPER_SECTION = (
+    r"^\[(stepper_\w+|printer|extruder\w*|mcu|gcode_macro|display_glyph|pwm_tool|output_pin"
+    r"|bed_mesh|safe_z_home|heater_bed|temperature_sensor|probe|bltouch)\b[^\]\n]*\]"
+)
+
+
 def looks_like(text: str) -> bool:
     """A Klipper config: ``[section]`` headers with ``key: value`` lines, one of them a
-    ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section."""
-    return bool(
-        re.search(r"^\[(stepper_\w+|printer|extruder\w*|mcu)\b[^\]\n]*\]", text, re.M)
-    ) and bool(re.search(r"^\w+[ \t]*:", text, re.M))
+    ``[stepper_…]``, ``[printer]``, ``[extruder…]`` or ``[mcu]`` section, or one of the add-on
+    sections only Klipper names (``[gcode_macro …]``, ``[display_glyph …]``, ``[pwm_tool …]`` …:
+    such a file is Klipper's, and is refused because it has no stepper)."""
+    return bool(re.search(_KLIPPER_SECTION, text, re.M)) and bool(
+        re.search(r"^\w+[ \t]*:", text, re.M)
+    )
 
 
 def _parse(
@@ -229,7 +238,9 @@ def _mcus(
     for name in sorted(names):
         sec = sections.get("mcu" if name == "mcu" else f"mcu {name}")
         texts = [v for v, _ in sec.keys.values()] if sec else []
-        if name == "mcu":
+        # the file's header comment names the board it is for: the main MCU's, or in a file
+        # without an [mcu] section (a CAN toolhead board's sample) the one MCU its steppers use
+        if name == "mcu" or ("mcu" not in sections and len(names) == 1):
             texts += header
         chips = {m.group(0).lower() for t in texts for m in _CHIP.finditer(t)}
         found = [
@@ -465,12 +476,14 @@ def _rate(
     if printer is None or spm is None or m is None:
         return none
     axis = "x" if m.group(2) else m.group(1)
+    # the rails set up with cartesian_stepper_alloc (klippy/kinematics/*.py setup_itersolve):
+    # hybrid_corexy.py:21-22 and hybrid_corexz.py:21-22 move y and z alone, corexz.py:19 y
     cartesian_axes = {
         "cartesian": "xyz",
         "corexy": "z",
-        "hybrid_corexy": "z",
+        "hybrid_corexy": "yz",
         "corexz": "y",
-        "hybrid_corexz": "y",
+        "hybrid_corexz": "yz",
     }.get(kinematics, "")
     if axis not in cartesian_axes:
         what = f"{kinematics or 'unknown'} kinematics"

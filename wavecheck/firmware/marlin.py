@@ -43,6 +43,7 @@ from wavecheck.firmware.guarantee import (
     FixRole,
     GeneratorGuarantee,
     Guaranteed,
+    not_enforced,
     unknown,
 )
 from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
@@ -81,6 +82,13 @@ class Era:
     single_dir_delay: bool
     """1.1.x: one ``MINIMUM_STEPPER_DIR_DELAY`` (the setup), no PRE delay."""
     source: str
+    old_pulse_code: bool = False
+    """The pulse loop before the 2020 rewrite (``Stepper::stepper_pulse_phase_isr``): the high
+    time is waited only ``#if MINIMUM_STEPPER_PULSE`` (see :data:`_OLD_PULSE`), so a 0 µs
+    pulse is not enforced; the rate only spaces pulses of one interrupt."""
+    untyped_is_none: bool = False
+    """``drivers.h`` tests ``defined(A##_DRIVER_TYPE)`` and nothing defines a fallback type, so
+    a stepper without ``…_DRIVER_TYPE`` matches no driver: the ``#else`` defaults apply."""
 
 
 _T213 = Table(
@@ -105,6 +113,15 @@ _T2022 = Table(
              (("A4988",), 500000), (("LV8729",), 1000000), (("TMC",), 5000000)),
     rate_else=250000,
 )  # fmt: skip
+#: 2.0.9.x as its own Configuration_adv.h documents the defaults (e.g. 2097/Creality/Ender-3/
+#: BigTreeTech_SKR_Mini_E3_1.2 adv lines 2210-2246: TMC DIR 20 ns, TMC rate 5 MHz): the 2022
+#: table with the TMC DIR delay still 20 ns. The release's own Conditionals are not in the
+#: searched corpus, so this combination is kept beside the two that are.
+_T2021 = Table(
+    pulse_ns=_T2022.pulse_ns, pulse_else=_T2022.pulse_else,
+    dir_ns=(*_T2022.dir_ns[:-1], (("TMC",), 20)), dir_else=_T2022.dir_else,
+    rate_hz=_T2022.rate_hz, rate_else=_T2022.rate_else,
+)  # fmt: skip
 _T2019 = Table(
     pulse_ns=((("TB6560",), 30000), (("TB6600",), 3000), (("DRV8825",), 2000),
               (("A4988", "A5984"), 1000), (("LV8729",), 0), (("TMC",), 0)),
@@ -116,24 +133,50 @@ _T2019 = Table(
              (("DRV8825",), 250000), (("TMC",), 400000), (("A4988",), 500000)),
     rate_else=250000,
 )  # fmt: skip
+#: The pulse loop of 1.1.9 and 2.0.0 (MarlinFirmware's ``stepper_pulse_phase_isr`` before the
+#: 2020 rewrite, as indexed: ``#if MINIMUM_STEPPER_PULSE`` / ``while (HAL_timer_get_count(…) <
+#: pulse_end)`` before ``PULSE_STOP``; ``pulse_end += added_step_ticks`` then the same wait
+#: before the next pulse of the interrupt only, ``if (events_to_do)``).
+_OLD_PULSE = ("stepper_pulse_phase_isr (1.1.9/2.0.0): the high time is waited only "
+              "#if MINIMUM_STEPPER_PULSE; with 0 the pulse is as long as the code between "
+              "PULSE_START and PULSE_STOP")  # fmt: skip
+#: The 1.1.x driver test: MarlinFirmware/Marlin:Marlin/drivers.h:43 @ 268245c6 (1.1.x layout,
+#: the driver list of 1.1.9's Configuration.h) ``_AXIS_DRIVER_TYPE(A,T) (
+#: defined(A##_DRIVER_TYPE) && (A##_DRIVER_TYPE == T) )``; 2.0.0: Marlin/src/core/drivers.h:51
+#: @ ae1cc796, the same test. The ``#ifndef X_DRIVER_TYPE / #define X_DRIVER_TYPE A4988``
+#: fallback ("Fallback Stepper Driver types", Conditionals_LCD.h) came with later 2.0.x.
+_UNTYPED_SOURCE = ("Marlin/drivers.h:43 @ 268245c6 (1.1.x) and Marlin/src/core/drivers.h:51 "
+                   "@ ae1cc796 (2.0.0) test defined(A##_DRIVER_TYPE)")  # fmt: skip
 #: Marlin's eras, newest first.
 ERAS: tuple[Era, ...] = (
     Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
-        "Conditionals-4-adv.h @ 00354a11 (firmware-timing.md §4)"),
-    Era("2.0.x to 2.1.2", (2, 0, 0), (_T2019, _T2022), True, False,
-        "Conditionals_post.h (2019) and Conditionals_adv.h (2022): the two tables of these "
-        "releases; the smaller figure of the two"),
+        "Marlin/src/inc/Conditionals-4-adv.h @ 00354a11, 'Driver Timings (in nanoseconds)'"),
+    Era("2.0.1 to 2.1.2", (2, 0, 1), (_T2019, _T2021, _T2022), True, False,
+        "Conditionals_post.h (2019), 2.0.9.x's documented defaults and Conditionals_adv.h "
+        "(2022): the tables of these releases; the smallest figure of them"),
+    Era("2.0.0", (2, 0, 0), (_T2019,), True, False,
+        "Conditionals_post.h of 2019 (TRINAMICS row: DIR 20 ns, pulse 0 us, 400 kHz; #else: "
+        "0 ns, 2 us, 250 kHz), the table 2.0.0's Configuration_adv.h documents",
+        old_pulse_code=True, untyped_is_none=True),
     Era("1.1.x", (1, 1, 0), (_T2019,), True, True,
-        "Conditionals_post.h (2019) taken for 1.1.x: one DIR delay, the setup"),
+        "Conditionals_post.h (2019) taken for 1.1.x (its #else row: 0 ns, 2 us, 250 kHz = 1 MHz "
+        "/ (2 x 2 us) as 1.1.9's Configuration_adv.h says): one DIR delay, the setup",
+        old_pulse_code=True, untyped_is_none=True),
 )  # fmt: skip
 _LINEAR = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W")
 _DRIVER_AXES = (*_LINEAR, "X2", "Y2", "Z2", "Z3", "Z4", *(f"E{i}" for i in range(8)))
 _KINEMATIC = {
     "COREXY": "XY", "COREYX": "XY", "MARKFORGED_XY": "XY", "MARKFORGED_YX": "XY",
     "COREXZ": "XZ", "COREZX": "XZ", "COREYZ": "YZ", "COREZY": "YZ",
-    "DELTA": "XYZ", "MORGAN_SCARA": "XYZ", "MP_SCARA": "XYZ", "AXEL_TPARA": "XYZ",
-    "POLARGRAPH": "XYZ", "POLAR": "XYZ",
+    # SCARA arms, polar and polargraph couple X and Y; Z passes through (scara.cpp
+    # inverse_kinematics: delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z))
+    "DELTA": "XYZ", "MORGAN_SCARA": "XY", "MP_SCARA": "XY", "AXEL_TPARA": "XYZ",
+    "POLARGRAPH": "XY", "POLAR": "XY", "HANGPRINTER": "XYZ",
 }  # fmt: skip
+#: Trinamic types driven by STEP/DIR alone: Marlin/src/core/drivers.h @ 04e8baa9 lines 97-101
+#: leave TMC2100 out of HAS_TRINAMIC_CONFIG (and AXIS_IS_TMC) and 106-111 put it in
+#: HAS_TRINAMIC_STANDALONE, like the ``…_STANDALONE`` types.
+_STANDALONE = ("TMC2100", "TMC26X_STANDALONE")
 _MAX_COMBOS = 4096
 _GIGA = Fraction(10**9)
 
@@ -201,7 +244,7 @@ def _version(h: Headers, texts: str) -> tuple[Era, str]:
     if "MINIMUM_STEPPER_POST_DIR_DELAY" in texts:
         return ERAS[1], "version not given; POST/PRE DIR delays: 2.0.x to 2.1.2"
     if "MINIMUM_STEPPER_DIR_DELAY" in texts:
-        return ERAS[2], "version not given; one MINIMUM_STEPPER_DIR_DELAY: 1.1.x"
+        return ERAS[-1], "version not given; one MINIMUM_STEPPER_DIR_DELAY: 1.1.x"
     return ERAS[0], "version not given and no timing names: 2.1.3 defaults assumed"
 
 
@@ -215,22 +258,15 @@ class _Driver:
 #: The kind of a stepper whose ``…_DRIVER_TYPE`` is not defined where Marlin matches it to no
 #: driver type: every ``HAS_DRIVER(T)`` is false, so the ``#else`` defaults apply.
 _UNTYPED = "no driver type"
-#: Marlin 2.0.0's test of a driver type (MarlinFirmware/Marlin:Marlin/src/core/drivers.h:51
-#: @ ae1cc796, a 2019 bugfix-2.0.x snapshot; the 2.0.0 tag itself is not in the searched
-#: corpus): ``(defined(A##_DRIVER_TYPE) && …)``, so a missing type matches none, despite the
-#: file's comment "A4988 is assumed". Later releases add a fallback ``#define X_DRIVER_TYPE
-#: A4988`` (Conditionals_LCD.h); from which release is not established, so only 2.0.0 is here.
-_UNTYPED_VERSIONS = ("020000",)
 
 
 def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
-    version = h.definition("CONFIGURATION_H_VERSION")
-    untyped = version is not None and (version.value or "").strip() in _UNTYPED_VERSIONS
     assumed = era.name != ERAS[0].name or "A4988 is assumed for unspecified drivers" in texts
     fallback, why = ("A4988", "Marlin's default: A4988 is assumed for unspecified drivers")
-    if untyped:
-        fallback, why = (_UNTYPED, "not defined: Marlin 2.0.0's drivers.h tests "
-                         "defined(A##_DRIVER_TYPE), so the #else defaults apply")  # fmt: skip
+    if era.untyped_is_none:
+        fallback, why = (_UNTYPED, f"not defined: Marlin {era.name}'s drivers.h tests "
+                         f"defined(A##_DRIVER_TYPE), so the #else defaults apply "
+                         f"({_UNTYPED_SOURCE})")  # fmt: skip
     extruders = 1
     e = h.definition("EXTRUDERS")
     if e is not None:
@@ -246,7 +282,7 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
             v = evaluate(h, d.value)
             kind = v if isinstance(v, str) else (d.value.split() or ["?"])[0]
             options.append((kind, d.where, d.depends))
-        implied = assumed and (axis in ("X", "Y", "Z") or (
+        implied = assumed and (axis in ("X", "Y", "Z", *_extra_steppers(h)) or (
             axis.startswith("E") and int(axis[1:]) < extruders))  # fmt: skip
         if options and any(d.value is None for d in h.candidates(f"{axis}_DRIVER_TYPE")):
             if implied:
@@ -256,6 +292,25 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
         if options:
             out.append(_Driver(axis, tuple(options)))
     return out
+
+
+def _extra_steppers(h: Headers) -> tuple[str, ...]:
+    """The second X/Y and extra Z steppers the options make (DUAL_X_CARRIAGE and
+    X_DUAL_STEPPER_DRIVERS: X2; Y_DUAL_STEPPER_DRIVERS: Y2; Z_DUAL_STEPPER_DRIVERS,
+    Z_TRIPLE_STEPPER_DRIVERS or NUM_Z_STEPPER_DRIVERS: Z2-Z4), which need a driver type too."""
+    out = []
+    if h.enabled("DUAL_X_CARRIAGE") or h.enabled("X_DUAL_STEPPER_DRIVERS"):
+        out.append("X2")
+    if h.enabled("Y_DUAL_STEPPER_DRIVERS"):
+        out.append("Y2")
+    n = evaluate(h, "NUM_Z_STEPPER_DRIVERS") if h.definition("NUM_Z_STEPPER_DRIVERS") else None
+    zs = int(n.value) if isinstance(n, Num) and 1 <= n.value <= 4 else 1
+    if h.enabled("Z_TRIPLE_STEPPER_DRIVERS"):
+        zs = max(zs, 3)
+    elif h.enabled("Z_DUAL_STEPPER_DRIVERS"):
+        zs = max(zs, 2)
+    out += [f"Z{i}" for i in range(2, zs + 1)]
+    return tuple(out)
 
 
 #: The drivers Marlin 2.0.0's HAS_TRINAMIC counts (HAS_DRIVER of each; not the standalone ones).
@@ -278,7 +333,7 @@ def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
         return False if all(p is False for p in per_axis) else None
 
     def config(t: str) -> bool:
-        return t.startswith("TMC") and not t.endswith("STANDALONE")
+        return _tmc_config(t)
 
     h.functions["HAS_DRIVER"] = lambda a: any_axis(lambda t: t == a[0].strip()) if a else None
     h.functions["AXIS_IS_TMC"] = lambda a: (
@@ -302,6 +357,11 @@ def _derive(h: Headers, drivers: list[_Driver], where: str) -> None:
             h.predefine(name, "1" if value else "0", f"derived from the driver types ({where})")
 
 
+def _tmc_config(kind: str) -> bool:
+    """A Trinamic driver Marlin configures over UART/SPI (not a standalone one)."""
+    return kind.startswith("TMC") and not kind.endswith("STANDALONE") and kind not in _STANDALONE
+
+
 def _present(row: tuple[str, ...], types: set[str]) -> bool:
     return any(t.startswith("TMC") if r == "TMC" else t == r for r in row for t in types)
 
@@ -316,6 +376,7 @@ def _first(rows: Sequence[_Row], other: int | None, types: set[str]) -> tuple[in
 @dataclass(frozen=True)
 class _Timing:
     pulse: Fraction | None
+    """None: not enforced (or the build fails, when the rate is None too)."""
     low: Fraction | None
     post: Fraction
     pre: Fraction
@@ -343,6 +404,8 @@ def _timing(era: Era, table: Table, types: set[str], settings: dict[str, _Opt]) 
         why.append(f"rate: Marlin's default for {row}")
     else:
         rate = rate_set
+    high: Fraction | None
+    low: Fraction | None
     have_pulse = pulse is not None and (pulse != 0 or not era.zero_is_unset)
     have_rate = rate is not None and rate > 0
     if have_pulse and have_rate:
@@ -352,6 +415,9 @@ def _timing(era: Era, table: Table, types: set[str], settings: dict[str, _Opt]) 
     elif have_pulse:
         assert pulse is not None
         high = low = pulse
+    elif have_rate and era.old_pulse_code:
+        high = low = None  # no wait for the high time; the rate spaces pulse starts only
+        why.append(f"pulse 0: not enforced ({_OLD_PULSE})")
     elif have_rate:
         assert rate is not None
         high = low = Fraction(5 * 10**8) / rate
@@ -474,11 +540,12 @@ def _figures(
         return _Figures(none, none, none, none, none, none)
 
     def pick(key: Callable[[_Timing], Fraction | None]) -> tuple[_Timing, dict[str, _Opt]]:
-        """The combination that gives the smallest figure (the lower bound over branches)."""
-        valid = [(t, s) for t, s, _ in results if key(t) is not None]
-        return min(valid, key=lambda ts: key(ts[0]) or Fraction(0)) if valid else (
-            results[0][0], results[0][1]
-        )  # fmt: skip
+        """The combination that gives the smallest figure (the lower bound over branches); a
+        combination where the firmware enforces none (None) is the smallest of all."""
+        unbounded = [(t, s) for t, s, _ in results if key(t) is None]
+        if unbounded:
+            return unbounded[0]
+        return min(((t, s) for t, s, _ in results), key=lambda ts: key(ts[0]) or Fraction(0))
 
     def source(name: str, opt: _Opt, why: str) -> tuple[str, str, str]:
         if opt.value is not None:
@@ -489,31 +556,50 @@ def _figures(
     name, at, st = source(pulse_name, s["pulse"], t.why)
     if s["pulse"].value is not None and t.pulse != s["pulse"].value:
         at = f"{at}; {t.why}"
-    pulse = Guaranteed(t.pulse, name, at, "ns" if era is ERAS[0] else "us", "uncertain",
-                       "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 tick "
-                       "short" + (" (Marlin's default)" if st == "default" else ""))  # fmt: skip
+    unit = "ns" if era is ERAS[0] else "us"
+    if t.pulse:
+        pulse = Guaranteed(t.pulse, name, at, unit, "uncertain",
+                           "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 "
+                           "tick short" + (" (Marlin's default)" if st == "default" else ""))  # fmt: skip
+    else:
+        pulse = not_enforced(name, f"a 0 pulse is no wait ({t.why or at})", at, unit=unit)
     t, s = pick(lambda x: x.low)
-    idle = Guaranteed(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default", "Hz",
-                      "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), enforced "
-                      "between pulses of one interrupt")  # fmt: skip
+    if t.low:
+        idle = Guaranteed(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
+                          "Hz", "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), "
+                          "enforced between pulses of one interrupt")  # fmt: skip
+    else:
+        idle = not_enforced("MAXIMUM_STEPPER_RATE", "the rate spaces pulse starts; the high "
+                            f"time is not bounded, so neither is the low time ({_OLD_PULSE})")  # fmt: skip
     t, s = pick(lambda x: x.post)
     name, at, st = source(post_name, s["post"], t.dir_why)
-    setup = Guaranteed(t.post, name, at, "ns", st,  # type: ignore[arg-type]
-                       "" if t.post else 'no delay: "expect at least 10 us, one stepper ISR"')  # fmt: skip
+    if t.post:
+        setup = Guaranteed(t.post, name, at, "ns", st)  # type: ignore[arg-type]
+    else:
+        setup = not_enforced(name, f"{name} 0 is no DELAY_NS after the DIR write ({at}); the "
+                             "next step waits for the next stepper interrupt, whose time the "
+                             "configuration does not bound", at)  # fmt: skip
     t, s = pick(lambda x: x.pre)
     pre_set = s["pre"].value is not None
-    pre = Guaranteed(
-        t.pre,
-        "MINIMUM_STEPPER_PRE_DIR_DELAY" if not era.single_dir_delay else "(no PRE delay in 1.1.x)",
-        s["pre"].where if pre_set else "Marlin default (PRE defaults to POST)",
-        "ns", "set" if pre_set else "default",
-    )  # fmt: skip
-    t, s = pick(lambda x: None if x.pulse is None else x.pulse + x.pre)
-    hold = Guaranteed(
-        None if t.pulse is None else t.pulse + t.pre, f"{pulse_name} + PRE_DIR_DELAY", pre.where,
-        "ns", "derived",
-        "PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge = pulse + PRE",
-    )  # fmt: skip
+    pre_name = (
+        "MINIMUM_STEPPER_PRE_DIR_DELAY" if not era.single_dir_delay else "(no PRE delay in 1.1.x)"
+    )
+    pre_at = s["pre"].where if pre_set else "Marlin default (PRE defaults to POST)"
+    if t.pre:
+        pre = Guaranteed(t.pre, pre_name, pre_at, "ns", "set" if pre_set else "default")
+    else:
+        pre = not_enforced(pre_name, "no wait between the end of the last pulse and the DIR "
+                           "write", pre_at)  # fmt: skip
+    t, s = pick(lambda x: (x.pulse or 0) + x.pre or None)
+    held = (t.pulse or 0) + t.pre
+    hold_note = ("PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge "
+                 "= pulse + PRE")  # fmt: skip
+    if held:
+        hold = Guaranteed(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", "derived",
+                          hold_note)  # fmt: skip
+    else:
+        hold = not_enforced(f"{pulse_name} + PRE_DIR_DELAY", f"both are 0: {hold_note}",
+                            pre.where)  # fmt: skip
     rated = [(t, s) for t, s, _ in results if t.rate is not None]
     if rated:
         t, s = max(rated, key=lambda ts: ts[0].rate or 0)
@@ -569,7 +655,7 @@ def _axis(
     axis = d.axis
     letter = "E" if axis.startswith("E") else axis[0]
     types = {k for k, _, _ in d.options}
-    tmc_config = {t.startswith("TMC") and not t.endswith("STANDALONE") for t in types}
+    tmc_config = {_tmc_config(t) for t in types}
     edge = next(
         (k for k in ("EDGE_STEPPING", "SQUARE_WAVE_STEPPING") if h.enabled(k) is not False), None
     )
@@ -586,7 +672,8 @@ def _axis(
         if dd is not None:
             level = 0 if (dd.value or "").strip() in ("LOW", "true", "1") else 1
     inv_def = h.definition(f"INVERT_{axis}_DIR") or h.definition(f"INVERT_{letter}_DIR")
-    inv = inv_def is not None and (inv_def.value or "").strip() in ("true", "1")
+    inv_v = evaluate(h, inv_def.value or "") if inv_def is not None else None
+    inv = isinstance(inv_v, Num) and inv_v.value != 0  # true, 1 or a macro naming one
     kind = " or ".join(f"{k} ({w})" for k, w, _ in d.options)
     info = {"driver type": kind}
     rate = _axis_rate(h, axis, drivers, figs.rate, info)
@@ -625,7 +712,9 @@ def _axis_rate(
     linear = [a for a in _LINEAR if any(d.axis == a for d in drivers)]
     if base == "E":
         distinct = h.enabled("DISTINCT_E_FACTORS") is True
-        index = len(linear) + (int(axis[1:]) if distinct else 0)
+        # 1.1.9's HANGPRINTER has four anchors A-D before E in the arrays
+        first_e = 4 if h.enabled("HANGPRINTER") else len(linear)
+        index = first_e + (int(axis[1:]) if distinct else 0)
     else:
         index = _LINEAR.index(base) if base in linear else len(linear)
         index = linear.index(base) if base in linear else index

@@ -14,7 +14,9 @@ without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits for
 setup and hold cannot be read from the file. On a Duet 3 MB6XD (named in the file's comments)
 every driver defaults to 2.5 µs per field and the largest of all drivers applies to all. An
 expansion board applies T with its own firmware (``uncertain``). Meta-commands (``if``, ``var``,
-``{expressions}``) are not evaluated: a value written as an expression is not read (named).
+``{expressions}``) are not evaluated: a value written as an expression is not read (named), and
+the motion commands of an ``if``/``elif``/``else``/``while`` block are not read either (the
+block is named), since whether they run is not decided by the file.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from wavecheck.firmware.guarantee import (
     Guaranteed,
     at_least,
     at_most,
+    not_enforced,
     unknown,
 )
 from wavecheck.linuxcnc.files import is_file
@@ -46,6 +49,10 @@ _WORD = re.compile(
     r"([A-Za-z])\s*(\"[^\"]*\"|\{[^}]*\}|[-+]?(?:(?i:nan|inf(?:inity)?)\b|[-+0-9.:eE]+))?"
 )
 _AXES = "XYZUVWABCD"
+#: A meta-command that opens a block: the lines indented under it run only when it says so.
+_BLOCK = re.compile(r"^\s*(if|elif|else|while)\b")
+#: The M-codes the reader takes figures from (M98 too: an include may hold them).
+_MOTION = {"98", "584", "569", "665", "667", "669", "350", "92", "203"}
 _MAX_INCLUDES = 64
 _US = 1000
 
@@ -59,15 +66,27 @@ def looks_like(text: str) -> bool:
     )
 
 
-#: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide:
-#: RRF 3.x ``GCodes::Init`` sets ``numExtruders = NumDefaultExtruders`` (Duet3D/RepRapFirmware:
-#: src/GCodes/GCodes.cpp @ fa22ccf), a per-board constant (0 to 3 in the boards' Pins files);
-#: 2.0x set ``min(MaxExtruders, GetNumSmartDrivers() - XYZ_AXES)`` (a 2.0x GCodes.cpp in the
-#: searched corpus, its repository not named).
+#: A driver without T (or with every field at most 0.2 us) is "fast": DDA::StepDrivers raises
+#: its STEP pin, computes the next step times, lowers it, with no wait for any field
+#: (Duet3D/RepRapFirmware:src/Movement/DDA.cpp, the branch after ``if ((driversStepping &
+#: p.GetSlowDriversBitmap()) != 0)``; on SAME70 a ``__DSB()`` "without this the step pulse can
+#: be far too short"). The 0.2 us RRF assumes is not a wait.
+_FAST = ("a fast driver (no T over 0.2 us): DDA::StepDrivers raises and lowers STEP with no "
+         "wait between, DIR with none before or after")  # fmt: skip
+#: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide.
+#: Per version, from RepRapFirmware's own code (Duet3D/RepRapFirmware and its 2.0x sources, as
+#: indexed): 2.0x ``GCodes::Init``: ``numExtruders = min<size_t>(MaxExtruders,
+#: platform.GetNumSmartDrivers() - XYZ_AXES)`` with smart drivers ("don't default dumb drivers
+#: to extruders"), ``MaxExtruders`` without (a Duet 2 alone has 5 smart drivers: 2 extruders,
+#: on drivers 3 and 4; a DueX adds more); 3.x: ``numExtruders = NumDefaultExtruders``
+#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0, 1 or 2 in the
+#: indexed ones); the latest Pins files (Pins_DuetNG.h @ 17a42594, Pins_Duet3_MB6HC.h @
+#: 0ab87481) define none. Which of these applies needs the version and board, so only an E0 the
+#: file gives M92/M203 values is read (on driver 3, the first after X/Y/Z), with this note.
 _DEFAULT_EXTRUDERS = (
     "no M584 E: E0 on driver 3 assumed, other extruders not read; RepRapFirmware's default "
-    "extruders depend on its version and board (3.x: the board's NumDefaultExtruders, 0 to 3; "
-    "2.0x: the smart drivers minus 3): give M584 E… to decide"
+    "extruders depend on its version and board (2.0x: the smart drivers minus 3, 2 on a Duet 2; "
+    "3.x: the board's NumDefaultExtruders, 0 to 2; later releases: not established): give M584 E… to decide"
 )
 
 
@@ -86,6 +105,7 @@ class _State:
     files: list[str] = field(default_factory=list)
     board_6xd: str = ""
     coupled: dict[str, str] = field(default_factory=dict)  # axis → why its rate is unknown
+    backwards: dict[str, bool] = field(default_factory=dict)  # driver → M569 S0
 
 
 def _words(line: str) -> list[tuple[str, str]]:
@@ -111,12 +131,38 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
     text = read_text(path)
     if not st.board_6xd and re.search(r"\b(MB\s*)?6XD\b", text, re.I):
         st.board_6xd = f"{path} names a Duet 3 MB6XD"
+    block: tuple[int, str] | None = None  # (indent, where) of the outermost if/while open
+    skipped = ""  # the block whose commands were left out (noted once)
     for no, line in enumerate(text.splitlines(), 1):
+        code_part = line.split(";")[0].expandtabs(4)
+        if not code_part.strip():
+            continue  # blank lines and comments do not end a block
+        indent = len(code_part) - len(code_part.lstrip())
+        keyword = _BLOCK.match(code_part)
+        if (
+            block is not None
+            and indent <= block[0]
+            and not (keyword and keyword.group(1) in ("elif", "else") and indent == block[0])
+        ):
+            block = None
+        if keyword and block is None:
+            block = (indent, where(path, no))
+            continue
         words = _words(line)
         if not words or words[0][0] != "M":
             continue
         code, rest = words[0][1], words[1:]
         at = where(path, no)
+        if block is not None and indent > block[0]:
+            if code in _MOTION and skipped != block[1]:
+                skipped = block[1]
+                st.unsupported.append(
+                    f"{at}: M{code} inside the `if`/`while` block of {block[1]}: RepRapFirmware "
+                    "runs it only when the condition holds, which the file does not decide; "
+                    "the block's motion commands are not read"
+                )
+            if code in _MOTION:
+                continue
         if code == "98":
             _include(path, sys_dir, dict(rest).get("P", ""), at, st, seen)
         elif code == "584":
@@ -141,6 +187,9 @@ def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: 
     name = target.strip('"')
     if not name:
         return
+    if name.startswith("{"):
+        st.unsupported.append(f"{at}: M98 P{name} names its file by an expression; not read")
+        return
     rel = re.sub(r"^(\d+:)?/?(sys/)?", "", name)
     inc = sys_dir / rel
     if not is_file(inc):
@@ -153,6 +202,11 @@ def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: 
 
 
 def _m569(words: dict[str, str], at: str, st: _State) -> None:
+    s = words.get("S", "")
+    if "P" in words and re.fullmatch(r"[01]", s):
+        # GCodes ConfigureDriver: platform.SetDirectionValue(drive, S != 0): S0 runs backwards
+        for drv in words["P"].split(":"):
+            st.backwards[_driver(drv)] = s == "0"
     if "P" not in words or "T" not in words or not words["T"]:
         return
     if words["T"].startswith("{"):
@@ -242,8 +296,10 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
     axes = []
     for name, drivers in logical:
-        if name not in st.spm and name not in st.speed and not any(d in st.timing for d in drivers):
-            continue
+        configured = name in st.spm or name in st.speed
+        if not configured and (name[0] == "E" and not st.extruders_given
+                               or not any(d in st.timing for d in drivers)):  # fmt: skip
+            continue  # a default extruder the file gives no M92/M203 for is not assumed
         axes.append(_axis(name, drivers, st, slow, worst))
     if not axes:
         missing = [u for u in st.unsupported if " M98 " in u]
@@ -283,6 +339,9 @@ def _worst(slow: dict[str, tuple[list[Fraction], str]]) -> list[Guaranteed]:
             break
         drv, (fields, at) = max(slow.items(), key=lambda kv: kv[1][0][i])
         note = "largest over all slow drivers; rounded up to step clocks"
+        if not fields[i]:
+            out.append(_zero(at, i))
+            continue
         out.append(Guaranteed(fields[i], f"M569 P{drv} T (field {i + 1})", at, "us", "set", note))
     return out
 
@@ -300,20 +359,22 @@ def _axis(
         fields, at = st.timing[expansion[0]]
         note = f"expansion board driver {expansion[0]}: its own firmware applies T"
         pulse, idle, setup, hold_t = (
-            Guaranteed(f, "M569 T", at, "us", "uncertain", note) for f in fields
+            Guaranteed(f, "M569 T", at, "us", "uncertain", note) if f else _zero(at, i)
+            for i, f in enumerate(fields)
         )
         hold = _hold(pulse, hold_t)
     elif any(d in slow for d in drivers) and worst:
         pulse, idle, setup, hold_t = worst
         hold = _hold(pulse, hold_t)
     else:
-        note = "no T: a fast driver; the firmware assumes >= 0.2 us high and low"
+        why = _FAST
         if expansion:
-            note = f"expansion board driver {expansion[0]} without T: its own firmware's timing"
-        pulse = Guaranteed(_FAST_NS, "M569 T", "firmware default", "us", "uncertain", note)
+            why = (f"expansion board driver {expansion[0]} without T: its own firmware's "
+                   "timing, not in this file")  # fmt: skip
+        pulse = not_enforced("M569 T", why, "firmware default", unit="us")
         idle = pulse
-        setup = unknown("M569 T", "fast driver: no DIR setup wait; measure it")
-        hold = unknown("M569 T", "fast driver: no DIR hold wait; measure it")
+        setup = not_enforced("M569 T", f"no DIR setup wait: {why}", "firmware default")
+        hold = not_enforced("M569 T", f"no DIR hold wait: {why}", "firmware default")
         hold_t = None
     info = {"drivers": ",".join(d.removeprefix("0.") for d in drivers)}
     rate = Guaranteed(None, "M203", "", "mm/min", "unknown", "no M92/M203 for this axis")
@@ -340,17 +401,26 @@ def _axis(
         dir_hold=hold,
         max_rate=rate,
         dir_hold_trailing=hold_t,
+        dir_inverted=st.backwards.get(drivers[0], False),
         info=info,
         aliases=("E",) if name == "E0" else (),
     )
 
 
+def _zero(at: str, field_no: int) -> Guaranteed:
+    """A T field of 0: RRF waits 0 clocks for it (not enforced)."""
+    return not_enforced(f"M569 T (field {field_no + 1})", "a 0 us field is no wait", at,
+                        unit="us")  # fmt: skip
+
+
 def _hold(pulse: Guaranteed, hold_t: Guaranteed) -> Guaranteed:
-    assert pulse.value is not None and hold_t.value is not None
+    """DIR changes only after STEP went low (DDA::StepDrivers lowers the pins before the
+    direction is updated) and after field 4 from that: from the rising edge, field 1 + 4."""
     note = "hold counts from the falling edge: from the rising edge add the high time"
-    return Guaranteed(
-        pulse.value + hold_t.value, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note
-    )
+    total = (pulse.value or Fraction(0)) + (hold_t.value or Fraction(0))
+    if not total:
+        return not_enforced("M569 T fields 1 + 4", "both 0: no wait", hold_t.where)
+    return Guaranteed(total, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note)
 
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:

@@ -1,21 +1,27 @@
 """Smoothieware: ``config`` (reference ``firmware-timing.md`` §6).
 
 Read: ``microseconds_per_step_pulse`` (default 1 µs), ``base_stepping_frequency`` (default
-100 kHz), ``alpha/beta/gamma/delta/epsilon/zeta_steps_per_mm``, ``…_max_rate`` (mm/min, default
-30000), ``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``, and
+100 kHz) (Kernel.cpp), ``alpha/beta/gamma/delta/epsilon/zeta_steps_per_mm`` (default 2560 for
+gamma, 80 for the others) and ``…_max_rate`` (mm/min, default 30000) (Robot::load_config),
+``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``, and
 each enabled ``extruder.NAME`` module (``step_pin``, ``dir_pin``, ``steps_per_mm`` default 1,
 ``max_speed`` mm/s default 1000: Extruder.cpp ``config_load`` makes a stepper motor of it). A key
-given twice keeps its last value (ConfigCache ``replace_or_push_back``). The pulse is the setting
-plus interrupt time (≥ the setting); each motor steps at most once per base tick, so the low
-time is ≥ one tick − the pulse and the rate ≤ the base frequency. Robot.cpp ``append_milestone``
-clamps every actuator to its own ``max_rate`` (any arm solution, deltas included), so a motor's
-rate is ≤ min(base frequency, steps/mm × max_rate). DIR is written when a block starts, ≈ one
-tick before the first pulse (uncertain); DIR hold after the leading edge is only code time
-(unknown).
+given twice keeps its last value (ConfigCache ``replace_or_push_back``).
+
+StepTicker: the pulse is the setting plus interrupt time (≥ the setting); each motor steps at most
+once per base tick, so the rate is ≤ the base frequency and the low time about one tick − the
+pulse (not enforced: the real pulse is longer by ISR time). Robot.cpp ``append_milestone`` clamps
+every actuator to its own ``max_rate`` (any arm solution, deltas included), so a motor's rate is
+≤ min(base frequency, steps/mm × max_rate); where steps/mm × max_rate exceeds the base frequency,
+Robot::check_max_actuator_speeds first lowers max_rate to floor(base / steps/mm) mm/s (extruders
+excepted). The motors after gamma need their step and dir pins and are taken in order, the first
+one missing ending them (Robot::load_config). DIR is written when a block starts, about one tick before the first pulse (not
+enforced: there is no DIR delay); DIR hold after the leading edge is only code time (unknown).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from fractions import Fraction
@@ -28,6 +34,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_most,
+    not_enforced,
     unknown,
 )
 
@@ -73,16 +80,30 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     arm = keys.get("arm_solution", ("cartesian", "firmware default"))
     pulse = Guaranteed(us * 1000, "microseconds_per_step_pulse", us_at, "us", us_st,  # type: ignore[arg-type]
                        "the pulse is this plus interrupt time (about 3 us at 1 us set)")  # fmt: skip
-    idle = Guaranteed(max(tick - us * 1000, Fraction(0)), "base_stepping_frequency", f_at, "Hz",
-                      "derived", "one base tick minus the set pulse (a longer real pulse shortens "
-                      "it)")  # fmt: skip
-    setup = Guaranteed(tick, "base_stepping_frequency", f_at, "Hz", "uncertain",
-                       "DIR is written when a block starts, about one tick before its first "
-                       "pulse")  # fmt: skip
-    axes = []
+    idle = not_enforced(
+        "base_stepping_frequency",
+        "StepTicker::step_tick steps a motor at most once per base tick and starts the unstep "
+        "timer only after every motor's step, so the real pulse is the setting plus ISR time and "
+        "the low time one tick minus that: at most one tick minus the set pulse",
+        f_at, max(tick - us * 1000, Fraction(0)), "Hz",
+    )  # fmt: skip
+    setup = not_enforced(
+        "base_stepping_frequency",
+        "StepTicker::start_next_block writes DIR at the end of the tick that finished the last "
+        "block (or just before the first tick's steps); the first step comes a tick or more "
+        "later, less the ISR's own time: about one base tick, no DIR delay setting",
+        f_at, tick, "Hz",
+    )  # fmt: skip
+    axes: list[GeneratorGuarantee] = []
     for motor in _MOTORS:
         pin = keys.get(f"{motor}_step_pin", ("nc", ""))[0].lower()
-        if pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
+        if motor not in _CARTESIAN_AXIS and any(a.axis == "gamma" for a in axes):
+            # Robot::load_config: after gamma, a motor needs its step and dir pins and the
+            # motors are taken in order, the first one missing ending them
+            dir_pin = keys.get(f"{motor}_dir_pin", ("nc", ""))[0].lower()
+            if "nc" in (pin, dir_pin):
+                break
+        elif pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
             continue
         axes.append(_axis(motor, f"{motor}_", "max_rate", keys, get, f, f_at, pulse, idle, setup,
                           arm))  # fmt: skip
@@ -122,18 +143,26 @@ def _axis(  # type: ignore[no-untyped-def]
     rate = Guaranteed(f, "base_stepping_frequency", f_at, "Hz", "derived",
                       "one step per base tick at most")  # fmt: skip
     extruder = rate_key == "max_speed"
-    if f"{prefix}steps_per_mm" in keys or extruder:
-        spm, at, _ = get(f"{prefix}steps_per_mm", "1" if extruder else "0", 0, 10**7, "steps/mm")
-        raw = keys.get(f"{prefix}steps_per_mm", ("1", ""))[0]
-        info["steps/mm"] = f"{raw} ({prefix}steps_per_mm, {at})"
-        default, unit, per_s = ("1000", "mm/s", 1) if extruder else ("30000", "mm/min", 60)
-        mr, mr_at, _ = get(f"{prefix}{rate_key}", default, 0, 10**9, unit)
-        info["max rate"] = f"{float(mr):g} {unit} ({prefix}{rate_key}, {mr_at})"
-        hz = spm * mr / per_s
-        if hz < f:
-            rate = Guaranteed(hz, f"{prefix}steps_per_mm x {prefix}{rate_key}", mr_at, unit,
-                              "derived", "Robot.cpp append_milestone clamps each actuator to "
-                              "its max rate")  # fmt: skip
+    # Robot::load_config: steps_per_mm defaults to 2560 for gamma, 80 for the others; the
+    # extruder module's to 1 (Extruder::config_load)
+    spm_default = "1" if extruder else ("2560" if motor == "gamma" else "80")
+    spm, at, _ = get(f"{prefix}steps_per_mm", spm_default, 0, 10**7, "steps/mm")
+    raw = keys.get(f"{prefix}steps_per_mm", (spm_default, ""))[0]
+    info["steps/mm"] = f"{raw} ({prefix}steps_per_mm, {at})"
+    default, unit, per_s = ("1000", "mm/s", 1) if extruder else ("30000", "mm/min", 60)
+    mr, mr_at, _ = get(f"{prefix}{rate_key}", default, 0, 10**9, unit)
+    info["max rate"] = f"{float(mr):g} {unit} ({prefix}{rate_key}, {mr_at})"
+    mm_s = mr / per_s
+    note = "Robot.cpp append_milestone clamps each actuator to its max rate"
+    if not extruder and spm > 0 and spm * mm_s > f:
+        # Robot::check_max_actuator_speeds: max_rate = floorf(base / steps_per_mm) mm/s
+        mm_s = Fraction(math.floor(f / spm))
+        note = (f"Robot::check_max_actuator_speeds lowers max_rate to floor(base frequency / "
+                f"steps_per_mm) = {mm_s} mm/s; append_milestone clamps the actuator to it")  # fmt: skip
+    hz = spm * mm_s
+    if hz < f:
+        rate = Guaranteed(hz, f"{prefix}steps_per_mm x {prefix}{rate_key}", mr_at, unit,
+                          "derived", note)  # fmt: skip
     alias = _CARTESIAN_AXIS.get(motor) if arm[0].lower() == "cartesian" else None
     if extruder:
         alias = "e" if motor == "extruder.hotend" else None

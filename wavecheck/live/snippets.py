@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from wavecheck.capture.srzip import EXACT_SECTION, sr_metadata, write_sr
-from wavecheck.engine import per_axis
 from wavecheck.errors import UsageError
+from wavecheck.steps.mapping import per_axis
 
 if TYPE_CHECKING:
     from wavecheck.engine import AxisPlan

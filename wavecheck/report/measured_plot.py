@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine import StepCounts, StepInterface, StepTrace
+from wavecheck.engine import StepCounts, StepTrace
 from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
+from wavecheck.steps.interface import StepInterface
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns

@@ -28,7 +28,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -37,19 +37,17 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
-from wavecheck.engine import StepEvents, check_axis_names
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
+from wavecheck.steps.mapping import check_axis_names
 from wavecheck.timebase import Timebase
 
 __all__ = [
-    "AxisSteps",
     "StepsCsvWriter",
     "decimal_digits",
     "format_times",
     "parse_steps_per_unit",
     "steps_per_unit_of",
-    "steps_csv_chunks",
 ]
 
 #: Rows formatted at a time.
@@ -60,15 +58,6 @@ RATE_PLACES = 3
 UNIT_PLACES = 6
 HEADER = ("time_s", "tick", "axis", "direction", "position", "rate_hz")
 UNIT_HEADER = ("position_units", "velocity_units_per_s")
-
-
-@dataclass(frozen=True)
-class AxisSteps:
-    """The steps of one axis for the CSV: its name, its steps, its steps per machine unit."""
-
-    name: str | None
-    steps: StepEvents
-    steps_per_unit: Fraction | None = None
 
 
 def decimal_digits(tick_s: Fraction) -> tuple[int, bool]:
@@ -358,33 +347,6 @@ class StepsCsvWriter:
         self._stack.__exit__(RuntimeError, RuntimeError("aborted"), None)
 
 
-def steps_csv_chunks(
-    axes: Sequence[AxisSteps], timebase: Timebase, chunk: int = CHUNK
-) -> Iterator[str]:
-    """The CSV's text: the header line, then the rows in chunks of ``chunk`` lines."""
-    units = any(a.steps_per_unit is not None for a in axes)
-    yield ",".join(HEADER + (UNIT_HEADER if units else ())) + "\n"
-    if not axes:
-        return
-    ticks = np.concatenate([a.steps.ticks for a in axes])
-    which = np.concatenate([np.full(a.steps.count, k, dtype=np.int32) for k, a in enumerate(axes)])
-    direction = np.concatenate([a.steps.direction for a in axes])
-    position = np.concatenate([a.steps.position for a in axes])
-    gaps = np.concatenate([np.diff(a.steps.ticks, prepend=a.steps.ticks[:1]) for a in axes])
-    first = np.concatenate([np.arange(a.steps.count) == 0 for a in axes]) | (gaps <= 0)
-    names = np.array(["" if a.name is None else _csv_field(a.name) for a in axes], dtype=np.str_)
-    per_unit = (
-        np.array([np.nan if a.steps_per_unit is None else float(a.steps_per_unit) for a in axes])
-        if units
-        else None
-    )
-    order = np.lexsort((which, ticks))
-    for i in range(0, len(order), chunk):
-        idx = order[i : i + chunk]
-        yield _format(ticks[idx], which[idx], direction[idx], position[idx], gaps[idx],
-                      first[idx], names, per_unit, timebase) + "\n"  # fmt: skip
-
-
 def _csv_field(text: str) -> str:
     if any(c in text for c in ',"\n\r'):
         return '"' + text.replace('"', '""') + '"'
@@ -394,5 +356,5 @@ def _csv_field(text: str) -> str:
 def steps_per_unit_of(
     values: Mapping[str | None, str], option: str = "--steps-per-unit"
 ) -> dict[str | None, Fraction]:
-    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.engine.mapping.per_axis`) as numbers."""
+    """Per-axis ``--steps-per-unit`` texts (see :func:`wavecheck.steps.mapping.per_axis`) as numbers."""
     return {axis: parse_steps_per_unit(text, option) for axis, text in values.items()}

@@ -35,23 +35,19 @@ from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine import (
-    FAIL,
-    INDETERMINATE,
-    PASS,
-    AxisMap,
     CheckOptions,
     MachineCheck,
     RuleResult,
-    build_interface,
     default_step_type,
     figure_of,
     machine_for,
-    role_name,
 )
 from wavecheck.engine import pulse_level as level_at_drive
 from wavecheck.engine import thresholds as engine_thresholds
 from wavecheck.errors import UsageError
 from wavecheck.rules import Rule, applicable
+from wavecheck.steps.interface import build_interface, role_name
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.steptypes import StepKind, StepType, step_type
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_frequency, format_ns, parse_option
@@ -71,8 +67,9 @@ __all__ = [
 
 #: The interface the decoder (``pd.py``'s ``API``) expects of this module; change both together.
 DECODER_API = 1
-#: An interval measured but not judged (the drive states no limit, or there is no sample rate).
-MEASURED = 3
+#: The decoder's outcome of one interval: passes, fails, undecided at the sampling resolution,
+#: or measured but not judged (the drive states no limit, or there is no sample rate).
+PASS, FAIL, INDETERMINATE, MEASURED = 0, 1, 2, 3
 #: The decoder's channels in ``pd.py``'s order (the required one, then the optional ones) → the
 #: role each plays for a kind of step type (None: not used by that kind). Two phases at most:
 #: every channel a decoder declares costs libsigrokdecode time at every sample.

@@ -7,8 +7,8 @@ libsigrokdecode 0.5.3 has no end-of-input call (sigrok-cli's only chance is the 
 at the sample of its later event — the edge that closes it — instead of in blocks afterwards.
 
 This module restates, one edge at a time, how the engine turns events into intervals
-(:mod:`wavecheck.engine.intervals`, :mod:`wavecheck.engine.primitives`) and edges into steps
-(:mod:`wavecheck.engine.decode`), for each kind of check the rule table uses; the limits and the exact
+(:mod:`wavecheck.engine.intervals`, :mod:`wavecheck.steps.primitives`) and edges into steps
+(:mod:`wavecheck.steps.decode`), for each kind of check the rule table uses; the limits and the exact
 pass/fail thresholds come from the engine (:class:`~wavecheck.sigrok.adapter.RuleSpec`).
 ``tests/wavecheck/sigrok/test_judge.py`` holds every interval, outcome and step equal to the
 engine's. Same-sample events follow the engine: a reference event counts for the data event of

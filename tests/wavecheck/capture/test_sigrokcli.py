@@ -154,7 +154,7 @@ def test_utf8_channel_names_in_sigrok_cli_vcd(tmp_path: Path) -> None:
     assert not any("latin-1" in n for n in cap.notes)
     scale = int(read_sr(src).timebase.tick_s / cap.timebase.tick_s)
     assert cap.channel("STÉP").edges.tolist() == [t * scale for t in (10, 12, 20, 22)]
-    from wavecheck.engine.interface import build_interface
+    from wavecheck.steps.interface import build_interface
 
     iface = build_interface(cap, {"step": "STÉP", "dir": "DIR→"})
     assert iface is not None

@@ -18,9 +18,9 @@ import pytest
 from wavecheck.api import check
 from wavecheck.capture.open import detect_format, open_capture
 from wavecheck.capture.wellen import read_wellen
-from wavecheck.engine.interface import find_channel
 from wavecheck.errors import UsageError
 from wavecheck.report import Report
+from wavecheck.steps.interface import find_channel
 
 SIM = Path(__file__).parent / "sim"
 needs_iverilog = pytest.mark.skipif(

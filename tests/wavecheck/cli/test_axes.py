@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from wavecheck.cli import main
-from wavecheck.engine.mapping import parse_axes, per_axis, split_invert
 from wavecheck.errors import UsageError
+from wavecheck.steps.mapping import parse_axes, per_axis, split_invert
 
 SMOOTHIE = ["--map", "x.step=5,x.dir=6", "--map", "y.step=3,y.dir=4"]
 

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 from tests.conftest import write_vcd
 from wavecheck.cli import _batch, main
+from wavecheck.cli._reports import Asked, asked
 from wavecheck.drives import library
 from wavecheck.report import plot
 from wavecheck.report.html import render_html
@@ -204,7 +205,7 @@ def test_workers_send_back_no_reports(tmp_path: Path, capsys: pytest.CaptureFixt
 
     paths = [str(p) for p in _runs(tmp_path, 4)]
     args = _parse(["check", *paths, *ARGS, "--format", "json"])
-    outcomes = list(_batch._outcomes(args, build_report, paths, 2))
+    outcomes = list(_batch._outcomes(args, asked(args), build_report, paths, 2))
     assert sorted(o.index for o in outcomes) == [0, 1, 2, 3]
     assert all(isinstance(o.piece, str) for o in outcomes)
     assert [f.name for f in dataclasses.fields(_batch._Outcome)] == [
@@ -227,10 +228,10 @@ def test_no_report_outlives_its_capture(
     alive: list[weakref.ref[Any]] = []
     build = check.build_report
 
-    def watched(args: argparse.Namespace, path: str) -> Any:
+    def watched(args: argparse.Namespace, what: Asked, path: str) -> Any:
         gc.collect()
         assert [r for r in alive if r() is not None] == []
-        checked = build(args, path)
+        checked = build(args, what, path)
         alive.append(weakref.ref(checked))
         return checked
 
@@ -260,7 +261,7 @@ def test_several_documents_equal_the_renderers_of_all_reports(
     args = _parse(["check", *paths, *ARGS])
     from wavecheck.cli.check import build_report
 
-    reports = [build_report(args, p) for p in paths]
+    reports = [build_report(args, asked(args), p) for p in paths]
     bad = str(tmp_path / "r9.vcd")
     assert junit_doc == render_junit(reports, [Unreadable(bad, f"{bad}: the file is empty")])
     pngs = [plot.render_png(r) for r in reports]

@@ -11,8 +11,8 @@ from tests.conftest import shared_capture, write_vcd
 from tests.wavecheck.capture.srutil import count_edges_by_members, write_sr
 from wavecheck.capture.open import open_capture
 from wavecheck.cli import main
-from wavecheck.engine.interface import build_interface
 from wavecheck.errors import UsageError
+from wavecheck.steps.interface import build_interface
 
 JSON_KEYS = {"format", "samplerate_hz", "resolution_ns", "duration_s", "channels"}
 CHANNEL_KEYS = {"name", "index", "initial", "edges", "rising", "falling"}

@@ -17,9 +17,9 @@ from wavecheck.crosscheck.sigrok import (
     parse_annotations,
     pick_downsample,
 )
-from wavecheck.engine.decode import decode
-from wavecheck.engine.interface import build_interface
 from wavecheck.errors import CaptureError
+from wavecheck.steps.decode import decode
+from wavecheck.steps.interface import build_interface
 
 
 def test_parse_annotations() -> None:

@@ -6,10 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from wavecheck.capture.blocks import BlockSource
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import MachineReport
 from wavecheck.engine.run import check_source
+from wavecheck.steps.mapping import AxisMap
 
 ROOT = Path(__file__).resolve().parents[3]
 GOLDEN = ROOT / "captures" / "golden"

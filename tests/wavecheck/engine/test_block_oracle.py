@@ -25,9 +25,9 @@ from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.outcome import MachineReport
 from wavecheck.report.machine import machine_dict
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 
 

@@ -14,8 +14,8 @@ from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.srzip import write_sr_edges
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.report.machine import machine_dict
+from wavecheck.steps.mapping import AxisMap
 
 ROOT = Path(__file__).resolve().parents[3]
 GOLDEN = ROOT / "captures" / "golden"

@@ -8,9 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.wavecheck.waves import capture, pulses
-from wavecheck.engine.decode import active_edges, decode
-from wavecheck.engine.interface import build_interface
 from wavecheck.errors import ConfigError, UsageError
+from wavecheck.steps.decode import active_edges, decode
+from wavecheck.steps.interface import build_interface
 from wavecheck.steptypes import STATE_TABLES, step_type
 
 
@@ -193,8 +193,8 @@ def test_dir_level_unknown_before_known_from() -> None:
     initial=st.sampled_from([0, 1]),
 )
 def test_level_before_matches_brute_force_on_both_paths(ticks, edges, initial) -> None:
-    from wavecheck.engine.decode import level_before
-    from wavecheck.engine.interface import RoleSignal
+    from wavecheck.steps.decode import level_before
+    from wavecheck.steps.interface import RoleSignal
 
     t = np.asarray(sorted(ticks), dtype=np.int64)
     e = np.asarray(sorted(edges), dtype=np.int64)

@@ -11,9 +11,9 @@ import pytest
 from tests.conftest import write_vcd
 from wavecheck.capture.open import open_source
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.run import start
+from wavecheck.steps.mapping import AxisMap
 
 BLOCK = 64  # edges a window
 

@@ -14,8 +14,8 @@ import pytest
 from tests.engine_probe import run_check
 from tests.reliability.helpers import cli
 from tests.wavecheck.waves import capture, drive, pulses
-from wavecheck.engine.interface import build_interface, parse_map
 from wavecheck.errors import UsageError
+from wavecheck.steps.interface import build_interface, parse_map
 
 US = 1000
 
@@ -90,7 +90,7 @@ def test_check_refuses_a_mapping_that_would_change_what_is_checked(
 )  # fmt: skip
 def test_a_unique_partial_hierarchical_name_resolves(tmp_path: Path, ref: str, name: str) -> None:
     from wavecheck.capture.vcd import read_vcd
-    from wavecheck.engine.interface import find_channel
+    from wavecheck.steps.interface import find_channel
 
     cap = read_vcd(_vcd(tmp_path, ["tb.s1.step", "tb.s1.dir", "tb.s2.step", "tb.s2.dir"]))
     assert find_channel(cap, ref).name == name

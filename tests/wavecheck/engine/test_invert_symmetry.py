@@ -21,10 +21,10 @@ from hypothesis import strategies as st
 from tests.wavecheck.engine.test_block_oracle import _drive, captures
 from wavecheck.capture.blocks import MemorySource
 from wavecheck.capture.edges import Capture, Channel
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.run import check_source
 from wavecheck.report.machine import machine_dict
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from tests.engine_probe import FullRule
 from wavecheck.engine.judge import FAIL, INDETERMINATE, PASS, Histogram, evaluate
-from wavecheck.engine.primitives import Intervals
 from wavecheck.engine.results import RuleResult
+from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
 
 

@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wavecheck.engine.primitives import Intervals, holds, periods, setups, sorted_search, widths
+from wavecheck.steps.primitives import Intervals, holds, periods, setups, sorted_search, widths
 
 A = np.asarray
 

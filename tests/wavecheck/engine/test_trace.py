@@ -1,7 +1,7 @@
 """A report draws the position / step-rate panel from a thinned trace of the steps.
 
 The oracle is every step, as a step sink collects them (:class:`wavecheck.engine.sinks.StepCollector`,
-:class:`wavecheck.engine.decode.StepEvents`). On the corpus and under hypothesis, at block sizes
+:class:`wavecheck.steps.decode.StepEvents`). On the corpus and under hypothesis, at block sizes
 from one event up: every position point of the thinned trace lies on the whole position curve,
 each bucket's range is the whole curve's range there, every rate point is one of the whole
 (tick, gap) points and each bucket's fastest and slowest step are the whole's over the same
@@ -27,8 +27,6 @@ from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.decode import StepEvents
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.run import check_source
@@ -36,6 +34,8 @@ from wavecheck.engine.sinks import StepCollector
 from wavecheck.engine.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
 from wavecheck.report.measured_plot import MAX_MARKS
 from wavecheck.report.plot import figure
+from wavecheck.steps.decode import StepEvents
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 
 SMOOTHIE = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"

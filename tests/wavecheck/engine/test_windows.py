@@ -28,8 +28,6 @@ from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
 from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.interface import build_interface
-from wavecheck.engine.mapping import AxisMap
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.windows import PLACES_PER_RULE, SIDE_EDGES, WindowKeeper
 from wavecheck.report.gtkw import MAX_MARKERS, _neighbours, write_gtkw
@@ -40,6 +38,8 @@ from wavecheck.report.plot import (
     place_title,
     place_traces,
 )
+from wavecheck.steps.interface import build_interface
+from wavecheck.steps.mapping import AxisMap
 from wavecheck.timebase import Timebase
 
 SMOOTHIE = "sigrok-dumps/stepper_motor/smoothieware/smoothieware_snippet.sr"

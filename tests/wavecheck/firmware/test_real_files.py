@@ -132,17 +132,18 @@ def test_rrf_cnc_one_external_drivers() -> None:
     cfg = read_firmware(FW / "reprapfirmware/cnc-one/config.g")
     x = cfg.axis("X")  # line 20: M584 X3 Y2:1 Z0; line 21: M569 P3 ... T5:5:10:0
     assert (v(x.pulse), v(x.idle), v(x.dir_setup)) == (5000, 5000, 10000)
-    assert (
-        v(x.dir_hold_trailing) == 0 and v(x.dir_hold) == 5000
-    )  # hold counts from the falling edge
+    # hold counts from the falling edge; T field 4 = 0 is no wait (not enforced), but DIR changes
+    # only after STEP went low: from the rising edge, the 5 us high time
+    assert x.dir_hold_trailing is not None and x.dir_hold_trailing.status == "not_enforced"
+    assert v(x.dir_hold) == 5000
     assert v(x.max_rate) == F(160 * 12000, 60)  # line 27: M92 X160; line 29: M203 X12000 mm/min
     assert cfg.axis("Y").info["drivers"] == "2,1"  # line 20: M584 Y2:1
 
 
 def test_rrf_hummel_default_timing() -> None:
     cfg = read_firmware(FW / "reprapfirmware/Hummel_SKR1.4_DWC/config.g")
-    x = cfg.axis("X")  # line 19: M569 P0 S1, no T: a fast driver
-    assert v(x.pulse) == 200 and x.pulse.status == "uncertain"
+    x = cfg.axis("X")  # line 19: M569 P0 S1, no T: a fast driver, no wait (DDA::StepDrivers)
+    assert x.pulse.value is None and x.pulse.status == "not_enforced"
     assert x.dir_setup.value is None
     # line 10: M669 K2 is CoreXZ in RRF's KinematicsType (the file's comment says CoreXY): X and Z
     # are coupled, so M92 x M203 does not bound them; Y moves alone
@@ -155,7 +156,8 @@ def test_smoothieboard_defaults() -> None:
     a = cfg.axis("alpha")
     assert v(a.pulse) == 1000 and a.pulse.status == "default"  # no microseconds_per_step_pulse
     assert v(a.max_rate) == F(80 * 30000, 60)  # lines 16, 39: 80 steps/mm, 30000 mm/min
-    assert v(cfg.axis("beta").max_rate) == 100_000  # 333.3333 x 30000/60 > 100 kHz base frequency
+    # 333.3333 x 30000/60 > 100 kHz: Robot::check_max_actuator_speeds floors max_rate to 300 mm/s
+    assert v(cfg.axis("beta").max_rate) == F("333.3333") * 300
     assert v(cfg.axis("gamma").max_rate) == F(1600 * 300, 60)  # lines 18, 51
 
 

@@ -123,15 +123,20 @@ def test_hm2_dir_hold_is_what_the_hardware_does(capsys: pytest.CaptureFixture[st
 # -- Marlin ----------------------------------------------------------------------------------
 
 
-def test_marlin_2_0_pulse_0_falls_back_to_the_rate(capsys: pytest.CaptureFixture[str]) -> None:
-    """Renkforce RF100 (2.0.0) sets MINIMUM_STEPPER_PULSE 0: reported as a 0 s pulse (FAIL);
-    in 2.0.x a 0 pulse is "not set", high = low = 5e8 / rate (FT §4, stepper.h of 2.0.9)."""
+def test_marlin_2_0_0_pulse_0_is_not_enforced(capsys: pytest.CaptureFixture[str]) -> None:
+    """Renkforce RF100 (2.0.0) sets MINIMUM_STEPPER_PULSE 0 (adv line 1546). It was read as
+    "not set", high = low = 5e8 / rate: that is the 2020 pulse code. 2.0.0's
+    stepper_pulse_phase_isr waits for the high time only ``#if MINIMUM_STEPPER_PULSE``: a 0
+    pulse is the code between PULSE_START and PULSE_STOP, and no DIR delay is 0 ns of wait.
+    Neither may PASS."""
     cfg = read_firmware(CORPUS / "marlin/200/Renkforce/RF100/Configuration.h")
-    assert cfg.axis("X").pulse.value == 2000  # 5e8 / 250 kHz (no driver type: #else rate)
+    x = cfg.axis("X")
+    assert x.pulse.value is None and x.pulse.status == "not_enforced"
+    assert x.dir_setup.value is None and x.dir_setup.status == "not_enforced"
     assert any("Marlin 2.0" in n for n in cfg.notes)  # the version inferred is stated
     code, doc = _config(capsys, str(CORPUS / "marlin/200/Renkforce/RF100/Configuration.h"),
                         "--drive", "a4988")  # fmt: skip
-    assert _rule(doc, "X", "step_high")["verdict"] == "pass"
+    assert _rule(doc, "X", "step_high")["verdict"] == "indeterminate"
 
 
 def test_marlin_old_tmc_configs_get_their_own_dir_default() -> None:
@@ -141,37 +146,32 @@ def test_marlin_old_tmc_configs_get_their_own_dir_default() -> None:
     assert cfg.axis("X").dir_setup.value == 20
 
 
-def test_marlin_unspecified_drivers_are_a4988() -> None:
-    """1.1.9/2.0.0 files with X_DRIVER_TYPE commented out ("A4988 is assumed for unspecified
-    drivers", the file says) were "not a Marlin Configuration.h"."""
-    cfg = read_firmware(CORPUS / "marlin/119/Creality/Ender-3/Configuration.h")
-    assert cfg.axis_names == ("X", "Y", "Z", "E0") and "A4988" in cfg.axis("X").info["driver type"]
-
-
 @pytest.mark.parametrize(
-    ("file", "pulse_ns", "setup_ns", "idle_ns"),
+    ("file", "pulse_ns", "idle_ns", "hold_ns"),
     [
-        # MINIMUM_STEPPER_PULSE, _POST_DIR_DELAY, _RATE all unset: the #else defaults 2 us,
-        # 0 ns, 250 kHz (the 2.0.x tables, not A4988's 1 us, 200 ns, 500 kHz): low =
-        # max(1e9 / 250 kHz - 2000, 2000)
-        ("marlin/200/Anet/A8/Configuration.h", 2000, 0, 2000),
-        # MINIMUM_STEPPER_PULSE 0 is "not set" before 2.1.3: high = low = 5e8 / 250 kHz
-        ("marlin/200/Renkforce/RF100/Configuration.h", 2000, 0, 2000),
+        # MINIMUM_STEPPER_PULSE, _DIR_DELAY(s), _RATE all unset: the #else defaults 2 us, 0 ns,
+        # 250 kHz (not A4988's 1 us, 200 ns, 500 kHz): low = max(1e9 / 250 kHz - 2000, 2000);
+        # DIR is written after the pulse ended: hold >= the pulse
+        ("marlin/119/Creality/Ender-3/Configuration.h", 2000, 2000, 2000),
+        ("marlin/200/Anet/A8/Configuration.h", 2000, 2000, 2000),
+        # MINIMUM_STEPPER_PULSE 0 in 2.0.0: no high-time wait (see above)
+        ("marlin/200/Renkforce/RF100/Configuration.h", None, None, None),
     ],
 )
-def test_marlin_2_0_0_without_driver_types_uses_the_else_defaults(
-    file: str, pulse_ns: int, setup_ns: int, idle_ns: int
+def test_marlin_without_driver_types_uses_the_else_defaults(
+    file: str, pulse_ns: int | None, idle_ns: int | None, hold_ns: int | None
 ) -> None:
-    """Marlin 2.0.0 files with every X_DRIVER_TYPE commented out were read as A4988s (the
-    file's comment says so). The code decides otherwise: drivers.h of bugfix-2.0.x in 2019
-    (MarlinFirmware/Marlin:Marlin/src/core/drivers.h:51 @ ae1cc796) tests
-    ``defined(A##_DRIVER_TYPE) && …``, so no HAS_DRIVER(T) holds and Conditionals_post.h's
-    ``#else`` branches give the defaults."""
+    """1.1.9 and 2.0.0 files with every X_DRIVER_TYPE commented out were read as A4988s (the
+    file's comment says "A4988 is assumed"). The code decides otherwise: drivers.h tests
+    ``defined(A##_DRIVER_TYPE) && …`` (MarlinFirmware/Marlin:Marlin/drivers.h:43 @ 268245c6 for
+    1.1.x, Marlin/src/core/drivers.h:51 @ ae1cc796 for 2.0.0) and no fallback type is defined
+    before the later 2.0.x Conditionals_LCD.h, so no HAS_DRIVER(T) holds and the ``#else``
+    defaults apply; the 0 ns DIR delay is not enforced."""
     cfg = read_firmware(CORPUS / file)
     x = cfg.axis("X")
     assert "A4988" not in x.info["driver type"]
-    assert (x.pulse.value, x.dir_setup.value) == (pulse_ns, setup_ns)
-    assert x.idle.value == idle_ns
+    assert (x.pulse.value, x.idle.value, x.dir_hold.value) == (pulse_ns, idle_ns, hold_ns)
+    assert x.dir_setup.value is None and x.dir_setup.status == "not_enforced"
     assert not cfg.unsupported
 
 

@@ -141,13 +141,13 @@ def test_measure_says_it_too(grbl_sr: Path) -> None:
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
-    from wavecheck.api import build_options
     from wavecheck.capture.open import open_source
-    from wavecheck.engine.mapping import AxisMap
+    from wavecheck.engine import CheckOptions
     from wavecheck.measurement import measure
     from wavecheck.report.measured_plot import draw_motion, position_unknown
+    from wavecheck.steps.mapping import AxisMap
 
-    m = measure(open_source(grbl_sr), build_options({}, (AxisMap(None, {"step": "1"}),)))
+    m = measure(open_source(grbl_sr), CheckOptions(axes=(AxisMap(None, {"step": "1"}),)))
     (a,) = m.axes
     assert (
         a.steps.count == 10_508 and position_unknown(a.step_type, a.interface, a.steps) == "no DIR"

@@ -16,8 +16,8 @@ from tests.conftest import shared_capture
 from wavecheck.cli import main
 from wavecheck.engine import results
 from wavecheck.engine.judge import FAIL, Judged
-from wavecheck.engine.primitives import Intervals
 from wavecheck.engine.results import RuleResult
+from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
 
 GRBL = "sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr"

@@ -16,12 +16,10 @@ from tests.engine_probe import run_check
 from wavecheck.capture.open import open_capture
 from wavecheck.cli import main
 from wavecheck.drives.library import load_drive
-from wavecheck.engine.decode import StepEvents
 from wavecheck.report.steps_csv import (
-    AxisSteps,
+    StepsCsvWriter,
     decimal_digits,
     format_times,
-    steps_csv_chunks,
 )
 from wavecheck.timebase import Timebase
 
@@ -111,14 +109,28 @@ def test_times_exact_or_within_a_twentieth_of_a_tick(ticks: list[int], num: int,
         assert len(s.partition(".")[2]) == places
 
 
-def test_chunks_do_not_change_the_text() -> None:
+def _written(path: Path, cuts: list[int]) -> str:
+    """Two axes' steps through the streaming writer, handed over in pieces: the steps before
+    each cut, then ``settled(cut)``."""
     d = np.array([1, 1, -1, 1, 0], dtype=np.int8)
-    a = StepEvents(np.array([0, 10, 25, 25, 40]), d, np.cumsum(d, dtype=np.int64))
-    b = StepEvents(np.array([5, 25]), d[:2], np.cumsum(d[:2], dtype=np.int64))
-    axes = [AxisSteps("x", a, Fraction(2)), AxisSteps("y", b)]
-    tb = Timebase(Fraction(1, 10**6))
-    whole = "".join(steps_csv_chunks(axes, tb, chunk=1 << 16))
-    assert "".join(steps_csv_chunks(axes, tb, chunk=2)) == whole
+    x_ticks, y_ticks = np.array([0, 10, 25, 25, 40]), np.array([5, 25])
+    writer = StepsCsvWriter(path, Timebase(Fraction(1, 10**6)), units=True, named={"x"})
+    x, y = writer.sink("x", Fraction(2)), writer.sink("y")
+    done_x = done_y = 0
+    for cut in [*cuts, 1 << 40]:
+        kx, ky = int(np.searchsorted(x_ticks, cut)), int(np.searchsorted(y_ticks, cut))
+        x.add(x_ticks[done_x:kx], d[done_x:kx])
+        y.add(y_ticks[done_y:ky], d[done_y:ky])
+        done_x, done_y = kx, ky
+        writer.settled(cut)
+    writer.close()
+    return path.read_text(encoding="utf-8")
+
+
+def test_pieces_do_not_change_the_text(tmp_path: Path) -> None:
+    whole = _written(tmp_path / "whole.csv", [])
+    for cuts in ([11], [5, 25, 26], [1, 6, 11, 25, 40]):
+        assert _written(tmp_path / "pieces.csv", cuts) == whole, cuts
     rows = list(csv.DictReader(io.StringIO(whole)))
     assert [(r["axis"], r["tick"]) for r in rows] == [
         ("x", "0"),

@@ -16,10 +16,10 @@ from hypothesis import strategies as st
 from tests.bounds import lines_run, peak_bytes
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
-from wavecheck.engine.interface import build_interface, parse_map
 from wavecheck.roles import Proposal, propose
 from wavecheck.roles.dirs import DirFit, assign
 from wavecheck.roles.names import name_hint
+from wavecheck.steps.interface import build_interface, parse_map
 
 from ..waves import capture, pulses, renamed
 

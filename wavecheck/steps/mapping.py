@@ -14,8 +14,8 @@ import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from wavecheck.engine.interface import parse_map, role_name
 from wavecheck.errors import UsageError
+from wavecheck.steps.interface import parse_map, role_name
 
 __all__ = [
     "AxisMap",
@@ -58,7 +58,7 @@ def _split_pairs(item: str) -> list[str]:
 def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
     """Parse ``--map`` values into axes, in the order their names first appear.
 
-    Without any ``AXIS.`` prefix this is one unnamed axis (:func:`wavecheck.engine.interface.parse_map`'s
+    Without any ``AXIS.`` prefix this is one unnamed axis (:func:`wavecheck.steps.interface.parse_map`'s
     rules: a role once, a channel in one role). With prefixes, every prefixed role belongs to its
     axis and every unprefixed one is shared by all axes (only ENABLE may be shared).
 

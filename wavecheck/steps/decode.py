@@ -35,8 +35,8 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine.interface import RoleSignal, StepInterface
 from wavecheck.errors import UsageError
+from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steptypes import StepType, step_type
 
 __all__ = [
@@ -142,7 +142,7 @@ def level_before(
         same[at[hit]] = True
     else:
         # here, not at the top: the checks package imports this module
-        from wavecheck.engine.primitives import sorted_search
+        from wavecheck.steps.primitives import sorted_search
 
         n = sorted_search(edges, ticks, "left")  # dense edges: counted, not searched
         clipped = np.minimum(n, len(edges) - 1)

@@ -1,0 +1,117 @@
+"""The reader errors the Marlin and RepRapFirmware audit (issue 32, corpus_figures.toml) found,
+one test per class, each citing the firmware code that decides it."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+from tools.firmware_corpus import CORPUS
+from wavecheck.firmware import read_firmware
+
+pytestmark = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
+
+
+def _marlin(tmp_path: Path, version: str, conf: str, adv: str = "") -> Path:
+    (tmp_path / "Configuration.h").write_text(
+        f"#define CONFIGURATION_H_VERSION {version}\n#define MOTHERBOARD BOARD_RAMPS_14_EFB\n{conf}"
+    )
+    (tmp_path / "Configuration_adv.h").write_text(
+        f"#define CONFIGURATION_ADV_H_VERSION {version}\n{adv}"
+    )
+    return tmp_path / "Configuration.h"
+
+
+def _types(kind: str) -> str:
+    return "".join(f"#define {a}_DRIVER_TYPE {kind}\n" for a in ("X", "Y", "Z", "E0"))
+
+
+_MOTION = (
+    "#define DEFAULT_AXIS_STEPS_PER_UNIT { 80, 80, 400, 93 }\n"
+    "#define DEFAULT_MAX_FEEDRATE { 300, 300, 5, 25 }\n"
+)
+
+
+@pytest.mark.parametrize(("kind", "both"), [("TMC2100", False), ("TMC2209", True)])
+def test_marlin_tmc2100_is_standalone_so_edge_stepping_is_off(
+    tmp_path: Path, kind: str, both: bool
+) -> None:
+    """Marlin/src/core/drivers.h @ 04e8baa9 lines 97-101: HAS_TRINAMIC_CONFIG counts TMC2130,
+    2160, 2208, 2209, 2660, 5130, 5160; TMC2100 is in HAS_TRINAMIC_STANDALONE (106-111). So
+    EDGE_STEPPING inside ``#if HAS_TRINAMIC_CONFIG`` (Artillery Genius Pro adv 2986-3479) is
+    not defined for a TMC2100: one edge steps. It was read as both edges."""
+    path = _marlin(tmp_path, "02010300", _types(kind) + _MOTION,
+                   "#if HAS_TRINAMIC_CONFIG\n  #define EDGE_STEPPING\n#endif\n")  # fmt: skip
+    assert read_firmware(path).axis("X").both_edges is both
+
+
+def test_marlin_scara_z_is_not_coupled() -> None:
+    """A SCARA's arms couple X and Y; Z passes through (Marlin/src/module/scara.cpp
+    inverse_kinematics: ``delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z)``). Z was left
+    without a rate; 200/SCARA/Morgan lines 743/750: 200/1.25 steps/mm x 30 mm/s."""
+    cfg = read_firmware(CORPUS / "marlin/200/SCARA/Morgan/Configuration.h")
+    assert cfg.axis("Z").max_rate.value == Fraction(200) / Fraction("1.25") * 30 == 4800
+    assert cfg.axis("X").max_rate.status == "uncertain"  # the driver rate only
+
+
+def test_marlin_2_0_0_uses_its_own_table(tmp_path: Path) -> None:
+    """2.0.0's Conditionals_post.h (its Configuration_adv.h documents the same table): the TMC
+    rate is 400 kHz, not the 5 MHz of later releases; with MINIMUM_STEPPER_PULSE 1 the low
+    time is max(1e9 / 400 kHz - 1 us, 1 us) = 1.5 us, not 1 us."""
+    path = _marlin(tmp_path, "020000", _types("TMC2208") + _MOTION,
+                   "#define MINIMUM_STEPPER_PULSE 1\n")  # fmt: skip
+    x = read_firmware(path).axis("X")
+    assert (x.pulse.value, x.idle.value, x.dir_setup.value) == (1000, 1500, 20)
+
+
+def test_marlin_2_0_9_tmc_hold_uses_the_documented_table() -> None:
+    """2.0.9.5 documents TMC DIR 20 ns with a 5 MHz rate (SKR Mini E3 1.2 adv lines 2210-2246):
+    pulse 5e8 / 5 MHz = 100 ns plus PRE 20 ns is a hold of 120 ns; the two tables read before
+    (400 kHz with 20 ns, 5 MHz with 70 ns) gave 170 ns, more than this release may give."""
+    x = read_firmware(CORPUS / "marlin/2097/Creality/Ender-3/BigTreeTech_SKR_Mini_E3_1.2").axis("X")
+    assert (x.pulse.value, x.dir_setup.value, x.dir_hold.value) == (100, 20, 120)
+
+
+def test_marlin_dual_steppers_and_macro_dir_inversion(tmp_path: Path) -> None:
+    """Found by the hand sample: 200/Formbot/T_Rex_3 (adv 548 DUAL_X_CARRIAGE, X2 type left
+    out) lost its X2 stepper; 119/hangprinter (986 ``INVERT_Y_DIR INVERT_B_DIR``) lost Y's DIR
+    inversion because the value names a macro."""
+    path = _marlin(tmp_path, "020000",
+                   "#define INVERT_B true\n#define INVERT_Y_DIR INVERT_B\n" + _MOTION,
+                   "#define DUAL_X_CARRIAGE\n")  # fmt: skip
+    cfg = read_firmware(path)
+    assert "X2" in cfg.axis_names and cfg.axis("Y").dir_inverted
+
+
+def test_rrf_expansion_driver_without_t_is_not_enforced() -> None:
+    """idx_13963938548 lines 25-27: E0/E1 on tool boards 20.0/21.0 without T. Their boards run
+    their own firmware; nothing in the file bounds the pulse (it was a 0.2 us 'uncertain')."""
+    e0 = read_firmware(CORPUS / "rrf/idx_13963938548/config.g").axis("E0")
+    assert e0.pulse.value is None and e0.pulse.status == "not_enforced"
+    assert e0.dir_setup.value is None
+
+
+def test_rrf_default_extruder_needs_m92_or_m203() -> None:
+    """idx_2226796419: M584 X0 Y1:2 Z3 (line 18) puts Z on driver 3, and T on drivers 0-4
+    (26-30) made a default E0 on driver 3 appear, with Z's timing. Without M584 E the extruders
+    are the version's default (2.0x: smart drivers - 3; 3.x NumDefaultExtruders): no E axis is
+    assumed unless the file gives it M92 or M203 values."""
+    assert read_firmware(CORPUS / "rrf/idx_2226796419/config.g").axis_names == ("X", "Y", "Z")
+
+
+def test_rrf_commands_inside_an_if_block_are_not_taken_as_run(tmp_path: Path) -> None:
+    """GenMachine lines 19-35: M584 W50.0 A51.0 and M92 W/A run only ``if (global.closedLoop)``;
+    RepRapFirmware's meta-commands are not evaluated here, so the W/A axes (closed-loop CAN
+    drivers) were claimed unconditionally. The block's motion commands are now left out, and
+    said so; the lines after the block (back at its indentation) are read again."""
+    cfg_g = tmp_path / "config.g"
+    cfg_g.write_text(
+        "M584 X0 Y1 Z2 E3\nif (global.closedLoop)\n    M584 W50.0\n    M92 W26.667\n"
+        "else\n    M92 X100\nM92 X80 Y80 Z400 E420\nM203 X6000 Y6000 Z180 E1200\n"
+    )
+    cfg = read_firmware(cfg_g)
+    assert cfg.axis_names == ("X", "Y", "Z", "E0")
+    assert cfg.axis("X").max_rate.value == 80 * 6000 / 60
+    assert any("block of" in u and ":2" in u for u in cfg.unsupported)
