@@ -20,32 +20,36 @@ import os
 import re
 import sys
 import time
+from typing import Any
 
 DRAIN_S = 60.0
 
-klippy_dir = sys.argv.pop(1)
-sys.path.insert(0, klippy_dir)
-sys.argv[0] = os.path.join(klippy_dir, "klippy.py")
 
-import klippy  # noqa: E402
-import serialhdl  # noqa: E402
-
-_disconnect = serialhdl.SerialReader.disconnect
-
-
-def _pending(reader: serialhdl.SerialReader) -> int:
+def _pending(reader: Any) -> int:
     stats = dict(re.findall(r"(\w+)=(\S+)", reader.stats(0.0)))
     return int(stats.get("ready_bytes", 0)) + int(stats.get("upcoming_bytes", 0))
 
 
-def disconnect(self: serialhdl.SerialReader) -> None:
-    deadline = time.monotonic() + DRAIN_S
-    while self.serialqueue is not None and _pending(self) and time.monotonic() < deadline:
-        time.sleep(0.01)
-    if self.serialqueue is not None and _pending(self):
-        sys.stderr.write(f"klippy_batch: the serial queue did not drain in {DRAIN_S:g} s\n")
-    _disconnect(self)
+def main() -> None:
+    klippy_dir = sys.argv.pop(1)
+    sys.path.insert(0, klippy_dir)
+    sys.argv[0] = os.path.join(klippy_dir, "klippy.py")
+    import klippy
+    import serialhdl
+
+    plain = serialhdl.SerialReader.disconnect
+
+    def disconnect(self: Any) -> None:
+        deadline = time.monotonic() + DRAIN_S
+        while self.serialqueue is not None and _pending(self) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if self.serialqueue is not None and _pending(self):
+            sys.stderr.write(f"klippy_batch: the serial queue did not drain in {DRAIN_S:g} s\n")
+        plain(self)
+
+    serialhdl.SerialReader.disconnect = disconnect
+    klippy.main()
 
 
-serialhdl.SerialReader.disconnect = disconnect
-klippy.main()
+if __name__ == "__main__":
+    main()
