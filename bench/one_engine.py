@@ -4,7 +4,7 @@
 ``bench/many_files.py`` (200 steps each; every tenth with a short DIR setup) in one call,
 ``wavecheck check 'bench/data/many1000/*.vcd' --drive gecko-g202 --map step=STEP,dir=DIR -j 1
 --format json -o REPORT``, with today's tree and with the tree of commit ``--old`` (main before
-issue 23: ``git archive`` into ``bench/data/old-COMMIT/``, run with ``PYTHONPATH`` on it), that
+issue 23: ``git archive`` into ``$TMPDIR/wavecheck-old-COMMIT/``, run with ``PYTHONPATH`` on it), that
 one both as its default (the streamed engine) and with ``--no-stream`` (its whole-capture engine).
 Interleaved run by run; CPU is user + sys of the process. Every capture's verdict and step count
 must agree across the three. Prints one JSON line: CPU and peak RSS per variant, ms of CPU per
@@ -37,8 +37,9 @@ GOAL = 1.0
 
 
 def old_tree(commit: str) -> Path:
-    """``wavecheck``, ``stepgen`` and ``rules`` of ``commit``, unpacked once into ``bench/data/``."""
-    dest = HERE / "data" / f"old-{commit}"
+    """``wavecheck``, ``stepgen`` and ``rules`` of ``commit``, unpacked once under ``$TMPDIR``
+    (not in the checkout: tests/architecture scans every module under ``bench/``)."""
+    dest = Path(tempfile.gettempdir()) / f"wavecheck-old-{commit}"
     if (dest / "wavecheck" / "__init__.py").exists():
         return dest
     tar = subprocess.run(

@@ -48,6 +48,7 @@ from wavecheck.steptypes import StepType
 __all__ = ["run_fast"]
 
 _DESC = 9  #: numbers describing a chunk for pass 2
+_STEPS_BLOCK = 1 << 14  #: steps of fast chunks solved at a time in pass 2
 
 #: A fast chunk that stepped, whose last step is found only when an exact chunk follows:
 #: (k0, m, accum0, a0, sgn, d_eff, span, counts at its end, (timer1, timer2, timer3) loads).
@@ -123,6 +124,7 @@ def run_fast(
     phased = kind.kind == "phases"
     describe = desc.extend
     steady = False
+    limits: tuple[float, float] | None = None  # (max_freq, max_ac) once the clamps settle
 
     # the channel state, as locals (synced with ``ch`` around reference calls)
     accum = ch.accum
@@ -157,27 +159,35 @@ def run_fast(
             u += 1
             if steady:
                 # ---- update-freq, steps 5-9 of §4, inlined (same operations as the model) ----
-                max_freq = 1.0 / (min_step_period * 0.000000001)
-                if maxvel <= 0.0:
-                    maxvel = 0.0
-                else:
-                    desired_freq = maxvel * abs_scale
-                    if desired_freq > max_freq:
-                        if not ch.printed_error:
-                            to_ch()
-                            ch.pos_cmd = ch.vel_cmd = value
-                            comp.update_freq(servo)  # the model prints its warning
-                            raise AssertionError("unreachable: maxvel clamp after settling")
-                        maxvel = max_freq / abs_scale
+                # the clamps, evaluated until one evaluation leaves maxvel and maxaccel as they
+                # were: from then on they give the same limits every period
+                if limits is None:
+                    was = (maxvel, maxaccel)
+                    max_freq = 1.0 / (min_step_period * 0.000000001)
+                    if maxvel <= 0.0:
+                        maxvel = 0.0
                     else:
-                        max_freq = desired_freq
-                max_ac = max_freq * recip_dt
-                if maxaccel <= 0.0:
-                    maxaccel = 0.0
-                elif maxaccel * abs_scale > max_ac:
-                    maxaccel = max_ac / abs_scale
+                        desired_freq = maxvel * abs_scale
+                        if desired_freq > max_freq:
+                            if not ch.printed_error:
+                                to_ch()
+                                ch.pos_cmd = ch.vel_cmd = value
+                                comp.update_freq(servo)  # the model prints its warning
+                                raise AssertionError("unreachable: maxvel clamp after settling")
+                            maxvel = max_freq / abs_scale
+                        else:
+                            max_freq = desired_freq
+                    max_ac = max_freq * recip_dt
+                    if maxaccel <= 0.0:
+                        maxaccel = 0.0
+                    elif maxaccel * abs_scale > max_ac:
+                        maxaccel = max_ac / abs_scale
+                    else:
+                        max_ac = maxaccel * abs_scale
+                    if was == (maxvel, maxaccel):
+                        limits = (max_freq, max_ac)
                 else:
-                    max_ac = maxaccel * abs_scale
+                    max_freq, max_ac = limits
                 if pos_mode:
                     pos_cmd = value * pos_scale
                     new_vel = follow_position(
@@ -320,6 +330,27 @@ def _fast_steps(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c0 = acc0 >> PICKOFF
     c1 = (acc0 + _addval_sum(m, a0, sgn, d, span, full)) >> PICKOFF
     n = np.abs(c1 - c0)
+    # ~_STEPS_BLOCK steps at a time (whole chunks): the per-step temporaries stay small
+    cum = np.cumsum(n)
+    cuts = np.searchsorted(
+        cum, np.arange(_STEPS_BLOCK, int(cum[-1]) if len(n) else 0, _STEPS_BLOCK)
+    )
+    bounds = [0, *sorted(set((cuts + 1).tolist()) - {len(n)}), len(n)]
+    parts = [
+        _chunk_steps(cols[:, a:b], full[a:b], c0[a:b], c1[a:b], n[a:b], a)
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    ]
+    if len(parts) == 1:
+        return parts[0]
+    return tuple(np.concatenate(p) for p in zip(*parts, strict=True))  # type: ignore[return-value]
+
+
+def _chunk_steps(
+    cols: np.ndarray, full: np.ndarray, c0: np.ndarray, c1: np.ndarray, n: np.ndarray, first: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_fast_steps` of the chunks ``first`` … (``full``, ``c0``, ``c1``, ``n``: theirs,
+    computed there)."""
+    k0, m, a0, sgn, d, span, _, _, acc0 = cols
     chunk = np.repeat(np.arange(len(n)), n)
     r = np.arange(1, len(chunk) + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n within a chunk
     q = np.sign(c1 - c0)[chunk]
@@ -344,7 +375,7 @@ def _fast_steps(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             ok = reached(mid, wrong)
             hi, lo = np.where(ok, mid, hi), np.where(ok, lo, mid + 1)
         guess[wrong] = lo
-    return k0[chunk] + guess - 1, chunk, count
+    return k0[chunk] + guess - 1, chunk + first, count
 
 
 def _float_root(

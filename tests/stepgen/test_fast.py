@@ -117,17 +117,23 @@ def fast_chunks(draw):  # type: ignore[no-untyped-def]
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(fast_chunks(), min_size=1, max_size=4), st.sampled_from([None, 0.0, 1e9]))
-def test_fast_steps_are_where_counts_change(chunks, bad_root) -> None:  # type: ignore[no-untyped-def]
+@given(
+    st.lists(fast_chunks(), min_size=1, max_size=4),
+    st.sampled_from([None, 0.0, 1e9]),
+    st.sampled_from([1, 3, fast._STEPS_BLOCK]),
+)
+def test_fast_steps_are_where_counts_change(chunks, bad_root, block) -> None:  # type: ignore[no-untyped-def]
     """The closed-form steps of pass 2 are the periods where accum >> 28 changes, period by
     period. The float root is only a guess, checked exactly: with it wrong everywhere
-    (``bad_root``) the binary search finds the same steps."""
+    (``bad_root``) the binary search finds the same steps. Solved ``block`` steps at a time
+    (whole chunks), the steps are the same."""
     cols = np.array([c for c, _ in chunks], dtype=np.int64).T
-    if bad_root is None:
-        at, chunk, count = fast._fast_steps(cols)
-    else:
-        with mock.patch.object(fast, "_float_root", lambda *a: np.full(len(a[0]), bad_root)):
+    with mock.patch.object(fast, "_STEPS_BLOCK", block):
+        if bad_root is None:
             at, chunk, count = fast._fast_steps(cols)
+        else:
+            with mock.patch.object(fast, "_float_root", lambda *a: np.full(len(a[0]), bad_root)):
+                at, chunk, count = fast._fast_steps(cols)
     want_at, want_chunk, want_count = [], [], []
     for ci, (desc, adds) in enumerate(chunks):
         accum = desc[8]

@@ -8,7 +8,7 @@ import argparse
 import sys
 from fractions import Fraction
 
-from wavecheck.cli.linuxcnc import add_file_arguments
+from wavecheck.cli._linuxcnc_args import add_file_arguments
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config
 from wavecheck.units import BASE_PERIOD, LATENCY, option_ns

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
+import tomllib
 from fractions import Fraction
 from pathlib import Path
 
 import pytest
+import rtoml
 
 from wavecheck.drives.datasheet import Drive
 from wavecheck.drives.library import list_drives, load_drive, rules_dir
@@ -271,6 +274,60 @@ def test_malformed_file_names_file_and_key(
     if key is not None:
         assert exc.value.key == key
         assert f": {key}: " in msg
+
+
+@pytest.mark.parametrize("path", RULE_FILES, ids=lambda p: p.stem)
+def test_rtoml_reads_every_rule_file_as_tomllib_does(path: Path) -> None:
+    # the library parses with rtoml (start-up, issue 38); tomllib is the reference
+    text = path.read_text(encoding="utf-8")
+    fast, slow = rtoml.loads(text), tomllib.loads(text)
+    assert fast == slow
+    assert json.dumps(fast) == json.dumps(slow)  # key order too: tables and figures keep theirs
+
+
+# TOML that both parsers must refuse; the message is tomllib's ("… (at line L, column C)")
+NOT_TOML = [
+    'value = "2us',  # unterminated string
+    "a = 1\na = 2",  # duplicate key
+    "a = ",  # no value
+    "[t]\n[t]",  # table defined twice
+    "a = 1 b = 2",  # two pairs on one line
+    "a = 01",  # leading zero
+    "a = 1__0",  # double underscore
+    "a = [1, 2",  # unterminated array
+    'a = "\\q"',  # unknown escape
+    "a = 1979-13-01",  # no month 13
+    "a.b = 1\na = 2",  # a table overwritten by a value
+    "a = tru",  # not a boolean
+]
+
+
+# TOML 1.1 forms (and a leading byte-order mark) that rtoml reads and tomllib (TOML 1.0) refuses:
+# a rule file may use them (rules/README.md)
+TOML_11 = [
+    ("a = { b = 1, }", {"a": {"b": 1}}),
+    ("a = {\n  b = 1 }", {"a": {"b": 1}}),
+    ('a = "\\x41\\e"', {"a": "A\x1b"}),
+    ("\ufeffa = 1", {"a": 1}),
+]
+
+
+@pytest.mark.parametrize(("text", "data"), TOML_11)
+def test_toml_11_forms_are_read(text: str, data: dict[str, object]) -> None:
+    with pytest.raises(tomllib.TOMLDecodeError):
+        tomllib.loads(text)
+    assert rtoml.loads(text) == data
+
+
+@pytest.mark.parametrize("text", NOT_TOML)
+def test_invalid_toml_is_refused_with_tomllibs_message(tmp_path: Path, text: str) -> None:
+    with pytest.raises(tomllib.TOMLDecodeError) as ref:
+        tomllib.loads(text)
+    path = tmp_path / "bad.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(RuleError) as exc:
+        load_drive(str(path))
+    assert str(exc.value) == f"{path}: not valid TOML: {ref.value}"
 
 
 def test_missing_file_is_a_rule_error(tmp_path: Path) -> None:
