@@ -18,6 +18,7 @@ import numpy as np
 
 from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture
+from wavecheck.compare import StepCollector
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.engine.judge import FAIL, INDETERMINATE, evaluate
@@ -26,7 +27,7 @@ from wavecheck.engine.outcome import Report
 from wavecheck.engine.resolve import AxisPlan
 from wavecheck.engine.results import RuleResult
 from wavecheck.engine.run import check_source
-from wavecheck.engine.sinks import StepCollector, StepSink
+from wavecheck.engine.sinks import StepSink
 from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import Rule
 from wavecheck.steps.decode import StepEvents

@@ -34,18 +34,12 @@ from fractions import Fraction
 from typing import Literal
 
 import numpy as np
+import numpy.typing as npt
 
-from wavecheck.capture.edges import Capture
+from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine import (
-    AxisPlan,
-    CheckOptions,
-    MachineReport,
-    Report,
-    StepCollector,
-    StepSink,
-    check_capture,
-)
+from wavecheck.engine import CheckOptions, MachineReport, Report, StepSink, check_capture
+from wavecheck.engine.planning import AxisPlan
 from wavecheck.errors import UsageError
 from wavecheck.steps.decode import StepEvents
 from wavecheck.steps.mapping import AxisMap
@@ -391,6 +385,27 @@ def compare_axes(
             for r, s in zip(checked.axes, steps, strict=True)
         ]
     )
+
+
+class StepCollector:
+    """A step sink that keeps every step (memory follows the number of steps), for the
+    step-by-step comparison; the engine's tests use it as their oracle."""
+
+    def __init__(self) -> None:
+        self._ticks: list[EdgeArray] = []
+        self._dirs: list[npt.NDArray[np.int8]] = []
+
+    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None:
+        if len(ticks):
+            self._ticks.append(ticks.copy())
+            self._dirs.append(direction.copy())
+
+    def events(self) -> StepEvents:
+        """The steps so far: ticks, directions and running positions."""
+        ticks = np.concatenate(self._ticks) if self._ticks else np.zeros(0, dtype=np.int64)
+        dirs = np.concatenate(self._dirs) if self._dirs else np.zeros(0, np.int8)
+        self._ticks, self._dirs = [ticks], [dirs]
+        return StepEvents(ticks, dirs, np.cumsum(dirs, dtype=np.int64))
 
 
 def _checked(

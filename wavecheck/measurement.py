@@ -26,7 +26,9 @@ import numpy as np
 from wavecheck.capture.blocks import BlockSource, MemorySource
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import AxisPlan, CheckOptions, StepCounts, StepSink, StepTrace, start
+from wavecheck.engine import CheckOptions, StepSink, start
+from wavecheck.engine.parts import StepCounts, StepTrace
+from wavecheck.engine.planning import AxisPlan
 from wavecheck.rules import Rule
 from wavecheck.steps.interface import StepInterface
 from wavecheck.steps.primitives import Intervals

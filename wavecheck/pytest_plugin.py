@@ -658,7 +658,7 @@ class AxisCollector(CaptureCollector):
 def _rules_of(drive_ref: str, type_number: int | None) -> list[str]:
     """The rules a check against ``drive_ref`` will evaluate, known without reading the capture."""
     from wavecheck.drives.library import load_drive
-    from wavecheck.engine import default_step_type, planned_rules
+    from wavecheck.engine.planning import default_step_type, planned_rules
     from wavecheck.steptypes import step_type
 
     drive = load_drive(drive_ref)

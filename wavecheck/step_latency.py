@@ -27,7 +27,8 @@ def step_channels(capture: Capture, options: CheckOptions) -> tuple[list[str], d
     Raises:
         UsageError: the axis options do not fit the capture.
     """
-    from wavecheck.engine import axes_for, plan_axes
+    from wavecheck.engine import axes_for
+    from wavecheck.engine.planning import plan_axes
 
     axes, _ = axes_for(options, capture)
     names: list[str] = []

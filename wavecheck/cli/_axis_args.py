@@ -15,7 +15,7 @@ from typing import Any
 from wavecheck.capture.blocks import WHOLE
 from wavecheck.cli._tuning_args import required
 from wavecheck.drives.datasheet import Drive
-from wavecheck.engine import DEFAULT_BLOCK_EDGES, CheckOptions
+from wavecheck.engine import CheckOptions
 from wavecheck.errors import UsageError
 from wavecheck.steps.mapping import parse_axes, split_per_axis
 
@@ -132,7 +132,7 @@ def add_engine_arguments(p: Any) -> None:
         default=None,
         metavar="N",
         help="check about N edges at a time (memory follows N, not the capture's length; "
-        f"default {DEFAULT_BLOCK_EDGES}); the results do not depend on it",
+        f"default {CheckOptions.block_edges}); the results do not depend on it",
     )
     p.add_argument(
         "--no-stream",
@@ -185,7 +185,7 @@ def check_options(args: argparse.Namespace, *, with_drive: bool = True) -> Check
         stepgen=stepgen_config(args) if with_drive else None,
         latency_ns=latency_ns(args) if with_drive else None,
         keep_violations=kept_violations(args),
-        block_edges=DEFAULT_BLOCK_EDGES if block is None else block,
+        block_edges=CheckOptions.block_edges if block is None else block,
         pictures=any(getattr(args, k, None) for k in ("plot", "html", "gtkw", "pulseview")),
         require=required(args),
     )

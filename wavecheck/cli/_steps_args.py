@@ -12,7 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.capture.blocks import BlockSource
-from wavecheck.engine import AxisPlan, StepSink
+from wavecheck.engine import StepSink
+from wavecheck.engine.planning import AxisPlan
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of

@@ -26,7 +26,7 @@ import numpy as np
 from wavecheck.capture.edges import Capture
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.cli._formats import Formats
-from wavecheck.engine import auto_map
+from wavecheck.engine.planning import auto_map
 from wavecheck.errors import UnitError, UsageError
 from wavecheck.follow import (
     Command,

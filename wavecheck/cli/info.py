@@ -27,7 +27,7 @@ from wavecheck.cli._capture_args import (
     resolution_from_args,
 )
 from wavecheck.cli._formats import Formats, json_text
-from wavecheck.engine import resolve_resolution_ns
+from wavecheck.engine.planning import resolve_resolution_ns
 from wavecheck.report.text import note_line
 from wavecheck.units import format_frequency, format_time, json_number
 

@@ -11,21 +11,18 @@ exactly (:mod:`.judge`), and merged window by window into one result per rule (:
 results is fed as the engine runs (:mod:`.sinks`, :mod:`.trace`, :mod:`.windows`), and
 :mod:`.outcome` holds the reports.
 
-The names below are the engine's face for the rest of the package (``tests/architecture/
-test_engine_door.py`` forbids importing its modules from outside it). They load on first use,
-as ``wavecheck``'s own names do, so importing one costs only its module.
+The names below are the engine's face for the rest of the package; two side doors give what
+a few users need beyond it: :mod:`.planning` (plan and judge without running) and :mod:`.parts`
+(the parts of a report beyond its rules). ``tests/architecture/test_engine_door.py`` forbids
+importing any other module of the engine from outside it. The names load on first use, as
+``wavecheck``'s own names do, so importing one costs only its module.
 
-- ask: :class:`CheckOptions` (:data:`DEFAULT_BLOCK_EDGES`);
+- ask: :class:`CheckOptions`;
 - run: :func:`check_source` (a block source), :func:`check_capture` (a capture in memory),
-  :func:`start` (block by block, with step sinks), and for a live check :func:`axes_for`,
-  :func:`needs_waveforms`, :func:`machine_for`, :class:`MachineCheck`;
-- plan without running: :func:`plan_axes`, :class:`AxisPlan`, :func:`auto_map`,
-  :func:`default_step_type`, :func:`resolve_resolution_ns`, :func:`planned_rules`;
+  :func:`start` (block by block, with step sinks, :class:`StepSink`), and for a live check
+  :func:`axes_for`, :func:`needs_waveforms`, :func:`machine_for`, :class:`MachineCheck`;
 - read the results: :class:`Report`, :class:`MachineReport`, :class:`RuleResult`,
-  :class:`StepCounts`, :class:`Violation`, :class:`Histogram`, :class:`StepTrace`;
-- judge one interval as the engine does (the PulseView decoder): :func:`figure_of`,
-  :func:`thresholds`, :func:`pulse_level`;
-- steps on the way: :class:`StepSink`, :class:`StepCollector`.
+  :class:`Violation`.
 """
 
 from __future__ import annotations
@@ -34,20 +31,10 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from wavecheck.engine.intervals import figure_of, planned_rules
-    from wavecheck.engine.judge import Histogram, Violation
-    from wavecheck.engine.judge import _thresholds as thresholds
-    from wavecheck.engine.options import DEFAULT_BLOCK_EDGES, CheckOptions
+    from wavecheck.engine.judge import Violation
+    from wavecheck.engine.options import CheckOptions
     from wavecheck.engine.outcome import MachineReport, Report
-    from wavecheck.engine.rates import pulse_level
-    from wavecheck.engine.resolve import (
-        AxisPlan,
-        auto_map,
-        default_step_type,
-        plan_axes,
-        resolve_resolution_ns,
-    )
-    from wavecheck.engine.results import RuleResult, StepCounts
+    from wavecheck.engine.results import RuleResult
     from wavecheck.engine.run import (
         MachineCheck,
         axes_for,
@@ -57,13 +44,11 @@ if TYPE_CHECKING:
         needs_waveforms,
         start,
     )
-    from wavecheck.engine.sinks import StepCollector, StepSink
-    from wavecheck.engine.trace import StepTrace
+    from wavecheck.engine.sinks import StepSink
 
-#: The modules of the face, each with the names it gives: the name it has there, but
-#: ``thresholds`` (``_RENAMED``), which is :func:`.judge._thresholds`.
+#: The modules of the face, each with the names it gives.
 _MODULES: dict[str, tuple[str, ...]] = {
-    "options": ("CheckOptions", "DEFAULT_BLOCK_EDGES"),
+    "options": ("CheckOptions",),
     "run": (
         "check_source",
         "check_capture",
@@ -73,46 +58,27 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "axes_for",
         "needs_waveforms",
     ),
-    "resolve": ("plan_axes", "AxisPlan", "auto_map", "default_step_type", "resolve_resolution_ns"),
     "outcome": ("Report", "MachineReport"),
-    "results": ("RuleResult", "StepCounts"),
-    "judge": ("Violation", "Histogram", "thresholds"),
-    "intervals": ("figure_of", "planned_rules"),
-    "rates": ("pulse_level",),
-    "sinks": ("StepSink", "StepCollector"),
-    "trace": ("StepTrace",),
+    "results": ("RuleResult",),
+    "judge": ("Violation",),
+    "sinks": ("StepSink",),
 }
 _FACE = {name: module for module, names in _MODULES.items() for name in names}
-_RENAMED = {"thresholds": "_thresholds"}
 
 __all__ = [
-    "AxisPlan",
     "CheckOptions",
-    "DEFAULT_BLOCK_EDGES",
-    "Histogram",
     "MachineCheck",
     "MachineReport",
     "Report",
     "RuleResult",
-    "StepCollector",
-    "StepCounts",
     "StepSink",
-    "StepTrace",
     "Violation",
-    "auto_map",
     "axes_for",
     "check_capture",
     "check_source",
-    "default_step_type",
-    "figure_of",
     "machine_for",
     "needs_waveforms",
-    "plan_axes",
-    "planned_rules",
-    "pulse_level",
-    "resolve_resolution_ns",
     "start",
-    "thresholds",
 ]
 
 
@@ -121,7 +87,7 @@ def __getattr__(name: str) -> Any:
     if where is None:
         raise AttributeError(f"module 'wavecheck.engine' has no attribute {name!r}")
     module = importlib.import_module(f"wavecheck.engine.{where}")
-    value = getattr(module, _RENAMED.get(name, name))
+    value = getattr(module, name)
     globals()[name] = value
     return value
 

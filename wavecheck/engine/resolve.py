@@ -23,6 +23,7 @@ from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
 from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine.intervals import figure_of, planned_rules
 from wavecheck.engine.options import CheckOptions, for_axis
+from wavecheck.engine.rates import pulse_level
 from wavecheck.errors import UsageError
 from wavecheck.linuxcnc.stepgen_config import ConfigRates, config_rates
 from wavecheck.rules import RULE_IDS, Rule, applicable
@@ -265,13 +266,6 @@ LevelBasis = Literal["stated", "seen", "assumed"]
 LEVEL_EDGES = 4096
 
 
-def _pulse_level(iface: StepInterface, st: StepType, generator_level: int) -> int:
-    """The level of the generator's pulses at the drive's input: ``generator_level``, flipped
-    when the pulse roles are inverted."""
-    inverted = any(s.inverted for s in (iface.get(r) for r in st.pulse_roles) if s is not None)
-    return generator_level ^ int(inverted)
-
-
 def pulse_level_seen(plan: AxisPlan, capture: Capture, before: int) -> int | None:
     """The level of the pulses at the drive's input as the waveform shows it, or None when it
     does not. A step generator makes pulses of one width and varies the gaps between them with
@@ -400,7 +394,7 @@ def plan_axis(
         interface=iface,
         active_edge=edge,
         forward_level=0 if forward is None else forward,
-        level=_pulse_level(iface, st, 1 if options.pulse_level is None else options.pulse_level),
+        level=pulse_level(iface, st, 1 if options.pulse_level is None else options.pulse_level),
         level_basis="assumed" if options.pulse_level is None else "stated",
         resolution_ns=resolution_ns,
         user_table=options.user_table,

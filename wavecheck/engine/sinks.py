@@ -1,9 +1,10 @@
 """What needs more of a check than its results: step and interval sinks the engine feeds.
 
 The engine keeps, per rule, only mergeable results (:mod:`wavecheck.engine.results`). Whatever
-needs every step (``--steps-csv``, ``compare``, ``follow``, the common-timer note, the plot's step
-trace) or every interval (``wavecheck measure``'s percentiles) is a *sink*: the engine hands it each
-window's new steps or intervals, in time order, once each, and keeps nothing for it.
+needs every step (``--steps-csv``, ``compare``'s :class:`~wavecheck.compare.StepCollector`,
+``follow``, the common-timer note, the plot's step trace) or every interval (``wavecheck
+measure``'s percentiles) is a *sink*: the engine hands it each window's new steps or intervals,
+in time order, once each, and keeps nothing for it.
 """
 
 from __future__ import annotations
@@ -15,10 +16,9 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.rules import Rule
-from wavecheck.steps.decode import StepEvents
 from wavecheck.steps.primitives import Intervals
 
-__all__ = ["IntervalSink", "StepCollector", "StepSink", "TimerSample"]
+__all__ = ["IntervalSink", "StepSink", "TimerSample"]
 
 _EMPTY = np.zeros(0, dtype=np.int64)
 
@@ -33,27 +33,6 @@ class IntervalSink(Protocol):
     """Takes each window's complete, known intervals of each measured rule (not judged)."""
 
     def add_intervals(self, rule: Rule, intervals: Intervals) -> None: ...
-
-
-class StepCollector:
-    """Every step, kept (memory follows the number of steps): ``compare``, ``follow`` and the
-    tests read :meth:`events`."""
-
-    def __init__(self) -> None:
-        self._ticks: list[EdgeArray] = []
-        self._dirs: list[npt.NDArray[np.int8]] = []
-
-    def add(self, ticks: EdgeArray, direction: npt.NDArray[np.int8]) -> None:
-        if len(ticks):
-            self._ticks.append(ticks.copy())
-            self._dirs.append(direction.copy())
-
-    def events(self) -> StepEvents:
-        """The steps so far: ticks, directions and running positions."""
-        ticks = np.concatenate(self._ticks) if self._ticks else _EMPTY.copy()
-        dirs = np.concatenate(self._dirs) if self._dirs else np.zeros(0, np.int8)
-        self._ticks, self._dirs = [ticks], [dirs]
-        return StepEvents(ticks, dirs, np.cumsum(dirs, dtype=np.int64))
 
 
 class TimerSample:

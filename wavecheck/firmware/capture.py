@@ -20,7 +20,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from wavecheck.drives.datasheet import ActiveEdge
-from wavecheck.engine import pulse_level
+from wavecheck.engine.planning import pulse_level
 from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed
 from wavecheck.rules import rate_rule, width_rule
 from wavecheck.steps.interface import StepInterface

@@ -33,7 +33,7 @@ from wavecheck.errors import UsageError
 from wavecheck.steps.mapping import per_axis
 
 if TYPE_CHECKING:
-    from wavecheck.engine import AxisPlan
+    from wavecheck.engine.planning import AxisPlan
 
 __all__ = ["SampleRing", "Snippets", "replay_arguments", "stored_arguments"]
 

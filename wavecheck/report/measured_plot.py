@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine import StepCounts, StepTrace
+from wavecheck.engine.parts import StepCounts, StepTrace
 from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
 from wavecheck.steps.interface import StepInterface
 from wavecheck.steptypes import StepType

@@ -339,7 +339,7 @@ def _log_x(ax: Axes, lo: float, hi: float, limit: float) -> bool:
 def binned(r: RuleResult) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], list[int]]:
     """A rule's fixed bins (:meth:`RuleResult.histogram`, four per octave of ticks) as
     (left edges in ns, right edges in ns, counts); the bin of lengths ≤ 0 spans [0, 1 tick)."""
-    from wavecheck.engine import Histogram
+    from wavecheck.engine.parts import Histogram
 
     hist = r.histogram()
     pairs = hist.counts if hist is not None else ()

@@ -34,16 +34,10 @@ from wavecheck.capture.edges import Capture, Channel
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.drives.library import load_drive
 from wavecheck.drives.overrides import tune_drive
-from wavecheck.engine import (
-    CheckOptions,
-    MachineCheck,
-    RuleResult,
-    default_step_type,
-    figure_of,
-    machine_for,
-)
-from wavecheck.engine import pulse_level as level_at_drive
-from wavecheck.engine import thresholds as engine_thresholds
+from wavecheck.engine import CheckOptions, MachineCheck, RuleResult, machine_for
+from wavecheck.engine.planning import default_step_type, figure_of
+from wavecheck.engine.planning import pulse_level as level_at_drive
+from wavecheck.engine.planning import thresholds as engine_thresholds
 from wavecheck.errors import UsageError
 from wavecheck.rules import Rule, applicable
 from wavecheck.steps.interface import build_interface, role_name

@@ -1,6 +1,6 @@
 """A report draws the position / step-rate panel from a thinned trace of the steps.
 
-The oracle is every step, as a step sink collects them (:class:`wavecheck.engine.sinks.StepCollector`,
+The oracle is every step, as a step sink collects them (:class:`wavecheck.compare.StepCollector`,
 :class:`wavecheck.steps.decode.StepEvents`). On the corpus and under hypothesis, at block sizes
 from one event up: every position point of the thinned trace lies on the whole position curve,
 each bucket's range is the whole curve's range there, every rate point is one of the whole
@@ -26,11 +26,11 @@ from tests.wavecheck.engine.corpus import GOLDEN, GOLDEN_CASES, ROOT
 from wavecheck.capture.blocks import WHOLE, MemorySource
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.open import open_capture
+from wavecheck.compare import StepCollector
 from wavecheck.drives.library import load_drive
 from wavecheck.engine.options import CheckOptions
 from wavecheck.engine.outcome import Report
 from wavecheck.engine.run import check_source
-from wavecheck.engine.sinks import StepCollector
 from wavecheck.engine.trace import MAX_BUCKETS, REVERSALS_KEPT, StepTrace
 from wavecheck.report.measured_plot import MAX_MARKS
 from wavecheck.report.plot import figure

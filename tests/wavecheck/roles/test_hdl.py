@@ -16,7 +16,8 @@ import pytest
 from tests.engine_probe import options
 from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
-from wavecheck.engine import axes_for, plan_axes
+from wavecheck.engine import axes_for
+from wavecheck.engine.planning import plan_axes
 from wavecheck.errors import UsageError
 from wavecheck.roles import Proposal, propose
 

@@ -14,7 +14,7 @@ from tests.conftest import write_vcd
 from tests.engine_probe import run_check
 from wavecheck.capture.edges import Capture
 from wavecheck.cli import main
-from wavecheck.engine import auto_map
+from wavecheck.engine.planning import auto_map
 from wavecheck.errors import UsageError
 from wavecheck.roles import name_conflicts, propose
 from wavecheck.steptypes import step_type
