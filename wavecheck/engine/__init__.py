@@ -1,4 +1,4 @@
-"""The one engine: edge blocks in, per-axis results out. Import it from here, not its modules.
+"""The one engine: edge blocks in, per-axis results out. Import it from here (or a side door).
 
 A capture (a file read block by block, a pipe, a live device, a simulation, a capture already in
 memory) is a :class:`~wavecheck.capture.blocks.BlockSource`. What a check is asked is one options

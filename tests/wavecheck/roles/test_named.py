@@ -1,7 +1,7 @@
 """Channels named after their roles (``step``, ``up``, ``down``): a name is a hint, not evidence
 (issue 33). A line so named whose waveform makes no step pulses (a free-running clock, a bus's
 clock or data, not one whole pulse) is refused with the reason and the lines most like a STEP,
-both by :func:`wavecheck.roles.propose` (``info``) and by :func:`wavecheck.engine.auto_map`
+both by :func:`wavecheck.roles.propose` (``info``) and by :func:`wavecheck.engine.planning.auto_map`
 (``check``); pulses the waveform cannot tell from steps (a few, at one rate) keep the name."""
 
 from __future__ import annotations
