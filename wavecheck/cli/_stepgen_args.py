@@ -7,11 +7,14 @@ from __future__ import annotations
 import argparse
 import sys
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from wavecheck.cli.linuxcnc import add_file_arguments
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config
 from wavecheck.units import BASE_PERIOD, LATENCY, option_ns
+
+if TYPE_CHECKING:  # imported where used: only with a stepgen configuration
+    from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 
 __all__ = ["add_stepgen_arguments", "latency_ns", "stepgen_config"]
 
@@ -49,6 +52,8 @@ _CONFIG_OPTIONS = {
 
 def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
     """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given)."""
+    from wavecheck.linuxcnc.stepgen_config import read_config
+
     cfg = None
     given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
     if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):

@@ -19,7 +19,6 @@ up to the cap is listed one by one (the text and HTML reports group identical on
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
@@ -202,5 +201,7 @@ def render_json(
     report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP, require: Sequence[str] = ()
 ) -> str:
     """The JSON report as text (indented, ending in a newline)."""
+    import json  # here: ``check``'s text report loads this module for its constants only
+
     data = report_dict(report, violation_cap, require)
     return json.dumps(data, indent=2, ensure_ascii=False) + "\n"
