@@ -10,7 +10,7 @@ setup: $(VENV_STAMP) system-deps
 $(VENV_STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv .venv
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[test]'
+	$(PY) -m pip install -q -e '.[test,klipper]'
 	$(PY) -m compileall -q wavecheck stepgen tools  # an editable install compiles nothing: 0.5 s -> 0.2 s start-up (bench/README.md)
 	@touch $@
 

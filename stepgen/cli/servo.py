@@ -8,7 +8,7 @@ servo``: motor, load, encoder; its A/B quadrature goes to the VCD). Prints the f
 diverges and the run stops) and, for a constant command (a step), the step response figures;
 ``--plot`` draws them. ``-o`` takes ``.vcd`` or ``.sr`` (the encoder's ``phase-A``/``phase-B``
 for the servo plant). With ``--ini``/``--hal``, the gains and limits the files set fill the
-options not given (:mod:`stepgen.cli.linuxcnc`); the pins they leave unset keep the pid
+options not given (:mod:`stepgen.cli.linuxcnc_options`); the pins they leave unset keep the pid
 component's defaults, while a run without files assumes pncconf's P = 1/servo period, FF1 = 1.
 """
 

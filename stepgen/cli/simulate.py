@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from stepgen.cli.linuxcnc import add_simulate_arguments, apply_to_simulate_args
+from stepgen.cli.linuxcnc_options import add_simulate_arguments, apply_to_simulate_args
 from stepgen.cli.pid_options import add_servo_loop_arguments
 from stepgen.lateness import DEFAULT_CATCHUP_NS, parse_latency
 from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion

@@ -107,7 +107,7 @@ def test_each_rule_is_declared_once_in_the_rule_table() -> None:
 #: under ``TYPE_CHECKING`` count: they are dependencies too.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("base", ("wavecheck.errors", "wavecheck.units", "wavecheck.verdict", "wavecheck.timebase",
-              "wavecheck.progress", "wavecheck.output")),
+              "wavecheck.progress", "wavecheck.output", "wavecheck.config_text")),
     ("vocabulary", ("wavecheck.steptypes", "wavecheck.rules")),
     ("drives", ("wavecheck.drives",)),
     ("linuxcnc", ("wavecheck.linuxcnc",)),

@@ -49,7 +49,7 @@ COMMANDS = {
     ),
     "simulate": Command(
         "wavecheck.cli.simulate",
-        "run grbl on a simulated MCU: its own STEP/DIR pins from settings and G-code, checked",
+        "run grbl or Klipper on a simulated MCU: its own STEP/DIR pins from the G-code, checked",
     ),
     "sigrok": Command(
         "wavecheck.cli.sigrok",

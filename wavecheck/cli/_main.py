@@ -38,8 +38,24 @@ class Command(NamedTuple):
 class _Parser(argparse.ArgumentParser):
     """argparse with the project's one-line usage errors (exit code 2)."""
 
+    intermixed = False
+    """Positionals may follow options (``config HAL --drive X INI``): argparse's plain parse
+    takes an optional positional as absent at the first option and then refuses it."""
+    _mixing = False
+
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        if not self.intermixed or self._mixing:
+            return super().parse_known_args(args, namespace)
+        self._mixing = True  # parse_known_intermixed_args calls parse_known_args itself
+        try:
+            return self.parse_known_intermixed_args(args, namespace)
+        finally:
+            self._mixing = False
 
 
 def run_cli(

@@ -9,7 +9,7 @@ import sys
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from wavecheck.cli.linuxcnc import add_file_arguments
+from wavecheck.cli._linuxcnc_args import add_file_arguments
 from wavecheck.errors import UsageError
 from wavecheck.units import BASE_PERIOD, LATENCY, option_ns
 

@@ -76,6 +76,7 @@ def register(sub: Any) -> None:
     p.add_argument(
         "-o", "--output", type=output_file, metavar="FILE", help="write the report to FILE"
     )
+    p.intermixed = True  # LinuxCNC's INI may follow the options
     p.set_defaults(func=run)
 
 

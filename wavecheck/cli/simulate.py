@@ -1,11 +1,15 @@
-"""``wavecheck simulate grbl --gcode JOB.nc --vcd OUT.vcd --drive ID``: run the real firmware on a
-simulated MCU, record its STEP/DIR/ENABLE pins, and check them like a capture.
+"""``wavecheck simulate grbl --gcode JOB.nc --vcd OUT.vcd --drive ID`` (and ``simulate klipper
+--config printer.cfg --gcode JOB.gcode ...``): run the real firmware on a simulated MCU, record its
+STEP/DIR/ENABLE pins, and check them like a capture.
 
-The firmware is built from its source (``--grbl-src``, with the user's ``--config-h``) or taken as
+grbl is built from its source (``--grbl-src``, with the user's ``--config-h``) or taken as
 an ELF (``--elf``), run on simavr with wavecheck's timing fixes (``wavecheck/mcu/simavr``, a
 separate GPL-3.0-or-later program), fed ``--settings`` and the G-code over its UART, and its pins
 written to ``--vcd`` with the cycle of every change. Then the VCD is checked by ``check``'s engine
-with every option ``check`` has, and against the ``$$`` settings grbl printed back.
+with every option ``check`` has, and against the ``$$`` settings grbl printed back. Klipper is
+built from ``--klipper-src`` with the user's ``--kconfig`` (or taken as ``--elf`` and ``--dict``);
+klippy turns the G-code into the MCU's messages in batch mode, and the simulated MCU gets them as
+its move queue makes room (``wavecheck/mcu/klipper.py``).
 
 Exit codes as ``check``: 0 pass, 1 a rule failed, 3 indeterminate, 2 unusable input (a firmware
 without the banner, rejected G-code, an ELF for another MCU, a run over its simulated or wall
@@ -15,9 +19,7 @@ time).
 from __future__ import annotations
 
 import argparse
-import os
 import tempfile
-from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -27,20 +29,21 @@ from wavecheck.cli._check_flow import run_check
 from wavecheck.cli._firmware_args import add_firmware_arguments
 from wavecheck.cli._formats import FORMATS
 from wavecheck.cli._reports import add_report_arguments
+from wavecheck.cli._simulate_args import seconds as _seconds
+from wavecheck.cli._simulate_args import source as _source
 from wavecheck.cli._steps_args import add_steps_arguments
 from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.sigrok.session import add_pulseview_argument
-from wavecheck.units import parse_frequency, parse_time
+from wavecheck.units import parse_frequency
 
 __all__ = ["register", "run"]
 
-#: Where the project's tests keep the public sources (a user names their own checkout).
-_SHARED = Path("..") / "shared" / "firmware-src"
-_DEFAULTS = {
-    "grbl_src": ("WAVECHECK_GRBL_SRC", _SHARED / "grbl-1.1h"),
-    "simavr_src": ("WAVECHECK_SIMAVR_SRC", _SHARED / "simavr"),
+#: Options of one firmware only.
+_ONLY = {
+    "grbl": ("settings", "config_h", "settings_out", "check_settings", "grbl_src"),
+    "klipper": ("config", "kconfig", "dict", "klipper_src"),
 }
 
 
@@ -48,13 +51,34 @@ def register(sub: Any) -> None:
     """Add the ``simulate`` subcommand."""
     p = sub.add_parser(
         "simulate",
-        description="Run grbl on a simulated ATmega328P (simavr with exact cycle timing), feed it "
-        "settings and G-code over its UART, record its STEP/DIR/ENABLE pins to a VCD and check "
-        "them against a drive like a capture. Exit 0 pass, 1 a rule failed, 3 indeterminate, "
-        "2 unusable input.",
+        description="Run grbl (ATmega328P) or Klipper (ATmega644P/2560) on a simulated MCU "
+        "(simavr with exact cycle timing), feed it the job over its UART, record its "
+        "STEP/DIR/ENABLE pins to a VCD and check them against a drive like a capture. Exit 0 "
+        "pass, 1 a rule failed, 3 indeterminate, 2 unusable input.",
     )
-    p.add_argument("firmware_name", metavar="FIRMWARE", choices=["grbl"], help="grbl")
+    p.add_argument(
+        "firmware_name", metavar="FIRMWARE", choices=["grbl", "klipper"], help="grbl or klipper"
+    )
     p.add_argument("--gcode", required=True, metavar="FILE", help="the G-code job")
+    p.add_argument(
+        "--config", metavar="FILE", help="klipper: the printer.cfg klippy runs the job with"
+    )
+    p.add_argument(
+        "--kconfig",
+        metavar="FILE",
+        help="klipper: build with this .config (make menuconfig's; default: an ATmega644P at 16 MHz)",
+    )
+    p.add_argument(
+        "--dict",
+        metavar="FILE",
+        help="klipper: the klipper.dict of the --elf build (out/klipper.dict)",
+    )
+    p.add_argument(
+        "--klipper-src",
+        metavar="DIR",
+        help="klipper: its source tree (default $WAVECHECK_KLIPPER_SRC, else "
+        "../shared/firmware-src/klipper)",
+    )
     p.add_argument(
         "--settings", metavar="FILE", help="$N=V lines sent before the job (grbl's $$ format)"
     )
@@ -62,7 +86,11 @@ def register(sub: Any) -> None:
     build.add_argument(
         "--config-h", metavar="FILE", help="build grbl with this config.h instead of its own"
     )
-    build.add_argument("--elf", metavar="FILE", help="run this grbl ELF (ATmega328P) as it is")
+    build.add_argument(
+        "--elf",
+        metavar="FILE",
+        help="run this ELF as it is (grbl: ATmega328P; klipper: with --dict)",
+    )
     p.add_argument(
         "--grbl-src",
         metavar="DIR",
@@ -74,7 +102,11 @@ def register(sub: Any) -> None:
         help="simavr's source tree (default $WAVECHECK_SIMAVR_SRC, else "
         "../shared/firmware-src/simavr)",
     )
-    p.add_argument("--clock", default="16MHz", help="the MCU clock (default 16MHz, grbl's)")
+    p.add_argument(
+        "--clock",
+        default="16MHz",
+        help="grbl: the MCU clock (default 16MHz; Klipper's is its build's)",
+    )
     p.add_argument(
         "--vcd", required=True, type=output_file, metavar="FILE", help="the pin waveform (VCD)"
     )
@@ -114,7 +146,7 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--axes",
         default="x",
-        help="the grbl axes checked when no --map is given (default x; e.g. xyz)",
+        help="the axes checked when no --map is given (default x; e.g. xyz; klipper: also e)",
     )
     add_axis_arguments(p)
     add_tuning_arguments(p)
@@ -132,25 +164,21 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def _source(args: argparse.Namespace, name: str) -> Path:
-    given = getattr(args, name)
-    env, default = _DEFAULTS[name]
-    path = Path(given or os.environ.get(env) or default)
-    if not path.is_dir():
-        option = "--" + name.replace("_", "-")
-        raise UsageError(f"{path}: no such folder: give the source tree with {option} or ${env}")
-    return path
-
-
-def _seconds(text: str, option: str) -> Fraction:
-    value = parse_time(text)
-    if value <= 0:
-        raise UsageError(f"{option} {text}: must be more than 0")
-    return value
+def _firmware_options(args: argparse.Namespace) -> None:
+    for firmware, names in _ONLY.items():
+        for name in names:
+            if firmware != args.firmware_name and getattr(args, name, None):
+                option = "--" + name.replace("_", "-")
+                raise UsageError(f"{option} is an option of simulate {firmware} only")
 
 
 def run(args: argparse.Namespace) -> int:
     """Build, simulate, record, check; returns ``check``'s exit code."""
+    _firmware_options(args)
+    if args.firmware_name == "klipper":
+        from wavecheck.cli._simulate_klipper import run_klipper
+
+        return run_klipper(args)
     from wavecheck.mcu import grbl
     from wavecheck.mcu.build import build_firmware, build_runner
     from wavecheck.mcu.run import check_elf, simulate

@@ -6,7 +6,7 @@
 guarantee with a drive (``wavecheck config``); :mod:`.capture` compares it with a checked capture
 (``wavecheck check --firmware``); :mod:`.pairing` pairs capture axes with firmware axes.
 
-Every file is read with a bound (:func:`~wavecheck.linuxcnc.files.read_text`: devices, FIFOs
+Every file is read with a bound (:func:`~wavecheck.config_text.read_text`: devices, FIFOs
 and files over 4 MiB are refused) and every number with one (:func:`._text.number`).
 """
 
@@ -46,8 +46,8 @@ FIRMWARES: tuple[str, ...] = (
 )
 
 #: Reader module of each format, in detection order (LinuxCNC INIs are decided by what their
-#: HAL files load, in :mod:`.linuxcnc_config`, so ``hm2`` and ``linuxcnc`` share one reader).
-_DETECT = ("grbl", "fluidnc", "marlin", "klipper", "rrf", "smoothie", "linuxcnc_config")
+#: HAL files load, in :mod:`.linuxcnc`, so ``hm2`` and ``linuxcnc`` share one reader).
+_DETECT = ("grbl", "fluidnc", "marlin", "klipper", "rrf", "smoothie", "linuxcnc")
 _MODULE = {
     "grbl": "grbl",
     "klipper": "klipper",
@@ -55,10 +55,10 @@ _MODULE = {
     "reprapfirmware": "rrf",
     "smoothieware": "smoothie",
     "fluidnc": "fluidnc",
-    "hm2": "linuxcnc_config",
-    "linuxcnc": "linuxcnc_config",
+    "hm2": "linuxcnc",
+    "linuxcnc": "linuxcnc",
 }
-_NAME = {"rrf": "reprapfirmware", "smoothie": "smoothieware", "linuxcnc_config": "linuxcnc"}
+_NAME = {"rrf": "reprapfirmware", "smoothie": "smoothieware"}
 
 
 #: The record types, loaded with the first configuration read (``check`` without ``--firmware``
@@ -115,7 +115,7 @@ def read_firmware(
     if name not in FIRMWARES:
         raise ConfigError(f"unknown firmware format {name!r} (one of {', '.join(FIRMWARES)})")
     reader = _reader(_MODULE[name])
-    if _MODULE[name] == "linuxcnc_config":
+    if _MODULE[name] == "linuxcnc":
         cfg: FirmwareConfig = reader.read(
             path, latency_ns=latency_ns, clock_hz=clock_hz, want=fmt, ini=ini
         )

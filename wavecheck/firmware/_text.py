@@ -7,11 +7,11 @@ import os
 import re
 from fractions import Fraction
 
+from wavecheck.config_text import MAX_CONFIG_BYTES, is_file, read_text
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.linuxcnc.files import MAX_CONFIG_BYTES, read_text
 from wavecheck.units import exact_number, shown
 
-__all__ = ["MAX_CONFIG_BYTES", "number", "read_text", "where"]
+__all__ = ["MAX_CONFIG_BYTES", "is_file", "number", "read_text", "where"]
 
 _SUFFIX = re.compile(r"(.*[\d.])[fFlLuU]+")
 

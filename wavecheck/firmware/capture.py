@@ -228,7 +228,10 @@ def firmware_check(
         out.append(_time(seen, "space", space_rule, axis.idle, Fraction(0), "space between edges"))
     trailing = seen.active_edge not in (leading, "both") and axis.pulse.value is not None
     offset = axis.pulse.value if trailing and axis.pulse.value is not None else Fraction(0)
-    out.append(_time(seen, "dir_setup", "dir_setup", axis.dir_setup, offset, "DIR setup"))
+    setup = axis.dir_setup
+    if trailing and axis.dir_setup_trailing is not None:  # DIR may change during the pulse
+        setup, offset = axis.dir_setup_trailing, Fraction(0)
+    out.append(_time(seen, "dir_setup", "dir_setup", setup, offset, "DIR setup"))
     cfg_rate, rate = axis.max_rate.value, seen.rate_hz
     if cfg_rate is None or rate is None:
         out.append(

@@ -25,7 +25,13 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.drives.datasheet import Drive, Figure
-from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed, Role
+from wavecheck.firmware.guarantee import (
+    FirmwareConfig,
+    FixRole,
+    GeneratorGuarantee,
+    Guaranteed,
+    Role,
+)
 from wavecheck.rules import Rule, applicable
 from wavecheck.units import format_ns
 from wavecheck.verdict import (
@@ -136,6 +142,9 @@ def _mapping(
         role: Role = "pulse" if r.level == g.pulse_level else "idle"
         return role, g.figure(role), Fraction(0), ""
     if r.check == "setup" and r.ref == "dir":
+        if trailing and g.dir_setup_trailing is not None:
+            note = "the drive's active edge ends the pulse, and DIR may change during it"
+            return "setup", g.dir_setup_trailing, Fraction(0), note
         if trailing and edge != "both" and g.pulse.value is not None:
             note = "the drive's active edge ends the pulse: setup + pulse"
             return "setup", g.dir_setup, g.pulse.value, note
@@ -148,6 +157,16 @@ def _mapping(
     if r.figure == "max_rate":
         return "max_rate", g.max_rate, Fraction(0), ""
     return None, None, Fraction(0), _SILENT
+
+
+def _fix_role(role: Role, g: GeneratorGuarantee, drive: Drive) -> FixRole:
+    """What the fix must reach: the trailing-edge hold or setup where the drive counts the
+    trailing edge and the generator says so."""
+    if role == "hold" and _trailing(g, drive):
+        return "trailing_hold"
+    if role == "setup" and _trailing(g, drive) and g.dir_setup_trailing is not None:
+        return "trailing_setup"
+    return role
 
 
 def _trailing(g: GeneratorGuarantee, drive: Drive) -> bool:
@@ -216,8 +235,7 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 if role == "max_rate"
                 else limit - offset
             )
-            fix = config.fix(g, "trailing_hold" if role == "hold" and _trailing(g, drive) else role,
-                             need)  # fmt: skip
+            fix = config.fix(g, _fix_role(role, g, drive), need)
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
     notes = list(g.notes)
     if drive.active_edge == "both" and not g.both_edges:

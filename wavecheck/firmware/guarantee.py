@@ -115,6 +115,8 @@ class GeneratorGuarantee:
         pulse_level: 1 when a pulse is high at the pin, 0 when low (firmware inversion applied).
         both_edges: every STEP edge is a step (TMC ``dedge``: Klipper, Marlin ``EDGE_STEPPING``).
         dir_hold_trailing: DIR hold counted from the pulse's trailing edge, when known.
+        dir_setup_trailing: DIR change → the pulse's trailing edge, when DIR may change during
+            the pulse (hm2 with dirhold < steplen): less than ``dir_setup`` + ``pulse``.
         dir_inverted: the firmware inverts this axis's DIR pin (information only).
         info: further settings read (steps/unit, max speed …), name → text with source.
         notes: what the user should know about this axis.
@@ -132,6 +134,7 @@ class GeneratorGuarantee:
     pulse_level: int = 1
     both_edges: bool = False
     dir_hold_trailing: Guaranteed | None = None
+    dir_setup_trailing: Guaranteed | None = None
     dir_inverted: bool = False
     info: Mapping[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
@@ -174,9 +177,9 @@ _FIELDS: dict[str, str] = {
     "max_rate": "max_rate",
 }  # fmt: skip
 
-FixRole = Literal["pulse", "idle", "setup", "hold", "trailing_hold", "max_rate"]
-"""What a fix must reach: a :data:`Role`, or ``trailing_hold`` (DIR hold after the pulse's
-trailing edge, the drive's active edge)."""
+FixRole = Literal["pulse", "idle", "setup", "hold", "trailing_hold", "trailing_setup", "max_rate"]
+"""What a fix must reach: a :data:`Role`, or ``trailing_hold`` / ``trailing_setup`` (DIR hold
+after, setup before the pulse's trailing edge, the drive's active edge)."""
 
 Fixer = Callable[[GeneratorGuarantee, FixRole, Fraction], str]
 """(axis, role, value needed: ns, or Hz for ``max_rate``) → the setting to change, in the

@@ -1,48 +1,80 @@
 """Mesa hostmot2 stepgen: ``setp hm2_<board>.<n>.stepgen.NN.steplen/stepspace/dirsetup/dirhold``
-(ns) in the HAL files of a LinuxCNC configuration (reference ``firmware-timing.md`` §8).
+(ns) in the HAL files of a LinuxCNC configuration.
 
-The driver truncates each ns value to clocks of the stepgen clock ``f`` (14-bit registers; at
-most 0x3FFF clocks); the firmware holds the pulse and the space N+1 clocks, so
-``step_high ≥ (⌊steplen·f⌋+1)/f > steplen`` always: without the clock the set value is the bound.
-DIR setup loads N clocks (≈ ⌊dirsetup·f⌋/f, up to one clock short: ``uncertain``).
+The driver turns each ns value into a 14-bit register of stepgen clocks ``f`` with C doubles,
+truncating: ``reg = ns * (f / 1e9)``, at most 0x3FFF (LinuxCNC ``src/hal/drivers/mesa-hostmot2/
+stepgen.c`` 348-387 at git f1270d6ed7). The firmware (hostmot2 ``src/kubstepgenz.vhd`` as
+published in IgorYeremin/hostmot2-firmware@8a8dcbd; line numbers below are that file's) holds
+STEP high N+1 clocks and low N+1 clocks (the pulse counter is loaded at the step, 210-211, and
+STEP cleared a clock after it reaches 0, 199-201), so ``step_high ≥ (⌊steplen·f⌋+1)/f >
+steplen``: without the clock the set value is the bound. DIR setup loads N clocks (216-219:
+⌊dirsetup·f⌋/f; under GHDL the next step came N + 2 clocks after the DIR change, 300 -> 302;
+kept ``uncertain``, one run being no proof).
 
-DIR hold is what the hardware does, not what the man page says ("after a step ends"): the VHDL
-(hostmot2 ``kubstepgenz.vhd``, simulated under GHDL with the registers as the hm2 driver writes
-them) loads the hold counter when the pulse starts, so DIR may change max(steplen, dirhold) after
-the leading edge, max(0, dirhold − steplen) after the trailing edge (steplen 2.01 µs, dirhold
-1.02 µs: DIR changed in the clock of STEP's falling edge; dirhold 20 µs, steplen ~4.5 µs: 15.48
-µs after it). Without the clock the trailing figure may be up to two clocks short (``uncertain``).
-Max rate: 1e9/(steplen + stepspace), and maxvel × |position-scale| when maxvel is set. Unset
-parameters start at 0x3FFF clocks.
+DIR hold is what the hardware does, not what the man page says ("after a step ends"): the hold
+counter is loaded with the pulse (212-213), and DIR may change as soon as it has run out
+(215-219, 307), whatever STEP is doing. Run under GHDL (2.0.0, registers as the driver writes
+them, 100 MHz, the direction reversed just after a STEP rising edge) it gives: dirhold 102
+clocks, steplen 201: DIR changed 103 clocks after the rising edge, while STEP was high (it fell
+at 202); dirhold 2000, steplen 450: DIR changed 2001 clocks after the rising edge, 1550 after
+the falling one. So the hold is dirhold (+1 clock) from the leading edge and dirhold − steplen
+from the trailing edge; when dirhold < steplen DIR can change during the pulse, and a drive that
+counts the trailing edge may count that step in the new direction (hold 0, and only steplen −
+dirhold from the DIR change to that edge: ``dir_setup_trailing``). Without the clock
+the trailing figure may be a clock short (``uncertain``).
+
+Max rate: the driver clamps the velocity to 1e9/(steplen + stepspace) steps/s and to maxvel ×
+|position-scale| when maxvel is set (stepgen.c 263-315); the hardware's (N+1)+(M+1) clocks per
+step are the lower of the two when the clock is known. Unset parameters start at 0x3FFF clocks
+(stepgen.c 1169-1172). A printed fix is a ns value the driver turns into the register needed
+(``--hm2-clock``), or the bound itself without the clock.
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from fractions import Fraction
 
-from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
 from wavecheck.firmware._text import number
 from wavecheck.firmware.guarantee import (
     FixRole,
     GeneratorGuarantee,
     Guaranteed,
     at_least,
-    at_most,
 )
-from wavecheck.firmware.linuxcnc import joint_of
+from wavecheck.firmware.linuxcnc_stepgen import PARAMETER, maxvel_fix
+from wavecheck.linuxcnc.configuration import LinuxCNCFiles
 from wavecheck.linuxcnc.files import resolve_ref
 
-__all__ = ["STEPGEN", "axes", "fix"]
+__all__ = ["STEPGEN", "axes", "fixer", "ns_for", "register"]
 
 #: An hm2 stepgen parameter: ``hm2_<board>.<n>.stepgen.<NN>.<param>``.
 STEPGEN = re.compile(r"^(hm2_[^.\s]+\.\d+)\.stepgen\.(\d+)\.([a-z_-]+)$")
 _PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "position-scale", "maxvel", "step_type")
 _REG_MAX = 0x3FFF
 _VHDL = (
-    "the hold counter starts with the pulse (hostmot2 kubstepgenz.vhd, as simulated), not after "
-    "the step ends as the man page says"
+    "the hold counter starts with the pulse and DIR may change when it runs out (hostmot2 "
+    "kubstepgenz.vhd 212-219, run under GHDL), not after the step ends as the man page says"
 )
+_DURING = (
+    "dirhold < steplen: DIR may change while STEP is high (kubstepgenz.vhd 215-219), so a drive "
+    "counting the trailing edge may count that step in the new direction"
+)
+
+
+def register(ns: Fraction, f: Fraction) -> int:
+    """The register the hm2 driver writes for ``ns`` at clock ``f``: C doubles, truncated, at
+    most 0x3FFF (stepgen.c 381-385)."""
+    return min(int(float(max(ns, Fraction(0))) * (float(f) / 1e9)), _REG_MAX)
+
+
+def ns_for(clocks: int, f: Fraction) -> int:
+    """The smallest whole ns the driver turns into ``clocks`` (:func:`register`)."""
+    ns = int(-(-Fraction(clocks * 10**9) // f))
+    while register(Fraction(ns), f) < clocks:
+        ns += 1
+    return ns
 
 
 def axes(files: LinuxCNCFiles, clock_hz: Fraction | None) -> list[GeneratorGuarantee]:
@@ -78,7 +110,7 @@ def _axis(
         ns, at = params[name]
         if f is None:
             return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
-        reg = min(int(max(ns, Fraction(0)) * f / 10**9), _REG_MAX)
+        reg = register(ns, f)
         return Guaranteed(
             Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns",
             "derived" if extra_clock else "uncertain",
@@ -88,9 +120,11 @@ def _axis(
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
-    setup = fig("dirsetup", 0, "uncertain", "loads N clocks: up to one clock short")
-    hold_raw = fig("dirhold", 0, "uncertain")
+    setup = fig("dirsetup", 0, "uncertain", "the setup counter loads N clocks (kubstepgenz.vhd "
+                "216-219; under GHDL the next step came N + 2 clocks after DIR)")  # fmt: skip
+    hold_raw = fig("dirhold", 1, "set")
     hold, trailing = _hold(pulse, hold_raw, f is not None)
+    setup_trailing = _setup_trailing(pulse, setup, hold)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
@@ -108,7 +142,7 @@ def _axis(
     if "step_type" in params and params["step_type"][0] != 0:
         notes = (f"step_type {params['step_type'][0]} ({params['step_type'][1]}): only step/dir "
                  "(0) is modelled",)  # fmt: skip
-    joint, letter = joint_of(files, f"{board}.stepgen.{nn}")
+    joint, letter = files.joint_of(f"{board}.stepgen.{nn}")
     aliases = tuple(
         a
         for a in (f"{board}.stepgen.{nn}", f"joint.{joint}" if joint is not None else "", letter)
@@ -122,6 +156,7 @@ def _axis(
         dir_hold=hold,
         max_rate=rate,
         dir_hold_trailing=trailing,
+        dir_setup_trailing=setup_trailing,
         info=info,
         notes=notes,
         aliases=aliases,
@@ -130,33 +165,83 @@ def _axis(
 
 def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guaranteed, Guaranteed]:
     """(from the leading edge, from the trailing edge): the hold counter starts with the pulse
-    (kubstepgenz.vhd), so max(steplen, dirhold) and max(0, dirhold - steplen)."""
+    and runs out dirhold (+1 clock) later (kubstepgenz.vhd 212-219): dirhold, and dirhold -
+    steplen, 0 when DIR may change during the pulse."""
     if hold.value is None or pulse.value is None:
         return (
             Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note),
             Guaranteed(None, "dirhold", hold.where, "ns", "unknown", hold.note),
         )
-    lead = Guaranteed(max(pulse.value, hold.value), "max(steplen, dirhold)", hold.where, "ns",
-                      hold.status, f"{_VHDL}; {hold.note}" if hold.note else _VHDL)  # fmt: skip
-    short = "" if clocked else "; without the stepgen clock up to two clocks short"
-    trail = Guaranteed(max(hold.value - pulse.value, Fraction(0)), "dirhold - steplen",
-                       hold.where, "ns", "derived" if clocked else "uncertain",
-                       f"{_VHDL}{short}")  # fmt: skip
+    note = f"{_VHDL}; {hold.note}" if hold.note else _VHDL
+    lead = Guaranteed(hold.value, "dirhold", hold.where, "ns", hold.status, note)
+    if hold.value < pulse.value:
+        return lead, Guaranteed(Fraction(0), "dirhold - steplen", hold.where, "ns", "derived",
+                                _DURING)  # fmt: skip
+    short = "" if clocked else "; without the stepgen clock up to one clock short"
+    trail = Guaranteed(hold.value - pulse.value, "dirhold - steplen", hold.where, "ns",
+                       "derived" if clocked else "uncertain", f"{_VHDL}{short}")  # fmt: skip
     return lead, trail
 
 
-def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
-    """The hm2 ``setp`` line to add so that ``role`` reaches ``need`` (the INI value the HAL
-    file names, ``STEPLEN`` …, is the other place to change it)."""
-    full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
-    name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-            "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
-    if name is None:
-        scale = axis.info.get("position-scale", "").split(" ")[0]
-        if scale and Fraction(scale):
-            return f"add `setp {full}.maxvel {at_most(need / abs(Fraction(scale)))}` (units/s)"
-        pulse = axis.pulse.value or Fraction(0)
-        return f"add `setp {full}.stepspace {at_least(Fraction(10**9) / need - pulse)}` (ns)"
-    if role == "trailing_hold" and axis.pulse.value is not None:
-        need += axis.pulse.value  # the hold counter starts with the pulse (kubstepgenz.vhd)
-    return f"add `setp {full}.{name} {int(-(-need // 1))}` (ns; the INI's {name.upper()})"
+def _setup_trailing(pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed) -> Guaranteed | None:
+    """DIR change → the trailing edge when DIR may change during the pulse (dirhold <
+    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise."""
+    if pulse.value is None or hold.value is None or setup.value is None:
+        return None
+    if hold.value >= pulse.value:
+        return None
+    value = min(pulse.value - hold.value, setup.value + pulse.value)
+    return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "uncertain", _DURING)
+
+
+def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
+    """How to say which hm2 setting to change: a ``setp`` line to add (the INI value the HAL
+    file names, ``STEPLEN`` …, is the other place), with a ns value the driver turns into enough
+    clocks at ``clock_hz`` (:func:`register`), the bound itself without the clock."""
+
+    def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+        full = axis.aliases[0] if axis.aliases else f"hm2_….{axis.axis}"
+        if role == "trailing_setup":  # DIR must not change during the pulse
+            return _whole_pulse(full, axis, need, clock_hz)
+        name = PARAMETER.get(role)
+        if name is None:
+            clamp = maxvel_fix(full, axis, need)
+            if clamp:
+                return clamp
+            pulse = axis.pulse.value or Fraction(0)
+            return f"add `setp {full}.stepspace {at_least(Fraction(10**9) / need - pulse)}` (ns)"
+        if clock_hz is None:
+            if role == "trailing_hold" and axis.pulse.value is not None:
+                need += axis.pulse.value  # the hold counter starts with the pulse
+            return f"add `setp {full}.{name} {int(-(-need // 1))}` (ns; the INI's {name.upper()})"
+        counts = need * clock_hz / 10**9
+        clocks = int(-(-counts // 1))
+        if role in ("pulse", "idle", "hold"):  # held N + 1 clocks
+            clocks = max(clocks - 1, 0)
+        elif role == "trailing_hold":  # (dirhold + 1) - (steplen + 1) clocks
+            clocks += int((axis.pulse.value or 0) * clock_hz / 10**9) - 1
+        if clocks > _REG_MAX:
+            return (f"{name} would need {clocks} clocks at {float(clock_hz):g} Hz, more than the "
+                    f"register holds (0x3FFF): the hm2 stepgen cannot make it")  # fmt: skip
+        return (f"add `setp {full}.{name} {ns_for(clocks, clock_hz)}` (ns: {clocks} clocks at "
+                f"{float(clock_hz):g} Hz; the INI's {name.upper()})")  # fmt: skip
+
+    return fix
+
+
+def _whole_pulse(full: str, axis: GeneratorGuarantee, need: Fraction, f: Fraction | None) -> str:
+    """The ``setp`` lines that keep DIR through the pulse (dirhold >= steplen) and, where the
+    dirsetup set falls short, give ``need`` from a DIR change to the trailing edge (dirsetup +
+    steplen)."""
+    pulse = axis.pulse.value or Fraction(0)
+    short = max(need - pulse, Fraction(0))
+    if f is None:
+        hold, setup = int(-(-pulse // 1)), int(-(-short // 1))
+    else:
+        hold = ns_for(int(pulse * f / 10**9) - 1, f)  # the pulse is steplen clocks + 1
+        setup = ns_for(int(-(-short * f / 10**9 // 1)), f)
+    lines = f"`setp {full}.dirhold {hold}`"
+    if short > (axis.dir_setup.value or 0):
+        lines += f" and `setp {full}.dirsetup {setup}`"
+    return (f"add {lines} (ns): DIR then waits for the end of the pulse (kubstepgenz.vhd "
+            "212-219), and the trailing edge comes dirsetup + steplen after a DIR change")  # fmt: skip

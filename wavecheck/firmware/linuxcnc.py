@@ -1,321 +1,145 @@
-"""LinuxCNC's software stepgen: the channels a configuration loads (``loadrt stepgen``), read by
-:mod:`wavecheck.linuxcnc.stepgen_config`, with the n·P − J arithmetic of :mod:`wavecheck.linuxcnc.timing`.
+"""A LinuxCNC configuration (an INI and its HAL files, or one HAL file): which step generator it
+has is decided by what the HAL files load, never by a ``BASE_PERIOD`` alone.
 
-stepgen rounds each parameter up to whole base periods ``P``, and any base-thread run may be up to
-``J`` (the worst latency) late, so an interval of ``n`` periods is only ``n·P − J`` on the wire:
-that is the guarantee (``stepgen plan``'s latency-aware answer; ``J`` = 0 when not given, with a
-note). Across a reversal the space between pulses is only dirhold + dirsetup periods; LinuxCNC's
-dirhold counts from the end of the pulse, so the hold from the leading edge is steplen + dirhold.
-DIR setup is what ``dirsetup`` asks for, not a bound stepgen keeps (LinuxCNC issue #2332): a rule
-that passes on it is indeterminate, one that fails still fails.
+- ``loadrt stepgen``: LinuxCNC's software stepgen (:mod:`.linuxcnc_stepgen`).
+- ``loadrt hostmot2`` (or an ``hm2_…`` board driver) with ``hm2_….stepgen.NN`` parameters: Mesa
+  hostmot2 stepgens (:mod:`.hm2`).
+- Step generators of other cards (:data:`UNMODELLED`: GM6-PCI, Pico PPMC, Pluto-P) are named as
+  such and not modelled.
+- Nothing of these (a simulator, a servo configuration): no step generator — refused with one
+  line naming the file, the line and what was loaded instead, never an invented stepgen.
 
-The output pin: when ``stepgen.N.step`` drives a parallel-port pin (``net … parport.P.pin-NN-out``)
-its ``-invert`` makes pulses low, and with ``-reset 1`` and ``parport.P.reset`` in the base thread
-the pin is written high each period and reset after ``parport.P.reset-time`` ns (at most P/4,
-hal_parport clamps it): the pulse on the pin is the reset time and the rest of the period is idle,
-whatever ``stepspace`` is (StepConf's "doublestep": ``steplen 1``, ``stepspace 0``, one step per
-period; reference ``stepgen-linuxcnc.md`` §2.3, hal_parport's man page).
+HALFILEs that could not be found are named in the refusal when they might hold the generator.
 """
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 from fractions import Fraction
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._linuxcnc_files import LinuxCNCFiles
-from wavecheck.firmware.guarantee import (
-    FixRole,
-    GeneratorGuarantee,
-    Guaranteed,
-    at_most,
-    not_enforced,
-    unknown,
-)
-from wavecheck.linuxcnc.files import ini_value, int_ns
-from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config_lines
-from wavecheck.linuxcnc.timing import periods_needed, step_rate_hz
+from wavecheck.firmware import hm2, linuxcnc_stepgen
+from wavecheck.firmware.guarantee import FirmwareConfig, FixRole, GeneratorGuarantee
+from wavecheck.linuxcnc.configuration import LinuxCNCFiles, is_ini, scan
 
-__all__ = ["PinOut", "axes", "fixer", "joint_of", "pin_out"]
+__all__ = ["UNMODELLED", "looks_like", "read"]
 
-_MAX_CHANNELS = 16
-
-
-@dataclass(frozen=True)
-class PinOut:
-    """What stands between a stepgen output and the wire: a parallel-port pin, if any.
-
-    Attributes:
-        pin: the port pin (``parport.0.pin-02-out``), "" when the output drives no port pin.
-        inverted: the pin's ``-invert`` is set.
-        reset_ns: the pulse the ``reset`` function makes (ns, after hal_parport's P/4 clamp),
-            None when the pin is not reset.
-        reset_where: where the reset time (or its absence) comes from.
-    """
-
-    pin: str = ""
-    inverted: bool = False
-    reset_ns: Fraction | None = None
-    reset_where: str = ""
-    reset_unknown: str = ""
+#: HAL modules with step generators wavecheck does not model, and what they drive.
+UNMODELLED: dict[str, str] = {
+    "hal_gm": "the General Mechatronics GM6-PCI card's step generators",
+    "hal_ppmc": "the Pico Systems PPMC/USC/UPC boards' step generators",
+    "pluto_step": "the Pluto-P FPGA's step generators",
+    "hal_motenc": "the Vital Systems MOTENC card's outputs",
+    "hal_ax5214h": "the Axiom AX5214H card's outputs",
+}
+_HM2 = re.compile(r"^(hostmot2|hm2_\w+)$")
 
 
-def _true(value: str) -> bool:
-    return value.strip().lower() in ("1", "true")
-
-
-def pin_out(files: LinuxCNCFiles, output: str, period_ns: int) -> PinOut:
-    """The parallel-port pin ``output`` (``stepgen.0.step``) drives, its inversion and reset."""
-    pins = [p for p in files.on_signal(output) if p.startswith("parport.") and p.endswith("-out")]
-    if not pins:
-        return PinOut()
-    pin = pins[0]
-    port = pin.split(".")[1]
-    inverted = _true(files.setp.get(f"{pin}-invert", ("0", ""))[0])
-    if not _true(files.setp.get(f"{pin}-reset", ("0", ""))[0]):
-        return PinOut(pin, inverted)
-    funct = f"parport.{port}.reset"
-    if funct not in files.thread_of:
-        return PinOut(
-            pin, inverted, reset_unknown=f"{pin}-reset is set but {funct} runs in no thread"
+def looks_like(text: str) -> bool:
+    """A LinuxCNC INI (an ``[EMCMOT]``, ``[HAL]`` or ``[KINS]`` section) or a HAL file
+    (``loadrt``/``setp``/``net`` commands)."""
+    if is_ini(text):
+        return bool(
+            re.search(
+                r"^[ \t]*(\[(EMCMOT|HAL|KINS|TRAJ|EMCIO|EMC|DISPLAY|RS274NGC)\]|#INCLUDE[ \t])",
+                text,
+                re.M,
+            )
         )
-    found = files.setp.get(f"parport.{port}.reset-time")
-    if found is None:
-        return PinOut(pin, inverted, reset_unknown=f"parport.{port}.reset-time is not set")
-    ns = int_ns(ini_value(found[0], files.ini), found[1], f"parport.{port}.reset-time")
-    clamp = Fraction(period_ns // 4)
-    return PinOut(pin, inverted, min(Fraction(ns), clamp), found[1])
+    return len(re.findall(r"^[ \t]*(loadrt|setp|net|addf)[ \t]", text, re.M)) >= 2
 
 
-def axes(files: LinuxCNCFiles, latency_ns: Fraction | None) -> list[GeneratorGuarantee]:
-    """One guarantee per software stepgen channel (empty when stepgen is not loaded)."""
-    configs: list[LinuxCNCConfig] = []
-    for channel in range(_MAX_CHANNELS):
-        try:
-            cfg = read_config_lines(files.ini, files.lines, channel)
-        except ConfigError as err:
-            if configs and "is not loaded" in str(err):
-                break
-            raise
-        if not cfg.stepgen_loaded:
-            return []
-        configs.append(cfg)
-    j = Fraction(latency_ns) if latency_ns is not None else Fraction(0)
-    return [_axis(files, cfg, j) for cfg in configs]
-
-
-def _axis(files: LinuxCNCFiles, cfg: LinuxCNCConfig, j: Fraction) -> GeneratorGuarantee:
-    if cfg.base_period_ns is None:
-        place = cfg.sources.get("step_type", files.path)
-        raise ConfigError(
-            f"{place}: stepgen is loaded but no base period is known: no [EMCMOT] BASE_PERIOD, "
-            "and stepgen.make-pulses runs in no thread with a period"
+def read(
+    path: str | os.PathLike[str],
+    *,
+    latency_ns: Fraction | None = None,
+    clock_hz: Fraction | None = None,
+    want: str | None = None,
+    ini: str | os.PathLike[str] | None = None,
+) -> FirmwareConfig:
+    """Read the step generators of the configuration at ``path`` (see the module doc);
+    ``want`` ``"hm2"`` or ``"linuxcnc"`` is what ``--firmware-format`` asked for; ``ini`` the
+    INI given beside a HAL file."""
+    files = scan(path, ini)
+    modules = {m for m, _ in files.loads}
+    soft = linuxcnc_stepgen.axes(files, latency_ns) if "stepgen" in modules else []
+    hw = hm2.axes(files, clock_hz) if any(_HM2.match(m) for m in modules) else []
+    if want == "hm2" and not hw:
+        raise ConfigError(_none(files, "hostmot2 stepgen"))
+    if not soft and not hw:
+        raise ConfigError(_none(files, "stepgen or hostmot2 stepgen"))
+    notes = list(files.not_read)
+    if files.ini_note:
+        notes.insert(0, files.ini_note)
+    unsupported = []
+    for module, at in files.loads:
+        if module in UNMODELLED:
+            unsupported.append(f"{at}: loadrt {module}: {UNMODELLED[module]} are not modelled")
+    if files.computed:
+        unsupported.append(
+            f"{len(files.computed)} Tcl command(s) with computed words are not evaluated "
+            f"(first: {files.computed[0]})"
         )
-    p = cfg.require_base_period()
-    n = cfg.periods()
-    src = cfg.sources
-
-    def fig(
-        names: tuple[str, ...], setting: str, note: str = "", minus: Fraction = Fraction(0)
-    ) -> Guaranteed:
-        periods = sum(n[x] for x in names)
-        value = max(periods * p - j - minus, Fraction(0))
-        at = src.get(names[-1], "stepgen default (1 ns = one period)")
-        extra = f" - {float(minus):g} ns" if minus else ""
-        return Guaranteed(value, setting, at, "ns", "derived",
-                          f"{periods} x {p} ns{extra} - J" + (f"; {note}" if note else ""))  # fmt: skip
-
-    step = pin_out(files, f"stepgen.{cfg.channel}.step", p)
-    dirp = pin_out(files, f"stepgen.{cfg.channel}.dir", p)
-    notes: list[str] = []
-    if cfg.step_type not in (None, 0):
-        notes.append(f"step_type {cfg.step_type}: only step/dir (0) is modelled here")
-    if step.pin:
-        notes.append(f"STEP drives {step.pin}" + (" (inverted)" if step.inverted else ""))
-    if step.reset_ns is not None or step.reset_unknown:
-        pulse, idle, hold, trailing, rate = _reset(cfg, step, p, n, j, notes)
-    else:
-        same = n["stepspace"]
-        reversal = n["dirhold"] + n["dirsetup"]
-        idle = (
-            fig(("stepspace",), "stepspace")
-            if same <= reversal
-            else fig(("dirhold", "dirsetup"), "dirhold + dirsetup", "across a reversal")
+    if files.ini is not None:
+        unsupported += files.ini.ignored[:5]
+    j = latency_ns if latency_ns is not None else Fraction(0)
+    if soft:
+        notes.insert(
+            0,
+            f"every interval is n x BASE_PERIOD - J with J = {float(j):g} ns"
+            if latency_ns is not None
+            else "J = 0 assumed (give --latency for the latency-aware figures, as stepgen plan "
+            "does)",
         )
-        pulse = fig(("steplen",), "steplen")
-        hold = fig(("steplen", "dirhold"), "steplen + dirhold",
-                   "dirhold counts from the end of the pulse")  # fmt: skip
-        trailing = fig(("dirhold",), "dirhold")
-        rate = Guaranteed(step_rate_hz(p, n["steplen"] + n["stepspace"]),
-                          "1 / ((steplen + stepspace) x P)",
-                          src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
-                          "stepgen's own clamp")  # fmt: skip
-        if n["stepspace"] == 0:
-            notes.append("stepspace 0 without the parport reset function: STEP stays high at the "
-                         "top rate")  # fmt: skip
-    rate = _maxvel_clamp(files, cfg, rate)
-    info = {
-        "base period": f"{p} ns ({src.get('BASE_PERIOD', '')})",
-        **{k: f"{v} base periods" for k, v in n.items()},
-    }
-    if cfg.floats.get("position-scale"):
-        info["position-scale"] = f"{cfg.floats['position-scale']!r} steps/unit"
-    if step.pin:
-        info["reset"] = ".".join(step.pin.split(".")[:2])
-    joint, letter = joint_of(files, f"stepgen.{cfg.channel}")
-    aliases = tuple(a for a in (f"joint.{joint}" if joint is not None else "", letter) if a)
-    return GeneratorGuarantee(
-        axis=f"stepgen.{cfg.channel}",
-        pulse=pulse,
-        idle=idle,
-        dir_setup=_collapsible(fig(("dirsetup",), "dirsetup")),
-        dir_hold=hold,
-        max_rate=rate,
-        pulse_level=0 if step.inverted else 1,
-        dir_hold_trailing=trailing,
-        dir_inverted=dirp.inverted,
-        info=info,
+    if hw:
+        clock = "unknown (give --hm2-clock for the exact rounding)" if clock_hz is None else (
+            f"{float(clock_hz):g} Hz"
+        )  # fmt: skip
+        notes.insert(0, f"hm2 stepgen clock {clock}; registers are truncated to whole clocks")
+    return FirmwareConfig(
+        firmware="hm2" if hw and not soft else "linuxcnc",
+        path=str(path),
+        axes=tuple(soft + hw),
+        files=tuple(dict.fromkeys((str(path), *filter(None, [files.found_ini]), *files.hal_files))),
+        unsupported=tuple(dict.fromkeys(unsupported)),
         notes=tuple(notes),
-        aliases=aliases,
+        fixer=_fixer({id(a) for a in hw}, hm2.fixer(clock_hz), linuxcnc_stepgen.fixer(j)),
     )
 
 
-def _maxvel_clamp(files: LinuxCNCFiles, cfg: LinuxCNCConfig, rate: Guaranteed) -> Guaranteed:
-    """``rate``, or ``maxvel x |position-scale|`` when ``setp stepgen.N.maxvel`` is lower
-    (stepgen.c clamps the commanded velocity to maxvel when it is > 0)."""
-    maxvel, scale = cfg.floats.get("maxvel"), cfg.floats.get("position-scale")
-    if not maxvel or maxvel <= 0 or not scale:
-        return rate
-    hz = Fraction(repr(maxvel)) * abs(Fraction(repr(scale)))
-    if rate.value is not None and hz >= rate.value:
-        return rate
-    at = files.setp.get(f"stepgen.{cfg.channel}.maxvel", ("", ""))[1]
-    return Guaranteed(hz, "maxvel x |position-scale|", at, "units/s", "derived",
-                      f"stepgen clamps the velocity to maxvel {maxvel:g} units/s "
-                      f"(position-scale {scale:g} steps/unit)")  # fmt: skip
+def _none(files: LinuxCNCFiles, what: str) -> str:
+    """The one-line refusal of a configuration without a modelled step generator."""
+    unmodelled = [(m, at) for m, at in files.loads if m in UNMODELLED]
+    if unmodelled:
+        module, at = unmodelled[0]
+        return f"{at}: loadrt {module}: {UNMODELLED[module]} are not modelled (no {what})"
+    loaded = sorted({m for m, _ in files.loads if not m.startswith("[")})
+    hals = ", ".join(os.path.basename(h) for h in files.hal_files) or "none"
+    place = files.path
+    if files.ini is not None and files.ini.get("HAL", "HALFILE") is not None:
+        place = files.ini.place("HAL", "HALFILE")
+    missing = f"; not found: {files.not_read[0].split(': ', 1)[1].split(' is not')[0]}" if (
+        files.not_read
+    ) else ""  # fmt: skip
+    tcl_files = [os.path.basename(h) for h in files.hal_files if h.lower().endswith(".tcl")]
+    tcl = (
+        f"; Tcl HAL files ({', '.join(tcl_files)}) are read for their literal commands only"
+        if tcl_files
+        else ""
+    )
+    return (
+        f"{place}: no step generator: the HAL files ({hals}) load no {what}"
+        f" (they load: {', '.join(loaded) or 'nothing'}){missing}{tcl}"
+    )
 
 
-#: LinuxCNC issue #2332 (open): stepgen.c can start a step sooner than dirsetup after a DIR change.
-DIRSETUP_COLLAPSE = (
-    "the software stepgen can fail to obey dirsetup (LinuxCNC issue #2332: a step follows a DIR "
-    "change sooner than dirsetup)"
-)
+_Fix = Callable[[GeneratorGuarantee, FixRole, Fraction], str]
 
 
-def _collapsible(setup: Guaranteed) -> Guaranteed:
-    """The configured DIR setup as what stepgen aims at, not a bound it keeps (issue #2332)."""
-    return not_enforced(setup.setting, f"{DIRSETUP_COLLAPSE}; configured {setup.note}",
-                        setup.where, setup.value, setup.unit)  # fmt: skip
-
-
-def _reset(
-    cfg: LinuxCNCConfig, step: PinOut, p: int, n: dict[str, int], j: Fraction, notes: list[str]
-) -> tuple[Guaranteed, Guaranteed, Guaranteed, Guaranteed, Guaranteed]:
-    """Pulse, idle, DIR hold (leading, trailing) and rate on a parport pin with ``reset``."""
-    src = cfg.sources
-    if step.reset_ns is None:
-        pulse = unknown("reset-time", f"{step.reset_unknown}: the pulse on {step.pin} is not known")
-    else:
-        pulse = Guaranteed(step.reset_ns, "parport reset-time", step.reset_where, "ns", "derived",
-                           f"the reset function lowers {step.pin} reset-time after the write "
-                           f"(clamped to P/4 = {p // 4} ns)")  # fmt: skip
-    width = pulse.value or Fraction(0)
-    # a step starts at most every steplen + stepspace periods; with steplen > 1 the pin is set
-    # again each period of the step, so pulses are one period apart
-    apart = n["steplen"] + n["stepspace"] if n["steplen"] <= 1 else 1
-    idle = Guaranteed(max(max(apart, 1) * p - width - j, Fraction(0)),
-                      "(steplen + stepspace) x BASE_PERIOD - reset-time",
-                      src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
-                      "the pin is written once per step and reset within the period: the rest "
-                      "until the next step is idle, less J")  # fmt: skip
-    lead = n["steplen"] + n["dirhold"]
-    hold = Guaranteed(max(lead * p - j, Fraction(0)), "steplen + dirhold", src.get("dirhold", ""),
-                      "ns", "derived", f"{lead} x {p} ns - J from the write that starts the pulse")  # fmt: skip
-    trailing = Guaranteed(max(lead * p - width - j, Fraction(0)), "steplen + dirhold - reset-time",
-                          src.get("dirhold", ""), "ns", "derived", "from the reset that ends the pulse")  # fmt: skip
-    per_step = n["steplen"] + n["stepspace"]
-    rate = Guaranteed(step_rate_hz(p, per_step), "1 / ((steplen + stepspace) x P)",
-                      src.get("stepspace", src.get("BASE_PERIOD", "")), "ns", "derived",
-                      "stepgen's own clamp; the reset pin makes one pulse per period")  # fmt: skip
-    notes.append(f"{step.pin} is reset each period (parport reset): the pulse is the reset time")
-    if n["steplen"] > 1:
-        notes.append(f"steplen is {n['steplen']} periods with the reset function: each step makes "
-                     f"{n['steplen']} pulses on {step.pin} (StepConf sets steplen 1)")  # fmt: skip
-    return pulse, idle, hold, trailing, rate
-
-
-def joint_of(files: LinuxCNCFiles, gen: str) -> tuple[int | None, str]:
-    """(the joint whose command drives ``gen``, that joint's axis letter or "")."""
-    joint = None
-    for pin in (f"{gen}.position-cmd", f"{gen}.velocity-cmd"):
-        for other in files.on_signal(pin):
-            m = re.fullmatch(
-                r"joint\.(\d{1,3})\.motor-pos-cmd|axis\.(\d{1,3})\.motor-pos-cmd", other
-            )
-            if m:
-                joint = int(m.group(1) or m.group(2))
-    if joint is None:
-        return None, ""
-    return joint, _letter(files, joint)
-
-
-def _letter(files: LinuxCNCFiles, joint: int) -> str:
-    kins = files.ini_setting("KINS", "KINEMATICS")
-    coords = ""
-    if kins:
-        m = re.search(r"coordinates=(\w+)", kins[0])
-        coords = m.group(1) if m else ""
-    if not coords:
-        traj = files.ini_setting("TRAJ", "COORDINATES")
-        coords = "".join(traj[0].split()) if traj else ""
-    return coords[joint].lower() if joint < len(coords) else ""
-
-
-def fixer(j: Fraction) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
-    """How to say which stepgen setting to change, at latency ``j``: a ``setp`` line to add
-    after the configuration's own (the last ``setp`` of a parameter wins)."""
-
+def _fixer(hw: set[int], hard: _Fix, soft: _Fix) -> _Fix:
     def fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
-        p = int(axis.info.get("base period", "0 ns").split(" ")[0])
-        name = {"pulse": "steplen", "idle": "stepspace", "setup": "dirsetup",
-                "hold": "dirhold", "trailing_hold": "dirhold"}.get(role)  # fmt: skip
-        if p <= 0:
-            return ""
-        if name is None:  # the rate: maxvel clamps it (stepgen.c), else steplen + stepspace
-            scale = axis.info.get("position-scale", "").split(" ")[0]
-            if scale and Fraction(scale):
-                vel = at_most(need / abs(Fraction(scale)))
-                return f"add `setp {axis.axis}.maxvel {vel}` (units/s; stepgen clamps to it)"
-            steplen = int(axis.info.get("steplen", "0").split(" ")[0])
-            periods = max(-(-Fraction(10**9) // (need * p)) - steplen, 1)
-            return f"add `setp {axis.axis}.stepspace {periods * p}` ({periods} base periods)"
-        if role == "pulse" and axis.pulse.setting == "parport reset-time":
-            value = int(-(-need // 1))
-            if value > p // 4:
-                return (
-                    f"the parport reset pulse is at most P/4 = {p // 4} ns: raise BASE_PERIOD to "
-                    f"at least {4 * value} ns"
-                )
-            return f"add `setp {axis.info.get('reset', 'parport.0')}.reset-time {value}` (ns)"
-        if role == "hold":
-            need -= int(axis.info.get("steplen", "0").split(" ")[0]) * p
-        if role == "idle" and axis.pulse.setting == "parport reset-time":
-            # (1 + stepspace) periods - reset-time - J (steplen 1, as StepConf sets it)
-            space = periods_needed(need + (axis.pulse.value or 0), j, p) - 1
-            return f"add `setp {axis.axis}.stepspace {space * p}` ({space} base periods of {p} ns)"
-        periods = periods_needed(max(need, Fraction(0)), j, p)
-        at_j = f"({periods} base periods of {p} ns at J = {float(j):g} ns)"
-        if role == "idle":  # across a reversal the space is dirhold + dirsetup
-            n = {k: int(axis.info.get(k, "0").split(" ")[0]) for k in ("dirhold", "dirsetup")}
-            if n["dirhold"] + n["dirsetup"] < periods:
-                hold = (periods - n["dirsetup"]) * p
-                return (
-                    f"add `setp {axis.axis}.stepspace {periods * p}` and "
-                    f"`setp {axis.axis}.dirhold {hold}` {at_j}: across a reversal the space is "
-                    "dirhold + dirsetup"
-                )
-        return f"add `setp {axis.axis}.{name} {periods * p}` {at_j}"
+        return hard(axis, role, need) if id(axis) in hw else soft(axis, role, need)
 
     return fix

@@ -28,7 +28,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._text import number, read_text, where
+from wavecheck.firmware._text import is_file, number, read_text, where
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -39,7 +39,6 @@ from wavecheck.firmware.guarantee import (
     not_enforced,
     unknown,
 )
-from wavecheck.linuxcnc.files import is_file
 
 __all__ = ["looks_like", "read"]
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import os
 import re
 import shlex
-import stat
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from wavecheck.config_text import is_file, read_text
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.units import exact_number, shown
 
@@ -23,12 +23,9 @@ __all__ = [
     "hal_words",
     "ini_value",
     "int_ns",
-    "is_file",
-    "MAX_CONFIG_BYTES",
     "loadrt_args",
     "logical_lines",
     "read_ini",
-    "read_text",
     "resolve_ref",
 ]
 
@@ -85,15 +82,6 @@ def logical_lines(text: str) -> Iterator[tuple[int, str]]:
         yield first, " ".join(p for p in parts if p)
 
 
-def is_file(path: str | os.PathLike[str]) -> bool:
-    """True for an existing regular file; False for a name the system refuses (too long, a
-    NUL byte) as for a missing one."""
-    try:
-        return Path(path).is_file()
-    except (OSError, ValueError):
-        return False
-
-
 #: ``#INCLUDE`` nesting LinuxCNC's INI files may use (a loop is refused).
 _MAX_INCLUDE_DEPTH = 8
 
@@ -142,44 +130,6 @@ def _read_ini_into(path: Path, ini: IniFile, stack: list[Path]) -> None:
         key, value = (x.strip() for x in line.split("=", 1))
         ini.sections[ini.section].setdefault(key, []).append((value, first))
         ini.origins.setdefault((ini.section, key), []).append(str(path))
-
-
-#: The most a configuration file (INI, HAL, a firmware's settings) may hold: the largest real one
-#: in the shared corpora is 0.2 MB; anything beyond this is not a configuration.
-MAX_CONFIG_BYTES = 4 * 1024 * 1024
-
-_NOT_REGULAR = (
-    (stat.S_ISDIR, "a directory"),
-    (stat.S_ISCHR, "a character device"),
-    (stat.S_ISBLK, "a block device"),
-    (stat.S_ISFIFO, "a FIFO (named pipe)"),
-    (stat.S_ISSOCK, "a socket"),
-)
-
-
-def read_text(path: str | os.PathLike[str]) -> str:
-    """A configuration file's text, read with a bound: a device, FIFO, socket or directory is
-    refused before it is opened (``/dev/zero`` never ends, a FIFO without a writer blocks), and
-    more than :data:`MAX_CONFIG_BYTES` is refused; undecodable bytes are replaced.
-
-    Raises:
-        ConfigError: one line naming the file.
-    """
-    try:
-        mode = os.stat(path).st_mode
-        for test, kind in _NOT_REGULAR:
-            if test(mode):
-                raise ConfigError(f"{path}: is {kind}, not a configuration file")
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_CONFIG_BYTES + 1)
-    except OSError as err:
-        raise ConfigError(f"{path}: cannot read: {err.strerror or err}") from None
-    if len(data) > MAX_CONFIG_BYTES:
-        raise ConfigError(
-            f"{path}: more than {MAX_CONFIG_BYTES // (1024 * 1024)} MiB, far larger than any "
-            "configuration file; give the configuration itself"
-        )
-    return data.decode("utf-8", errors="replace")
 
 
 def int_ns(value: str, where: str, what: str) -> int:

@@ -11,6 +11,7 @@ import os
 import re
 from dataclasses import dataclass, field
 
+from wavecheck.config_text import read_text
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.files import (
     INI_REF,
@@ -18,7 +19,6 @@ from wavecheck.linuxcnc.files import (
     hal_words,
     loadrt_args,
     read_ini,
-    read_text,
     resolve_ref,
 )
 

@@ -19,7 +19,14 @@ from pathlib import Path
 
 from wavecheck.errors import ConfigError, UsageError
 
-__all__ = ["SIMAVR_FILES", "build_firmware", "build_runner", "cache_root", "tree_hash"]
+__all__ = [
+    "SIMAVR_FILES",
+    "build_firmware",
+    "build_klippy",
+    "build_runner",
+    "cache_root",
+    "tree_hash",
+]
 
 #: The GPL-3.0-or-later folder with the simavr patch and the runner's source.
 SIMAVR_FILES = Path(__file__).resolve().parent / "simavr"
@@ -99,6 +106,14 @@ def _source_tree(path: Path, what: str, marker: str) -> Path:
     return path
 
 
+def _writable(tree: Path) -> None:
+    """Owner write permission on a copied tree (a read-only checkout copies read-only)."""
+    for dirpath, _, filenames in os.walk(tree):
+        for name in (".", *filenames):
+            path = Path(dirpath, name)
+            path.chmod(path.stat().st_mode | 0o200)
+
+
 def _cached(name: str, key: str, product: str, make: Callable[[Path], None]) -> Path:
     """``cache/NAME-KEY/PRODUCT``, made by ``make(folder)`` in a temporary folder if missing."""
     final = cache_root() / f"{name}-{key[:20]}"
@@ -146,14 +161,23 @@ def build_runner(simavr_src: Path, *, fixes: bool = True) -> Path:
 
 
 def build_firmware(
-    src: Path, marker: str, replace: dict[str, bytes], target: Sequence[str], product: str
+    src: Path,
+    marker: str,
+    replace: dict[str, bytes],
+    target: Sequence[str],
+    product: str,
+    *,
+    before: Sequence[Sequence[str]] = (),
+    also: Sequence[str] = (),
 ) -> Path:
     """A firmware built with ``make TARGET`` in a copy of ``src`` whose files ``replace`` names
-    (relative path → content) are replaced; returns the cached ``product`` (an ELF)."""
+    (relative path → content) are replaced or added; returns the cached ``product`` (an ELF).
+
+    ``before``: make arguments run first (each a make run); ``also``: other build outputs kept
+    beside the product (by file name)."""
     tree_src = _source_tree(src, "firmware", marker)
-    extra = [k.encode() + b"\0" + v for k, v in sorted(replace.items())] + [
-        " ".join(target).encode()
-    ]
+    extra = [k.encode() + b"\0" + v for k, v in sorted(replace.items())]
+    extra += [" ".join(t).encode() for t in (*before, target)] + [" ".join(also).encode()]
     key = tree_hash(tree_src, extra)
 
     def make(work: Path) -> None:
@@ -161,11 +185,33 @@ def build_firmware(
         _need("avr-gcc")
         tree = work / "src"
         shutil.copytree(tree_src, tree, ignore=shutil.ignore_patterns(".git", "build", "*.o"))
+        _writable(tree)
         for rel, content in replace.items():
+            (tree / rel).parent.mkdir(parents=True, exist_ok=True)
             (tree / rel).write_bytes(content)
         (tree / "build").mkdir(exist_ok=True)
-        _run(["make", *target], tree, f"firmware {src.name}")
-        shutil.copy2(tree / product, work / Path(product).name)
+        for args in (*before, target):
+            _run(["make", *args], tree, f"firmware {src.name}")
+        for name in (product, *also):
+            shutil.copy2(tree / name, work / Path(name).name)
         shutil.rmtree(tree)
 
     return _cached(f"fw-{src.name}", key, Path(product).name, make)
+
+
+def build_klippy(klipper_src: Path, python: str) -> Path:
+    """Klipper's host program (``klippy/``) copied into the cache with its C helper built
+    (klippy compiles ``chelper/c_helper.so`` beside its sources on first use, which a read-only
+    checkout forbids); returns the copy's ``klippy.py``."""
+    src = _source_tree(klipper_src, "Klipper", "klippy/klippy.py") / "klippy"
+    key = tree_hash(src, (python.encode(),))
+
+    def make(work: Path) -> None:
+        _need("gcc")
+        tree = work / "klippy"
+        shutil.copytree(src, tree, ignore=shutil.ignore_patterns("*.so", "__pycache__"))
+        _writable(tree)
+        code = "import chelper; chelper.get_ffi()"
+        _run([python, "-c", code], tree, "klippy's C helper (needs cffi: pip install cffi)")
+
+    return _cached("klippy", key, "klippy/klippy.py", make)

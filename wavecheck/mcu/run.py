@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import struct
 import subprocess
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,7 +54,8 @@ class Printed:
 @dataclass(frozen=True)
 class SimRun:
     """The outcome of one simulation: how it ended (``done``, ``limit``, ``nobanner``,
-    ``alarm``), at which cycle of the MCU's clock, and what the firmware printed."""
+    ``alarm``; in block mode ``noanswer``, ``stop``, ``nak``), at which cycle of the MCU's
+    clock, and what the firmware printed (lines, or in block mode its blocks in hex)."""
 
     end: str
     end_cycle: int
@@ -115,17 +116,20 @@ def simulate(
     tail_cycles: int,
     wall_timeout_s: float,
     accept: Callable[[SimRun], object],
+    options: Sequence[str] = (),
 ) -> SimRun:
     """Run ``elf`` and write the ``pins`` (name → ``PORT.BIT``) to ``vcd``.
 
     ``accept(run)`` judges the run (raising an error to refuse it) before the VCD is renamed
-    into place: a refused run leaves no VCD.
+    into place: a refused run leaves no VCD. ``options`` go to the runner as they are (its
+    block mode for Klipper: ``--blocks=ADDR``, ``--start=``, ``--until=``, ``--stop=HEX``).
 
     Raises:
         ConfigError: the simulation exceeded ``wall_timeout_s``, or the runner refused its input.
     """
     cmd = [str(runner), str(elf), MCUS[mcu].core, str(clock_hz), "", banner]
     cmd += [str(max_cycles), str(tail_cycles)] + [f"{n}={p}" for n, p in pins.items()]
+    cmd += list(options)
     with atomic_path(vcd) as tmp:
         cmd[4] = os.fspath(tmp)
         proc = subprocess.Popen(

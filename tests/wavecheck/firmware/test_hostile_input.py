@@ -15,9 +15,9 @@ import pytest
 from tests.bounds import lines_run
 from tests.wavecheck.firmware.bounded import bounded
 from wavecheck.cli import main
+from wavecheck.config_text import MAX_CONFIG_BYTES
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import read_firmware
-from wavecheck.linuxcnc.files import MAX_CONFIG_BYTES
 
 #: Numbers no configuration can hold, each as a firmware file writes numbers.
 BAD_NUMBERS = ["1e999999999", "1e400", "12345678901234567890", "9" * 5000, "nan", "inf", "-inf"]

@@ -106,18 +106,22 @@ def test_pair_rate_is_the_smaller_of_generator_and_drive(
 @pytest.mark.parametrize(
     ("steplen", "dirhold", "lead", "trailing"),
     [
-        # issue 32's GHDL runs of kubstepgenz.vhd: steplen 2.01 us, dirhold 1.02 us -> DIR changed
-        # in the clock of STEP's falling edge; dirhold 20 us, steplen ~4.5 us -> 15.48 us after it
-        (2010, 1020, 2020, 0),
-        (4500, 20000, 20000, 15490),
+        # hostmot2 kubstepgenz.vhd (IgorYeremin/hostmot2-firmware@8a8dcbd) under GHDL 2.0.0 at
+        # 100 MHz, the rate reversed just after a rising STEP edge: registers 201/102 -> DIR
+        # changed 103 clocks after the rising edge while STEP was high (it fell at 202); 450/2000
+        # -> 2001 clocks after the rising edge, 1550 after the falling one
+        (2010, 1020, 1030, 0),
+        (4500, 20000, 20010, 15500),
     ],
 )
 def test_hm2_dir_hold_counts_from_the_pulse_start(
     tmp_path: Path, steplen: int, dirhold: int, lead: int, trailing: int
 ) -> None:
-    """Class 2: DIR may change max(steplen, dirhold) after the leading edge (the hold counter is
-    loaded when the pulse starts), max(0, dirhold - steplen) after the trailing one; at 100 MHz
-    the pulse is steplen clocks + 1 (here 2020 / 4510 ns)."""
+    """Class 2: the hold counter is loaded with the pulse (kubstepgenz.vhd:212-213) and DIR may
+    change when it runs out (215-219), even during the pulse: dirhold + 1 clock after the
+    leading edge, dirhold - steplen after the trailing one (0 when DIR may change while STEP is
+    high); the driver truncates ns x f to clocks (mesa-hostmot2/stepgen.c:348-387), the pulse is
+    steplen clocks + 1 (here 2020 / 4510 ns)."""
     src = SHARED / "firmware/linuxcnc/hm2-stepper"
     for f in src.iterdir():
         text = f.read_text()

@@ -166,8 +166,9 @@ def test_hm2_5i20() -> None:
     assert cfg.firmware == "hm2" and cfg.axis_names == ("stepgen.00", "stepgen.01", "stepgen.02")
     s = cfg.axes[0]  # 5i20.ini:123-126 DIRSETUP 200, DIRHOLD 200, STEPLEN 40000, STEPSPACE 40000
     assert (v(s.pulse), v(s.idle), v(s.dir_setup)) == (40000, 40000, 200)
-    # DIR hold: the hold counter starts with the pulse (kubstepgenz.vhd): max(40000, 200)
-    assert v(s.dir_hold) == 40000 and v(s.dir_hold_trailing) == 0
+    # DIR hold: the hold counter starts with the pulse and DIR may change when it runs out, even
+    # while STEP is high (kubstepgenz.vhd:212-219): 200 ns from the leading edge, 0 from the end
+    assert v(s.dir_hold) == 200 and v(s.dir_hold_trailing) == 0
     assert s.pulse.where.endswith("hm2-stepper.hal:84")
     assert v(s.max_rate) == 12 * 1000  # 5i20.ini:106 STEPGEN_MAX_VEL 12 x :110 SCALE 1000
 

@@ -108,13 +108,14 @@ def test_hm2_without_a_hostmot2_section_is_hm2(tmp_path: Path) -> None:
 
 
 def test_hm2_dir_hold_is_what_the_hardware_does(capsys: pytest.CaptureFixture[str]) -> None:
-    """5i20 (DIRHOLD 200, STEPLEN 40000): the hold counter starts with the pulse
-    (kubstepgenz.vhd under GHDL, issue 32): max(steplen, dirhold) = 40 us after the leading edge
-    (was steplen + dirhold, indeterminate), max(0, dirhold - steplen) = 0 after the trailing."""
+    """5i20 (DIRHOLD 200, STEPLEN 40000): the hold counter is loaded with the pulse and DIR may
+    change when it runs out, while STEP is still high (kubstepgenz.vhd:212-219, run under GHDL):
+    200 ns after the leading edge (was max(steplen, dirhold) = 40 us, a PASS for a 650 ns hold),
+    and before the trailing edge (0)."""
     ini = str(FW / "linuxcnc/hm2-stepper/5i20.ini")
     _, doc = _config(capsys, ini, "--drive", "drv8825")  # rising edge, 650 ns hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
-    assert hold["generator_ns"] == 40000 and hold["verdict"] == "pass"
+    assert hold["generator_ns"] == 200 and hold["verdict"] == "fail"
     _, doc = _config(capsys, ini, "--drive", "gecko-g202")  # falling edge, 20 us hold
     hold = _rule(doc, "stepgen.00", "dir_hold")
     assert hold["generator_ns"] == 0 and hold["verdict"] == "fail"

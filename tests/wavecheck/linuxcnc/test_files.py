@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from wavecheck.config_text import read_text
 from wavecheck.errors import ConfigError
-from wavecheck.linuxcnc.files import hal_lines, int_ns, read_ini, read_text
+from wavecheck.linuxcnc.files import hal_lines, int_ns, read_ini
 
 
 def test_continued_values_and_includes(tmp_path: Path) -> None:

@@ -6,12 +6,13 @@ a second run of the suite builds nothing (the builds are keyed by the hash of th
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from tests.wavecheck.mcu.helpers import GRBL_SRC, REPO, SIMAVR_SRC, need_sources
+from tests.wavecheck.mcu.helpers import GRBL_SRC, KLIPPER_SRC, REPO, SIMAVR_SRC, need_sources
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -66,3 +67,20 @@ def delay_config_h() -> bytes:
 def grbl_delay() -> Path:
     need_sources()
     return grbl_elf(delay_config_h())
+
+
+@pytest.fixture(scope="session")
+def klipper_build() -> tuple[Path, Path]:
+    """Klipper for the ATmega644P at 16 MHz (wavecheck's default .config): its ELF and dict."""
+    need_sources(KLIPPER_SRC)
+    from wavecheck.mcu.klipper import build
+
+    return build(KLIPPER_SRC, None)
+
+
+@pytest.fixture(scope="session")
+def klippy() -> Path:
+    need_sources(KLIPPER_SRC)
+    from wavecheck.mcu.build import build_klippy
+
+    return build_klippy(KLIPPER_SRC, sys.executable)

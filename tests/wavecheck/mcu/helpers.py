@@ -18,12 +18,13 @@ REPO = Path(__file__).resolve().parents[3]
 SRC = REPO.parent / "shared" / "firmware-src"
 GRBL_SRC = SRC / "grbl-1.1h"
 SIMAVR_SRC = SRC / "simavr"
+KLIPPER_SRC = SRC / "klipper"
 CLOCK_HZ = 16_000_000
 
 
-def need_sources() -> None:
+def need_sources(firmware: Path = GRBL_SRC) -> None:
     """Skip locally, fail in CI, when the firmware sources or avr-gcc are missing."""
-    missing = [str(p) for p in (GRBL_SRC, SIMAVR_SRC) if not p.is_dir()]
+    missing = [str(p) for p in (firmware, SIMAVR_SRC) if not p.is_dir()]
     missing += [t for t in ("avr-gcc", "avr-objdump", "gcc", "make") if not shutil.which(t)]
     if missing:
         if os.environ.get("CI"):

@@ -20,6 +20,17 @@
  *   "END done CYCLE", "END limit CYCLE", "END nobanner CYCLE", "END alarm CYCLE",
  *   "END crashed CYCLE".
  * Exit status: 0 when it ran (whatever the end), 2 for bad arguments or an unloadable ELF.
+ *
+ * Block mode (Klipper's binary protocol), chosen by the option --blocks=ADDR among the PINs:
+ * each input line is "NEED HEX", one message block and the number of move-queue slots its
+ * commands take. Nothing is sent before the cycle --start=N. Block k is sent when the MCU has
+ * answered block k-1 (any block whose sequence byte is the one after k-1's) and, if ADDR (the
+ * data address of the firmware's free-list head pointer) is not 0, when that list holds at least
+ * NEED nodes (walked every 1024 cycles while a block waits). Each block the MCU sends is printed
+ * as "CYCLE HEX". After the last answer the simulation runs to the cycle --until=N, then
+ * TAIL_CYCLES more. It stops at an MCU block whose payload starts with one of the --stop=HEX
+ * prefixes, and at a 5-byte block that repeats the sequence of the block in flight (a nak).
+ * Ends: "END done|limit|noanswer|stop|nak|crashed CYCLE".
  */
 #include <inttypes.h>
 #include <stdio.h>
@@ -34,6 +45,9 @@
 
 #define MAX_PINS 32
 #define MAX_LINE 512
+#define MAX_STOPS 8
+#define MAX_BLOCK 64	/* Klipper's MESSAGE_MAX */
+#define FREE_LIST_BOUND 65536	/* nodes walked at most (a corrupt list ends the walk) */
 
 typedef struct pin_t {
 	char name[64];
@@ -61,6 +75,16 @@ static uint64_t stop_at;
 static const char *end_reason = "done";
 static char rx[MAX_LINE];
 static size_t rx_len;
+
+/* block mode */
+static int blocks;
+static uint16_t free_list_addr;
+static uint64_t start_cycle, until_cycle, next_check;
+static int *needs;
+static uint8_t stops[MAX_STOPS][MAX_BLOCK];
+static size_t stop_len[MAX_STOPS];
+static int nstops;
+static int answered;	/* an answer came to the block in flight */
 
 static void
 vcd_change(pin_t *p, int value)
@@ -108,10 +132,55 @@ got_line(void)
 	rx_len = 0;
 }
 
+/* A whole block from the MCU in rx[0..rx_len): print it, note an answer or a stop. */
+static void
+got_block(void)
+{
+	const uint8_t *b = (const uint8_t *)rx;
+	printf("%" PRIu64 " ", avr->cycle);
+	for (size_t i = 0; i < rx_len; i++)
+		printf("%02x", b[i]);
+	printf("\n");
+	if (rx_len < 5 || b[0] != rx_len)
+		return;	/* not a block: the framing is the firmware's to get right */
+	for (int k = 0; k < nstops; k++)
+		if (rx_len - 2 >= stop_len[k] && !memcmp(b + 2, stops[k], stop_len[k])) {
+			end_reason = "stop";
+			state = STOP;
+			return;
+		}
+	if (state != WAIT_REPLY)
+		return;
+	unsigned sent = 0x10 | (cur_line & 0x0f);
+	unsigned next = 0x10 | ((cur_line + 1) & 0x0f);
+	if (b[1] == next) {
+		answered = 1;
+		cur_line++;
+		state = cur_line < nlines ? SENDING : TAIL;
+		if (state == TAIL)
+			stop_at = 1;
+	} else if (rx_len == 5 && b[1] == sent) {
+		end_reason = "nak";
+		state = STOP;
+	}
+}
+
 static void
 uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
 {
 	char c = value & 0xff;
+	if (blocks) {
+		if ((uint8_t)c == 0x7e) {
+			if (rx_len)
+				rx[rx_len++] = c;
+			if (rx_len)
+				got_block();
+			rx_len = 0;
+		} else if (rx_len < MAX_BLOCK) {
+			rx[rx_len++] = c;
+		}
+		return;
+	}
 	if (c == '\n')
 		got_line();
 	else if (rx_len < MAX_LINE - 1)
@@ -129,6 +198,78 @@ uart_xon(struct avr_irq_t *irq, uint32_t value, void *param)
 {
 	if (value & 1)
 		xoff = 0;
+}
+
+static int
+hexval(int c)
+{
+	if (c >= '0' && c <= '9')
+		return c - '0';
+	if (c >= 'a' && c <= 'f')
+		return c - 'a' + 10;
+	if (c >= 'A' && c <= 'F')
+		return c - 'A' + 10;
+	return -1;
+}
+
+/* HEX -> bytes in out (at most max); returns the count, or -1 for a malformed string. */
+static int
+unhex(const char *hex, uint8_t *out, size_t max)
+{
+	size_t n = strlen(hex);
+	if (n % 2 || n / 2 > max)
+		return -1;
+	for (size_t i = 0; i < n / 2; i++) {
+		int hi = hexval(hex[2 * i]), lo = hexval(hex[2 * i + 1]);
+		if (hi < 0 || lo < 0)
+			return -1;
+		out[i] = hi << 4 | lo;
+	}
+	return n / 2;
+}
+
+/* Block mode: each line "NEED HEX" becomes the bytes of one block (its first byte is its
+ * length). */
+static int
+read_blocks(void)
+{
+	size_t cap = 64;
+	char buf[4096];
+	lines = malloc(cap * sizeof(char *));
+	needs = malloc(cap * sizeof(int));
+	while (fgets(buf, sizeof(buf), stdin)) {
+		buf[strcspn(buf, "\r\n")] = 0;
+		char *sp = strchr(buf, ' ');
+		uint8_t bytes[MAX_BLOCK];
+		int n = sp ? unhex(sp + 1, bytes, sizeof(bytes)) : -1;
+		if (n < 5 || bytes[0] != n) {
+			fprintf(stderr, "input line %zu: expected NEED HEX, a whole message block\n",
+					nlines + 1);
+			return -1;
+		}
+		if (nlines == cap) {
+			lines = realloc(lines, (cap *= 2) * sizeof(char *));
+			needs = realloc(needs, cap * sizeof(int));
+		}
+		needs[nlines] = atoi(buf);
+		lines[nlines] = malloc(n);
+		memcpy(lines[nlines], bytes, n);
+		nlines++;
+	}
+	return 0;
+}
+
+/* The nodes on the firmware's free list (its head pointer at free_list_addr in data space). */
+static int
+free_nodes(void)
+{
+	int n = 0;
+	uint16_t p = avr->data[free_list_addr] | avr->data[free_list_addr + 1] << 8;
+	while (p && p + 1 <= avr->ramend && n < FREE_LIST_BOUND) {
+		n++;
+		p = avr->data[p] | avr->data[p + 1] << 8;
+	}
+	return n;
 }
 
 static void
@@ -189,6 +330,29 @@ main(int argc, char *argv[])
 
 	for (int i = 8; i < argc && npins < MAX_PINS; i++) {
 		pin_t *p = &pins[npins];
+		if (!strncmp(argv[i], "--", 2)) {
+			const char *v = strchr(argv[i], '=');
+			v = v ? v + 1 : "";
+			if (!strncmp(argv[i], "--blocks=", 9)) {
+				blocks = 1;
+				free_list_addr = strtoul(v, NULL, 0);
+			} else if (!strncmp(argv[i], "--start=", 8)) {
+				start_cycle = strtoull(v, NULL, 10);
+			} else if (!strncmp(argv[i], "--until=", 8)) {
+				until_cycle = strtoull(v, NULL, 10);
+			} else if (!strncmp(argv[i], "--stop=", 7) && nstops < MAX_STOPS) {
+				int n = unhex(v, stops[nstops], MAX_BLOCK);
+				if (n <= 0) {
+					fprintf(stderr, "%s: expected --stop=HEX\n", argv[i]);
+					return 2;
+				}
+				stop_len[nstops++] = n;
+			} else {
+				fprintf(stderr, "%s: not an option of this program\n", argv[i]);
+				return 2;
+			}
+			continue;
+		}
 		const char *eq = strchr(argv[i], '=');
 		if (!eq || eq - argv[i] >= (long)sizeof(p->name) || strlen(eq) != 4 || eq[2] != '.' ||
 				eq[3] < '0' || eq[3] > '7') {
@@ -259,7 +423,13 @@ main(int argc, char *argv[])
 	flags &= ~AVR_UART_FLAG_STDIO;
 	avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
 
-	read_lines();
+	if (blocks) {
+		if (read_blocks())
+			return 2;
+		banner = "";
+	} else {
+		read_lines();
+	}
 	if (!*banner)	/* no banner to wait for: send at once */
 		state = nlines ? SENDING : TAIL;
 	if (state == TAIL)
@@ -274,12 +444,32 @@ main(int argc, char *argv[])
 		if (state == STOP)
 			break;
 		if (state == TAIL && stop_at == 1)
-			stop_at = avr->cycle + tail_cycles;
+			stop_at = (until_cycle > avr->cycle ? until_cycle : avr->cycle) + tail_cycles;
 		if (state == TAIL && avr->cycle >= stop_at)
 			break;
 		if (avr->cycle >= max_cycles) {
-			end_reason = state == WAIT_BANNER ? "nobanner" : "limit";
+			end_reason = state == WAIT_BANNER ? "nobanner" :
+				blocks && !answered ? "noanswer" : "limit";
 			break;
+		}
+		if (blocks) {
+			if (state != SENDING || xoff || avr->cycle < start_cycle)
+				continue;
+			if (cur_pos == 0 && free_list_addr && needs[cur_line]) {
+				if (avr->cycle < next_check)
+					continue;
+				if (free_nodes() < needs[cur_line]) {
+					next_check = avr->cycle + 1024;
+					continue;
+				}
+			}
+			const uint8_t *b = (const uint8_t *)lines[cur_line];
+			avr_raise_irq(uart_in, b[cur_pos++]);	/* its sequence byte: cur_line's */
+			if (cur_pos == b[0]) {
+				cur_pos = 0;
+				state = WAIT_REPLY;
+			}
+			continue;
 		}
 		if (state == SENDING && !xoff) {
 			const char *l = lines[cur_line];

@@ -13,8 +13,9 @@ has it) and in the installed ``/usr/share/linuxcnc/hallib``. A HALFILE found now
 with the consequence, in :attr:`LinuxCNCFiles.not_read`.
 
 :class:`LinuxCNCFiles` also answers what the HAL commands say: which modules are loaded, the
-``setp`` values, which pins share a signal and which function runs in which thread. Shared by
-the software-stepgen and hm2 readers and by :mod:`.linuxcnc_config`, which decides from it.
+``setp`` values, which pins share a signal, which function runs in which thread and which joint
+(and axis letter) commands a step generator. The software-stepgen and hm2 readers of
+:mod:`wavecheck.firmware` decide from it.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
+from wavecheck.config_text import is_file, read_text
 from wavecheck.errors import ConfigError
 from wavecheck.linuxcnc.files import (
     HalLine,
@@ -32,9 +34,7 @@ from wavecheck.linuxcnc.files import (
     hal_lines,
     hal_words,
     ini_value,
-    is_file,
     read_ini,
-    read_text,
 )
 
 __all__ = ["LinuxCNCFiles", "expand_refs", "hallib_dirs", "is_ini", "scan"]
@@ -168,6 +168,31 @@ class LinuxCNCFiles:
         value = self.ini.get(section, key)
         assert value is not None
         return value[0], self.ini.place(section, key)
+
+    def joint_of(self, gen: str) -> tuple[int | None, str]:
+        """(the joint whose command drives ``gen``, that joint's axis letter or "")."""
+        joint = None
+        for pin in (f"{gen}.position-cmd", f"{gen}.velocity-cmd"):
+            for other in self.on_signal(pin):
+                m = re.fullmatch(
+                    r"joint\.(\d{1,3})\.motor-pos-cmd|axis\.(\d{1,3})\.motor-pos-cmd", other
+                )
+                if m:
+                    joint = int(m.group(1) or m.group(2))
+        if joint is None:
+            return None, ""
+        return joint, self._letter(joint)
+
+    def _letter(self, joint: int) -> str:
+        kins = self.ini_setting("KINS", "KINEMATICS")
+        coords = ""
+        if kins:
+            m = re.search(r"coordinates=(\w+)", kins[0])
+            coords = m.group(1) if m else ""
+        if not coords:
+            traj = self.ini_setting("TRAJ", "COORDINATES")
+            coords = "".join(traj[0].split()) if traj else ""
+        return coords[joint].lower() if joint < len(coords) else ""
 
 
 def scan(

@@ -1,7 +1,7 @@
 """``stepgen simulate --ini/--hal``: fill the simulate options from LinuxCNC's own files.
 
 The stepgen settings (:func:`~wavecheck.linuxcnc.stepgen_config.read_config`) and, with ``--pid``,
-the joint's pid and following-error limits (:func:`~wavecheck.linuxcnc.stepgen_config.read_pid_config`:
+the joint's pid and following-error limits (:func:`~wavecheck.linuxcnc.pid_settings.read_pid_config`:
 ``setp pid.N.Pgain …``, ``[JOINT_n] P, I, D, FF0, FF1, FF2, BIAS, DEADBAND, MAX_OUTPUT, FERROR,
 MIN_FERROR, MAX_VELOCITY``; ``MAX_VELOCITY``/``MAX_ACCELERATION`` also as ``--move``'s limits)
 fill every option not given on the command line.
@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from stepgen.cli.pid_options import GAIN_OPTIONS
-from wavecheck.cli.linuxcnc import add_file_arguments
+from wavecheck.cli._linuxcnc_args import add_file_arguments
 from wavecheck.errors import ConfigError
 
 if TYPE_CHECKING:  # the readers are imported only when files are given
