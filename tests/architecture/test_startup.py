@@ -166,21 +166,20 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.capture.formats", "wavecheck.capture.open", "wavecheck.capture.sr",
             "wavecheck.capture.srzip", "wavecheck.cli", "wavecheck.cli._axis_args",
             "wavecheck.cli._batch", "wavecheck.cli._capture_args", "wavecheck.cli._check_flow",
-            "wavecheck.cli._firmware_args", "wavecheck.cli._formats", "wavecheck.cli._main",
-            "wavecheck.cli._reports", "wavecheck.cli._stepgen_args", "wavecheck.cli._steps_args",
-            "wavecheck.cli._tuning_args", "wavecheck.cli.check", "wavecheck.cli.linuxcnc",
-            "wavecheck.drives", "wavecheck.drives.datasheet", "wavecheck.drives.library",
-            "wavecheck.drives.overrides", "wavecheck.engine", "wavecheck.engine.axis",
-            "wavecheck.engine.intervals", "wavecheck.engine.judge", "wavecheck.engine.options",
-            "wavecheck.engine.outcome", "wavecheck.engine.rates", "wavecheck.engine.resolve",
-            "wavecheck.engine.results", "wavecheck.engine.run", "wavecheck.engine.sinks",
-            "wavecheck.engine.trace", "wavecheck.engine.windows", "wavecheck.errors",
-            "wavecheck.firmware", "wavecheck.linuxcnc", "wavecheck.linuxcnc.files",
-            "wavecheck.linuxcnc.stepgen_config", "wavecheck.linuxcnc.timing", "wavecheck.output",
-            "wavecheck.progress", "wavecheck.report", "wavecheck.report.assumptions",
-            "wavecheck.report.claims", "wavecheck.report.groups", "wavecheck.report.json",
-            "wavecheck.report.machine", "wavecheck.report.text", "wavecheck.rules",
-            "wavecheck.sigrok", "wavecheck.sigrok.session", "wavecheck.steps",
+            "wavecheck.cli._firmware_args", "wavecheck.cli._formats",
+            "wavecheck.cli._linuxcnc_args", "wavecheck.cli._main", "wavecheck.cli._reports",
+            "wavecheck.cli._stepgen_args", "wavecheck.cli._steps_args",
+            "wavecheck.cli._tuning_args", "wavecheck.cli.check", "wavecheck.drives",
+            "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.drives.overrides",
+            "wavecheck.engine", "wavecheck.engine.axis", "wavecheck.engine.intervals",
+            "wavecheck.engine.judge", "wavecheck.engine.options", "wavecheck.engine.outcome",
+            "wavecheck.engine.rates", "wavecheck.engine.resolve", "wavecheck.engine.results",
+            "wavecheck.engine.run", "wavecheck.engine.sinks", "wavecheck.engine.trace",
+            "wavecheck.engine.windows", "wavecheck.errors", "wavecheck.firmware",
+            "wavecheck.output", "wavecheck.progress", "wavecheck.report",
+            "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
+            "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
+            "wavecheck.rules", "wavecheck.sigrok", "wavecheck.sigrok.session", "wavecheck.steps",
             "wavecheck.steps.decode", "wavecheck.steps.interface", "wavecheck.steps.mapping",
             "wavecheck.steps.primitives", "wavecheck.steptypes", "wavecheck.timebase",
             "wavecheck.units", "wavecheck.verdict",
@@ -189,9 +188,10 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
 }  # fmt: skip
 
 #: Never on those paths: roles inference (the channels are mapped), the firmware records and
-#: readers (no --firmware), the steps CSV writer, json (a text report), numpy.ma (np.unique).
-NOT_LOADED = ("wavecheck.roles", "wavecheck.firmware.guarantee", "wavecheck.report.steps_csv",
-              "json", "numpy.ma")  # fmt: skip
+#: readers (no --firmware), the LinuxCNC configuration (no --ini/--hal/--base-period), the
+#: steps CSV writer, json (a text report), numpy.ma (np.unique).
+NOT_LOADED = ("wavecheck.roles", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
+              "wavecheck.report.steps_csv", "json", "numpy.ma")  # fmt: skip
 
 
 @pytest.mark.parametrize("path", list(PINNED))
@@ -209,6 +209,7 @@ def test_a_short_path_loads_the_pinned_modules(path: str) -> None:
     [
         (["--steps-csv", "STEPS"], "wavecheck.report.steps_csv"),
         (["--format", "json"], "json"),
+        (["--base-period", "25us"], "wavecheck.linuxcnc.stepgen_config"),
         (
             ["--firmware", str(ROOT / "captures/firmware/grbl/settings.md")],
             "wavecheck.firmware.guarantee",

@@ -52,11 +52,11 @@ _CONFIG_OPTIONS = {
 
 def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
     """The stepgen configuration of ``--ini``/``--hal``/``--base-period``/… (None: not given)."""
-    from wavecheck.linuxcnc.stepgen_config import read_config
-
     cfg = None
     given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
     if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):
+        from wavecheck.linuxcnc.stepgen_config import read_config
+
         cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
         for name, text in given.items():
             if text is None:

@@ -24,7 +24,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
 from wavecheck.engine import MachineReport, Report, RuleResult, Violation
-from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
@@ -32,6 +31,7 @@ from wavecheck.units import json_number
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
+    from wavecheck.linuxcnc.stepgen_config import ConfigRates
 
 __all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict"]
 
