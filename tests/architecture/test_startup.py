@@ -167,8 +167,8 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.capture.srzip", "wavecheck.cli", "wavecheck.cli._axis_args",
             "wavecheck.cli._batch", "wavecheck.cli._capture_args", "wavecheck.cli._check_flow",
             "wavecheck.cli._firmware_args", "wavecheck.cli._formats",
-            "wavecheck.cli._linuxcnc_args", "wavecheck.cli._main", "wavecheck.cli._reports",
-            "wavecheck.cli._stepgen_args", "wavecheck.cli._steps_args",
+            "wavecheck.cli._linuxcnc_args", "wavecheck.cli._main", "wavecheck.cli._pulseview_args",
+            "wavecheck.cli._reports", "wavecheck.cli._stepgen_args", "wavecheck.cli._steps_args",
             "wavecheck.cli._tuning_args", "wavecheck.cli.check", "wavecheck.drives",
             "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.drives.overrides",
             "wavecheck.engine", "wavecheck.engine.axis", "wavecheck.engine.intervals",
@@ -179,19 +179,20 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.output", "wavecheck.progress", "wavecheck.report",
             "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
             "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
-            "wavecheck.rules", "wavecheck.sigrok", "wavecheck.sigrok.session", "wavecheck.steps",
-            "wavecheck.steps.decode", "wavecheck.steps.interface", "wavecheck.steps.mapping",
-            "wavecheck.steps.primitives", "wavecheck.steptypes", "wavecheck.timebase",
-            "wavecheck.units", "wavecheck.verdict",
+            "wavecheck.rules", "wavecheck.steps", "wavecheck.steps.decode",
+            "wavecheck.steps.interface", "wavecheck.steps.mapping", "wavecheck.steps.primitives",
+            "wavecheck.steptypes", "wavecheck.timebase", "wavecheck.units", "wavecheck.verdict",
         },
     ),
 }  # fmt: skip
 
 #: Never on those paths: roles inference (the channels are mapped), the firmware records and
 #: readers (no --firmware), the LinuxCNC configuration (no --ini/--hal/--base-period), the
-#: steps CSV writer, json (a text report), numpy.ma (np.unique).
+#: steps CSV writer, the PulseView session writer, json (a text report), tempfile (only standard
+#: input is spooled), numpy.ma (np.unique).
 NOT_LOADED = ("wavecheck.roles", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
-              "wavecheck.report.steps_csv", "json", "numpy.ma")  # fmt: skip
+              "wavecheck.report.steps_csv", "wavecheck.sigrok.session", "json", "tempfile",
+              "numpy.ma")  # fmt: skip
 
 
 @pytest.mark.parametrize("path", list(PINNED))
@@ -210,6 +211,7 @@ def test_a_short_path_loads_the_pinned_modules(path: str) -> None:
         (["--steps-csv", "STEPS"], "wavecheck.report.steps_csv"),
         (["--format", "json"], "json"),
         (["--base-period", "25us"], "wavecheck.linuxcnc.stepgen_config"),
+        (["--pulseview", "PVS"], "wavecheck.sigrok.session"),
         (
             ["--firmware", str(ROOT / "captures/firmware/grbl/settings.md")],
             "wavecheck.firmware.guarantee",
@@ -222,7 +224,10 @@ def test_the_option_that_needs_a_lazy_module_loads_it(
 ) -> None:
     argv = [
         *PINNED["check sr --map"][0],
-        *(str(tmp_path / "s.csv") if o == "STEPS" else o for o in option),
+        *(
+            {"STEPS": str(tmp_path / "s.csv"), "PVS": str(tmp_path / "s.pvs")}.get(o, o)
+            for o in option
+        ),
     ]
     assert module in _loaded_after(argv)
 
