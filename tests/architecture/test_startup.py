@@ -156,7 +156,6 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.cli._tuning_args", "wavecheck.cli.drives", "wavecheck.drives",
             "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.errors",
             "wavecheck.output", "wavecheck.rules", "wavecheck.steptypes", "wavecheck.units",
-            "wavecheck.verdict",
         },
     ),
     "check sr --map": (

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, ParamSpec, TypeAlias
 
 from wavecheck.cli._tuning_args import required
-from wavecheck.verdict import overall_verdict
 
 if TYPE_CHECKING:  # the reports load numpy: imported where used (wavecheck drives has none)
     from wavecheck.engine import MachineReport, Report
@@ -146,6 +145,8 @@ def _json_piece(checked: Checked, args: argparse.Namespace) -> tuple[str, Counts
 def _json_join(
     ok: list[Part], errors: list[tuple[str, str]], error_lines: list[str], code: int
 ) -> Iterator[str]:
+    from wavecheck.verdict import overall_verdict
+
     verdict: str = overall_verdict([str(p.verdict) for p in ok]) if ok else "unchecked"  # type: ignore[arg-type]
     if errors:
         verdict = "error"
