@@ -3,7 +3,8 @@
 ``python bench/roles_infer.py [--old 2839247] [--timeout 120]`` writes (deterministically) a VCD
 of 55 lines of bus data on one clock, ~8 KB as in the issue (``bench/data/bus55.vcd``), and one
 of 100 such lines (``bus100.vcd``), and one of 100 square waves at two periods and random
-offsets (``waves100.vcd``: any two at one period are quadrature). For each it runs ``wavecheck
+offsets (``waves100.vcd``: any two at one period are quadrature), and one of 50 step/dir axes
+that reverse (``axes100.vcd``: every pair tried as STEP and DIR). For each it runs ``wavecheck
 info FILE`` with today's tree and with the tree of commit ``--old`` (main before issue 33:
 ``git archive`` into a temporary folder, removed after the run (an unpacked tree under the
 repository would be scanned by tests/architecture), run with ``PYTHONPATH`` on it; stopped after
@@ -71,10 +72,30 @@ def make_inputs(dest: Path) -> list[Path]:
         f"w{i}": (np.arange(int(rng.integers(0, 4)), 120, 4 + i % 2) * 100 + i).tolist()
         for i in range(100)
     }
+
+    def axes(n: int) -> dict[str, list[int]]:
+        """``n`` step/dir axes (2n lines) that reverse every 8-19 steps, each move speeding up
+        and slowing down: every pair is tried as STEP and DIR, up/down and bus."""
+        out = {}
+        for k in range(n):
+            starts: list[int] = []
+            dirs: list[int] = []
+            t = k * 37_000
+            for m in rng.integers(8, 20, 4):
+                ramp = [(3.7, 1.55, 1.2)[min(j, m - 1 - j)] if min(j, m - 1 - j) < 3 else 1.0
+                        for j in range(m)]  # fmt: skip
+                starts += (t + np.cumsum(ramp) * (90 + k) * 1000).astype(int).tolist()
+                t = starts[-1] + 5 * (90 + k) * 1000
+                dirs.append(t + 3 * (90 + k) * 1000 - 10_000)
+            out[f"s{k}"] = [e for x in starts for e in (x, x + 5000)]
+            out[f"d{k}"] = dirs[:-1]
+        return out
+
     return [
         _vcd(dest / "bus55.vcd", bus(55)),
         _vcd(dest / "bus100.vcd", bus(100)),
         _vcd(dest / "waves100.vcd", waves),
+        _vcd(dest / "axes100.vcd", axes(50)),
     ]
 
 

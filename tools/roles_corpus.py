@@ -11,6 +11,9 @@ against what the captures' READMEs say:
   YA/YB outputs) carry quadrature: phase axes of step type 2 are right there, nothing else.
 - every other capture carries no step signal: any axis proposed is wrong.
 
+A stepper capture's map (proposed, or suggested when nothing is) keeps every README DIR, or the
+totals say how many do not (issue 33).
+
 A stepper capture is ``right`` when its axes are the README's (an ENABLE only on the README's
 ENABLE line), ``refused`` when nothing or only an ambiguity is proposed, else ``wrong``. One line
 per capture, then the totals; exit 1 when anything is wrong.
@@ -49,6 +52,7 @@ class Row:
     verdict: str  # "right", "refused", "wrong", "none" (nothing proposed, as it should), "unread"
     axes: int
     text: str
+    dirs_kept: bool | None = None  # stepper captures: every README DIR in the (suggested) map
 
 
 def _expected(rel: str) -> tuple[tuple[dict[str, int], ...], frozenset[int]] | None:
@@ -65,7 +69,19 @@ def _describe(p: Proposal) -> str:
         out += f" ({len(p.ambiguous)} ambiguous)"
     if not p.axes and not p.ambiguous:
         out += f": {p.summary()}"
+        if p.suggested:
+            out += f"; suggested {p.suggested_map_args()}"
     return out
+
+
+def dirs_kept(rel: str, p: Proposal) -> bool | None:
+    """For a stepper capture: whether every README DIR is in the map proposed, or suggested
+    when nothing is proposed (issue 33: a suggested map never drops a DIR); else None."""
+    expected = _expected(rel)
+    if expected is None:
+        return None
+    given = {(r.role, r.index) for a in (p.axes or p.suggested) for r in a.roles}
+    return all(("dir", e["dir"]) in given for e in expected[0] if "dir" in e)
 
 
 def judge(rel: str, p: Proposal) -> tuple[str, str]:
@@ -109,7 +125,7 @@ def evaluate(root: Path) -> list[Row]:
             continue
         p = propose(cap)
         carries, verdict = judge(rel, p)
-        rows.append(Row(rel, carries, verdict, len(p.axes), _describe(p)))
+        rows.append(Row(rel, carries, verdict, len(p.axes), _describe(p), dirs_kept(rel, p)))
     return rows
 
 
@@ -125,7 +141,9 @@ def totals(rows: list[Row]) -> str:
         f"stepper captures {len(steppers)}: {sum(r.verdict == 'right' for r in steppers)} right, "
         f"{sum(r.verdict == 'refused' for r in steppers)} refused; quadrature captures "
         f"{len(quad)}: {sum(r.verdict == 'right' for r in quad)} right; other captures "
-        f"{len(others)}: axes proposed on {sum(r.axes > 0 for r in others)}; wrong {len(wrong)}"
+        f"{len(others)}: axes proposed on {sum(r.axes > 0 for r in others)}; wrong {len(wrong)}; "
+        f"stepper maps (proposed or suggested) keeping every README DIR: "
+        f"{sum(bool(r.dirs_kept) for r in steppers)} of {len(steppers)}"
     )
 
 

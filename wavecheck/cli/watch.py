@@ -268,7 +268,8 @@ def run(args: argparse.Namespace) -> int:
     def start(capture: Capture) -> MachineCheck:
         """The live check of ``args``' axes (roles resolved against ``capture``)."""
         axes, found[:] = axes_for(options, capture)
-        machine = machine_for(scanner.skeleton, options, axes, found)
+        read = capture if capture is not scanner.skeleton else None  # names judged on it
+        machine = machine_for(scanner.skeleton, options, axes, found, waveforms=read)
         if snippets is not None:  # each snippet says how to check it again
             snippets.check = replay_arguments(args, [a.plan for a in machine.axes], names)
         return machine

@@ -10,6 +10,7 @@ feeds the plan's channels block by block.
 
 from __future__ import annotations
 
+import shlex
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from fractions import Fraction
@@ -51,12 +52,25 @@ __all__ = [
 ]
 
 
-def auto_map(capture: Capture, st: StepType, taken: Iterable[str] = ()) -> dict[str, str]:
+def auto_map(
+    capture: Capture,
+    st: StepType,
+    taken: Iterable[str] = (),
+    waveforms: Capture | None = None,
+) -> dict[str, str]:
     """Map roles to channels named after them (``STEP``, ``dir``, ``stepgen.0.phase-A`` …).
 
     A role is mapped only when exactly one channel's name (its last dotted part, any case) is the
     role's name; roles the user maps explicitly take precedence over this, and a channel in
     ``taken`` (the channels the user mapped, by name) is never mapped again to another role.
+
+    A name is a hint, not evidence: given ``waveforms`` (the capture's edges, or its first
+    part), a STEP, UP or DOWN so mapped whose waveform makes no step pulses (a free-running
+    clock, a bus line, not one whole pulse; :func:`wavecheck.roles.name_conflicts`) is
+    refused with the reason and the lines most like a STEP.
+
+    Raises:
+        UsageError: a name the waveform contradicts.
     """
     roles = (*st.outputs, "enable")
     used = set(taken)
@@ -65,7 +79,36 @@ def auto_map(capture: Capture, st: StepType, taken: Iterable[str] = ()) -> dict[
         hits = [c for c in capture.channels if leaf_name(c.name) == role.lower()]
         if len(hits) == 1 and hits[0].name not in used:
             mapping[role] = hits[0].name
+    if waveforms is not None:
+        _refuse_contradicted_names(waveforms, mapping)
     return mapping
+
+
+def _refuse_contradicted_names(waveforms: Capture, mapping: Mapping[str, str]) -> None:
+    """Raise a UsageError when a pulse role of ``mapping`` (role → channel name, mapped by
+    name) is a line whose waveform makes no step pulses; the candidates on the lines below."""
+    from wavecheck.roles import PULSE_NAMES, name_conflicts
+
+    index = {c.name: c.index for c in waveforms.channels}
+    named = {r: index[ch] for r, ch in mapping.items() if r in PULSE_NAMES and ch in index}
+    refused = name_conflicts(waveforms, named) if named else ()
+    if not refused:
+        return
+    first = refused[0]
+    hint = f"{first.role}={first.others[0]}" if first.others else f"{first.role}=LINE"
+    raise UsageError(
+        f"{waveforms.path}: {first.conflict.question}: give the {first.role.upper()} line "
+        f"(e.g. --map {shlex.quote(hint)}), or --map {shlex.quote(f'{first.role}={first.ref}')} "
+        "to check this line anyway",
+        tuple(
+            line
+            for k, r in enumerate(refused)
+            for line in (
+                "candidates:" if k == 0 else f"{r.conflict.question}:",
+                *(f"  - {cand}" for cand in r.conflict.candidates),
+            )
+        ),
+    )
 
 
 def _suggest_type(capture: Capture, st: StepType) -> None:
@@ -319,7 +362,7 @@ def plan_axis(
             else default_step_type(drive)
         )
     st = step_type(number, options.user_table)
-    full_map = auto_map(capture, st, mapped_channel_names(capture, explicit))
+    full_map = auto_map(capture, st, mapped_channel_names(capture, explicit), waveforms)
     full_map.update(explicit)
     iface = build_interface(capture, full_map, [*invert, *axis.invert])
     for role in st.pulse_roles:

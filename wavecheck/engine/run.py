@@ -52,6 +52,10 @@ TIMER_TICKS = 1 << 14
 #: Fewest step times from which the note tells anything.
 TIMER_MIN = 64
 
+#: The roles that carry an axis's motion: an axis mapping none of them takes its pulse line by
+#: a channel's name.
+_PULSE_ROLES = frozenset({"step", "up", "down", *(f"phase-{x}" for x in "abcde")})
+
 StepSinks = Callable[[AxisPlan], Sequence[StepSink]]
 IntervalSinks = Callable[[AxisPlan], IntervalSink | None]
 
@@ -77,11 +81,11 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
 
     proposal = propose(capture)
     if not proposal.axes and not proposal.ambiguous:
-        best = proposal.candidates[:1]
-        hint = f" (e.g. --map step={shlex.quote(best[0])})" if best else ""
+        hint = (
+            f"; {proposal.hint()}" if proposal.suggested else "; give --map to check a line anyway"
+        )
         raise UsageError(
-            f"{capture.path}: no step signal found: the lines look like {proposal.summary()}; "
-            f"give --map to check a line anyway{hint}"
+            f"{capture.path}: no step signal found: the lines look like {proposal.summary()}{hint}"
         )
     if not proposal.unambiguous:
         example = proposal.map_args() if proposal.axes else ""
@@ -238,9 +242,14 @@ def axes_for(options: CheckOptions, capture: Capture) -> tuple[list[AxisMap], li
 
 def needs_waveforms(options: CheckOptions, skeleton: Capture) -> bool:
     """Whether the axes must be told from the waveforms (no mapping, no channel named after a
-    role; or, measured without a drive or step type, phase outputs: the step type they walk):
-    the edges of every channel are needed first."""
-    if not options.axes and not names_give_roles(skeleton):
+    role; or, measured without a drive or step type, phase outputs: the step type they walk) or
+    the names judged against them (an axis whose pulse line is left to a channel's name:
+    :func:`wavecheck.engine.resolve.auto_map`): the edges of every channel are needed first."""
+    named = names_give_roles(skeleton)
+    if not options.axes and not named:
+        return True
+    axes = options.axes or [AxisMap(None)]
+    if named and any(not {r.lower() for r in a.roles} & _PULSE_ROLES for a in axes):
         return True
     phases = any(leaf_name(c.name).startswith("phase-") for c in skeleton.channels)
     return options.measure_only and phases and not options.step_type
@@ -290,7 +299,7 @@ def start(
         before = _tick_of_edge(assemble(skeleton, read), options.infer_edges)
         waveforms = assemble(skeleton, read, before=before)
         axes, found = axes_for(options, waveforms)
-        if before < NEVER:
+        if before < NEVER and found:
             at = format_time(skeleton.timebase.seconds(before))
             found = [f"{found[0]} (told from the first {options.infer_edges} edges, to {at})"]
     else:

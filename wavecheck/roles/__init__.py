@@ -6,9 +6,13 @@ lines, channels left unassigned with why, the conflicts the waveforms cannot set
 looks like, and the channels most like a STEP (for hints). No role is given that the waveform
 contradicts. The rules:
 
-- **names after roles**: when a channel is called ``step``, ``up`` or ``phase-A`` (the end of a
-  hierarchical name, any case), the axis is the one ``check`` maps by those names without
-  ``--map``; what the waveforms say against it goes into its notes.
+- **names after roles** (:mod:`wavecheck.roles.named`): when a channel is called ``step``,
+  ``up`` or ``phase-A`` (the end of a hierarchical name, any case), the axis is the one
+  ``check`` maps by those names without ``--map``; what the waveforms say against it goes into
+  its notes. A name is a hint, not evidence: a STEP, UP or DOWN so named whose waveform makes
+  no step pulses (a bus's clock, data or gate, a free-running clock, not one whole pulse) is
+  refused, with the reason and the lines most like a STEP (:func:`name_conflicts`, which
+  ``check`` asks too).
 - **STEP**: a step train: many pulses at one level with nearly constant width, no longer than
   the gaps, at a rate that changes as a motor's does (:mod:`wavecheck.roles.features`,
   :mod:`wavecheck.roles.periodic`). A clock (one period, about 50 % duty, no pause) and PWM (one
@@ -65,17 +69,23 @@ contradicts. The rules:
 - **names** (:mod:`wavecheck.roles.names`) name the axes and break ties; the waveform decides,
   and the evidence says when a name disagreed.
 
+- **no axis found** (:mod:`wavecheck.roles.result`): the proposal's ``suggested`` axes are
+  what to check *if* the lines most like a STEP are STEPs (every line of a few pulses, else the
+  best one), each with a DIR named like its axis's or the unchanging channel after it: the
+  refusal's hint never drops a DIR the capture may have.
+
 Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x``,
 ``stepgen.2.step`` → ``2``), else ``a``, ``b`` … in channel order (skipping letters the names
 took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
-from wavecheck.roles.infer import best_channel, propose
+from wavecheck.roles.infer import PULSE_NAMES, best_channel, name_conflicts, propose
 from wavecheck.roles.proposal import (
     AxisProposal,
     Basis,
     Conflict,
     LineLook,
+    NameRefused,
     Proposal,
     RoleChoice,
     SharedLine,
@@ -83,14 +93,17 @@ from wavecheck.roles.proposal import (
 )
 
 __all__ = [
+    "PULSE_NAMES",
     "AxisProposal",
     "Basis",
     "Conflict",
     "LineLook",
+    "NameRefused",
     "Proposal",
     "RoleChoice",
     "SharedLine",
     "Unassigned",
     "best_channel",
+    "name_conflicts",
     "propose",
 ]

@@ -120,6 +120,23 @@ class Conflict:
 
 
 @dataclass(frozen=True)
+class NameRefused:
+    """A channel named after a pulse role whose waveform says it is none (a name is a hint).
+
+    Attributes:
+        role: the role it is named after (``"step"``, ``"up"``, ``"down"``).
+        ref: its ``--map`` reference.
+        others: ``--map`` references of the other lines most like a STEP, best first.
+        conflict: the question, with the line and those others as candidates.
+    """
+
+    role: str
+    ref: str
+    others: tuple[str, ...]
+    conflict: Conflict
+
+
+@dataclass(frozen=True)
 class LineLook:
     """What one channel looks like, in a word or two (``"clock"``, ``"bus data"``)."""
 
@@ -152,6 +169,21 @@ _SUMMARY: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 
 
+def axes_map_args(axes: tuple[AxisProposal, ...]) -> str:
+    """The ``--map`` options that give ``axes``, ready to paste into a shell (one axis unnamed)."""
+    groups: list[tuple[str | None, AxisProposal]]
+    if len(axes) == 1:
+        groups = [(None, axes[0])]
+    else:
+        groups = [(a.name, a) for a in axes]
+    out: list[str] = []
+    for prefix, axis in groups:
+        pre = f"{prefix}." if prefix is not None else ""
+        value = ",".join(f"{pre}{r.role}={r.ref}" for r in axis.roles)
+        out.append(f"--map {shlex.quote(value)}")
+    return " ".join(out)
+
+
 @dataclass(frozen=True)
 class Proposal:
     """Roles proposed for a capture's channels (see :func:`wavecheck.roles.propose`).
@@ -172,6 +204,10 @@ class Proposal:
     named: bool = False
     """The channels are named after their roles (``step``, ``up``, ``phase-A``): the axis is the
     one ``check`` maps by those names without ``--map``, with what the waveforms say of it."""
+    suggested: tuple[AxisProposal, ...] = ()
+    """When no axis is found: the axes to check *if* the lines most like a STEP are STEPs (every
+    line of a few pulses, else the best one), each with the DIR a name or the layout gives it
+    (never one dropped); a hint for the refusal, not a finding."""
 
     @property
     def unambiguous(self) -> bool:
@@ -213,17 +249,29 @@ class Proposal:
 
     def map_args(self) -> str:
         """The ``--map`` options that give this mapping, ready to paste into a shell."""
-        groups: list[tuple[str | None, AxisProposal]]
-        if len(self.axes) == 1:
-            groups = [(None, self.axes[0])]
-        else:
-            groups = [(a.name, a) for a in self.axes]
-        out: list[str] = []
-        for prefix, axis in groups:
-            pre = f"{prefix}." if prefix is not None else ""
-            value = ",".join(f"{pre}{r.role}={r.ref}" for r in axis.roles)
-            out.append(f"--map {shlex.quote(value)}")
-        return " ".join(out)
+        return axes_map_args(self.axes)
+
+    def suggested_map_args(self) -> str:
+        """The ``--map`` options of :attr:`suggested` (empty when none)."""
+        return axes_map_args(self.suggested) if self.suggested else ""
+
+    def hint(self) -> str:
+        """What a refusal without axes says of the lines most like a STEP (:attr:`suggested`):
+        which they are, what is missing, and the ``--map`` that checks them anyway with every
+        DIR; empty when there is none."""
+        if not self.suggested:
+            return ""
+        steps = [a.roles[0] for a in self.suggested]
+        lines = ", ".join(f"{r.index}={r.channel!r} ({r.evidence.split(',')[0]})" for r in steps)
+        layout = any(r.basis == "layout" for a in self.suggested for r in a.roles)
+        words = (
+            "; the DIR of each is the unchanging channel after it (layout only)" if layout else ""
+        )
+        return (
+            f"the lines most like a STEP are no step train on their waveform: {lines}, and no "
+            "line changes between their pulses as a DIR would; to check them anyway: "
+            f"{self.suggested_map_args()}{words}"
+        )
 
     def type_args(self) -> str:
         """``--type`` options for axes that are not step/dir (``--type 2``; with several axes
@@ -280,6 +328,7 @@ class Proposal:
             "lines": [{"channel": k.channel, "index": k.index, "look": k.word} for k in self.looks],
             "candidates": list(self.candidates),
             "map_args": self.map_args() if self.axes else None,
+            "suggested_map_args": self.suggested_map_args() or None,
         }
 
     def text(self) -> str:
@@ -306,4 +355,6 @@ class Proposal:
             )
         if not self.axes and not self.ambiguous:
             lines.append(f"no step signal found: the lines look like {self.summary()}")
+            if self.suggested:
+                lines.append(self.hint())
         return "\n".join(lines)

@@ -1,7 +1,8 @@
 """UP/DOWN lines: two pulse lines that never pulse together and take turns.
 
 Two pulse trains fit as an up/down pair when they have the same pulse level and about the same
-pulse width (one step generator drives both), never overlap, and at each switch from one line to
+pulse width (one step generator drives both: medians within 20 %, and each line's median width
+within the other's range of widths, as latency varies both alike), never overlap, and at each switch from one line to
 the other the period is no shorter than the periods beside it (a line pulsing within the other's
 run is another axis). Which pairs to propose is decided in :mod:`wavecheck.roles.infer`.
 """
@@ -44,6 +45,12 @@ def up_down(p: Pulses, q: Pulses, resolution: int) -> UpDownFit | None:
     wp, wq = float(np.median(p.widths)), float(np.median(q.widths))
     if max(wp, wq) > _SAME_WIDTH * min(wp, wq) + 2 * resolution:
         return None  # one step generator drives both lines: same pulse level and width
+    slack = 2 * resolution
+    if not (
+        int(p.widths.min()) - slack <= wq <= int(p.widths.max()) + slack
+        and int(q.widths.min()) - slack <= wp <= int(q.widths.max()) + slack
+    ):
+        return None  # each line's usual width is one the other makes too (latency varies both)
     s = np.concatenate([p.starts, q.starts])
     e = np.concatenate([p.ends, q.ends])
     lab = np.concatenate([np.zeros(p.count, np.int8), np.ones(q.count, np.int8)])

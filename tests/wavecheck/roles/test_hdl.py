@@ -13,8 +13,11 @@ from pathlib import Path
 
 import pytest
 
+from tests.engine_probe import options
 from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
+from wavecheck.engine import axes_for, plan_axes
+from wavecheck.errors import UsageError
 from wavecheck.roles import Proposal, propose
 
 from ..waves import renamed
@@ -47,6 +50,22 @@ def _neutral(cap: Capture) -> Capture:
     return renamed(cap, [f"n{c.index}" for c in cap.channels])
 
 
+def _checked(cap: Capture) -> set[int] | None:
+    """The channels ``check`` (against a DRV8825, no --map) would read, or None when it
+    refuses: the axes as the engine finds them (names, else waveforms), planned."""
+    opts = options("drv8825")
+    try:
+        axes, _ = axes_for(opts, cap)
+        plans = plan_axes(cap, axes, opts, cap)
+    except UsageError:
+        return None
+    return {i for p in plans for i in p.channels}
+
+
+def _named(cap: Capture, names: dict[str, str]) -> Capture:
+    return renamed(cap, [names.get(c.name, c.name) for c in cap.channels])
+
+
 @pytest.mark.parametrize("defines", [(), ("EPP_DATA_ONLY",)], ids=["addr+data", "data only"])
 def test_parallel_port_step_generator_testbench(tmp_path: Path, defines: tuple[str, ...]) -> None:
     """Issue 33: the EPP lines were taken as a quadrature pair and failed a DRV8825, the real
@@ -64,6 +83,14 @@ def test_parallel_port_step_generator_testbench(tmp_path: Path, defines: tuple[s
     q = propose(_neutral(cap))
     assert {r.index for a in q.axes for r in a.roles} <= steps, q.text()
     assert not any(a.kind == "phases" for a in q.axes), q.text()
+    # check reads the step outputs and nothing else, named or not; a line named after a role
+    # is judged on its waveform: the bus clock called "step" is refused, not checked
+    assert _checked(cap) == steps
+    assert _checked(_neutral(cap)) is None  # refused: no line of it is taken for a STEP
+    assert _checked(_named(cap, {"step0": "step", "dir0": "dir"})) == {
+        cap.channel(n).index for n in ("step0", "dir0")
+    }
+    assert _checked(_named(cap, {"clk": "step"})) is None
 
 
 def test_gate_level_pwm_controller_has_no_axis(tmp_path: Path) -> None:
@@ -76,6 +103,12 @@ def test_gate_level_pwm_controller_has_no_axis(tmp_path: Path) -> None:
     for c in (cap, _neutral(cap)):
         p = propose(c)
         assert not p.axes and not p.ambiguous, p.text()
+        assert _checked(c) is None
+    # its PWM output or its clock called "step": refused, whatever the name says
+    for line in ("pwm_out", "clk"):
+        p = propose(_named(cap, {line: "step"}))
+        assert not p.axes and "is named STEP, but its waveform is no STEP line" in p.text()
+        assert _checked(_named(cap, {line: "step"})) is None
 
 
 @pytest.mark.parametrize("dump", ["onehot.vcd", "onehot.ghw"])
@@ -115,3 +148,5 @@ def test_one_hot_stepper_sequencer(tmp_path: Path, dump: str) -> None:
     [axis] = q.axes
     assert {r.index for r in axis.roles if r.role.startswith("phase-")} == outputs, q.text()
     assert {r.index for r in axis.roles} <= outputs | {cap.channel("tb.en").index}
+    assert _checked(cap) == outputs | {cap.channel("tb.en").index}
+    assert _checked(_neutral(cap)) is None  # the enable asked about: refused

@@ -14,34 +14,15 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from tests.bounds import lines_run, peak_bytes
-from wavecheck.capture.edges import Capture, Channel
+from wavecheck.capture.edges import Capture
 from wavecheck.capture.open import open_capture
 from wavecheck.roles import Proposal, propose
-from wavecheck.roles.dirs import DirFit, assign
-from wavecheck.roles.names import name_hint
 from wavecheck.steps.interface import build_interface, parse_map
 
 from ..waves import capture, pulses, renamed
+from .moves import US, reversing_axis, roles_of
 
 GOLDEN = Path(__file__).resolve().parents[3] / "captures" / "golden"
-US = 1000  # ticks (ns) per µs
-
-
-def _roles(p: Proposal) -> dict[str, dict[str, str]]:
-    return {a.name: {r.role: r.channel for r in a.roles} for a in p.axes}
-
-
-# periods of the first (last) steps of a move, in units of its period: from rest at constant
-# acceleration (steps at times proportional to the square roots of 1, 2, 3 …)
-_RAMP = (3.7, 1.55, 1.2)
-
-
-def _move(t0: int, n: int, period: int = 100 * US) -> list[int]:
-    """Pulse starts of one move of ``n`` steps after ``t0``: it speeds up over three steps and
-    slows down over three (periods 3.7, 1.55, 1.2 × ``period``), as a motor does; a train at one
-    rate is no step train to the waveform (:mod:`wavecheck.roles.periodic`)."""
-    factors = [_RAMP[min(k, n - 1 - k)] if min(k, n - 1 - k) < 3 else 1.0 for k in range(n)]
-    return [t0 + int(x) for x in np.cumsum(factors) * period]
 
 
 # ---------------------------------------------------------------- real captures
@@ -50,7 +31,7 @@ def _move(t0: int, n: int, period: int = 100 * US) -> list[int]:
 def test_grbl_step_is_step_en_is_enable_serial_lines_are_not_roles(grbl_sr: Path) -> None:
     p = propose(open_capture(grbl_sr))
     assert p.unambiguous, p.text()
-    assert _roles(p) == {"y": {"step": "STEP (Y axis)", "enable": "EN"}}
+    assert roles_of(p) == {"y": {"step": "STEP (Y axis)", "enable": "EN"}}
     y = p.axis("y")
     assert y.kind == "step-dir" and y.step_type == 0
     assert y.role("step").evidence.startswith("pulse train: 10,508 high pulses of 9.5 us–13.5 us")
@@ -72,7 +53,7 @@ def test_smoothieware_two_axes_3_4_and_5_6(smoothie_sr: Path) -> None:
     p = propose(cap)
     assert p.unambiguous, p.text()
     # test_engine_real.py: Y = step 3 / dir 4, X = step 5 / dir 6
-    assert _roles(p) == {"a": {"step": "3", "dir": "4"}, "b": {"step": "5", "dir": "6"}}
+    assert roles_of(p) == {"a": {"step": "3", "dir": "4"}, "b": {"step": "5", "dir": "6"}}
     for a in p.axes:
         assert a.role("step").basis == "waveform"
         assert a.role("dir").basis == "layout"  # DIR never changes: only the wiring says so
@@ -160,187 +141,6 @@ def test_golden_traces_with_neutral_names(trace: str) -> None:
 # ---------------------------------------------------------------- rules, one by one
 
 
-def test_names_give_roles_and_axes() -> None:
-    cases = {
-        "X_STEP": ({"step"}, "x"),
-        "STEP (Y axis)": ({"step"}, "y"),
-        "xstep": ({"step"}, "x"),
-        "dirz": ({"dir"}, "z"),
-        "stepgen.2.step": ({"step"}, "2"),
-        "PUL+": ({"step"}, None),
-        "EN": ({"enable"}, None),
-        "phase-A": ({"phase-A"}, None),
-        "D3": (set(), None),
-        "A0": (set(), None),
-        "ch3": (set(), None),
-    }
-    for name, (roles, axis) in cases.items():
-        h = name_hint(name)
-        assert (set(h.roles), h.axis) == (roles, axis), name
-
-
-def test_dir_toggling_inside_a_pulse_is_not_a_dir() -> None:
-    starts = _move(0, 19)
-    step = pulses(starts, 5 * US)
-    # toggles 2 µs into the fifth pulse, and between the 12th and 13th
-    p = propose(capture({"s": (0, step), "d": (0, [starts[4] + 2 * US, starts[11] + 50 * US])}))
-    assert _roles(p) == {"a": {"step": "s"}}
-    assert [u.channel for u in p.unassigned] == ["d"]
-
-
-def test_a_line_named_dir_is_never_a_step() -> None:
-    """Issue 33: a generated machine's ``x_dir`` was made the STEP of its own axis. A step
-    train named DIR is left out, and asked about when other axes were found."""
-    step = pulses(_move(0, 19), 5 * US)
-    p = propose(capture({"X DIR": (0, step), "X STEP": (0, [1003 * US])}))
-    assert not p.axes and "X DIR" in p.candidates
-    other = pulses(_move(50 * US, 30), 5 * US)
-    p = propose(capture({"X DIR": (0, step), "Y STEP": (0, other)}))
-    assert p.ambiguous and "named otherwise" in p.ambiguous[0].question
-    assert [r.channel for a in p.axes for r in a.roles] == ["Y STEP"]
-
-
-def test_channels_named_after_their_roles_are_what_check_maps() -> None:
-    """Issue 26: a channel called ``step`` is the STEP ``check`` maps without --map
-    (engine.auto_map); the proposal is that mapping, with what the waveform says against it."""
-    step = pulses(_move(0, 19), 5 * US)
-    p = propose(capture({"DIR": (0, step), "STEP": (0, [1003 * US])}))
-    assert p.named and p.map_args() == "--map step=STEP,dir=DIR"
-    assert all(r.basis == "name" for r in p.axes[0].roles)
-    (note,) = p.axes[0].notes
-    assert note.startswith("step 1='STEP' is taken by its name, but its waveform says it is no ")
-    assert "check checks it as named" in note
-
-
-def _reversing_axis(
-    t0: int, reversals: list[int], period: int = 100 * US
-) -> tuple[list[int], list[int]]:
-    """Starts of pulses and DIR toggles of an axis that reverses after the given pulse counts:
-    each move speeds up and slows down (:func:`_move`), pauses, and DIR changes 10 µs before the
-    next pulse."""
-    starts: list[int] = []
-    toggles: list[int] = []
-    t = t0
-    for n in reversals:
-        starts += _move(t, n, period)
-        t = starts[-1] + 5 * period
-        toggles.append(t + 3 * period - 10 * US)
-    return starts, toggles[:-1]
-
-
-def test_two_dirs_and_two_steps_are_paired_by_reversals() -> None:
-    xs, xd = _reversing_axis(0, [10, 12, 9])
-    ys, yd = _reversing_axis(37 * US, [7, 8, 15])
-    cap = capture(
-        {
-            "0": (0, pulses(xs, 5 * US)),
-            "1": (0, pulses(ys, 4 * US)),
-            "2": (0, yd),
-            "3": (0, xd),
-        }
-    )
-    p = propose(cap)
-    assert p.unambiguous, p.text()
-    assert _roles(p) == {"a": {"step": "0", "dir": "3"}, "b": {"step": "1", "dir": "2"}}
-    assert "2 of 2 at reversals of its rate" in p.axis("a").role("dir").evidence
-
-
-def test_a_change_where_two_steps_pause_is_ambiguous_however_near_to_one() -> None:
-    # both lines pause from about 1.6 ms to 3 ms; the single change of "d" is 15 µs after the last
-    # pulse of "s" and 1.5 ms before the next one of "t": nearness is no proof, so it is refused
-    s_starts = _move(0, 12) + _move(3000 * US, 12)
-    s = pulses(s_starts, 5 * US)
-    t = pulses(_move(50 * US, 11) + _move(3050 * US, 12), 5 * US)
-    change = s_starts[11] + 20 * US
-    p = propose(capture({"s": (0, s), "t": (0, t), "d": (0, [change])}))
-    assert not p.unambiguous
-    assert "fits as the DIR of several STEP lines" in p.ambiguous[0].question
-    assert all(a.role("dir") is None for a in p.axes)
-    # when "t" runs steadily through the change, the change proves "d" is not its DIR
-    t2 = pulses(_move(50 * US, 44), 5 * US)
-    p2 = propose(capture({"s": (0, s), "t": (0, t2), "d": (0, [change])}))
-    assert p2.unambiguous, p2.text()
-    assert _roles(p2) == {"a": {"step": "s", "dir": "d"}, "b": {"step": "t"}}
-    assert "'t' runs steadily through 1 of its changes" in p2.axis("a").role("dir").evidence
-
-
-def _fit(d: int, s: int) -> DirFit:
-    return DirFit(
-        Channel(f"d{d}", d, 0, np.array([1])),
-        Channel(f"s{s}", s, 0, np.array([1])),
-        1,
-        1,
-        0,
-        (1, 1),
-    )
-
-
-def test_dirs_are_given_only_where_every_matching_agrees() -> None:
-    # d1 fits only s1, so d2 (s1 or s2) is s2's
-    got = assign({1: [_fit(1, 11)], 2: [_fit(2, 11), _fit(2, 12)]})
-    assert {s: f.d.index for s, f in got.chosen.items()} == {11: 1, 12: 2}
-    assert not got.undecided and not got.crowded
-    # d1 and d2 share s1/s2 in either order, so d3 must be s3's; d1 and d2 stay undecided
-    got = assign(
-        {
-            1: [_fit(1, 11), _fit(1, 12)],
-            2: [_fit(2, 11), _fit(2, 12)],
-            3: [_fit(3, 11), _fit(3, 12), _fit(3, 13)],
-        }
-    )
-    assert {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
-    assert {d: [f.s.index for f in fs] for d, fs in got.undecided.items()} == {
-        1: [11, 12],
-        2: [11, 12],
-    }
-    # two lines that can only be s1's: neither is decided; a separate pair still is
-    got = assign({1: [_fit(1, 11)], 2: [_fit(2, 11)], 3: [_fit(3, 13)]})
-    assert got.crowded == [(1, 2)] and {s: f.d.index for s, f in got.chosen.items()} == {13: 3}
-
-
-def test_up_down_pair_refused_when_unchanging_lines_could_be_dirs() -> None:
-    up = pulses(_move(0, 10), 5 * US)
-    down = pulses(_move(3000 * US, 10), 5 * US)
-    clean = propose(capture({"p": (0, up), "q": (0, down)}))
-    assert clean.unambiguous and clean.axes[0].kind == "up-down"
-    assert clean.map_args() == "--map up=p,down=q" and clean.type_args() == "--type 1"
-    one = propose(capture({"p": (0, up), "q": (0, down), "r": (0, [])}))
-    assert one.unambiguous and one.axes[0].kind == "up-down"  # one DIR cannot serve two axes
-    spare = propose(capture({"p": (0, up), "q": (0, down), "r": (0, []), "s": (1, [])}))
-    assert not spare.unambiguous and not spare.axes
-    assert "take turns" in spare.ambiguous[0].question
-    named = propose(capture({"X_STEP": (0, up), "Y_STEP": (0, down), "r": (0, []), "s": (0, [])}))
-    assert [a.kind for a in named.axes] == ["step-dir", "step-dir"]
-
-
-def test_shared_enable_and_active_low() -> None:
-    xs, xd = _reversing_axis(1000 * US, [10, 12])
-    ys, yd = _reversing_axis(1037 * US, [7, 8])
-    last = max(xs[-1], ys[-1]) + 500 * US
-    cap = capture(
-        {
-            "x": (0, pulses(xs, 5 * US)),
-            "xd": (0, xd),
-            "y": (0, pulses(ys, 5 * US)),
-            "yd": (1, yd),
-            "en": (1, [500 * US, last]),
-        }
-    )
-    p = propose(cap)
-    assert p.unambiguous, p.text()
-    assert [s.channel for s in p.shared] == ["en"] and p.shared[0].axes == ("a", "b")
-    for a in p.axes:
-        assert a.role("enable").active_level == 0 and a.inverted == ("enable",)
-
-
-def test_map_args_quote_and_fall_back_to_indices() -> None:
-    step = pulses(_move(0, 19), 5 * US)
-    assert propose(capture({"S,1": (0, step)})).map_args() == "--map step=0"
-    named = propose(capture({"STEP (Y axis)": (0, step), "Y DIR": (0, [])}))
-    assert named.map_args() == "--map 'step=STEP (Y axis),dir=Y DIR'"
-    assert named.axis("y").role("dir").basis == "name"
-
-
 def test_long_capture_is_bounded_in_work_and_memory() -> None:
     """Two million edges: the inference runs no Python per edge (lines of Python run, counted,
     stay far below the edge count: ~6,500 in 2026) and its memory peak stays within 25 times
@@ -355,9 +155,46 @@ def test_long_capture_is_bounded_in_work_and_memory() -> None:
     cap = capture({"s": (0, step.tolist()), "d": (0, rev.tolist()), "u": (1, [])})
     p, lines = lines_run(lambda: propose(cap))
     assert lines < 100_000, lines
-    assert _roles(p) == {"a": {"step": "s", "dir": "d"}}
+    assert roles_of(p) == {"a": {"step": "s", "dir": "d"}}
     _, peak = peak_bytes(lambda: propose(cap))
     assert peak < 25 * step.nbytes, peak
+
+
+def _hundred(shape: str) -> Capture:
+    """100 lines of one hostile shape: 50 step/dir axes that reverse at the same moments (every
+    pair of lines is tried as STEP and DIR, up/down, bus), square waves at two periods and
+    random offsets (any two of a period walk quadrature), or 99 data lines of one bus clock."""
+    rng = np.random.default_rng(5)
+    sig: dict[str, tuple[int, list[int]]] = {}
+    if shape == "axes":
+        for k in range(50):
+            moves = [int(x) for x in rng.integers(8, 20, 4)]
+            s, d = reversing_axis(k * 37 * US, moves, period=(90 + k) * US)
+            sig[f"n{2 * k}"], sig[f"n{2 * k + 1}"] = (0, pulses(s, 5 * US)), (0, d)
+    elif shape == "waves":
+        for k in range(100):
+            per = (20 if k % 2 else 30) * US
+            off = int(rng.integers(0, per))
+            sig[f"w{k}"] = (0, [off + per // 2 * j for j in range(1, 400)])
+    else:
+        clk = [j * 1000 for j in range(1, 2000)]
+        sig["clk"] = (0, clk)
+        for k in range(99):
+            sig[f"d{k}"] = (0, [clk[j] for j in range(1, len(clk), 2) if rng.random() < 0.3])
+    return capture(sig)
+
+
+@pytest.mark.parametrize("shape", ["axes", "waves", "bus"])
+def test_a_hundred_lines_are_bounded_in_counted_work(shape: str) -> None:
+    """Issue 33: inference of 100 channels in under 1 s. Counted, not timed: lines of Python run
+    (numpy's work is per relation, not per edge). Measured 2026-11-29: 4.6 M (axes), 0.7 M
+    (waves), 1.2 M (bus); CPython ran the 4.6 M in 0.74 s CPU on the loaded 2-core machine, so
+    6 M is about 1 s (bench/roles_infer.py times it)."""
+    cap = _hundred(shape)
+    p, lines = lines_run(lambda: propose(cap))
+    assert lines < 6_000_000, lines
+    if shape != "axes":
+        assert not p.axes and not p.ambiguous, p.text()
 
 
 # ---------------------------------------------------------------- generated machines
@@ -538,6 +375,7 @@ def _judge(m: Machine, where: list[int], p: Proposal, cap: Capture) -> str:
 @example(seed=4117852037, n_axes=4, with_enable=True, unused=0, style="num")
 # a DIR change given to the wrong STEP of five (a.dir=D1 was truly the DIR of axis 2): now refused
 @example(seed=21651, n_axes=5, with_enable=False, unused=0, style="D")
+@example(seed=1544, n_axes=3, with_enable=False, unused=0, style="D")  # 17 vs 15 us: no pair
 @given(
     seed=st.integers(0, 2**32 - 1),
     n_axes=st.integers(2, 5),

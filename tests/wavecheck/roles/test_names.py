@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import REPO, write_vcd
-from wavecheck.roles.names import axes_by_scope
+from wavecheck.roles.names import axes_by_scope, name_hint
 
 CASES = [
     (
@@ -58,3 +58,22 @@ def test_check_without_map_checks_each_scope(tmp_path: Path) -> None:
     report = json.loads(run.stdout)
     got = {a["name"]: a["steps"]["count"] for a in report["axes"]}
     assert got == {"x": 50, "y": 20}
+
+
+def test_names_give_roles_and_axes() -> None:
+    cases = {
+        "X_STEP": ({"step"}, "x"),
+        "STEP (Y axis)": ({"step"}, "y"),
+        "xstep": ({"step"}, "x"),
+        "dirz": ({"dir"}, "z"),
+        "stepgen.2.step": ({"step"}, "2"),
+        "PUL+": ({"step"}, None),
+        "EN": ({"enable"}, None),
+        "phase-A": ({"phase-A"}, None),
+        "D3": (set(), None),
+        "A0": (set(), None),
+        "ch3": (set(), None),
+    }
+    for name, (roles, axis) in cases.items():
+        h = name_hint(name)
+        assert (set(h.roles), h.axis) == (roles, axis), name
