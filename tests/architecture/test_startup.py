@@ -178,18 +178,19 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.output", "wavecheck.progress", "wavecheck.report",
             "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
             "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
-            "wavecheck.rules", "wavecheck.steps", "wavecheck.steps.decode",
-            "wavecheck.steps.interface", "wavecheck.steps.mapping", "wavecheck.steps.primitives",
-            "wavecheck.steptypes", "wavecheck.timebase", "wavecheck.units", "wavecheck.verdict",
+            "wavecheck.roles", "wavecheck.roles.names", "wavecheck.rules", "wavecheck.steps",
+            "wavecheck.steps.decode", "wavecheck.steps.interface", "wavecheck.steps.mapping",
+            "wavecheck.steps.primitives", "wavecheck.steptypes", "wavecheck.timebase",
+            "wavecheck.units", "wavecheck.verdict",
         },
     ),
 }  # fmt: skip
 
-#: Never on those paths: roles inference (the channels are mapped), the firmware records and
-#: readers (no --firmware), the LinuxCNC configuration (no --ini/--hal/--base-period), the
-#: steps CSV writer, the PulseView session writer, json (a text report), tempfile (only standard
-#: input is spooled), numpy.ma (np.unique).
-NOT_LOADED = ("wavecheck.roles", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
+#: Never on those paths: roles inference (the channels are mapped; roles.names, what a name
+#: says, is read), the firmware records and readers (no --firmware), the LinuxCNC configuration
+#: (no --ini/--hal/--base-period), the steps CSV writer, the PulseView session writer, json (a
+#: text report), tempfile (only standard input is spooled), numpy.ma (np.unique).
+NOT_LOADED = ("wavecheck.roles.infer", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
               "wavecheck.report.steps_csv", "wavecheck.sigrok.session", "json", "tempfile",
               "numpy.ma")  # fmt: skip
 
@@ -231,6 +232,7 @@ def test_the_option_that_needs_a_lazy_module_loads_it(
     assert module in _loaded_after(argv)
 
 
-def test_a_named_channel_alone_loads_roles_inference() -> None:
-    """The probe's other side: a capture without --map is mapped by names (roles.names)."""
-    assert "wavecheck.roles.names" in _loaded_after(["check", str(TINY), "--drive", "gecko-g202"])
+def test_a_named_capture_without_map_loads_roles_inference() -> None:
+    """The probe's other side: a capture mapped by its channels' names loads the inference
+    (the waveforms of the named lines are checked against their names)."""
+    assert "wavecheck.roles.infer" in _loaded_after(["check", str(TINY), "--drive", "gecko-g202"])

@@ -15,6 +15,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
+from wavecheck.roles.names import leaf as leaf_name
 
 __all__ = [
     "ROLES",
@@ -27,16 +28,6 @@ __all__ = [
     "parse_map",
     "role_name",
 ]
-
-
-def leaf_name(name: str) -> str:
-    """The last dotted part of a channel name, stripped, lower case, ``_`` as ``-``
-    (``"stepgen.0.phase_A"`` → ``"phase-a"``): what a channel named after its role is called.
-
-    Defined here, not imported from :mod:`wavecheck.roles.names`: that would load the whole
-    roles package (about 13 ms) on every ``check``, which needs only this function."""
-    return name.strip().rsplit(".", 1)[-1].strip().lower().replace("_", "-")
-
 
 ROLES: tuple[str, ...] = (
     "step",

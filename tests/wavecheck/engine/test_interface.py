@@ -10,15 +10,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 
 from tests.engine_probe import run_check
 from tests.reliability.helpers import cli
 from tests.wavecheck.waves import capture, drive, pulses
 from wavecheck.errors import UsageError
-from wavecheck.roles.names import leaf
-from wavecheck.steps.interface import build_interface, leaf_name, parse_map
+from wavecheck.steps.interface import build_interface, parse_map
 
 US = 1000
 
@@ -131,18 +128,3 @@ def test_auto_map_does_not_give_a_mapped_channel_a_second_role() -> None:
     assert report.interface.require("step").channel == "DIR"
     assert report.interface.get("dir") is None
     assert report.steps.count == 2
-
-
-@given(st.text(max_size=40))
-def test_leaf_name_is_the_roles_packages_leaf(name: str) -> None:
-    """steps/interface.py defines ``leaf_name`` itself (importing it from wavecheck.roles.names
-    loaded all of roles inference on every check, issue 38): the two must say the same."""
-    assert leaf_name(name) == leaf(name)
-
-
-@pytest.mark.parametrize(
-    ("name", "leaf_"),
-    [("stepgen.0.phase_A", "phase-a"), (" X.STEP ", "step"), ("top.dut.Dir", "dir"), ("", "")],
-)
-def test_leaf_name_is_the_last_dotted_part_in_lower_case(name: str, leaf_: str) -> None:
-    assert leaf_name(name) == leaf_
