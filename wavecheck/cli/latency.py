@@ -70,24 +70,14 @@ def register(sub: Any) -> None:
 
 
 def channel_roles(capture: Capture, args: argparse.Namespace) -> tuple[list[str], dict[str, str]]:
-    """Every channel the axes of ``args`` map (as ``check`` maps them: the engine's planning,
-    :func:`wavecheck.engine.run.axes_for` and :func:`wavecheck.engine.resolve.plan_axes`; ENABLE
-    left out), and role → channel of the first axis (the roles the worst-case patterns are told
-    by).
+    """:func:`wavecheck.step_latency.step_channels` of the axes of ``args``, and ``--also``.
 
     Raises:
         UsageError: no step channel found, or the axis options do not fit the capture.
     """
-    from wavecheck.engine import axes_for, plan_axes
+    from wavecheck.step_latency import step_channels
 
-    options = check_options(args, with_drive=False)
-    axes, _ = axes_for(options, capture)
-    names: list[str] = []
-    first: dict[str, str] = {}
-    for plan in plan_axes(capture, axes, options, capture):
-        roles = {r: s.channel for r, s in plan.interface.signals.items() if r != "enable"}
-        names += list(roles.values())
-        first = first or roles
+    names, first = step_channels(capture, check_options(args, with_drive=False))
     names += list(args.also)
     if not names:
         raise UsageError(

@@ -64,6 +64,7 @@ import numpy as np
 
 from wavecheck.capture.edges import Capture
 from wavecheck.errors import UsageError
+from wavecheck.lattice.evidence import MIN_MOTION_SHARE, MIN_PAIRS, motion_share, steady_pulse
 from wavecheck.lattice.period import (
     MAX_PERIOD_NS,
     MIN_PERIOD_NS,
@@ -85,6 +86,7 @@ from wavecheck.lattice.reading import (
     Reading,
     Signatures,
     allowance,
+    ascending,
     bursts,
     catch_up,
     evaluate,
@@ -211,12 +213,15 @@ class LatencyReport:
     candidates: list[Candidate] = field(default_factory=list)
     catch_up: CatchUp | None = None
     rule: str = ""
+    no_motion: str = ""
+    _ascending: Ints | None = field(default=None, repr=False)
 
     @property
     def unestablished(self) -> str:
         """Why the worst lateness is not established ("" when it is): no lattice, lateness of a
-        period or more (a lower bound only), fewer than :data:`ESTABLISH_EDGES` edge times, or
-        readings the capture cannot tell apart."""
+        period or more (a lower bound only), fewer than :data:`ESTABLISH_EDGES` edge times,
+        readings the capture cannot tell apart, or a lattice not shown to be a step generator's
+        thread (:mod:`wavecheck.lattice.evidence`)."""
         if not self.lattice:
             return self.reason
         if self.catch_up is not None:
@@ -236,7 +241,7 @@ class LatencyReport:
                 f"the capture cannot tell {len(figures)} readings of the lattice apart (worst "
                 f"lateness {' or '.join(format_ns(f) for f in figures)})"
             )
-        return ""
+        return self.no_motion
 
     @property
     def established(self) -> bool:
@@ -272,9 +277,10 @@ class LatencyReport:
         n = len(self.lateness_num)
         if not n:
             return None
+        if self._ascending is None or len(self._ascending) != n:  # sorted once
+            self._ascending = ascending(self.lateness_num)
         rank = max(1, math.ceil(q / 100 * n))
-        value = int(np.partition(self.lateness_num, rank - 1)[rank - 1])
-        return Fraction(value, self.lateness_den) * self.tick_ns
+        return Fraction(int(self._ascending[rank - 1]), self.lateness_den) * self.tick_ns
 
     def worst(self) -> tuple[Fraction, tuple[str, ...]] | None:
         """(time in ns, channels with an edge there) of the worst lateness."""
@@ -324,9 +330,9 @@ class LatencyReport:
         nb = max(1, min(bins, len(t)))
         width = (hi - lo) / nb or 1.0
         idx = np.minimum(((t - lo) / width).astype(np.int64), nb - 1)
-        mx = np.full(nb, -np.inf)
-        np.maximum.at(mx, idx, self.lateness_ns)
-        mx[np.isinf(mx)] = np.nan
+        mx = np.full(nb, np.nan)
+        starts = np.flatnonzero(np.diff(idx, prepend=-1))  # idx rises with time: runs
+        mx[idx[starts]] = np.maximum.reduceat(self.lateness_ns, starts)
         return (lo + np.arange(nb) * width).astype(np.float64), mx
 
     def spikes(self) -> list[Spike]:
@@ -440,7 +446,23 @@ def analyse_times(
             "the analyzer's sample period, which the file does not state (each figure is exact to "
             "± that; a lattice of that grid is the analyzer's, not a thread's)"
         )
-    return _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
+    report = _fill(report, times, mask, ev, given, env, err, res_ticks, pmin)
+    if report.lattice and not given and kinds is not None:
+        pulse = steady_pulse(report.invocation, kinds.bits, len(kinds.names))
+        share, pairs = (
+            motion_share(report.invocation, kinds.bits, 2 * len(kinds.names))
+            if pulse is None
+            else (1.0, 0)
+        )
+        if pulse is None and (share < MIN_MOTION_SHARE or pairs < MIN_PAIRS):
+            report.no_motion = (
+                f"the lattice is not shown to be a step generator's thread: no line's pulses "
+                f"last one whole number of periods, and {share:.0%} of {pairs} successive step "
+                f"intervals change gradually, as a motion's do (at least {MIN_MOTION_SHARE:.0%}"
+                f" of {MIN_PAIRS} or more are needed); another periodic clock, such as a "
+                "sensor's frame clock, makes such edges too"
+            )
+    return report
 
 
 def sample_grid(times: Ints, tick_ns: Fraction, res_ticks: int) -> int:
@@ -470,11 +492,11 @@ def _fill(
     k, lat, moved = catch_up(fold, reading)
     span_p = max(int(k.max() - k.min()), 1)
     q = max(res, 1)
-    p99, in_arc, f, _ = significance(lat, fold.b, q, fold.period, span_p)
-    # the evidence for the lattice: the most plausible reading's (the first)
-    _, _, _, chance = significance(
-        fold.lateness(ev.readings[0].anchor)[1], fold.b, q, fold.period, span_p
-    )
+    p99, in_arc, f, chance = significance(lat, fold.b, q, fold.period, span_p)
+    if ev.readings[0] is not reading or moved:  # the evidence: the most plausible reading's
+        _, _, _, chance = significance(
+            fold.lateness(ev.readings[0].anchor)[1], fold.b, q, fold.period, span_p
+        )
     fit = LatticeFit(
         period=fold.period,
         phase=Fraction(int(times[0])) + Fraction(reading.anchor, fold.b),
@@ -595,12 +617,12 @@ def _merge(capture: Capture, names: list[str]) -> tuple[Ints, Ints, Ints, dict[s
             for j, c in enumerate(chans)
         ]
     ).astype(np.int64)
-    times, inv = np.unique(allt, return_inverse=True)
-    mask = np.zeros(len(times), np.int64)
-    kinds = np.zeros(len(times), np.int64)
-    np.bitwise_or.at(mask, inv, bits)
-    np.bitwise_or.at(kinds, inv, kind)
-    return times.astype(np.int64), mask, kinds, counts
+    order = np.argsort(allt, kind="stable")  # a merge of sorted runs: linear
+    allt = allt[order]
+    first = np.flatnonzero(np.concatenate([[True], allt[1:] != allt[:-1]]))
+    mask = np.bitwise_or.reduceat(bits[order], first)
+    kinds = np.bitwise_or.reduceat(kind[order], first)
+    return allt[first].astype(np.int64), mask, kinds, counts
 
 
 def common_period(

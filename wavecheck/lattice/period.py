@@ -70,6 +70,14 @@ COMB_EDGES = 2048
 SUBMULTIPLES = 8
 
 
+#: Edges each candidate period is read on when choosing among them (the middle of the stretch).
+TRY_EDGES = 4096
+
+
+#: Strongest single spectral lines tried as the thread's period (beside the combs).
+LINES = 8
+
+
 #: Edges of the first window P is refined on: enough that the widest empty arc of their phases
 #: is the lattice's even when lateness spans 95 % of the period.
 GROW_EDGES = 512
@@ -88,10 +96,13 @@ def simplest_between(lo: Fraction, hi: Fraction) -> Fraction:
 
 
 def densest(times: Ints, span: int) -> tuple[int, int]:
-    """[i, j) of the stretch of at most ``span`` ticks holding the most edges."""
-    ends = np.searchsorted(times, times + span, side="left")
-    i = int(np.argmax(ends - np.arange(len(times))))
-    return i, int(ends[i])
+    """[i, j) of the stretch of at most ``span`` ticks holding the most edges (starting at one
+    of 2^16 edges spread evenly over a longer capture)."""
+    step = max(1, len(times) >> 16)
+    starts = np.arange(0, len(times), step)
+    ends = np.searchsorted(times, times[starts] + span, side="left")
+    at = int(np.argmax(ends - starts))
+    return int(starts[at]), int(ends[at])
 
 
 def coarse(
@@ -106,12 +117,30 @@ def coarse(
     """Up to ``keep`` candidate periods (ticks, floats), best first, from the comb of the
     densest stretch (at most ``edges`` edges and ``bins`` FFT bins of 1/(2·``harmonics``) of
     the shortest period), each scored by its first ``harmonics`` harmonics."""
+    return combs_and_lines(times, pmin, pmax, harmonics, keep, edges, bins)[0]
+
+
+def combs_and_lines(
+    times: Ints,
+    pmin: float,
+    pmax: float,
+    harmonics: int = 16,
+    keep: int = 3,
+    edges: int = COMB_EDGES,
+    bins: int = 1 << 20,
+    lines: int = 0,
+) -> tuple[list[float], list[float]]:
+    """:func:`coarse`'s combs, and the periods of up to ``lines`` of the strongest single
+    spectral lines (local maxima of the power itself) within the period range, refined: at a
+    constant step rate a/b of the thread's the comb finds the step pattern (b periods, or its
+    fractions), and the thread's own period is a strong line of it, seldom one of the comb's
+    fractions (3/20 of the pattern at 0.3 of the top rate of step/dir)."""
     bw = max(1, int(pmin // (2 * harmonics)))  # bins fine enough for the shortest period's
     i, j = densest(times, bw * bins)
     j = min(j, i + edges)
     w = times[i:j] - times[i]
     if len(w) < MIN_EDGES or w[-1] < 2 * pmin:
-        return []
+        return [], []
     m = 1 << max(10, int(w[-1] // bw + 1).bit_length())
     hist = np.bincount(w // bw, minlength=m).astype(np.float64)
     power = np.abs(np.fft.rfft(hist)) ** 2 / len(w)  # the noise: exponential, mean 1
@@ -120,7 +149,7 @@ def coarse(
     flo = max(2, math.ceil(length / pmax))
     fhi = int(min(length / pmin, (len(power) - h_top - 1) / h_top))
     if fhi <= flo:
-        return []
+        return [], []
     # summed power of the harmonics h of each fundamental f..f+1: harmonic h lies in bins
     # h·f .. h·f + h − 1, of which the largest counts (less the noise's expected largest)
     f = np.arange(flo, fhi + 1)
@@ -131,7 +160,7 @@ def coarse(
     peaks = np.flatnonzero((z[1:-1] >= z[:-2]) & (z[1:-1] >= z[2:])) + 1
     order = peaks[np.argsort(-z[peaks], kind="stable")]
     if not len(order):
-        return []
+        return [], []
     # a punctual lattice at P puts full power on every harmonic, so P/m scores as well as P:
     # the longest period whose comb scores nearly as well as the best's is first
     best = int(order[0])
@@ -146,7 +175,16 @@ def coarse(
             picked.append(float(f[k]) + 0.5)
         if len(picked) >= keep:
             break
-    return [_refine_comb(w, length / g, 0.6 / g) for g in picked[:keep]]
+    found = [_refine_comb(w, length / g, 0.6 / g) for g in picked[:keep]]
+    seg = power[flo : int(min(length / pmin, len(power) - 2)) + 1]  # lines up to pmin
+    tops = np.flatnonzero((seg[1:-1] >= seg[:-2]) & (seg[1:-1] >= seg[2:])) + 1
+    strong: list[int] = []
+    for g in tops[np.argsort(-seg[tops], kind="stable")]:  # a neighbour is the same line
+        if len(strong) >= lines:
+            break
+        if all(abs(int(g) - h) > 2 for h in strong):
+            strong.append(int(g))
+    return found, [_refine_comb(w, length / (flo + g), 0.6 / (flo + g)) for g in strong]
 
 
 def _refine_comb(t: Ints, p: float, width: float) -> float:
@@ -165,19 +203,21 @@ def _refine_comb(t: Ints, p: float, width: float) -> float:
     return p
 
 
-def _cut(x: Floats, p: float, q: float) -> float:
+def _cut(x: Floats, p: float, q: float) -> tuple[float, float]:
     """Where to cut phases ``x`` (in [0, p)) into invocations: the middle of the widest empty
-    arc (its emptiest bin when none is empty), in bins of a quarter sample or finer."""
+    arc (its emptiest bin when none is empty), in bins of a quarter sample or finer; and that
+    arc's width (ticks; 0 when none is empty)."""
     nb = int(max(16, min(1 << 16, 4 * p // max(q, 1e-9))))
     hist = np.bincount(np.minimum((x / p * nb).astype(np.int64), nb - 1), minlength=nb)
     empty = np.concatenate([hist, hist]) == 0
     if not empty.any():
-        return (int(np.argmin(hist)) + 0.5) * p / nb
+        return (int(np.argmin(hist)) + 0.5) * p / nb, 0.0
     # longest run of empty bins on the doubled circle
     edges = np.diff(np.concatenate([[0], empty.astype(np.int8), [0]]))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     k = int(np.argmax(stops - starts))
-    return ((starts[k] + stops[k]) / 2 % nb) * p / nb
+    width = min(int(stops[k] - starts[k]), nb) * p / nb
+    return ((starts[k] + stops[k]) / 2 % nb) * p / nb, width
 
 
 def _lower_hull(x: Floats, y: Floats) -> list[int]:
@@ -245,8 +285,10 @@ def grow(
     times: Ints, p: float, centre: int, q: float, progress: ProgressCallback, half: float
 ) -> tuple[float, float]:
     """Refine the period ``p`` over windows growing ×4 from ±``half`` ticks (at least 32
-    periods and :data:`GROW_EDGES` edges) about ``times[centre]``; returns (P, its standard
-    error), both in ticks."""
+    periods and :data:`GROW_EDGES` edges) about ``times[centre]``, or at once to the whole
+    capture when P is known well enough that its error moves the edges of the whole by less
+    than an eighth of the empty arc the cut lies in; returns (P, its standard error), both in
+    ticks."""
     t0 = int(times[centre])
     n = len(times)
     lo, hi = max(0, centre - GROW_EDGES // 2), min(n - 1, centre + GROW_EDGES // 2)
@@ -256,7 +298,7 @@ def grow(
         i = int(np.searchsorted(times, t0 - half, side="left"))
         j = int(np.searchsorted(times, t0 + half, side="right"))
         rel = (times[i:j] - t0).astype(np.float64)
-        cut = _cut(np.mod(rel, p), p, q)
+        cut, room = _cut(np.mod(rel, p), p, q)
         k = np.floor((rel - cut) / p).astype(np.int64)
         r = rel - cut - k * p
         slope, err_k = _floor_line(k, r, _cluster_labels(r, p, q), q)
@@ -267,7 +309,8 @@ def grow(
         progress(j - i, n)
         if i == 0 and j == n:
             return p, err
-        half *= 4
+        reach = float(max(t0 - times[0], times[-1] - t0))
+        half = reach if err * reach / p < room / 8 else half * 4
 
 
 def _cluster_labels(r: Floats, p: float, q: float) -> Ints:
@@ -369,53 +412,75 @@ def _alike(a: tuple[float, float], b: tuple[float, float], q: float) -> bool:
     return abs(a[0] - b[0]) <= q / 2 and abs(a[1] - b[1]) <= q / 2
 
 
+#: A candidate period as tried: (double writes, (mean, max) lateness, period in ticks, read as a
+#: worst-case pattern).
+Tried = tuple[int, tuple[float, float], Fraction, bool]
+
+
+def _middle(times: Ints, kinds: EdgeKinds | None) -> tuple[Ints, EdgeKinds | None]:
+    """The middle :data:`TRY_EDGES` edges of ``times`` (all when fewer) and their ``kinds``."""
+    if len(times) <= TRY_EDGES:
+        return times, kinds
+    i = (len(times) - TRY_EDGES) // 2
+    return times[i : i + TRY_EDGES], _window_kinds(kinds, times, i, i + TRY_EDGES)
+
+
+def _tries(times: Ints, periods: list[Fraction], res: int, kinds: EdgeKinds | None) -> list[Tried]:
+    """Each exact period read quickly (:func:`evaluate` of the middle :data:`TRY_EDGES` edges
+    on at most 2^14 phase bins, the pin not judged), those better than chance kept."""
+    times, kinds = _middle(times, kinds)
+    out = []
+    bmax = max(1, min(1 << 20, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4))
+    for p in periods:
+        e = evaluate(times, p.limit_denominator(bmax), res, kinds, 1 << 14, False)
+        spread = _spread(e)
+        if spread is not None:
+            out.append((e.collisions, spread, p, bool(e.readings[0].rule)))
+    return out
+
+
+def _best(tried: list[Tried], n: int, q: float) -> Fraction:
+    """Among the tried periods with no more double writes than the fewest (and the allowance):
+    when some read as a worst-case pattern (whose exact structure chance does not make), the
+    longest of those; otherwise the longest among those with the least mean lateness (within
+    half a sample, :func:`_alike`)."""
+    fewest = min(t[0] for t in tried)
+    ok = [t for t in tried if t[0] <= fewest + allowance(n)]
+    if any(t[3] for t in ok):
+        return max(t[2] for t in ok if t[3])
+    least = min(ok, key=lambda t: t[1][0])[1]
+    return max(t[2] for t in ok if _alike(t[1], least, q))
+
+
 def _down(
-    times: Ints, coarse: list[float], res: int, kinds: EdgeKinds | None, pmin: float, pmax: float
-) -> float | None:
-    """The thread among the ``coarse`` periods, their submultiples p/m and the multiples of the
-    best of those (m ≤ :data:`SUBMULTIPLES`), on a stretch of edges. Among those with no more double writes than
-    the fewest: when some read as a worst-case pattern (whose exact structure chance does not
-    make), the longest of those (at P/m the pattern repeats with J wrapped); otherwise the one
-    with the least mean lateness, the longest among equals (within half a sample): a stepgen
-    at its maximum rate uses every second invocation, which a lattice at 2P fits with its other
-    edges a period late, and a lattice at P/2 fits P's edges with the same lateness. None: no
-    lattice better than chance.
+    times: Ints, combs: list[float], lines: list[float], res: int, kinds: EdgeKinds | None,
+    pmin: float, pmax: float,
+) -> Fraction | None:  # fmt: skip
+    """The thread among the ``combs``' periods, their submultiples p/m (m ≤
+    :data:`SUBMULTIPLES`), the strongest spectral ``lines`` and the multiples of the best of
+    those, on a stretch of edges, chosen by :func:`_best`: a stepgen at its maximum rate uses
+    every second invocation, which a lattice at 2P fits with its other edges a period late, and
+    a lattice at P/2 fits P's edges with the same lateness. None: no lattice better than chance.
     """
     q = float(max(res, 1))
-
-    def tries(periods: list[float]) -> list[tuple[int, tuple[float, float], float, bool]]:
-        out = []
-        for p in periods:
-            bmax = max(1, min(1 << 20, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4))
-            e = evaluate(times, Fraction(p).limit_denominator(bmax), res, kinds, 1 << 14, False)
-            spread = _spread(e)
-            if spread is not None:
-                out.append((e.collisions, spread, p, bool(e.readings[0].rule)))
-        return out
-
-    def best(tried: list[tuple[int, tuple[float, float], float, bool]]) -> float:
-        fewest = min(t[0] for t in tried)
-        ok = [t for t in tried if t[0] <= fewest + allowance(len(times))]
-        if any(t[3] for t in ok):
-            return max(t[2] for t in ok if t[3])
-        least = min(ok, key=lambda t: t[1][0])[1]
-        return max(t[2] for t in ok if _alike(t[1], least, q))
-
-    # each submultiple refined on its own: a lattice at a multiple of the thread's period
-    # (its step pattern) does not fit well enough to refine P there
-    starts = [
-        p0 / m for p0 in coarse for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin
-    ]
-    subs: list[float] = []
-    for p0 in sorted(starts, reverse=True):
-        if all(abs(p0 - s) > 1e-3 * s for s in subs):
+    times, kinds = _middle(times, kinds)  # the edges the candidates are read on
+    # each start refined on its own: a lattice at a multiple of the thread's period (its step
+    # pattern) does not fit well enough to refine P there
+    starts = sorted(
+        (p0 / m for p0 in combs for m in range(1, SUBMULTIPLES + 1) if m == 1 or p0 / m >= pmin),
+        reverse=True,
+    ) + [p0 for p0 in lines if pmin <= p0 <= pmax]  # a line after the combs: it may be a sidelobe
+    subs: list[Fraction] = []
+    for p0 in starts:
+        if all(abs(p0 - float(s)) > 1e-3 * float(s) for s in subs):
             p, err = grow(times, p0, len(times) // 2, q, no_progress, 0.0)
-            subs.append(float(exact(p, err, times)))
-    tried = tries(subs)
+            subs.append(exact(p, err, times, res))
+    tried = _tries(times, subs, res, kinds)
     if not tried:
         return None
-    p1 = best(tried)
-    return best(tried + tries([p1 * m for m in range(2, 9) if p1 * m <= pmax]))
+    p1 = _best(tried, len(times), q)
+    more = [p1 * m for m in range(2, 9) if float(p1) * m <= pmax]
+    return _best(tried + _tries(times, more, res, kinds), len(times), q)
 
 
 def _reads_as_well(ev: Evaluation, big: Evaluation, m: int, sample: slice) -> bool:
@@ -456,24 +521,30 @@ def _up(
     return ev
 
 
-def exact(p: float, err: float, times: Ints) -> Fraction:
-    """The rational with the smallest denominator within ``err`` ticks of ``p`` (at least a
-    millionth of a tick; the nearest of them), its denominator small enough for exact int64
-    arithmetic over the capture. An ``err`` that is not finite (the floor of the lateness gave
-    no line to refine on) leaves ``p`` as it is, to that denominator."""
+def exact(p: float, err: float, times: Ints, sample: int = 1) -> Fraction:
+    """The rational number of samples (``sample`` ticks each) with the smallest denominator
+    within ``err`` ticks of ``p`` (at least a millionth of a tick; the nearest of them), in
+    ticks, its denominator small enough for exact int64 arithmetic over the capture. Simplest
+    in samples, not ticks: on a 2 µs sample grid exported with 1 ns ticks, 34 µs is 17 samples,
+    where every whole tick within the uncertainty would be as simple. An ``err`` that is not
+    finite (the floor of the lateness gave no line to refine on) leaves ``p`` as it is, to that
+    denominator."""
     if not math.isfinite(p) or p <= 0:
         raise ValueError(f"a period must be finite and positive, got {p} ticks")
-    centre = Fraction(p).limit_denominator(10**12)
+    unit = max(sample, 1)
     bmax = max(1, (1 << 60) // max(int(times[-1] - times[0]), 1) // 4)
+    centre = Fraction(p).limit_denominator(10**12)
     if not math.isfinite(err):
         return centre.limit_denominator(bmax)
-    half = Fraction(max(err, 1e-6)).limit_denominator(10**9)
+    centre /= unit
+    half = Fraction(max(err, 1e-6)).limit_denominator(10**9) / unit
     lo, hi = max(centre - half, Fraction(1, 10**9)), centre + half
     b = simplest_between(lo, hi).denominator
     exact = Fraction(round(centre * b), b)  # the nearest with that denominator
     if not lo <= exact <= hi:
         exact = simplest_between(lo, hi)
-    return exact if exact.denominator <= bmax else centre.limit_denominator(bmax)
+    exact *= unit
+    return exact if exact.denominator <= bmax else (centre * unit).limit_denominator(bmax)
 
 
 def limits(tick_ns: Fraction, res_ticks: int) -> tuple[float, float]:
@@ -490,38 +561,19 @@ def dither(times: Ints, res: int) -> Ints:
     return times + np.random.default_rng(0).integers(0, res, len(times))
 
 
-def _rival(times: Ints, ev: Evaluation, res: int, pmin: float) -> str | None:
-    """A fraction k/m (2 ≤ k < m ≤ 16) of ``ev``'s period whose lattice, refined, reads the edges
-    ``times`` (a bounded stretch) with no more double writes and at most two thirds of the
-    mean lateness (and a tenth of its period and two samples less: a few spikes do not decide),
-    which the thread's own period would: a constant step rate a/b of the
-    thread's repeats every b periods, and a lattice at a fraction of that pattern fits it too
-    (``k/m`` as text), else None."""
-    mine = _spread(evaluate(times, ev.fold.period, res, None, 1 << 14, False))
-    if mine is None or ev.readings[0].rule:  # a worst-case pattern's structure decides
-        return None
-    p = float(ev.fold.period)
+def _fractions(times: Ints, period: Fraction, res: int, pmin: float) -> Fraction | None:
+    """A fraction k/m (m ≤ 16) of ``period`` that :func:`_best` prefers on the edges ``times``
+    (a bounded stretch), else None: a constant step rate a/b of the thread's repeats every b
+    periods, and a lattice at a fraction of that pattern fits it too, with more lateness than
+    the thread's own period."""
     q = float(max(res, 1))
-    seen: set[Fraction] = set()
-    for m in range(3, 17):
-        for k in range(2, m):  # P/m itself: _up's judgement (spikes read less late there)
-            f = Fraction(k, m)
-            if f.numerator == 1 or f in seen or p * k / m < pmin:
-                continue
-            seen.add(f)
-            p2, err = grow(times, p * k / m, len(times) // 2, q, no_progress, 0.0)
-            if not math.isfinite(err) or abs(p2 / (p * k / m) - 1) > 0.01:
-                continue
-            theirs = evaluate(times, exact(p2, err, times), res, None, 1 << 14, False)
-            spread = _spread(theirs)
-            if (
-                spread is not None
-                and theirs.collisions <= ev.collisions + allowance(len(times))
-                and spread[0] <= 2 * mine[0] / 3
-                and mine[0] - spread[0] >= max(2 * q, 0.1 * p2)
-            ):
-                return f"{k}/{m}"
-    return None
+    family = {period * Fraction(k, m) for m in range(2, 17) for k in range(1, m)}
+    periods = [period] + sorted(p for p in family if p >= pmin)
+    tried = _tries(times, periods, res, None)
+    if not tried or tried[0][2] != period:
+        return None
+    chosen = _best(tried, min(len(times), TRY_EDGES), q)
+    return None if chosen == period else chosen
 
 
 def infer(
@@ -547,34 +599,32 @@ def infer(
         )
     if len(times) < MIN_EDGES:
         return None, 0.0, "too few edges outside catch-up runs", Fraction(0)
-    combs = coarse(dither(times, res), pmin, pmax)
+    combs, lines = combs_and_lines(dither(times, res), pmin, pmax, lines=LINES)
     if not combs:
         return None, 0.0, "no periodic comb in the edges' timing", Fraction(0)
     i, j = densest(times, int(64 * WINDOW_EDGES * max(combs)))
     j = min(j, i + WINDOW_EDGES)
-    p1 = _down(times[i:j], combs, res, _window_kinds(kinds, times, i, j), pmin, pmax)
+    p1 = _down(times[i:j], combs, lines, res, _window_kinds(kinds, times, i, j), pmin, pmax)
     if p1 is None:
         return (
             None, 0.0, "no lattice near the edges' strongest combs is better than chance",
             Fraction(0),
         )  # fmt: skip
     p, err = grow(
-        times, p1, (i + j) // 2, float(max(res, 1)), progress, float(times[j - 1] - times[i])
-    )
+        times, float(p1), (i + j) // 2, float(max(res, 1)), progress,
+        float(times[j - 1] - times[i]),
+    )  # fmt: skip
     if not pmin <= p <= pmax:
         return (
             None, 0.0, "the best period, {period}, is outside the base thread's range",
             Fraction(p).limit_denominator(10**6),
         )  # fmt: skip
-    ev = _up(times, exact(p, err, times), res, kinds, pmax, slice(i, j))
-    rival = _rival(times[i:j], ev, res, pmin) if ev.readings else None
-    if rival is not None:
-        return (
-            None, 0.0,
-            f"a lattice at {rival} of the best period, {{period}}, reads the edges with far "
-            "less lateness: which period the thread runs at is not established",
-            ev.fold.period,
-        )  # fmt: skip
+    ev = _up(times, exact(p, err, times, res), res, kinds, pmax, slice(i, j))
+    if ev.readings and not ev.readings[0].rule:  # a worst-case pattern's structure decides
+        frac = _fractions(times[i:j], ev.fold.period, res, pmin)
+        if frac is not None:  # refined over the whole capture, as P was
+            p, err = grow(times, float(frac), (i + j) // 2, float(max(res, 1)), no_progress, 0.0)
+            ev = _up(times, exact(p, err, times, res), res, kinds, pmax, slice(i, j))
     if ev.readings and burst.any():
         ev = evaluate(every, ev.fold.period, res, whole)
     if ev.readings:

@@ -33,6 +33,7 @@ __all__ = [
     "Reading",
     "Signatures",
     "allowance",
+    "ascending",
     "bursts",
     "catch_up",
     "evaluate",
@@ -121,20 +122,23 @@ class Fold:
         self.w = max(1, -(-self.a // bins))
         self.nb = -(-self.a // self.w)
         self.q = max(res, 1) * self.b  # one sample in units
-        self.bins = self.x // self.w
+        self.bins = self.x // self.w if self.w > 1 else self.x
         self.hist = np.bincount(self.bins, minlength=self.nb)
         self.n = len(times)
+        self._last: tuple[int, tuple[Ints, Ints]] | None = None
 
     def collisions(self) -> Ints:
         """For each anchor bin: pairs of successive edge times in one period."""
         d = np.diff(self.units)
         close = np.flatnonzero(d < self.a)
-        cover = np.zeros(2 * self.nb + 2, np.int64)
+        size = 2 * self.nb + 2
+        cover = np.zeros(size, np.int64)
         if len(close):
             first = self.x[close] // self.w + 1
-            last = (self.x[close] + d[close]) // self.w
-            np.add.at(cover, first, 1)
-            np.add.at(cover, last + 1, -1)
+            end = self.x[close] + d[close]  # past the period: the next period's bins (the
+            # last bin is shorter than w when w does not divide the period)
+            last = np.where(end >= self.a, self.nb + (end - self.a) // self.w, end // self.w)
+            cover = np.bincount(first, minlength=size) - np.bincount(last + 1, minlength=size)
         c = np.cumsum(cover)
         covered = c[: self.nb] + c[self.nb : 2 * self.nb]
         return len(close) - covered
@@ -152,9 +156,12 @@ class Fold:
         return start + int(np.min(np.mod(self.x - start, self.a)))
 
     def lateness(self, anchor: int) -> tuple[Ints, Ints]:
-        """(invocation, lateness in units) of every edge."""
-        k = np.floor_divide(self.units - anchor, self.a)
-        return k, self.units - anchor - k * self.a
+        """(invocation, lateness in units) of every edge (the last anchor's kept: the same
+        reading is asked for several times)."""
+        if self._last is None or self._last[0] != anchor:
+            k = np.floor_divide(self.units - anchor, self.a)
+            self._last = anchor, (k, self.units - anchor - k * self.a)
+        return self._last[1]
 
     def reading(self, bin_: int, collisions: Ints) -> Reading:
         anchor = self.anchor_at(bin_)
@@ -210,9 +217,12 @@ def _kind_dependence(fold: Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
         return None
     best: tuple[int, float] | None = None
     worst_v: dict[int, float] = {}
+    # the edges grouped by what changed at them (a few combinations): one count per offset
+    combos, group = _groups(kinds.bits)
     for offset in (0, fold.a // (2 * nbk)):
         bins = np.mod((fold.x + offset) * nbk // fold.a, nbk)
-        hists = {c: np.bincount(bins[((kinds.bits >> c) & 1) == 1], minlength=nbk) for c in present}
+        per = np.bincount(group * nbk + bins, minlength=len(combos) * nbk).reshape(-1, nbk)
+        hists = {c: per[((combos >> c) & 1) == 1].sum(axis=0) for c in present}
         total = np.sum(list(hists.values()), axis=0)
         n_all = int(total.sum())
         for c, h in hists.items():
@@ -230,6 +240,19 @@ def _kind_dependence(fold: Fold, kinds: EdgeKinds) -> tuple[int, float] | None:
         if v > 0 and (best is None or v > best[1]):
             best = (c, v)
     return best
+
+
+def _groups(bits: Ints) -> tuple[Ints, Ints]:
+    """(the distinct values of ``bits``, each element's index among them): counted when the
+    values are small (a few channels), else sorted."""
+    if int(bits.max()) < 1 << 16:
+        seen = np.bincount(bits)
+        combos = np.flatnonzero(seen)
+        index = np.zeros(len(seen), np.int64)
+        index[combos] = np.arange(len(combos))
+        return combos, index[bits]
+    combos, group = np.unique(bits, return_inverse=True)
+    return combos, group.reshape(-1)
 
 
 def _rule_of(times: Ints, on_time: npt.NDArray[np.bool_], kinds: EdgeKinds | None) -> str:
@@ -397,7 +420,8 @@ def significance(
             continue
         kl = a * math.log(a / f) + ((1 - a) * math.log((1 - a) / (1 - f)) if a < 1 else 0.0)
         best = min(best, trials - n * kl / math.log(10))
-    values = union(lat)
+    counts = _counts(lat)
+    values = np.flatnonzero(counts) if len(counts) else union(lat)  # sorted, distinct
     a_units = float(period) * b
     gaps = np.sort(np.diff(np.append(values, values[0] + a_units)))[::-1][:8]
     for k in range(1, len(gaps) + 1):
@@ -413,10 +437,25 @@ def significance(
 MIN_GAP_FRACTION = 0.03
 
 
+def _counts(values: Ints) -> Ints:
+    """How often each value 0 … max occurs in ``values`` (non-negative): the sorted values in
+    linear time, when that range is at most a few times their number (else empty)."""
+    top = int(values.max()) + 1 if len(values) else 0
+    if not len(values) or top > 4 * len(values) + (1 << 16):
+        return np.zeros(0, np.int64)
+    return np.bincount(values, minlength=top)
+
+
+def ascending(values: Ints) -> Ints:
+    """``values`` (non-negative integers) sorted: counted when their range allows (linear)."""
+    counts = _counts(values)
+    return np.repeat(np.arange(len(counts)), counts) if len(counts) else np.sort(values)
+
+
 def widest_gap(lat: Ints, a: int) -> int:
     """The widest arc (units) between two edges' phases (``lat`` modulo ``a`` units) with at
     most ``max(2, n // 500)`` edges inside it (late spikes), measured edge to edge."""
-    x = np.sort(np.mod(lat, a))
+    x = ascending(np.mod(lat, a))
     n = len(x)
     if not n:
         return a
