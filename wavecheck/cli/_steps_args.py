@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.blocks import BlockSource
 from wavecheck.engine import StepSink
-from wavecheck.engine.planning import AxisPlan
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.steps.mapping import split_per_axis
 
-if TYPE_CHECKING:  # imported where used: only with --steps-csv
+if TYPE_CHECKING:  # AxisPlan names types only; StepsCsvWriter is imported where used (--steps-csv)
+    from wavecheck.engine.planning import AxisPlan
     from wavecheck.report.steps_csv import StepsCsvWriter
 
 __all__ = ["add_steps_arguments", "check_steps_arguments", "steps_csv_path", "steps_writer"]
