@@ -125,7 +125,7 @@ def propose(capture: Capture) -> Proposal:
 
 def name_conflicts(capture: Capture, named: Mapping[str, int]) -> tuple[NameRefused, ...]:
     """The names a mapping by channel names must not follow: ``named`` is role → channel index
-    (the lines :func:`wavecheck.engine.auto_map` maps by their names); for each STEP, UP or DOWN
+    (the lines :func:`wavecheck.engine.planning.auto_map` maps by their names); for each STEP, UP or DOWN
     whose waveform says it makes no step pulses (a free-running clock, a bus line, not one
     whole pulse), a :class:`~wavecheck.roles.proposal.NameRefused` with the reason and the lines
     most like a STEP. Empty when no name is contradicted. ``capture`` holds the edges (or its

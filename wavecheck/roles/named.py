@@ -1,5 +1,5 @@
 """Channels named after their roles (``step``, ``up``, ``phase-A``): the axis ``check`` maps by
-those names without ``--map`` (:func:`wavecheck.engine.auto_map`), with what the waveforms say
+those names without ``--map`` (:func:`wavecheck.engine.planning.auto_map`), with what the waveforms say
 of each line. A name is a hint, not evidence: a STEP, UP or DOWN whose waveform makes no step
 pulses (a free-running clock, a bus's line, not one whole pulse) is refused with the
 reason and the lines most like a STEP; pulses the waveform cannot tell from steps keep the name."""
@@ -32,7 +32,7 @@ class NamedAxis(State):
 
     def _named(self, kind: str, chans: list[Channel]) -> bool:
         """The one axis ``check`` maps by channel names without ``--map`` (a channel called
-        ``step``, ``up`` or ``phase-A``; :func:`wavecheck.engine.auto_map`), with what the
+        ``step``, ``up`` or ``phase-A``; :func:`wavecheck.engine.planning.auto_map`), with what the
         waveforms say of each line; False (nothing done) when the names give no unique channel
         for the first role."""
         number, roles = NAMED_KINDS[kind]

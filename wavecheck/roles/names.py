@@ -112,7 +112,7 @@ def leaf(name: str) -> str:
 
 
 #: The roles of each kind of axis that a channel named after its role takes without ``--map``
-#: (``check`` maps them by name, :func:`wavecheck.engine.auto_map`): kind → (step type, roles).
+#: (``check`` maps them by name, :func:`wavecheck.engine.planning.auto_map`): kind → (step type, roles).
 #: A capture is named after its roles when a channel is called ``step``, ``up`` or ``phase-A``.
 NAMED_KINDS: dict[str, tuple[int, tuple[str, ...]]] = {
     "step": (0, ("step", "dir", "enable")),
