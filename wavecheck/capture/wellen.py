@@ -180,16 +180,21 @@ def _signal_key(ref: Any) -> int | None:
 
 
 def _load(path: str | os.PathLike[str]) -> tuple[Timebase, list[_Var]]:
-    """The time base and variables of a pywellen waveform, the 1-bit ones with their changes."""
+    """The time base and variables of a pywellen waveform, the 1-bit ones with their changes
+    (read once per signal: a second name of one has its key only)."""
     w = _open(path)
     out: list[_Var] = []
+    read: set[int] = set()
     for v in w.all_vars():
         var = _Var(v.full_name, v.name, int(v.bitwidth or 0))
         if v.is_real or v.is_string:
             var.skipped = "a real" if v.is_real else "a string"
         elif var.width == 1:
             var.key = _signal_key(v.signal_ref)
-            var.times, var.codes = _changes(v.signal, 1, 0)
+            if var.key is None or var.key not in read:
+                var.times, var.codes = _changes(v.signal, 1, 0)
+            if var.key is not None:
+                read.add(var.key)
         out.append(var)
     return _timebase(w), out
 
