@@ -226,15 +226,15 @@ class Capture:
     def _by_name(self) -> dict[str, list[Channel]]:
         """Channels by exact name (built once per list of channels: lookups stay O(1) on
         captures with hundreds of thousands of signals)."""
-        key = (id(self.channels), len(self.channels))
         cached = self.__dict__.get("_name_index")
-        if cached is None or cached[0] != key:
+        # the list itself is kept, not its id(): a freed list's address may be a new one's
+        if cached is None or cached[0] is not self.channels or cached[1] != len(self.channels):
             index: dict[str, list[Channel]] = {}
             for ch in self.channels:
                 index.setdefault(ch.name, []).append(ch)
-            cached = (key, index)
+            cached = (self.channels, len(self.channels), index)
             self.__dict__["_name_index"] = cached
-        return cached[1]
+        return cached[2]
 
     def channel(self, ref: str | int) -> Channel:
         """Find a channel by exact name, else by index (``"3"`` or ``3``).

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 import select
 import shutil
 import subprocess
@@ -45,6 +46,9 @@ if TYPE_CHECKING:
     from wavecheck.capture.blocks import EdgeBlock
 
 __all__ = ["FstBlocks", "ghw_timebase", "load_bit", "read_fst", "read_wellen"]
+
+#: pywellen's text of a signal's identity (``str(var.signal_ref)``)
+_SIGNAL_ID = re.compile(r"SignalId\((\d+)\)")
 
 # unknown is 2 (x, u, w, -) or 3 (z), as in the VCD reader
 _CODES = {"0": 0, "1": 1, "l": 0, "h": 1, "z": 3}
@@ -157,23 +161,40 @@ class _Var:
     name: str
     width: int
     skipped: str | None = None  # "a real", "a string"
-    key: Any = None  # the signal's identity (a signal declared twice has one)
+    key: int | None = None  # the signal's index (a signal declared twice has one); None: unknown
     times: npt.NDArray[np.int64] | None = None
     codes: npt.NDArray[np.int8] | None = None
 
 
+def _signal_key(ref: Any) -> int | None:
+    """The index of the signal a pywellen variable reads (a port and the signal it is
+    connected to, ``tb.a`` and ``tb.dut.a`` in a GHW file, share one), or None when pywellen
+    does not tell it. pywellen 0.25's ``SignalId`` gives its index only in its text
+    (``SignalId(7)``); the object is made anew at each access, so its ``id()`` is no identity:
+    once the object is freed, another signal's may get the same address."""
+    index = getattr(ref, "index", None)
+    if callable(index):
+        return int(index())
+    found = _SIGNAL_ID.fullmatch(str(ref))
+    return int(found.group(1)) if found else None
+
+
 def _load(path: str | os.PathLike[str]) -> tuple[Timebase, list[_Var]]:
-    """The time base and variables of a pywellen waveform, the 1-bit ones with their changes."""
+    """The time base and variables of a pywellen waveform, the 1-bit ones with their changes
+    (read once per signal: a second name of one has its key only)."""
     w = _open(path)
     out: list[_Var] = []
+    read: set[int] = set()
     for v in w.all_vars():
         var = _Var(v.full_name, v.name, int(v.bitwidth or 0))
         if v.is_real or v.is_string:
             var.skipped = "a real" if v.is_real else "a string"
         elif var.width == 1:
-            ref = v.signal_ref
-            var.key = ref.index() if hasattr(ref, "index") else id(ref)
-            var.times, var.codes = _changes(v.signal, 1, 0)
+            var.key = _signal_key(v.signal_ref)
+            if var.key is None or var.key not in read:
+                var.times, var.codes = _changes(v.signal, 1, 0)
+            if var.key is not None:
+                read.add(var.key)
         out.append(var)
     return _timebase(w), out
 
@@ -208,7 +229,7 @@ def read_wellen(
     by_short: dict[str, int] = {}
     for v in variables:
         by_short[v.name] = by_short.get(v.name, 0) + 1
-    seen: dict[Any, str] = {}  # signal id -> channel name (a signal declared twice)
+    seen: dict[int, str] = {}  # signal index -> channel name (a signal declared twice)
     aliases: dict[str, str] = {}
     skipped: dict[str, str] = {}
     vectors: dict[str, Vector] = {}
@@ -229,14 +250,15 @@ def read_wellen(
                 skipped.setdefault(full, f"a {v.width}-bit vector")
             continue
         name = v.name if by_short[v.name] == 1 else full
-        if v.key in seen:
+        if v.key is not None and v.key in seen:
             aliases[full] = seen[v.key]
             continue
         assert v.times is not None and v.codes is not None
         if len(v.times):
             first = int(v.times[0]) if first is None else min(first, int(v.times[0]))
             last = int(v.times[-1]) if last is None else max(last, int(v.times[-1]))
-        seen[v.key] = name
+        if v.key is not None:
+            seen[v.key] = name
         if name != full:
             aliases[full] = name
         found.append((name, _edges(v.times, v.codes)))
