@@ -141,3 +141,98 @@ def test_each_listed_subcommand_is_built_by_its_module(name: str, module: str) -
     importlib.import_module(module).register(sub)
     assert list(sub.choices) == [name]
     assert callable(sub.choices[name].get_default("func"))
+
+
+GRBL_SR = ROOT / "captures/real/grbl_cnc_1.sr"
+
+#: The project's modules each short path loads, pinned (issue 38: start-up is what a command
+#: imports before it reads a byte). A module joining one of these sets costs every such run;
+#: add it here only when the path needs it.
+PINNED: dict[str, tuple[list[str], set[str]]] = {
+    "drives": (
+        ["drives"],
+        {
+            "wavecheck", "wavecheck.cli", "wavecheck.cli._formats", "wavecheck.cli._main",
+            "wavecheck.cli._tuning_args", "wavecheck.cli.drives", "wavecheck.drives",
+            "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.errors",
+            "wavecheck.output", "wavecheck.rules", "wavecheck.steptypes", "wavecheck.units",
+        },
+    ),
+    "check sr --map": (
+        ["check", str(GRBL_SR), "--drive", "leadshine-dm542", "--map", "step=STEP (Y axis),dir=EN"],
+        {
+            "wavecheck", "wavecheck.capture", "wavecheck.capture.blocks", "wavecheck.capture.edges",
+            "wavecheck.capture.formats", "wavecheck.capture.open", "wavecheck.capture.sr",
+            "wavecheck.capture.srzip", "wavecheck.cli", "wavecheck.cli._axis_args",
+            "wavecheck.cli._batch", "wavecheck.cli._capture_args", "wavecheck.cli._check_flow",
+            "wavecheck.cli._firmware_args", "wavecheck.cli._formats",
+            "wavecheck.cli._linuxcnc_args", "wavecheck.cli._main", "wavecheck.cli._pulseview_args",
+            "wavecheck.cli._reports", "wavecheck.cli._stepgen_args", "wavecheck.cli._steps_args",
+            "wavecheck.cli._tuning_args", "wavecheck.cli.check", "wavecheck.drives",
+            "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.drives.overrides",
+            "wavecheck.engine", "wavecheck.engine.axis", "wavecheck.engine.intervals",
+            "wavecheck.engine.judge", "wavecheck.engine.options", "wavecheck.engine.outcome",
+            "wavecheck.engine.rates", "wavecheck.engine.resolve", "wavecheck.engine.results",
+            "wavecheck.engine.run", "wavecheck.engine.sinks", "wavecheck.engine.trace",
+            "wavecheck.engine.windows", "wavecheck.errors", "wavecheck.firmware",
+            "wavecheck.output", "wavecheck.progress", "wavecheck.report",
+            "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
+            "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
+            "wavecheck.roles", "wavecheck.roles.names", "wavecheck.rules", "wavecheck.steps",
+            "wavecheck.steps.decode", "wavecheck.steps.interface", "wavecheck.steps.mapping",
+            "wavecheck.steps.primitives", "wavecheck.steptypes", "wavecheck.timebase",
+            "wavecheck.units", "wavecheck.verdict",
+        },
+    ),
+}  # fmt: skip
+
+#: Never on those paths: roles inference (the channels are mapped; roles.names, what a name
+#: says, is read), the firmware records and readers (no --firmware), the LinuxCNC configuration
+#: (no --ini/--hal/--base-period), the steps CSV writer, the PulseView session writer, json (a
+#: text report), tempfile (only standard input is spooled), numpy.ma (np.unique).
+NOT_LOADED = ("wavecheck.roles.infer", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
+              "wavecheck.report.steps_csv", "wavecheck.sigrok.session", "json", "tempfile",
+              "numpy.ma")  # fmt: skip
+
+
+@pytest.mark.parametrize("path", list(PINNED))
+def test_a_short_path_loads_the_pinned_modules(path: str) -> None:
+    argv, pinned = PINNED[path]
+    loaded = _loaded_after(argv)
+    ours = {m for m in loaded if m == "wavecheck" or m.startswith("wavecheck.")}
+    assert sorted(ours - pinned) == [], "new on the path: pin it here only if the path needs it"
+    assert sorted(pinned - ours) == [], "no longer on the path: take it out of the pin"
+    assert sorted(m for m in NOT_LOADED if m in loaded) == []
+
+
+@pytest.mark.parametrize(
+    ("option", "module"),
+    [
+        (["--steps-csv", "STEPS"], "wavecheck.report.steps_csv"),
+        (["--format", "json"], "json"),
+        (["--base-period", "25us"], "wavecheck.linuxcnc.stepgen_config"),
+        (["--pulseview", "PVS"], "wavecheck.sigrok.session"),
+        (
+            ["--firmware", str(ROOT / "captures/firmware/grbl/settings.md")],
+            "wavecheck.firmware.guarantee",
+        ),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, list) else v,
+)
+def test_the_option_that_needs_a_lazy_module_loads_it(
+    option: list[str], module: str, tmp_path: Path
+) -> None:
+    argv = [
+        *PINNED["check sr --map"][0],
+        *(
+            {"STEPS": str(tmp_path / "s.csv"), "PVS": str(tmp_path / "s.pvs")}.get(o, o)
+            for o in option
+        ),
+    ]
+    assert module in _loaded_after(argv)
+
+
+def test_a_named_capture_without_map_loads_roles_inference() -> None:
+    """The probe's other side: a capture mapped by its channels' names loads the inference
+    (the waveforms of the named lines are checked against their names)."""
+    assert "wavecheck.roles.infer" in _loaded_after(["check", str(TINY), "--drive", "gecko-g202"])

@@ -15,7 +15,6 @@ import os
 import shutil
 import stat
 import sys
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
@@ -233,6 +232,8 @@ def _read_stream(sniffed: _Sniffed, request: Request) -> Capture:
         if fmt.streams:
             return _wired(fmt.read(replace(request, path=name, stream=sniffed.stream)))
         suffix = (*fmt.extensions, "." + sniffed.spec.partition(":")[0].strip().lower())[0]
+        import tempfile  # here: only a stream that needs seeking is spooled
+
         with tempfile.TemporaryDirectory(prefix="wavecheck-stdin-") as tmp:
             spool = Path(tmp) / f"input{suffix}"
             with open(spool, "wb") as out:

@@ -9,11 +9,11 @@ import argparse
 from wavecheck.cli._batch import run_checks
 from wavecheck.cli._capture_args import source_from_args
 from wavecheck.cli._formats import Checked
+from wavecheck.cli._pulseview_args import check_pulseview
 from wavecheck.cli._reports import Asked, finish_report, write_outputs
 from wavecheck.cli._steps_args import check_steps_arguments, steps_writer
 from wavecheck.engine import check_source, start
 from wavecheck.errors import UsageError
-from wavecheck.sigrok.session import check_pulseview
 
 __all__ = ["build_report", "run_check"]
 

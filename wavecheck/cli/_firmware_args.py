@@ -9,11 +9,11 @@ import argparse
 from typing import TYPE_CHECKING, Any
 
 from wavecheck.firmware import FIRMWARES, read_firmware
-from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.units import parse_frequency, time_ns
 
 if TYPE_CHECKING:  # imported where used: only with a firmware configuration
     from wavecheck.firmware.capture import FirmwareCheck
+    from wavecheck.firmware.guarantee import FirmwareConfig
 
 __all__ = ["add_firmware_arguments", "check_firmware", "firmware_config", "read_firmware_args"]
 

@@ -19,13 +19,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import itertools
-import json
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, ParamSpec, TypeAlias
 
 from wavecheck.cli._tuning_args import required
-from wavecheck.verdict import overall_verdict
 
 if TYPE_CHECKING:  # the reports load numpy: imported where used (wavecheck drives has none)
     from wavecheck.engine import MachineReport, Report
@@ -126,20 +124,29 @@ def _dict(report: Checked, args: argparse.Namespace) -> dict[str, Any]:
     return report_dict(report, cap, required(args))
 
 
+def _dumps(doc: Any) -> str:
+    """``doc`` as every JSON report is written (json is imported here: a text run needs none)."""
+    import json
+
+    return json.dumps(doc, indent=2, ensure_ascii=False)
+
+
 def render_json_report(report: Checked, args: argparse.Namespace) -> str:
     """The JSON report (``--max-violations`` listed)."""
-    return json.dumps(_dict(report, args), indent=2, ensure_ascii=False) + "\n"
+    return _dumps(_dict(report, args)) + "\n"
 
 
 def _json_piece(checked: Checked, args: argparse.Namespace) -> tuple[str, Counts | None]:
     """Rendered where the capture was checked, nested in ``"reports": [ … ]``."""
-    text = json.dumps(_dict(checked, args), indent=2, ensure_ascii=False)
+    text = _dumps(_dict(checked, args))
     return text.replace("\n", "\n" + _NESTED), None
 
 
 def _json_join(
     ok: list[Part], errors: list[tuple[str, str]], error_lines: list[str], code: int
 ) -> Iterator[str]:
+    from wavecheck.verdict import overall_verdict
+
     verdict: str = overall_verdict([str(p.verdict) for p in ok]) if ok else "unchecked"  # type: ignore[arg-type]
     if errors:
         verdict = "error"
@@ -149,7 +156,7 @@ def _json_join(
         "verdict": verdict,
         "exit_code": code,
     }
-    text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
+    text = _dumps(doc) + "\n"
     if not ok:
         yield text
         return
@@ -221,7 +228,7 @@ def json_text(doc: Callable[P, Any]) -> Callable[P, str]:
     """The JSON renderer of ``doc`` (the document's dictionary): indented, characters kept."""
 
     def render(*args: P.args, **kwargs: P.kwargs) -> str:
-        return json.dumps(doc(*args, **kwargs), indent=2, ensure_ascii=False) + "\n"
+        return _dumps(doc(*args, **kwargs)) + "\n"
 
     return render
 

@@ -20,11 +20,10 @@ from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 from wavecheck import __version__
-from wavecheck.errors import WavecheckError
+from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import OUTPUT_TYPES, check_outputs, protect_inputs
-from wavecheck.verdict import EXIT_FAIL, EXIT_INDETERMINATE, EXIT_PASS, EXIT_USAGE
 
-__all__ = ["EXIT_FAIL", "EXIT_INDETERMINATE", "EXIT_PASS", "EXIT_USAGE", "Command", "run_cli"]
+__all__ = ["Command", "run_cli"]
 
 
 class Command(NamedTuple):
@@ -44,7 +43,7 @@ class _Parser(argparse.ArgumentParser):
     _mixing = False
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(UsageError.exit_code, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
     def parse_known_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from wavecheck.cli._axis_args import check_options
 from wavecheck.cli._firmware_args import check_firmware, firmware_config
@@ -19,9 +20,11 @@ from wavecheck.cli._formats import FORMATS, Checked, axis_reports
 from wavecheck.cli._stepgen_args import add_stepgen_arguments
 from wavecheck.cli._tuning_args import required
 from wavecheck.engine import CheckOptions, MachineReport
-from wavecheck.firmware.guarantee import FirmwareConfig
 from wavecheck.output import atomic_write, figure_file, gtkw_file, output_file
 from wavecheck.progress import QUIET_HELP
+
+if TYPE_CHECKING:  # read only with --firmware
+    from wavecheck.firmware.guarantee import FirmwareConfig
 
 __all__ = ["Asked", "add_report_arguments", "asked", "finish_report", "write_outputs"]
 

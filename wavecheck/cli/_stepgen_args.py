@@ -7,11 +7,14 @@ from __future__ import annotations
 import argparse
 import sys
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from wavecheck.cli._linuxcnc_args import add_file_arguments
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig, read_config
 from wavecheck.units import BASE_PERIOD, LATENCY, option_ns
+
+if TYPE_CHECKING:  # imported where used: only with a stepgen configuration
+    from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 
 __all__ = ["add_stepgen_arguments", "latency_ns", "stepgen_config"]
 
@@ -52,6 +55,8 @@ def stepgen_config(args: argparse.Namespace) -> LinuxCNCConfig | None:
     cfg = None
     given = {k: getattr(args, k, None) for k in _CONFIG_OPTIONS}
     if getattr(args, "ini", None) or getattr(args, "hal", None) or any(given.values()):
+        from wavecheck.linuxcnc.stepgen_config import read_config
+
         cfg = read_config(args.ini, list(args.hal or []), getattr(args, "channel", 0))
         for name, text in given.items():
             if text is None:

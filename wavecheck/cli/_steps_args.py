@@ -9,14 +9,16 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.capture.blocks import BlockSource
 from wavecheck.engine import AxisPlan, StepSink
 from wavecheck.errors import UsageError
 from wavecheck.output import output_file
-from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of
 from wavecheck.steps.mapping import split_per_axis
+
+if TYPE_CHECKING:  # imported where used: only with --steps-csv
+    from wavecheck.report.steps_csv import StepsCsvWriter
 
 __all__ = ["add_steps_arguments", "check_steps_arguments", "steps_csv_path", "steps_writer"]
 
@@ -64,6 +66,8 @@ def steps_writer(
 ) -> tuple[StepsCsvWriter, Callable[[AxisPlan], list[StepSink]]]:
     """The ``--steps-csv`` writer of one capture (``--steps-per-unit`` applied) and the
     engine's factory of its axis sinks."""
+    from wavecheck.report.steps_csv import StepsCsvWriter, steps_per_unit_of
+
     spu = steps_per_unit_of(split_per_axis(args.steps_per_unit, "--steps-per-unit"))
     writer = StepsCsvWriter(
         target, source.skeleton.timebase, bool(args.steps_per_unit), named=set(spu) - {None}

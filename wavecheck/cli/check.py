@@ -25,6 +25,7 @@ from wavecheck.cli._capture_args import add_capture_arguments
 from wavecheck.cli._check_flow import build_report
 from wavecheck.cli._firmware_args import add_firmware_arguments
 from wavecheck.cli._formats import FORMATS, Checked
+from wavecheck.cli._pulseview_args import add_pulseview_argument, check_pulseview
 from wavecheck.cli._reports import Asked, add_report_arguments, write_outputs
 from wavecheck.cli._steps_args import (
     add_steps_arguments,
@@ -36,7 +37,6 @@ from wavecheck.errors import UsageError
 from wavecheck.output import output_file
 from wavecheck.report.json import DEFAULT_VIOLATION_CAP
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
-from wavecheck.sigrok.session import add_pulseview_argument, check_pulseview
 
 __all__ = [
     "build_report",

@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING, Any
 
 from wavecheck.cli._capture_args import add_capture_arguments, capture_from_args
 from wavecheck.cli._formats import Formats, json_text
-from wavecheck.cli._main import EXIT_FAIL, EXIT_PASS
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.steps.interface import parse_map
+from wavecheck.verdict import EXIT_FAIL, EXIT_PASS
 
 if TYPE_CHECKING:  # imported by run(): the sigrok-cli layer only when used
     from wavecheck.crosscheck import CrosscheckResult

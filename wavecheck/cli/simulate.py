@@ -28,6 +28,7 @@ from wavecheck.cli._capture_args import add_capture_arguments
 from wavecheck.cli._check_flow import run_check
 from wavecheck.cli._firmware_args import add_firmware_arguments
 from wavecheck.cli._formats import FORMATS
+from wavecheck.cli._pulseview_args import add_pulseview_argument
 from wavecheck.cli._reports import add_report_arguments
 from wavecheck.cli._simulate_args import seconds as _seconds
 from wavecheck.cli._simulate_args import source as _source
@@ -35,7 +36,6 @@ from wavecheck.cli._steps_args import add_steps_arguments
 from wavecheck.cli._tuning_args import add_tuning_arguments
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write, output_file
-from wavecheck.sigrok.session import add_pulseview_argument
 from wavecheck.units import parse_frequency
 
 __all__ = ["register", "run"]

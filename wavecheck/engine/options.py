@@ -15,14 +15,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 from wavecheck.rules import RULE_IDS
 from wavecheck.steps.mapping import AxisMap
 from wavecheck.verdict import check_require
+
+if TYPE_CHECKING:  # the LinuxCNC config is read only when given
+    from wavecheck.linuxcnc.stepgen_config import LinuxCNCConfig
 
 __all__ = [
     "DEFAULT_BLOCK_EDGES",

@@ -23,18 +23,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
-from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.rules import width_rule
 from wavecheck.steps.decode import StepEvents, touches_stretches, unknown_stretches
 from wavecheck.steps.interface import StepInterface
 from wavecheck.steps.primitives import Intervals, widths
 from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:  # the LinuxCNC config is read only when given
+    from wavecheck.linuxcnc.stepgen_config import ConfigRates
 
 __all__ = ["MaxStepRates", "max_step_rates", "rates_from"]
 

@@ -14,7 +14,7 @@ import shlex
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -24,7 +24,6 @@ from wavecheck.drives.overrides import tune_drive
 from wavecheck.engine.intervals import figure_of, planned_rules
 from wavecheck.engine.options import CheckOptions, for_axis
 from wavecheck.errors import UsageError
-from wavecheck.linuxcnc.stepgen_config import ConfigRates, config_rates
 from wavecheck.rules import RULE_IDS, Rule, applicable
 from wavecheck.steps.interface import (
     StepInterface,
@@ -36,6 +35,9 @@ from wavecheck.steps.mapping import AxisMap, check_axis_names, split_invert
 from wavecheck.steptypes import StepType, step_type
 from wavecheck.timebase import Timebase
 from wavecheck.units import format_time
+
+if TYPE_CHECKING:  # the LinuxCNC config is read only when given
+    from wavecheck.linuxcnc.stepgen_config import ConfigRates
 
 __all__ = [
     "AxisPlan",
@@ -385,6 +387,8 @@ def plan_axis(
         not_applicable = tuple(r for r in RULE_IDS if r not in used and drive.figure(r) is not None)
     configured = None
     if options.stepgen is not None and drive is not None:
+        from wavecheck.linuxcnc.stepgen_config import config_rates
+
         step = iface.get("step")
         configured = config_rates(
             options.stepgen,

@@ -14,17 +14,15 @@ from __future__ import annotations
 
 import importlib
 import os
-from fractions import Fraction
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from wavecheck.errors import ConfigError
-from wavecheck.firmware._text import read_text
-from wavecheck.firmware.guarantee import (
-    FIRMWARES,
-    FirmwareConfig,
-    GeneratorGuarantee,
-    Guaranteed,
-)
+
+if TYPE_CHECKING:
+    from fractions import Fraction
+
+    from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Guaranteed
 
 __all__ = [
     "FIRMWARES",
@@ -34,6 +32,18 @@ __all__ = [
     "detect",
     "read_firmware",
 ]
+
+#: Firmware names (``--firmware-format`` choices), in detection order.
+FIRMWARES: tuple[str, ...] = (
+    "grbl",
+    "klipper",
+    "marlin",
+    "reprapfirmware",
+    "smoothieware",
+    "fluidnc",
+    "hm2",
+    "linuxcnc",
+)
 
 #: Reader module of each format, in detection order (LinuxCNC INIs are decided by what their
 #: HAL files load, in :mod:`.linuxcnc`, so ``hm2`` and ``linuxcnc`` share one reader).
@@ -49,6 +59,17 @@ _MODULE = {
     "linuxcnc": "linuxcnc",
 }
 _NAME = {"rrf": "reprapfirmware", "smoothie": "smoothieware"}
+
+
+#: The record types, loaded with the first configuration read (``check`` without ``--firmware``
+#: builds its ``--firmware-format`` choices from :data:`FIRMWARES` alone).
+_RECORDS = ("FirmwareConfig", "GeneratorGuarantee", "Guaranteed")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _RECORDS:
+        return getattr(importlib.import_module("wavecheck.firmware.guarantee"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _reader(module: str):  # type: ignore[no-untyped-def]
@@ -68,6 +89,8 @@ def detect(path: str | os.PathLike[str]) -> str:
         if (p / "Configuration.h").is_file():
             return "marlin"
         raise ConfigError(f"{path}: a folder without Configuration.h; give a configuration file")
+    from wavecheck.firmware._text import read_text
+
     text = read_text(p)
     for module in _DETECT:
         if _reader(module).looks_like(text):

@@ -23,6 +23,7 @@ from typing import Literal
 
 from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.errors import ConfigError
+from wavecheck.firmware import FIRMWARES
 
 __all__ = [
     "FIRMWARES",
@@ -42,17 +43,6 @@ __all__ = [
     "unknown",
 ]
 
-#: Firmware names (``--firmware-format`` choices), in detection order.
-FIRMWARES: tuple[str, ...] = (
-    "grbl",
-    "klipper",
-    "marlin",
-    "reprapfirmware",
-    "smoothieware",
-    "fluidnc",
-    "hm2",
-    "linuxcnc",
-)
 
 #: More step generators than any machine has: a file naming more is refused (bounded time).
 MAX_AXES = 256

@@ -19,13 +19,11 @@ up to the cap is listed one by one (the text and HTML reports group identical on
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, cast
 
 from wavecheck.engine import MachineReport, Report, RuleResult, Violation
-from wavecheck.linuxcnc.stepgen_config import ConfigRates
 from wavecheck.report import claims
 from wavecheck.report.assumptions import assumptions
 from wavecheck.rules import rule
@@ -33,6 +31,7 @@ from wavecheck.units import json_number
 
 if TYPE_CHECKING:
     from wavecheck.firmware.capture import FirmwareCheck
+    from wavecheck.linuxcnc.stepgen_config import ConfigRates
 
 __all__ = ["DEFAULT_VIOLATION_CAP", "claims_dict", "render_json", "report_dict"]
 
@@ -202,5 +201,7 @@ def render_json(
     report: Report, violation_cap: int = DEFAULT_VIOLATION_CAP, require: Sequence[str] = ()
 ) -> str:
     """The JSON report as text (indented, ending in a newline)."""
+    import json  # here: ``check``'s text report loads this module for its constants only
+
     data = report_dict(report, violation_cap, require)
     return json.dumps(data, indent=2, ensure_ascii=False) + "\n"

@@ -79,18 +79,24 @@ Axis names: the axis letter or number the channel names give (``X_STEP`` → ``x
 took). The ``--map`` text is :meth:`Proposal.map_args`.
 """
 
-from wavecheck.roles.infer import PULSE_NAMES, best_channel, name_conflicts, propose
-from wavecheck.roles.proposal import (
-    AxisProposal,
-    Basis,
-    Conflict,
-    LineLook,
-    NameRefused,
-    Proposal,
-    RoleChoice,
-    SharedLine,
-    Unassigned,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from wavecheck.roles.infer import PULSE_NAMES, best_channel, name_conflicts, propose
+    from wavecheck.roles.proposal import (
+        AxisProposal,
+        Basis,
+        Conflict,
+        LineLook,
+        NameRefused,
+        Proposal,
+        RoleChoice,
+        SharedLine,
+        Unassigned,
+    )
 
 __all__ = [
     "PULSE_NAMES",
@@ -107,3 +113,24 @@ __all__ = [
     "name_conflicts",
     "propose",
 ]
+
+#: Where each name above lives. They load on first use, so that ``wavecheck.roles.names`` (what
+#: a channel's name says: read by every check, for :func:`~wavecheck.roles.names.leaf`) loads
+#: none of the inference (issue 38: ~12 ms at every ``check`` start).
+_LAZY = {
+    **dict.fromkeys(("PULSE_NAMES", "best_channel", "name_conflicts", "propose"), "infer"),
+    **dict.fromkeys(
+        ("AxisProposal", "Basis", "Conflict", "LineLook", "NameRefused", "Proposal",
+         "RoleChoice", "SharedLine", "Unassigned"),
+        "proposal",
+    ),
+}  # fmt: skip
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'wavecheck.roles' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"wavecheck.roles.{module}"), name)
+    globals()[name] = value
+    return value

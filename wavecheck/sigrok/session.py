@@ -19,17 +19,13 @@ import string
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
-
-from wavecheck.output import output_file
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from wavecheck.engine import Report
 
 __all__ = [
     "Stacked",
-    "add_pulseview_argument",
-    "check_pulseview",
     "pvs_text",
     "stacked_from_report",
     "write_pulseview",
@@ -170,26 +166,6 @@ def stacked_from_report(report: Report, args: argparse.Namespace, ids: Sequence[
     }
     name = "wavecheck" if report.axis is None else f"wavecheck {report.axis}"
     return Stacked(name, channels, options)
-
-
-def add_pulseview_argument(p: Any) -> None:
-    """``--pulseview FILE.pvs`` (checked before any work, like every output)."""
-    p.add_argument(
-        "--pulseview",
-        type=output_file,
-        metavar="FILE.pvs",
-        help="write a PulseView session with the wavecheck decoder stacked on the capture "
-        "(open: pulseview -s FILE.pvs -i CAPTURE; install the decoder once with "
-        "'wavecheck sigrok install')",
-    )
-
-
-def check_pulseview(args: argparse.Namespace, captures: int) -> None:
-    """Refuse ``--pulseview`` for several captures (one session opens one capture)."""
-    from wavecheck.errors import UsageError
-
-    if captures != 1:
-        raise UsageError(f"--pulseview opens one capture in PulseView; {captures} were given")
 
 
 def write_pulseview(args: argparse.Namespace, reports: Sequence[Report]) -> list[str]:
