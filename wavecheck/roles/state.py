@@ -44,11 +44,9 @@ class Looks(dict[int, ChannelLook]):
         super().__init__()
         self.cap = cap
         self.by_index = {c.index: c for c in cap.channels}
-        self.made = 0  # looks computed (work counted in tests)
 
     def __missing__(self, index: int) -> ChannelLook:
         look = self[index] = look_at(self.by_index[index], self.cap)
-        self.made += 1
         return look
 
 
