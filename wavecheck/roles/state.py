@@ -132,8 +132,11 @@ class State:
         ``asked``, only the findings of those lines are sure (a strobe is looked for among
         them only, and only beside a bus clock), and the other lines' looks may stay unmade."""
         changing = [c for c in chans if len(c.edges) and c.index not in self.taken]
+        # every line's findings: every line's look is made (the pre-test would be work twice)
         clock_like = {
-            c.index for c in changing if self.may_be_one_rate(c) and self.looks[c.index].clock_like
+            c.index
+            for c in changing
+            if (asked is None or self.may_be_one_rate(c)) and self.looks[c.index].clock_like
         }
         res = max(self.cap.resolution_ticks, 0)
         if asked is not None:
