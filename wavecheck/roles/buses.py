@@ -59,12 +59,6 @@ def _period(ch: Channel) -> float:
     return float(np.median(np.diff(rising))) if len(rising) > 1 else 0.0
 
 
-def _level_after(ch: Channel, t: I64) -> I64:
-    """Level of ``ch`` just after each tick of ``t`` (an edge at that tick counts)."""
-    n = np.searchsorted(ch.edges, t, side="right")
-    return (ch.initial ^ (n & 1)).astype(np.int64)
-
-
 @dataclass(frozen=True)
 class Clocked:
     """``d`` changes in step with one edge of the clock ``c``."""
@@ -188,14 +182,15 @@ def confined(e: Channel, b: Channel) -> Gate | None:
     ee, be = e.edges, b.edges
     if len(ee) == 0 or len(be) < 8 or len(be) < _GATE_BUSIER * len(ee):
         return None
-    level = int(_level_after(e, be[:1])[0])
-    for part in (be[:_SAMPLE], be):  # most lines fail on their first changes, cheaply
-        if np.any(_level_after(e, part) != level):
-            return None
-    # stretches of e: k = 0 before its first edge … len(ee) after its last; level alternates
-    k = np.searchsorted(ee, be, side="right")
-    held = np.bincount(k, minlength=len(ee) + 1) > 0
+    # stretches of e: k = 0 before its first edge … len(ee) after its last; level alternates;
+    # an edge of b at the tick of an edge of e falls after it (one search per edge of e, the
+    # sparser line)
+    bounds = np.concatenate(([0], np.searchsorted(be, ee, side="left"), [len(be)]))
+    held = np.diff(bounds) > 0
     levels = e.initial ^ (np.arange(len(ee) + 1) & 1)
+    level = int(levels[np.argmax(held)])  # at b's first edge
+    if np.any(held & (levels != level)):
+        return None
     active = levels == level
     stretches = int(np.count_nonzero(active))
     filled = int(np.count_nonzero(held & active))

@@ -29,9 +29,18 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.roles.periodic import Timing, timing
+from wavecheck.roles.periodic import may_be_one_rate as may_be_rate
 from wavecheck.units import format_frequency, format_time
 
-__all__ = ["BY_NAME_ONLY", "KIND_WORDS", "ChannelLook", "Pulses", "look_at", "pulses_of"]
+__all__ = [
+    "BY_NAME_ONLY",
+    "KIND_WORDS",
+    "ChannelLook",
+    "Pulses",
+    "look_at",
+    "may_be_one_rate",
+    "pulses_of",
+]
 
 _WIDTH_SPREAD = 1.6  # p90/p10 of a pulse train's pulse widths stays below this
 _FOLLOW_SPREAD = 1.15  # pulse widths varying this much (p90/p10) may follow the period …
@@ -276,6 +285,27 @@ def _follows_period(p: Pulses) -> str | None:
     )
 
 
+def _pulse_level(ch: Channel, lows: EdgeArray, highs: EdgeArray) -> int:
+    """The level of ``ch``'s pulses: the one it spends less time at on median."""
+    med0, med1 = float(np.median(lows)), float(np.median(highs))
+    if med0 != med1:
+        return 0 if med0 < med1 else 1
+    return ch.initial ^ 1
+
+
+def may_be_one_rate(ch: Channel, cap: Capture) -> bool:
+    """False when :func:`look_at` surely finds ``ch`` none of the kinds at one rate (a clock,
+    PWM, periodic pulses, bursts: every :attr:`ChannelLook.clock_like` look), from the first steps of its look only: a line whose whole look
+    is not needed (its name is judged, not its shape) costs a fraction of one."""
+    if len(ch.edges) == 0:
+        return False
+    lows, highs = _level_intervals(ch)
+    if len(lows) == 0 or len(highs) == 0:
+        return False
+    p = pulses_of(ch, _pulse_level(ch, lows, highs))
+    return may_be_rate(p.starts, max(cap.resolution_ticks, 0))
+
+
 def look_at(ch: Channel, cap: Capture) -> ChannelLook:
     """Classify one channel from its own edges (see the module docstring for the rules)."""
     n = len(ch.edges)
@@ -288,11 +318,7 @@ def look_at(ch: Channel, cap: Capture) -> ChannelLook:
     lows, highs = _level_intervals(ch)
     if len(lows) == 0 or len(highs) == 0:
         return ChannelLook(ch, "other", None, f"changes {n} time{'s' if n != 1 else ''}")
-    med0, med1 = float(np.median(lows)), float(np.median(highs))
-    if med0 != med1:
-        level = 0 if med0 < med1 else 1
-    else:
-        level = ch.initial ^ 1
+    level = _pulse_level(ch, lows, highs)
     p = pulses_of(ch, level)
     gaps = lows if level == 1 else highs
     res = max(cap.resolution_ticks, 0)

@@ -131,8 +131,14 @@ def name_conflicts(capture: Capture, named: Mapping[str, int]) -> tuple[NameRefu
     most like a STEP. Empty when no name is contradicted. ``capture`` holds the edges (or its
     first part)."""
     inference = _Inference(capture)
-    inference._buses([c for c in capture.channels if len(c.xz_times) == 0])
+    chans = [c for c in capture.channels if len(c.xz_times) == 0]
     found = [(role, capture.channels[index]) for role, index in named.items()]
+    pulse = [c for role, c in found if role in PULSE_NAMES]
+    # the question first, on the looks and bus findings of the named pulse lines only
+    inference._buses(chans, asked=pulse)
+    if not any(inference._no_pulse_line(c) for c in pulse):
+        return ()
+    inference._buses(chans)  # a refusal offers the lines most like a STEP: every line's findings
     return tuple(inference._name_conflicts(found))
 
 

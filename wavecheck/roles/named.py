@@ -101,20 +101,20 @@ class NamedAxis(State):
         steps (a few, at one rate, coded) do not contradict a name, and neither do PWM or a
         serial line's look: a base thread's step generator puts every edge on its period's
         lattice, and its latency varies the widths (``stepgen simulate`` is read so)."""
-        look = self.looks[c.index]
         no = self.bus.no_step(c.index)
         if no is not None:
             return no
-        if look.kind in ("clock", "constant"):
-            return look.evidence
+        # a line that changes is a clock only at one rate: told without its whole look mostly
+        if not len(c.edges) or (self.may_be_one_rate(c) and self.looks[c.index].kind == "clock"):
+            return self.looks[c.index].evidence  # unchanging, or a clock
         if len(c.edges) < 2:
-            return f"{look.evidence}: not one whole pulse"
+            return f"{self.looks[c.index].evidence}: not one whole pulse"
         return ""
 
     def _name_conflicts(self, found: list[tuple[str, Channel]]) -> list[NameRefused]:
         """The pulse roles (STEP, UP, DOWN) of ``found`` (role, channel named so) whose waveform
         says the line is none (:meth:`_no_pulse_line`), each with the reason and the other lines
-        most like a STEP. Needs the bus findings."""
+        most like a STEP. Needs the bus findings of every line (:meth:`_buses`)."""
         out = []
         named = {c.index for _, c in found}
         for role, c in found:

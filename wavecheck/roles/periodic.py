@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Timing", "timing"]
+__all__ = ["Timing", "may_be_one_rate", "timing"]
 
 _FEW = 3  # fewest periods to see one rate in
 _MANY = 8  # fewest periods to see jumps in
@@ -134,6 +134,30 @@ class Timing:
         return "bursts"
 
 
+def _runs(
+    per: npt.NDArray[np.float64], resolution: int
+) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.float64], float, float, float]:
+    """Of the periods ``per`` (at least one): which are pauses, those within runs, their
+    median, the tolerance around it and the share of periods within runs inside it."""
+    prev = np.r_[per[1:2], per[:-1]] if len(per) > 1 else per
+    nxt = np.r_[per[1:], per[-2:-1]] if len(per) > 1 else per
+    pause = per > _PAUSE * np.minimum(prev, nxt)
+    inrun = per[~pause]
+    period = float(np.median(inrun))
+    tol = 2 * resolution + _STEADY_TOL * period
+    steady = float(np.mean(np.abs(inrun - period) <= tol))
+    return pause, inrun, period, tol, steady
+
+
+def may_be_one_rate(starts: npt.NDArray[np.int64], resolution: int) -> bool:
+    """False when pulses starting at ``starts`` are surely not at one rate
+    (:attr:`Timing.one_rate` of their :func:`timing` is False): too few periods, or too few of
+    them at the median. A first part of :func:`timing`, for a line most of whose look is not
+    needed."""
+    per = np.diff(starts).astype(np.float64)
+    return len(per) >= _FEW and _runs(per, resolution)[4] >= _STEADY
+
+
 def timing(starts: npt.NDArray[np.int64], widths: npt.NDArray[np.int64], resolution: int) -> Timing:
     """The :class:`Timing` of pulses starting at ``starts`` with ``widths`` (ticks; at least two
     pulses); ``resolution`` is the capture's resolution in ticks."""
@@ -144,13 +168,7 @@ def timing(starts: npt.NDArray[np.int64], widths: npt.NDArray[np.int64], resolut
     spread = float((p95 - p5) / mid_w) if mid_w > 0 else 0.0
     if len(per) == 0:
         return Timing(0, 0.0, 0.0, 0, 0, 0, 0.0, 0.0, 0.0, spread)
-    prev = np.r_[per[1:2], per[:-1]] if len(per) > 1 else per
-    nxt = np.r_[per[1:], per[-2:-1]] if len(per) > 1 else per
-    pause = per > _PAUSE * np.minimum(prev, nxt)
-    inrun = per[~pause]
-    period = float(np.median(inrun))
-    tol = 2 * resolution + _STEADY_TOL * period
-    steady = float(np.mean(np.abs(inrun - period) <= tol))
+    pause, inrun, period, tol, steady = _runs(per, resolution)
     # jumps between consecutive periods inside one run, where the line runs fast (the shorter
     # period within 2x its 10th percentile: a motor speeding up from rest, or making a move of a
     # few steps, jumps, but only while slow): one way, or there and back

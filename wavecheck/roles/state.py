@@ -11,7 +11,7 @@ import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.roles.buses import BusFindings, find_buses
-from wavecheck.roles.features import ChannelLook, Pulses, look_at
+from wavecheck.roles.features import ChannelLook, Pulses, look_at, may_be_one_rate
 from wavecheck.roles.names import NameHint, name_hint
 from wavecheck.roles.proposal import (
     Basis,
@@ -20,7 +20,7 @@ from wavecheck.roles.proposal import (
     Unassigned,
 )
 
-__all__ = ["FoundAxis", "I64", "State", "level_at", "pulses_inside"]
+__all__ = ["FoundAxis", "I64", "Looks", "State", "level_at", "pulses_inside"]
 
 I64 = npt.NDArray[np.int64]
 
@@ -34,6 +34,20 @@ def level_at(ch: Channel, times: I64) -> I64:
 def pulses_inside(d: Channel, dp: Pulses, s_starts: I64) -> int:
     """Number of ``s_starts`` that fall while ``d`` is at its pulse level."""
     return int(np.count_nonzero(level_at(d, s_starts) == dp.level))
+
+
+class Looks(dict[int, ChannelLook]):
+    """Every line's look (channel index → :func:`~wavecheck.roles.features.look_at`), each
+    computed when first asked for: judging a few lines' names costs their looks only."""
+
+    def __init__(self, cap: Capture) -> None:
+        super().__init__()
+        self.cap = cap
+        self.by_index = {c.index: c for c in cap.channels}
+
+    def __missing__(self, index: int) -> ChannelLook:
+        look = self[index] = look_at(self.by_index[index], self.cap)
+        return look
 
 
 @dataclass(eq=False)
@@ -53,7 +67,8 @@ class State:
 
     def __init__(self, cap: Capture) -> None:
         self.cap = cap
-        self.looks: dict[int, ChannelLook] = {c.index: look_at(c, cap) for c in cap.channels}
+        self.looks = Looks(cap)
+        self._one_rate: dict[int, bool] = {}  # lines that may be at one rate, before a look
         self.hints: dict[int, NameHint] = {c.index: name_hint(c.name) for c in cap.channels}
         self.refs = self._refs()
         self.taken: set[int] = set()
@@ -103,16 +118,38 @@ class State:
     def name_of(self, c: Channel) -> str:
         return f"{c.index}={c.name!r}"
 
-    def _buses(self, chans: list[Channel]) -> None:
-        """Bus clocks, data, strobes and gates among the changing lines not yet taken."""
+    def may_be_one_rate(self, c: Channel) -> bool:
+        """False when ``c``'s look is surely none of the kinds at one rate (a clock, PWM,
+        periodic pulses, bursts), told without its whole look while that is not made."""
+        if c.index in self.looks:
+            return True  # its look tells
+        if c.index not in self._one_rate:
+            self._one_rate[c.index] = may_be_one_rate(c, self.cap)
+        return self._one_rate[c.index]
+
+    def _buses(self, chans: list[Channel], asked: list[Channel] | None = None) -> None:
+        """Bus clocks, data, strobes and gates among the changing lines not yet taken; with
+        ``asked``, only the findings of those lines are sure (a strobe is looked for among
+        them only, and only beside a bus clock), and the other lines' looks may stay unmade."""
         changing = [c for c in chans if len(c.edges) and c.index not in self.taken]
-        clock_like = {c.index for c in changing if self.looks[c.index].clock_like}
-        starts = {
-            i: look.pulses.starts
-            for i, look in self.looks.items()
-            if look.pulses is not None and (look.is_step_like or look.step_by_name)
+        # every line's findings: every line's look is made (the pre-test would be work twice)
+        clock_like = {
+            c.index
+            for c in changing
+            if (asked is None or self.may_be_one_rate(c)) and self.looks[c.index].clock_like
         }
-        self.bus = find_buses(changing, max(self.cap.resolution_ticks, 0), clock_like, starts)
+        res = max(self.cap.resolution_ticks, 0)
+        if asked is not None:
+            self.bus = find_buses(changing, res, clock_like, {})
+            if not self.bus.clocks:  # a strobe follows a bus clock: no strobe without one
+                return
+        starts = {
+            c.index: look.pulses.starts
+            for c in (self.cap.channels if asked is None else asked)
+            if (look := self.looks[c.index]).pulses is not None
+            and (look.is_step_like or look.step_by_name)
+        }
+        self.bus = find_buses(changing, res, clock_like, starts)
 
     def _candidates(self) -> list[Channel]:
         """The channels most like a STEP, best first: named so, then by how they look (a step

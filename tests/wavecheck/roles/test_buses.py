@@ -5,10 +5,12 @@ synchronous design's STEP on its clock)."""
 from __future__ import annotations
 
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from wavecheck.capture.edges import Channel
 from wavecheck.roles import propose
-from wavecheck.roles.buses import clocked_data, find_buses, gate, strobe
+from wavecheck.roles.buses import clocked_data, confined, find_buses, gate, strobe
 
 from ..waves import capture, move, pulses
 
@@ -107,3 +109,43 @@ def test_enable_gates_the_steps_and_is_never_a_step() -> None:
     # another STEP with few pulses, all in the pauses of a busy one, gates nothing
     z = _ch("Z", pulses([en[1] + 1_000_000 + k * 700_000_000 for k in range(6)], 10_000))
     assert gate(z, s) is None
+
+
+def _confined_per_edge(e: Channel, b: Channel) -> tuple[int, int, int] | None:
+    """:func:`confined` told edge by edge of ``b`` (the level of ``e`` at each): the oracle of
+    its one search per edge of ``e``."""
+    ee, be = e.edges, b.edges
+    if len(ee) == 0 or len(be) < 8 or len(be) < 2 * len(ee):
+        return None
+    k = np.searchsorted(ee, be, side="right")
+    at = e.initial ^ (k & 1)
+    if np.any(at != at[0]):
+        return None
+    held = np.bincount(k, minlength=len(ee) + 1) > 0
+    active = (e.initial ^ (np.arange(len(ee) + 1) & 1)) == at[0]
+    filled, stretches = int(np.count_nonzero(held & active)), int(np.count_nonzero(active))
+    if filled < 0.5 * stretches or np.count_nonzero((held & active)[1:-1]) < 2:
+        return None
+    return int(at[0]), filled, stretches
+
+
+@given(
+    st.integers(0, 1),
+    st.lists(st.integers(0, 400), min_size=1, max_size=12, unique=True),
+    st.lists(st.integers(0, 400), min_size=8, max_size=120, unique=True),
+    st.integers(0, 1),
+    st.sets(st.integers(0, 400), max_size=2),
+)
+@settings(max_examples=300, deadline=None)
+def test_confined_is_the_per_edge_rule(
+    initial: int, e_edges: list[int], ticks: list[int], level: int, strays: set[int]
+) -> None:
+    """A gate's stretches are counted with one search per edge of the gate (not per edge of the
+    busy line); edges at the same tick included, the answer is the per-edge one. The busy line
+    changes while the gate is at ``level`` (and at a few ``strays``), so gates are found too."""
+    e = Channel(name="e", index=0, initial=initial, edges=np.array(sorted(e_edges), np.int64))
+    at = initial ^ (np.searchsorted(e.edges, np.array(ticks, np.int64), side="right") & 1)
+    kept = sorted({t for t, lv in zip(ticks, at, strict=True) if lv == level} | strays)
+    b = Channel(name="b", index=1, initial=0, edges=np.array(kept, np.int64))
+    g = confined(e, b)
+    assert (None if g is None else (g.level, g.filled, g.stretches)) == _confined_per_edge(e, b)

@@ -12,11 +12,12 @@ import pytest
 
 from tests.conftest import write_vcd
 from tests.engine_probe import run_check
-from wavecheck.capture.edges import Capture
+from wavecheck.capture.edges import Capture, Channel
 from wavecheck.cli import main
 from wavecheck.engine.planning import auto_map
 from wavecheck.errors import UsageError
 from wavecheck.roles import name_conflicts, propose
+from wavecheck.roles.features import ChannelLook, look_at
 from wavecheck.steptypes import step_type
 
 from ..waves import capture, drive, pulses
@@ -172,3 +173,61 @@ def test_the_user_sees_the_refusal_and_the_candidates(
     assert main(["info", str(vcd)]) == 0
     assert "ambiguous: 0='step' is named STEP" in capsys.readouterr().out
     assert main(["check", str(vcd), "--drive", "gecko-g202", "--map", "step=X"]) in (0, 1)
+
+
+# ---------------------------------------------------------------- the work a name's judgement costs
+
+
+def _strobed() -> Capture:
+    """Bursts of 8 clock cycles with data changing on each falling edge, and after each burst
+    a pulse on the line named ``step``, always 3 µs after the clock's last edge: a strobe."""
+    clk: list[int] = []
+    data: list[int] = []
+    strobe: list[int] = []
+    for b in range(30):
+        t0 = 1000 * US + b * 200 * US
+        burst = [t0 + k * 2 * US for k in range(16)]
+        clk += burst
+        data += [burst[k] for k in range(1, 16, 2) if (b * 16 + k) * 7919 % 5 < 2]
+        strobe += [burst[-1] + 3 * US, burst[-1] + 4 * US]
+    return capture({"SCK": (0, clk), "MOSI": (0, data), "step": (0, strobe)})
+
+
+@pytest.mark.parametrize(("cap", "named", "why"), [
+    (_bus(), {"step": 1}, "data of bus clock 0='SCK'"),
+    (_strobed(), {"step": 2}, "a strobe of bus clock 0='SCK'"),
+])  # fmt: skip
+def test_a_bus_line_named_step_is_refused_by_check(
+    cap: Capture, named: dict[str, int], why: str
+) -> None:
+    """The question is asked on the named lines' findings first (a strobe looked for beside a
+    bus clock only); the refusal is :func:`propose`'s."""
+    (refusal,) = name_conflicts(cap, named)
+    assert why in refusal.conflict.question
+    (conflict,) = propose(cap).ambiguous
+    assert conflict == refusal.conflict
+
+
+@pytest.mark.parametrize(("step", "refused", "looks"), [
+    (_TRAIN, False, 0),  # a step train speeds up: no clock, told without its whole look
+    (pulses([k * 50 * US for k in range(1, 40)], 5 * US), False, 1),  # one rate: looked at
+    (_clock(200), True, 3),  # refused: every line's look, for the lines most like a STEP
+])  # fmt: skip
+def test_judging_a_name_looks_only_at_what_the_question_needs(
+    monkeypatch: pytest.MonkeyPatch, step: list[int], refused: bool, looks: int
+) -> None:
+    """A named two-line capture (and a line beside it): its lines' whole looks
+    (:func:`~wavecheck.roles.features.look_at`, the cost of judging a name on a capture of
+    millions of edges) are made only where the question needs them."""
+    import wavecheck.roles.state as state
+
+    made: list[str] = []
+
+    def counted(ch: Channel, cap: Capture) -> ChannelLook:
+        made.append(ch.name)
+        return look_at(ch, cap)
+
+    monkeypatch.setattr(state, "look_at", counted)
+    cap = capture({"step": (0, step), "dir": (0, [700 * US, 1400 * US]), "led": (1, [])})
+    assert bool(name_conflicts(cap, {"step": 0, "dir": 1})) == refused
+    assert len(made) == looks, made
