@@ -113,6 +113,15 @@ def test_the_drive_table_loads_no_python_toml_parser() -> None:
     assert "difflib" in _loaded_after(["drives", "no-such-drive"])  # the probe sees it
 
 
+def test_the_drive_table_defines_no_dataclass() -> None:
+    """``wavecheck drives`` (issue 38): its record types (Drive, Figure, Rule, the format
+    registry …) are :mod:`wavecheck.record` classes, so neither :mod:`dataclasses` nor the
+    :mod:`inspect` it imports loads (~6 ms), and no method is compiled per class."""
+    loaded = _loaded_after(["drives"])
+    assert sorted({"dataclasses", "inspect"} & loaded) == []
+    assert "wavecheck.record" in loaded  # the probe sees the records' module
+
+
 def test_a_simulated_vcd_loads_no_numpy_ma(tmp_path: Path) -> None:
     """``np.unique`` imports numpy.ma (8 ms, issue 38): the engine and the VCD writer avoid it."""
     out = tmp_path / "o.vcd"
@@ -155,7 +164,8 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck", "wavecheck.cli", "wavecheck.cli._formats", "wavecheck.cli._main",
             "wavecheck.cli._tuning_args", "wavecheck.cli.drives", "wavecheck.drives",
             "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.errors",
-            "wavecheck.output", "wavecheck.rules", "wavecheck.steptypes", "wavecheck.units",
+            "wavecheck.output", "wavecheck.record", "wavecheck.rules", "wavecheck.steptypes",
+            "wavecheck.units",
         },
     ),
     "check sr --map": (
@@ -175,7 +185,7 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.engine.rates", "wavecheck.engine.resolve", "wavecheck.engine.results",
             "wavecheck.engine.run", "wavecheck.engine.sinks", "wavecheck.engine.trace",
             "wavecheck.engine.windows", "wavecheck.errors", "wavecheck.firmware",
-            "wavecheck.output", "wavecheck.progress", "wavecheck.report",
+            "wavecheck.output", "wavecheck.progress", "wavecheck.record", "wavecheck.report",
             "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
             "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
             "wavecheck.roles", "wavecheck.roles.names", "wavecheck.rules", "wavecheck.steps",

@@ -1,0 +1,321 @@
+"""Record classes: :func:`dataclasses.dataclass`'s semantics without its start-up cost.
+
+``@dataclass`` compiles six small functions for each class it makes (``__init__``, ``__repr__``,
+``__eq__``, ``__hash__``, ``__setattr__``, ``__delattr__``: ~0.5 ms a class on this machine), and
+importing :mod:`dataclasses` imports :mod:`inspect` (~6 ms). ``check`` defines dozens of record
+types before it reads a byte, ``wavecheck drives`` eight (issue 38). :func:`record` gives the
+same classes with no code compiled per class: ``__init__`` is a code object compiled once per
+number of fields, its parameters renamed (so signature, keywords, defaults and error messages are
+the generated one's), and the other methods are shared functions over the field names.
+
+What a user of a record type sees is a dataclass's: the same ``__init__`` signature (with
+``<factory>`` defaults), ``repr``, ``==`` (tuples of the fields, same class only), ``hash``
+(frozen), :class:`dataclasses.FrozenInstanceError` on assignment, ``__match_args__``,
+``__post_init__``; :func:`dataclasses.fields`, :func:`dataclasses.replace`,
+:func:`dataclasses.asdict` and :func:`dataclasses.is_dataclass` work (``__dataclass_fields__`` and
+``__dataclass_params__`` are made by :mod:`dataclasses` itself the first time one is asked for).
+Type checkers read :func:`record` as a dataclass (PEP 681). Supported: ``frozen``, ``eq``,
+defaults, :func:`field` with ``default`` or ``default_factory``, ``ClassVar`` annotations,
+records inheriting records; anything else (``order``, ``slots``, ``kw_only``, ``InitVar``) is
+refused at class creation.
+"""
+
+from __future__ import annotations
+
+import builtins
+import reprlib
+import types
+from typing import TYPE_CHECKING, Any, TypeVar, dataclass_transform, overload
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+T = TypeVar("T")
+
+__all__ = ["field", "record", "replace"]
+
+
+class _Factory:
+    """The default of a field made by a factory (shown ``<factory>`` in the signature, as
+    :mod:`dataclasses` shows it)."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "<factory>"
+
+
+_FACTORY = _Factory()
+_MISSING: Any = object()
+#: The names under which the fields of a record class are kept.
+_FIELDS = "__record_fields__"
+_DATACLASS_ATTRS = ("__dataclass_fields__", "__dataclass_params__")
+
+
+class _Field:
+    __slots__ = ("default", "default_factory")
+
+    def __init__(self, default: Any, default_factory: Any) -> None:
+        self.default = default
+        self.default_factory = default_factory
+
+
+def field(*, default: Any = _MISSING, default_factory: Callable[[], Any] = _MISSING) -> Any:
+    """A field's default (as :func:`dataclasses.field`'s ``default`` / ``default_factory``)."""
+    if default is not _MISSING and default_factory is not _MISSING:
+        raise ValueError("cannot specify both default and default_factory")
+    return _Field(default, default_factory)
+
+
+class _Spec:
+    """A record class's fields: names, annotations, defaults (``_MISSING``: none) and
+    factories (name → callable), and how the class was declared."""
+
+    __slots__ = ("annotations", "defaults", "eq", "factories", "frozen", "names")
+
+    def __init__(self, frozen: bool, eq: bool) -> None:
+        self.names: tuple[str, ...] = ()
+        self.annotations: dict[str, Any] = {}
+        self.defaults: dict[str, Any] = {}
+        self.factories: dict[str, Callable[[], Any]] = {}
+        self.frozen = frozen
+        self.eq = eq
+
+
+#: The most fields a record's ``__init__`` takes from :func:`_template` (more: compiled).
+_MAX_FIELDS = 48
+
+
+def _template(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35, a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47):  # type: ignore[no-untyped-def]  # noqa: E501  # fmt: skip
+    """Every record's ``__init__``: this code with its first parameters renamed to the fields
+    and the rest left as unbound locals (``locals()`` omits them): no code compiled per class."""
+    _fill(self, locals())  # type: ignore[name-defined]  # noqa: F821
+
+
+def _init_code(cls: type, names: tuple[str, ...]) -> types.CodeType:
+    n = len(names)
+    if n <= _MAX_FIELDS:
+        code = _template.__code__
+        spare = tuple(f" {k}" for k in range(_MAX_FIELDS - n))
+    else:
+        namespace: dict[str, Any] = {}
+        src = f"def __init__(self, {', '.join(names)}):\n    _fill(self, locals())\n"
+        exec(compile(src, "<wavecheck.record>", "exec"), namespace)
+        code, spare = namespace["__init__"].__code__, ()
+    return code.replace(
+        co_argcount=n + 1,
+        co_varnames=("self", *names, *spare),
+        co_name="__init__",
+        co_qualname=f"{cls.__qualname__}.__init__",
+    )
+
+
+def _is_classvar(annotation: Any) -> bool:
+    text = annotation if isinstance(annotation, str) else repr(annotation)
+    return text.startswith(("ClassVar", "typing.ClassVar", "t.ClassVar"))
+
+
+def _spec_of(cls: type, frozen: bool, eq: bool) -> _Spec:
+    spec = _Spec(frozen, eq)
+    for base in reversed(cls.__mro__[1:]):
+        inherited: _Spec | None = base.__dict__.get(_FIELDS)
+        if inherited is None:
+            continue
+        if inherited.frozen != frozen:
+            raise TypeError(f"{cls.__qualname__}: a frozen and a mutable record cannot mix")
+        spec.annotations.update(inherited.annotations)
+        spec.defaults.update(inherited.defaults)
+        spec.factories.update(inherited.factories)
+    for name, annotation in cls.__dict__.get("__annotations__", {}).items():
+        if _is_classvar(annotation):
+            continue
+        text = annotation if isinstance(annotation, str) else repr(annotation)
+        if text.startswith(("InitVar", "KW_ONLY", "dataclasses.")):
+            raise TypeError(f"{cls.__qualname__}.{name}: {text} is not supported by record")
+        spec.annotations[name] = annotation
+        value = cls.__dict__.get(name, _MISSING)
+        spec.factories.pop(name, None)
+        if isinstance(value, _Field):
+            if value.default_factory is not _MISSING:
+                spec.factories[name] = value.default_factory
+                value = _MISSING
+                delattr(cls, name)
+            else:
+                value = value.default
+                if value is _MISSING:
+                    delattr(cls, name)
+                else:
+                    setattr(cls, name, value)
+        if value is not _MISSING and type(value).__hash__ is None:
+            raise ValueError(
+                f"mutable default {type(value)} for field {name} is not allowed: use "
+                "default_factory"
+            )
+        spec.defaults[name] = value
+    spec.names = tuple(spec.annotations)
+    seen_default = False
+    for name in spec.names:
+        has_default = spec.defaults[name] is not _MISSING or name in spec.factories
+        if seen_default and not has_default:
+            raise TypeError(f"non-default argument {name!r} follows default argument")
+        seen_default = seen_default or has_default
+    return spec
+
+
+def _make_init(cls: type, spec: _Spec) -> Callable[..., None]:
+    names = spec.names
+    factories = spec.factories
+    post_init = getattr(cls, "__post_init__", None)
+    put = object.__setattr__ if spec.frozen else builtins.setattr
+
+    def fill(self: Any, values: dict[str, Any]) -> None:
+        for name in names:
+            put(self, name, values[name])
+        if post_init is not None:
+            self.__post_init__()
+
+    def fill_factories(self: Any, values: dict[str, Any]) -> None:
+        for name in names:
+            value = values[name]
+            put(self, name, factories[name]() if value is _FACTORY else value)
+        if post_init is not None:
+            self.__post_init__()
+
+    scope = {
+        "_fill": fill_factories if factories else fill,
+        "__name__": cls.__module__,
+        "__builtins__": builtins,
+    }
+    defaults = tuple(
+        _FACTORY if n in spec.factories else spec.defaults[n]
+        for n in names
+        if n in spec.factories or spec.defaults[n] is not _MISSING
+    )
+    init = types.FunctionType(_init_code(cls, names), scope, "__init__", defaults or None)
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__annotations__ = {**spec.annotations, "return": None}
+    return init
+
+
+def _values(self: Any) -> tuple[Any, ...]:
+    return tuple([getattr(self, n) for n in type(self).__record_fields__.names])
+
+
+@reprlib.recursive_repr()
+def _repr(self: Any) -> str:
+    spec: _Spec = type(self).__record_fields__
+    inner = ", ".join([f"{n}={getattr(self, n)!r}" for n in spec.names])
+    return f"{type(self).__qualname__}({inner})"
+
+
+def _eq(self: Any, other: Any) -> Any:
+    if other.__class__ is self.__class__:
+        return _values(self) == _values(other)
+    return NotImplemented
+
+
+def _hash(self: Any) -> int:
+    return hash(_values(self))
+
+
+def _frozen_methods(cls: Any, names: tuple[str, ...]) -> tuple[Any, Any]:
+    def __setattr__(self: Any, name: str, value: Any) -> None:
+        if type(self) is cls or name in names:
+            from dataclasses import FrozenInstanceError
+
+            raise FrozenInstanceError(f"cannot assign to field {name!r}")
+        super(cls, self).__setattr__(name, value)
+
+    def __delattr__(self: Any, name: str) -> None:
+        if type(self) is cls or name in names:
+            from dataclasses import FrozenInstanceError
+
+            raise FrozenInstanceError(f"cannot delete field {name!r}")
+        super(cls, self).__delattr__(name)
+
+    __setattr__.__qualname__ = f"{cls.__qualname__}.__setattr__"
+    __delattr__.__qualname__ = f"{cls.__qualname__}.__delattr__"
+    return __setattr__, __delattr__
+
+
+class _AsDataclass:
+    """``__dataclass_fields__`` / ``__dataclass_params__`` of a record class, made by
+    :func:`dataclasses.make_dataclass` from its fields the first time either is asked for (the
+    introspection of :mod:`dataclasses`: ``fields``, ``asdict``, ``is_dataclass`` …)."""
+
+    def __init__(self, attr: str) -> None:
+        self.attr = attr
+
+    def __get__(self, obj: Any, owner: Any) -> Any:
+        import dataclasses
+
+        spec: _Spec = owner.__record_fields__
+        specs: list[tuple[str, Any] | tuple[str, Any, Any]] = []
+        for name in spec.names:
+            if name in spec.factories:
+                specs.append((name, spec.annotations[name], dataclasses.field(default_factory=spec.factories[name])))  # fmt: skip
+            elif spec.defaults[name] is not _MISSING:
+                specs.append((name, spec.annotations[name], dataclasses.field(default=spec.defaults[name])))  # fmt: skip
+            else:
+                specs.append((name, spec.annotations[name]))
+        twin = dataclasses.make_dataclass(owner.__name__, specs, eq=spec.eq, frozen=spec.frozen)
+        for attr in _DATACLASS_ATTRS:
+            type.__setattr__(owner, attr, twin.__dict__[attr])
+        return twin.__dict__[self.attr]
+
+
+def _build(cls: type, frozen: bool, eq: bool) -> type:
+    spec = _spec_of(cls, frozen, eq)
+    own = cls.__dict__
+    setattr(cls, _FIELDS, spec)
+    for attr in _DATACLASS_ATTRS:
+        setattr(cls, attr, _AsDataclass(attr))
+    if "__init__" not in own:
+        cls.__init__ = _make_init(cls, spec)  # type: ignore[misc]
+    if "__repr__" not in own:
+        cls.__repr__ = _repr  # type: ignore[assignment]
+    if eq and "__eq__" not in own:
+        cls.__eq__ = _eq  # type: ignore[assignment]
+    if "__hash__" not in own or (own["__hash__"] is None and "__eq__" in own):
+        if eq and frozen:
+            cls.__hash__ = _hash  # type: ignore[assignment]
+        elif eq:
+            cls.__hash__ = None  # type: ignore[assignment]
+    if frozen:
+        if "__setattr__" in own or "__delattr__" in own:
+            raise TypeError(f"cannot overwrite __setattr__/__delattr__ of {cls.__qualname__}")
+        cls.__setattr__, cls.__delattr__ = _frozen_methods(cls, spec.names)  # type: ignore[method-assign]
+    if "__match_args__" not in own:
+        cls.__match_args__ = spec.names  # type: ignore[attr-defined,misc]
+    return cls
+
+
+@overload
+def record(cls: type[T], /) -> type[T]: ...
+@overload
+def record(*, frozen: bool = False, eq: bool = True) -> Callable[[type[T]], type[T]]: ...
+
+
+@dataclass_transform(field_specifiers=(field,))
+def record(cls: Any = None, /, *, frozen: bool = False, eq: bool = True) -> Any:
+    """Make ``cls`` a record: ``@record`` is ``@dataclass``, ``@record(frozen=True)`` is
+    ``@dataclass(frozen=True)`` (see the module's docstring for what is supported)."""
+
+    def wrap(cls: type) -> type:
+        return _build(cls, frozen, eq)
+
+    return wrap if cls is None else wrap(cls)
+
+
+def replace(obj: T, /, **changes: Any) -> T:
+    """A copy of ``obj`` (a record or a dataclass) with ``changes``, as
+    :func:`dataclasses.replace` (without making a record's ``__dataclass_fields__``)."""
+    spec: _Spec | None = getattr(type(obj), _FIELDS, None)
+    if spec is None:
+        import dataclasses
+
+        return dataclasses.replace(obj, **changes)  # type: ignore[type-var]
+    for name in spec.names:
+        if name not in changes:
+            changes[name] = getattr(obj, name)
+    return type(obj)(**changes)
