@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
-__all__ = ["field", "record", "replace"]
+__all__ = ["field", "field_names", "record", "replace"]
 
 
 class _Factory:
@@ -319,3 +319,10 @@ def replace(obj: T, /, **changes: Any) -> T:
         if name not in changes:
             changes[name] = getattr(obj, name)
     return type(obj)(**changes)
+
+
+def field_names(class_or_record: Any) -> tuple[str, ...]:
+    """The field names of a record class or record, in order (``dataclasses.fields``' names,
+    without making a record's ``__dataclass_fields__``)."""
+    spec: _Spec = class_or_record.__record_fields__
+    return spec.names

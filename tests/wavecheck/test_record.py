@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 import pytest
 
 from wavecheck import record as record_module
-from wavecheck.record import field, record, replace
+from wavecheck.record import field, field_names, record, replace
 
 
 def _pair(frozen: bool, eq: bool = True) -> tuple[type, type]:
@@ -165,3 +165,9 @@ def test_a_repr_of_a_record_that_contains_itself_ends() -> None:
     node = Node()
     node.children.append(node)
     assert repr(node).endswith(".Node(children=[...])")
+
+
+def test_field_names_are_the_dataclass_fields_names() -> None:
+    _, rc = _pair(frozen=True)
+    assert field_names(rc) == field_names(rc(1)) == ("x", "y", "z")
+    assert field_names(rc) == tuple(f.name for f in dataclasses.fields(rc))
