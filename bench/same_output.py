@@ -8,7 +8,7 @@ byte for byte (each tree's own path written as ``TREE``).
 The set: every golden VCD (its drive from its .toml, else gecko-g202) as text and JSON; the grbl
 capture mapped, as text, JSON and JUnit, with ``--firmware`` and ``--base-period``, and unmapped;
 a bad drive; ``drives`` with and without an id, as text and JSON; ``info`` and ``measure``;
-``--help``; an unknown command; and ``check FILE --drive gecko-g202`` on real captures.
+``--help`` (alone, before and after a command), ``--version``, usage errors, an unknown command; and ``check FILE --drive gecko-g202`` on real captures.
 """
 
 from __future__ import annotations
@@ -48,7 +48,12 @@ def commands(every: int) -> list[list[str]]:
         ["info", TINY],
         ["measure", TINY],
         ["--help"],
+        ["--help", "check"],
+        ["--version"],
         ["check", "--help"],
+        ["check"],
+        ["check", TINY, "--drive", "gecko-g202", "--format", "nope"],
+        ["drives", "--bogus"],
         ["no-such-command"],
     ]
     if every:

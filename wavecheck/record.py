@@ -53,28 +53,44 @@ _DATACLASS_ATTRS = ("__dataclass_fields__", "__dataclass_params__")
 
 
 class _Field:
-    __slots__ = ("default", "default_factory")
+    __slots__ = ("compare", "default", "default_factory", "repr")
 
-    def __init__(self, default: Any, default_factory: Any) -> None:
+    def __init__(self, default: Any, default_factory: Any, repr: bool, compare: bool) -> None:
         self.default = default
         self.default_factory = default_factory
+        self.repr = repr
+        self.compare = compare
 
 
-def field(*, default: Any = _MISSING, default_factory: Callable[[], Any] = _MISSING) -> Any:
-    """A field's default (as :func:`dataclasses.field`'s ``default`` / ``default_factory``)."""
+def field(
+    *,
+    default: Any = _MISSING,
+    default_factory: Callable[[], Any] = _MISSING,
+    repr: bool = True,
+    compare: bool = True,
+) -> Any:
+    """A field's default, and whether ``repr`` shows it and ``==`` / ``hash`` use it (as
+    :func:`dataclasses.field`'s arguments of these names)."""
     if default is not _MISSING and default_factory is not _MISSING:
         raise ValueError("cannot specify both default and default_factory")
-    return _Field(default, default_factory)
+    return _Field(default, default_factory, repr, compare)
 
 
 class _Spec:
     """A record class's fields: names, annotations, defaults (``_MISSING``: none) and
     factories (name → callable), and how the class was declared."""
 
-    __slots__ = ("annotations", "defaults", "eq", "factories", "frozen", "names")
+    __slots__ = ("annotations", "compared", "defaults", "eq", "factories", "frozen", "names",
+                 "options", "shown")  # fmt: skip
 
     def __init__(self, frozen: bool, eq: bool) -> None:
         self.names: tuple[str, ...] = ()
+        self.shown: tuple[str, ...] = ()
+        """The fields ``repr`` shows."""
+        self.compared: tuple[str, ...] = ()
+        """The fields ``==`` and ``hash`` use."""
+        self.options: dict[str, dict[str, bool]] = {}
+        """Name → ``repr=False`` / ``compare=False`` as given to :func:`field`."""
         self.annotations: dict[str, Any] = {}
         self.defaults: dict[str, Any] = {}
         self.factories: dict[str, Callable[[], Any]] = {}
@@ -126,6 +142,7 @@ def _spec_of(cls: type, frozen: bool, eq: bool) -> _Spec:
         spec.annotations.update(inherited.annotations)
         spec.defaults.update(inherited.defaults)
         spec.factories.update(inherited.factories)
+        spec.options.update(inherited.options)
     for name, annotation in cls.__dict__.get("__annotations__", {}).items():
         if _is_classvar(annotation):
             continue
@@ -135,7 +152,10 @@ def _spec_of(cls: type, frozen: bool, eq: bool) -> _Spec:
         spec.annotations[name] = annotation
         value = cls.__dict__.get(name, _MISSING)
         spec.factories.pop(name, None)
+        spec.options.pop(name, None)
         if isinstance(value, _Field):
+            flags = {"repr": value.repr, "compare": value.compare}
+            spec.options[name] = {k: v for k, v in flags.items() if not v}
             if value.default_factory is not _MISSING:
                 spec.factories[name] = value.default_factory
                 value = _MISSING
@@ -153,6 +173,8 @@ def _spec_of(cls: type, frozen: bool, eq: bool) -> _Spec:
             )
         spec.defaults[name] = value
     spec.names = tuple(spec.annotations)
+    spec.shown = tuple(n for n in spec.names if spec.options.get(n, {}).get("repr", True))
+    spec.compared = tuple(n for n in spec.names if spec.options.get(n, {}).get("compare", True))
     seen_default = False
     for name in spec.names:
         has_default = spec.defaults[name] is not _MISSING or name in spec.factories
@@ -198,13 +220,13 @@ def _make_init(cls: type, spec: _Spec) -> Callable[..., None]:
 
 
 def _values(self: Any) -> tuple[Any, ...]:
-    return tuple([getattr(self, n) for n in type(self).__record_fields__.names])
+    return tuple([getattr(self, n) for n in type(self).__record_fields__.compared])
 
 
 @reprlib.recursive_repr()
 def _repr(self: Any) -> str:
     spec: _Spec = type(self).__record_fields__
-    inner = ", ".join([f"{n}={getattr(self, n)!r}" for n in spec.names])
+    inner = ", ".join([f"{n}={getattr(self, n)!r}" for n in spec.shown])
     return f"{type(self).__qualname__}({inner})"
 
 
@@ -250,14 +272,14 @@ class _AsDataclass:
         import dataclasses
 
         spec: _Spec = owner.__record_fields__
-        specs: list[tuple[str, Any] | tuple[str, Any, Any]] = []
+        specs: list[tuple[str, Any, Any]] = []
         for name in spec.names:
+            given: dict[str, Any] = dict(spec.options.get(name, {}))
             if name in spec.factories:
-                specs.append((name, spec.annotations[name], dataclasses.field(default_factory=spec.factories[name])))  # fmt: skip
+                given["default_factory"] = spec.factories[name]
             elif spec.defaults[name] is not _MISSING:
-                specs.append((name, spec.annotations[name], dataclasses.field(default=spec.defaults[name])))  # fmt: skip
-            else:
-                specs.append((name, spec.annotations[name]))
+                given["default"] = spec.defaults[name]
+            specs.append((name, spec.annotations[name], dataclasses.field(**given)))
         twin = dataclasses.make_dataclass(owner.__name__, specs, eq=spec.eq, frozen=spec.frozen)
         for attr in _DATACLASS_ATTRS:
             type.__setattr__(owner, attr, twin.__dict__[attr])

@@ -122,6 +122,33 @@ def test_the_drive_table_defines_no_dataclass() -> None:
     assert "wavecheck.record" in loaded  # the probe sees the records' module
 
 
+def test_argparse_asks_the_terminal_width_only_to_write_help() -> None:
+    """argparse's formatter imports shutil for the terminal's width (~2 ms with bz2/lzma):
+    ``drives`` writes no help, so builds no formatter that asks; ``--help`` does."""
+    assert "shutil" not in _loaded_after(["drives"])
+    assert "shutil" in _loaded_after(["drives", "--help"])  # the probe sees it
+
+
+def test_a_command_first_builds_no_other_subcommand_parser() -> None:
+    """The other subcommands' (empty) parsers are listed only where argparse may show them:
+    ``--help`` or an error before the command word."""
+    code = (
+        "import argparse\n"
+        "from wavecheck.cli import main\n"
+        "made = []\n"
+        "init = argparse.ArgumentParser.__init__\n"
+        "def spy(self, *a, **k):\n"
+        "    made.append(k.get('prog'))\n"
+        "    init(self, *a, **k)\n"
+        "argparse.ArgumentParser.__init__ = spy\n"
+        "main(['drives'])\n"
+        "print('--- parsers ---', len(made))\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.rpartition("--- parsers ---")[2].split() == ["2"]  # the tool's, drives'
+
+
 def test_a_simulated_vcd_loads_no_numpy_ma(tmp_path: Path) -> None:
     """``np.unique`` imports numpy.ma (8 ms, issue 38): the engine and the VCD writer avoid it."""
     out = tmp_path / "o.vcd"

@@ -171,3 +171,18 @@ def test_field_names_are_the_dataclass_fields_names() -> None:
     _, rc = _pair(frozen=True)
     assert field_names(rc) == field_names(rc(1)) == ("x", "y", "z")
     assert field_names(rc) == tuple(f.name for f in dataclasses.fields(rc))
+
+
+def test_fields_left_out_of_repr_and_comparison() -> None:
+    def make(decorator: Callable[..., Any], fld: Callable[..., Any]) -> type:
+        @decorator(frozen=True)
+        class Probe:
+            a: int
+            b: int = fld(default=0, repr=False, compare=False)
+
+        return Probe
+
+    dc, rc = make(dataclasses.dataclass, dataclasses.field), make(record, field)
+    assert repr(rc(1, 2)).endswith("Probe(a=1)") and repr(dc(1, 2)).endswith("Probe(a=1)")
+    assert rc(1, 2) == rc(1, 3) and hash(rc(1, 2)) == hash(rc(1, 3)) == hash(dc(1, 2))
+    assert [(f.repr, f.compare) for f in dataclasses.fields(rc)] == [(True, True), (False, False)]

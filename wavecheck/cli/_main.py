@@ -17,7 +17,7 @@ import importlib
 import os
 import sys
 from collections.abc import Mapping, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from wavecheck import __version__
 from wavecheck.errors import UsageError, WavecheckError
@@ -45,6 +45,23 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(UsageError.exit_code, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    _checking = False
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> argparse.Action:
+        self._checking = True
+        try:
+            return super().add_argument(*args, **kwargs)
+        finally:
+            self._checking = False
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        # add_argument asks for a formatter only to check the metavar against nargs; the
+        # formatter asks for the terminal's width (shutil, ~2 ms of start-up), wanted only
+        # when help or an error is written
+        if self._checking:
+            return self.formatter_class(prog=self.prog, width=80)  # type: ignore[call-arg]
+        return super()._get_formatter()
+
     def parse_known_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> tuple[argparse.Namespace, list[str]]:
@@ -63,8 +80,9 @@ def run_cli(
     """Build the parser of the subcommand asked for and run it.
 
     Only that subcommand's module is imported: its ``register(subparsers)`` adds its parser and
-    sets ``func`` to a ``run(args) -> int``. Every other subcommand is listed from ``commands``
-    (``--help``, usage errors) with an empty parser that never parses.
+    sets ``func`` to a ``run(args) -> int``. When the command is not the first word (``--help``,
+    ``--version``, a usage error), every other subcommand is listed from ``commands`` with an
+    empty parser that never parses.
     """
     # numpy's OpenBLAS starts a thread per core when numpy is imported: about 0.1 s of CPU at
     # every start, for linear algebra no command does (an environment variable says otherwise)
@@ -74,12 +92,17 @@ def run_cli(
     parser = _Parser(prog=prog, description=description)
     parser.add_argument("--version", action="version", version=f"{prog} {__version__}")
     # dest: not "command", which stepgen simulate's --command option also sets
-    sub = parser.add_subparsers(dest="_subcommand", metavar="COMMAND", parser_class=_Parser)
+    # prog given: argparse would format the tool's usage (a formatter, the terminal's width) for it
+    sub = parser.add_subparsers(
+        dest="_subcommand", metavar="COMMAND", parser_class=_Parser, prog=prog
+    )
     sub.required = True
+    # the others only where argparse may show them: help or an error before the command word
+    alone = bool(words) and words[0] == chosen and chosen in commands
     for name, command in commands.items():
         if name == chosen:
             importlib.import_module(command.module).register(sub)
-        else:
+        elif not alone:
             sub.add_parser(name, help=command.help)
     args = parser.parse_args(words)
     try:
