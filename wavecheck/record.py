@@ -262,8 +262,10 @@ def _frozen_methods(cls: Any, names: tuple[str, ...]) -> tuple[Any, Any]:
 
 class _AsDataclass:
     """``__dataclass_fields__`` / ``__dataclass_params__`` of a record class, made by
-    :func:`dataclasses.make_dataclass` from its fields the first time either is asked for (the
-    introspection of :mod:`dataclasses`: ``fields``, ``asdict``, ``is_dataclass`` …)."""
+    :func:`dataclasses.make_dataclass` from its fields the first time one is asked for (the
+    introspection of :mod:`dataclasses`: ``fields``, ``replace``, ``asdict``, ``is_dataclass``
+    …). The fields come from a twin made without methods (no code compiled); the parameters,
+    asked for rarely, from one made as the record was declared."""
 
     def __init__(self, attr: str) -> None:
         self.attr = attr
@@ -280,9 +282,12 @@ class _AsDataclass:
             elif spec.defaults[name] is not _MISSING:
                 given["default"] = spec.defaults[name]
             specs.append((name, spec.annotations[name], dataclasses.field(**given)))
-        twin = dataclasses.make_dataclass(owner.__name__, specs, eq=spec.eq, frozen=spec.frozen)
-        for attr in _DATACLASS_ATTRS:
-            type.__setattr__(owner, attr, twin.__dict__[attr])
+        if self.attr == "__dataclass_fields__":
+            flags = {"init": False, "repr": False, "eq": False}
+        else:
+            flags = {"eq": spec.eq, "frozen": spec.frozen}
+        twin = dataclasses.make_dataclass(owner.__name__, specs, **flags)  # type: ignore[arg-type]
+        type.__setattr__(owner, self.attr, twin.__dict__[self.attr])
         return twin.__dict__[self.attr]
 
 

@@ -149,6 +149,16 @@ def test_a_command_first_builds_no_other_subcommand_parser() -> None:
     assert run.stdout.rpartition("--- parsers ---")[2].split() == ["2"]  # the tool's, drives'
 
 
+def test_a_check_plot_loads_no_measurement_module(tmp_path: Path) -> None:
+    """``check --plot`` (issue 38: CPU beyond matplotlib's import) draws the motion panel with
+    report.measured_plot, whose measure-only types are annotations, not imports."""
+    out = tmp_path / "p.png"
+    loaded = _loaded_after(["check", str(TINY), "--drive", "gecko-g202", "--plot", str(out)])
+    assert out.stat().st_size > 10_000  # it drew
+    assert "wavecheck.report.measured_plot" in loaded
+    assert "wavecheck.measurement" not in loaded
+
+
 def test_a_simulated_vcd_loads_no_numpy_ma(tmp_path: Path) -> None:
     """``np.unique`` imports numpy.ma (8 ms, issue 38): the engine and the VCD writer avoid it."""
     out = tmp_path / "o.vcd"
