@@ -7,13 +7,14 @@ byte for byte (each tree's own path written as ``TREE``).
 
 The set: every golden VCD (its drive from its .toml, else gecko-g202) as text and JSON; the grbl
 capture mapped, as text, JSON and JUnit, with ``--firmware`` and ``--base-period``, and unmapped;
-a bad drive; ``drives`` with and without an id, as text and JSON; ``info`` and ``measure``;
+a bad drive; the golden VCDs in one run with ``-j 2`` (text, JSON); ``drives`` with and without an id, as text and JSON; ``info`` and ``measure``;
 ``--help`` (alone, before and after a command), ``--version``, usage errors, an unknown command; and ``check FILE --drive gecko-g202`` on real captures.
 """
 
 from __future__ import annotations
 
 import argparse
+import difflib
 import subprocess
 import sys
 import tomllib
@@ -41,6 +42,17 @@ def commands(every: int) -> list[list[str]]:
         ["check", GRBL, *MAP, "--base-period", "25us"],
         ["check", GRBL, "--drive", "leadshine-dm542"],
         ["check", TINY, "--drive", "no-such-drive"],
+        ["check", str(ROOT / "captures/golden/*.vcd"), "--drive", "gecko-g202", "-j", "2"],
+        [
+            "check",
+            str(ROOT / "captures/golden/*.vcd"),
+            "--drive",
+            "gecko-g202",
+            "-j",
+            "2",
+            "--format",
+            "json",
+        ],
         ["drives"],
         ["drives", "--format", "json"],
         ["drives", "gecko-g202"],
@@ -67,8 +79,9 @@ def commands(every: int) -> list[list[str]]:
 
 
 def run(root: Path, argv: list[str]) -> tuple[int, str, str]:
+    # main() with no argv, as the console script calls it (the collector tuned: as_program)
     code = "import sys; sys.path.insert(0, sys.argv[1]); from wavecheck.cli import main; " \
-           "sys.exit(main(sys.argv[2:]))"  # fmt: skip
+           "sys.argv = ['wavecheck', *sys.argv[2:]]; sys.exit(main())"  # fmt: skip
     p = subprocess.run([sys.executable, "-c", code, str(root), *argv], capture_output=True,
                        text=True, cwd=ROOT)  # fmt: skip
     out = [p.stdout, p.stderr]
@@ -93,6 +106,9 @@ def main() -> None:
         if before != after:
             differ.append(argv)
             print("DIFFERS:", " ".join(argv), f"(exit {before[0]} -> {after[0]})")
+            for name, b, a in (("stdout", before[1], after[1]), ("stderr", before[2], after[2])):
+                lines = difflib.unified_diff(b.splitlines(), a.splitlines(), name, name, n=1)
+                print("\n".join(list(lines)[:20]))
         elif args.verbose:
             print(f"same (exit {after[0]}):", " ".join(argv), after[2].strip()[:100])
     shown = ", ".join(f"exit {c}: {n}" for c, n in sorted(codes.items()))

@@ -159,6 +159,23 @@ def test_a_check_plot_loads_no_measurement_module(tmp_path: Path) -> None:
     assert "wavecheck.measurement" not in loaded
 
 
+@pytest.mark.parametrize(("call", "young", "frozen"), [("main()", "50000", "True"),
+                                                      ("main(['drives'])", "700", "False")])  # fmt: skip
+def test_only_the_program_tunes_the_garbage_collector(call: str, young: str, frozen: str) -> None:
+    """``main()`` as the console script calls it: fewer young collections, the objects left
+    frozen for the exit (issue 38); ``main(argv)`` from another program changes nothing."""
+    code = (
+        "import gc, sys\n"
+        "sys.argv = ['wavecheck', 'drives']\n"
+        "from wavecheck.cli import main\n"
+        f"{call}\n"
+        "print('--- gc ---', gc.get_threshold()[0], gc.get_freeze_count() > 0)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.rpartition("--- gc ---")[2].split() == [young, frozen]
+
+
 def test_a_simulated_vcd_loads_no_numpy_ma(tmp_path: Path) -> None:
     """``np.unique`` imports numpy.ma (8 ms, issue 38): the engine and the VCD writer avoid it."""
     out = tmp_path / "o.vcd"
