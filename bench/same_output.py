@@ -1,6 +1,7 @@
 """Speed work changes no result: stdout, stderr and exit code of ``wavecheck`` commands run by an
 older tree (``git archive COMMIT``, as ``before_after.py`` unpacks it) and by this one, compared
-byte for byte (each tree's own path written as ``TREE``).
+byte for byte (each tree's own path written as ``TREE``; with ``-j`` the error lines on stderr,
+which print as the captures finish, are compared sorted).
 
     .venv/bin/python bench/same_output.py c5483b7            # the set below
     .venv/bin/python bench/same_output.py c5483b7 --every 3  # + every 3rd real capture ≤ 3 MB
@@ -87,7 +88,7 @@ def run(root: Path, argv: list[str]) -> tuple[int, str, str]:
     out = [p.stdout, p.stderr]
     for path in (str(root), str(ROOT)):  # the tree run, and the files named from this checkout
         out = [t.replace(path, "TREE") for t in out]
-    return p.returncode, *out
+    return p.returncode, out[0], out[1]
 
 
 def main() -> None:
@@ -102,6 +103,11 @@ def main() -> None:
     codes: dict[int, int] = {}
     for argv in cmds:
         before, after = run(old, argv), run(ROOT, argv)
+        if "-j" in argv:  # error lines print as captures finish, in any order: compare them sorted
+            before, after = (
+                (code, out, "".join(sorted(err.splitlines(keepends=True))))
+                for code, out, err in (before, after)
+            )
         codes[after[0]] = codes.get(after[0], 0) + 1
         if before != after:
             differ.append(argv)
