@@ -4,9 +4,10 @@
 ``__eq__``, ``__hash__``, ``__setattr__``, ``__delattr__``: ~0.5 ms a class on this machine), and
 importing :mod:`dataclasses` imports :mod:`inspect` (~6 ms). ``check`` defines dozens of record
 types before it reads a byte, ``wavecheck drives`` eight (issue 38). :func:`record` gives the
-same classes with no code compiled per class: ``__init__`` is a code object compiled once per
-number of fields, its parameters renamed (so signature, keywords, defaults and error messages are
-the generated one's), and the other methods are shared functions over the field names.
+same classes with no code compiled per class: ``__init__`` is a template compiled once per number
+of fields, its parameters renamed to the fields (so signature, keywords, defaults and error
+messages are the generated one's), and the other methods are shared functions over the field
+names.
 
 What a user of a record type sees is a dataclass's: the same ``__init__`` signature (with
 ``<factory>`` defaults), ``repr``, ``==`` (tuples of the fields, same class only), ``hash``
@@ -15,7 +16,8 @@ What a user of a record type sees is a dataclass's: the same ``__init__`` signat
 :func:`dataclasses.asdict` and :func:`dataclasses.is_dataclass` work (``__dataclass_fields__`` and
 ``__dataclass_params__`` are made by :mod:`dataclasses` itself the first time one is asked for).
 Type checkers read :func:`record` as a dataclass (PEP 681). Supported: ``frozen``, ``eq``,
-defaults, :func:`field` with ``default`` or ``default_factory``, ``ClassVar`` annotations,
+defaults, :func:`field` with ``default`` or ``default_factory`` (and ``repr``/``compare``
+off), ``ClassVar`` annotations,
 records inheriting records; anything else (``order``, ``slots``, ``kw_only``, ``InitVar``) is
 refused at class creation.
 """
@@ -98,32 +100,21 @@ class _Spec:
         self.eq = eq
 
 
-#: The most fields a record's ``__init__`` takes from :func:`_template` (more: compiled).
-_MAX_FIELDS = 48
-
-
-def _template(self, a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23, a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35, a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47):  # type: ignore[no-untyped-def]  # noqa: E501  # fmt: skip
-    """Every record's ``__init__``: this code with its first parameters renamed to the fields
-    and the rest left as unbound locals (``locals()`` omits them): no code compiled per class."""
-    _fill(self, locals())  # type: ignore[name-defined]  # noqa: F821
+_TEMPLATES: dict[int, types.CodeType] = {}
 
 
 def _init_code(cls: type, names: tuple[str, ...]) -> types.CodeType:
+    """``__init__(self, <names>)`` of ``cls``: ``def __init__(self, a0, …): _fill(self, (a0,
+    …))``, compiled once per number of fields (~20 µs) and its parameters renamed to the fields."""
     n = len(names)
-    if n <= _MAX_FIELDS:
-        code = _template.__code__
-        spare = tuple(f" {k}" for k in range(_MAX_FIELDS - n))
-    else:
+    code = _TEMPLATES.get(n)
+    if code is None:
+        args = "".join(f"a{k}, " for k in range(n))
         namespace: dict[str, Any] = {}
-        src = f"def __init__(self, {', '.join(names)}):\n    _fill(self, locals())\n"
-        exec(compile(src, "<wavecheck.record>", "exec"), namespace)
-        code, spare = namespace["__init__"].__code__, ()
-    return code.replace(
-        co_argcount=n + 1,
-        co_varnames=("self", *names, *spare),
-        co_name="__init__",
-        co_qualname=f"{cls.__qualname__}.__init__",
-    )
+        exec(compile(f"def __init__(self, {args}):\n    _fill(self, ({args}))\n",
+                     "<wavecheck.record>", "exec"), namespace)  # fmt: skip
+        code = _TEMPLATES[n] = namespace["__init__"].__code__
+    return code.replace(co_varnames=("self", *names), co_qualname=f"{cls.__qualname__}.__init__")
 
 
 def _is_classvar(annotation: Any) -> bool:
@@ -173,6 +164,8 @@ def _spec_of(cls: type, frozen: bool, eq: bool) -> _Spec:
             )
         spec.defaults[name] = value
     spec.names = tuple(spec.annotations)
+    if "self" in spec.names:
+        raise TypeError(f"{cls.__qualname__}: a record field cannot be named 'self'")
     spec.shown = tuple(n for n in spec.names if spec.options.get(n, {}).get("repr", True))
     spec.compared = tuple(n for n in spec.names if spec.options.get(n, {}).get("compare", True))
     seen_default = False
@@ -190,15 +183,14 @@ def _make_init(cls: type, spec: _Spec) -> Callable[..., None]:
     post_init = getattr(cls, "__post_init__", None)
     put = object.__setattr__ if spec.frozen else builtins.setattr
 
-    def fill(self: Any, values: dict[str, Any]) -> None:
-        for name in names:
-            put(self, name, values[name])
+    def fill(self: Any, values: tuple[Any, ...]) -> None:
+        for name, value in zip(names, values):  # noqa: B905 - as many as the parameters
+            put(self, name, value)
         if post_init is not None:
             self.__post_init__()
 
-    def fill_factories(self: Any, values: dict[str, Any]) -> None:
-        for name in names:
-            value = values[name]
+    def fill_factories(self: Any, values: tuple[Any, ...]) -> None:
+        for name, value in zip(names, values):  # noqa: B905 - as many as the parameters
             put(self, name, factories[name]() if value is _FACTORY else value)
         if post_init is not None:
             self.__post_init__()

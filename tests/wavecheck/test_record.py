@@ -118,13 +118,18 @@ def test_a_record_pickles() -> None:
     assert pickle.loads(pickle.dumps(Point(1, {"a": 2}))) == Point(1, {"a": 2})
 
 
-def test_a_record_with_more_fields_than_the_template_is_compiled() -> None:
-    n = record_module._MAX_FIELDS + 2
+def test_records_of_one_width_share_one_compiled_template() -> None:
+    """One ``__init__`` code compiled per number of fields, renamed for each class."""
+    n = 61  # a width no record of the project has
     ns = {"__annotations__": {f"f{k}": "int" for k in range(n)}, "__module__": __name__}
     wide = record(frozen=True)(type("Wide", (), ns))
+    other = record(type("Other", (), {**ns, "__annotations__": {f"g{k}": "int" for k in range(n)}}))
     obj = wide(*range(n))
     assert obj.f0 == 0 and getattr(obj, f"f{n - 1}") == n - 1
     assert str(inspect.signature(wide)).startswith("(f0: 'int', f1: 'int'")
+    assert other(*range(n)).g3 == 3
+    assert wide.__init__.__code__.co_code == other.__init__.__code__.co_code
+    assert record_module._TEMPLATES[n].co_varnames[:2] == ("self", "a0")
 
 
 def test_records_inherit_their_bases_fields() -> None:
