@@ -372,6 +372,13 @@ def read_fst(
     Raises:
         CaptureError: the file cannot be read as FST.
     """
+    from wavecheck.capture.fst import FstUnsupported
+    from wavecheck.capture.fst_source import read_native
+
+    try:
+        return read_native(path, samplerate=samplerate, resolution_s=resolution_s)
+    except FstUnsupported:
+        pass  # LZ4/FastLZ packing: GTKWave's reader, or pywellen's
     tool = shutil.which("fst2vcd")
     if tool is None:
         return read_wellen(path, kind="fst", samplerate=samplerate, resolution_s=resolution_s)

@@ -746,6 +746,10 @@ class VcdBlocks:
         else:
             with open_vcd(path) as f:
                 self.header, _ = read_header(path, f)
+        self._setup(channels)
+
+    def _setup(self, channels: Iterable[int] | None) -> None:
+        """The layout, builder and skeleton of ``self.header`` (also the FST reader's)."""
         self.notes: list[str] = []
         self.tb = header_timebase(self.header, self.notes)
         self.lay = layout_of(self.header)
@@ -834,8 +838,6 @@ class VcdBlocks:
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each chunk of text (the changes of its last timestamp held back)."""
-        from wavecheck.capture.blocks import EdgeBlock
-
         b = self.builder = _EdgeBuilder(len(self.lay.ids) + len(self.bit_channels))
         if self._body is not None:
             f, rest = self._body
@@ -860,30 +862,41 @@ class VcdBlocks:
                 if not final and body.time is not None:
                     pend = body.pend
                     end = body.time if pend is None else min(body.time, int(pend[1][0]))
-                block = EdgeBlock(end=end)
+                start = None
                 if not started:
-                    block.start = 0 if body.pre_time_changes else (body.first_time or 0)
+                    start = 0 if body.pre_time_changes else (body.first_time or 0)
                     started = True
-                now = b.last_known >= 0
-                for i in np.flatnonzero(now & ~known).tolist():
-                    block.known[i] = (int(b.known_from[i]), int(b.initial[i]))
-                known = now
-                for i in range(b.nsig):
-                    if b.edges[i]:
-                        e = _concat(b.edges[i])
-                        b.edges[i] = []
-                        self.counts[i] += len(e)
-                        if i in self.wanted:
-                            block.edges[i] = e
-                    if b.xz[i]:
-                        block.xz_starts[i] = _concat(b.xz[i])
-                        b.xz[i] = []
-                    if b.xz_end[i]:
-                        block.xz_ends[i] = _concat(b.xz_end[i])
-                        b.xz_end[i] = []
+                block, known = self._take(end, start, known)
                 yield block
             self.first_time, self.last_time = body.first_time, body.time
             self.pre_time = body.pre_time_changes
+
+    def _take(
+        self, end: int, start: int | None, known: npt.NDArray[np.bool_]
+    ) -> tuple[EdgeBlock, npt.NDArray[np.bool_]]:
+        """The builder's edges, levels now known (``known``: those known before) and x/z
+        stretches as a block ending at ``end``; the builder is emptied."""
+        from wavecheck.capture.blocks import EdgeBlock
+
+        b = self.builder
+        block = EdgeBlock(end=end, start=start)
+        now = b.last_known >= 0
+        for i in np.flatnonzero(now & ~known).tolist():
+            block.known[i] = (int(b.known_from[i]), int(b.initial[i]))
+        for i in range(b.nsig):
+            if b.edges[i]:
+                e = _concat(b.edges[i])
+                b.edges[i] = []
+                self.counts[i] += len(e)
+                if i in self.wanted:
+                    block.edges[i] = e
+            if b.xz[i]:
+                block.xz_starts[i] = _concat(b.xz[i])
+                b.xz[i] = []
+            if b.xz_end[i]:
+                block.xz_ends[i] = _concat(b.xz_end[i])
+                b.xz_end[i] = []
+        return block, now
 
     def capture(self) -> Capture:
         """The whole capture without edges (after :meth:`blocks`)."""
