@@ -7,19 +7,20 @@ header (times, time scale, writer), a geometry block (each signal's width), a hi
 signals' values at its start (the *frame*), then each signal's changes compressed on its own,
 then a table of where each signal's data starts (with aliases), then the block's times.
 
-Only the changes of the signals asked for are decompressed, and each signal's changes are
-decoded at once with numpy (LEB128 varints: a 1-bit signal's change is one varint holding the
-time-index delta and the value). The result is what GTKWave's ``fst2vcd`` followed by the VCD
-reader gives (the same header, names, frame rule and timestamps): :class:`FstFile` builds the
-:class:`~wavecheck.capture.vcd.header.VcdHeader` ``fst2vcd`` would print, and
-:meth:`FstFile.changes` the value changes it would write.
+Only the 1-bit signals' changes (and a vector's, when a bit of it is mapped) are
+decompressed, each signal's at once, and decoded with numpy (LEB128 varints: a 1-bit
+signal's change is one varint holding the time-index delta and the value). The result is what
+GTKWave's ``fst2vcd`` followed by the VCD reader gives (the same header, names, frame rule and
+timestamps): :class:`FstFile` builds the :class:`~wavecheck.capture.vcd.header.VcdHeader`
+``fst2vcd`` would print, :func:`scalar_changes` and :func:`vector_changes` the changes it
+would write (:mod:`wavecheck.capture.fst_source` makes edges of them).
 
 Facts from GTKWave's ``fstapi.c`` (``fstReaderProcessHier``, ``fstReaderIterBlocks2``) and
-GTKWave's FST notes; the code is this project's own. Not read here (the caller falls back to
-``fst2vcd`` or pywellen): LZ4- or FastLZ-packed changes, LZ4 hierarchies, gzip-wrapped files
-(:class:`FstUnsupported`). Everything is bounded: lengths are checked against the file and
-decompression ratios before anything is allocated, and a malformed file is a
-:class:`~wavecheck.errors.CaptureError` naming the byte.
+GTKWave's FST notes; the code is this project's own. Not read here: FastLZ-packed changes
+(``vcd2fst -F``; :class:`FstUnsupported`, the caller falls back to ``fst2vcd`` or pywellen).
+Everything is bounded: lengths are checked against the file and decompression ratios before
+anything is allocated, and a malformed file is a :class:`~wavecheck.errors.CaptureError`
+naming the byte.
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ _MAX_RATIO = 1100
 
 
 class FstUnsupported(Exception):
-    """A valid FST this reader does not decode (LZ4/FastLZ packing, a gzip-wrapped file)."""
+    """A valid FST this reader does not decode (FastLZ packing: ``vcd2fst -F``)."""
 
 
 @dataclass
@@ -206,6 +207,11 @@ class FstFile:
         except OSError as err:
             raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
         self.size = len(self.data)
+        if self.size >= 17 and self.data[0] == _ZWRAPPER:  # the whole file gzipped (vcd2fst -c)
+            full = int.from_bytes(self.data[9:17], "big")
+            inner = self._inflate(17, self.size - 17, full, "gzip-wrapped file", always=True)
+            self.close()
+            self.data, self.size = inner, len(inner)
         self.blocks: list[VcBlock] = []
         self.lengths: list[int] = []  # per handle (index handle-1): its declared width
         self.reals: set[int] = set()  # handles (1-based) of reals
@@ -222,9 +228,7 @@ class FstFile:
 
     def _scan(self) -> None:
         d, pos = self.data, 0
-        if self.size < 1 + 8 + _HEADER_BYTES - 8 or d[0] != _HDR:
-            if self.size and d[0] == _ZWRAPPER:
-                raise FstUnsupported("a gzip-wrapped FST")
+        if self.size < 1 + _HEADER_BYTES or d[0] != _HDR:
             raise self.error(0, "no FST header block")
         hier: tuple[int, int, int] | None = None
         while pos < self.size:
