@@ -290,10 +290,13 @@ class FstFile:
             return bytes(data)
         if full > _MAX_RATIO * packed + (1 << 20):
             raise self.error(at, f"{what}: {packed} bytes said to expand to {full}")
+        inflate = zlib.decompressobj(47)
         try:
-            out = zlib.decompressobj(47).decompress(data, full + 1)
+            out = inflate.decompress(data, full + 1)
         except zlib.error as err:
             raise self.error(at, f"{what}: bad compressed data ({err})") from None
+        if not inflate.eof:
+            raise self.error(at, f"{what}: the compressed data is cut off")
         if len(out) != full:
             raise self.error(at, f"{what}: expands to {len(out)} bytes, not {full}")
         return out
@@ -308,6 +311,8 @@ class FstFile:
         end = at + length
         c = _Cursor(self, self.data, at + 8, 0, "value change block")
         begin = c.u64()
+        if begin >= 1 << 63:
+            raise self.error(at + 8, f"value change block starting at time {begin} (≥ 2^63)")
         c.u64(), c.u64()  # end time, memory the reader needs
         f_full, f_packed, f_count = c.varint(), c.varint(), c.varint()
         frame = (c.pos, f_full, f_packed, f_count)
