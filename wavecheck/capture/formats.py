@@ -160,7 +160,7 @@ def _fst_blocks(r: Request) -> BlockSource | None:
             slice_changes=r.chunk_bytes or SLICE_CHANGES,  # the tests' tiny blocks
         )  # fmt: skip
     except FstUnsupported:
-        pass  # LZ4/FastLZ packing: GTKWave's fst2vcd, else the whole file with pywellen
+        pass  # FastLZ packing: GTKWave's fst2vcd, else the whole file with pywellen
     tool = shutil.which("fst2vcd")
     if tool is None:
         return None

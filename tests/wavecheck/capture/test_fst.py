@@ -97,6 +97,25 @@ def test_vcd2fst_files_read_as_fst2vcd_reads_them(tmp_path: Path, vcd: Path, pac
     assert type(open_source(fst)) is FstNativeBlocks
 
 
+SHARED_VCDS = [
+    "sigrok-dumps/misc/vcd/vectors-integers.vcd",  # vectors and integers: their bits mapped
+    "sigrok-dumps/misc/vcd/real-analog.vcd",  # reals only: vcd2fst writes no hierarchy
+    "sigrok-dumps/spi/spiflash_read16/chronovu_la8/chronovu_la8_spiflash_read16.vcd",
+]
+
+
+@needs_gtkwave
+@pytest.mark.parametrize("packing", list(PACKINGS))
+@pytest.mark.parametrize("name", SHARED_VCDS, ids=lambda p: Path(p).stem)
+def test_real_vcds_as_fst_read_or_refused_as_fst2vcd_does(
+    tmp_path: Path, name: str, packing: str
+) -> None:
+    from tests.conftest import shared_capture
+
+    fst = _vcd2fst(shared_capture(name), tmp_path / "c.fst", PACKINGS[packing])
+    assert _same_as_fst2vcd(fst, (1, 1 << 16)) == ("real-analog" not in name)
+
+
 @needs_gtkwave
 @needs_iverilog
 @pytest.mark.parametrize("precision", ["1fs", "1ps", "10ps", "1ns"])
