@@ -29,11 +29,12 @@ import mmap
 import os
 import zlib
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.vcd.header import MAX_VARS, VarDecl, VcdHeader
+from wavecheck.capture.vcd.header import MAX_VARS, SCALAR_VALUES, VarDecl, VcdHeader
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
 
@@ -62,7 +63,7 @@ _SCOPE_TYPES = (
     "vhdl_architecture vhdl_procedure vhdl_function vhdl_record vhdl_process vhdl_block "
     "vhdl_for_generate vhdl_if_generate vhdl_generate vhdl_package"
 ).split()
-_SCOPE, _UPSCOPE, _ATTRBEGIN, _ATTREND = 254, 255, 252, 253
+_SCOPE, _UPSCOPE, _ATTRBEGIN = 254, 255, 252  # 253 (attribute end) is skipped as any byte
 #: fst2vcd's timescale text per exponent (fstReaderProcessHier); others print as 1 ns
 _UNITS = {0: "s", -3: "ms", -6: "us", -9: "ns", -12: "ps", -15: "fs", -18: "as", -21: "zs"}
 #: the longest name fst2vcd keeps (FST_ID_NAM_ATTR_SIZ); longer ones are cut
@@ -70,12 +71,10 @@ _NAME_BYTES = 65536
 #: value code of a 1-bit change's non-binary values, in the order of FST_RCV_STR "xzhuwl-?"
 #: (0, 1, 2 = unknown, 3 = z, -1 = not a VCD value: '?')
 _RCV = np.array([2, 3, 1, 2, 2, 0, 2, -1], dtype=np.int8)
-#: value code of a frame byte (the VCD reader's scalar values; -1: not one)
+#: value code of a value character (the VCD reader's scalar values, either case; -1: not one)
 FRAME_CODES = np.full(256, -1, dtype=np.int8)
-for _c, _v in {"0": 0, "1": 1, "l": 0, "h": 1, "z": 3}.items():
+for _c, _v in SCALAR_VALUES.items():
     FRAME_CODES[ord(_c)] = FRAME_CODES[ord(_c.upper())] = _v
-for _c in "xuw-":
-    FRAME_CODES[ord(_c)] = FRAME_CODES[ord(_c.upper())] = 2
 #: most bytes one deflate stream can expand a byte to (zlib's limit is ~1032), plus slack
 _MAX_RATIO = 1100
 
@@ -188,8 +187,10 @@ def varints(data: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint64]:
 
 
 class FstFile:
-    """An FST file's layout: header, geometry, hierarchy (as the VCD header ``fst2vcd``
-    prints) and value-change blocks; :meth:`changes` decodes a block's changes.
+    """An FST file's layout: header, hierarchy (as the VCD header ``fst2vcd`` prints) and
+    value-change blocks; :meth:`time_table`, :meth:`positions`, :meth:`wave` and
+    :meth:`frame` give a block's parts (the geometry block is not read: fst2vcd takes the
+    widths from the hierarchy).
 
     Raises (constructor):
         CaptureError: not a readable FST (the message names the byte).
@@ -214,7 +215,6 @@ class FstFile:
             self.data, self.size = inner, len(inner)
         self.blocks: list[VcBlock] = []
         self.lengths: list[int] = []  # per handle (index handle-1): its declared width
-        self.reals: set[int] = set()  # handles (1-based) of reals
         self._scan()
 
     def close(self) -> None:
@@ -268,10 +268,7 @@ class FstFile:
         if np.frombuffer(self.data[at + 16 : at + 24], "<f8")[0] != _ENDIAN_TEST:
             raise self.error(at + 16, "the header's check number is wrong (not an FST file)")
         c.pos += 8
-        c.u64()  # writer's memory use
-        self.scope_count, self.var_count, self.max_handle, self.block_count = (
-            c.u64(), c.u64(), c.u64(), c.u64()
-        )  # fmt: skip
+        c.pos += 5 * 8  # writer's memory use, scope, variable, signal and block counts
         exp = int.from_bytes(self.data[c.pos : c.pos + 1], "big", signed=True)
         c.pos += 1
         self.version = bytes(self.data[c.pos : c.pos + 128]).split(b"\0", 1)[0]
@@ -378,8 +375,6 @@ class FstFile:
                     handles += 1
                     handle = handles
                     self.lengths.append(size)  # fst2vcd decodes by this width (signal_lens)
-                    if tag in _REAL_TYPES:
-                        self.reals.add(handle)
                 else:
                     handle = alias
                 if len(decls) >= MAX_VARS:
@@ -411,7 +406,7 @@ class FstFile:
             )
         mag, unit = self.tick
         tb = Timebase.from_timescale(mag, unit)
-        if not 1e-15 <= float(tb.tick_s) <= 100:
+        if not Fraction(1, 10**15) <= tb.tick_s <= 100:
             raise self.error(0, f"time scale {mag} {unit} is outside 1 fs … 100 s")
         version = " ".join(_name(self.version, []).split())
         return VcdHeader(tb, self.timescale_text, decls, [], 0, 0, version, notes)
@@ -434,7 +429,10 @@ class FstFile:
         if len(deltas) < count:
             raise self.error(at, f"time table: {len(deltas)} times, {count} declared")
         times = np.cumsum(deltas[:count], dtype=np.uint64)
-        if count and (int(times[-1]) >= 1 << 63 or int(deltas[:count].max()) >= 1 << 63):
+        if count and (
+            int(deltas[:count].max()) >= 1 << 63 or int(times[-1]) >= 1 << 63
+            or bool((times[1:] < times[:-1]).any())  # the sum went past 2^64
+        ):  # fmt: skip
             raise self.error(at, "time table: a time beyond 2^63 ticks")
         return times.astype(np.int64)
 

@@ -1,12 +1,12 @@
 """An FST file as a block source, decoded natively (:mod:`wavecheck.capture.fst`).
 
-One value-change block of the file is one :class:`~wavecheck.capture.blocks.EdgeBlock`: its
-1-bit signals' changes are decoded with numpy and turned into edges by the VCD reader's edge
-builder, so the capture is the one ``fst2vcd`` piped into the VCD reader gives (same names,
-aliases, vectors, notes, start and end), at a fraction of the cost (``bench/fst_read.py``).
-The changes at a block's last time are held back to the next block (a time can continue
-there). A bit of a vector mapped as a channel is decoded from the vector's changes in the same
-pass.
+The file is read one value-change block at a time: its 1-bit signals' changes are decoded with
+numpy and given to the VCD reader's edge builder in slices of about :data:`SLICE_CHANGES`
+changes, each an :class:`~wavecheck.capture.blocks.EdgeBlock`, so the capture is the one
+``fst2vcd`` piped into the VCD reader gives (same names, aliases, vectors, notes, start and
+end) at a fraction of the cost (``bench/fst_read.py``). The changes at a slice's last time are
+held back to the next (the time can go on there). A bit of a vector mapped as a channel is
+decoded from the vector's changes in the same pass.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from wavecheck.capture.edges import NEVER, Capture
 from wavecheck.capture.fst import (
     FRAME_CODES,
     FstFile,
+    FstUnsupported,
     VcBlock,
     scalar_changes,
     vector_changes,
@@ -58,8 +59,6 @@ class FstNativeBlocks(VcdBlocks):
         channels: Iterable[int] | None = None,
         slice_changes: int = SLICE_CHANGES,
     ) -> None:
-        from wavecheck.capture.fst import FstUnsupported
-
         self.path = path
         self.slice_changes = max(1, slice_changes)
         self.samplerate, self.resolution_s = samplerate, resolution_s
@@ -69,9 +68,13 @@ class FstNativeBlocks(VcdBlocks):
         self.header = self.fst.header
         self._setup(channels)
         self.handles = [int(code) for code in self.lay.ids]
-        bad = [h for h in self.handles if self._width(h) != 1]
-        if bad:  # a 1-bit port (stored 3n+2 wide) or a width the hierarchy contradicts
-            raise FstUnsupported(f"signal {bad[0]} is declared 1 bit but stored wider")
+        codes = {d.id_code for d in self.header.vars}
+        undeclared = [c for c in codes if self._width(int(c)) < 0]
+        if undeclared:
+            raise self.fst.error(0, f"a variable aliases signal {undeclared[0]}, never declared")
+        wide = [h for h in self.handles if self._width(h) != 1]
+        if wide:  # a 1-bit port: stored 3n+2 characters wide (extended VCD)
+            raise FstUnsupported(f"signal {wide[0]} is declared 1 bit but stored wider")
         self.skeleton.format = "fst"
         self.skeleton.bit_source = str(path)
 
@@ -207,7 +210,8 @@ class FstNativeBlocks(VcdBlocks):
                     out.append((channel, idx, codes))
         return out
 
-    def capture(self):  # type: ignore[no-untyped-def]
+    def capture(self) -> Capture:
+        """The whole capture without edges (after :meth:`blocks`), named an FST."""
         cap = super().capture()
         cap.format = "fst"
         cap.bit_source = str(self.path)
