@@ -171,16 +171,20 @@ def varints(data: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint64]:
     ends = np.flatnonzero(last)
     if len(ends) == len(data):  # every varint one byte
         return data.astype(np.uint64)
-    size = np.diff(ends, prepend=-1)
-    longest = int(size.max())
+    wide = np.diff(ends, prepend=-1)
+    longest = int(wide.max())
     if longest > 10:
         raise ValueError(f"a number of {longest} bytes (at most 10)")
-    # Horner from each varint's last (most significant) byte down to its first
+    size = wide.astype(np.uint8)
+    del wide
+    # Horner from each varint's last (most significant) byte down to its first; few arrays of
+    # the varints' count live at once (a block's time table can hold millions)
     out = (data[ends] & 0x7F).astype(np.uint64)
     seven = np.uint64(7)
     for k in range(1, longest):
         inside = size > k
-        lower = (data[np.maximum(ends - k, 0)] & 0x7F).astype(np.uint64)
+        np.subtract(ends, 1, out=ends)
+        lower = data[np.maximum(ends, 0)] & 0x7F
         np.left_shift(out, seven, out=out, where=inside)
         np.bitwise_or(out, lower, out=out, where=inside)
     return out
@@ -428,13 +432,13 @@ class FstFile:
             raise self.error(at, f"time table: {err}") from None
         if len(deltas) < count:
             raise self.error(at, f"time table: {len(deltas)} times, {count} declared")
-        times = np.cumsum(deltas[:count], dtype=np.uint64)
-        if count and (
-            int(deltas[:count].max()) >= 1 << 63 or int(times[-1]) >= 1 << 63
-            or bool((times[1:] < times[:-1]).any())  # the sum went past 2^64
-        ):  # fmt: skip
+        if count and int(deltas[:count].max()) >= 1 << 63:
             raise self.error(at, "time table: a time beyond 2^63 ticks")
-        return times.astype(np.int64)
+        times = deltas[:count].view(np.int64)
+        np.cumsum(times, out=times)  # in place: a block's table can hold millions of times
+        if count and (int(times[-1]) < 0 or bool((times[1:] < times[:-1]).any())):
+            raise self.error(at, "time table: a time beyond 2^63 ticks")  # the sum wrapped
+        return times
 
     def positions(self, b: VcBlock) -> tuple[list[int], list[int]]:
         """Each handle's (index handle-1) offset of its changes from ``b.waves`` (0: none in
@@ -527,7 +531,7 @@ def _lz4(fst: FstFile, data: bytes, full: int, at: int, what: str = "hierarchy")
 
 def scalar_changes(
     fst: FstFile, data: npt.NDArray[np.uint8], ntimes: int, at: int
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
+) -> tuple[npt.NDArray[np.signedinteger], npt.NDArray[np.int8]]:
     """A 1-bit signal's changes in a block: (time index, value code). Each is one varint:
     ``delta << 2 | value << 1`` for 0/1, ``delta << 4 | code << 1 | 1`` for x, z, … ."""
     if len(data) and int(data.max()) < 0x80:  # one byte each (deltas < 32): stay in uint8
@@ -542,9 +546,12 @@ def scalar_changes(
     delta = np.where(binary, v >> v.dtype.type(2), v >> v.dtype.type(4))
     if len(v) and int(delta.max()) >= ntimes:
         raise fst.error(at, f"a signal's change at time {int(delta.max())} of {ntimes}")
-    idx = np.cumsum(delta, dtype=np.int64)
-    if len(idx) and int(idx[-1]) >= ntimes:
-        raise fst.error(at, f"a signal's change at time {int(idx[-1])} of {ntimes}")
+    end = int(delta.sum(dtype=np.uint64))  # each < ntimes < 2^63, at most 2^32 of them
+    if end >= ntimes:
+        raise fst.error(at, f"a signal's change at time {end} of {ntimes}")
+    idx: npt.NDArray[np.signedinteger] = np.cumsum(
+        delta, dtype=np.int32 if ntimes < 1 << 31 else np.int64
+    )
     codes = _RCV[(v >> one) & v.dtype.type(7)]
     codes[binary] = ((v[binary] >> one) & one).astype(np.int8)
     if (codes < 0).any():

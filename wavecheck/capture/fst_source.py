@@ -183,7 +183,7 @@ class FstNativeBlocks(VcdBlocks):
 
     def _changes(
         self, blk: VcBlock, ntimes: int, vectors: list[tuple[int, int, list[tuple[int, int]]]]
-    ) -> list[tuple[int, npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
+    ) -> list[tuple[int, npt.NDArray[np.signedinteger], npt.NDArray[np.int8]]]:
         """The block's changes of each channel (and of the bits read from vectors):
         (channel, time indices, value codes)."""
         fst = self.fst
