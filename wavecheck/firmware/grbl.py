@@ -46,6 +46,7 @@ from wavecheck.firmware.guarantee import (
     Guaranteed,
     at_most,
     not_enforced,
+    uncertain,
     unknown,
 )
 
@@ -91,8 +92,26 @@ _PULSE_NOTES = {
     "grbl": "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on "
     "a scope, not enforced)",
     "grblHAL": "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
-    "Grbl_ESP32": "Grbl_ESP32: made by the RMT or I2S engine (I2S rounds to its frame)",
+    "Grbl_ESP32": "Grbl_ESP32: made by the RMT, I2S or software engine, chosen at build time",
 }
+#: Why the pulse of a grblHAL or Grbl_ESP32 dump has no bound below ``$0`` (the dump does not
+#: say which driver or engine made it). grblHAL: each driver times it its own way (the ESP32
+#: driver truncates 4 × $0 to whole 0.25 us RMT ticks, ``rmtItem[0].duration1 =
+#: (uint32_t)(4.0f * pulse_microseconds)``; the STM32 drivers subtract a latency allowance).
+#: Grbl_ESP32: RMT is exact (Grbl_Esp32/src/Motors/StandardStepper.cpp:54 clk_div 20, :69
+#: duration1 = 4 × $0 @ 0004468a), but the I2S stream engine pushes $0 / I2S_OUT_USEC_PER_PULSE
+#: samples (integer division) and the software one waits whole us of esp_timer from a read at any
+#: phase (Grbl_Esp32/stepper.cpp, ``#ifndef USE_RMT_STEPS``).
+_NO_BOUND = {
+    "grblHAL": "grblHAL times the pulse per driver (truncated to RMT ticks on ESP32, less a "
+    "latency allowance on STM32): the dump does not name the driver",
+    "Grbl_ESP32": "Grbl_ESP32's I2S stream engine truncates $0 to whole samples and its software "
+    "engine counts whole us of esp_timer (Grbl_Esp32/stepper.cpp, #ifndef USE_RMT_STEPS); only "
+    "RMT is exact (Motors/StandardStepper.cpp:69): the dump does not say which was built",
+}
+#: grbl 1.1h's pulse lies in [$0 − 562.5 ns, $0 − 62.5 ns] (the prescaler's phase, stepper.c:241,
+#: 344-345): a figure computed as a time less the pulse's lower bound may be this much shorter.
+_GRBL_WINDOW_NS = Fraction(500)
 
 
 def looks_like(text: str) -> bool:
@@ -197,13 +216,14 @@ def _pulse(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
         if flavour == "grbl":
             return Guaranteed(default * _US - _GRBL_SHORT_NS, "$0", "firmware default", "us",
                               "default", f"{note}; {_GRBL_PULSE}")  # fmt: skip
-        return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note)
+        return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note,
+                          short_by=None, short_why=_NO_BOUND[flavour])  # fmt: skip
     us0, raw0, line0 = settings[0]
     at = where(path, line0)
     number(raw0, at, "$0 (step pulse)", low=0, high=255, unit="us")
     if flavour == "grbl":
         return Guaranteed(us0 * _US - _GRBL_SHORT_NS, "$0", at, "us", "derived", _GRBL_PULSE)
-    return Guaranteed(us0 * _US, "$0", at, "us", "uncertain", _PULSE_NOTES[flavour])
+    return uncertain(us0 * _US, "$0", at, "us", None, _NO_BOUND[flavour], _PULSE_NOTES[flavour])
 
 
 def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int]]) -> Guaranteed:
@@ -211,9 +231,10 @@ def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
         us29, raw29, line29 = settings[29]
         at = where(path, line29)
         number(raw29, at, "$29 (pulse delay)", low=0, high=255, unit="us")
-        return Guaranteed(us29 * _US, "$29", at, "us", "uncertain",
-                          "grblHAL applies $29 only when DIR changes, less the driver's latency "
-                          "allowance")  # fmt: skip
+        return uncertain(us29 * _US, "$29", at, "us", None,
+                         "grblHAL's drivers time $29 each their own way, less a latency "
+                         "allowance: the dump does not name the driver",
+                         "grblHAL applies $29 only when DIR changes")  # fmt: skip
     if flavour == "Grbl_ESP32":
         return unknown(
             "direction delay",
@@ -261,37 +282,47 @@ def _axis(
     else:
         max_rate = Guaranteed(None, f"${110 + bit}", "", "mm/min", "unknown", "not in the dump")
         gap = None
-    idle = Guaranteed(
-        None if gap is None else max(gap, Fraction(0)), f"${110 + bit}", max_rate.where,
-        "mm/min", "uncertain" if gap is not None else "unknown",
+    spacing_note = (
         "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: Bresenham puts its steps "
         "on the dominant axis's ticks (stepper.c:413-440)"
-        if gap is not None
-        else "an axis's max rate is not in the dump: the interrupt's tick is not bounded",
-    )  # fmt: skip
+    )
+    if gap is None:
+        idle = unknown(f"${110 + bit}", "an axis's max rate is not in the dump: the interrupt's "
+                       "tick is not bounded", max_rate.where)  # fmt: skip
+    elif pulse.short_by is None:  # grblHAL, Grbl_ESP32
+        idle = uncertain(max(gap, Fraction(0)), f"${110 + bit}", max_rate.where, "mm/min", None,
+                         f"the spacing less the pulse, whose length no source bounds ({pulse.short_why})",
+                         spacing_note)  # fmt: skip
+    else:  # grbl 1.1: the pulse's value is its lower bound
+        idle = uncertain(max(gap, Fraction(0)), f"${110 + bit}", max_rate.where, "mm/min",
+                         _GRBL_WINDOW_NS, "the spacing less the pulse, which may run 500 ns past "
+                         "its lower bound ($0 - 562.5 to $0 - 62.5 ns by the prescaler's phase, "
+                         "stepper.c:241, 344-345)", spacing_note)  # fmt: skip
     tick = min(Fraction(10**9) / fastest, _AMASS_TICK_NS) if fastest else None
     return GeneratorGuarantee(
         axis=axis,
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
+        # the tick is already the lower bound (the step and the next block's DIR are both
+        # written at the start of an interrupt, one tick apart): nothing to take off it
         dir_hold=Guaranteed(
             tick,
             "$11n",
             max_rate.where,
             "mm/min",
-            "uncertain" if tick is not None else "unknown",
+            "derived" if tick is not None else "unknown",
             "DIR changes one interrupt tick after a block's last step: at least min(1 / the "
             "fastest axis's max rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)",
         ),  # fmt: skip
         max_rate=max_rate,
         pulse_level=0 if step_mask >> bit & 1 else 1,
-        dir_hold_trailing=Guaranteed(
+        dir_hold_trailing=Guaranteed(  # 0: no figure can fall below it
             Fraction(0),
             "$0",
             pulse.where,
             "us",
-            "uncertain",
+            "derived",
             "the next tick may follow the end of the pulse at once",
         ),  # fmt: skip
         dir_inverted=bool(dir_mask >> bit & 1),

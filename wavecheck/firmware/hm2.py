@@ -42,6 +42,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_least,
+    uncertain,
 )
 from wavecheck.firmware.linuxcnc_stepgen import PARAMETER, maxvel_fix
 from wavecheck.linuxcnc.configuration import LinuxCNCFiles
@@ -56,6 +57,13 @@ _REG_MAX = 0x3FFF
 _VHDL = (
     "the hold counter starts with the pulse and DIR may change when it runs out (hostmot2 "
     "kubstepgenz.vhd 212-219, run under GHDL), not after the step ends as the man page says"
+)
+#: Without the stepgen clock: the driver truncates each ns value to whole clocks (stepgen.c
+#: 381-385), so a figure that loses a register's truncation may be up to one clock short, and
+#: the clock (the board's, which the HAL files do not give) bounds that.
+_NO_CLOCK = (
+    "the driver truncates each value to whole stepgen clocks (stepgen.c 381-385) and the clock "
+    "is not known: give --hm2-clock"
 )
 _DURING = (
     "dirhold < steplen: DIR may change while STEP is high (kubstepgenz.vhd 215-219), so a drive "
@@ -109,22 +117,23 @@ def _axis(
                               "driver default", "ns", "default")  # fmt: skip
         ns, at = params[name]
         if f is None:
-            return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
+            if extra_clock:  # (⌊ns·f⌋ + 1) / f > ns: the set value is the lower bound
+                return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
+            return uncertain(ns, name, at, "ns", None, _NO_CLOCK, note)
         reg = register(ns, f)
         return Guaranteed(
-            Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns",
-            "derived" if extra_clock else "uncertain",
+            Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns", "derived",
             f"{reg} clocks{' + 1' if extra_clock else ''} at {float(f):g} Hz"
             + (f"; {note}" if note else ""),
         )  # fmt: skip
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
-    setup = fig("dirsetup", 0, "uncertain", "the setup counter loads N clocks (kubstepgenz.vhd "
+    setup = fig("dirsetup", 0, "derived", "the setup counter loads N clocks (kubstepgenz.vhd "
                 "216-219; under GHDL the next step came N + 2 clocks after DIR)")  # fmt: skip
     hold_raw = fig("dirhold", 1, "set")
     hold, trailing = _hold(pulse, hold_raw, f is not None)
-    setup_trailing = _setup_trailing(pulse, setup, hold)
+    setup_trailing = _setup_trailing(pulse, setup, hold, f is not None)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
@@ -177,21 +186,30 @@ def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guarantee
     if hold.value < pulse.value:
         return lead, Guaranteed(Fraction(0), "dirhold - steplen", hold.where, "ns", "derived",
                                 _DURING)  # fmt: skip
-    short = "" if clocked else "; without the stepgen clock up to one clock short"
-    trail = Guaranteed(hold.value - pulse.value, "dirhold - steplen", hold.where, "ns",
-                       "derived" if clocked else "uncertain", f"{_VHDL}{short}")  # fmt: skip
+    value = hold.value - pulse.value
+    trail = (
+        Guaranteed(value, "dirhold - steplen", hold.where, "ns", "derived", _VHDL)
+        if clocked  # (M + 1 - (N + 1)) clocks, as GHDL ran it
+        else uncertain(value, "dirhold - steplen", hold.where, "ns", None, _NO_CLOCK, _VHDL)
+    )
     return lead, trail
 
 
-def _setup_trailing(pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed) -> Guaranteed | None:
+def _setup_trailing(
+    pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed, clocked: bool
+) -> Guaranteed | None:
     """DIR change → the trailing edge when DIR may change during the pulse (dirhold <
-    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise."""
+    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise. In clocks
+    ((N + 1) - (M + 1), as GHDL ran it) when the clock is known; without it the registers'
+    truncation may take up to a clock off."""
     if pulse.value is None or hold.value is None or setup.value is None:
         return None
     if hold.value >= pulse.value:
         return None
     value = min(pulse.value - hold.value, setup.value + pulse.value)
-    return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "uncertain", _DURING)
+    if clocked:
+        return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "derived", _DURING)
+    return uncertain(value, "steplen - dirhold", hold.where, "ns", None, _NO_CLOCK, _DURING)
 
 
 def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
