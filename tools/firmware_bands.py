@@ -30,18 +30,26 @@ from wavecheck.firmware.guarantee import FirmwareConfig, GeneratorGuarantee, Gua
 
 #: Common drives: two Pololu carriers, a Trinamic UART driver, a Gecko and a Leadshine.
 DRIVES = ("drv8825", "a4988", "tmc2209", "gecko-g202", "leadshine-dm542")
-_FIGS = ("pulse", "idle", "dir_setup", "dir_hold", "max_rate", "dir_hold_trailing",
-         "dir_setup_trailing")  # fmt: skip
 
 
 def face_value(cfg: FirmwareConfig) -> FirmwareConfig:
     """``cfg`` with every band taken away (each figure judged as exact)."""
 
-    def exact(fig: Guaranteed | None) -> Guaranteed | None:
-        return None if fig is None else dataclasses.replace(fig, short_by=Fraction(0))
+    def exact(fig: Guaranteed) -> Guaranteed:
+        return dataclasses.replace(fig, short_by=Fraction(0))
 
     def axis(g: GeneratorGuarantee) -> GeneratorGuarantee:
-        return dataclasses.replace(g, **{f: exact(getattr(g, f)) for f in _FIGS})
+        hold_t, setup_t = g.dir_hold_trailing, g.dir_setup_trailing
+        return dataclasses.replace(
+            g,
+            pulse=exact(g.pulse),
+            idle=exact(g.idle),
+            dir_setup=exact(g.dir_setup),
+            dir_hold=exact(g.dir_hold),
+            max_rate=exact(g.max_rate),
+            dir_hold_trailing=None if hold_t is None else exact(hold_t),
+            dir_setup_trailing=None if setup_t is None else exact(setup_t),
+        )
 
     return dataclasses.replace(cfg, axes=tuple(axis(a) for a in cfg.axes))
 

@@ -222,7 +222,14 @@ def worst_end(fig: Guaranteed, rate: bool, added: Guaranteed = _EXACT) -> Fracti
     if rate:
         top = fig.value + fig.short_by
         return _GIGA / top if top else None
-    return fig.value - fig.short_by + (added.value or Fraction(0)) - added.short_by
+    return _floor0(fig.value - fig.short_by) + _floor0(
+        (added.value or Fraction(0)) - added.short_by
+    )
+
+
+def _floor0(ns: Fraction) -> Fraction:
+    """A time the firmware may fall short to: no time is below 0."""
+    return max(ns, Fraction(0))
 
 
 def band_verdict(value: Fraction, worst: Fraction | None, limit: Fraction) -> Verdict:
@@ -310,7 +317,7 @@ def _need(
     if role == "max_rate":
         top = drive.max_rate.value if drive.max_rate else Fraction(0)
         return max(top - (fig.short_by or Fraction(0)), Fraction(0))
-    added_worst = (added.value or Fraction(0)) - (added.short_by or Fraction(0))
+    added_worst = _floor0((added.value or Fraction(0)) - (added.short_by or Fraction(0)))
     return limit - added_worst + (fig.short_by or Fraction(0))
 
 

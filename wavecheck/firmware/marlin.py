@@ -623,7 +623,7 @@ def _figures(
                  "= pulse + PRE")  # fmt: skip
     if held and t.pulse:  # the pulse's wait is in it, and its band
         short, why = _PULSE_SHORT[era.old_pulse_code]
-        hold = uncertain(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", short,
+        hold = uncertain(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", min(short, t.pulse),
                          f"the pulse's {why}", hold_note)  # fmt: skip
     elif held:
         hold = Guaranteed(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", "derived",
