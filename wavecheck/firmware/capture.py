@@ -18,7 +18,7 @@ not measured); ``measure`` measures every interval kind of the step type.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
@@ -117,6 +117,9 @@ class Comparison:
     where: str
     verdict: Verdict
     message: str
+    short_by: Fraction | None = Fraction(0)
+    """How far below ``configured`` the firmware may fall (Hz above it for the rate; None: no
+    source bounds it): a measured figure inside that band is no finding."""
 
 
 @dataclass(frozen=True)
@@ -142,11 +145,26 @@ class FirmwareCheck:
         return tuple(c for c in self.comparisons if c.verdict == "fail")
 
 
+def _band(figs: list[Guaranteed]) -> Fraction | None:
+    """The sum of the figures' bands (None when one is unbounded)."""
+    short: Fraction | None = Fraction(0)
+    for f in figs:
+        short = None if short is None or f.short_by is None else short + f.short_by
+    return short
+
+
 def _time(
     seen: Observed, what: str, rule: str, fig: Guaranteed, added: Guaranteed | None, label: str
 ) -> Comparison:
     """``fig`` (+ ``added``: the pulse, to a trailing active edge) vs the shortest measured: a
     FAIL only below the band's worst end (:attr:`Guaranteed.short_by`), by more than T."""
+    found = _time_verdict(seen, what, rule, fig, added, label)
+    return replace(found, short_by=_band([f for f in (fig, added) if f is not None]))
+
+
+def _time_verdict(
+    seen: Observed, what: str, rule: str, fig: Guaranteed, added: Guaranteed | None, label: str
+) -> Comparison:
     offset = added.value if added is not None and added.value is not None else Fraction(0)
     configured = None if fig.value is None else fig.value + offset
     where = fig.where
@@ -186,9 +204,7 @@ def _time(
                           f"not enforce; shortest measured {format_ns(measured)}")  # fmt: skip
     t = seen.resolution_ns
     bands = [f for f in (fig, added) if f is not None and f.banded]
-    short: Fraction | None = Fraction(0)
-    for f in bands:
-        short = None if short is None or f.short_by is None else short + f.short_by
+    short = _band(bands)
     band = "; ".join(f.band_text() for f in bands)
     place = f" at {format_time(at)}" if at is not None else ""
     if measured + t < configured and (short is None or measured + t >= configured - short):
@@ -271,7 +287,7 @@ def firmware_check(
                 "no configured maximum or no steps",
             )
         )
-    elif axis.max_rate.short_by is None and rate > cfg_rate:
+    elif axis.max_rate.short_by is None and rate > cfg_rate:  # the band has no top
         out.append(
             Comparison(
                 "rate",
@@ -286,6 +302,7 @@ def firmware_check(
                 f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); "
                 f"highest measured {format_rate(rate)}, and "
                 f"{axis.max_rate.band_text(rate=True)}",
+                None,
             )  # fmt: skip
         )
     else:
@@ -304,6 +321,7 @@ def firmware_check(
                 "pass" if ok else "fail",
                 f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
                 f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
+                axis.max_rate.short_by,
             )
         )
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out), pairing)

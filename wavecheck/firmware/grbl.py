@@ -14,8 +14,10 @@ default is machine-specific: unknown).
 
 Guarantees: grbl 1.1's pulse is at least ``$0`` − 562.5 ns (Timer0 loaded with ``$0`` − 2 µs
 for the interrupt overhead, 62.5–562.5 ns short of ``$0`` by the clk/8 prescaler's phase:
-``stepper.c`` 241, 344-345, and cycle-true runs); grblHAL rounds per driver and Grbl_ESP32 uses
-RMT or I2S, so theirs is ≈ ``$0`` (``uncertain``). DIR is written a
+``stepper.c`` 241, 344-345, and cycle-true runs), so a low time computed from it may be 500 ns
+shorter; grblHAL times it per driver and Grbl_ESP32 with the RMT, I2S or software engine built
+in, which a dump does not name, so theirs is ≈ ``$0`` with no bound below (``uncertain``: never a
+PASS). DIR is written a
 few CPU cycles before STEP (setup ≈ 0) unless grblHAL's ``$29`` is set (Grbl_ESP32 keeps its DIR
 delay outside the numbered settings: unknown). The max step rate of an axis is
 ``$10n × $11n / 60`` (the planner limits each axis to it); grbl does not enforce its 30 kHz.

@@ -8,8 +8,8 @@ published in IgorYeremin/hostmot2-firmware@8a8dcbd; line numbers below are that 
 STEP high N+1 clocks and low N+1 clocks (the pulse counter is loaded at the step, 210-211, and
 STEP cleared a clock after it reaches 0, 199-201), so ``step_high ≥ (⌊steplen·f⌋+1)/f >
 steplen``: without the clock the set value is the bound. DIR setup loads N clocks (216-219:
-⌊dirsetup·f⌋/f; under GHDL the next step came N + 2 clocks after the DIR change, 300 -> 302;
-kept ``uncertain``, one run being no proof).
+⌊dirsetup·f⌋/f, the lower bound; under GHDL the next step came N + 2 clocks after the DIR
+change, 300 -> 302).
 
 DIR hold is what the hardware does, not what the man page says ("after a step ends"): the hold
 counter is loaded with the pulse (212-213), and DIR may change as soon as it has run out
@@ -21,7 +21,9 @@ the falling one. So the hold is dirhold (+1 clock) from the leading edge and dir
 from the trailing edge; when dirhold < steplen DIR can change during the pulse, and a drive that
 counts the trailing edge may count that step in the new direction (hold 0, and only steplen −
 dirhold from the DIR change to that edge: ``dir_setup_trailing``). Without the clock
-the trailing figure may be a clock short (``uncertain``).
+(``--hm2-clock``) the figures the truncation can shorten — dirsetup and the trailing ones — may
+be up to a clock short, and the clock bounds that: they are ``uncertain`` with no bound (never a
+PASS).
 
 Max rate: the driver clamps the velocity to 1e9/(steplen + stepspace) steps/s and to maxvel ×
 |position-scale| when maxvel is set (stepgen.c 263-315); the hardware's (N+1)+(M+1) clocks per

@@ -13,7 +13,8 @@ gets the largest value of each field over all slow drivers (rounded up to step c
 without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits for nothing, so its DIR
 setup and hold cannot be read from the file. On a Duet 3 MB6XD (named in the file's comments)
 every driver defaults to 2.5 µs per field and the largest of all drivers applies to all. An
-expansion board applies T with its own firmware (``uncertain``). Meta-commands (``if``, ``var``,
+expansion board applies T with its own firmware, on its own step clock, whose rate the file does
+not give (``uncertain`` with no bound: never a PASS). Meta-commands (``if``, ``var``,
 ``{expressions}``) are not evaluated: a value written as an expression is not read (named), and
 the motion commands of an ``if``/``elif``/``else``/``while`` block are not read either (the
 block is named), since whether they run is not decided by the file.

@@ -322,6 +322,8 @@ def firmware_check_dict(fc: FirmwareCheck) -> dict[str, Any]:
                 "where": c.where,
                 "verdict": c.verdict,
                 "message": c.message,
+                "short_by": json_number(c.short_by),
+                "short_bounded": c.short_by is not None,
             }
             for c in fc.comparisons
         ],

@@ -206,3 +206,4 @@ def test_check_firmware_finds_only_below_the_band(
     doc = json.loads(capsys.readouterr().out)
     pulse = next(c for c in doc["firmware"]["comparisons"] if c["what"] == "pulse")
     assert pulse["verdict"] == verdict, pulse["message"]
+    assert (pulse["configured"], pulse["short_by"], pulse["short_bounded"]) == (2000, 750, True)
