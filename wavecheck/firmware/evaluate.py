@@ -16,8 +16,8 @@ A figure the firmware does not keep exactly (status ``uncertain``) carries a ban
 ``short_by``; a rate plus it) still meets the limit, fails only if the value itself misses it,
 and is indeterminate in between, the note naming the band and the firmware line it comes from; a
 band no source bounds is never a PASS. The printed fix clears the band. The pair's max step rate
-takes each term at its low end: the generator's configured maximum, and the pulse the firmware
-aims at (a pulse shorter than its aim only raises the timing term).
+takes the generator's ceiling at the top of its band (a rate with no bound above is no ceiling)
+and the pulse at its aim (a pulse shorter than its aim only raises the timing term).
 
 A figure whose sources disagree (:attr:`Guaranteed.disputed`) is judged under both readings: a
 rule that passes under one and fails under the other is indeterminate, and says so. A figure the
@@ -298,7 +298,8 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 verdict = "indeterminate"
                 note += ": the readings give different verdicts (measure it)"
         fix = ""
-        if verdict == "fail" or (verdict == "indeterminate" and (other is not None or in_band)):
+        clears = in_band and worst is not None  # an unbounded band: no value clears it
+        if verdict == "fail" or (verdict == "indeterminate" and (other is not None or clears)):
             fix = config.fix(g, _fix_role(role, g, drive), _need(fig, added, drive, limit, role))
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note,
                             worst_ns=worst, in_band=in_band))  # fmt: skip
@@ -341,5 +342,7 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
         known = idle_lim is not None or pulse is not None
         timing = _GIGA / total if total > 0 and known else None
     drive_rate = drive.max_rate.value if drive.max_rate else None
-    rates = [v for v in (timing, drive_rate, g.max_rate.value) if v is not None]
+    top = g.max_rate  # the generator's ceiling: its value plus its band (no band top: none)
+    ceiling = None if top.value is None or top.short_by is None else top.value + top.short_by
+    rates = [v for v in (timing, drive_rate, ceiling) if v is not None]
     return min(rates) if rates else None
