@@ -208,3 +208,24 @@ def test_check_firmware_finds_only_below_the_band(
     pulse = next(c for c in doc["firmware"]["comparisons"] if c["what"] == "pulse")
     assert pulse["verdict"] == verdict, pulse["message"]
     assert (pulse["configured"], pulse["short_by"], pulse["short_bounded"]) == (2000, 750, True)
+
+
+@pytest.mark.parametrize(
+    ("case", "figure", "short_by", "bounded"),
+    [
+        (_MARLIN_CR20, "pulse_ns", 750, True),  # 1.5 ticks of the 2 MHz pulse timer
+        (_MARLIN_CR20, "dir_setup_ns", 0, True),  # a DELAY_NS: no band
+        (_GRBL_ESP32, "pulse_ns", None, False),  # the engine built in is not in the dump
+    ],
+)
+def test_json_shows_the_band_beside_the_figure(
+    capsys: pytest.CaptureFixture[str], case: str, figure: str, short_by: int | None, bounded: bool
+) -> None:
+    main(["config", str(CORPUS / case), "--drive", "a4988", "--format", "json"])
+    doc = json.loads(capsys.readouterr().out)
+    fig = doc["axes"][0][figure]
+    assert (fig["short_by"], fig["short_bounded"]) == (short_by, bounded)
+    assert bool(fig["short_why"]) == (short_by != 0)
+    main(["config", str(CORPUS / case), "--drive", "a4988"])
+    text = capsys.readouterr().out
+    assert "? = the firmware may fall short of it" in text
