@@ -101,8 +101,13 @@ CASES = [
     (_GRBL, "a4988", [], "X", "step_low", "pass"),
     # RRF: an expansion board times T on its own step clock (Duet3Expansion SetDriverStepTiming)
     (_RRF_EXP, "tmc2209", [], "Z", "step_high", "indeterminate"),
+    # ... the main board's drivers (P0.x) round T up to its step clocks: exact, a PASS stays
+    (_RRF_EXP, "tmc2209", [], "X", "step_high", "pass"),
     # hm2 without --hm2-clock: dirsetup is truncated to whole clocks (stepgen.c 381-385)
     (_HM2, "a4988", [], "stepgen.00", "dir_setup", "indeterminate"),
+    # ... steplen is held N + 1 clocks (kubstepgenz.vhd 210-211, 199-201): more than the set
+    # value, no band: 1 us against 1 us passes
+    (_HM2, "a4988", [], "stepgen.00", "step_high", "pass"),
     # FluidNC RMT: the pulse is 4 x pulse_us ticks of 0.25 us, exact: a clear PASS stays
     (_FLUIDNC, "a4988", [], "x", "step_high", "pass"),
 ]
