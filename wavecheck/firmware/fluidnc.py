@@ -29,7 +29,10 @@ What each engine guarantees at the pin:
   1e6 / (2 × pulse frames × frame) (``max_pulses_per_sec``).
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
-after the last pulse's leading edge when the step rate stays under the engine's maximum. The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
+after the last pulse's leading edge when the step rate stays under the engine's maximum. Under
+RMT and TIMED the step events are the stepping interrupt's, which other interrupts may delay:
+the low time and the DIR hold have no bound below (``uncertain``: never a PASS); I2S clocks its
+samples out of a FIFO. The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
 its steps are at least 1 / min(2 × that, the fastest axis's) apart (grbl's Bresenham, kept by
 FluidNC's ``Stepper.cpp``: :func:`wavecheck.firmware.grbl.bresenham_spacing`).
 """
@@ -335,14 +338,10 @@ def _axis(
             spacing = ("1 / min(2 x this axis's max rate, the fastest axis's) - pulse: FluidNC's "
                        "Stepper.cpp keeps grbl's Bresenham, which puts the steps on the dominant "
                        "axis's ticks")  # fmt: skip
-            if engine == "TIMED":  # the spin ends the pulse late when interrupted
-                idle = uncertain(
-                    max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at, "mm/min", None,
-                    "TIMED: an interrupt during the pulse's spin (timed_engine.c:45-46) "
-                    "lengthens the pulse by an amount nothing bounds, and the low time loses it",
-                    spacing,
-                )  # fmt: skip
-            else:  # RMT and I2S make the pulse in hardware, exactly
+            if engine in ("RMT", "TIMED"):
+                idle = uncertain(max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at,
+                                 "mm/min", None, _ISR_JITTER[engine], spacing)  # fmt: skip
+            else:  # I2S: the steps are samples of a FIFO clocked out by the I2S hardware
                 idle = Guaranteed(max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at,
                                   "mm/min", "derived", spacing)  # fmt: skip
     hold_note = "DIR changes at a later step event: at least one pulse after the leading edge"
@@ -351,7 +350,13 @@ def _axis(
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
-        dir_hold=Guaranteed(pulse.value, "pulse_us", pulse.where, "us", "derived", hold_note),
+        dir_hold=(
+            uncertain(
+                pulse.value, "pulse_us", pulse.where, "us", None, _ISR_JITTER[engine], hold_note
+            )  # fmt: skip
+            if engine in ("RMT", "TIMED")
+            else Guaranteed(pulse.value, "pulse_us", pulse.where, "us", "derived", hold_note)
+        ),
         max_rate=max_rate,
         pulse_level=0 if step_low else 1,
         dir_hold_trailing=Guaranteed(
@@ -366,6 +371,19 @@ def _axis(
         info=info,
         aliases=(f"{name}.motor0",) if motor == "motor0" else (),
     )
+
+
+#: Why the times between step events have no bound under the RMT and TIMED engines: each step
+#: (RMT: its transmission started, TIMED: the pin written) and each DIR write happens when the
+#: stepping timer's interrupt runs, which other interrupts may delay by an amount no source
+#: bounds, so two events may come closer than their ticks; TIMED's pulse spin
+#: (timed_engine.c:45-46) is also lengthened by an interrupt, which the low time then loses.
+_ISR_JITTER = {
+    "RMT": "the stepping interrupt starts each RMT pulse and writes DIR, and other interrupts may "
+    "delay it by an amount no source bounds",
+    "TIMED": "the stepping interrupt writes STEP and DIR, and other interrupts may delay it, or "
+    "lengthen the pulse's spin (timed_engine.c:45-46), by an amount no source bounds",
+}
 
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:

@@ -29,7 +29,10 @@ whose fastest axis steps at up to F, steps at least 1 / min(2R, F) apart: Bresen
 floor(dominant / its rate) ticks apart, which tends to one tick of a dominant just under twice its
 rate (so its low time is that less the pulse, not 1/R − pulse). DIR changes at the tick after a
 block's last step (the new block's DIR is written at the next interrupt, 323-324, 358-375): the
-hold after the leading edge is one tick, at least min(1 / F, 62.5 µs), whatever ``$0`` is.
+hold after the leading edge is one tick, min(1 / F, 62.5 µs), whatever ``$0`` is. Both are times
+between interrupts, which other interrupts may delay (serial, pin change, the pulse reset): no
+source bounds that, so the low time and the DIR hold are ``uncertain`` with no bound (never a
+PASS).
 """
 
 from __future__ import annotations
@@ -111,9 +114,16 @@ _NO_BOUND = {
     "engine counts whole us of esp_timer (Grbl_Esp32/stepper.cpp, #ifndef USE_RMT_STEPS); only "
     "RMT is exact (Motors/StandardStepper.cpp:69): the dump does not say which was built",
 }
-#: grbl 1.1h's pulse lies in [$0 − 562.5 ns, $0 − 62.5 ns] (the prescaler's phase, stepper.c:241,
-#: 344-345): a figure computed as a time less the pulse's lower bound may be this much shorter.
-_GRBL_WINDOW_NS = Fraction(500)
+#: Why the times between interrupts are no bound: STEP and DIR are written at the start of the
+#: stepper interrupt (grbl 1.1h stepper.c:319-336), which the serial interrupts (serial.c:107,
+#: 143), the limit and control pin-change interrupts (limits.c:110, system.c:64) and the pulse
+#: reset (stepper.c:489) may each delay, by their run time, which no source bounds: two steps, or
+#: a step and the next DIR write, may come closer than one tick.
+_TICK_JITTER = (
+    "STEP and DIR are written at the start of the stepper interrupt (stepper.c:319-336), which "
+    "the serial, pin-change and pulse-reset interrupts (serial.c:107, 143; limits.c:110; "
+    "system.c:64; stepper.c:489) may delay by their run time, which no source bounds"
+)
 
 
 def looks_like(text: str) -> bool:
@@ -291,32 +301,22 @@ def _axis(
     if gap is None:
         idle = unknown(f"${110 + bit}", "an axis's max rate is not in the dump: the interrupt's "
                        "tick is not bounded", max_rate.where)  # fmt: skip
-    elif pulse.short_by is None:  # grblHAL, Grbl_ESP32
+    else:  # the interrupts' jitter, and grblHAL's and Grbl_ESP32's pulse, have no bound
         idle = uncertain(max(gap, Fraction(0)), f"${110 + bit}", max_rate.where, "mm/min", None,
-                         f"the spacing less the pulse, whose length no source bounds ({pulse.short_why})",
-                         spacing_note)  # fmt: skip
-    else:  # grbl 1.1: the pulse's value is its lower bound
-        idle = uncertain(max(gap, Fraction(0)), f"${110 + bit}", max_rate.where, "mm/min",
-                         _GRBL_WINDOW_NS, "the spacing less the pulse, which may run 500 ns past "
-                         "its lower bound ($0 - 562.5 to $0 - 62.5 ns by the prescaler's phase, "
-                         "stepper.c:241, 344-345)", spacing_note)  # fmt: skip
+                         _TICK_JITTER, spacing_note)  # fmt: skip
     tick = min(Fraction(10**9) / fastest, _AMASS_TICK_NS) if fastest else None
     return GeneratorGuarantee(
         axis=axis,
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
-        # the tick is already the lower bound (the step and the next block's DIR are both
-        # written at the start of an interrupt, one tick apart): nothing to take off it
-        dir_hold=Guaranteed(
-            tick,
-            "$11n",
-            max_rate.where,
-            "mm/min",
-            "derived" if tick is not None else "unknown",
-            "DIR changes one interrupt tick after a block's last step: at least min(1 / the "
-            "fastest axis's max rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)",
-        ),  # fmt: skip
+        # the step and the next block's DIR are written at the start of interrupts one tick
+        # apart, each entered late by what other interrupts run first: no bound below the tick
+        dir_hold=(
+            uncertain(tick, "$11n", max_rate.where, "mm/min", None, _TICK_JITTER, _HOLD_NOTE)
+            if tick is not None
+            else unknown("$11n", _HOLD_NOTE, max_rate.where)
+        ),
         max_rate=max_rate,
         pulse_level=0 if step_mask >> bit & 1 else 1,
         dir_hold_trailing=Guaranteed(  # 0: no figure can fall below it
@@ -330,6 +330,12 @@ def _axis(
         dir_inverted=bool(dir_mask >> bit & 1),
         info=info,
     )
+
+
+_HOLD_NOTE = (
+    "DIR changes one interrupt tick after a block's last step: min(1 / the fastest axis's max "
+    "rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)"
+)
 
 
 def _fixer(
