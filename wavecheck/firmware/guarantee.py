@@ -5,7 +5,8 @@ Every firmware reader (:mod:`wavecheck.firmware.grbl`, ``klipper``, ``marlin``, 
 :class:`FirmwareConfig`: a :class:`GeneratorGuarantee` per axis, each figure a
 :class:`Guaranteed` lower bound with the setting, the file and line, and the unit it was written
 in. Times are exact ns, rates exact Hz (:class:`~fractions.Fraction`). A figure the configuration
-cannot prove is ``None`` with a note saying why ("measure it"), never a guess.
+cannot prove is ``None`` with a note saying why ("measure it"), never a guess; one the firmware
+aims at but may miss carries the band it may fall short by (:attr:`Guaranteed.short_by`).
 
 Levels are the generator's *output pin*, after the firmware's own pin inversion: ``pulse`` is the
 level the firmware drives for a step (high unless inverted), ``idle`` the time between pulses.
@@ -69,7 +70,8 @@ MEASURE_HOW = "capture STEP and DIR, then `wavecheck check --firmware FILE`"
 class Guaranteed:
     """One lower bound (upper bound for ``max_rate``) and where it comes from.
 
-    The band: an ``uncertain`` figure is what the firmware aims at; the wire figure may fall up
+    The band: an ``uncertain`` figure (or a ``default`` one the firmware times the same way) is
+    what the firmware aims at; the wire figure may fall up
     to :attr:`short_by` below :attr:`value` (for ``max_rate``: the real rate may exceed it by
     up to that many Hz, the direction that hurts), for the reason :attr:`short_why` gives with
     the firmware line that makes it so. The firmware may also overshoot its aim (interrupts

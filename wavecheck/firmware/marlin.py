@@ -18,8 +18,10 @@ machine from the slowest driver type present on any axis. Until 2.1.2 a pulse of
 and LV8729 default, or a user's 0) is "not set", so high = low = 5e8 / rate; from 2.1.3 a
 defined ``MINIMUM_STEPPER_PULSE_NS 0`` is 0. Low time = max(1e9 / rate − pulse, pulse) when both
 are set. Before 2.1, a driver whose ``X_DRIVER_TYPE`` is not defined is an A4988 (the files say
-so), except in 2.0.0, whose ``drivers.h`` matches it to no type: the ``#else`` defaults. Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up to ½ tick
-short: it is ``uncertain``. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
+so), except in 2.0.0, whose ``drivers.h`` matches it to no type: the ``#else`` defaults. The
+pulse is a busy-wait on the pulse timer, so it is ``uncertain``: it may be up to 1½ ticks short
+(:data:`_PULSE_SHORT`), 1 tick before the 2020 rewrite; the DIR hold from the leading edge
+(pulse + PRE) carries the pulse's band. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
 ``_STANDALONE``) makes every STEP edge a step.
 
 A figure that depends on a branch the files cannot decide is the smallest over the branches
