@@ -52,7 +52,10 @@ def test_marlin_scara_z_is_not_coupled() -> None:
     inverse_kinematics: ``delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z)``). Z was left
     without a rate; 200/SCARA/Morgan lines 743/750: 200/1.25 steps/mm x 30 mm/s."""
     cfg = read_firmware(CORPUS / "marlin/200/SCARA/Morgan/Configuration.h")
-    assert cfg.axis("Z").max_rate.value == Fraction(200) / Fraction("1.25") * 30 == 4800
+    # its sustained rate (multi-stepping may burst it at the driver rate: see below)
+    assert Fraction(200) / Fraction("1.25") * 30 == 4800
+    assert "4800 Hz" in cfg.axis("Z").max_rate.note
+    assert "couple" not in cfg.axis("Z").max_rate.note
     assert cfg.axis("X").max_rate.status == "uncertain"  # the driver rate only
 
 
@@ -115,3 +118,69 @@ def test_rrf_commands_inside_an_if_block_are_not_taken_as_run(tmp_path: Path) ->
     assert cfg.axis_names == ("X", "Y", "Z", "E0")
     assert cfg.axis("X").max_rate.value == 80 * 6000 / 60
     assert any("block of" in u and ":2" in u for u in cfg.unsupported)
+
+
+@pytest.mark.parametrize(
+    ("adv", "x_rate", "e_rate"),
+    [
+        # the default: up to 128 steps per interrupt (2.1.x Conditionals_adv.h "Multi-Stepping
+        # Limit"), spaced by the A4988 driver timing: every axis may step at 500 kHz
+        ("", 500000, 500000),
+        ("#define MULTISTEPPING_LIMIT 16\n", 500000, 500000),
+        # one step per interrupt: steps/unit x feedrate, the planner's per-axis cap, holds
+        ("#define MULTISTEPPING_LIMIT 1\n", 80 * 300, 93 * 25),
+    ],
+)
+def test_marlin_multistepping_packs_every_axis_at_the_driver_rate(
+    tmp_path: Path, adv: str, x_rate: int, e_rate: int
+) -> None:
+    """Stepper::calc_timer_interval (stepper.h; 2.1.x calc_multistep_timer_interval) takes up
+    to 128 steps of the leading axis in one interrupt above the CPU's
+    MAX_STEP_ISR_FREQUENCY_1X, and stepper.cpp pulse_phase_isr steps every axis's Bresenham
+    on each of those events with only the low time waited between them (AWAIT_LOW_PULSE): an
+    axis's steps may come 1 / driver rate apart. The reader claimed 80 x 300 = 24 kHz for X
+    (steps/unit x feedrate, the sustained rate only), which a drive rated for 100 kHz passed."""
+    path = _marlin(tmp_path, "02010300", _types("A4988") + _MOTION, adv)
+    cfg = read_firmware(path)
+    assert (cfg.axis("X").max_rate.value, cfg.axis("E0").max_rate.value) == (x_rate, e_rate)
+    if x_rate == 500000:
+        assert cfg.axis("X").idle.value == 1000  # 1e9 / 500 kHz - the 1 us A4988 pulse
+        assert "sustained" in cfg.axis("X").max_rate.note
+
+
+def test_marlin_one_step_per_interrupt_spaces_a_slow_axis_by_the_leading_axis(
+    tmp_path: Path,
+) -> None:
+    """With one step per interrupt (DISABLE_MULTI_STEPPING, 2.0.x) no low time is waited at
+    all (pulse_phase_isr's AWAIT_LOW_PULSE runs only after an interrupt's first step): a slow
+    axis steps on the leading axis's events, at least 1 / min(2 x its rate, the fastest) apart
+    (grbl's Bresenham), less the pulse. Z: 400 x 5 = 2 kHz -> 250 us - 1 us; X 24 kHz is the
+    fastest: 1 / 24 kHz - 1 us."""
+    path = _marlin(tmp_path, "02000900", _types("A4988") + _MOTION,
+                   "#define DISABLE_MULTI_STEPPING\n")  # fmt: skip
+    cfg = read_firmware(path)
+    z, x = cfg.axis("Z"), cfg.axis("X")
+    assert z.idle.value == Fraction(10**9, 4000) - 1000 and z.idle.status == "uncertain"
+    assert x.idle.value == Fraction(10**9, 24000) - 1000
+    assert z.max_rate.value == 2000
+
+
+def test_marlin_hangprinter_d_anchor_is_a_stepper(tmp_path: Path) -> None:
+    """1.1.9's HANGPRINTER drives four anchors (enum.h ``D_AXIS = 3, E_AXIS = 4``); D's motor
+    is on the first E socket the extruders leave free (1.1.x Marlin/pins.h HANGPRINTER block:
+    ``D_STEP_PIN _EPIN(E_STEPPERS, STEP)``; 119/hangprinter/Configuration.h:988-989
+    ``INVERT_E1_DIR INVERT_D_DIR``). The reader left it out: a motor with STEP/DIR pins and no
+    verdict. It takes that socket's driver type and ``INVERT_D_DIR``, and is coupled."""
+    path = _marlin(tmp_path, "010109",
+                   "#define EXTRUDERS 1\n#define HANGPRINTER\n#define INVERT_D_DIR true\n"
+                   "#define E1_DRIVER_TYPE DRV8825\n#define X_DRIVER_TYPE A4988\n"
+                   "#define Y_DRIVER_TYPE A4988\n#define Z_DRIVER_TYPE A4988\n"
+                   "#define E0_DRIVER_TYPE A4988\n"
+                   "#define DEFAULT_AXIS_STEPS_PER_UNIT { 92, 92, 92, 92, 410 }\n"
+                   "#define DEFAULT_MAX_FEEDRATE { 500, 500, 500, 300, 25 }\n")  # fmt: skip
+    cfg = read_firmware(path)
+    assert cfg.axis_names == ("X", "Y", "Z", "D", "E0")
+    d = cfg.axis("D")
+    assert d.dir_inverted and "DRV8825" in d.info["driver type"]
+    assert "couple" in d.max_rate.note
+    assert cfg.axis("E0").info["steps/unit"].startswith("410 ")
