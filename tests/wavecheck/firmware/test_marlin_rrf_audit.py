@@ -184,3 +184,66 @@ def test_marlin_hangprinter_d_anchor_is_a_stepper(tmp_path: Path) -> None:
     assert d.dir_inverted and "DRV8825" in d.info["driver type"]
     assert "couple" in d.max_rate.note
     assert cfg.axis("E0").info["steps/unit"].startswith("410 ")
+
+
+_RRF_MOTION = "M92 X80 Y80 Z400 E420\nM203 X6000 Y6000 Z180 E1200\n"
+
+
+@pytest.mark.parametrize(
+    ("header", "axes"),
+    [
+        # 2.0x GCodes::Init: numExtruders = min(MaxExtruders, GetNumSmartDrivers() - XYZ_AXES)
+        # ("don't default dumb drivers to extruders"); a Duet 2 WiFi has 5 smart drivers, and
+        # Platform::Init maps extruder n to driver n + MinAxes: E0 on 3, E1 on 4
+        (
+            "; Configuration file for Duet WiFi (firmware version 2.03)\n",
+            ("X", "Y", "Z", "E0", "E1"),
+        ),
+        # 3.x: the board's NumDefaultExtruders, which differs between releases: not applied
+        ("; Configuration file for Duet WiFi (firmware version 3)\n", ("X", "Y", "Z", "E0")),
+        ("; my printer\n", ("X", "Y", "Z", "E0")),
+    ],
+)
+def test_rrf_default_extruders_follow_the_stated_version_and_board(
+    tmp_path: Path, header: str, axes: tuple[str, ...]
+) -> None:
+    cfg_g = tmp_path / "config.g"
+    cfg_g.write_text(header + "M569 P3 S1\nM569 P4 S0\n" + _RRF_MOTION)
+    cfg = read_firmware(cfg_g)
+    assert cfg.axis_names == axes
+    if "E1" in axes:
+        e1 = cfg.axis("E1")
+        assert e1.info["drivers"] == "4" and e1.dir_inverted  # M569 P4 S0
+        assert any("E1 on driver 4" in n and "config.g:1" in n for n in cfg.notes)
+    else:
+        assert any("no M584 E" in n for n in cfg.notes)
+
+
+@pytest.mark.parametrize(
+    ("version", "t", "figures"),
+    [
+        # before 1.21: GCodes case 569 SetDriverStepTiming(drive, gb.GetFValue()): the first
+        # number only, for the high and the low time (DDA::Step waits it before raising and
+        # before lowering STEP); DIR is written while STEP is high: no setup, no hold
+        ("1.20", "2:3:5:5", (2000, 2000, None)),
+        ("1.19", "0.2", (200, 200, None)),  # slow from minStepPulseTiming 0.2 us (>=)
+        # 1.21 and later: 1 or 4 values, each field its own figure
+        ("2.02", "2:3:5:5", (2000, 3000, 5000)),
+        ("2.02", "0.2", (None, None, None)),  # not over 0.2 us: a fast driver, no wait
+    ],
+)
+def test_rrf_m569_t_is_read_as_the_stated_version_reads_it(
+    tmp_path: Path, version: str, t: str, figures: tuple[int | None, ...]
+) -> None:
+    """RepRapFirmware 1.21's release notes (WHATS_NEW.md): "New M569 T parameter options to
+    specify step pulse width, step pulse interval, direction setup and direction hold times";
+    "the DIR signal is no longer changed before the step pulse has ended". A 1.20 file's
+    T2:3:5:5 was read as 3 us of low time and 5 us of DIR setup, which that firmware never
+    waits for."""
+    cfg_g = tmp_path / "config.g"
+    cfg_g.write_text(f"; Configuration file for Duet WiFi (firmware version {version})\n"
+                     f"M569 P0 S1 T{t}\nM569 P1 S1\nM569 P2 S1\n" + _RRF_MOTION)  # fmt: skip
+    x = read_firmware(cfg_g).axis("X")
+    assert (x.pulse.value, x.idle.value, x.dir_setup.value) == figures
+    if version < "1.21":
+        assert x.dir_setup.status == x.dir_hold.status == "not_enforced"
