@@ -852,6 +852,12 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
             return f"Marlin: define MINIMUM_STEPPER_PULSE_NS {ns(need)}"
         if role == "idle":
             p = axis.pulse.value or Fraction(0)
+            if axis.idle.setting == "DEFAULT_MAX_FEEDRATE":  # the leading axis's schedule decides
+                return (
+                    f"Marlin: lower DEFAULT_MAX_FEEDRATE so that no axis steps faster than "
+                    f"{float(_GIGA / (p + need)):.6g} steps/s ({axis.axis} steps on the leading "
+                    "axis's events, one step per interrupt)"
+                )
             if need > p:
                 # low = 1e9 / rate - pulse, or 5e8 / rate with the pulse 0 or unset: both hold
                 rate = min(_GIGA / (p + need), _GIGA / 2 / need)
@@ -879,6 +885,10 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
                     "DIR hold after the pulse, so the drive's edge must start a pulse that long"
                 )
             return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(need)}"
+        if axis.max_rate.setting == "MAXIMUM_STEPPER_RATE":
+            # multi-stepping spaces an interrupt's steps by the driver timing: a lower feed
+            # rate lowers the sustained rate only (stepper.cpp pulse_phase_isr)
+            return f"Marlin: define MAXIMUM_STEPPER_RATE {int(need)}"
         return (
             f"Marlin: define MAXIMUM_STEPPER_RATE {int(need)}, or lower DEFAULT_MAX_FEEDRATE for "
             f"{axis.axis} so that it steps at most {float(need):.6g} steps/s"

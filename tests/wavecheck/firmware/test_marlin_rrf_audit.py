@@ -163,6 +163,8 @@ def test_marlin_one_step_per_interrupt_spaces_a_slow_axis_by_the_leading_axis(
     assert z.idle.value == Fraction(10**9, 4000) - 1000 and z.idle.status == "uncertain"
     assert x.idle.value == Fraction(10**9, 24000) - 1000
     assert z.max_rate.value == 2000
+    fix = cfg.fix(z, "idle", Fraction(300_000))
+    assert "DEFAULT_MAX_FEEDRATE" in fix and "MAXIMUM_STEPPER_RATE" not in fix
 
 
 def test_marlin_hangprinter_d_anchor_is_a_stepper(tmp_path: Path) -> None:
