@@ -529,8 +529,11 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     figs = _figures(results, dims, era, pulse_name, post_name)
     infos = {d.axis: {"driver type": " or ".join(f"{k} ({w})" for k, w, _ in d.options)}
              for d in drivers}  # fmt: skip
-    sustained = {d.axis: _sustained_rate(h, d.axis, drivers, figs.rate, infos[d.axis])
-                 for d in drivers}  # fmt: skip
+    asked = {d.axis: _sustained_rate(h, d.axis, drivers, figs.rate, infos[d.axis])
+             for d in drivers}  # fmt: skip
+    sustained = {a: r if r is None or figs.rate.value is None or r.hz < figs.rate.value else None
+                 for a, r in asked.items()}  # fmt: skip
+    figs = _outrun(figs, asked)
     packing = _multistepping(h)
     if packing[0] > 1:
         notes.append(f"multi-stepping ({packing[1]}): up to {packing[0]} steps per interrupt, "
@@ -790,6 +793,26 @@ def _axis_idle(
                       "Bresenham steps it on the leading axis's events; " + _ISR)  # fmt: skip
 
 
+def _outrun(figs: _Figures, asked: dict[str, _Sustained | None]) -> _Figures:
+    """An axis whose steps/unit x feedrate is over 1 / (pulse + low) asks the interrupt for
+    more steps than its waits can space: ``isr()`` runs late and takes the next interrupt's
+    first step at once ("Advance pulses if not enough time to wait for the next ISR"), after
+    no low-time wait. In a move that axis leads, every axis steps on its events: the low time
+    is then not enforced (the figure is kept as what the settings ask for)."""
+    pulse, low = figs.pulse.value, figs.idle.value
+    if not pulse or not low or figs.idle.status == "not_enforced":
+        return figs
+    cap = _GIGA / (pulse + low)
+    fast = [f"{a} {float(r.hz):g} Hz ({r.how})" for a, r in asked.items() if r and r.hz > cap]
+    if not fast:
+        return figs
+    why = (f"{', '.join(fast)} over the {float(cap):g} Hz that 1 / (pulse + low) allows: the "
+           "interrupt runs late and steps again with no low-time wait (stepper.cpp isr(), "
+           "pulse_phase_isr's first step)")  # fmt: skip
+    idle = not_enforced(figs.idle.setting, why, figs.idle.where, value=low, unit=figs.idle.unit)
+    return _Figures(figs.pulse, idle, figs.setup, figs.pre, figs.hold, figs.rate)
+
+
 def _coupled(h: Headers) -> set[str]:
     """The steppers whose motion kinematics couple (steps/unit x feedrate bounds none)."""
     return {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
@@ -816,8 +839,8 @@ class _Sustained:
 def _sustained_rate(
     h: Headers, axis: str, drivers: list[_Driver], global_rate: Guaranteed, info: dict[str, str]
 ) -> _Sustained | None:
-    """Steps/unit x max feedrate (Hz) of an uncoupled axis below the driver rate (the planner
-    keeps every axis's speed under its ``max_feedrate_mm_s``), else None."""
+    """Steps/unit x max feedrate (Hz) of an uncoupled axis (the planner keeps every axis's
+    speed under its ``max_feedrate_mm_s``), else None."""
     spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
     base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
     if base in _coupled(h) or spu is None or feed is None:
@@ -835,10 +858,7 @@ def _sustained_rate(
     f = feed[0][min(index, len(feed[0]) - 1)]
     info["steps/unit"] = f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {spu[1]})"
     info["max feedrate"] = f"{float(f):g} mm/s (DEFAULT_MAX_FEEDRATE, {feed[1]})"
-    hz = s * f
-    if global_rate.value is not None and hz >= global_rate.value:
-        return None
-    return _Sustained(hz, feed[1], f"{float(s):g} steps/unit x {float(f):g} mm/s")
+    return _Sustained(s * f, feed[1], f"{float(s):g} steps/unit x {float(f):g} mm/s")
 
 
 def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:

@@ -107,14 +107,14 @@ _ONE_T_WHY = ("RepRapFirmware before 1.21 reads one M569 T value, the minimum pu
 #: platform.GetNumSmartDrivers() - XYZ_AXES)`` with smart drivers ("don't default dumb drivers
 #: to extruders"), ``MaxExtruders`` without (a Duet 2 alone has 5 smart drivers: 2 extruders,
 #: on drivers 3 and 4; a DueX adds more); 3.x: ``numExtruders = NumDefaultExtruders``
-#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0, 1 or 2 in the
+#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0 to 3 in the
 #: indexed ones); the latest Pins files (Pins_DuetNG.h @ 17a42594, Pins_Duet3_MB6HC.h @
 #: 0ab87481) define none. Which of these applies needs the version and board, so only an E0 the
 #: file gives M92/M203 values is read (on driver 3, the first after X/Y/Z), with this note.
 _DEFAULT_EXTRUDERS = (
     "no M584 E: E0 on driver 3 assumed, other extruders not read; RepRapFirmware's default "
     "extruders depend on its version and board (2.0x: the smart drivers minus 3, 2 on a Duet 2; "
-    "3.x: the board's NumDefaultExtruders, 0 to 2; later releases: not established): give M584 E… to decide"
+    "3.x: the board's NumDefaultExtruders, 0 to 3 in the Pins files read; later releases: not established): give M584 E… to decide"
 )
 _DUET2_EXTRUDERS = (
     "no M584 E: {at} states RepRapFirmware {version} on a {board}: GCodes::Init makes "

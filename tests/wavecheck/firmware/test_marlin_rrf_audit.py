@@ -249,3 +249,18 @@ def test_rrf_m569_t_is_read_as_the_stated_version_reads_it(
     assert (x.pulse.value, x.idle.value, x.dir_setup.value) == figures
     if version < "1.21":
         assert x.dir_setup.status == x.dir_hold.status == "not_enforced"
+
+
+def test_marlin_an_axis_faster_than_the_waits_leaves_the_low_time_unenforced() -> None:
+    """200/Wanhao/Duplicator_i3_2.1 lines 732/739: E0 100 steps/mm x 10000 mm/s = 1 MHz, over
+    the 250 kHz that 1 / (2 us pulse + 2 us low) allows. In a move E leads, the interrupt cannot
+    keep its schedule: isr() runs the pulse phase again at once ("Advance pulses if not enough
+    time to wait for the next ISR"), and an interrupt's first step waits no low time
+    (pulse_phase_isr: AWAIT_LOW_PULSE after firstStep only). The 2 us low time was a PASS."""
+    cfg = read_firmware(CORPUS / "marlin/200/Wanhao/Duplicator_i3_2.1/Configuration.h")
+    for axis in ("X", "E0"):
+        idle = cfg.axis(axis).idle
+        assert idle.status == "not_enforced" and idle.value == 2000  # a FAIL under it stands
+        assert "E0 1e+06 Hz" in idle.note
+    a_sane_one = read_firmware(CORPUS / "marlin/200/Anet/A8/Configuration.h").axis("X").idle
+    assert a_sane_one.status == "derived" and a_sane_one.value == 2000
