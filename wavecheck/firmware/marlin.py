@@ -529,7 +529,7 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     figs = _figures(results, dims, era, pulse_name, post_name)
     infos = {d.axis: {"driver type": " or ".join(f"{k} ({w})" for k, w, _ in d.options)}
              for d in drivers}  # fmt: skip
-    asked = {d.axis: _sustained_rate(h, d.axis, drivers, figs.rate, infos[d.axis])
+    asked = {d.axis: _sustained_rate(h, d.axis, drivers, infos[d.axis])
              for d in drivers}  # fmt: skip
     sustained = {a: r if r is None or figs.rate.value is None or r.hz < figs.rate.value else None
                  for a, r in asked.items()}  # fmt: skip
@@ -837,7 +837,7 @@ class _Sustained:
 
 
 def _sustained_rate(
-    h: Headers, axis: str, drivers: list[_Driver], global_rate: Guaranteed, info: dict[str, str]
+    h: Headers, axis: str, drivers: list[_Driver], info: dict[str, str]
 ) -> _Sustained | None:
     """Steps/unit x max feedrate (Hz) of an uncoupled axis (the planner keeps every axis's
     speed under its ``max_feedrate_mm_s``), else None."""
