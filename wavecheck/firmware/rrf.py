@@ -96,7 +96,10 @@ _DUET2 = ("duet wifi", "duet ethernet", "duet 2 wifi", "duet 2 ethernet")
 #: and DDA::Step waits that many clocks before raising STEP (since it was lowered) and before
 #: lowering it: the high and the low time. DIR is updated in step 4 ("update the direction pins
 #: where necessary ... We assume that meeting the direction pin hold time is not a problem"),
-#: between the two, while STEP is high: no DIR setup or hold is kept.
+#: between the two, while STEP is high: no DIR setup or hold is kept. From 1.21 (2.0x: GCodes
+#: ``gb.GetFloatArray(timings, numTimings, true)`` then ``numTimings != 4`` -> "bad timing
+#: parameter"; GCodeBuffer::GetFloatArray pads one entry to all four, "Special case if there is
+#: one entry"; 3.x: ``numTimings == 1`` copied, else 4 required) T is one value or four.
 _ONE_T = (1, 21)
 _ONE_T_WHY = ("RepRapFirmware before 1.21 reads one M569 T value, the minimum pulse width, for "
               "the high and the low time, and may change DIR while STEP is high (DDA::Step; 1.21 "
