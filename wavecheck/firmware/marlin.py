@@ -42,7 +42,7 @@ import itertools
 import os
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 
@@ -751,10 +751,9 @@ def _axis(
                               f"; one step per interrupt ({packing[1]})"
                               if packing[0] == 1 else ""))  # fmt: skip
     elif sustained is not None:
-        rate = Guaranteed(rate.value, rate.setting, rate.where, "Hz", rate.status,
-                          f"{rate.note}; {packing[1]}: the steps of one interrupt are spaced by "
-                          f"the driver timing, so this axis's {float(sustained.hz):g} Hz "
-                          f"({sustained.how}) is only its sustained rate")  # fmt: skip
+        rate = replace(rate, note=f"{rate.note}; {packing[1]}: the steps of one interrupt are "
+                       f"spaced by the driver timing, so this axis's {float(sustained.hz):g} Hz "
+                       f"({sustained.how}) is only its sustained rate")  # fmt: skip
     return GeneratorGuarantee(
         axis=axis,
         pulse=figs.pulse,
