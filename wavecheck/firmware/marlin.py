@@ -187,6 +187,27 @@ _PULSE_SHORT = {
         "phase (stepper_pulse_phase_isr, MIN_PULSE_TICKS; HAL/AVR/timers.h:35 F_CPU / 8)",
     ),
 }
+#: How far the low time may fall short, waited by the same timer. 2020 rewrite: START_LOW_PULSE
+#: after PULSE_STOP, AWAIT_LOW_PULSE until PULSE_LOW_TICK_COUNT = NS_TO_PULSE_TIMER_TICKS(
+#: _MIN_PULSE_LOW_NS - TIMER_SETUP_NS) ticks have passed: the pulse's rounding and phase, 1.5
+#: ticks. Before (1.1.9/2.0.0): ``pulse_end += ADDED_STEP_TICKS`` with ADDED_STEP_TICKS =
+#: MIN_STEPPER_PULSE_CYCLES / PULSE_TIMER_PRESCALE - MIN_PULSE_TICKS (stepper.h, integer
+#: division: up to 1 tick lost) counted from the previous target, not from the falling edge,
+#: at any phase (1 tick): 2 ticks, and a high wait that overruns its target takes from it.
+_LOW_SHORT = {
+    False: (
+        _PULSE_SHORT[False][0],
+        "1.5 ticks of a 2 MHz pulse timer: PULSE_LOW_TICK_COUNT is NS_TO_PULSE_TIMER_TICKS "
+        "(nearest tick) and AWAIT_LOW_PULSE counts whole ticks from any phase "
+        "(Marlin/src/module/stepper.cpp; HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+    True: (
+        2 * _PULSE_TICK_NS,
+        "2 ticks of a 2 MHz pulse timer: ADDED_STEP_TICKS truncates cycles to ticks and the "
+        "wait counts from the high wait's target at any phase (stepper_pulse_phase_isr, "
+        "stepper.h ADDED_STEP_TICKS; HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+}
 #: Marlin's eras, newest first.
 ERAS: tuple[Era, ...] = (
     Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
@@ -628,9 +649,10 @@ def _figures(
         pulse = not_enforced(name, f"a 0 pulse is no wait ({t.why or at})", at, unit=unit)
     t, s = pick(lambda x: x.low)
     if t.low:
-        idle = Guaranteed(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
-                          "Hz", "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), "
-                          "enforced between pulses of one interrupt")  # fmt: skip
+        short, why = _LOW_SHORT[era.old_pulse_code]
+        idle = uncertain(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
+                         "Hz", short, why, "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, "
+                         "pulse), waited between the steps of one interrupt")  # fmt: skip
     else:
         idle = not_enforced("MAXIMUM_STEPPER_RATE", "the rate spaces pulse starts; the high "
                             f"time is not bounded, so neither is the low time ({_OLD_PULSE})")  # fmt: skip
