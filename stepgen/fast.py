@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from stepgen.reference import (
+    HALF_STEP,
     ONE_STEP,
     PICKOFF,
     Channel,
@@ -49,6 +50,7 @@ __all__ = ["run_fast"]
 
 _DESC = 9  #: numbers describing a chunk for pass 2
 _STEPS_BLOCK = 1 << 14  #: steps of fast chunks solved at a time in pass 2
+_TRACK = True  #: pass 1 runs settled position-mode stretches through :func:`_track`
 
 #: A fast chunk that stepped, whose last step is found only when an exact chunk follows:
 #: (k0, m, accum0, a0, sgn, d_eff, span, counts at its end, (timer1, timer2, timer3) loads).
@@ -93,7 +95,10 @@ def run_fast(
 
     Pass 1 keeps the channel state in local variables. Until update-freq has settled (the first
     one or two calls re-round the timing params, §3) it calls the reference update-freq; after
-    that it runs the same code inlined (steps 5–9 of §4 with nothing left to re-round).
+    that it runs the same code inlined (steps 5–9 of §4 with nothing left to re-round). Once
+    the clamps' limits have settled too, position mode runs in :func:`_track` (the follower
+    and the closed form only, nothing else per servo period) for as long as the chunks stay
+    fast.
     """
     config.validate()
     kind = config.kind()
@@ -111,6 +116,8 @@ def run_fast(
     # per-chunk descriptors for pass 2, _DESC numbers each: k0, m, a0, sgn, d_eff, span, dir,
     # step_len, accum0
     desc: list[int] = []
+    blocks: list[np.ndarray] = []  # descriptor columns of the chunks before those in ``desc``
+    n_blocked = 0  # chunks in ``blocks``
     exact: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     # lazy timers: values after invocation t_ref, or a pending fast chunk
@@ -148,13 +155,55 @@ def run_fast(
         ch.rawcount = accum >> PICKOFF
 
     report = current()
-    for ci in range(len(bounds) - 1):
+    n_chunks = len(bounds) - 1
+    pos_list: list[float] = []  # the position commands in steps, for _track
+    ci = 0
+    while ci < n_chunks:
         k0, k1 = bounds[ci], bounds[ci + 1]
         if not ci & 1023:
             report(k0, n_periods)
         if k1 <= k0:
+            ci += 1
             continue
-        if ci >= first_update_at:
+        updated = False  # update-freq already run for chunk ci (by _track)
+        if (
+            _TRACK
+            and limits is not None  # (then steady)
+            and pos_mode
+            and n_cmd
+            and ci >= first_update_at
+            and not ch.hold_dds
+            and ch.enable
+            and int(limits[1] * accelscale)
+        ):
+            if not pos_list:  # value · pos_scale, as update-freq multiplies
+                pos_list = (cmds * pos_scale).tolist()
+                pos_list += pos_list[-1:] * (n_chunks + 1 - n_cmd)
+            deltalim = int(limits[1] * accelscale)
+            rec: tuple[list[int], list[int], list[int]] = ([], [], [])
+            ci1, u, accum, addval, freq, old_pos_cmd, target, updated = _track(
+                bounds, ci, min(n_chunks, (ci | 1023) + 1), pos_list, u,
+                (accum, addval, freq, old_pos_cmd, target, curr_dir),
+                (limits[0], limits[1], dt, recip_dt, freqscale, deltalim), rec,
+            )  # fmt: skip
+            if ci1 > ci:
+                if desc:
+                    blocks.append(_columns(desc))
+                    n_blocked += len(desc) // _DESC
+                    desc.clear()
+                block, moved, last = _tracked(bounds, ci, ci1, rec, accum, deltalim, curr_dir, ch)
+                blocks.append(block)
+                n_blocked += ci1 - ci
+                steps_total += abs(moved)
+                if last is not None:
+                    pending = last
+                if phased:
+                    state = (state + moved) % cycle
+                ci = ci1
+            if not updated:
+                continue
+            k0, k1 = bounds[ci], bounds[ci + 1]
+        if ci >= first_update_at and not updated:
             value = cmd_list[u if u < n_cmd else n_cmd - 1] if n_cmd else 0.0
             u += 1
             if steady:
@@ -264,6 +313,7 @@ def run_fast(
                     state = (state + delta) % cycle
             accum = accum1
             addval = a_end
+            ci += 1
             continue
         # exact chunk: make the timers concrete, then run the reference make-pulses
         describe((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum))
@@ -285,14 +335,16 @@ def run_fast(
                 steps_total += 1
             inc[i] = ch.accum - before
             dirs[i] = ch.curr_dir
-        exact[len(desc) // _DESC - 1] = (inc, dirs)
+        exact[n_blocked + len(desc) // _DESC - 1] = (inc, dirs)
         accum, addval, curr_dir, state = ch.accum, ch.addval, ch.curr_dir, ch.state
         # timers after this chunk, relative to its last invocation
         t_vals = (ch.timer1, ch.timer2, ch.timer3)
         t_ref = k1 - 1
+        ci += 1
 
     to_ch()
-    toggles, counts_at, counts_val = _pass2(kind, base, n_periods, desc, exact)
+    cols = np.concatenate([*blocks, _columns(desc)], axis=1)
+    toggles, counts_at, counts_val = _pass2(kind, base, n_periods, cols, exact)
     run = InvocationRun(
         config=config,
         n_periods=n_periods,
@@ -301,12 +353,164 @@ def run_fast(
         counts_at=counts_at,
         counts_val=counts_val,
         steps=steps_total,
-        fast_chunks=len(desc) // _DESC - len(exact),
+        fast_chunks=cols.shape[1] - len(exact),
         exact_chunks=len(exact),
     )
     run.final = final_state(comp)
     run.warnings = list(ch.warnings)
     return run
+
+
+def _columns(desc: list[int]) -> np.ndarray:
+    """The descriptors ``desc`` (``_DESC`` numbers a chunk) as columns: one row per number."""
+    return np.fromiter(desc, dtype=np.int64, count=len(desc)).reshape(-1, _DESC).T
+
+
+def _track(
+    bounds: list[int],
+    ci: int,
+    stop: int,
+    pos_list: list[float],
+    u: int,
+    st: tuple[int, int, float, float, int, int],
+    consts: tuple[float, float, float, float, float, int],
+    rec: tuple[list[int], list[int], list[int]],
+) -> tuple[int, int, int, int, float, float, int, bool]:
+    """Pass 1 over settled position-mode chunks ``ci`` … ``stop − 1`` while each is fast.
+
+    The same update-freq as the general loop (:func:`stepgen.reference.follow_position`
+    inlined, the same floating-point operations in the same order, so the same bits) and the
+    same closed form of the chunk, with nothing else per servo period: it records the
+    accumulator, addval and target at each chunk's start in ``rec``; :func:`_tracked` makes
+    the chunks' descriptors from them with numpy. It stops before a chunk of no periods, at
+    ``stop`` (progress reports), or after the update of a chunk that is not fast (the clamps'
+    limits are settled: the caller checks, and passes them in ``consts``).
+
+    ``st``: accum, addval, freq, old_pos_cmd, target, curr_dir; ``consts``: max_freq, max_ac,
+    dt, recip_dt, freqscale and deltalim (≠ 0). Returns the chunk it stopped at, the next
+    command index, accum, addval, freq, old_pos_cmd, target, and whether that chunk's update
+    has run.
+    """
+    accum, addval, freq, old_pos_cmd, target, curr_dir = st
+    max_freq, max_ac, dt, recip_dt, freqscale, d = consts
+    to_steps = 1.0 / (1 << PICKOFF)
+    ac_dt = max_ac * dt
+    acc_rec, a0_rec, tg_rec = (r.append for r in rec)
+    k0 = bounds[ci]
+    while ci < stop:
+        k1 = bounds[ci + 1]
+        m = k1 - k0
+        if m <= 0:
+            break
+        # update-freq, position mode (reference.follow_position, the same operations)
+        pos_cmd = pos_list[u]
+        vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
+        curr_pos = (accum - HALF_STEP) * to_steps
+        match_ac = max_ac if vel_cmd > freq else -max_ac
+        match_time = (vel_cmd - freq) / match_ac
+        avg_v = (vel_cmd + freq) * 0.5
+        est_out = curr_pos + avg_v * match_time
+        est_cmd = pos_cmd + vel_cmd * (match_time - 1.5 * dt)
+        est_err = est_out - est_cmd
+        if match_time < dt:
+            if abs(est_err) < 0.0001:
+                new_vel = vel_cmd
+            else:
+                new_vel = vel_cmd - 0.5 * est_err * recip_dt
+                if new_vel > freq + ac_dt:
+                    new_vel = freq + ac_dt
+                elif new_vel < freq - ac_dt:
+                    new_vel = freq - ac_dt
+        else:
+            dv = -2.0 * match_ac * dt
+            dp = dv * match_time
+            if abs(est_err + dp * 2.0) < abs(est_err):
+                match_ac = -match_ac
+            new_vel = freq + match_ac * dt
+        if new_vel > max_freq:
+            new_vel = max_freq
+        elif new_vel < -max_freq:
+            new_vel = -max_freq
+        freq = new_vel
+        old_pos_cmd = pos_cmd
+        u += 1
+        target = int(freq * freqscale)
+        # the chunk's closed form (run_fast's, with d ≠ 0), then whether it is fast
+        a0 = addval
+        if target >= a0:
+            span = target - a0
+            if m * d <= span:
+                a_end = a0 + m * d
+                total = m * a0 + d * (m * (m + 1) // 2)
+            else:
+                full = span // d
+                a_end = target
+                total = m * a0 + (d * (full * (full + 1) // 2) + span * (m - full))
+        else:
+            span = a0 - target
+            if m * d <= span:
+                a_end = a0 - m * d
+                total = m * a0 - d * (m * (m + 1) // 2)
+            else:
+                full = span // d
+                a_end = target
+                total = m * a0 - (d * (full * (full + 1) // 2) + span * (m - full))
+        if a0 >= 0:
+            fast = (
+                a_end >= 0
+                and a0 <= ONE_STEP
+                and a_end <= ONE_STEP
+                and (curr_dir == 1 or (a0 == 0 and a_end == 0))
+            )
+        else:
+            fast = a_end < 0 and a0 >= -ONE_STEP and a_end >= -ONE_STEP and curr_dir == -1
+        if not fast:
+            return ci, u, accum, addval, freq, old_pos_cmd, target, True
+        acc_rec(accum)
+        a0_rec(a0)
+        tg_rec(target)
+        accum += total
+        addval = a_end
+        ci += 1
+        k0 = k1
+    return ci, u, accum, addval, freq, old_pos_cmd, target, False
+
+
+def _tracked(
+    bounds: list[int],
+    ci0: int,
+    ci1: int,
+    rec: tuple[list[int], list[int], list[int]],
+    accum: int,
+    d: int,
+    curr_dir: int,
+    ch: Channel,
+) -> tuple[np.ndarray, int, _Pending | None]:
+    """The fast chunks ``ci0`` … ``ci1 − 1`` that :func:`_track` ran (``rec``: their starting
+    accum, addval and target; ``accum``: the accumulator after them): their descriptor columns,
+    the count they moved (one way: addval keeps its sign through fast chunks), and the last one
+    that stepped as a pending chunk (None if none did)."""
+    k = np.array(bounds[ci0 : ci1 + 1], dtype=np.int64)
+    k0, m = k[:-1], np.diff(k)
+    acc, a0, tg = (np.array(r, dtype=np.int64) for r in rec)
+    sgn = np.where(tg >= a0, 1, -1)
+    span = np.abs(tg - a0)
+    n = ci1 - ci0
+    step_len = ch.step_len
+    block = np.stack(
+        (k0, m, a0, sgn, np.full(n, d), span, np.full(n, curr_dir), np.full(n, step_len), acc)
+    )
+    counts = np.append(acc >> PICKOFF, accum >> PICKOFF)
+    stepped = np.flatnonzero(counts[1:] != counts[:-1])
+    if not len(stepped):
+        return block, 0, None
+    j = int(stepped[-1])
+    hold = step_len + ch.dir_hold_dly
+    last: _Pending = (
+        int(k0[j]), int(m[j]), int(acc[j]), int(a0[j]), int(sgn[j]), d, int(span[j]),
+        int(counts[j + 1]), (step_len, hold, hold + ch.dir_setup),
+    )  # fmt: skip
+    return block, int(counts[-1] - counts[0]), last
 
 
 def _addval_sum(i: Any, a0: Any, sgn: Any, d: Any, span: Any, full: Any) -> Any:
@@ -417,7 +621,7 @@ def _pass2(
     kind: StepType,
     base: int,
     n_periods: int,
-    desc: list[int],
+    cols: np.ndarray,
     exact: dict[int, tuple[np.ndarray, np.ndarray]],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """Each pin's toggles and the ``counts`` changes from the chunk descriptors, step by step.
@@ -428,7 +632,6 @@ def _pass2(
     up/down (type 1) carry each pulse on the line of the direction at its step (the direction
     cannot change while timer2 ≥ timer1 runs), and a phase type's state moves by the direction
     at each step."""
-    cols = np.fromiter(desc, dtype=np.int64, count=len(desc)).reshape(-1, _DESC).T
     k0, dirs, lens, acc0 = cols[0], cols[6], cols[7], cols[8]
     nper = -(-lens // base)  # ceil(step_len / P): the periods timer1 keeps STEP high
     is_fast = np.ones(cols.shape[1], dtype=bool)
