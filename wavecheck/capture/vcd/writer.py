@@ -374,8 +374,8 @@ def _header(
     dump = [f"{last0[j]}{idents[j]}" for j in range(len(wires))]
     for j, vec in enumerate(vectors, len(wires)):
         lines.append(f"$var {vec.var_type} {vec.size} {idents[j]} {vec.name} $end")
-        value = last0[j] + (1 << vec.size) if last0[j] < 0 else last0[j]
-        dump.append(f"b{value:b} {idents[j]}")
+        number = last0[j] + (1 << vec.size) if last0[j] < 0 else last0[j]
+        dump.append(f"b{number:b} {idents[j]}")
     lines += ["$upscope $end", "$enddefinitions $end", "#0", "$dumpvars", *dump, "$end", ""]
     return "\n".join(lines)
 
