@@ -196,6 +196,7 @@ def _parse_plain_lines(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
 def _parse_rows(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """:func:`parse_command_csv` row by row with the ``csv`` module (the plain reader)."""
     import csv  # only for files the whole-file path does not take
+
     times: list[float] = []
     values: list[float] = []
     try:
