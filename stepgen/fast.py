@@ -157,6 +157,7 @@ def run_fast(
     report = current()
     n_chunks = len(bounds) - 1
     pos_list: list[float] = []  # the position commands in steps, for _track
+    lengths: list[int] = []  # the chunks' periods, for _track
     ci = 0
     while ci < n_chunks:
         k0, k1 = bounds[ci], bounds[ci + 1]
@@ -179,10 +180,12 @@ def run_fast(
             if not pos_list:  # value · pos_scale, as update-freq multiplies
                 pos_list = (cmds * pos_scale).tolist()
                 pos_list += pos_list[-1:] * (n_chunks + 1 - n_cmd)
+                lengths = np.diff(bounds).tolist()
             deltalim = int(limits[1] * accelscale)
-            rec: tuple[list[int], list[int], list[int]] = ([], [], [])
+            rec: tuple[list[int], list[int]] = ([], [])
+            accum0 = accum
             ci1, u, accum, addval, freq, old_pos_cmd, target, updated = _track(
-                bounds, ci, min(n_chunks, (ci | 1023) + 1), pos_list, u,
+                lengths, ci, min(n_chunks, (ci | 1023) + 1), pos_list, u,
                 (accum, addval, freq, old_pos_cmd, target, curr_dir),
                 (limits[0], limits[1], dt, recip_dt, freqscale, deltalim), rec,
             )  # fmt: skip
@@ -191,7 +194,9 @@ def run_fast(
                     blocks.append(_columns(desc))
                     n_blocked += len(desc) // _DESC
                     desc.clear()
-                block, moved, last = _tracked(bounds, ci, ci1, rec, accum, deltalim, curr_dir, ch)
+                block, moved, last = _tracked(
+                    bounds, ci, ci1, rec, accum0, accum, deltalim, curr_dir, ch
+                )
                 blocks.append(block)
                 n_blocked += ci1 - ci
                 steps_total += abs(moved)
@@ -367,27 +372,28 @@ def _columns(desc: list[int]) -> np.ndarray:
 
 
 def _track(
-    bounds: list[int],
+    lengths: list[int],
     ci: int,
     stop: int,
     pos_list: list[float],
     u: int,
     st: tuple[int, int, float, float, int, int],
     consts: tuple[float, float, float, float, float, int],
-    rec: tuple[list[int], list[int], list[int]],
+    rec: tuple[list[int], list[int]],
 ) -> tuple[int, int, int, int, float, float, int, bool]:
     """Pass 1 over settled position-mode chunks ``ci`` … ``stop − 1`` while each is fast.
 
     The same update-freq as the general loop (:func:`stepgen.reference.follow_position`
     inlined, the same floating-point operations in the same order, so the same bits) and the
-    same closed form of the chunk, with nothing else per servo period: it records the
-    accumulator, addval and target at each chunk's start in ``rec``; :func:`_tracked` makes
-    the chunks' descriptors from them with numpy. It stops before a chunk of no periods, at
+    same closed form of the chunk, with nothing else per servo period: it records addval at
+    each chunk's start and its target in ``rec``; :func:`_tracked` makes the chunks'
+    descriptors from them with numpy. It stops before a chunk of no periods, at
     ``stop`` (progress reports), or after the update of a chunk that is not fast (the clamps'
     limits are settled: the caller checks, and passes them in ``consts``).
 
     ``st``: accum, addval, freq, old_pos_cmd, target, curr_dir; ``consts``: max_freq, max_ac,
-    dt, recip_dt, freqscale and deltalim (≠ 0). Returns the chunk it stopped at, the next
+    dt, recip_dt, freqscale and deltalim (≠ 0); ``lengths``: each chunk's base periods.
+    Returns the chunk it stopped at, the next
     command index, accum, addval, freq, old_pos_cmd, target, and whether that chunk's update
     has run.
     """
@@ -395,15 +401,12 @@ def _track(
     max_freq, max_ac, dt, recip_dt, freqscale, d = consts
     to_steps = 1.0 / (1 << PICKOFF)
     ac_dt = max_ac * dt
-    acc_rec, a0_rec, tg_rec = (r.append for r in rec)
-    k0 = bounds[ci]
-    while ci < stop:
-        k1 = bounds[ci + 1]
-        m = k1 - k0
+    a0_rec, tg_rec = (r.append for r in rec)
+    done = 0
+    for pos_cmd, m in zip(pos_list[u : u + stop - ci], lengths[ci:stop], strict=True):
         if m <= 0:
             break
         # update-freq, position mode (reference.follow_position, the same operations)
-        pos_cmd = pos_list[u]
         vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
         curr_pos = (accum - HALF_STEP) * to_steps
         match_ac = max_ac if vel_cmd > freq else -max_ac
@@ -433,7 +436,6 @@ def _track(
             new_vel = -max_freq
         freq = new_vel
         old_pos_cmd = pos_cmd
-        u += 1
         target = int(freq * freqscale)
         # the chunk's closed form (run_fast's, with d ≠ 0), then whether it is fast
         a0 = addval
@@ -465,37 +467,43 @@ def _track(
         else:
             fast = a_end < 0 and a0 >= -ONE_STEP and a_end >= -ONE_STEP and curr_dir == -1
         if not fast:
-            return ci, u, accum, addval, freq, old_pos_cmd, target, True
-        acc_rec(accum)
+            return ci + done, u + done + 1, accum, addval, freq, old_pos_cmd, target, True
         a0_rec(a0)
         tg_rec(target)
         accum += total
         addval = a_end
-        ci += 1
-        k0 = k1
-    return ci, u, accum, addval, freq, old_pos_cmd, target, False
+        done += 1
+    return ci + done, u + done, accum, addval, freq, old_pos_cmd, target, False
 
 
 def _tracked(
     bounds: list[int],
     ci0: int,
     ci1: int,
-    rec: tuple[list[int], list[int], list[int]],
+    rec: tuple[list[int], list[int]],
+    accum0: int,
     accum: int,
     d: int,
     curr_dir: int,
     ch: Channel,
 ) -> tuple[np.ndarray, int, _Pending | None]:
     """The fast chunks ``ci0`` … ``ci1 − 1`` that :func:`_track` ran (``rec``: their starting
-    accum, addval and target; ``accum``: the accumulator after them): their descriptor columns,
-    the count they moved (one way: addval keeps its sign through fast chunks), and the last one
-    that stepped as a pending chunk (None if none did)."""
+    addval and their target; ``accum0``, ``accum``: the accumulator before and after them):
+    their descriptor columns, the count they moved (one way: addval keeps its sign through
+    fast chunks), and the last one that stepped as a pending chunk (None if none did). Each
+    chunk's starting accumulator is ``accum0`` plus the closed-form sums of the chunks before."""
     k = np.array(bounds[ci0 : ci1 + 1], dtype=np.int64)
     k0, m = k[:-1], np.diff(k)
-    acc, a0, tg = (np.array(r, dtype=np.int64) for r in rec)
+    a0, tg = (np.array(r, dtype=np.int64) for r in rec)
     sgn = np.where(tg >= a0, 1, -1)
     span = np.abs(tg - a0)
     n = ci1 - ci0
+    sums = _addval_sum(m, a0, sgn, d, span, span // d)
+    acc = np.empty(n, dtype=np.int64)
+    acc[0] = accum0
+    np.cumsum(sums[:-1], out=acc[1:])
+    acc[1:] += accum0
+    assert int(acc[-1] + sums[-1]) == accum  # the same closed form as _track's
     step_len = ch.step_len
     block = np.stack(
         (k0, m, a0, sgn, np.full(n, d), span, np.full(n, curr_dir), np.full(n, step_len), acc)
