@@ -579,7 +579,11 @@ def _chunk_steps(
 
     i = _float_root(q, a0, sgn, d, span, full, need)
     guess = np.clip(np.nan_to_num(np.ceil(i), nan=1.0), 1, mm).astype(np.int64)
-    wrong = np.flatnonzero(~reached(guess) | ((guess > 1) & reached(guess - 1)))
+    # right where reached at guess and not at guess − 1: q·S(guess − 1) is q·S(guess) less
+    # q·addval(guess), addval(i) = a0 + sgn·min(i·d, span) (span is 0 where d is)
+    at = q * _addval_sum(guess, a0, sgn, d, span, full)
+    before = at - q * (a0 + sgn * np.minimum(guess * d, span))
+    wrong = np.flatnonzero((at < need) | ((guess > 1) & (before >= need)))
     if len(wrong):  # binary search where the float root missed
         lo, hi = np.ones(len(wrong), dtype=np.int64), mm[wrong]
         for _ in range(int(hi.max()).bit_length()):
@@ -650,8 +654,11 @@ def _pass2(
     c_at = s_at
     # the direction, chunk by chunk (exact chunks: period by period)
     d_at, d_val = k0[fast], dirs[fast]
+    s_dir = dirs[s_chunk]  # each step's direction: its chunk's (exact chunks: its period's)
     if exact:
-        parts: list[list[np.ndarray]] = [[s_at], [s_chunk], [c_at], [c_val], [d_at], [d_val]]
+        parts: list[list[np.ndarray]] = [
+            [s_at], [s_chunk], [s_dir], [c_at], [c_val], [d_at], [d_val]
+        ]  # fmt: skip
         for ci, (inc, e_dir) in exact.items():
             start = int(k0[ci])
             accum = np.cumsum(inc) + acc0[ci]
@@ -660,17 +667,16 @@ def _pass2(
             counts = accum >> PICKOFF
             moved = np.flatnonzero(counts != (prev >> PICKOFF))
             for part, value in zip(parts, (
-                steps + start, np.full(len(steps), ci), moved + start, counts[moved],
-                np.arange(start, start + len(inc)), e_dir,
+                steps + start, np.full(len(steps), ci), e_dir[steps], moved + start,
+                counts[moved], np.arange(start, start + len(inc)), e_dir,
             ), strict=True):  # fmt: skip
                 part.append(value)
-        s_at, s_chunk, c_at, c_val, d_at, d_val = (np.concatenate(p) for p in parts)
-        for at, rest in ((s_at, (s_chunk,)), (c_at, (c_val,)), (d_at, (d_val,))):
+        s_at, s_chunk, s_dir, c_at, c_val, d_at, d_val = (np.concatenate(p) for p in parts)
+        for at, rest in ((s_at, (s_chunk, s_dir)), (c_at, (c_val,)), (d_at, (d_val,))):
             order = np.argsort(at, kind="stable")
             at[:] = at[order]
             for x in rest:
                 x[:] = x[order]
-    s_dir = dirs[s_chunk] if not exact else _at(d_at, d_val, s_at)
     toggles: dict[str, np.ndarray] = {}
     if kind.kind == "phases":
         state = np.cumsum(s_dir) % max(kind.cycle, 1)
@@ -693,8 +699,3 @@ def _pass2(
             for pin, line in zip(kind.outputs, lines, strict=True):
                 toggles[pin] = _runs(s_at[line], ends[line], n_periods)
     return toggles, c_at, c_val
-
-
-def _at(at: np.ndarray, values: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The piecewise-constant series (``values[j]`` from ``at[j]`` on) at the indices ``t``."""
-    return values[np.searchsorted(at, t, side="right") - 1]
