@@ -541,7 +541,11 @@ def _put_bits(
         byte = (u[rows] >> np.uint64(8 * j)) & np.uint64(0xFF)
         words[end[rows] - 8 * (j + 1)] = _BYTE_CHARS[byte.astype(np.intp)]
     lead = nbits - 8 * whole
-    for c in range(int(lead.max()) if len(lead) else 0):
-        rows = np.flatnonzero(lead > c)
-        bit = (u[rows] >> (8 * whole[rows] + c).astype(np.uint64)) & np.uint64(1)
-        out[end[rows] - 8 * whole[rows] - 1 - c] = bit.astype(np.uint8) + np.uint8(ord("0"))
+    if not len(lead) or not int(lead.max()):
+        return
+    top = u >> (8 * whole).astype(np.uint64)  # the leading partial byte's bits
+    last = end - 8 * whole - 1  # where its lowest bit goes
+    for c in range(int(lead.max())):
+        rows = np.flatnonzero(lead > c) if c else np.flatnonzero(lead)
+        bit = (top[rows] >> np.uint64(c)) & np.uint64(1)
+        out[last[rows] - c] = bit.astype(np.uint8) + np.uint8(ord("0"))
