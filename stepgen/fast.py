@@ -400,7 +400,9 @@ def _track(
     accum, addval, freq, old_pos_cmd, target, curr_dir = st
     max_freq, max_ac, dt, recip_dt, freqscale, d = consts
     to_steps = 1.0 / (1 << PICKOFF)
-    ac_dt = max_ac * dt
+    ac_dt = max_ac * dt  # (the same products as the follower's, made once)
+    dt15 = 1.5 * dt
+    half, one, up = HALF_STEP, ONE_STEP, curr_dir == 1
     a0_rec, tg_rec = (r.append for r in rec)
     done = 0
     for pos_cmd, m in zip(pos_list[u : u + stop - ci], lengths[ci:stop], strict=True):
@@ -408,15 +410,15 @@ def _track(
             break
         # update-freq, position mode (reference.follow_position, the same operations)
         vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
-        curr_pos = (accum - HALF_STEP) * to_steps
+        curr_pos = (accum - half) * to_steps
         match_ac = max_ac if vel_cmd > freq else -max_ac
         match_time = (vel_cmd - freq) / match_ac
         avg_v = (vel_cmd + freq) * 0.5
         est_out = curr_pos + avg_v * match_time
-        est_cmd = pos_cmd + vel_cmd * (match_time - 1.5 * dt)
+        est_cmd = pos_cmd + vel_cmd * (match_time - dt15)
         est_err = est_out - est_cmd
         if match_time < dt:
-            if abs(est_err) < 0.0001:
+            if -0.0001 < est_err < 0.0001:  # abs(est_err) < 0.0001
                 new_vel = vel_cmd
             else:
                 new_vel = vel_cmd - 0.5 * est_err * recip_dt
@@ -458,14 +460,9 @@ def _track(
                 a_end = target
                 total = m * a0 - (d * (full * (full + 1) // 2) + span * (m - full))
         if a0 >= 0:
-            fast = (
-                a_end >= 0
-                and a0 <= ONE_STEP
-                and a_end <= ONE_STEP
-                and (curr_dir == 1 or (a0 == 0 and a_end == 0))
-            )
+            fast = 0 <= a_end <= one and a0 <= one and (up or (a0 == 0 and a_end == 0))
         else:
-            fast = a_end < 0 and a0 >= -ONE_STEP and a_end >= -ONE_STEP and curr_dir == -1
+            fast = -one <= a_end < 0 and a0 >= -one and curr_dir == -1
         if not fast:
             return ci + done, u + done + 1, accum, addval, freq, old_pos_cmd, target, True
         a0_rec(a0)
