@@ -48,10 +48,8 @@ _FAST_MAX_BITS = 62  # wider vectors: pyvcd
 _FAST_BLOCK = _REPORT_EVERY  # changes formatted at a time (memory stays bounded)
 # _BYTE_CHARS[b]: the 8 characters "0"/"1" of byte b, most significant first, as the
 # little-endian uint64 that puts them in that order in memory
-_BYTE_CHARS = np.array(
-    [sum((48 + ((b >> (7 - i)) & 1)) << (8 * i) for i in range(8)) for b in range(256)],
-    dtype=np.uint64,
-)
+_BITS = (np.arange(256, dtype=np.uint64)[:, None] >> np.arange(7, -1, -1, dtype=np.uint64)) & 1
+_BYTE_CHARS = ((_BITS + 48) << (8 * np.arange(8, dtype=np.uint64))).sum(axis=1, dtype=np.uint64)
 _POW10 = np.array([10**k for k in range(19)], dtype=np.int64)
 _VECTOR_TYPES = {"integer", "reg", "wire", "tri", "wor", "wand", "supply0", "supply1", "time"}
 _UNITS = ("s", "ms", "us", "ns", "ps", "fs")  # timescale units :func:`_header` writes itself
