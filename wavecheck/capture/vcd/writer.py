@@ -492,6 +492,7 @@ def _put_digits(
             top = high // 10**8
             parts = [parts[0], high - top * 10**8, top]
     col = 0
+    pos = end.copy()  # where each value's digit ``col`` goes
     for part in parts:
         q = part.astype(np.uint32)
         for _ in range(8):
@@ -501,7 +502,8 @@ def _put_digits(
             nq = q // np.uint32(10)
             digit = (q - nq * np.uint32(10)).astype(np.uint8)
             digit += np.uint8(ord("0"))
-            out[end[first:] - col] = digit[first:]
+            out[pos[first:]] = digit[first:]
+            pos -= 1
             q = nq
             col += 1
 
