@@ -543,9 +543,17 @@ def _put_bits(
     lead = nbits - 8 * whole
     if not len(lead) or not int(lead.max()):
         return
-    top = u >> (8 * whole).astype(np.uint64)  # the leading partial byte's bits
-    last = end - 8 * whole - 1  # where its lowest bit goes
-    for c in range(int(lead.max())):
-        rows = np.flatnonzero(lead > c) if c else np.flatnonzero(lead)
-        bit = (top[rows] >> np.uint64(c)) & np.uint64(1)
-        out[last[rows] - c] = bit.astype(np.uint8) + np.uint8(ord("0"))
+    # the leading partial byte's bits, lowest first, of the values that have one; a value
+    # leaves the set when its bits are written (lead is how many it has)
+    rows = np.flatnonzero(lead)
+    top = u[rows] >> (8 * whole[rows]).astype(np.uint64)
+    at_bit = end[rows] - 8 * whole[rows] - 1
+    left = lead[rows]
+    while len(rows):
+        out[at_bit] = (top & np.uint64(1)).astype(np.uint8) + np.uint8(ord("0"))
+        top >>= np.uint64(1)
+        at_bit -= 1
+        left -= 1
+        more = left > 0
+        if not more.all():
+            rows, top, at_bit, left = rows[more], top[more], at_bit[more], left[more]
