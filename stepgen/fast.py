@@ -567,6 +567,9 @@ def _chunk_steps(
     # q·S(i) >= need: counting up accum >= c·2^28; down −accum >= 1 − (c + 1)·2^28
     need = np.where(q > 0, count << PICKOFF, 1 - ((count + 1) << PICKOFF)) - q * acc0[chunk]
     ch = (a0, sgn, d, span, full)
+    # per chunk, for the float root: the sum over its ramp and the addval after it
+    at_full = _addval_sum(full, a0, sgn, d, span, full)[chunk]
+    after = (a0 + sgn * span)[chunk]
     a0, sgn, d, span, full = (x[chunk] for x in ch)
     mm = m[chunk]
 
@@ -574,7 +577,7 @@ def _chunk_steps(
         s = _addval_sum(i, a0[sel], sgn[sel], d[sel], span[sel], full[sel])
         return np.asarray(q[sel] * s >= need[sel])
 
-    i = _float_root(q, a0, sgn, d, span, full, need)
+    i = _float_root(q, a0, sgn, d, full, need, at_full, after)
     guess = np.clip(np.nan_to_num(np.ceil(i), nan=1.0), 1, mm).astype(np.int64)
     # right where reached at guess and not at guess − 1: q·S(guess − 1) is q·S(guess) less
     # q·addval(guess), addval(i) = a0 + sgn·min(i·d, span) (span is 0 where d is)
@@ -592,18 +595,18 @@ def _chunk_steps(
 
 
 def _float_root(
-    q: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, span: np.ndarray,
-    full: np.ndarray, need: np.ndarray,
+    q: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, full: np.ndarray,
+    need: np.ndarray, at_full: np.ndarray, after: np.ndarray,
 ) -> np.ndarray:  # fmt: skip
     """The real i with q·S(i) = need (see :func:`_fast_steps`), in floats: on the ramp
-    (h/2)·i² + (q·a0 + h/2)·i with h = q·sgn·d, after it linear at q·target a period."""
+    (h/2)·i² + (q·a0 + h/2)·i with h = q·sgn·d, after it (``full`` periods, the sum
+    ``at_full`` by then) linear at q·``after`` a period."""
     h = (q * sgn * d).astype(float)
     b = q * a0 + h / 2
     want = need.astype(float)
     with np.errstate(all="ignore"):
         i = 2 * want / (b + np.sqrt(np.maximum(b * b + 2 * h * want, 0.0)))
-        at_full = (q * _addval_sum(full, a0, sgn, d, span, full)).astype(float)
-        return np.where(i > full, full + (want - at_full) / (q * (a0 + sgn * span)), i)
+        return np.where(i > full, full + (want - (q * at_full).astype(float)) / (q * after), i)
 
 
 def _runs(starts: np.ndarray, ends: np.ndarray, n_periods: int) -> np.ndarray:
