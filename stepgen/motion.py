@@ -149,6 +149,9 @@ def parse_command_csv(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     return fast if fast is not None else _parse_rows(path)
 
 
+_CSV_PIECE = 1 << 16  #: characters of the command CSV split and converted at a time
+
+
 def _parse_plain_lines(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     """The rows of ``data`` when every line is two comma-separated fields without quotes (the
     first may be a header) that give finite numbers with times in order, else None. Fields
@@ -178,15 +181,24 @@ def _parse_plain_lines(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     if not body.endswith("\n"):
         body += "\n"
-    raw = np.frombuffer(body.encode("utf-8"), dtype=np.uint8)
-    seps = raw[(raw == ord(",")) | (raw == ord("\n"))]
-    if len(seps) % 2 or (seps[0::2] != ord(",")).any() or (seps[1::2] != ord("\n")).any():
-        return None
-    fields = body[:-1].replace("\n", ",").split(",")
-    try:
-        numbers = np.fromiter(map(float, fields), dtype=float, count=len(fields))
-    except ValueError:
-        return None
+    # a piece of whole lines at a time: its field strings are freed before the next piece
+    # is split, so their memory is reused instead of touched anew (~6 MB for 20 k lines)
+    parts = []
+    start = 0
+    while start < len(body):
+        stop = body.find("\n", start + _CSV_PIECE) + 1 or len(body)
+        piece = body[start:stop]
+        raw = np.frombuffer(piece.encode("utf-8"), dtype=np.uint8)
+        seps = raw[(raw == ord(",")) | (raw == ord("\n"))]
+        if len(seps) % 2 or (seps[0::2] != ord(",")).any() or (seps[1::2] != ord("\n")).any():
+            return None
+        fields = piece[:-1].replace("\n", ",").split(",")
+        try:
+            parts.append(np.fromiter(map(float, fields), dtype=float, count=len(fields)))
+        except ValueError:
+            return None
+        start = stop
+    numbers = np.concatenate(parts)
     times, values = numbers[0::2], numbers[1::2]
     if not np.isfinite(numbers).all() or (times[1:] < times[:-1]).any():
         return None
