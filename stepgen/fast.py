@@ -108,7 +108,6 @@ def run_fast(
     servo = config.servo_ns
     cmds = np.asarray(commands, dtype=float)
     n_cmd = len(cmds)
-    cmd_list = cmds.tolist()
     schedule = update_schedule(config, n_periods)
     bounds = ([0] if (not schedule or schedule[0] != 0) else []) + schedule + [n_periods]
     first_update_at = 0 if schedule and schedule[0] == 0 else 1
@@ -156,7 +155,6 @@ def run_fast(
 
     report = current()
     n_chunks = len(bounds) - 1
-    pos_list: list[float] = []  # the position commands in steps, for _track
     lengths: list[int] = []  # the chunks' periods, for _track
     ci = 0
     while ci < n_chunks:
@@ -177,15 +175,18 @@ def run_fast(
             and ch.enable
             and int(limits[1] * accelscale)
         ):
-            if not pos_list:  # value · pos_scale, as update-freq multiplies
-                pos_list = (cmds * pos_scale).tolist()
-                pos_list += pos_list[-1:] * (n_chunks + 1 - n_cmd)
+            if not lengths:
                 lengths = np.diff(bounds).tolist()
+            stop = min(n_chunks, (ci | 1023) + 1)
+            # this run's position commands in steps (value · pos_scale, as update-freq
+            # multiplies), the last one held; made per run, so few float objects live at once
+            pos_list = (cmds[u : u + stop - ci] * pos_scale).tolist()
+            pos_list += (cmds[-1:] * pos_scale).tolist() * (stop - ci - len(pos_list))
             deltalim = int(limits[1] * accelscale)
             rec: tuple[list[int], list[int]] = ([], [])
             accum0 = accum
             ci1, u, accum, addval, freq, old_pos_cmd, target, updated = _track(
-                lengths, ci, min(n_chunks, (ci | 1023) + 1), pos_list, u,
+                lengths, ci, stop, pos_list, u,
                 (accum, addval, freq, old_pos_cmd, target, curr_dir),
                 (limits[0], limits[1], dt, recip_dt, freqscale, deltalim), rec,
             )  # fmt: skip
@@ -209,7 +210,7 @@ def run_fast(
                 continue
             k0, k1 = bounds[ci], bounds[ci + 1]
         if ci >= first_update_at and not updated:
-            value = cmd_list[u if u < n_cmd else n_cmd - 1] if n_cmd else 0.0
+            value = float(cmds[u if u < n_cmd else n_cmd - 1]) if n_cmd else 0.0
             u += 1
             if steady:
                 # ---- update-freq, steps 5-9 of §4, inlined (same operations as the model) ----
@@ -392,10 +393,10 @@ def _track(
     limits are settled: the caller checks, and passes them in ``consts``).
 
     ``st``: accum, addval, freq, old_pos_cmd, target, curr_dir; ``consts``: max_freq, max_ac,
-    dt, recip_dt, freqscale and deltalim (≠ 0); ``lengths``: each chunk's base periods.
-    Returns the chunk it stopped at, the next
-    command index, accum, addval, freq, old_pos_cmd, target, and whether that chunk's update
-    has run.
+    dt, recip_dt, freqscale and deltalim (≠ 0); ``lengths``: each chunk's base periods;
+    ``pos_list``: the position commands (steps) of chunks ``ci`` … ``stop − 1``, command ``u``
+    first. Returns the chunk it stopped at, the next command index, accum, addval, freq,
+    old_pos_cmd, target, and whether that chunk's update has run.
     """
     accum, addval, freq, old_pos_cmd, target, curr_dir = st
     max_freq, max_ac, dt, recip_dt, freqscale, d = consts
@@ -405,7 +406,7 @@ def _track(
     half, one, up = HALF_STEP, ONE_STEP, curr_dir == 1
     a0_rec, tg_rec = (r.append for r in rec)
     done = 0
-    for pos_cmd, m in zip(pos_list[u : u + stop - ci], lengths[ci:stop], strict=True):
+    for pos_cmd, m in zip(pos_list, lengths[ci:stop], strict=True):
         if m <= 0:
             break
         # update-freq, position mode (reference.follow_position, the same operations)
@@ -545,13 +546,15 @@ def _fast_steps(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         cum, np.arange(_STEPS_BLOCK, int(cum[-1]) if len(n) else 0, _STEPS_BLOCK)
     )
     bounds = [0, *sorted(set((cuts + 1).tolist()) - {len(n)}), len(n)]
-    parts = [
-        _chunk_steps(cols[:, a:b], full[a:b], c0[a:b], c1[a:b], n[a:b], a)
-        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
-    ]
-    if len(parts) == 1:
-        return parts[0]
-    return tuple(np.concatenate(p) for p in zip(*parts, strict=True))  # type: ignore[return-value]
+    if len(bounds) == 2:
+        return _chunk_steps(cols, full, c0, c1, n, 0)
+    out = tuple(np.empty(int(cum[-1]), dtype=np.int64) for _ in range(3))  # filled block by block
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        s0, s1 = int(cum[a - 1]) if a else 0, int(cum[b - 1])
+        got = _chunk_steps(cols[:, a:b], full[a:b], c0[a:b], c1[a:b], n[a:b], a)
+        for whole, part in zip(out, got, strict=True):
+            whole[s0:s1] = part
+    return out  # type: ignore[return-value]
 
 
 def _chunk_steps(
