@@ -659,27 +659,32 @@ def _pass2(
     d_at, d_val = k0[fast], dirs[fast]
     s_dir = dirs[s_chunk]  # each step's direction: its chunk's (exact chunks: its period's)
     if exact:
-        parts: list[list[np.ndarray]] = [
-            [s_at], [s_chunk], [s_dir], [c_at], [c_val], [d_at], [d_val]
-        ]  # fmt: skip
-        for ci, (inc, e_dir) in exact.items():
+        # an exact chunk's steps, count changes and per-period directions go between the fast
+        # chunks before and after it (chunks cover disjoint, ordered periods): inserted there
+        s_before = np.searchsorted(s_chunk, list(exact))  # fast steps before each exact chunk
+        d_before = np.searchsorted(fast, list(exact))  # fast chunks before it
+        ins: list[list[np.ndarray]] = [[] for _ in range(10)]
+        for (ci, (inc, e_dir)), sb, db in zip(exact.items(), s_before, d_before, strict=True):
             start = int(k0[ci])
             accum = np.cumsum(inc) + acc0[ci]
             prev = np.concatenate((acc0[ci : ci + 1], accum[:-1]))
             steps = np.flatnonzero((accum ^ prev) & ONE_STEP)
             counts = accum >> PICKOFF
             moved = np.flatnonzero(counts != (prev >> PICKOFF))
-            for part, value in zip(parts, (
-                steps + start, np.full(len(steps), ci), e_dir[steps], moved + start,
-                counts[moved], np.arange(start, start + len(inc)), e_dir,
+            for part, value in zip(ins, (
+                np.full(len(steps), sb), steps + start, np.full(len(steps), ci), e_dir[steps],
+                np.full(len(moved), sb), moved + start, counts[moved],
+                np.full(len(inc), db), np.arange(start, start + len(inc)), e_dir,
             ), strict=True):  # fmt: skip
                 part.append(value)
-        s_at, s_chunk, s_dir, c_at, c_val, d_at, d_val = (np.concatenate(p) for p in parts)
-        for at, rest in ((s_at, (s_chunk, s_dir)), (c_at, (c_val,)), (d_at, (d_val,))):
-            order = np.argsort(at, kind="stable")
-            at[:] = at[order]
-            for x in rest:
-                x[:] = x[order]
+        sp, sa, sc, sd, cp, ca, cv, dp, da, dv = (np.concatenate(p) for p in ins)
+        s_at, s_chunk, s_dir = (
+            np.insert(s_at, sp, sa),
+            np.insert(s_chunk, sp, sc),
+            np.insert(s_dir, sp, sd),
+        )
+        c_at, c_val = np.insert(c_at, cp, ca), np.insert(c_val, cp, cv)
+        d_at, d_val = np.insert(d_at, dp, da), np.insert(d_val, dp, dv)
     toggles: dict[str, np.ndarray] = {}
     if kind.kind == "phases":
         state = np.cumsum(s_dir) % max(kind.cycle, 1)
