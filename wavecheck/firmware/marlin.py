@@ -806,9 +806,16 @@ def _axis(
                               f"; one step per interrupt ({packing[1]})"
                               if packing[0] == 1 else ""))  # fmt: skip
     elif sustained is not None:
-        rate = replace(rate, note=f"{rate.note}; {packing[1]}: the steps of one interrupt are "
+        # Whether the interrupt ever takes more than one step depends on the leading axis
+        # passing the CPU's MAX_STEP_ISR_FREQUENCY_1X (stepper.h), which no configuration
+        # states: one step per interrupt (the sustained rate) is the other reading, and a rule
+        # whose verdict differs between the two is indeterminate (evaluate.evaluate_pair).
+        rate = replace(rate, disputed=sustained.hz,
+                       note=f"{rate.note}; {packing[1]}: the steps of one interrupt are "
                        f"spaced by the driver timing, so this axis's {float(sustained.hz):g} Hz "
-                       f"({sustained.how}) is only its sustained rate")  # fmt: skip
+                       f"({sustained.how}) is only its sustained rate; whether this axis's "
+                       "moves reach multi-stepping depends on the CPU (MAX_STEP_ISR_FREQUENCY_1X, "
+                       "not in the configuration)")  # fmt: skip
     return GeneratorGuarantee(
         axis=axis,
         pulse=figs.pulse,

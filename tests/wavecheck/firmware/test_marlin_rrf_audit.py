@@ -9,7 +9,10 @@ from pathlib import Path
 import pytest
 
 from tools.firmware_corpus import CORPUS
+from wavecheck.drives.library import load_drive
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
 
 pytestmark = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
 
@@ -285,3 +288,36 @@ def test_marlin_low_time_carries_the_timer_band(file: str, low: int, band: int) 
     x = read_firmware(CORPUS / file).axis("X")
     assert (x.idle.value, x.idle.short_by, x.idle.status) == (low, band, "uncertain")
     assert "AWAIT_LOW_PULSE" in x.idle.short_why or "ADDED_STEP_TICKS" in x.idle.short_why
+
+
+@pytest.mark.parametrize(
+    ("drive_rate", "adv", "verdict", "split"),
+    [
+        # X: 24 kHz sustained (80 x 300), bursts at the A4988 driver rate 500 kHz when the
+        # leading axis passes the CPU's MAX_STEP_ISR_FREQUENCY_1X (stepper.h; not in any
+        # configuration): a drive between the two is decided by that, so neither PASS nor FAIL
+        ("100kHz", "", "indeterminate", True),
+        # under both readings the drive is too slow: the FAIL stands
+        ("20kHz", "", "fail", False),
+        # one step per interrupt: only the sustained rate, which the planner keeps exactly
+        ("100kHz", "#define MULTISTEPPING_LIMIT 1\n", "pass", False),
+    ],
+)
+def test_marlin_step_period_under_both_readings_of_multistepping(
+    tmp_path: Path, drive_rate: str, adv: str, verdict: str, split: bool
+) -> None:
+    """Whether an axis ever bursts at the driver rate depends on the CPU's multi-step trigger
+    (stepper.h ``MAX_STEP_ISR_FREQUENCY_1X``), which no configuration states: the sustained
+    rate is the other reading (``Guaranteed.disputed``), and a verdict that differs between the
+    two is indeterminate, with a fix; the note never says the readings differ when they agree."""
+    path = _marlin(tmp_path, "02010300", _types("A4988") + _MOTION, adv)
+    cfg = read_firmware(path)
+    drive = tune_drive(load_drive("a4988"), [f"max_rate={drive_rate}"])
+    row = next(
+        r
+        for r in evaluate_config(cfg, [(cfg.axis("X"), drive)]).pairs[0].rows
+        if r.rule == "step_period"
+    )
+    assert row.verdict == verdict, row.note
+    assert ("readings give different verdicts" in row.note) == split
+    assert bool(row.fix) == (verdict != "pass")
