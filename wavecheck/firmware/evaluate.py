@@ -290,16 +290,17 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
             note = "; ".join(x for x in (note, fig.note) if x)
             if verdict == "pass":
                 verdict = "indeterminate"  # the setting meets the limit; the firmware need not
+        split = False  # the two readings of a disputed figure give different verdicts
         if other is not None:
-            second = _judge(other, limit)
+            split = _judge(other, limit) != _judge(value, limit)
             said = f"{format_ns(value)} under the reading used, {format_ns(other)} under the other"
             note = "; ".join(x for x in (note, said) if x)
-            if second != verdict:
+            if split:
                 verdict = "indeterminate"
                 note += ": the readings give different verdicts (measure it)"
         fix = ""
         clears = in_band and worst is not None  # an unbounded band: no value clears it
-        if verdict == "fail" or (verdict == "indeterminate" and (other is not None or clears)):
+        if verdict == "fail" or (verdict == "indeterminate" and (split or clears)):
             fix = config.fix(g, _fix_role(role, g, drive), _need(fig, added, drive, limit, role))
         rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note,
                             worst_ns=worst, in_band=in_band))  # fmt: skip

@@ -92,9 +92,10 @@ class Guaranteed:
     status: GStatus = "set"
     note: str = ""
     disputed: Fraction | None = None
-    """Where the sources disagree (hm2: the man page and the VHDL), the bound under the other
-    reading; :attr:`note` names both, and a rule whose verdict differs under it is
-    indeterminate."""
+    """Where the sources disagree (hm2: the man page and the VHDL) or the figure depends on
+    something no configuration states (Marlin: whether an axis reaches multi-stepping), the
+    bound under the other reading; :attr:`note` names both, and a rule whose verdict differs
+    under it is indeterminate."""
     short_by: Fraction | None = Fraction(0)
     """How far the wire figure may fall below :attr:`value` (ns; Hz above it for ``max_rate``);
     0 = kept exactly, None = no bound derived (never a PASS). See the class doc."""
