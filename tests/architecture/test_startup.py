@@ -159,16 +159,25 @@ def test_a_check_plot_loads_no_measurement_module(tmp_path: Path) -> None:
     assert "wavecheck.measurement" not in loaded
 
 
-@pytest.mark.parametrize(("call", "young", "frozen"), [("main()", "50000", "True"),
-                                                      ("main(['drives'])", "700", "False")])  # fmt: skip
-def test_only_the_program_tunes_the_garbage_collector(call: str, young: str, frozen: str) -> None:
+@pytest.mark.parametrize(
+    ("tool", "call", "young", "frozen"),
+    [("wavecheck", "main()", "50000", "True"), ("wavecheck", "main(['drives'])", "700", "False"),
+     ("stepgen", "main()", "50000", "True"), ("stepgen", "main(['--help'])", "700", "False")],
+)  # fmt: skip
+def test_only_the_program_tunes_the_garbage_collector(
+    tool: str, call: str, young: str, frozen: str
+) -> None:
     """``main()`` as the console script calls it: fewer young collections, the objects left
     frozen for the exit (issue 38); ``main(argv)`` from another program changes nothing."""
+    argv = ["drives"] if tool == "wavecheck" else ["--help"]
     code = (
         "import gc, sys\n"
-        "sys.argv = ['wavecheck', 'drives']\n"
-        "from wavecheck.cli import main\n"
-        f"{call}\n"
+        f"sys.argv = [{tool!r}, *{argv!r}]\n"
+        f"from {tool}.cli import main\n"
+        "try:\n"
+        f"    {call}\n"
+        "except SystemExit:\n"
+        "    pass\n"
         "print('--- gc ---', gc.get_threshold()[0], gc.get_freeze_count() > 0)\n"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
