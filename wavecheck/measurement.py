@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
@@ -29,6 +28,7 @@ from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.engine import CheckOptions, StepSink, start
 from wavecheck.engine.parts import StepCounts, StepTrace
 from wavecheck.engine.planning import AxisPlan
+from wavecheck.record import field, record
 from wavecheck.rules import Rule
 from wavecheck.steps.interface import StepInterface
 from wavecheck.steps.primitives import Intervals
@@ -51,7 +51,7 @@ REVERSALS_KEPT = 1000
 _GIGA = Fraction(10**9)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class IntervalStats:
     """One interval kind of one axis, in exact ticks (``*_ns`` converts exactly).
 
@@ -193,7 +193,7 @@ def _exact_sum(values: EdgeArray) -> int:
     return (high << 32) + low
 
 
-@dataclass
+@record
 class AxisMeasurement:
     """One axis measured.
 
@@ -272,7 +272,7 @@ class AxisMeasurement:
         return None if not m else _GIGA / self.period.timebase.ns(m)
 
 
-@dataclass
+@record
 class Measurement:
     """Every axis of one capture, measured in one pass over one read of it.
 
@@ -310,7 +310,7 @@ def measure(
     Raises:
         WavecheckError: an unusable mapping or option, roles that cannot be told.
     """
-    from dataclasses import replace
+    from wavecheck.record import replace
 
     src = MemorySource(source) if isinstance(source, Capture) else source
     options = replace(options, drive={})

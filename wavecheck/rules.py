@@ -22,10 +22,10 @@ Events (levels at the drive's input, after ``--invert``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from fractions import Fraction
 from typing import Literal
 
+from wavecheck.record import record
 from wavecheck.steptypes import StepKind, StepType
 
 __all__ = [
@@ -60,7 +60,7 @@ drive's maximum step rate (limit = 1 / max_rate), or nowhere (``state_sequence``
 _ALL: tuple[StepKind, ...] = ("step-dir", "up-down", "phases")
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Rule:
     """One rule: what it measures, where its limit comes from, which step types it applies to."""
 

@@ -8,10 +8,10 @@ wrapping. The validator's decoder and the stepgen model both use this one table.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Literal
 
 from wavecheck.errors import ConfigError
+from wavecheck.record import record
 
 __all__ = ["PHASE_NAMES", "STATE_TABLES", "StepKind", "StepType", "kind_of", "step_type"]
 
@@ -40,7 +40,7 @@ _PHASES = {2: 2, 3: 3, 4: 3, 5: 4, 6: 4, 7: 4, 8: 4, 9: 4, 10: 4, 11: 5, 12: 5, 
 MAX_USER_CYCLE = 18  # LinuxCNC 2.9/master (10 in <= 2.8 and machinekit)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class StepType:
     """One step type: its outputs and, for types >= 2, its state table."""
 

@@ -8,7 +8,6 @@ conservative. Seconds and nanoseconds appear only when printing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from fractions import Fraction
 from functools import cached_property
 from typing import Literal
@@ -17,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.errors import UsageError
+from wavecheck.record import record
 from wavecheck.units import SI_TIME
 
 __all__ = ["Rounding", "Timebase"]
@@ -26,7 +26,7 @@ Rounding = Literal["floor", "ceil", "exact"]
 _TIMESCALE_UNITS = dict(SI_TIME)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Timebase:
     """The length of one tick, in exact seconds."""
 

@@ -38,12 +38,12 @@ import math
 import re
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 from typing import TYPE_CHECKING, Literal
 
 from wavecheck.errors import UnitError
+from wavecheck.record import record
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -361,7 +361,7 @@ def number_option(text: str) -> float:
 
 
 # -- command-line options ----------------------------------------------------------------------
-@dataclass(frozen=True)
+@record(frozen=True)
 class Plausible:
     """Values of an option that are almost surely a unit slip (SI base units: s or Hz).
 

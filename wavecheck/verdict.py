@@ -16,10 +16,10 @@ same functions: :func:`unchecked_by_reason` for the verdict line, :func:`unmet_r
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Literal
 
 from wavecheck.errors import UsageError
+from wavecheck.record import record
 
 __all__ = [
     "EXIT_FAIL",
@@ -110,7 +110,7 @@ def unchecked_phrase(unchecked: Mapping[str, Sequence[str]]) -> str:
     )
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class RuleStatus:
     """One rule of one axis as a verdict line and ``--require`` read it.
 
@@ -185,7 +185,7 @@ def check_require(require: Sequence[str], rule_ids: Sequence[str]) -> None:
             )
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Unmet:
     """A required rule that was not decided: its verdict (unchecked or indeterminate) and why."""
 

@@ -106,6 +106,7 @@ def test_each_rule_is_declared_once_in_the_rule_table() -> None:
 #: and the packages of one layer import each other without a circle. Imports inside functions and
 #: under ``TYPE_CHECKING`` count: they are dependencies too.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("language", ("wavecheck.record",)),
     ("base", ("wavecheck.errors", "wavecheck.units", "wavecheck.verdict", "wavecheck.timebase",
               "wavecheck.progress", "wavecheck.output", "wavecheck.config_text")),
     ("vocabulary", ("wavecheck.steptypes", "wavecheck.rules")),

@@ -113,6 +113,78 @@ def test_the_drive_table_loads_no_python_toml_parser() -> None:
     assert "difflib" in _loaded_after(["drives", "no-such-drive"])  # the probe sees it
 
 
+def test_the_drive_table_defines_no_dataclass() -> None:
+    """``wavecheck drives`` (issue 38): its record types (Drive, Figure, Rule, the format
+    registry …) are :mod:`wavecheck.record` classes, so neither :mod:`dataclasses` nor the
+    :mod:`inspect` it imports loads (~6 ms), and no method is compiled per class."""
+    loaded = _loaded_after(["drives"])
+    assert sorted({"dataclasses", "inspect"} & loaded) == []
+    assert "wavecheck.record" in loaded  # the probe sees the records' module
+
+
+def test_argparse_asks_the_terminal_width_only_to_write_help() -> None:
+    """argparse's formatter imports shutil for the terminal's width (~2 ms with bz2/lzma):
+    ``drives`` writes no help, so builds no formatter that asks; ``--help`` does."""
+    assert "shutil" not in _loaded_after(["drives"])
+    assert "shutil" in _loaded_after(["drives", "--help"])  # the probe sees it
+
+
+def test_a_command_first_builds_no_other_subcommand_parser() -> None:
+    """The other subcommands' (empty) parsers are listed only where argparse may show them:
+    ``--help`` or an error before the command word."""
+    code = (
+        "import argparse\n"
+        "from wavecheck.cli import main\n"
+        "made = []\n"
+        "init = argparse.ArgumentParser.__init__\n"
+        "def spy(self, *a, **k):\n"
+        "    made.append(k.get('prog'))\n"
+        "    init(self, *a, **k)\n"
+        "argparse.ArgumentParser.__init__ = spy\n"
+        "main(['drives'])\n"
+        "print('--- parsers ---', len(made))\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.rpartition("--- parsers ---")[2].split() == ["2"]  # the tool's, drives'
+
+
+def test_a_check_plot_loads_no_measurement_module(tmp_path: Path) -> None:
+    """``check --plot`` (issue 38: CPU beyond matplotlib's import) draws the motion panel with
+    report.measured_plot, whose measure-only types are annotations, not imports."""
+    out = tmp_path / "p.png"
+    loaded = _loaded_after(["check", str(TINY), "--drive", "gecko-g202", "--plot", str(out)])
+    assert out.stat().st_size > 10_000  # it drew
+    assert "wavecheck.report.measured_plot" in loaded
+    assert "wavecheck.measurement" not in loaded
+
+
+@pytest.mark.parametrize(
+    ("tool", "call", "young", "frozen"),
+    [("wavecheck", "main()", "50000", "True"), ("wavecheck", "main(['drives'])", "700", "False"),
+     ("stepgen", "main()", "50000", "True"), ("stepgen", "main(['--help'])", "700", "False")],
+)  # fmt: skip
+def test_only_the_program_tunes_the_garbage_collector(
+    tool: str, call: str, young: str, frozen: str
+) -> None:
+    """``main()`` as the console script calls it: fewer young collections, the objects left
+    frozen for the exit (issue 38); ``main(argv)`` from another program changes nothing."""
+    argv = ["drives"] if tool == "wavecheck" else ["--help"]
+    code = (
+        "import gc, sys\n"
+        f"sys.argv = [{tool!r}, *{argv!r}]\n"
+        f"from {tool}.cli import main\n"
+        "try:\n"
+        f"    {call}\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "print('--- gc ---', gc.get_threshold()[0], gc.get_freeze_count() > 0)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.rpartition("--- gc ---")[2].split() == [young, frozen]
+
+
 def test_a_simulated_vcd_loads_no_numpy_ma(tmp_path: Path) -> None:
     """``np.unique`` imports numpy.ma (8 ms, issue 38): the engine and the VCD writer avoid it."""
     out = tmp_path / "o.vcd"
@@ -155,7 +227,8 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck", "wavecheck.cli", "wavecheck.cli._formats", "wavecheck.cli._main",
             "wavecheck.cli._tuning_args", "wavecheck.cli.drives", "wavecheck.drives",
             "wavecheck.drives.datasheet", "wavecheck.drives.library", "wavecheck.errors",
-            "wavecheck.output", "wavecheck.rules", "wavecheck.steptypes", "wavecheck.units",
+            "wavecheck.output", "wavecheck.record", "wavecheck.rules", "wavecheck.steptypes",
+            "wavecheck.units",
         },
     ),
     "check sr --map": (
@@ -175,7 +248,7 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
             "wavecheck.engine.rates", "wavecheck.engine.resolve", "wavecheck.engine.results",
             "wavecheck.engine.run", "wavecheck.engine.sinks", "wavecheck.engine.trace",
             "wavecheck.engine.windows", "wavecheck.errors", "wavecheck.firmware",
-            "wavecheck.output", "wavecheck.progress", "wavecheck.report",
+            "wavecheck.output", "wavecheck.progress", "wavecheck.record", "wavecheck.report",
             "wavecheck.report.assumptions", "wavecheck.report.claims", "wavecheck.report.groups",
             "wavecheck.report.json", "wavecheck.report.machine", "wavecheck.report.text",
             "wavecheck.roles", "wavecheck.roles.names", "wavecheck.rules", "wavecheck.steps",

@@ -14,12 +14,12 @@ turns blocks back into a capture (the first part read to tell roles from the wav
 from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
 
 from wavecheck.capture.edges import NEVER, Capture, Channel, EdgeArray, Vector
+from wavecheck.record import field, record, replace
 
 __all__ = [
     "BlockSource",
@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 
-@dataclass
+@record
 class EdgeBlock:
     """The edges of one time slice ``[previous block's end, end)``.
 

@@ -8,13 +8,13 @@ hundreds of millions of samples costs only its edges.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.errors import UsageError
+from wavecheck.record import field, record
 from wavecheck.timebase import Timebase
 
 __all__ = ["NEVER", "Capture", "Channel", "EdgeArray", "Vector"]
@@ -24,7 +24,7 @@ EdgeArray = npt.NDArray[np.int64]
 NEVER = int(np.iinfo(np.int64).max)
 
 
-@dataclass
+@record
 class Channel:
     """One 1-bit signal of a capture.
 
@@ -91,7 +91,7 @@ class Channel:
         return self.initial ^ ((i + 1) & 1)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Vector:
     """A multi-bit signal of the file whose bits can be mapped as channels.
 
@@ -119,7 +119,7 @@ class Vector:
         return p if 0 <= p < self.width else None
 
 
-@dataclass
+@record
 class Capture:
     """A whole capture: channels, exact time base, resolution and where it came from.
 

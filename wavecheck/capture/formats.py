@@ -14,12 +14,12 @@ import os
 import re
 import shutil
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, BinaryIO
 
 from wavecheck.capture.edges import Capture
 from wavecheck.errors import CaptureError, UsageError
+from wavecheck.record import record
 
 if TYPE_CHECKING:
     from wavecheck.capture.blocks import BlockSource
@@ -38,7 +38,7 @@ __all__ = [
 ZIP_MAGIC = b"PK\x03\x04"
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Request:
     """One read: the capture (a path, or ``stream`` named ``path``), the format as given with its
     options (``binary:numchannels=4``), and the user's values."""
@@ -58,7 +58,7 @@ class Request:
         return self.spec.partition(":")[2]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Format:
     """One capture format.
 

@@ -16,7 +16,6 @@ import shutil
 import stat
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
@@ -33,6 +32,7 @@ from wavecheck.capture.formats import (
     named_formats,
 )
 from wavecheck.errors import CaptureError, UsageError
+from wavecheck.record import record, replace
 
 if TYPE_CHECKING:
     from wavecheck.capture.blocks import BlockSource
@@ -177,7 +177,7 @@ def _say_waiting(path: str | os.PathLike[str]) -> None:
                   file=sys.stderr, flush=True)  # fmt: skip
 
 
-@dataclass
+@record
 class _Sniffed:
     """A stream whose first bytes told its format: ``stream`` gives them again, then the rest."""
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from wavecheck.cli._main import Command, run_cli
+from wavecheck.cli._main import Command, as_program, run_cli
 
 __all__ = ["COMMANDS", "main"]
 
@@ -59,7 +59,17 @@ COMMANDS = {
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``wavecheck`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code."""
+    """Run ``wavecheck`` with ``argv`` (default: ``sys.argv[1:]``); returns the exit code.
+
+    Without ``argv`` (the console script, ``python -m wavecheck``) it runs as the program
+    (:func:`~wavecheck.cli._main.as_program`: the garbage collector tuned for one command);
+    called with ``argv`` (tests, other programs) nothing about the collector changes."""
+    if argv is not None:
+        return _run(argv)
+    return as_program(lambda: _run(None))
+
+
+def _run(argv: Sequence[str] | None) -> int:
     return run_cli(
         "wavecheck",
         "Check STEP/DIR waveforms against stepper drive datasheet timing.",

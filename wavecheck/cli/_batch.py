@@ -21,7 +21,6 @@ import glob
 import os
 import sys
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +31,7 @@ from wavecheck.engine import MachineReport, Report
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import atomic_write, figure_format
 from wavecheck.progress import activate
+from wavecheck.record import record
 from wavecheck.report.claims import exit_code, not_checked, requirement_line
 from wavecheck.report.text import DEFAULT_TEXT_VIOLATIONS
 from wavecheck.units import format_time
@@ -220,7 +220,7 @@ def _jobs(args: argparse.Namespace, count: int) -> int:
     return max(1, min(jobs, count))
 
 
-@dataclass
+@record
 class _Outcome:
     """What the outputs need of one capture of several (never the report itself, so memory
     does not grow with the number of captures): its summary line, exit code and verdict, and

@@ -20,10 +20,10 @@ import argparse
 import importlib
 import itertools
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, ParamSpec, TypeAlias
 
 from wavecheck.cli._tuning_args import required
+from wavecheck.record import record
 
 if TYPE_CHECKING:  # the reports load numpy: imported where used (wavecheck drives has none)
     from wavecheck.engine import MachineReport, Report
@@ -58,7 +58,7 @@ def axis_reports(checked: Checked) -> list[Report]:
     return checked.axes if isinstance(checked, MachineReport) else [checked]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Part:
     """One capture of several as their document needs it: its summary line, verdict, JUnit
     counts and its piece, read back (from the spool) only when the document is written."""
@@ -70,7 +70,7 @@ class Part:
     text: Callable[[], str]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class ReportFormat:
     """One ``--format``.
 
@@ -206,7 +206,7 @@ FORMATS: dict[str, ReportFormat] = {
 
 
 # -- the other commands ----------------------------------------------------------------------------
-@dataclass(frozen=True)
+@record(frozen=True)
 class Formats(Generic[P]):
     """The ``--format`` of a command: format name → the renderer of its result (the first is
     the default)."""

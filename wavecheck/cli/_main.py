@@ -12,18 +12,19 @@ inputs (every file named by another option), and those inputs stay protected whi
 from __future__ import annotations
 
 import argparse
+import gc
 import glob
 import importlib
 import os
 import sys
-from collections.abc import Mapping, Sequence
-from typing import NamedTuple
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, NamedTuple
 
 from wavecheck import __version__
 from wavecheck.errors import UsageError, WavecheckError
 from wavecheck.output import OUTPUT_TYPES, check_outputs, protect_inputs
 
-__all__ = ["Command", "run_cli"]
+__all__ = ["GC_YOUNG_THRESHOLD", "Command", "as_program", "run_cli"]
 
 
 class Command(NamedTuple):
@@ -45,6 +46,23 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(UsageError.exit_code, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    _checking = False
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> argparse.Action:
+        self._checking = True
+        try:
+            return super().add_argument(*args, **kwargs)
+        finally:
+            self._checking = False
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        # add_argument asks for a formatter only to check the metavar against nargs; the
+        # formatter asks for the terminal's width (shutil, ~2 ms of start-up), wanted only
+        # when help or an error is written
+        if self._checking:
+            return self.formatter_class(prog=self.prog, width=80)  # type: ignore[call-arg]
+        return super()._get_formatter()
+
     def parse_known_args(  # type: ignore[override]
         self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
     ) -> tuple[argparse.Namespace, list[str]]:
@@ -63,8 +81,9 @@ def run_cli(
     """Build the parser of the subcommand asked for and run it.
 
     Only that subcommand's module is imported: its ``register(subparsers)`` adds its parser and
-    sets ``func`` to a ``run(args) -> int``. Every other subcommand is listed from ``commands``
-    (``--help``, usage errors) with an empty parser that never parses.
+    sets ``func`` to a ``run(args) -> int``. When the command is not the first word (``--help``,
+    ``--version``, a usage error), every other subcommand is listed from ``commands`` with an
+    empty parser that never parses.
     """
     # numpy's OpenBLAS starts a thread per core when numpy is imported: about 0.1 s of CPU at
     # every start, for linear algebra no command does (an environment variable says otherwise)
@@ -74,12 +93,17 @@ def run_cli(
     parser = _Parser(prog=prog, description=description)
     parser.add_argument("--version", action="version", version=f"{prog} {__version__}")
     # dest: not "command", which stepgen simulate's --command option also sets
-    sub = parser.add_subparsers(dest="_subcommand", metavar="COMMAND", parser_class=_Parser)
+    # prog given: argparse would format the tool's usage (a formatter, the terminal's width) for it
+    sub = parser.add_subparsers(
+        dest="_subcommand", metavar="COMMAND", parser_class=_Parser, prog=prog
+    )
     sub.required = True
+    # the others only where argparse may show them: help or an error before the command word
+    alone = bool(words) and words[0] == chosen and chosen in commands
     for name, command in commands.items():
         if name == chosen:
             importlib.import_module(command.module).register(sub)
-        else:
+        elif not alone:
             sub.add_parser(name, help=command.help)
     args = parser.parse_args(words)
     try:
@@ -97,6 +121,25 @@ def run_cli(
         return 130
     except BrokenPipeError:
         return 0
+
+
+#: Allocations between two young-generation collections while a command runs as the program
+#: (Python's default is 700): importing numpy and a command's modules made dozens of
+#: collections. The cyclic garbage a collection would free waits for at most this many.
+GC_YOUNG_THRESHOLD = 50_000
+
+
+def as_program(run: Callable[[], int]) -> int:
+    """``run()`` as the whole program (the console script, ``python -m``): the cyclic garbage
+    collector runs less often, and the objects left at the end are frozen, so the collection
+    at interpreter exit does not walk them again (``wavecheck check`` on grbl_cnc_1.sr: ~25 ms
+    of ~165 ms CPU; bench/README.md, Round 6, start-up). Every temporary file the commands make
+    is closed by a ``with`` or unlinked at creation, so none waits on that collection."""
+    gc.set_threshold(GC_YOUNG_THRESHOLD, *gc.get_threshold()[1:])
+    try:
+        return run()
+    finally:
+        gc.freeze()
 
 
 def _command_word(words: Sequence[str]) -> str | None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from wavecheck.cli._axis_args import check_options
@@ -22,6 +21,7 @@ from wavecheck.cli._tuning_args import required
 from wavecheck.engine import CheckOptions, MachineReport
 from wavecheck.output import atomic_write, figure_file, gtkw_file, output_file
 from wavecheck.progress import QUIET_HELP
+from wavecheck.record import record
 
 if TYPE_CHECKING:  # read only with --firmware
     from wavecheck.firmware.guarantee import FirmwareConfig
@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # read only with --firmware
 __all__ = ["Asked", "add_report_arguments", "asked", "finish_report", "write_outputs"]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Asked:
     """What a check is asked, read from its arguments once, before any capture (a bad option
     or file is reported before any capture is read): the options object and the firmware

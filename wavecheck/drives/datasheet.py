@@ -7,11 +7,11 @@ Every figure keeps its source and how sure it is. Time limits are exact nanoseco
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Literal
 
+from wavecheck.record import field, record
 from wavecheck.rules import PLAN_RULES, TIME_RULES, rule, width_rule
 
 __all__ = [
@@ -42,7 +42,7 @@ def status_mark(status: str | None) -> str:
     return STATUS_MARKS.get(status, "") if status else ""
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Figure:
     """One datasheet figure: an exact value, where it comes from, how sure it is."""
 
@@ -62,7 +62,7 @@ class Figure:
         return status_mark(self.status)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Drive:
     """A drive (or driver IC, or config-tool preset) and its STEP/DIR input timing."""
 

@@ -169,12 +169,13 @@ def _in_library(path: Path) -> bool:
 _MAX_EXTENDS = 8
 
 
-def _read_toml(path: Path) -> dict[str, Any]:
-    """The file's TOML data. rtoml (compiled) parses it, the library's 46 files in ~1 ms against
-    tomllib's ~8 ms, to the same data (tested); a file rtoml refuses is parsed again by tomllib,
-    whose message (or data, should it accept) counts."""
+def _read_toml(path: Path, raw: bytes | None = None) -> dict[str, Any]:
+    """The file's TOML data (``raw``: its bytes, when already read). rtoml (compiled) parses
+    it, the library's 46 files in ~1 ms against tomllib's ~8 ms, to the same data (tested); a
+    file rtoml refuses is parsed again by tomllib, whose message (or data, should it accept)
+    counts."""
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = (path.read_bytes() if raw is None else raw).decode("utf-8")
     except UnicodeDecodeError as err:
         raise RuleError(
             path, None, f"not UTF-8 text (byte {err.start}): a rule file must be UTF-8 TOML"
@@ -203,14 +204,14 @@ def _load_file(path: Path, user: bool = False) -> Drive:
     hit = _DRIVES.get(key)
     if hit is not None and hit[0] == raw:
         return hit[1]
-    drive = _parse_file(path, user)
+    drive = _parse_file(path, user, raw)
     if not (user and b"extends" in raw):
         _DRIVES[key] = (raw, drive)
     return drive
 
 
-def _parse_file(path: Path, user: bool) -> Drive:
-    data = _read_toml(path)
+def _parse_file(path: Path, user: bool, raw: bytes | None = None) -> Drive:
+    data = _read_toml(path, raw)
     if user:
         data = _resolve_extends(path, data, ())
     return _parse(path, data, user=user)

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
 from fractions import Fraction
 
 from wavecheck.drives.datasheet import Drive, Figure
 from wavecheck.errors import UnitError, UsageError
+from wavecheck.record import record, replace
 from wavecheck.rules import TIME_RULES
 from wavecheck.units import parse_frequency, parse_quantity
 
@@ -24,7 +24,7 @@ __all__ = ["Margin", "parse_limit", "parse_margin", "tune_drive"]
 _GIGA = Fraction(10**9)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Margin:
     """``factor`` × each minimum time, then + ``add_ns``."""
 

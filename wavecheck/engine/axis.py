@@ -27,7 +27,6 @@ is dropped, so memory follows the window, not the capture.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -43,6 +42,7 @@ from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.sinks import IntervalSink, StepSink
 from wavecheck.engine.trace import StepTrace
 from wavecheck.engine.windows import PLACES_PER_RULE, WindowKeeper, wanted_places
+from wavecheck.record import field, record, replace
 from wavecheck.rules import Rule, width_rule
 from wavecheck.steps.decode import (
     StepEvents,
@@ -61,7 +61,7 @@ __all__ = ["AxisCheck"]
 _EMPTY = np.zeros(0, dtype=np.int64)
 
 
-@dataclass
+@record
 class _Role:
     """One mapped channel's running state."""
 

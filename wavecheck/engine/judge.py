@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
+from wavecheck.record import field, record
 from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
 
@@ -50,7 +50,7 @@ def _clamp(v: int) -> int:
     return max(_I64_MIN, min(_I64_MAX, v))
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Violation:
     """One failed interval (or one state-sequence error).
 
@@ -75,7 +75,7 @@ class Violation:
     detail: str = ""
 
 
-@dataclass
+@record
 class Judged:
     """One window's intervals of one rule and their verdicts: what :func:`evaluate` gives and
     :class:`wavecheck.engine.results.RuleResult` merges (every interval of the window; nothing
@@ -138,7 +138,7 @@ def decide_rate(
     return Fraction(2 * 10**9) / min(gaps)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Histogram:
     """Measured lengths counted in fixed bins: mergeable by adding counts.
 

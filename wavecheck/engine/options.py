@@ -13,12 +13,12 @@ of every axis not named (``--drive gecko-g202 --drive y=leadshine-dm542`` is
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, TypeVar
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.errors import UsageError
+from wavecheck.record import field, record
 from wavecheck.rules import RULE_IDS
 from wavecheck.steps.mapping import AxisMap
 from wavecheck.verdict import check_require
@@ -54,7 +54,7 @@ def for_axis(values: PerAxis[T], axis: str | None) -> T | None:
     return values.get(None)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class CheckOptions:
     """Everything a check is asked (times exact; drives loaded).
 

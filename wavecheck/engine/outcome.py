@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import heapq
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Protocol
 
@@ -22,6 +21,7 @@ from wavecheck.engine.rates import MaxStepRates
 from wavecheck.engine.results import RuleResult, StepCounts
 from wavecheck.engine.trace import StepTrace
 from wavecheck.engine.windows import SignalWindows
+from wavecheck.record import field, record
 from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steptypes import StepType
 from wavecheck.verdict import Verdict, exit_code, overall_verdict
@@ -37,7 +37,7 @@ class OwnSettingsCheck(Protocol):
     def verdict(self) -> Verdict: ...
 
 
-@dataclass
+@record
 class Report:
     """One check of one capture's step interface against one drive.
 
@@ -139,7 +139,7 @@ class Report:
         return list(heapq.merge(*per_rule, key=key))[:n]
 
 
-@dataclass
+@record
 class MachineReport:
     """Every axis of one capture, checked in one pass over one read of it."""
 

@@ -21,7 +21,6 @@ drive's input they are high, or low when the STEP (UP/DOWN) role is inverted (``
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
@@ -29,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
+from wavecheck.record import record, replace
 from wavecheck.rules import width_rule
 from wavecheck.steps.decode import StepEvents, touches_stretches, unknown_stretches
 from wavecheck.steps.interface import StepInterface
@@ -73,7 +73,7 @@ def pulse_level(iface: StepInterface, st: StepType, generator_level: int = 1) ->
     return generator_level ^ int(inverted)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class MaxStepRates:
     """Maximum step rates in exact Hz (None where not defined).
 

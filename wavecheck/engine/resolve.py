@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import shlex
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Literal
 
@@ -25,6 +24,7 @@ from wavecheck.engine.intervals import figure_of, planned_rules
 from wavecheck.engine.options import CheckOptions, for_axis
 from wavecheck.engine.rates import pulse_level
 from wavecheck.errors import UsageError
+from wavecheck.record import record, replace
 from wavecheck.rules import RULE_IDS, Rule, applicable
 from wavecheck.steps.interface import (
     StepInterface,
@@ -198,7 +198,7 @@ def ambiguous_note(count: int, first: EdgeArray, timebase: Timebase) -> str | No
     )
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class AxisPlan:
     """One axis resolved against a capture's channels (module docstring).
 

@@ -15,7 +15,6 @@ draw from these results and the signal windows kept around the worst places
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
@@ -31,6 +30,7 @@ from wavecheck.engine.judge import (
     decide_parts,
     decide_rate,
 )
+from wavecheck.record import field, record
 from wavecheck.timebase import Timebase
 from wavecheck.verdict import Verdict
 
@@ -47,7 +47,7 @@ TALLY_KEPT = 4096
 _Key = tuple[int, int, int]  # (measured ticks, order tick, other tick): the intervals' order
 
 
-@dataclass
+@record
 class RuleResult:
     """One rule's results merged window by window (see the module docstring).
 
@@ -347,7 +347,7 @@ class RuleResult:
         return self._hist if self.binned else None
 
 
-@dataclass
+@record
 class StepCounts:
     """Step counts merged window by window: what the reports read of
     :class:`wavecheck.steps.decode.StepEvents` (which keeps every step)."""

@@ -24,12 +24,11 @@ more than two steps, the curves hold every step (:attr:`StepTrace.thinned` is Fa
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
-
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
+from wavecheck.record import field_names, record
 
 __all__ = ["MAX_BUCKETS", "REVERSALS_KEPT", "StepTrace"]
 
@@ -43,7 +42,7 @@ _SMALL = np.iinfo(np.int64).min
 _I64 = npt.NDArray[np.int64]
 
 
-@dataclass
+@record
 class _Buckets:
     """Per-bucket figures (module docstring), one array element per bucket; an empty bucket has
     ``count`` 0, ``low`` = +max, ``high`` = −max, ``fast_gap`` = +max and ``slow_gap`` = −1."""
@@ -64,14 +63,14 @@ class _Buckets:
     @classmethod
     def empty(cls, n: int) -> _Buckets:
         fill = {"low": _BIG, "high": _SMALL, "fast_gap": _BIG, "slow_gap": -1}
-        return cls(*(np.full(n, fill.get(f.name, 0), np.int64) for f in fields(cls)))
+        return cls(*(np.full(n, fill.get(name, 0), np.int64) for name in field_names(cls)))
 
     def take(self, at: npt.NDArray[np.intp] | slice) -> _Buckets:
-        return _Buckets(*(getattr(self, f.name)[at] for f in fields(self)))
+        return _Buckets(*(getattr(self, name)[at] for name in field_names(self)))
 
     def put(self, at: npt.NDArray[np.intp], other: _Buckets) -> None:
-        for f in fields(self):
-            getattr(self, f.name)[at] = getattr(other, f.name)
+        for name in field_names(self):
+            getattr(self, name)[at] = getattr(other, name)
 
 
 def _combine(a: _Buckets, b: _Buckets) -> _Buckets:
@@ -193,8 +192,8 @@ class StepTrace:
         for _ in range(min(shift, self.size.bit_length() - 1)):  # one bucket left: done
             b = _combine(b.take(slice(0, None, 2)), b.take(slice(1, None, 2)))
         rest = _Buckets.empty(self.size - len(b.count))
-        self._b = _Buckets(*(np.concatenate([getattr(b, f.name), getattr(rest, f.name)])
-                             for f in fields(b)))  # fmt: skip
+        self._b = _Buckets(*(np.concatenate([getattr(b, name), getattr(rest, name)])
+                             for name in field_names(b)))  # fmt: skip
         self.width <<= shift
 
     # -- reading -----------------------------------------------------------------------------

@@ -24,13 +24,13 @@ not kept).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import numpy as np
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.engine.results import RuleResult
+from wavecheck.record import field, record, replace
 from wavecheck.steps.interface import RoleSignal
 
 __all__ = [
@@ -76,7 +76,7 @@ def wanted_places(rules: list[RuleResult], tick_ns: Fraction) -> set[Place]:
     return out
 
 
-@dataclass
+@record
 class _Side:
     """One role's part of one window."""
 
@@ -87,14 +87,14 @@ class _Side:
     cut: bool = False
 
 
-@dataclass
+@record
 class _Window:
     lo: int
     hi: int
     sides: dict[str, _Side] = field(default_factory=dict)
 
 
-@dataclass
+@record
 class SignalWindows:
     """The windows a report keeps, joined (module docstring).
 

@@ -14,17 +14,17 @@ violation by measured length (:meth:`wavecheck.engine.results.RuleResult.tally`)
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from fractions import Fraction
 from typing import Protocol, runtime_checkable
 
 from wavecheck.engine import Violation
+from wavecheck.record import record
 from wavecheck.timebase import Timebase
 
 __all__ = ["Tally", "ViolationGroup", "group_violations"]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class ViolationGroup:
     """Violations identical in rule, measured length and limit.
 

@@ -17,15 +17,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.engine.parts import StepCounts, StepTrace
-from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
-from wavecheck.steps.interface import StepInterface
-from wavecheck.steptypes import StepType
-from wavecheck.timebase import Timebase
 from wavecheck.units import format_ns
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # names for annotations: check --plot loads no measurement module
     from matplotlib.axes import Axes
+
+    from wavecheck.engine.parts import StepCounts, StepTrace
+    from wavecheck.measurement import AxisMeasurement, IntervalStats, Measurement
+    from wavecheck.steps.interface import StepInterface
+    from wavecheck.steptypes import StepType
+    from wavecheck.timebase import Timebase
 
 __all__ = ["draw_motion", "position_unknown", "render_measure_png"]
 

@@ -17,12 +17,11 @@ latch or a frame line does this; a STEP cannot (its pulses are as short as the o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
+from wavecheck.record import record
 
 __all__ = [
     "BusFindings",
@@ -59,7 +58,7 @@ def _period(ch: Channel) -> float:
     return float(np.median(np.diff(rising))) if len(rising) > 1 else 0.0
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Clocked:
     """``d`` changes in step with one edge of the clock ``c``."""
 
@@ -156,7 +155,7 @@ def strobe(starts: I64, c: Channel, resolution: int = 0) -> int | None:
     return int(p50)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Gate:
     """``e`` gates ``b``: every edge of ``b`` falls while ``e`` is at ``level``."""
 
@@ -221,7 +220,7 @@ def gate(e: Channel, b: Channel, clock: bool = False) -> Gate | None:
     return g
 
 
-@dataclass
+@record
 class BusFindings:
     """What the relations between lines rule out, channel index → why in words.
 

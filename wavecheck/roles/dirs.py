@@ -23,12 +23,12 @@ involved are refused. Elsewhere, a line with two possible STEPs is refused and i
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
+from wavecheck.record import field, record
 from wavecheck.roles.features import Pulses
 
 __all__ = ["Assignment", "DirFit", "assign", "at_pauses", "dir_fit", "plural"]
@@ -41,7 +41,7 @@ def plural(n: int, word: str) -> str:
     return f"{n:,} {word}{'' if n == 1 else 's'}"
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class DirFit:
     """How a changing channel ``d`` fits as the DIR of pulse channel ``s``."""
 
@@ -119,7 +119,7 @@ def dir_fit(d: Channel, s: Channel, p: Pulses) -> DirFit | None:
     return DirFit(d, s, n, at_rev, outside, (lo, hi))
 
 
-@dataclass
+@record
 class Assignment:
     """The outcome of :func:`assign`.
 

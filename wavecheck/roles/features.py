@@ -21,13 +21,13 @@ and RX have intervals of 17–104 samples at 2 MHz, all within ±1 sample of mul
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
+from wavecheck.record import record
 from wavecheck.roles.periodic import Timing, timing
 from wavecheck.roles.periodic import may_be_one_rate as may_be_rate
 from wavecheck.units import format_frequency, format_time
@@ -49,7 +49,7 @@ _SERIAL_FRAME_BITS = 10.5  # intervals up to this many bit times belong to a fra
 _SERIAL_ON_GRID = 0.9  # share of in-frame intervals within a quarter bit of a whole multiple
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Pulses:
     """The complete pulses of a channel at its pulse level, in ticks.
 
@@ -100,7 +100,7 @@ KIND_WORDS: dict[str, str] = {
 BY_NAME_ONLY = frozenset({"periodic", "bursts", "coded", "few", "duty"})
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class ChannelLook:
     """What a channel looks like on its own.
 

@@ -21,7 +21,8 @@ digit, and between letters and digits):
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+
+from wavecheck.record import record
 
 __all__ = ["NAMED_KINDS", "NameHint", "axes_by_scope", "leaf", "name_hint", "named_kind"]
 
@@ -46,7 +47,7 @@ _AXES = "xyzabcuvw"
 _NOISE = {"axis", "stepgen", "joint", "motor", "out", "pin"}
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class NameHint:
     """Roles a name fits (empty when it names none) and the axis it names (or None)."""
 

@@ -28,10 +28,10 @@ The rules look at the periods between pulse starts, in ticks, with a few ``numpy
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import numpy.typing as npt
+
+from wavecheck.record import record
 
 __all__ = ["Timing", "may_be_one_rate", "timing"]
 
@@ -56,7 +56,7 @@ _CLOCK_SLOW = 0.1  # a clock's longest period within runs is at most this much o
 _PWM_SPREAD = 0.05  # width spread (p95 - p5) beyond this fraction of the median: PWM
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Timing:
     """The rate of one pulse train.
 

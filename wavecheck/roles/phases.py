@@ -41,12 +41,12 @@ from __future__ import annotations
 import functools
 import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
+from wavecheck.record import field, record
 from wavecheck.roles.names import name_hint
 from wavecheck.roles.periodic import timing
 from wavecheck.steptypes import PHASE_NAMES, STATE_TABLES, step_type
@@ -60,7 +60,7 @@ _MAX_DWELL_RATIO = 3.0
 _PREFIX = 512  # changes checked first, for every order and table, before the full check
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class PhaseGroup:
     """Channels found to be one axis's phase outputs.
 
@@ -217,7 +217,7 @@ def _may_walk(seq: npt.NDArray[np.int64], longest: int) -> bool:
     return int(np.count_nonzero(np.bincount(seq, minlength=32))) <= longest
 
 
-@dataclass
+@record
 class PhaseSearch:
     """What :func:`find_phase_groups` found, and what it cost.
 

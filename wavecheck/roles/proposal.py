@@ -10,9 +10,9 @@ else (``Capture.channel``), else by index; each ``--map`` value is shell-quoted 
 from __future__ import annotations
 
 import shlex
-from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from wavecheck.record import field, record
 from wavecheck.steptypes import StepKind
 
 __all__ = [
@@ -32,7 +32,7 @@ changes but is named ``Y_DIR``); or the layout (an unchanging channel right afte
 its DIR: no waveform evidence at all — check the wiring)."""
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class RoleChoice:
     """One role of one axis: the channel, how to write it in ``--map``, and why.
 
@@ -56,7 +56,7 @@ class RoleChoice:
     active_level: int | None = None
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class AxisProposal:
     """One axis.
 
@@ -91,7 +91,7 @@ class AxisProposal:
         return tuple(r.role for r in self.roles if r.role == "enable" and r.active_level == 0)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class SharedLine:
     """A line that serves several axes (one ENABLE for all of them)."""
 
@@ -102,7 +102,7 @@ class SharedLine:
     evidence: str
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Unassigned:
     """A channel given no role, and why."""
 
@@ -111,7 +111,7 @@ class Unassigned:
     why: str
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Conflict:
     """Something the waveform cannot decide: a question and the candidate answers."""
 
@@ -119,7 +119,7 @@ class Conflict:
     candidates: tuple[str, ...]
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class NameRefused:
     """A channel named after a pulse role whose waveform says it is none (a name is a hint).
 
@@ -136,7 +136,7 @@ class NameRefused:
     conflict: Conflict
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class LineLook:
     """What one channel looks like, in a word or two (``"clock"``, ``"bus data"``)."""
 
@@ -184,7 +184,7 @@ def axes_map_args(axes: tuple[AxisProposal, ...]) -> str:
     return " ".join(out)
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Proposal:
     """Roles proposed for a capture's channels (see :func:`wavecheck.roles.propose`).
 

@@ -4,12 +4,11 @@ bus findings; and the lines most like a STEP."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel
+from wavecheck.record import record
 from wavecheck.roles.buses import BusFindings, find_buses
 from wavecheck.roles.features import ChannelLook, Pulses, look_at, may_be_one_rate
 from wavecheck.roles.names import NameHint, name_hint
@@ -50,7 +49,7 @@ class Looks(dict[int, ChannelLook]):
         return look
 
 
-@dataclass(eq=False)
+@record(eq=False)
 class FoundAxis:
     """An axis as the stages build it."""
 

@@ -9,11 +9,10 @@ run is another axis). Which pairs to propose is decided in :mod:`wavecheck.roles
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from wavecheck.capture.edges import Channel
+from wavecheck.record import record
 from wavecheck.roles.features import Pulses
 
 __all__ = ["UpDownFit", "up_down"]
@@ -22,7 +21,7 @@ _SWITCH_GAP = 0.9  # the period across a switch is at least this times its neigh
 _SAME_WIDTH = 1.2  # median pulse widths of the two lines within this factor
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class UpDownFit:
     """Two pulse lines that never pulse together and take turns ``switches`` times."""
 

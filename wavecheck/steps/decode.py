@@ -28,7 +28,6 @@ Everything is vectorised over the whole edge arrays (numpy ``searchsorted`` / ``
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -36,6 +35,7 @@ import numpy.typing as npt
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.errors import UsageError
+from wavecheck.record import field, record
 from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steptypes import StepType, step_type
 
@@ -57,7 +57,7 @@ def _empty() -> EdgeArray:
     return _EMPTY.copy()
 
 
-@dataclass
+@record
 class StepEvents:
     """The steps of one interface.
 

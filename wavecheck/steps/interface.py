@@ -9,12 +9,12 @@ from __future__ import annotations
 import re
 import shlex
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.errors import UsageError
+from wavecheck.record import field, record
 from wavecheck.roles.names import leaf as leaf_name
 
 __all__ = [
@@ -204,7 +204,7 @@ def _no_stretches() -> tuple[EdgeArray, EdgeArray]:
     return np.zeros(0, np.int64), np.zeros(0, np.int64)
 
 
-@dataclass
+@record
 class RoleSignal:
     """One role's signal at the drive's input (after any inversion)."""
 
@@ -220,7 +220,7 @@ class RoleSignal:
     """The channel's index in the capture (−1: not from a capture)."""
 
 
-@dataclass
+@record
 class StepInterface:
     """The mapped signals of one step interface, on the capture's time base."""
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 
 from wavecheck.errors import UsageError
+from wavecheck.record import field, record
 from wavecheck.steps.interface import parse_map, role_name
 
 __all__ = [
@@ -32,7 +32,7 @@ _AXIS = re.compile(r"^[A-Za-z0-9_-]+$")
 SHAREABLE = frozenset({"enable"})
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class AxisMap:
     """One axis: its name (None for the unnamed single axis) and role → channel as written."""
 

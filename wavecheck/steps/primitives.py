@@ -14,7 +14,6 @@ All inputs are increasing ``int64`` tick arrays; nothing loops per edge in Pytho
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 from typing import Literal
 
@@ -22,6 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
+from wavecheck.record import record
 
 __all__ = ["Intervals", "holds", "periods", "setups", "sorted_search", "widths"]
 
@@ -29,7 +29,7 @@ __all__ = ["Intervals", "holds", "periods", "setups", "sorted_search", "widths"]
 DENSE_SPAN = 8
 
 
-@dataclass(frozen=True)
+@record(frozen=True)
 class Intervals:
     """Measured intervals: ``end[i] - start[i]`` ticks, starting at ``start[i]``.
 

@@ -309,9 +309,9 @@ def test_drive_file_parsed_once_while_unchanged(
     calls: list[Path] = []
     parse = library._parse_file
 
-    def counting(path: Path, user: bool) -> library.Drive:
+    def counting(path: Path, user: bool, raw: bytes | None = None) -> library.Drive:
         calls.append(path)
-        return parse(path, user)
+        return parse(path, user, raw)
 
     monkeypatch.setattr(library, "_parse_file", counting)
     monkeypatch.setattr(library, "_DRIVES", {})
