@@ -319,17 +319,23 @@ def _axis(
         ),
         max_rate=max_rate,
         pulse_level=0 if step_mask >> bit & 1 else 1,
-        dir_hold_trailing=Guaranteed(  # 0: no figure can fall below it
-            Fraction(0),
-            "$0",
-            pulse.where,
-            "us",
-            "derived",
-            "the next tick may follow the end of the pulse at once",
-        ),  # fmt: skip
+        dir_hold_trailing=_trailing_hold(tick, pulse, max_rate.where),
         dir_inverted=bool(dir_mask >> bit & 1),
         info=info,
     )
+
+
+def _trailing_hold(tick: Fraction | None, pulse: Guaranteed, where: str) -> Guaranteed:
+    """DIR hold from the pulse's end: the next DIR is written one interrupt tick after the
+    pulse started (stepper.c:319-336), so at the fastest tick the hold is the tick less the
+    pulse (the pulse's lower bound: the hold's upper end, so a FAIL under it is sure); the
+    interrupts' jitter may take any part of it (no bound: never a PASS). Without the tick or the
+    pulse nothing is known."""
+    if tick is None or pulse.value is None:
+        return unknown("$0", "the interrupt tick or the pulse is not known: " + _HOLD_NOTE, where)
+    return uncertain(max(tick - pulse.value, Fraction(0)), "$11n and $0", where, "us", None,
+                     _TICK_JITTER, "one interrupt tick after the pulse started, less the pulse: "
+                     + _HOLD_NOTE)  # fmt: skip
 
 
 _HOLD_NOTE = (

@@ -12,8 +12,11 @@ import pytest
 from tests.wavecheck.firmware.fixapply import apply
 from tools.firmware_corpus import CORPUS
 from wavecheck.cli import main
+from wavecheck.drives.library import load_drive
+from wavecheck.drives.overrides import tune_drive
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
 
 pytestmark = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared firmware corpus not present")
 FLUIDNC = CORPUS / "fluidnc/official/6_pack_TMC2130_XYZ.yaml"
@@ -333,3 +336,31 @@ def test_rrf_default_extruders_are_not_decided_by_the_file(
     cfg = read_firmware(cfg_g)
     assert cfg.axis_names == axes
     assert any(n.startswith("no M584 E: E0 on driver 3 assumed") for n in cfg.notes) == noted
+
+
+@pytest.mark.parametrize(
+    ("rates", "limit", "verdict"),
+    [
+        # X 80 x 30000 / 60 = 40 kHz: the tick is 25 us, the pulse >= $0 - 562.5 ns = 9.4375 us,
+        # so the hold from the pulse's end is at most 15.5625 us at that rate; jitter may take
+        # any part of it (stepper.c:319-336 and the interrupts that delay it): never a PASS
+        ("$110=30000\n$111=30000\n", "dir_hold=5us", "indeterminate"),
+        # a drive asking more than the tick less the pulse fails even without any jitter
+        ("$110=30000\n$111=30000\n", "dir_hold=20us", "fail"),
+    ],
+)
+def test_grbl_trailing_dir_hold_is_the_tick_less_the_pulse(
+    tmp_path: Path, rates: str, limit: str, verdict: str
+) -> None:
+    """With STEP inverted ($2) a drive that counts its rising edge counts the end of grbl's
+    pulse; the next block's DIR is written one interrupt tick after the pulse started, so the
+    hold from the pulse's end is the tick less the pulse, not 0 (the reader said 0, a certain
+    FAIL against any drive stating a hold: held-out grbl dumps with $2 set)."""
+    (tmp_path / "d.txt").write_text(f"$0=10\n$2=3\n$100=80\n$101=80\n{rates}")
+    cfg = read_firmware(tmp_path / "d.txt")
+    x = cfg.axis("X")
+    assert x.pulse_level == 0 and x.dir_hold_trailing is not None
+    assert x.dir_hold_trailing.value == F(25_000) - (F(10_000) - F(1125, 2))
+    drive = tune_drive(load_drive("drv8825"), [limit])
+    row = next(r for r in evaluate_config(cfg, [(x, drive)]).pairs[0].rows if r.rule == "dir_hold")
+    assert row.verdict == verdict, row.note
