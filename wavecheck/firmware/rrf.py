@@ -268,7 +268,12 @@ def _m92_203(code: str, words: list[tuple[str, str]], at: str, st: _State) -> No
         if not value or value.startswith("{"):
             st.unsupported.append(f"{at}: M{code} {letter}{value} is not a number; not read")
             continue
-        for i, v in enumerate(value.split(":")):
+        values = value.split(":")
+        if letter == "E" and len(values) == 1 and st.extruders_given:
+            # one E value is every extruder's: GCodeBuffer::GetFloatArray(..., doPad=true) fills
+            # the array with it (M92 and M203 read E so, GCodes2.cpp / GCodes3.cpp)
+            values *= len(st.extruders)
+        for i, v in enumerate(values):
             key = letter if letter != "E" else f"E{i}"
             x = number(v, at, f"M{code} {letter}", low=0, high=10**9)
             if code == "92":

@@ -1,0 +1,101 @@
+"""Constructs seen in real configurations outside the development corpus (the held-out probe,
+``tools/heldout_probe.py``), each reduced to a few lines of our own. Each test names the public
+file where the construct was seen and the firmware fact it checks."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from wavecheck.errors import ConfigError
+from wavecheck.firmware import read_firmware
+
+
+def test_klipper_printer_cfg_of_missing_includes_says_so(tmp_path: Path) -> None:
+    """Seen in 3lementalS/MK3SKlipperConfigs printer.cfg: every stepper is in
+    ``[include Configuration/002_Motion/*.cfg]``; given alone, the file was refused as "a Klipper
+    file without steppers". Klipper reads includes beside the file and stops on a missing one that is no glob
+    (../shared/firmware-src/klipper/klippy/configfile.py:181-189), so the true reason is the
+    includes that are not there."""
+    cfg = tmp_path / "printer.cfg"
+    cfg.write_text("[include mainsail.cfg]\n[include motion/*.cfg]\n\n[printer]\nkinematics: cartesian\n"
+                   "max_velocity: 300\nmax_accel: 3000\n")  # fmt: skip
+    with pytest.raises(ConfigError) as err:
+        read_firmware(cfg)
+    text = str(err.value)
+    assert "2 [include] match no file" in text and "mainsail.cfg" in text
+    assert "without steppers" not in text
+
+
+def test_klipper_file_without_steppers_or_includes_is_still_refused_as_such(
+    tmp_path: Path,
+) -> None:
+    """The other side: no includes at all, no steppers (a partial sample file)."""
+    cfg = tmp_path / "sample.cfg"
+    cfg.write_text("[mcu]\nserial: /dev/ttyACM0\n\n[printer]\nkinematics: none\nmax_velocity: 1\n"
+                   "max_accel: 1\n\n[fan]\npin: PA8\n")  # fmt: skip
+    with pytest.raises(ConfigError, match="without steppers"):
+        read_firmware(cfg)
+
+
+def test_rrf_one_e_value_is_every_extruders(tmp_path: Path) -> None:
+    """Seen in uwo-fast/hangprinter-v4 config.g (``M584 E121.0:0:1:2:3:4:5`` then ``M92 E391.50``
+    and ``M203 ... E3600``), and common wherever two extruders share one ``M92 E``: only E0 got
+    the value and E1.. were dropped as unconfigured. RepRapFirmware reads E with
+    ``gb.GetFloatArray(eVals, eCount, true)``; with one value given and doPad true it fills the
+    rest of the array with it (GCodeBuffer.cpp GetFloatArray: "If there is one entry and doPad is
+    true, fill the rest of the array with the first entry"), for M92 and M203 alike."""
+    cfg = tmp_path / "config.g"
+    cfg.write_text("M584 X0 Y1 Z2 E3:4\nM92 X80 Y80 Z400 E420\nM203 X6000 Y6000 Z600 E1200\n")
+    got = read_firmware(cfg)
+    assert got.axis_names == ("X", "Y", "Z", "E0", "E1")
+    for e in ("E0", "E1"):
+        assert got.axis(e).max_rate.value == 420 * 1200 / 60  # steps/mm x mm/min / 60
+
+
+def test_rrf_e_list_is_read_value_by_value(tmp_path: Path) -> None:
+    """The other side: a list gives each extruder its own value, no padding."""
+    cfg = tmp_path / "config.g"
+    cfg.write_text(
+        "M584 X0 Y1 Z2 E3:4\nM92 X80 Y80 Z400 E420:830\nM203 X6000 Y6000 Z600 E1200:600\n"
+    )
+    got = read_firmware(cfg)
+    assert got.axis("E0").max_rate.value == 420 * 1200 / 60
+    assert got.axis("E1").max_rate.value == 830 * 600 / 60
+
+
+_SMOOTHIE_OLD_EXTRUDER = """alpha_steps_per_mm 100
+alpha_step_pin 2.0
+alpha_dir_pin 0.5
+alpha_max_rate 30000.0
+extruder_module_enable {enable}
+extruder_steps_per_mm 140
+extruder_max_speed 100   # mm/s
+extruder_step_pin 2.3
+extruder_dir_pin 0.22!
+"""
+
+
+def test_smoothie_old_single_extruder_syntax_is_a_motor(tmp_path: Path) -> None:
+    """Seen in Smoothieware/Smoothieware ConfigSamples/Smoothieboard.Kossel/config (and other
+    pre-2014 samples): ``extruder_module_enable true`` with ``extruder_step_pin`` etc. The
+    extruder motor was missing from the axes. ExtruderMaker::on_module_loaded makes an Extruder
+    with single_config when ``extruder_module_enable`` is true, and Extruder::on_config_reload
+    reads ``extruder_steps_per_mm`` (default 1), ``extruder_step_pin``/``extruder_dir_pin`` and
+    ``set_max_rate(extruder_max_speed)`` (mm/s, default 1000) for it (src/modules/tools/extruder/
+    ExtruderMaker.cpp, Extruder.cpp)."""
+    cfg = tmp_path / "config"
+    cfg.write_text(_SMOOTHIE_OLD_EXTRUDER.format(enable="true"))
+    got = read_firmware(cfg)
+    assert got.axis_names == ("alpha", "extruder")
+    e = got.axis("e")
+    assert e.axis == "extruder" and e.dir_inverted
+    assert e.max_rate.value == 140 * 100  # steps/mm x mm/s
+
+
+def test_smoothie_old_extruder_disabled_is_no_motor(tmp_path: Path) -> None:
+    """The other side (ConfigSamples/NucleoF411RE/config): ``extruder_module_enable false``."""
+    cfg = tmp_path / "config"
+    cfg.write_text(_SMOOTHIE_OLD_EXTRUDER.format(enable="false"))
+    assert read_firmware(cfg).axis_names == ("alpha",)
