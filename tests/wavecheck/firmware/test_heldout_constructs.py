@@ -99,3 +99,58 @@ def test_smoothie_old_extruder_disabled_is_no_motor(tmp_path: Path) -> None:
     cfg = tmp_path / "config"
     cfg.write_text(_SMOOTHIE_OLD_EXTRUDER.format(enable="false"))
     assert read_firmware(cfg).axis_names == ("alpha",)
+
+
+_FLUIDNC_AXIS = """axes:
+  x:
+    steps_per_mm: 100
+    max_rate_mm_per_min: 600
+    motor0:
+      standard_stepper:
+        step_pin: gpio.4
+        direction_pin: gpio.5
+"""
+
+
+def test_fluidnc_flow_mapping_is_not_read(tmp_path: Path) -> None:
+    """Seen in a fluidnc-bob rev C README's config (``stepping: { engine: RMT, pulse_us: 5,
+    dir_delay_us: 5 }``, ``standard_stepper: { step_pin: gpio.4, ... }``): read as YAML the
+    braces gave a 5 us pulse and DIR delay and PASSed. FluidNC's tokenizer takes a line's key
+    and the rest of the line as its value (FluidNC/src/Configuration/Tokenizer.cpp) and a
+    section reads only the more-indented lines below it (ParserHandler::enterSection), so the
+    settings in braces are never read: the pulse is the 4 us default, the DIR delay 0."""
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text("stepping: { engine: RMT, pulse_us: 5, dir_delay_us: 5 }\n" + _FLUIDNC_AXIS)
+    got = read_firmware(cfg)
+    x = got.axis("x")
+    assert x.pulse.value == 4000 and x.pulse.where == "firmware default"
+    assert any("flow mapping" in n and ":1:" in n for n in got.notes)
+
+
+def test_fluidnc_motor_in_braces_is_no_step_generator(tmp_path: Path) -> None:
+    """The same README's motors: ``standard_stepper: { step_pin: gpio.4, ... }`` sets no pin in
+    FluidNC; with every motor so, the refusal says why."""
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text(_FLUIDNC_AXIS.replace(
+        "      standard_stepper:\n        step_pin: gpio.4\n        direction_pin: gpio.5\n",
+        "      standard_stepper: { step_pin: gpio.4, direction_pin: gpio.5 }\n",
+    ))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"flow mapping.*line 6"):
+        read_firmware(cfg)
+
+
+@pytest.mark.parametrize(("delay", "want"), [("0", None), ("3", 3000)])
+def test_fluidnc_timed_engine_without_dir_delay_is_not_enforced(
+    tmp_path: Path, delay: str, want: int | None
+) -> None:
+    """Seen in the FluidNC wiki's MKS DLC32 Max example (``engine: Timed``, ``dir_delay_us: 0``):
+    the DIR setup was a '0 s?' figure and FAILed. FluidNC's timed engine writes DIR, spins
+    ``delay_us(_dir_delay_us)`` in finish_dir and then writes STEP (FluidNC/esp32/
+    timed_engine.c): at 0 nothing keeps a setup, so it is not enforced (issue 32, 1); a set
+    delay is spun (interrupts only lengthen it)."""
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text(f"stepping:\n  engine: Timed\n  pulse_us: 4\n  dir_delay_us: {delay}\n"
+                   + _FLUIDNC_AXIS)  # fmt: skip
+    setup = read_firmware(cfg).axis("x").dir_setup
+    assert setup.value == want
+    assert (setup.status == "not_enforced") == (want is None)
