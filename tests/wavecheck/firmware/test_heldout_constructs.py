@@ -154,3 +154,43 @@ def test_fluidnc_timed_engine_without_dir_delay_is_not_enforced(
     setup = read_firmware(cfg).axis("x").dir_setup
     assert setup.value == want
     assert (setup.status == "not_enforced") == (want is None)
+
+
+_HM2_INI = """[EMCMOT]
+SERVO_PERIOD = 1000000
+[KINS]
+JOINTS = 1
+[HAL]
+HALFILE = mill.hal
+[JOINT_0]
+SCALE = 1000
+"""
+_HM2_HAL = """loadrt hostmot2
+loadrt hm2_pci config="num_stepgens=1"
+setp hm2_5i20.0.stepgen.00.steplen 5000
+setp hm2_5i20.0.stepgen.00.stepspace 5000
+setp hm2_5i20.0.stepgen.00.dirsetup 5000
+setp hm2_5i20.0.stepgen.00.dirhold 5000
+setp hm2_5i20.0.stepgen.00.position-scale [JOINT_0]SCALE
+net xpos joint.0.motor-pos-cmd => hm2_5i20.0.stepgen.00.position-cmd
+setp hm2_5i20.0.gpio.040.is_output TRUE
+setp hm2_5i20.0.gpio.040.invert_output TRUE
+"""
+
+
+@pytest.mark.parametrize("invert_step", [True, False])
+def test_hm2_inverted_module_output_is_named(tmp_path: Path, invert_step: bool) -> None:
+    """Seen in LinuxCNC configs/by_machine/smithy/622leadshine.hal: ``setp
+    hm2_5i20.0.gpio.000.invert_output TRUE`` ("invert the step pulse polarity") for the step
+    pins of stepgens 0..3; the report said "pulses high at the pin". hostmot2 gives a pin that
+    is "an output for some other module" the invert_output parameter and writes it to the
+    output-invert register (src/hal/drivers/mesa-hostmot2/ioport.c hm2_ioport_gpio_export_hal,
+    hm2_ioport_update); which IO pin is a stepgen's STEP is in the bitfile's pin table, so the
+    report says so. A plain GPIO output (``is_output`` TRUE, gpio.040 here) is no stepgen's."""
+    (tmp_path / "mill.ini").write_text(_HM2_INI)
+    extra = "setp hm2_5i20.0.gpio.000.invert_output TRUE\n" if invert_step else ""
+    (tmp_path / "mill.hal").write_text(_HM2_HAL + extra)
+    notes = read_firmware(tmp_path / "mill.ini").axis("stepgen.00").notes
+    named = [n for n in notes if "invert_output" in n]
+    assert bool(named) == invert_step
+    assert not any("gpio.040" in n for n in named)
