@@ -59,9 +59,9 @@ class Tally:
     bad: list[str] = field(default_factory=list)
 
 
-def run_config(path: Path, drive: str, timeout: float) -> Outcome:
+def run_config(path: Path, drive: str, timeout: float, command: list[str]) -> Outcome:
     """One ``wavecheck config PATH --drive DRIVE --format json`` run, classified."""
-    cmd = [str(WAVECHECK), "config", str(path), "--drive", drive, "--format", "json"]
+    cmd = [*command, "config", str(path), "--drive", drive, "--format", "json"]
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
     except subprocess.TimeoutExpired:
@@ -88,13 +88,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--drive", action="append", help="drive ids (default drv8825, tmc2209)")
     parser.add_argument("--timeout", type=float, default=60.0, help="seconds before 'hung'")
     parser.add_argument("--list", action="store_true", help="one line per case and drive too")
+    parser.add_argument(
+        "--command",
+        default=str(WAVECHECK),
+        help="the wavecheck to run, split at spaces (default: this venv's; e.g. "
+        "'python -m wavecheck' with PYTHONPATH set to an older checkout)",
+    )
     args = parser.parse_args(argv)
     drives = args.drive or ["drv8825", "tmc2209"]
     tallies: dict[tuple[str, str], Tally] = {}
     for family, path in cases(args.folder):
         for drive in drives:
             t = tallies.setdefault((family, drive), Tally())
-            out = run_config(path, drive, args.timeout)
+            out = run_config(path, drive, args.timeout, args.command.split())
             t.cases += 1
             t.kinds[out.kind] += 1
             if out.kind == "refused":
