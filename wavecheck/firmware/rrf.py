@@ -408,6 +408,21 @@ def _axis(
         dir_inverted=st.backwards.get(drivers[0], False),
         info=info,
         aliases=("E",) if name == "E0" else (),
+        notes=_mixed_direction(drivers, st),
+    )
+
+
+def _mixed_direction(drivers: list[str], st: _State) -> tuple[str, ...]:
+    """A note when an axis's drivers run in different directions (M569 S per driver, e.g. a
+    gantry's second Y motor mounted mirrored): DIR is inverted on some of them only, and the
+    axis's DIR polarity shown is its first driver's."""
+    back = [d.removeprefix("0.") for d in drivers if st.backwards.get(d, False)]
+    if not back or len(back) == len(drivers):
+        return ()
+    return (
+        f"M569 S0 (backwards) on driver {', '.join(back)} only: DIR is inverted there and not on "
+        f"the axis's other drivers; the DIR polarity shown is driver "
+        f"{drivers[0].removeprefix('0.')}'s",
     )
 
 

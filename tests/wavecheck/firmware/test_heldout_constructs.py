@@ -194,3 +194,17 @@ def test_hm2_inverted_module_output_is_named(tmp_path: Path, invert_step: bool) 
     named = [n for n in notes if "invert_output" in n]
     assert bool(named) == invert_step
     assert not any("gpio.040" in n for n in named)
+
+
+def test_rrf_axis_with_mirrored_second_driver_says_so(tmp_path: Path) -> None:
+    """Seen in 4cello/mirandacnc-duet config.g: ``M569 P1 S1`` and ``M569 P3 S0`` with ``M584
+    Y1:3`` (a gantry's second Y motor mirrored); Y was reported "DIR not inverted", true for
+    driver 1 only. RepRapFirmware keeps the direction per driver (M569 S: SetDirectionValue per
+    drive, GCodes ConfigureDriver), so the report names the driver that differs."""
+    cfg = tmp_path / "config.g"
+    cfg.write_text("M569 P1 S1\nM569 P3 S0\nM584 X0 Y1:3 Z2\nM92 X80 Y80 Z400\n"
+                   "M203 X6000 Y6000 Z600\n")  # fmt: skip
+    got = read_firmware(cfg)
+    assert not got.axis("Y").dir_inverted
+    assert any("driver 3 only" in n for n in got.axis("Y").notes)
+    assert not got.axis("X").notes  # one driver: nothing to say
