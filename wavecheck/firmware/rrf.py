@@ -246,13 +246,28 @@ def _kinematics(code: str, words: dict[str, str], at: str, st: _State) -> None:
         st.coupled[a] = f"{what} at {at}"
 
 
+#: Microstepping values the smart drivers take (M350 refuses others, see _m350).
+_MICROSTEPS = frozenset(Fraction(2**k) for k in range(9))
+
+
 def _m350(words: list[tuple[str, str]], at: str, st: _State) -> None:
     for letter, value in words:
         if letter not in (*_AXES, "E") or not value or value.startswith("{"):
             continue
-        for i, v in enumerate(value.split(":")):
+        values = value.split(":")
+        if letter == "E" and len(values) == 1 and st.extruders_given:
+            values *= len(st.extruders)  # GetUnsignedArray(..., doPad=true), as M92 E
+        for i, v in enumerate(values):
             key = letter if letter != "E" else f"E{i}"
-            new = number(v, at, f"M350 {letter}", low=1, high=256)
+            new = number(v, at, f"M350 {letter}", low=0, high=10**6)
+            if new not in _MICROSTEPS:
+                # GCodes M350: ChangeMicrostepping fails, "Drive %c does not support %ux
+                # microstepping" is reported and the loop goes on: that drive keeps its setting
+                st.unsupported.append(
+                    f"{at}: M350 {letter}{v}: RepRapFirmware refuses {v}x microstepping (a "
+                    "power of 2 up to 256) and keeps the drive's setting; not applied"
+                )
+                continue
             old = st.micro.get(key, Fraction(16))
             if key in st.spm:
                 spm, first = st.spm[key]

@@ -208,3 +208,18 @@ def test_rrf_axis_with_mirrored_second_driver_says_so(tmp_path: Path) -> None:
     assert not got.axis("Y").dir_inverted
     assert any("driver 3 only" in n for n in got.axis("Y").notes)
     assert not got.axis("X").notes  # one driver: nothing to say
+
+
+def test_rrf_unsupported_microstepping_is_not_applied(tmp_path: Path) -> None:
+    """Seen in diabase/H-Series-Configuration config.g (``M350 ... W400 ...``): the whole file
+    was refused ("M350 W '400' is out of range"). RepRapFirmware's M350 calls
+    ChangeMicrostepping per letter; when the drive refuses the value it replies "Drive %c does
+    not support %ux microstepping" and goes on with the next letter (GCodes M350), so the other
+    axes are read and that drive keeps its microstepping (no steps/mm rescale)."""
+    cfg = tmp_path / "config.g"
+    cfg.write_text("M584 X0 Y1 Z2 W5\nM92 X80 Y80 Z400 W400\nM350 X32 W400\n"
+                   "M203 X6000 Y6000 Z600 W600\n")  # fmt: skip
+    got = read_firmware(cfg)
+    assert got.axis("X").max_rate.value == 160 * 6000 / 60  # 80 steps/mm x 32/16
+    assert got.axis("W").max_rate.value == 400 * 600 / 60  # not rescaled
+    assert any("W400" in u and "not applied" in u for u in got.unsupported)
