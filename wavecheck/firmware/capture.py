@@ -7,7 +7,10 @@
 pulse, the shortest DIR setup seen vs the configured delay (to the drive's active edge: plus the
 pulse when that edge ends the pulse), in both-edge mode the shortest space too, and the highest
 step rate vs the configured maximum. A capture shorter than its own configuration (by more than
-the capture's resolution) is a finding of its own, apart from the drive's rules. From a Report,
+the capture's resolution) is a finding of its own, apart from the drive's rules, but only when
+it is shorter than the band the firmware may fall short by (:attr:`Guaranteed.short_by`): a
+measured figure inside that band is what the firmware does, and a figure with a band no source
+bounds cannot show that the setting did not take effect (indeterminate). From a Report,
 only intervals the drive's rules measured are compared (a rule the drive states no figure for is
 not measured); ``measure`` measures every interval kind of the step type.
 """
@@ -15,7 +18,7 @@ not measured); ``measure`` measures every interval kind of the step type.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
@@ -114,6 +117,9 @@ class Comparison:
     where: str
     verdict: Verdict
     message: str
+    short_by: Fraction | None = Fraction(0)
+    """How far below ``configured`` the firmware may fall (Hz above it for the rate; None: no
+    source bounds it): a measured figure inside that band is no finding."""
 
 
 @dataclass(frozen=True)
@@ -139,9 +145,27 @@ class FirmwareCheck:
         return tuple(c for c in self.comparisons if c.verdict == "fail")
 
 
+def _band(figs: list[Guaranteed]) -> Fraction | None:
+    """The sum of the figures' bands (None when one is unbounded)."""
+    short: Fraction | None = Fraction(0)
+    for f in figs:
+        short = None if short is None or f.short_by is None else short + f.short_by
+    return short
+
+
 def _time(
-    seen: Observed, what: str, rule: str, fig: Guaranteed, offset: Fraction, label: str
+    seen: Observed, what: str, rule: str, fig: Guaranteed, added: Guaranteed | None, label: str
 ) -> Comparison:
+    """``fig`` (+ ``added``: the pulse, to a trailing active edge) vs the shortest measured: a
+    FAIL only below the band's worst end (:attr:`Guaranteed.short_by`), by more than T."""
+    found = _time_verdict(seen, what, rule, fig, added, label)
+    return replace(found, short_by=_band([f for f in (fig, added) if f is not None]))
+
+
+def _time_verdict(
+    seen: Observed, what: str, rule: str, fig: Guaranteed, added: Guaranteed | None, label: str
+) -> Comparison:
+    offset = added.value if added is not None and added.value is not None else Fraction(0)
     configured = None if fig.value is None else fig.value + offset
     where = fig.where
     measured, at = seen.shortest.get(rule, (None, None))
@@ -179,11 +203,26 @@ def _time(
                           f"configured {format_ns(configured)} {label}, which the firmware does "
                           f"not enforce; shortest measured {format_ns(measured)}")  # fmt: skip
     t = seen.resolution_ns
-    exact = (
-        "" if fig.status not in ("uncertain",) else " (the firmware does not enforce it exactly)"
-    )
+    bands = [f for f in (fig, added) if f is not None and f.banded]
+    short = _band(bands)
+    band = "; ".join(f.band_text() for f in bands)
     place = f" at {format_time(at)}" if at is not None else ""
-    if measured + t < configured:
+    if measured + t < configured and (short is None or measured + t >= configured - short):
+        within = (
+            "inside the band the firmware may fall short by"
+            if short is not None
+            else "and the firmware may fall short of it by an amount no source bounds"
+        )
+        return Comparison(
+            what, rule, configured, measured, "ns", at, fig.setting, where,
+            "pass" if short is not None else "indeterminate",
+            f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
+            f"measured {format_ns(measured)}{place}, {within}: {band}",
+        )  # fmt: skip
+    if measured + t < configured - (short or Fraction(0)):
+        worst = (
+            f", below the {format_ns(configured - short)} it may fall to ({band})" if short else ""
+        )
         return Comparison(
             what,
             rule,
@@ -195,7 +234,7 @@ def _time(
             where,
             "fail",
             f"configured {format_ns(configured)} {label} ({fig.setting}, {where}); shortest "
-            f"measured {format_ns(measured)}{place}{exact}",
+            f"measured {format_ns(measured)}{place}{worst}",
         )
     return Comparison(
         what,
@@ -223,15 +262,15 @@ def firmware_check(
     level = pulse_level(seen.interface, seen.step_type, axis.pulse_level)
     pulse_rule, space_rule = width_rule(level), width_rule(1 - level)
     leading = "rising" if level else "falling"
-    out = [_time(seen, "pulse", pulse_rule, axis.pulse, Fraction(0), "pulses")]
+    out = [_time(seen, "pulse", pulse_rule, axis.pulse, None, "pulses")]
     if axis.both_edges:
-        out.append(_time(seen, "space", space_rule, axis.idle, Fraction(0), "space between edges"))
+        out.append(_time(seen, "space", space_rule, axis.idle, None, "space between edges"))
     trailing = seen.active_edge not in (leading, "both") and axis.pulse.value is not None
-    offset = axis.pulse.value if trailing and axis.pulse.value is not None else Fraction(0)
+    added = axis.pulse if trailing else None
     setup = axis.dir_setup
     if trailing and axis.dir_setup_trailing is not None:  # DIR may change during the pulse
-        setup, offset = axis.dir_setup_trailing, Fraction(0)
-    out.append(_time(seen, "dir_setup", "dir_setup", setup, offset, "DIR setup"))
+        setup, added = axis.dir_setup_trailing, None
+    out.append(_time(seen, "dir_setup", "dir_setup", setup, added, "DIR setup"))
     cfg_rate, rate = axis.max_rate.value, seen.rate_hz
     if cfg_rate is None or rate is None:
         out.append(
@@ -248,9 +287,27 @@ def firmware_check(
                 "no configured maximum or no steps",
             )
         )
+    elif axis.max_rate.short_by is None and rate > cfg_rate:  # the band has no top
+        out.append(
+            Comparison(
+                "rate",
+                "",
+                cfg_rate,
+                rate,
+                "Hz",
+                seen.rate_at_s,
+                axis.max_rate.setting,
+                axis.max_rate.where,
+                "indeterminate",
+                f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); "
+                f"highest measured {format_rate(rate)}, and "
+                f"{axis.max_rate.band_text(rate=True)}",
+                None,
+            )  # fmt: skip
+        )
     else:
         at = seen.rate_at_s
-        ok = rate <= cfg_rate
+        ok = rate <= cfg_rate + (axis.max_rate.short_by or Fraction(0))
         out.append(
             Comparison(
                 "rate",
@@ -264,6 +321,7 @@ def firmware_check(
                 "pass" if ok else "fail",
                 f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
                 f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
+                axis.max_rate.short_by,
             )
         )
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out), pairing)

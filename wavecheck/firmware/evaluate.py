@@ -11,6 +11,14 @@ of the pair is the smallest of the generator's max rate, the drive's, and 1 / (p
 drive's minimum for the idle level), or 1 / the longest of the pulse and the two level minimums
 in both-edge mode.
 
+A figure the firmware does not keep exactly (status ``uncertain``) carries a band
+(:attr:`Guaranteed.short_by`): the rule passes only if the band's worst end (the value less
+``short_by``; a rate plus it) still meets the limit, fails only if the value itself misses it,
+and is indeterminate in between, the note naming the band and the firmware line it comes from; a
+band no source bounds is never a PASS. The printed fix clears the band. The pair's max step rate
+takes the generator's ceiling at the top of its band (a rate with no bound above is no ceiling)
+and the pulse at its aim (a pulse shorter than its aim only raises the timing term).
+
 A figure whose sources disagree (:attr:`Guaranteed.disputed`) is judged under both readings: a
 rule that passes under one and fails under the other is indeterminate, and says so. A figure the
 firmware does not enforce (status ``not_enforced``) is never a PASS: it is indeterminate, with the
@@ -43,7 +51,15 @@ from wavecheck.verdict import (
     unchecked_by_reason,
 )
 
-__all__ = ["ConfigResult", "PairResult", "PairRow", "evaluate_config", "evaluate_pair"]
+__all__ = [
+    "ConfigResult",
+    "PairResult",
+    "PairRow",
+    "band_verdict",
+    "evaluate_config",
+    "evaluate_pair",
+    "worst_end",
+]
 
 _GIGA = Fraction(10**9)
 _SILENT = "the configuration says nothing about it"
@@ -65,6 +81,12 @@ class PairRow:
     note: str = ""
     why_unchecked: str = ""
     """For an ``unchecked`` row: why (the drive states no figure; the configuration says nothing)."""
+    worst_ns: Fraction | None = None
+    """The band's worst end as compared (ns; a rate's as its period): ``guaranteed_ns`` when the
+    figure is exact, None when no source bounds its band."""
+    in_band: bool = False
+    """Indeterminate because the limit falls inside the figure's band (the value meets it, the
+    worst end does not)."""
 
 
 @dataclass(frozen=True)
@@ -129,34 +151,38 @@ class ConfigResult:
         return qualified_verdict(self.verdict, self.unchecked)
 
 
+_EXACT = Guaranteed(Fraction(0), "", "")
+
+
 def _mapping(
     g: GeneratorGuarantee, drive: Drive, r: Rule
-) -> tuple[Role | None, Guaranteed | None, Fraction, str]:
-    """(role, figure, offset added, note) for rule ``r``, by what the rule table says it
-    measures: a width at the pulse level is the pulse, at the other the idle time; a DIR setup or
-    hold is the generator's DIR delay or hold (from the trailing edge when the drive's active
-    edge ends the pulse); the rate rule the maximum step rate."""
+) -> tuple[Role | None, Guaranteed | None, Guaranteed, str]:
+    """(role, figure, figure added (its value and band: the pulse, when setup counts to the
+    trailing edge), note) for rule ``r``, by what the rule table says it measures: a width at
+    the pulse level is the pulse, at the other the idle time; a DIR setup or hold is the
+    generator's DIR delay or hold (from the trailing edge when the drive's active edge ends the
+    pulse); the rate rule the maximum step rate."""
     edge = "both" if g.both_edges else drive.active_edge
     trailing = _trailing(g, drive)
     if r.check == "width":
         role: Role = "pulse" if r.level == g.pulse_level else "idle"
-        return role, g.figure(role), Fraction(0), ""
+        return role, g.figure(role), _EXACT, ""
     if r.check == "setup" and r.ref == "dir":
         if trailing and g.dir_setup_trailing is not None:
             note = "the drive's active edge ends the pulse, and DIR may change during it"
-            return "setup", g.dir_setup_trailing, Fraction(0), note
+            return "setup", g.dir_setup_trailing, _EXACT, note
         if trailing and edge != "both" and g.pulse.value is not None:
             note = "the drive's active edge ends the pulse: setup + pulse"
-            return "setup", g.dir_setup, g.pulse.value, note
-        return "setup", g.dir_setup, Fraction(0), ""
+            return "setup", g.dir_setup, g.pulse, note
+        return "setup", g.dir_setup, _EXACT, ""
     if r.check == "hold" and r.data == "dir":
         if trailing:
             note = "the drive's active edge ends the pulse: hold from the trailing edge"
-            return "hold", g.dir_hold_trailing, Fraction(0), note
-        return "hold", g.dir_hold, Fraction(0), ""
+            return "hold", g.dir_hold_trailing, _EXACT, note
+        return "hold", g.dir_hold, _EXACT, ""
     if r.figure == "max_rate":
-        return "max_rate", g.max_rate, Fraction(0), ""
-    return None, None, Fraction(0), _SILENT
+        return "max_rate", g.max_rate, _EXACT, ""
+    return None, None, _EXACT, _SILENT
 
 
 def _fix_role(role: Role, g: GeneratorGuarantee, drive: Drive) -> FixRole:
@@ -187,13 +213,42 @@ def _judge(value: Fraction, limit: Fraction) -> Verdict:
     return "pass" if value >= limit else "fail"
 
 
+def worst_end(fig: Guaranteed, rate: bool, added: Guaranteed = _EXACT) -> Fraction | None:
+    """The worst end of ``fig``'s band as ns to compare with a limit (``rate``: the period of
+    the highest rate the band allows), ``added``'s band counted too; None when no source
+    bounds it (or the figure is unknown)."""
+    if fig.value is None or fig.short_by is None or added.short_by is None:
+        return None
+    if rate:
+        top = fig.value + fig.short_by
+        return _GIGA / top if top else None
+    return _floor0(fig.value - fig.short_by) + _floor0(
+        (added.value or Fraction(0)) - added.short_by
+    )
+
+
+def _floor0(ns: Fraction) -> Fraction:
+    """A time the firmware may fall short to: no time is below 0."""
+    return max(ns, Fraction(0))
+
+
+def band_verdict(value: Fraction, worst: Fraction | None, limit: Fraction) -> Verdict:
+    """A figure that may be anywhere from ``worst`` (None: unbounded below) up to ``value``
+    against a lower limit (exact; a figure equal to the limit passes): pass when even the worst
+    end meets it, fail when the value itself misses it, else indeterminate."""
+    if value < limit:
+        return "fail"
+    return "pass" if worst is not None and worst >= limit else "indeterminate"
+
+
 def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -> PairResult:
     """Every step/dir rule of ``drive`` against axis ``g`` of ``config``."""
     rows: list[PairRow] = []
     for r in applicable("step-dir"):
         if r.figure == "none":
             continue
-        role, fig, offset, note = _mapping(g, drive, r)
+        role, fig, added, note = _mapping(g, drive, r)
+        offset = added.value or Fraction(0)
         rate = r.figure == "max_rate"
         limit_fig = drive.max_rate if rate else drive.limits.get(r.id)
         limit = (_GIGA / limit_fig.value if rate else limit_fig.value) if limit_fig else None
@@ -216,8 +271,22 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                                 note=why))  # fmt: skip
             continue
         margin = value - limit
-        verdict = _judge(value, limit)
-        if fig is not None and fig.status == "not_enforced":
+        assert fig is not None and fig.value is not None
+        worst = worst_end(fig, rate, added)
+        verdict = band_verdict(value, worst, limit)
+        in_band = verdict == "indeterminate"
+        if in_band:
+            bands = [f.band_text(rate) for f in (fig, added) if f.banded]
+            note = (
+                "; ".join(x for x in (note, *bands) if x)
+                + (
+                    f": {format_ns(worst)} against the {format_ns(limit)} limit at worst"
+                    if worst is not None
+                    else ""
+                )
+                + "; measure it"
+            )
+        if fig.status == "not_enforced":
             note = "; ".join(x for x in (note, fig.note) if x)
             if verdict == "pass":
                 verdict = "indeterminate"  # the setting meets the limit; the firmware need not
@@ -229,18 +298,28 @@ def evaluate_pair(config: FirmwareConfig, g: GeneratorGuarantee, drive: Drive) -
                 verdict = "indeterminate"
                 note += ": the readings give different verdicts (measure it)"
         fix = ""
-        if verdict in ("fail", "indeterminate") and (verdict == "fail" or other is not None):
-            need = (
-                (drive.max_rate.value if drive.max_rate else Fraction(0))
-                if role == "max_rate"
-                else limit - offset
-            )
-            fix = config.fix(g, _fix_role(role, g, drive), need)
-        rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note))
+        clears = in_band and worst is not None  # an unbounded band: no value clears it
+        if verdict == "fail" or (verdict == "indeterminate" and (other is not None or clears)):
+            fix = config.fix(g, _fix_role(role, g, drive), _need(fig, added, drive, limit, role))
+        rows.append(PairRow(r.id, role, value, fig, limit, limit_fig, margin, verdict, fix, note,
+                            worst_ns=worst, in_band=in_band))  # fmt: skip
     notes = list(g.notes)
     if drive.active_edge == "both" and not g.both_edges:
         notes.append("the drive counts both edges but the generator makes one step per pulse")
     return PairResult(config.firmware, g, drive, tuple(rows), _pair_rate(g, drive), tuple(notes))
+
+
+def _need(
+    fig: Guaranteed, added: Guaranteed, drive: Drive, limit: Fraction, role: Role
+) -> Fraction:
+    """What the figure must reach for the rule to pass at the band's worst end: the limit less
+    the added figure's worst end, plus the band (a rate: the drive's maximum less the band);
+    an unbounded band adds nothing (no value can clear it: the fix only ends the FAIL)."""
+    if role == "max_rate":
+        top = drive.max_rate.value if drive.max_rate else Fraction(0)
+        return max(top - (fig.short_by or Fraction(0)), Fraction(0))
+    added_worst = _floor0((added.value or Fraction(0)) - (added.short_by or Fraction(0)))
+    return limit - added_worst + (fig.short_by or Fraction(0))
 
 
 def evaluate_config(
@@ -263,5 +342,7 @@ def _pair_rate(g: GeneratorGuarantee, drive: Drive) -> Fraction | None:
         known = idle_lim is not None or pulse is not None
         timing = _GIGA / total if total > 0 and known else None
     drive_rate = drive.max_rate.value if drive.max_rate else None
-    rates = [v for v in (timing, drive_rate, g.max_rate.value) if v is not None]
+    top = g.max_rate  # the generator's ceiling: its value plus its band (no band top: none)
+    ceiling = None if top.value is None or top.short_by is None else top.value + top.short_by
+    rates = [v for v in (timing, drive_rate, ceiling) if v is not None]
     return min(rates) if rates else None

@@ -15,8 +15,9 @@ What each engine guarantees at the pin:
   0) then ``pulse_us`` active: the pulse and the DIR setup are hardware-timed, before every
   pulse. Max rate 1e6 / (2·pulse + dir_delay) steps/s.
 - **TIMED**: the CPU raises the pin, spins ``pulse_us`` and lowers it; ``dir_delay_us`` is spun
-  after a DIR change. Interrupts lengthen, never shorten, them, but they are not hardware-timed
-  (``uncertain``).
+  after a DIR change. Both spins count CPU cycles from a read taken after the pin write
+  (``timed_engine.c`` 31-33, 41-46, ``spinUntil``), so the set value is a lower bound; interrupts
+  lengthen the pulse, by an amount nothing bounds, which the low time then loses (``uncertain``).
 - **I2S_STATIC / I2S_STREAM** (both names find the one ``I2S`` engine in current FluidNC:
   ``Stepping.cpp`` ``find_engine`` matches the name's start): every output is a sample of the
   I2S FIFO, one sample per frame of ``i2so: min_pulse_us`` (1, 2 or 4 µs, default 2:
@@ -28,8 +29,10 @@ What each engine guarantees at the pin:
   1e6 / (2 × pulse frames × frame) (``max_pulses_per_sec``).
 
 DIR hold is not timed by any engine: DIR changes at a later step event, at least one pulse
-after the last pulse's leading edge when the step rate stays under the engine's maximum
-(``uncertain``). The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
+after the last pulse's leading edge when the step rate stays under the engine's maximum. Under
+RMT and TIMED the step events are the stepping interrupt's, which other interrupts may delay:
+the low time and the DIR hold have no bound below (``uncertain``: never a PASS); I2S clocks its
+samples out of a FIFO. The max step rate of an axis is ``steps_per_mm × max_rate_mm_per_min / 60``;
 its steps are at least 1 / min(2 × that, the fastest axis's) apart (grbl's Bresenham, kept by
 FluidNC's ``Stepper.cpp``: :func:`wavecheck.firmware.grbl.bresenham_spacing`).
 """
@@ -54,6 +57,7 @@ from wavecheck.firmware.guarantee import (
     Guaranteed,
     at_most,
     not_enforced,
+    uncertain,
     unknown,
 )
 
@@ -252,8 +256,12 @@ def _engine_pulse(engine: str, pulse: Guaranteed, frame: Guaranteed | None) -> G
             "whole frames, at least one, at most 20 us: i2s_engine.cpp init_engine)"
         )
         return Guaranteed(frames * frame.value, pulse.setting, pulse.where, "us", "derived", note)
-    note = "TIMED: the CPU spins pulse_us (interrupts only lengthen it)"
-    return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", "uncertain", note)
+    # FluidNC/esp32/timed_engine.c:41-46 @ 763a648: finish_step takes the end time from the CPU
+    # cycle counter after the STEP write, start_unstep spins until it (spinUntil): the pulse is
+    # at least pulse_us, so the set value is the lower bound
+    note = ("TIMED: the CPU spins pulse_us from a cycle count taken after the STEP write "
+            "(timed_engine.c:41-46); interrupts only lengthen it")  # fmt: skip
+    return Guaranteed(pulse.value, pulse.setting, pulse.where, "us", pulse.status, note)
 
 
 def _setup(engine: str, dir_delay: Guaranteed, frame: Guaranteed | None) -> Guaranteed:
@@ -276,8 +284,10 @@ def _setup(engine: str, dir_delay: Guaranteed, frame: Guaranteed | None) -> Guar
             "(timed_engine.c finish_dir spins dir_delay_us), so the setup is instruction time",
             dir_delay.where,
         )
-    note = "TIMED: the CPU spins dir_delay_us after a DIR change (timed_engine.c finish_dir)"
-    return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", "uncertain", note)
+    # timed_engine.c:31-33: finish_dir spins delay_us(dir_delay_us) after the DIR writes, a
+    # cycle-counted wait (spinUntil(usToEndTicks(us))): at least the set value
+    note = "TIMED: the CPU spins dir_delay_us after a DIR change (timed_engine.c:31-33)"
+    return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", dir_delay.status, note)
 
 
 def _engine_rate(engine: str, pulse: Guaranteed, dir_delay: Guaranteed) -> Fraction | None:
@@ -361,19 +371,28 @@ def _axis(
                               "mm/min", "derived", note)  # fmt: skip
         if hz > 0 and pulse.value is not None and fastest:
             gap = bresenham_spacing(hz, fastest) - pulse.value
-            idle = Guaranteed(
-                max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at, "mm/min", "uncertain",
-                "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: FluidNC's "
-                "Stepper.cpp keeps grbl's Bresenham, which puts the steps on the dominant axis's "
-                "ticks",
-            )  # fmt: skip
+            spacing = ("1 / min(2 x this axis's max rate, the fastest axis's) - pulse: FluidNC's "
+                       "Stepper.cpp keeps grbl's Bresenham, which puts the steps on the dominant "
+                       "axis's ticks")  # fmt: skip
+            if engine in ("RMT", "TIMED"):
+                idle = uncertain(max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at,
+                                 "mm/min", None, _ISR_JITTER[engine], spacing)  # fmt: skip
+            else:  # I2S: the steps are samples of a FIFO clocked out by the I2S hardware
+                idle = Guaranteed(max(gap, Fraction(0)), "max_rate_mm_per_min", rate_at,
+                                  "mm/min", "derived", spacing)  # fmt: skip
     hold_note = "DIR changes at a later step event: at least one pulse after the leading edge"
     return GeneratorGuarantee(
         axis=name if motor == "motor0" else f"{name}.{motor}",
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
-        dir_hold=Guaranteed(pulse.value, "pulse_us", pulse.where, "us", "uncertain", hold_note),
+        dir_hold=(
+            uncertain(
+                pulse.value, "pulse_us", pulse.where, "us", None, _ISR_JITTER[engine], hold_note
+            )  # fmt: skip
+            if engine in ("RMT", "TIMED")
+            else Guaranteed(pulse.value, "pulse_us", pulse.where, "us", "derived", hold_note)
+        ),
         max_rate=max_rate,
         pulse_level=0 if step_low else 1,
         dir_hold_trailing=Guaranteed(
@@ -381,13 +400,26 @@ def _axis(
             "pulse_us",
             pulse.where,
             "us",
-            "uncertain",
+            "derived",  # 0: no figure can fall below it
             "DIR may change right after the pulse ends",
         ),  # fmt: skip
         dir_inverted=dir_low,
         info=info,
         aliases=(f"{name}.motor0",) if motor == "motor0" else (),
     )
+
+
+#: Why the times between step events have no bound under the RMT and TIMED engines: each step
+#: (RMT: its transmission started, TIMED: the pin written) and each DIR write happens when the
+#: stepping timer's interrupt runs, which other interrupts may delay by an amount no source
+#: bounds, so two events may come closer than their ticks; TIMED's pulse spin
+#: (timed_engine.c:45-46) is also lengthened by an interrupt, which the low time then loses.
+_ISR_JITTER = {
+    "RMT": "the stepping interrupt starts each RMT pulse and writes DIR, and other interrupts may "
+    "delay it by an amount no source bounds",
+    "TIMED": "the stepping interrupt writes STEP and DIR, and other interrupts may delay it, or "
+    "lengthen the pulse's spin (timed_engine.c:45-46), by an amount no source bounds",
+}
 
 
 def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:

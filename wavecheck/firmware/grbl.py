@@ -14,8 +14,10 @@ default is machine-specific: unknown).
 
 Guarantees: grbl 1.1's pulse is at least ``$0`` − 562.5 ns (Timer0 loaded with ``$0`` − 2 µs
 for the interrupt overhead, 62.5–562.5 ns short of ``$0`` by the clk/8 prescaler's phase:
-``stepper.c`` 241, 344-345, and cycle-true runs); grblHAL rounds per driver and Grbl_ESP32 uses
-RMT or I2S, so theirs is ≈ ``$0`` (``uncertain``). DIR is written a
+``stepper.c`` 241, 344-345, and cycle-true runs), so a low time computed from it may be 500 ns
+shorter; grblHAL times it per driver and Grbl_ESP32 with the RMT, I2S or software engine built
+in, which a dump does not name, so theirs is ≈ ``$0`` with no bound below (``uncertain``: never a
+PASS). DIR is written a
 few CPU cycles before STEP (setup ≈ 0) unless grblHAL's ``$29`` is set (Grbl_ESP32 keeps its DIR
 delay outside the numbered settings: unknown). The max step rate of an axis is
 ``$10n × $11n / 60`` (the planner limits each axis to it); grbl does not enforce its 30 kHz.
@@ -27,7 +29,10 @@ whose fastest axis steps at up to F, steps at least 1 / min(2R, F) apart: Bresen
 floor(dominant / its rate) ticks apart, which tends to one tick of a dominant just under twice its
 rate (so its low time is that less the pulse, not 1/R − pulse). DIR changes at the tick after a
 block's last step (the new block's DIR is written at the next interrupt, 323-324, 358-375): the
-hold after the leading edge is one tick, at least min(1 / F, 62.5 µs), whatever ``$0`` is.
+hold after the leading edge is one tick, min(1 / F, 62.5 µs), whatever ``$0`` is. Both are times
+between interrupts, which other interrupts may delay (serial, pin change, the pulse reset): no
+source bounds that, so the low time and the DIR hold are ``uncertain`` with no bound (never a
+PASS).
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ from wavecheck.firmware.guarantee import (
     Guaranteed,
     at_most,
     not_enforced,
+    uncertain,
     unknown,
 )
 
@@ -91,8 +97,33 @@ _PULSE_NOTES = {
     "grbl": "grbl: Timer0 at 0.5 us, loaded with $0 - 2 us for interrupt overhead (calibrated on "
     "a scope, not enforced)",
     "grblHAL": "grblHAL: rounding and latency allowance are driver-specific (STM32F4xx rounds up)",
-    "Grbl_ESP32": "Grbl_ESP32: made by the RMT or I2S engine (I2S rounds to its frame)",
+    "Grbl_ESP32": "Grbl_ESP32: made by the RMT, I2S or software engine, chosen at build time",
 }
+#: Why the pulse of a grblHAL or Grbl_ESP32 dump has no bound below ``$0`` (the dump does not
+#: say which driver or engine made it). grblHAL: each driver times it its own way (the ESP32
+#: driver truncates 4 × $0 to whole 0.25 us RMT ticks, ``rmtItem[0].duration1 =
+#: (uint32_t)(4.0f * pulse_microseconds)``; the STM32 drivers subtract a latency allowance).
+#: Grbl_ESP32: RMT is exact (Grbl_Esp32/src/Motors/StandardStepper.cpp:54 clk_div 20, :69
+#: duration1 = 4 × $0 @ 0004468a), but the I2S stream engine pushes $0 / I2S_OUT_USEC_PER_PULSE
+#: samples (integer division) and the software one waits whole us of esp_timer from a read at any
+#: phase (Grbl_Esp32/stepper.cpp, ``#ifndef USE_RMT_STEPS``).
+_NO_BOUND = {
+    "grblHAL": "grblHAL times the pulse per driver (truncated to RMT ticks on ESP32, less a "
+    "latency allowance on STM32): the dump does not name the driver",
+    "Grbl_ESP32": "Grbl_ESP32's I2S stream engine truncates $0 to whole samples and its software "
+    "engine counts whole us of esp_timer (Grbl_Esp32/stepper.cpp, #ifndef USE_RMT_STEPS); only "
+    "RMT is exact (Motors/StandardStepper.cpp:69): the dump does not say which was built",
+}
+#: Why the times between interrupts are no bound: STEP and DIR are written at the start of the
+#: stepper interrupt (grbl 1.1h stepper.c:319-336), which the serial interrupts (serial.c:107,
+#: 143), the limit and control pin-change interrupts (limits.c:110, system.c:64) and the pulse
+#: reset (stepper.c:489) may each delay, by their run time, which no source bounds: two steps, or
+#: a step and the next DIR write, may come closer than one tick.
+_TICK_JITTER = (
+    "STEP and DIR are written at the start of the stepper interrupt (stepper.c:319-336), which "
+    "the serial, pin-change and pulse-reset interrupts (serial.c:107, 143; limits.c:110; "
+    "system.c:64; stepper.c:489) may delay by their run time, which no source bounds"
+)
 
 
 def looks_like(text: str) -> bool:
@@ -197,13 +228,14 @@ def _pulse(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
         if flavour == "grbl":
             return Guaranteed(default * _US - _GRBL_SHORT_NS, "$0", "firmware default", "us",
                               "default", f"{note}; {_GRBL_PULSE}")  # fmt: skip
-        return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note)
+        return Guaranteed(default * _US, "$0", "firmware default", "us", "default", note,
+                          short_by=None, short_why=_NO_BOUND[flavour])  # fmt: skip
     us0, raw0, line0 = settings[0]
     at = where(path, line0)
     number(raw0, at, "$0 (step pulse)", low=0, high=255, unit="us")
     if flavour == "grbl":
         return Guaranteed(us0 * _US - _GRBL_SHORT_NS, "$0", at, "us", "derived", _GRBL_PULSE)
-    return Guaranteed(us0 * _US, "$0", at, "us", "uncertain", _PULSE_NOTES[flavour])
+    return uncertain(us0 * _US, "$0", at, "us", None, _NO_BOUND[flavour], _PULSE_NOTES[flavour])
 
 
 def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int]]) -> Guaranteed:
@@ -211,9 +243,10 @@ def _setup(path: str, flavour: str, settings: dict[int, tuple[Fraction, str, int
         us29, raw29, line29 = settings[29]
         at = where(path, line29)
         number(raw29, at, "$29 (pulse delay)", low=0, high=255, unit="us")
-        return Guaranteed(us29 * _US, "$29", at, "us", "uncertain",
-                          "grblHAL applies $29 only when DIR changes, less the driver's latency "
-                          "allowance")  # fmt: skip
+        return uncertain(us29 * _US, "$29", at, "us", None,
+                         "grblHAL's drivers time $29 each their own way, less a latency "
+                         "allowance: the dump does not name the driver",
+                         "grblHAL applies $29 only when DIR changes")  # fmt: skip
     if flavour == "Grbl_ESP32":
         return unknown(
             "direction delay",
@@ -261,42 +294,48 @@ def _axis(
     else:
         max_rate = Guaranteed(None, f"${110 + bit}", "", "mm/min", "unknown", "not in the dump")
         gap = None
-    idle = Guaranteed(
-        None if gap is None else max(gap, Fraction(0)), f"${110 + bit}", max_rate.where,
-        "mm/min", "uncertain" if gap is not None else "unknown",
+    spacing_note = (
         "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: Bresenham puts its steps "
         "on the dominant axis's ticks (stepper.c:413-440)"
-        if gap is not None
-        else "an axis's max rate is not in the dump: the interrupt's tick is not bounded",
-    )  # fmt: skip
+    )
+    if gap is None:
+        idle = unknown(f"${110 + bit}", "an axis's max rate is not in the dump: the interrupt's "
+                       "tick is not bounded", max_rate.where)  # fmt: skip
+    else:  # the interrupts' jitter, and grblHAL's and Grbl_ESP32's pulse, have no bound
+        idle = uncertain(max(gap, Fraction(0)), f"${110 + bit}", max_rate.where, "mm/min", None,
+                         _TICK_JITTER, spacing_note)  # fmt: skip
     tick = min(Fraction(10**9) / fastest, _AMASS_TICK_NS) if fastest else None
     return GeneratorGuarantee(
         axis=axis,
         pulse=pulse,
         idle=idle,
         dir_setup=setup,
-        dir_hold=Guaranteed(
-            tick,
-            "$11n",
-            max_rate.where,
-            "mm/min",
-            "uncertain" if tick is not None else "unknown",
-            "DIR changes one interrupt tick after a block's last step: at least min(1 / the "
-            "fastest axis's max rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)",
-        ),  # fmt: skip
+        # the step and the next block's DIR are written at the start of interrupts one tick
+        # apart, each entered late by what other interrupts run first: no bound below the tick
+        dir_hold=(
+            uncertain(tick, "$11n", max_rate.where, "mm/min", None, _TICK_JITTER, _HOLD_NOTE)
+            if tick is not None
+            else unknown("$11n", _HOLD_NOTE, max_rate.where)
+        ),
         max_rate=max_rate,
         pulse_level=0 if step_mask >> bit & 1 else 1,
-        dir_hold_trailing=Guaranteed(
+        dir_hold_trailing=Guaranteed(  # 0: no figure can fall below it
             Fraction(0),
             "$0",
             pulse.where,
             "us",
-            "uncertain",
+            "derived",
             "the next tick may follow the end of the pulse at once",
         ),  # fmt: skip
         dir_inverted=bool(dir_mask >> bit & 1),
         info=info,
     )
+
+
+_HOLD_NOTE = (
+    "DIR changes one interrupt tick after a block's last step: min(1 / the fastest axis's max "
+    "rate, 62.5 us of AMASS) (stepper.c:323-324, 358-375, 1017-1027)"
+)
 
 
 def _fixer(

@@ -5,7 +5,8 @@ Every firmware reader (:mod:`wavecheck.firmware.grbl`, ``klipper``, ``marlin``, 
 :class:`FirmwareConfig`: a :class:`GeneratorGuarantee` per axis, each figure a
 :class:`Guaranteed` lower bound with the setting, the file and line, and the unit it was written
 in. Times are exact ns, rates exact Hz (:class:`~fractions.Fraction`). A figure the configuration
-cannot prove is ``None`` with a note saying why ("measure it"), never a guess.
+cannot prove is ``None`` with a note saying why ("measure it"), never a guess; one the firmware
+aims at but may miss carries the band it may fall short by (:attr:`Guaranteed.short_by`).
 
 Levels are the generator's *output pin*, after the firmware's own pin inversion: ``pulse`` is the
 level the firmware drives for a step (high unless inverted), ``idle`` the time between pulses.
@@ -24,6 +25,7 @@ from typing import Literal
 from wavecheck.drives.datasheet import ActiveEdge
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import FIRMWARES
+from wavecheck.units import format_ns, format_rate
 
 __all__ = [
     "FIRMWARES",
@@ -40,6 +42,7 @@ __all__ = [
     "at_most",
     "ceil_to",
     "not_enforced",
+    "uncertain",
     "unknown",
 ]
 
@@ -53,7 +56,8 @@ Role = Literal["pulse", "idle", "setup", "hold", "max_rate"]
 GStatus = Literal["set", "default", "derived", "uncertain", "not_enforced", "unknown"]
 """``set`` = written in the file; ``default`` = the firmware's default (the file says nothing);
 ``derived`` = computed from settings (rounding, rate → low time); ``uncertain`` = the firmware
-aims at it but does not enforce it exactly (calibrated offsets, ½-tick rounding);
+aims at it but does not keep it exactly (timer rounding, a counter's phase, a clock not known):
+:attr:`Guaranteed.short_by` says by how much the wire figure may miss it, and why;
 ``not_enforced`` = no code of the firmware keeps it (the value, if any, is what the setting asks
 for: a rule it passes is indeterminate, one it fails still fails); ``unknown`` = no bound can be
 read from the configuration."""
@@ -64,7 +68,18 @@ MEASURE_HOW = "capture STEP and DIR, then `wavecheck check --firmware FILE`"
 
 @dataclass(frozen=True)
 class Guaranteed:
-    """One lower bound (upper bound for ``max_rate``) and where it comes from."""
+    """One lower bound (upper bound for ``max_rate``) and where it comes from.
+
+    The band: an ``uncertain`` figure (or a ``default`` one the firmware times the same way) is
+    what the firmware aims at; the wire figure may fall up
+    to :attr:`short_by` below :attr:`value` (for ``max_rate``: the real rate may exceed it by
+    up to that many Hz, the direction that hurts), for the reason :attr:`short_why` gives with
+    the firmware line that makes it so. The firmware may also overshoot its aim (interrupts
+    lengthen a busy-wait), but nothing bounds that, so no verdict counts on it: a rule passes
+    only if ``value - short_by`` meets the limit, fails only if ``value`` itself misses it, and
+    is indeterminate in between (:func:`wavecheck.firmware.evaluate.evaluate_pair`).
+    ``short_by`` None: no bound could be derived from the source, so the figure is never a PASS.
+    """
 
     value: Fraction | None
     """ns (Hz for ``max_rate``); None when the configuration cannot prove any bound."""
@@ -80,11 +95,40 @@ class Guaranteed:
     """Where the sources disagree (hm2: the man page and the VHDL), the bound under the other
     reading; :attr:`note` names both, and a rule whose verdict differs under it is
     indeterminate."""
+    short_by: Fraction | None = Fraction(0)
+    """How far the wire figure may fall below :attr:`value` (ns; Hz above it for ``max_rate``);
+    0 = kept exactly, None = no bound derived (never a PASS). See the class doc."""
+    short_why: str = ""
+    """Why it may fall short, with the firmware's file:line (``½ tick of the 2 MHz pulse timer,
+    …``): the note of a verdict the band decides."""
+
+    def __post_init__(self) -> None:
+        if self.short_by is not None and self.short_by < 0:
+            raise ValueError(f"{self.setting}: short_by {self.short_by} < 0")
+        if self.status == "uncertain" and not self.short_why:
+            raise ValueError(f"{self.setting}: an uncertain figure must say why (short_why)")
 
     @property
     def known(self) -> bool:
         """True when a bound is known."""
         return self.value is not None
+
+    @property
+    def banded(self) -> bool:
+        """The wire figure may fall short of :attr:`value` (a non-zero or unbounded band)."""
+        return self.short_by is None or self.short_by > 0
+
+    def band_text(self, rate: bool = False) -> str:
+        """``the firmware may make it up to 750 ns short (why)``, or ``""`` for an exact figure
+        (``rate``: the band is Hz over the value)."""
+        if not self.banded:
+            return ""
+        if self.short_by is None:
+            return f"the firmware may miss it by an amount no source bounds ({self.short_why})"
+        amount = (
+            f"{format_rate(self.short_by)} over" if rate else f"{format_ns(self.short_by)} short"
+        )
+        return f"the firmware may make it up to {amount} ({self.short_why})"
 
 
 def unknown(setting: str, note: str, where: str = "") -> Guaranteed:
@@ -99,6 +143,21 @@ def not_enforced(
     PASS. ``value``: what the setting asks for, when it has one (a FAIL under it stands)."""
     note = f"not enforced by the firmware: measure it ({MEASURE_HOW}); {why}"
     return Guaranteed(value, setting, where, unit, "not_enforced", note)
+
+
+def uncertain(
+    value: Fraction | None,
+    setting: str,
+    where: str,
+    unit: str,
+    short_by: Fraction | None,
+    why: str,
+    note: str = "",
+) -> Guaranteed:
+    """A figure the firmware aims at but may miss by up to ``short_by`` (None: unbounded), for
+    the reason ``why`` (with the firmware's file:line)."""
+    return Guaranteed(value, setting, where, unit, "uncertain", note, short_by=short_by,
+                      short_why=why)  # fmt: skip
 
 
 @dataclass(frozen=True)

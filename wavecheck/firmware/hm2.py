@@ -8,8 +8,8 @@ published in IgorYeremin/hostmot2-firmware@8a8dcbd; line numbers below are that 
 STEP high N+1 clocks and low N+1 clocks (the pulse counter is loaded at the step, 210-211, and
 STEP cleared a clock after it reaches 0, 199-201), so ``step_high ≥ (⌊steplen·f⌋+1)/f >
 steplen``: without the clock the set value is the bound. DIR setup loads N clocks (216-219:
-⌊dirsetup·f⌋/f; under GHDL the next step came N + 2 clocks after the DIR change, 300 -> 302;
-kept ``uncertain``, one run being no proof).
+⌊dirsetup·f⌋/f, the lower bound; under GHDL the next step came N + 2 clocks after the DIR
+change, 300 -> 302).
 
 DIR hold is what the hardware does, not what the man page says ("after a step ends"): the hold
 counter is loaded with the pulse (212-213), and DIR may change as soon as it has run out
@@ -21,7 +21,9 @@ the falling one. So the hold is dirhold (+1 clock) from the leading edge and dir
 from the trailing edge; when dirhold < steplen DIR can change during the pulse, and a drive that
 counts the trailing edge may count that step in the new direction (hold 0, and only steplen −
 dirhold from the DIR change to that edge: ``dir_setup_trailing``). Without the clock
-the trailing figure may be a clock short (``uncertain``).
+(``--hm2-clock``) the figures the truncation can shorten — dirsetup and the trailing ones — may
+be up to a clock short, and the clock bounds that: they are ``uncertain`` with no bound (never a
+PASS).
 
 Max rate: the driver clamps the velocity to 1e9/(steplen + stepspace) steps/s and to maxvel ×
 |position-scale| when maxvel is set (stepgen.c 263-315); the hardware's (N+1)+(M+1) clocks per
@@ -43,6 +45,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_least,
+    uncertain,
 )
 from wavecheck.firmware.linuxcnc_stepgen import PARAMETER, maxvel_fix
 from wavecheck.linuxcnc.configuration import LinuxCNCFiles
@@ -58,6 +61,13 @@ _REG_MAX = 0x3FFF
 _VHDL = (
     "the hold counter starts with the pulse and DIR may change when it runs out (hostmot2 "
     "kubstepgenz.vhd 212-219, run under GHDL), not after the step ends as the man page says"
+)
+#: Without the stepgen clock: the driver truncates each ns value to whole clocks (stepgen.c
+#: 381-385), so a figure that loses a register's truncation may be up to one clock short, and
+#: the clock (the board's, which the HAL files do not give) bounds that.
+_NO_CLOCK = (
+    "the driver truncates each value to whole stepgen clocks (stepgen.c 381-385) and the clock "
+    "is not known: give --hm2-clock"
 )
 _DURING = (
     "dirhold < steplen: DIR may change while STEP is high (kubstepgenz.vhd 215-219), so a drive "
@@ -148,22 +158,23 @@ def _axis(
                               "driver default", "ns", "default")  # fmt: skip
         ns, at = params[name]
         if f is None:
-            return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
+            if extra_clock:  # (⌊ns·f⌋ + 1) / f > ns: the set value is the lower bound
+                return Guaranteed(ns, name, at, "ns", status, note)  # type: ignore[arg-type]
+            return uncertain(ns, name, at, "ns", None, _NO_CLOCK, note)
         reg = register(ns, f)
         return Guaranteed(
-            Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns",
-            "derived" if extra_clock else "uncertain",
+            Fraction(reg + extra_clock) * 10**9 / f, name, at, "ns", "derived",
             f"{reg} clocks{' + 1' if extra_clock else ''} at {float(f):g} Hz"
             + (f"; {note}" if note else ""),
         )  # fmt: skip
 
     pulse = fig("steplen", 1, "set")
     idle = fig("stepspace", 1, "set")
-    setup = fig("dirsetup", 0, "uncertain", "the setup counter loads N clocks (kubstepgenz.vhd "
+    setup = fig("dirsetup", 0, "derived", "the setup counter loads N clocks (kubstepgenz.vhd "
                 "216-219; under GHDL the next step came N + 2 clocks after DIR)")  # fmt: skip
     hold_raw = fig("dirhold", 1, "set")
     hold, trailing = _hold(pulse, hold_raw, f is not None)
-    setup_trailing = _setup_trailing(pulse, setup, hold)
+    setup_trailing = _setup_trailing(pulse, setup, hold, f is not None)
     info: dict[str, str] = {}
     rate = Guaranteed(None, "steplen + stepspace", "", "ns", "unknown")
     if pulse.value is not None and idle.value is not None and pulse.value + idle.value > 0:
@@ -216,21 +227,30 @@ def _hold(pulse: Guaranteed, hold: Guaranteed, clocked: bool) -> tuple[Guarantee
     if hold.value < pulse.value:
         return lead, Guaranteed(Fraction(0), "dirhold - steplen", hold.where, "ns", "derived",
                                 _DURING)  # fmt: skip
-    short = "" if clocked else "; without the stepgen clock up to one clock short"
-    trail = Guaranteed(hold.value - pulse.value, "dirhold - steplen", hold.where, "ns",
-                       "derived" if clocked else "uncertain", f"{_VHDL}{short}")  # fmt: skip
+    value = hold.value - pulse.value
+    trail = (
+        Guaranteed(value, "dirhold - steplen", hold.where, "ns", "derived", _VHDL)
+        if clocked  # (M + 1 - (N + 1)) clocks, as GHDL ran it
+        else uncertain(value, "dirhold - steplen", hold.where, "ns", None, _NO_CLOCK, _VHDL)
+    )
     return lead, trail
 
 
-def _setup_trailing(pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed) -> Guaranteed | None:
+def _setup_trailing(
+    pulse: Guaranteed, setup: Guaranteed, hold: Guaranteed, clocked: bool
+) -> Guaranteed | None:
     """DIR change → the trailing edge when DIR may change during the pulse (dirhold <
-    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise."""
+    steplen): steplen - dirhold, or dirsetup + steplen when less; None otherwise. In clocks
+    ((N + 1) - (M + 1), as GHDL ran it) when the clock is known; without it the registers'
+    truncation may take up to a clock off."""
     if pulse.value is None or hold.value is None or setup.value is None:
         return None
     if hold.value >= pulse.value:
         return None
     value = min(pulse.value - hold.value, setup.value + pulse.value)
-    return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "uncertain", _DURING)
+    if clocked:
+        return Guaranteed(value, "steplen - dirhold", hold.where, "ns", "derived", _DURING)
+    return uncertain(value, "steplen - dirhold", hold.where, "ns", None, _NO_CLOCK, _DURING)
 
 
 def fixer(clock_hz: Fraction | None) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:

@@ -354,6 +354,25 @@ def _truncated(ns: Fraction, mcu: _Mcu) -> tuple[Fraction, str, bool]:
     return ns, "truncated to whole MCU clock ticks (clock not known: up to one tick shorter)", False
 
 
+#: The slowest MCU clocks Klipper builds for (its Kconfig): an 8 MHz AVR (src/avr/Kconfig:87),
+#: else the 12 MHz RP2040 (src/rp2040/Kconfig:41). ``step_pulse_ticks`` is
+#: ``seconds_to_clock(step_pulse_duration)`` (klippy/stepper.py:112) = ``int(time * freq)``
+#: (klippy/mcu.py:1141): truncated, less than one tick short.
+_SLOWEST_AVR_HZ, _SLOWEST_ARM_HZ = 8_000_000, 12_000_000
+
+
+def _unknown_clock_short(mcu: _Mcu) -> tuple[Fraction, str]:
+    """How far below the set duration the MCU's truncation may put it when its clock is not
+    known: one tick of the slowest clock the MCU may have."""
+    hz = _SLOWEST_AVR_HZ if mcu.avr is not False else _SLOWEST_ARM_HZ
+    where = "src/avr/Kconfig:87" if mcu.avr is not False else "src/rp2040/Kconfig:41"
+    why = (
+        f"one tick of a {hz / 1e6:g} MHz MCU clock, the slowest this MCU may have ({where}): "
+        "step_pulse_ticks = int(duration x clock) (klippy/mcu.py:1141, klippy/stepper.py:112)"
+    )
+    return Fraction(10**9, hz), why
+
+
 def _axis(
     path: str,
     sec: _Section,
@@ -379,10 +398,12 @@ def _axis(
         notes.append(f"{tmc.name.split()[0]} requests both-edge stepping, refused because {why}")
     made, trunc, exact = _truncated(ns, mcu)
     status = src[3] if exact and not trunc else ("derived" if exact else "uncertain")
+    short, short_why = (Fraction(0), "") if exact else _unknown_clock_short(mcu)
 
     def fig(st: str = "", note: str = "") -> Guaranteed:
         text = "; ".join(x for x in (note, trunc) if x)
-        return Guaranteed(made, src[0], src[1], src[2], (st or status), text)  # type: ignore[arg-type]
+        return Guaranteed(made, src[0], src[1], src[2], (st or status), text,  # type: ignore[arg-type]
+                          short_by=short, short_why=short_why)  # fmt: skip
 
     fast_avr = mcu.avr is not False and (
         any(int(ns * f / 10**9) <= _AVR_FAST_TICKS for f in mcu.clocks)

@@ -18,8 +18,10 @@ machine from the slowest driver type present on any axis. Until 2.1.2 a pulse of
 and LV8729 default, or a user's 0) is "not set", so high = low = 5e8 / rate; from 2.1.3 a
 defined ``MINIMUM_STEPPER_PULSE_NS 0`` is 0. Low time = max(1e9 / rate − pulse, pulse) when both
 are set. Before 2.1, a driver whose ``X_DRIVER_TYPE`` is not defined is an A4988 (the files say
-so), except in 2.0.0, whose ``drivers.h`` matches it to no type: the ``#else`` defaults. Busy-waits are rounded to the nearest pulse-timer tick, so the pulse may be up to ½ tick
-short: it is ``uncertain``. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
+so), except in 2.0.0, whose ``drivers.h`` matches it to no type: the ``#else`` defaults. The
+pulse is a busy-wait on the pulse timer, so it is ``uncertain``: it may be up to 1½ ticks short
+(:data:`_PULSE_SHORT`), 1 tick before the 2020 rewrite; the DIR hold from the leading edge
+(pulse + PRE) carries the pulse's band. ``EDGE_STEPPING`` on a TMC axis driven over UART/SPI (not
 ``_STANDALONE``) makes every STEP edge a step.
 
 A figure that depends on a branch the files cannot decide is the smallest over the branches
@@ -44,6 +46,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     not_enforced,
+    uncertain,
     unknown,
 )
 from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
@@ -147,6 +150,32 @@ _OLD_PULSE = ("stepper_pulse_phase_isr (1.1.9/2.0.0): the high time is waited on
 #: fallback ("Fallback Stepper Driver types", Conditionals_LCD.h) came with later 2.0.x.
 _UNTYPED_SOURCE = ("Marlin/drivers.h:43 @ 268245c6 (1.1.x) and Marlin/src/core/drivers.h:51 "
                    "@ ae1cc796 (2.0.0) test defined(A##_DRIVER_TYPE)")  # fmt: skip
+#: The slowest pulse timer of Marlin's HALs: AVR's Timer1 at F_CPU / 8 = 2 MHz on a 16 MHz
+#: board (Marlin/src/HAL/AVR/timers.h:35 HAL_TIMER_RATE ((F_CPU) / 8), :49 STEPPER_TIMER_RATE,
+#: :53 PULSE_TIMER_RATE @ 3312295; 2.5 MHz at 20 MHz), the STM32 HALs' STEPPER_TIMER_RATE
+#: 2000000. The file does not name the board's HAL, so one tick is taken as 500 ns.
+_PULSE_TICK_NS = Fraction(500)
+#: How far the pulse may fall short of the setting. 2020 rewrite (2.0.x after 2.0.5, 2.1.x,
+#: Marlin/src/module/stepper.cpp): PULSE_HIGH_TICK_COUNT is NS_TO_PULSE_TIMER_TICKS(pulse −
+#: TIMER_SETUP_NS), rounded to the *nearest* tick ((NS + NS_PER_PULSE_TIMER_TICK / 2) /
+#: NS_PER_PULSE_TIMER_TICK: ½ tick), and AWAIT_TIMED_PULSE waits until the free-running counter
+#: has advanced that many ticks since START_TIMED_PULSE read it, at any phase of a tick (one tick
+#: more); the TIMER_SETUP_NS taken off is spent between the STEP write and the counter read.
+#: Before (1.1.9, 2.0.0: stepper_pulse_phase_isr): MIN_PULSE_TICKS = whole µs ×
+#: PULSE_TIMER_TICKS_PER_US, no rounding, the same counter phase: one tick.
+_PULSE_SHORT = {
+    False: (
+        Fraction(3, 2) * _PULSE_TICK_NS,
+        "1.5 ticks of a 2 MHz pulse timer: NS_TO_PULSE_TIMER_TICKS rounds to the nearest tick "
+        "and AWAIT_TIMED_PULSE counts whole ticks from any phase (Marlin/src/module/stepper.cpp; "
+        "HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+    True: (
+        _PULSE_TICK_NS,
+        "1 tick of a 2 MHz pulse timer: the wait counts whole ticks of the pulse timer from any "
+        "phase (stepper_pulse_phase_isr, MIN_PULSE_TICKS; HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+}
 #: Marlin's eras, newest first.
 ERAS: tuple[Era, ...] = (
     Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
@@ -558,9 +587,9 @@ def _figures(
         at = f"{at}; {t.why}"
     unit = "ns" if era is ERAS[0] else "us"
     if t.pulse:
-        pulse = Guaranteed(t.pulse, name, at, unit, "uncertain",
-                           "busy-wait rounded to the nearest pulse-timer tick: may be up to 1/2 "
-                           "tick short" + (" (Marlin's default)" if st == "default" else ""))  # fmt: skip
+        short, why = _PULSE_SHORT[era.old_pulse_code]
+        pulse = uncertain(t.pulse, name, at, unit, short, why,
+                          "a busy-wait on the pulse timer" + (" (Marlin's default)" if st == "default" else ""))  # fmt: skip
     else:
         pulse = not_enforced(name, f"a 0 pulse is no wait ({t.why or at})", at, unit=unit)
     t, s = pick(lambda x: x.low)
@@ -594,7 +623,11 @@ def _figures(
     held = (t.pulse or 0) + t.pre
     hold_note = ("PRE_DIR_DELAY runs after the last pulse has ended: hold from the leading edge "
                  "= pulse + PRE")  # fmt: skip
-    if held:
+    if held and t.pulse:  # the pulse's wait is in it, and its band
+        short, why = _PULSE_SHORT[era.old_pulse_code]
+        hold = uncertain(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", min(short, t.pulse),
+                         f"the pulse's {why}", hold_note)  # fmt: skip
+    elif held:
         hold = Guaranteed(held, f"{pulse_name} + PRE_DIR_DELAY", pre.where, "ns", "derived",
                           hold_note)  # fmt: skip
     else:
@@ -699,13 +732,20 @@ def _axis_rate(
     spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
     kinematic = {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
     base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
-    fallback = Guaranteed(global_rate.value, global_rate.setting, global_rate.where, "Hz",
-                          "uncertain" if global_rate.value is not None else "unknown",
-                          "the driver rate Marlin times pulses for; not a cap on motion")  # fmt: skip
+    note = "the driver rate Marlin times pulses for; not a cap on motion"
     if base in kinematic:
-        fallback = Guaranteed(fallback.value, fallback.setting, fallback.where, "Hz",
-                              fallback.status, fallback.note + "; kinematics couple this axis "
-                              "with others (steps/unit x feedrate does not bound it)")  # fmt: skip
+        note += (
+            "; kinematics couple this axis with others (steps/unit x feedrate does not bound it)"
+        )
+    # MAXIMUM_STEPPER_RATE spaces the pulses of one interrupt (it sets _MIN_PULSE_LOW_NS,
+    # stepper/cycles.h); nothing caps the planner's step rate at it: no bound above
+    fallback = (
+        uncertain(global_rate.value, global_rate.setting, global_rate.where, "Hz", None,
+                  "the planner does not cap the step rate at MAXIMUM_STEPPER_RATE", note)
+        if global_rate.value is not None
+        else Guaranteed(None, global_rate.setting, global_rate.where, "Hz", "unknown", note)
+    )  # fmt: skip
+    if base in kinematic:
         return fallback
     if spu is None or feed is None:
         return fallback

@@ -13,7 +13,8 @@ gets the largest value of each field over all slow drivers (rounded up to step c
 without T is "fast": the firmware assumes ≥ 0.2 µs high and low and waits for nothing, so its DIR
 setup and hold cannot be read from the file. On a Duet 3 MB6XD (named in the file's comments)
 every driver defaults to 2.5 µs per field and the largest of all drivers applies to all. An
-expansion board applies T with its own firmware (``uncertain``). Meta-commands (``if``, ``var``,
+expansion board applies T with its own firmware, on its own step clock, whose rate the file does
+not give (``uncertain`` with no bound: never a PASS). Meta-commands (``if``, ``var``,
 ``{expressions}``) are not evaluated: a value written as an expression is not read (named), and
 the motion commands of an ``if``/``elif``/``else``/``while`` block are not read either (the
 block is named), since whether they run is not decided by the file.
@@ -37,6 +38,7 @@ from wavecheck.firmware.guarantee import (
     at_least,
     at_most,
     not_enforced,
+    uncertain,
     unknown,
 )
 
@@ -378,7 +380,7 @@ def _axis(
         fields, at = st.timing[expansion[0]]
         note = f"expansion board driver {expansion[0]}: its own firmware applies T"
         pulse, idle, setup, hold_t = (
-            Guaranteed(f, "M569 T", at, "us", "uncertain", note) if f else _zero(at, i)
+            uncertain(f, "M569 T", at, "us", None, _EXPANSION, note) if f else _zero(at, i)
             for i, f in enumerate(fields)
         )
         hold = _hold(pulse, hold_t)
@@ -441,6 +443,17 @@ def _mixed_direction(drivers: list[str], st: _State) -> tuple[str, ...]:
     )
 
 
+#: Duet3Expansion's Platform::SetDriverStepTiming (as indexed) waits only for fields over 0.2 us,
+#: rounds them up to its step clocks (``+ 0.99``) and waits on a free-running step-clock counter
+#: read at any phase (``GetTimerTicks() - DDA::lastStepLowTime < clocks``): up to one step clock
+#: short, and the board's step clock rate is not in the file.
+_EXPANSION = (
+    "the expansion board waits whole ticks of its own step clock, whose rate the file does not "
+    "give, from a counter read at any phase, and ignores fields of 0.2 us or less "
+    "(Duet3Expansion Platform::SetDriverStepTiming)"
+)
+
+
 def _zero(at: str, field_no: int) -> Guaranteed:
     """A T field of 0: RRF waits 0 clocks for it (not enforced)."""
     return not_enforced(f"M569 T (field {field_no + 1})", "a 0 us field is no wait", at,
@@ -454,6 +467,8 @@ def _hold(pulse: Guaranteed, hold_t: Guaranteed) -> Guaranteed:
     total = (pulse.value or Fraction(0)) + (hold_t.value or Fraction(0))
     if not total:
         return not_enforced("M569 T fields 1 + 4", "both 0: no wait", hold_t.where)
+    if pulse.banded or hold_t.banded:  # an expansion board's fields: their band carries over
+        return uncertain(total, "M569 T fields 1 + 4", hold_t.where, "us", None, _EXPANSION, note)
     return Guaranteed(total, "M569 T fields 1 + 4", hold_t.where, "us", "derived", note)
 
 

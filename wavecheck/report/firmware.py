@@ -27,11 +27,17 @@ __all__ = [
 _MARK = {"uncertain": "?", "not_enforced": "!", "default": "*", "unknown": ""}
 
 
+def _mark(fig: Guaranteed) -> str:
+    """The figure's status mark; ``?`` too when the firmware may fall short of it (a band)."""
+    mark = _MARK.get(fig.status, "")
+    return mark + ("?" if fig.banded and "?" not in mark else "")
+
+
 def _g(fig: Guaranteed | None, rate: bool = False) -> str:
     if fig is None or fig.value is None:
         return "unknown"
     text = format_rate(fig.value) if rate else format_ns(fig.value)
-    return text + _MARK.get(fig.status, "")
+    return text + _mark(fig)
 
 
 def _limit(fig: Figure | None, ns: Fraction | None) -> str:
@@ -70,7 +76,7 @@ def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
                     _g(r.source, rate=True)
                     if rate
                     else (
-                        format_ns(r.guaranteed_ns) + _MARK.get(r.source.status, "")
+                        format_ns(r.guaranteed_ns) + _mark(r.source)
                         if r.guaranteed_ns is not None
                         else "unknown"
                     )
@@ -103,8 +109,8 @@ def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
         out += [f"  note: {n}" for n in res.notes]
     out += [
         "",
-        "* = firmware default, ? = not enforced exactly by the firmware, ! = not enforced by the "
-        "firmware (measure it)",
+        "* = firmware default, ? = the firmware may fall short of it (the note says by how "
+        "much), ! = not enforced by the firmware (measure it)",
         f"verdict: {result.verdict_line}",
     ]
     unmet = unmet_requirements(result.statuses, require)
@@ -113,7 +119,10 @@ def config_text(result: ConfigResult, require: Sequence[str] = ()) -> str:
 
 
 def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
-    """A guaranteed figure as JSON."""
+    """A guaranteed figure as JSON. ``short_by``: how far the wire figure may fall below
+    ``value`` (its unit; for a max rate, Hz above it), 0 when kept exactly, null with
+    ``short_bounded`` false when no source bounds it; ``short_why`` says why, with the firmware
+    line."""
     if fig is None:
         return None
     return {
@@ -124,6 +133,9 @@ def guaranteed_dict(fig: Guaranteed | None) -> dict[str, Any] | None:
         "status": fig.status,
         "note": fig.note,
         "disputed": json_number(fig.disputed),
+        "short_by": json_number(fig.short_by),
+        "short_bounded": fig.short_by is not None,
+        "short_why": fig.short_why,
     }
 
 
@@ -181,6 +193,13 @@ def config_dict(result: ConfigResult, require: Sequence[str] = ()) -> dict[str, 
                             else None
                         ),
                         "margin_ns": json_number(r.margin_ns),
+                        "worst_ns": json_number(r.worst_ns),
+                        "short_by_ns": json_number(
+                            r.guaranteed_ns - r.worst_ns
+                            if r.guaranteed_ns is not None and r.worst_ns is not None
+                            else None
+                        ),
+                        "in_band": r.in_band,
                         "verdict": r.verdict,
                         "fix": r.fix,
                         "note": r.note,
@@ -303,6 +322,8 @@ def firmware_check_dict(fc: FirmwareCheck) -> dict[str, Any]:
                 "where": c.where,
                 "verdict": c.verdict,
                 "message": c.message,
+                "short_by": json_number(c.short_by),
+                "short_bounded": c.short_by is not None,
             }
             for c in fc.comparisons
         ],

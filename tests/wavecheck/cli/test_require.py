@@ -122,11 +122,12 @@ def test_unknown_rule_is_one_line_exit_2(capsys) -> None:
 
 
 def test_config_require(capsys) -> None:
-    """grbl's $$ dump against a TB6600, which states no DIR figures: PASS (exit 0) unless the
-    DIR rules are required (config's verdict line and ``--require`` are check's mechanism)."""
+    """grbl's $$ dump against a TB6600, which states no DIR figures: INDETERMINATE (exit 3: its
+    low time is a time between stepper interrupts, which no source bounds) unless the DIR rules
+    are required (exit 4; config's verdict line and ``--require`` are check's mechanism)."""
     base = ["config", GRBL_SETTINGS, "--drive", "tb6600"]
     code, out, _ = _run(capsys, *base)
-    assert code == 0
+    assert code == 3
     code, out, _ = _run(capsys, *base, "--require", "dir_setup,dir_hold")
     assert code == 4
     assert out.splitlines()[-1] == (
