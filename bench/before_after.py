@@ -9,8 +9,8 @@ best and median of ``--runs``; the load (1 min) is printed at the start and the 
     .venv/bin/python bench/before_after.py adc30fc --runs 15 -- stepgen simulate --command …
     .venv/bin/python bench/before_after.py adc30fc --peer 'python -c "import numpy"' -- wavecheck drives
 
-The first word after ``--`` is ``wavecheck`` or ``stepgen`` (run as ``main(argv)`` of that
-tree's CLI). ``--peer`` adds a shell command run in the same loop (e.g. the row's peer).
+The first word after ``--`` is ``wavecheck`` or ``stepgen`` (run as ``main()`` of that tree's
+CLI with ``sys.argv`` set, as the console script runs it). ``--peer`` adds a shell command run in the same loop (e.g. the row's peer).
 """
 
 from __future__ import annotations
@@ -62,8 +62,9 @@ def main() -> None:
     words = argv[cut + 1 :]
     if not words or words[0] not in ("wavecheck", "stepgen"):
         raise SystemExit("give -- wavecheck ARGS or -- stepgen ARGS")
+    # main() with no argv, as the console script calls it (stepgen tunes the collector then)
     code = f"import sys; sys.path.insert(0, sys.argv[1]); from {words[0]}.cli import main; " \
-           "sys.exit(main(sys.argv[2:]))"  # fmt: skip
+           f"sys.argv = [{words[0]!r}, *sys.argv[2:]]; sys.exit(main())"  # fmt: skip
     cmds = {
         f"before ({args.commit})": [sys.executable, "-c", code, str(tree(args.commit)), *words[1:]],
         "after (this tree)": [sys.executable, "-c", code, str(ROOT), *words[1:]],

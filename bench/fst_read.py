@@ -4,8 +4,11 @@ Icarus Verilog writes one run of a step generator twice, as VCD and as FST (``vv
 reader runs in its own process (wall time and peak RSS from ``getrusage``), best of ``--runs``:
 
 - wavecheck on the VCD (the fast VCD reader),
-- wavecheck on the FST (GTKWave's ``fst2vcd`` streamed into the same reader),
-- wavecheck's pywellen path on the FST (used when ``fst2vcd`` is missing; also the GHW reader),
+- wavecheck on the FST (the native reader, :mod:`wavecheck.capture.fst`: the default),
+- wavecheck's fst2vcd route on the FST (GTKWave's ``fst2vcd`` streamed into the VCD reader: the
+  default before round 6, still used for FastLZ-packed files),
+- wavecheck's pywellen path on the FST (the route without ``fst2vcd`` before round 6; also the
+  GHW reader),
 - pylibfst (the other FST reader on PyPI, the bench extra): its block iterator with a callback.
 
 Run: ``.venv/bin/python bench/fst_read.py [--steps 500000] [--runs 3]`` (needs iverilog).
@@ -37,7 +40,14 @@ endmodule
 
 READERS = {
     "wavecheck VCD": "from wavecheck.capture.open import open_capture as o; c = o({vcd!r}); n = sum(len(x.edges) for x in c.channels)",
-    "wavecheck FST (fst2vcd)": "from wavecheck.capture.open import open_capture as o; c = o({fst!r}); n = sum(len(x.edges) for x in c.channels)",
+    "wavecheck FST (native)": "from wavecheck.capture.open import open_capture as o; c = o({fst!r}); n = sum(len(x.edges) for x in c.channels)",
+    "wavecheck FST (fst2vcd)": (
+        "import shutil\n"
+        "from wavecheck.capture.blocks import assemble\n"
+        "from wavecheck.capture.wellen import FstBlocks\n"
+        "s = FstBlocks({fst!r}, shutil.which('fst2vcd')); b = list(s.blocks())\n"
+        "c = assemble(s.capture(), b); n = sum(len(x.edges) for x in c.channels)"
+    ),
     "wavecheck FST (pywellen)": "from wavecheck.capture.wellen import read_wellen as r; c = r({fst!r}, kind='fst'); n = sum(len(x.edges) for x in c.channels)",
     "pylibfst": (
         "import pylibfst as p\n"

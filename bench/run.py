@@ -26,7 +26,8 @@ Sections (goals of issues 18, 7 and 14 in brackets):
 4b–4d. Issue 38 (``bench/issue38.py``, sections ``stepgen120``, ``plot``, ``fst``): ``stepgen
    simulate`` of a 120 s sine with a VCD out as a process [≥ 100× real time]; the CPU ``check
    --plot`` adds on a tiny capture against ``import matplotlib.pyplot`` [≤ 1.5×]; ``check`` of an
-   FST (through fst2vcd, and through pywellen) against the same simulation's VCD [CPU ≤ 1.0×].
+   FST (the native reader; the old routes through fst2vcd and pywellen printed beside it)
+   against the same simulation's VCD [CPU ≤ 1.0×].
    Its other rows: section 1's grbl row by CPU [≥ 8×], section 2's VCD rows [≥ 3×], section
    4's ``--command`` row [≥ 100×], section 5's ``drives`` row [≤ 0.5×].
 5. Start-up: ``wavecheck --help``, ``wavecheck drives`` and a check of a tiny VCD [each ≤ 0.25 s

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from stepgen.reference import (
+    HALF_STEP,
     ONE_STEP,
     PICKOFF,
     Channel,
@@ -49,6 +50,7 @@ __all__ = ["run_fast"]
 
 _DESC = 9  #: numbers describing a chunk for pass 2
 _STEPS_BLOCK = 1 << 14  #: steps of fast chunks solved at a time in pass 2
+_TRACK = True  #: pass 1 runs settled position-mode stretches through :func:`_track`
 
 #: A fast chunk that stepped, whose last step is found only when an exact chunk follows:
 #: (k0, m, accum0, a0, sgn, d_eff, span, counts at its end, (timer1, timer2, timer3) loads).
@@ -93,7 +95,10 @@ def run_fast(
 
     Pass 1 keeps the channel state in local variables. Until update-freq has settled (the first
     one or two calls re-round the timing params, §3) it calls the reference update-freq; after
-    that it runs the same code inlined (steps 5–9 of §4 with nothing left to re-round).
+    that it runs the same code inlined (steps 5–9 of §4 with nothing left to re-round). Once
+    the clamps' limits have settled too, position mode runs in :func:`_track` (the follower
+    and the closed form only, nothing else per servo period) for as long as the chunks stay
+    fast.
     """
     config.validate()
     kind = config.kind()
@@ -103,7 +108,6 @@ def run_fast(
     servo = config.servo_ns
     cmds = np.asarray(commands, dtype=float)
     n_cmd = len(cmds)
-    cmd_list = cmds.tolist()
     schedule = update_schedule(config, n_periods)
     bounds = ([0] if (not schedule or schedule[0] != 0) else []) + schedule + [n_periods]
     first_update_at = 0 if schedule and schedule[0] == 0 else 1
@@ -111,6 +115,8 @@ def run_fast(
     # per-chunk descriptors for pass 2, _DESC numbers each: k0, m, a0, sgn, d_eff, span, dir,
     # step_len, accum0
     desc: list[int] = []
+    blocks: list[np.ndarray] = []  # descriptor columns of the chunks before those in ``desc``
+    n_blocked = 0  # chunks in ``blocks``
     exact: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     # lazy timers: values after invocation t_ref, or a pending fast chunk
@@ -148,14 +154,63 @@ def run_fast(
         ch.rawcount = accum >> PICKOFF
 
     report = current()
-    for ci in range(len(bounds) - 1):
+    n_chunks = len(bounds) - 1
+    lengths: list[int] = []  # the chunks' periods, for _track
+    ci = 0
+    while ci < n_chunks:
         k0, k1 = bounds[ci], bounds[ci + 1]
         if not ci & 1023:
             report(k0, n_periods)
         if k1 <= k0:
+            ci += 1
             continue
-        if ci >= first_update_at:
-            value = cmd_list[u if u < n_cmd else n_cmd - 1] if n_cmd else 0.0
+        updated = False  # update-freq already run for chunk ci (by _track)
+        if (
+            _TRACK
+            and limits is not None  # (then steady)
+            and pos_mode
+            and n_cmd
+            and ci >= first_update_at
+            and not ch.hold_dds
+            and ch.enable
+            and int(limits[1] * accelscale)
+        ):
+            if not lengths:
+                lengths = np.diff(bounds).tolist()
+            stop = min(n_chunks, (ci | 1023) + 1)
+            # this run's position commands in steps (value · pos_scale, as update-freq
+            # multiplies), the last one held; made per run, so few float objects live at once
+            pos_list = (cmds[u : u + stop - ci] * pos_scale).tolist()
+            pos_list += (cmds[-1:] * pos_scale).tolist() * (stop - ci - len(pos_list))
+            deltalim = int(limits[1] * accelscale)
+            rec: tuple[list[int], list[int]] = ([], [])
+            accum0 = accum
+            ci1, u, accum, addval, freq, old_pos_cmd, target, updated = _track(
+                lengths, ci, stop, pos_list, u,
+                (accum, addval, freq, old_pos_cmd, target, curr_dir),
+                (limits[0], limits[1], dt, recip_dt, freqscale, deltalim), rec,
+            )  # fmt: skip
+            if ci1 > ci:
+                if desc:
+                    blocks.append(_columns(desc))
+                    n_blocked += len(desc) // _DESC
+                    desc.clear()
+                block, moved, last = _tracked(
+                    bounds, ci, ci1, rec, accum0, accum, deltalim, curr_dir, ch
+                )
+                blocks.append(block)
+                n_blocked += ci1 - ci
+                steps_total += abs(moved)
+                if last is not None:
+                    pending = last
+                if phased:
+                    state = (state + moved) % cycle
+                ci = ci1
+            if not updated:
+                continue
+            k0, k1 = bounds[ci], bounds[ci + 1]
+        if ci >= first_update_at and not updated:
+            value = float(cmds[u if u < n_cmd else n_cmd - 1]) if n_cmd else 0.0
             u += 1
             if steady:
                 # ---- update-freq, steps 5-9 of §4, inlined (same operations as the model) ----
@@ -264,6 +319,7 @@ def run_fast(
                     state = (state + delta) % cycle
             accum = accum1
             addval = a_end
+            ci += 1
             continue
         # exact chunk: make the timers concrete, then run the reference make-pulses
         describe((k0, m, a0, sgn, d_eff, span, curr_dir, ch.step_len, accum))
@@ -285,14 +341,16 @@ def run_fast(
                 steps_total += 1
             inc[i] = ch.accum - before
             dirs[i] = ch.curr_dir
-        exact[len(desc) // _DESC - 1] = (inc, dirs)
+        exact[n_blocked + len(desc) // _DESC - 1] = (inc, dirs)
         accum, addval, curr_dir, state = ch.accum, ch.addval, ch.curr_dir, ch.state
         # timers after this chunk, relative to its last invocation
         t_vals = (ch.timer1, ch.timer2, ch.timer3)
         t_ref = k1 - 1
+        ci += 1
 
     to_ch()
-    toggles, counts_at, counts_val = _pass2(kind, base, n_periods, desc, exact)
+    cols = np.concatenate([*blocks, _columns(desc)], axis=1)
+    toggles, counts_at, counts_val = _pass2(kind, base, n_periods, cols, exact)
     run = InvocationRun(
         config=config,
         n_periods=n_periods,
@@ -301,12 +359,164 @@ def run_fast(
         counts_at=counts_at,
         counts_val=counts_val,
         steps=steps_total,
-        fast_chunks=len(desc) // _DESC - len(exact),
+        fast_chunks=cols.shape[1] - len(exact),
         exact_chunks=len(exact),
     )
     run.final = final_state(comp)
     run.warnings = list(ch.warnings)
     return run
+
+
+def _columns(desc: list[int]) -> np.ndarray:
+    """The descriptors ``desc`` (``_DESC`` numbers a chunk) as columns: one row per number."""
+    return np.fromiter(desc, dtype=np.int64, count=len(desc)).reshape(-1, _DESC).T
+
+
+def _track(
+    lengths: list[int],
+    ci: int,
+    stop: int,
+    pos_list: list[float],
+    u: int,
+    st: tuple[int, int, float, float, int, int],
+    consts: tuple[float, float, float, float, float, int],
+    rec: tuple[list[int], list[int]],
+) -> tuple[int, int, int, int, float, float, int, bool]:
+    """Pass 1 over settled position-mode chunks ``ci`` … ``stop − 1`` while each is fast.
+
+    The same update-freq as the general loop (:func:`stepgen.reference.follow_position`
+    inlined, the same floating-point operations in the same order, so the same bits) and the
+    same closed form of the chunk, with nothing else per servo period: it records addval at
+    each chunk's start and its target in ``rec``; :func:`_tracked` makes the chunks'
+    descriptors from them with numpy. It stops before a chunk of no periods, at
+    ``stop`` (progress reports), or after the update of a chunk that is not fast (the clamps'
+    limits are settled: the caller checks, and passes them in ``consts``).
+
+    ``st``: accum, addval, freq, old_pos_cmd, target, curr_dir; ``consts``: max_freq, max_ac,
+    dt, recip_dt, freqscale and deltalim (≠ 0); ``lengths``: each chunk's base periods;
+    ``pos_list``: the position commands (steps) of chunks ``ci`` … ``stop − 1``, command ``u``
+    first. Returns the chunk it stopped at, the next command index, accum, addval, freq,
+    old_pos_cmd, target, and whether that chunk's update has run.
+    """
+    accum, addval, freq, old_pos_cmd, target, curr_dir = st
+    max_freq, max_ac, dt, recip_dt, freqscale, d = consts
+    to_steps = 1.0 / (1 << PICKOFF)
+    ac_dt = max_ac * dt  # (the same products as the follower's, made once)
+    dt15 = 1.5 * dt
+    half, one, up = HALF_STEP, ONE_STEP, curr_dir == 1
+    a0_rec, tg_rec = (r.append for r in rec)
+    done = 0
+    for pos_cmd, m in zip(pos_list, lengths[ci:stop], strict=True):
+        if m <= 0:
+            break
+        # update-freq, position mode (reference.follow_position, the same operations)
+        vel_cmd = (pos_cmd - old_pos_cmd) * recip_dt
+        curr_pos = (accum - half) * to_steps
+        match_ac = max_ac if vel_cmd > freq else -max_ac
+        match_time = (vel_cmd - freq) / match_ac
+        avg_v = (vel_cmd + freq) * 0.5
+        est_out = curr_pos + avg_v * match_time
+        est_cmd = pos_cmd + vel_cmd * (match_time - dt15)
+        est_err = est_out - est_cmd
+        if match_time < dt:
+            if -0.0001 < est_err < 0.0001:  # abs(est_err) < 0.0001
+                new_vel = vel_cmd
+            else:
+                new_vel = vel_cmd - 0.5 * est_err * recip_dt
+                if new_vel > freq + ac_dt:
+                    new_vel = freq + ac_dt
+                elif new_vel < freq - ac_dt:
+                    new_vel = freq - ac_dt
+        else:
+            dv = -2.0 * match_ac * dt
+            dp = dv * match_time
+            if abs(est_err + dp * 2.0) < abs(est_err):
+                match_ac = -match_ac
+            new_vel = freq + match_ac * dt
+        if new_vel > max_freq:
+            new_vel = max_freq
+        elif new_vel < -max_freq:
+            new_vel = -max_freq
+        freq = new_vel
+        old_pos_cmd = pos_cmd
+        target = int(freq * freqscale)
+        # the chunk's closed form (run_fast's, with d ≠ 0), then whether it is fast
+        a0 = addval
+        if target >= a0:
+            span = target - a0
+            if m * d <= span:
+                a_end = a0 + m * d
+                total = m * a0 + d * (m * (m + 1) // 2)
+            else:
+                full = span // d
+                a_end = target
+                total = m * a0 + (d * (full * (full + 1) // 2) + span * (m - full))
+        else:
+            span = a0 - target
+            if m * d <= span:
+                a_end = a0 - m * d
+                total = m * a0 - d * (m * (m + 1) // 2)
+            else:
+                full = span // d
+                a_end = target
+                total = m * a0 - (d * (full * (full + 1) // 2) + span * (m - full))
+        if a0 >= 0:
+            fast = 0 <= a_end <= one and a0 <= one and (up or (a0 == 0 and a_end == 0))
+        else:
+            fast = -one <= a_end < 0 and a0 >= -one and curr_dir == -1
+        if not fast:
+            return ci + done, u + done + 1, accum, addval, freq, old_pos_cmd, target, True
+        a0_rec(a0)
+        tg_rec(target)
+        accum += total
+        addval = a_end
+        done += 1
+    return ci + done, u + done, accum, addval, freq, old_pos_cmd, target, False
+
+
+def _tracked(
+    bounds: list[int],
+    ci0: int,
+    ci1: int,
+    rec: tuple[list[int], list[int]],
+    accum0: int,
+    accum: int,
+    d: int,
+    curr_dir: int,
+    ch: Channel,
+) -> tuple[np.ndarray, int, _Pending | None]:
+    """The fast chunks ``ci0`` … ``ci1 − 1`` that :func:`_track` ran (``rec``: their starting
+    addval and their target; ``accum0``, ``accum``: the accumulator before and after them):
+    their descriptor columns, the count they moved (one way: addval keeps its sign through
+    fast chunks), and the last one that stepped as a pending chunk (None if none did). Each
+    chunk's starting accumulator is ``accum0`` plus the closed-form sums of the chunks before."""
+    k = np.array(bounds[ci0 : ci1 + 1], dtype=np.int64)
+    k0, m = k[:-1], np.diff(k)
+    a0, tg = (np.array(r, dtype=np.int64) for r in rec)
+    sgn = np.where(tg >= a0, 1, -1)
+    span = np.abs(tg - a0)
+    n = ci1 - ci0
+    sums = _addval_sum(m, a0, sgn, d, span, span // d)
+    acc = np.empty(n, dtype=np.int64)
+    acc[0] = accum0
+    np.cumsum(sums[:-1], out=acc[1:])
+    acc[1:] += accum0
+    assert int(acc[-1] + sums[-1]) == accum  # the same closed form as _track's
+    step_len = ch.step_len
+    block = np.stack(
+        (k0, m, a0, sgn, np.full(n, d), span, np.full(n, curr_dir), np.full(n, step_len), acc)
+    )
+    counts = np.append(acc >> PICKOFF, accum >> PICKOFF)
+    stepped = np.flatnonzero(counts[1:] != counts[:-1])
+    if not len(stepped):
+        return block, 0, None
+    j = int(stepped[-1])
+    hold = step_len + ch.dir_hold_dly
+    last: _Pending = (
+        int(k0[j]), int(m[j]), int(acc[j]), int(a0[j]), int(sgn[j]), d, int(span[j]),
+        int(counts[j + 1]), (step_len, hold, hold + ch.dir_setup),
+    )  # fmt: skip
+    return block, int(counts[-1] - counts[0]), last
 
 
 def _addval_sum(i: Any, a0: Any, sgn: Any, d: Any, span: Any, full: Any) -> Any:
@@ -336,13 +546,15 @@ def _fast_steps(cols: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         cum, np.arange(_STEPS_BLOCK, int(cum[-1]) if len(n) else 0, _STEPS_BLOCK)
     )
     bounds = [0, *sorted(set((cuts + 1).tolist()) - {len(n)}), len(n)]
-    parts = [
-        _chunk_steps(cols[:, a:b], full[a:b], c0[a:b], c1[a:b], n[a:b], a)
-        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
-    ]
-    if len(parts) == 1:
-        return parts[0]
-    return tuple(np.concatenate(p) for p in zip(*parts, strict=True))  # type: ignore[return-value]
+    if len(bounds) == 2:
+        return _chunk_steps(cols, full, c0, c1, n, 0)
+    out = tuple(np.empty(int(cum[-1]), dtype=np.int64) for _ in range(3))  # filled block by block
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        s0, s1 = int(cum[a - 1]) if a else 0, int(cum[b - 1])
+        got = _chunk_steps(cols[:, a:b], full[a:b], c0[a:b], c1[a:b], n[a:b], a)
+        for whole, part in zip(out, got, strict=True):
+            whole[s0:s1] = part
+    return out  # type: ignore[return-value]
 
 
 def _chunk_steps(
@@ -358,6 +570,9 @@ def _chunk_steps(
     # q·S(i) >= need: counting up accum >= c·2^28; down −accum >= 1 − (c + 1)·2^28
     need = np.where(q > 0, count << PICKOFF, 1 - ((count + 1) << PICKOFF)) - q * acc0[chunk]
     ch = (a0, sgn, d, span, full)
+    # per chunk, for the float root: the sum over its ramp and the addval after it
+    at_full = _addval_sum(full, a0, sgn, d, span, full)[chunk]
+    after = (a0 + sgn * span)[chunk]
     a0, sgn, d, span, full = (x[chunk] for x in ch)
     mm = m[chunk]
 
@@ -365,9 +580,13 @@ def _chunk_steps(
         s = _addval_sum(i, a0[sel], sgn[sel], d[sel], span[sel], full[sel])
         return np.asarray(q[sel] * s >= need[sel])
 
-    i = _float_root(q, a0, sgn, d, span, full, need)
+    i = _float_root(q, a0, sgn, d, full, need, at_full, after)
     guess = np.clip(np.nan_to_num(np.ceil(i), nan=1.0), 1, mm).astype(np.int64)
-    wrong = np.flatnonzero(~reached(guess) | ((guess > 1) & reached(guess - 1)))
+    # right where reached at guess and not at guess − 1: q·S(guess − 1) is q·S(guess) less
+    # q·addval(guess), addval(i) = a0 + sgn·min(i·d, span) (span is 0 where d is)
+    at = q * _addval_sum(guess, a0, sgn, d, span, full)
+    before = at - q * (a0 + sgn * np.minimum(guess * d, span))
+    wrong = np.flatnonzero((at < need) | ((guess > 1) & (before >= need)))
     if len(wrong):  # binary search where the float root missed
         lo, hi = np.ones(len(wrong), dtype=np.int64), mm[wrong]
         for _ in range(int(hi.max()).bit_length()):
@@ -379,18 +598,18 @@ def _chunk_steps(
 
 
 def _float_root(
-    q: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, span: np.ndarray,
-    full: np.ndarray, need: np.ndarray,
+    q: np.ndarray, a0: np.ndarray, sgn: np.ndarray, d: np.ndarray, full: np.ndarray,
+    need: np.ndarray, at_full: np.ndarray, after: np.ndarray,
 ) -> np.ndarray:  # fmt: skip
     """The real i with q·S(i) = need (see :func:`_fast_steps`), in floats: on the ramp
-    (h/2)·i² + (q·a0 + h/2)·i with h = q·sgn·d, after it linear at q·target a period."""
+    (h/2)·i² + (q·a0 + h/2)·i with h = q·sgn·d, after it (``full`` periods, the sum
+    ``at_full`` by then) linear at q·``after`` a period."""
     h = (q * sgn * d).astype(float)
     b = q * a0 + h / 2
     want = need.astype(float)
     with np.errstate(all="ignore"):
         i = 2 * want / (b + np.sqrt(np.maximum(b * b + 2 * h * want, 0.0)))
-        at_full = (q * _addval_sum(full, a0, sgn, d, span, full)).astype(float)
-        return np.where(i > full, full + (want - at_full) / (q * (a0 + sgn * span)), i)
+        return np.where(i > full, full + (want - (q * at_full).astype(float)) / (q * after), i)
 
 
 def _runs(starts: np.ndarray, ends: np.ndarray, n_periods: int) -> np.ndarray:
@@ -417,7 +636,7 @@ def _pass2(
     kind: StepType,
     base: int,
     n_periods: int,
-    desc: list[int],
+    cols: np.ndarray,
     exact: dict[int, tuple[np.ndarray, np.ndarray]],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """Each pin's toggles and the ``counts`` changes from the chunk descriptors, step by step.
@@ -428,7 +647,6 @@ def _pass2(
     up/down (type 1) carry each pulse on the line of the direction at its step (the direction
     cannot change while timer2 ≥ timer1 runs), and a phase type's state moves by the direction
     at each step."""
-    cols = np.fromiter(desc, dtype=np.int64, count=len(desc)).reshape(-1, _DESC).T
     k0, dirs, lens, acc0 = cols[0], cols[6], cols[7], cols[8]
     nper = -(-lens // base)  # ceil(step_len / P): the periods timer1 keeps STEP high
     is_fast = np.ones(cols.shape[1], dtype=bool)
@@ -439,27 +657,34 @@ def _pass2(
     c_at = s_at
     # the direction, chunk by chunk (exact chunks: period by period)
     d_at, d_val = k0[fast], dirs[fast]
+    s_dir = dirs[s_chunk]  # each step's direction: its chunk's (exact chunks: its period's)
     if exact:
-        parts: list[list[np.ndarray]] = [[s_at], [s_chunk], [c_at], [c_val], [d_at], [d_val]]
-        for ci, (inc, e_dir) in exact.items():
+        # an exact chunk's steps, count changes and per-period directions go between the fast
+        # chunks before and after it (chunks cover disjoint, ordered periods): inserted there
+        s_before = np.searchsorted(s_chunk, list(exact))  # fast steps before each exact chunk
+        d_before = np.searchsorted(fast, list(exact))  # fast chunks before it
+        ins: list[list[np.ndarray]] = [[] for _ in range(10)]
+        for (ci, (inc, e_dir)), sb, db in zip(exact.items(), s_before, d_before, strict=True):
             start = int(k0[ci])
             accum = np.cumsum(inc) + acc0[ci]
             prev = np.concatenate((acc0[ci : ci + 1], accum[:-1]))
             steps = np.flatnonzero((accum ^ prev) & ONE_STEP)
             counts = accum >> PICKOFF
             moved = np.flatnonzero(counts != (prev >> PICKOFF))
-            for part, value in zip(parts, (
-                steps + start, np.full(len(steps), ci), moved + start, counts[moved],
-                np.arange(start, start + len(inc)), e_dir,
+            for part, value in zip(ins, (
+                np.full(len(steps), sb), steps + start, np.full(len(steps), ci), e_dir[steps],
+                np.full(len(moved), sb), moved + start, counts[moved],
+                np.full(len(inc), db), np.arange(start, start + len(inc)), e_dir,
             ), strict=True):  # fmt: skip
                 part.append(value)
-        s_at, s_chunk, c_at, c_val, d_at, d_val = (np.concatenate(p) for p in parts)
-        for at, rest in ((s_at, (s_chunk,)), (c_at, (c_val,)), (d_at, (d_val,))):
-            order = np.argsort(at, kind="stable")
-            at[:] = at[order]
-            for x in rest:
-                x[:] = x[order]
-    s_dir = dirs[s_chunk] if not exact else _at(d_at, d_val, s_at)
+        sp, sa, sc, sd, cp, ca, cv, dp, da, dv = (np.concatenate(p) for p in ins)
+        s_at, s_chunk, s_dir = (
+            np.insert(s_at, sp, sa),
+            np.insert(s_chunk, sp, sc),
+            np.insert(s_dir, sp, sd),
+        )
+        c_at, c_val = np.insert(c_at, cp, ca), np.insert(c_val, cp, cv)
+        d_at, d_val = np.insert(d_at, dp, da), np.insert(d_val, dp, dv)
     toggles: dict[str, np.ndarray] = {}
     if kind.kind == "phases":
         state = np.cumsum(s_dir) % max(kind.cycle, 1)
@@ -482,8 +707,3 @@ def _pass2(
             for pin, line in zip(kind.outputs, lines, strict=True):
                 toggles[pin] = _runs(s_at[line], ends[line], n_periods)
     return toggles, c_at, c_val
-
-
-def _at(at: np.ndarray, values: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The piecewise-constant series (``values[j]`` from ``at[j]`` on) at the indices ``t``."""
-    return values[np.searchsorted(at, t, side="right") - 1]

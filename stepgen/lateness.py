@@ -48,7 +48,6 @@ import numpy as np
 
 from stepgen.reference import InvocationRun
 from wavecheck.errors import ConfigError, UnitError
-from wavecheck.linuxcnc.worstcase import WORST_RULES, end_events
 from wavecheck.steptypes import kind_of
 from wavecheck.units import LATENCY, Plausible, option_ns, shorten
 
@@ -67,9 +66,19 @@ __all__ = [
     "parse_latency",
 ]
 
-#: The rules ``worst:J:RULE`` can target (:data:`wavecheck.linuxcnc.worstcase.WORST_RULES`).
-RULES: tuple[str, ...] = WORST_RULES
 DEFAULT_CATCHUP_NS = 1000
+RULES: tuple[str, ...]  # loaded on first use (module __getattr__ below)
+
+
+def __getattr__(name: str) -> tuple[str, ...]:
+    """``RULES``: the rules ``worst:J:RULE`` can target
+    (:data:`wavecheck.linuxcnc.worstcase.WORST_RULES`), loaded with the worst-case module only
+    when asked for (a simulation under another latency model does not need it: ~2 ms)."""
+    if name == "RULES":
+        from wavecheck.linuxcnc.worstcase import WORST_RULES
+
+        return WORST_RULES
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -148,9 +157,11 @@ def parse_latency(text: str) -> LatencyModel:
     if kind == "worst" and rest.count(":") == 1:
         j, rule = rest.split(":")
         rule = rule.strip().lower().replace("-", "_")
-        if rule not in RULES:
+        from wavecheck.linuxcnc.worstcase import WORST_RULES
+
+        if rule not in WORST_RULES:
             raise ConfigError(
-                f"latency model {t!r}: unknown rule {rule!r} (rules: {', '.join(RULES)})"
+                f"latency model {t!r}: unknown rule {rule!r} (rules: {', '.join(WORST_RULES)})"
             )
         return LatencyModel("worst", t, j_ns=_ns(j, "J", t), rule=rule)
     raise ConfigError(
@@ -211,6 +222,8 @@ def _end_events(rule: str, run: InvocationRun, active_edge: ActiveEdge) -> np.nd
         lines = ("step",) if kind == "step-dir" else ("up", "down")
     pulses = [(t[p][0::2], t[p][1::2]) for p in lines]  # pins start at 0: rise, fall, ...
     dirs = t["dir"] if kind == "step-dir" else np.zeros(0, np.int64)
+    from wavecheck.linuxcnc.worstcase import end_events
+
     out = end_events(rule, kind, pulses, dirs, active_rising=active_edge == "rising")
     if out is not None:
         return out

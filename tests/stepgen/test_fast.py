@@ -146,3 +146,100 @@ def test_fast_steps_are_where_counts_change(chunks, bad_root, block) -> None:  #
     assert at.tolist() == want_at
     assert chunk.tolist() == want_chunk
     assert count.tolist() == want_count
+
+
+@st.composite
+def tracking_scenarios(draw):  # type: ignore[no-untyped-def]
+    """Position-mode runs long enough for pass 1's tracking loop (:func:`fast._track`): a
+    command of velocity segments at, just under, just over and far beyond maxvel, and jumps
+    that make the follower accelerate at maxaccel (its clamps and the bang-bang branch), so
+    stretches where a clamp acts and where none does alternate."""
+    base = draw(st.sampled_from([20_000, 25_000, 50_000]))
+    servo = draw(st.sampled_from([base * 4, 1_000_000, 990_000]))
+    scale = draw(st.sampled_from([1.0, 250.0, -1000.0, 3200.0]))
+    vmax = draw(st.sampled_from([0.0, 2e3, 1e4, 1.9e4]))  # steps/s (0: the step-rate limit)
+    amax = draw(st.sampled_from([0.0, 1e4, 1e5, 3e6]))  # steps/s²
+    cfg = StepgenConfig(
+        base_period_ns=base,
+        servo_period_ns=servo,
+        position_scale=scale,
+        maxvel=vmax / abs(scale),
+        maxaccel=amax / abs(scale),
+        steplen=draw(st.integers(0, 2 * base)),
+        stepspace=draw(st.integers(0, 2 * base)),
+        dirsetup=draw(st.integers(0, 3 * base)),
+        dirhold=draw(st.integers(0, 3 * base)),
+        thread_order=draw(st.sampled_from(["update-first", "pulses-first"])),
+    )
+    limit = vmax or 1e9 / (2 * base)  # about the step-rate limit when maxvel is 0
+    dt = servo * 1e-9
+    vel: list[float] = []
+    for _ in range(draw(st.integers(1, 6))):
+        f = draw(st.sampled_from([0.0, 0.3, -0.7, 0.999, 1.0, -1.0, 1.001, 2.0, -3.0]))
+        vel += [f * limit] * draw(st.integers(1, 120))
+    pos = np.cumsum(np.array(vel) * dt)
+    jumps = draw(
+        st.lists(st.tuples(st.integers(0, len(pos) - 1), st.floats(-300, 300)), max_size=3)
+    )
+    for at, size in jumps:
+        pos[at:] += size
+    cmds = (pos / scale).tolist()
+    n_periods = len(cmds) * (cfg.servo_ns // base) + draw(st.integers(0, 7))
+    return cfg, cmds, n_periods
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tracking_scenarios())
+def test_tracking_loop_equals_the_general_loop(scenario) -> None:  # type: ignore[no-untyped-def]
+    """Pass 1's tracking loop (follow_position inlined, the chunk's closed form, descriptors
+    made afterwards with numpy) gives exactly what the general per-period loop gives: the same
+    toggles, counts, final state (freq, accum, addval … bit for bit) and warnings, where the
+    maxvel/maxaccel clamps act and where they do not."""
+    cfg, cmds, n = scenario
+    try:
+        cfg.validate()
+    except Exception:
+        return
+    with mock.patch.object(fast, "_TRACK", False):
+        general = run_fast(cfg, cmds, n)
+    tracked = run_fast(cfg, cmds, n)
+    assert_same(general, tracked)
+    assert general.warnings == tracked.warnings
+    assert (general.fast_chunks, general.exact_chunks) == (
+        tracked.fast_chunks,
+        tracked.exact_chunks,
+    )
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tracking_scenarios())
+def test_tracking_loop_equals_the_reference(scenario) -> None:  # type: ignore[no-untyped-def]
+    """The same runs against the plain per-period model (stepgen.reference)."""
+    cfg, cmds, n = scenario
+    try:
+        cfg.validate()
+    except Exception:
+        return
+    assume(n <= 12_000)
+    assert_same(run_reference(cfg, cmds, n), run_fast(cfg, cmds, n))
+
+
+def test_tracking_loop_runs_a_steady_sine() -> None:
+    """A sine followed within its limits goes through the tracking loop, nearly every servo
+    period (the rest: the start, before the clamps settle, and the reversals' exact chunks)."""
+    cfg = StepgenConfig(base_period_ns=25_000, servo_period_ns=1_000_000, position_scale=1000.0,
+                        maxvel=15.0, maxaccel=100.0, thread_order="pulses-first")  # fmt: skip
+    cmds = (10 * np.sin(np.arange(4000) * 1e-3)).tolist()
+    runs: list[tuple[int, int]] = []
+    track = fast._track
+
+    def spy(*a):  # type: ignore[no-untyped-def]
+        out = track(*a)
+        runs.append((a[1], out[0]))
+        return out
+
+    with mock.patch.object(fast, "_track", spy):
+        run = run_fast(cfg, cmds, 4000 * 40)
+    assert sum(b - a for a, b in runs) >= 3900
+    with mock.patch.object(fast, "_TRACK", False):
+        assert_same(run_fast(cfg, cmds, 4000 * 40), run)

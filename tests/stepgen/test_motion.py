@@ -5,12 +5,14 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from stepgen import motion
 from stepgen.motion import _parse_plain_lines, _parse_rows, parse_command_csv
 from wavecheck.errors import ConfigError
 
@@ -103,3 +105,20 @@ def test_which_files_take_the_whole_file_path(tmp_path: Path, text: str, fast: b
     t0, v0 = _parse_rows(path)
     np.testing.assert_array_equal(t, t0)
     np.testing.assert_array_equal(v, v0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(LINES, ENDS), max_size=8) | ORDERED, st.sampled_from([1, 5, 40]))
+def test_whole_file_parse_in_pieces_is_the_same(rows, piece) -> None:  # type: ignore[no-untyped-def]
+    """The whole-file path splits and converts ``_CSV_PIECE`` characters of whole lines at a
+    time: pieces of one line or a few give the same answer (or the same refusal)."""
+    data = "".join(line + end for line, end in rows).encode()
+    whole = _parse_plain_lines(data)
+    with mock.patch.object(motion, "_CSV_PIECE", piece):
+        pieces = _parse_plain_lines(data)
+    if whole is None:
+        assert pieces is None
+        return
+    assert pieces is not None
+    for a, b in zip(whole, pieces, strict=True):
+        assert a.view(np.int64).tolist() == b.view(np.int64).tolist()

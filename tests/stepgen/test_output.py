@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import filecmp
+import gc
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -140,3 +143,20 @@ def test_simulation_and_vcd_writing_report_progress(tmp_path: Path) -> None:
     assert sim_reports >= 5  # 10,000 servo periods, a report every 1024
     assert all(total == 400_000 for _, total in seen[:sim_reports])
     assert seen[-1][0] == seen[-1][1]  # the writer ends at its total
+
+
+def test_the_program_writes_what_main_with_argv_writes(tmp_path: Path) -> None:
+    """``python -m stepgen`` (main() as the program: the collector tuned, objects frozen at the
+    end) writes the same bytes as main(argv) in this process, which leaves the collector as it
+    was."""
+    args = ["simulate", "--move", "0.02", "--position-scale", "1000", "--maxvel", "0.5",
+            "--maxaccel", "20", "--latency", "uniform:5us", "--seed", "3", "-q"]  # fmt: skip
+    before = gc.get_threshold()
+    assert main([*args, "-o", str(tmp_path / "a.vcd")]) == 0
+    assert gc.get_threshold() == before
+    run = subprocess.run(
+        [sys.executable, "-m", "stepgen", *args, "-o", str(tmp_path / "b.vcd")],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "a.vcd").read_bytes() == (tmp_path / "b.vcd").read_bytes()

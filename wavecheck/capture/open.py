@@ -345,7 +345,7 @@ def open_source(
 ) -> BlockSource:
     """A block source for any capture (as :func:`open_capture` reads it): a format with
     ``blocks`` in :data:`~wavecheck.capture.formats.FORMATS` (``.sr``, VCD, timed raw binary
-    samples, FST through ``fst2vcd``), from a file or, where it reads a stream, from standard
+    samples, FST), from a file or, where it reads a stream, from standard
     input or a pipe, is read block by block in bounded memory; every other input is read whole
     first and given as one block (:class:`~wavecheck.capture.blocks.MemorySource`).
 

@@ -1,9 +1,9 @@
 """FST and GHW through pywellen, and single bits of vectors from any simulator dump.
 
-FST (Verilator's, GTKWave's, ``vvp -fst``) is read by GTKWave's own ``fst2vcd`` streamed into the
-fast VCD reader when it is installed: measured faster per value change than pywellen's per-change
-Python objects and than reading the same run's VCD (``bench/fst_read.py``, bench/README.md), in
-bounded memory. GHW (GHDL's ``--wave``), and FST without ``fst2vcd``, are read with pywellen.
+FST (Verilator's, GTKWave's, ``vvp -fst``) is decoded natively (:mod:`wavecheck.capture.fst`);
+a FastLZ-packed one (``vcd2fst -F``, which that decoder leaves out) is read by GTKWave's own
+``fst2vcd`` streamed into the fast VCD reader when it is installed, else by pywellen
+(``bench/fst_read.py``, bench/README.md). GHW (GHDL's ``--wave``) is read with pywellen.
 
 The semantics are the VCD reader's (:mod:`wavecheck.capture.vcd.reader`): exact integer ticks of
 the file's timescale; several changes of a signal at one time, the last wins; unknown values
@@ -365,13 +365,21 @@ def read_fst(
     samplerate: Fraction | None = None,
     resolution_s: Fraction | None = None,
 ) -> Capture:
-    """Read an FST file: GTKWave's ``fst2vcd`` streamed into the VCD reader, or pywellen when
-    ``fst2vcd`` is not installed (slower per value change, same result). fst2vcd is bounded
-    (:class:`_Watched`): it is stopped when it stalls or writes beyond any FST's expansion.
+    """Read an FST file: decoded natively (:mod:`wavecheck.capture.fst_source`); a FastLZ-packed
+    one through GTKWave's ``fst2vcd`` streamed into the VCD reader, or pywellen when ``fst2vcd``
+    is not installed (same result, slower). fst2vcd is bounded (:class:`_Watched`): it is
+    stopped when it stalls or writes beyond any FST's expansion.
 
     Raises:
         CaptureError: the file cannot be read as FST.
     """
+    from wavecheck.capture.fst import FstUnsupported
+    from wavecheck.capture.fst_source import read_native
+
+    try:
+        return read_native(path, samplerate=samplerate, resolution_s=resolution_s)
+    except FstUnsupported:
+        pass  # FastLZ packing: GTKWave's reader, or pywellen's
     tool = shutil.which("fst2vcd")
     if tool is None:
         return read_wellen(path, kind="fst", samplerate=samplerate, resolution_s=resolution_s)

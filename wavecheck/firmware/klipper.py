@@ -17,7 +17,7 @@ duration (klipper ``src/stepper.c`` 180-206, 111-121), and DIR changes right aft
 edge. Not enforced by the firmware (never a PASS; "measure it"): every figure of the AVR fast
 path (pulse ≤ 40 ticks: both STEP writes in one event, ``stepper_event_avr`` 160-176) and of the
 optimised both-edge path (``step_pulse_ticks`` ≤ ⌈clock / 8 MHz⌉: ``stepper_event_edge`` 138-151,
-DIR toggled right after the last edge). The both-edge full path (longer pulses) keeps each edge,
+DIR toggled right after the last edge; an STM32H7, Linux or BeagleBone PRU build has no such path). The both-edge full path (longer pulses) keeps each edge,
 DIR setup and hold ≥ the duration (113-120, 184-195). The duration is truncated to whole MCU
 clock ticks (:data:`MCUS`, Klipper's Kconfig clocks).
 
@@ -68,6 +68,8 @@ MCUS: tuple[tuple[str, bool, tuple[int, ...]], ...] = (
     (r"stm32f401", False, (84_000_000,)),
     (r"stm32f40[57]", False, (168_000_000,)),
     (r"stm32f446", False, (180_000_000,)),
+    (r"stm32h723\w*", False, (520_000_000,)),
+    (r"stm32h743\w*", False, (400_000_000,)),
     (r"lpc1768", False, (100_000_000,)),
     (r"lpc1769", False, (120_000_000,)),
     (r"stm32\w+|gd32\w+|lpc17\d\d|sam[a-z]?\d\w*|atsam\w*|rp2040|hc32\w+|"
@@ -104,6 +106,8 @@ class _Mcu:
     avr: bool | None
     clocks: tuple[int, ...]
     why: str
+    chips: tuple[str, ...] = ()
+    """The chip names the file gives for it (lower case)."""
 
 
 #: Section headers only a Klipper file has (lower-case module names; LinuxCNC's are upper-case).
@@ -272,7 +276,8 @@ def _mcus(
             why = f"{chip} named in the file" + (
                 "" if avr is not None else " (AVR and ARM both named: AVR possible)"
             )
-            out[name] = _Mcu(name, avr, clocks if all(row[2] for _, row in found) else (), why)
+            out[name] = _Mcu(name, avr, clocks if all(row[2] for _, row in found) else (), why,
+                             tuple(sorted({c for c, _ in found})))  # fmt: skip
         elif not_avr_pin:
             out[name] = _Mcu(name, False, (), f"no chip named; pin {not_avr_pin} is no ATmega pin")
         else:
@@ -531,9 +536,22 @@ def _rate(
                       f"{kinematics}: {sec.name} moves {axis} alone")  # fmt: skip
 
 
+#: MCUs whose Klipper build has no optimised edge path: HAVE_EDGE_OPTIMIZATION needs
+#: CONFIG_WANT_STEPPER_OPTIMIZED_BOTH_EDGE (src/stepper.c:19-21), which needs
+#: HAVE_STEPPER_OPTIMIZED_BOTH_EDGE (src/Kconfig:299-304); src/stm32/Kconfig:16 selects it
+#: "if !MACH_STM32H7", and src/linux and src/pru (a BeagleBone's) select it not at all. Their
+#: both-edge steps run stepper_event_full with SF_SINGLE_SCHED (233-237, 224-227).
+_NO_EDGE_PATH = re.compile(r"stm32h7\w*|linux|beaglebone", re.I)
+
+
 def _edge_path(made: Fraction, mcu: _Mcu) -> bool | None:
     """Does the MCU run both-edge stepping on its optimised edge path (src/stepper.c:233-235:
     step_pulse_ticks <= EDGE_STEP_TICKS = ceil(clock / 8 MHz), line 132)? None: undecided."""
+    no_edge = [bool(_NO_EDGE_PATH.fullmatch(c)) for c in mcu.chips]
+    if no_edge and all(no_edge):
+        return False
+    if any(no_edge):
+        return None
     if mcu.clocks:
         found = {int(made * f / 10**9) <= -(-f // 8_000_000) for f in mcu.clocks}
         return found.pop() if len(found) == 1 else None

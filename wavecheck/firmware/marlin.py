@@ -26,6 +26,16 @@ pulse is a busy-wait on the pulse timer, so it is ``uncertain``: it may be up to
 
 A figure that depends on a branch the files cannot decide is the smallest over the branches
 (the largest for the max rate), and the note names the branch.
+
+Spacing (stepper.cpp ``pulse_phase_isr``/``isr``, stepper.h ``calc_timer_interval``, 1.1.9 to
+2.1.x): the interrupt runs every axis's Bresenham on the leading axis's step events and, above
+the CPU's one-step-per-interrupt rate (not in the files), takes up to 128 of them per interrupt
+(``MULTISTEPPING_LIMIT``; ``DISABLE_MULTI_STEPPING`` or a limit of 1: one), waiting only the
+low time between them. So any axis may step at the driver rate: its max rate is that, and
+steps/unit × feedrate is only its sustained rate. Between interrupts nothing is waited: the
+timer set from the leading axis's rate spaces a slow axis's steps ≥ 1 / min(2 × its rate, the
+fastest axis's) (as grbl's), less the pulse: the low time is the smaller of the two.
+Hangprinter's fourth anchor D is a stepper on the first free E socket.
 """
 
 from __future__ import annotations
@@ -34,12 +44,13 @@ import itertools
 import os
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import read_text
+from wavecheck.firmware.grbl import bresenham_spacing
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -176,6 +187,27 @@ _PULSE_SHORT = {
         "phase (stepper_pulse_phase_isr, MIN_PULSE_TICKS; HAL/AVR/timers.h:35 F_CPU / 8)",
     ),
 }
+#: How far the low time may fall short, waited by the same timer. 2020 rewrite: START_LOW_PULSE
+#: after PULSE_STOP, AWAIT_LOW_PULSE until PULSE_LOW_TICK_COUNT = NS_TO_PULSE_TIMER_TICKS(
+#: _MIN_PULSE_LOW_NS - TIMER_SETUP_NS) ticks have passed: the pulse's rounding and phase, 1.5
+#: ticks. Before (1.1.9/2.0.0): ``pulse_end += ADDED_STEP_TICKS`` with ADDED_STEP_TICKS =
+#: MIN_STEPPER_PULSE_CYCLES / PULSE_TIMER_PRESCALE - MIN_PULSE_TICKS (stepper.h, integer
+#: division: up to 1 tick lost) counted from the previous target, not from the falling edge,
+#: at any phase (1 tick): 2 ticks, and a high wait that overruns its target takes from it.
+_LOW_SHORT = {
+    False: (
+        _PULSE_SHORT[False][0],
+        "1.5 ticks of a 2 MHz pulse timer: PULSE_LOW_TICK_COUNT is NS_TO_PULSE_TIMER_TICKS "
+        "(nearest tick) and AWAIT_LOW_PULSE counts whole ticks from any phase "
+        "(Marlin/src/module/stepper.cpp; HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+    True: (
+        2 * _PULSE_TICK_NS,
+        "2 ticks of a 2 MHz pulse timer: ADDED_STEP_TICKS truncates cycles to ticks and the "
+        "wait counts from the high wait's target at any phase (stepper_pulse_phase_isr, "
+        "stepper.h ADDED_STEP_TICKS; HAL/AVR/timers.h:35 F_CPU / 8)",
+    ),
+}
 #: Marlin's eras, newest first.
 ERAS: tuple[Era, ...] = (
     Era("2.1.3 and later", (2, 1, 3), (_T213,), False, False,
@@ -200,8 +232,13 @@ _KINEMATIC = {
     # SCARA arms, polar and polargraph couple X and Y; Z passes through (scara.cpp
     # inverse_kinematics: delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z))
     "DELTA": "XYZ", "MORGAN_SCARA": "XY", "MP_SCARA": "XY", "AXEL_TPARA": "XYZ",
-    "POLARGRAPH": "XY", "POLAR": "XY", "HANGPRINTER": "XYZ",
+    "POLARGRAPH": "XY", "POLAR": "XY", "HANGPRINTER": "XYZD",
 }  # fmt: skip
+#: 1.1.9's HANGPRINTER drives four anchor motors A-D (enum.h: ``D_AXIS = 3, E_AXIS = 4``): A-C on
+#: the X-Z sockets, D on the first E socket the extruders leave free (1.1.x ``Marlin/pins.h``,
+#: HANGPRINTER block: ``D_STEP_PIN _EPIN(E_STEPPERS, STEP)``, as indexed in a 1.1.9-era copy;
+#: 119/hangprinter/Configuration.h:988-989 ``#if EXTRUDERS == 1 / INVERT_E1_DIR INVERT_D_DIR``).
+_HANGPRINTER_D = "D"
 #: Trinamic types driven by STEP/DIR alone: Marlin/src/core/drivers.h @ 04e8baa9 lines 97-101
 #: leave TMC2100 out of HAS_TRINAMIC_CONFIG (and AXIS_IS_TMC) and 106-111 put it in
 #: HAS_TRINAMIC_STANDALONE, like the ``…_STANDALONE`` types.
@@ -302,18 +339,23 @@ def _drivers(h: Headers, era: Era, texts: str) -> list[_Driver]:
         v = evaluate(h, e.value or "")
         if isinstance(v, Num) and 0 <= v.value <= 8:
             extruders = int(v.value)
+    # Hangprinter: the D anchor motor takes the socket (and driver type) of E<EXTRUDERS>
+    d_socket = f"E{extruders}" if h.enabled("HANGPRINTER") else None
     out = []
-    for axis in _DRIVER_AXES:
+    for axis in (*_DRIVER_AXES[:9], *((_HANGPRINTER_D,) if d_socket else ()), *_DRIVER_AXES[9:]):
+        if axis == d_socket:
+            continue
+        socket = d_socket if axis == _HANGPRINTER_D and d_socket else axis
         options = []
-        for d in h.candidates(f"{axis}_DRIVER_TYPE"):
+        for d in h.candidates(f"{socket}_DRIVER_TYPE"):
             if d.value is None:
                 continue
             v = evaluate(h, d.value)
             kind = v if isinstance(v, str) else (d.value.split() or ["?"])[0]
             options.append((kind, d.where, d.depends))
-        implied = assumed and (axis in ("X", "Y", "Z", *_extra_steppers(h)) or (
+        implied = assumed and (axis in ("X", "Y", "Z", _HANGPRINTER_D, *_extra_steppers(h)) or (
             axis.startswith("E") and int(axis[1:]) < extruders))  # fmt: skip
-        if options and any(d.value is None for d in h.candidates(f"{axis}_DRIVER_TYPE")):
+        if options and any(d.value is None for d in h.candidates(f"{socket}_DRIVER_TYPE")):
             if implied:
                 options.append((fallback, f"not defined: {why}", options[0][2]))
         if not options and implied:
@@ -535,7 +577,20 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )  # fmt: skip
     unsupported = [f"driver type {t}: no Marlin default timing is modelled" for t in unknown_types]
     figs = _figures(results, dims, era, pulse_name, post_name)
-    axes = [_axis(h, era, d, drivers, figs) for d in drivers]
+    infos = {d.axis: {"driver type": " or ".join(f"{k} ({w})" for k, w, _ in d.options)}
+             for d in drivers}  # fmt: skip
+    asked = {d.axis: _sustained_rate(h, d.axis, drivers, infos[d.axis])
+             for d in drivers}  # fmt: skip
+    sustained = {a: r if r is None or figs.rate.value is None or r.hz < figs.rate.value else None
+                 for a, r in asked.items()}  # fmt: skip
+    figs = _outrun(figs, asked)
+    packing = _multistepping(h)
+    if packing[0] > 1:
+        notes.append(f"multi-stepping ({packing[1]}): up to {packing[0]} steps per interrupt, "
+                     "spaced by the driver timing, so every axis may step at the driver rate")  # fmt: skip
+    known = [r.hz for r in sustained.values() if r is not None]
+    fastest = max(known) if known and len(known) == len(sustained) else None
+    axes = [_axis(h, d, figs, infos[d.axis], sustained[d.axis], fastest, packing) for d in drivers]
     return FirmwareConfig(
         firmware="marlin",
         path=str(path),
@@ -594,9 +649,10 @@ def _figures(
         pulse = not_enforced(name, f"a 0 pulse is no wait ({t.why or at})", at, unit=unit)
     t, s = pick(lambda x: x.low)
     if t.low:
-        idle = Guaranteed(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
-                          "Hz", "derived", "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, pulse), "
-                          "enforced between pulses of one interrupt")  # fmt: skip
+        short, why = _LOW_SHORT[era.old_pulse_code]
+        idle = uncertain(t.low, "MAXIMUM_STEPPER_RATE", s["rate"].where or "Marlin default",
+                         "Hz", short, why, "max(1e9 / MAXIMUM_STEPPER_RATE - pulse, "
+                         "pulse), waited between the steps of one interrupt")  # fmt: skip
     else:
         idle = not_enforced("MAXIMUM_STEPPER_RATE", "the rate spaces pulse starts; the high "
                             f"time is not bounded, so neither is the low time ({_OLD_PULSE})")  # fmt: skip
@@ -682,8 +738,44 @@ def _split_top(text: str) -> list[str]:
     return parts
 
 
+def _multistepping(h: Headers) -> tuple[int, str]:
+    """How many steps one stepper interrupt may take, and the setting that says so.
+
+    ``Stepper::calc_timer_interval`` (stepper.h, 2.0.x; ``calc_multistep_timer_interval`` in
+    2.1.x) doubles the steps per interrupt while the leading axis's rate is above the CPU's
+    ``MAX_STEP_ISR_FREQUENCY_<n>X`` estimates (not in the configuration), up to 128, or
+    ``MULTISTEPPING_LIMIT`` (2.1.x; Conditionals_adv.h "Multi-Stepping Limit": 128 when not
+    defined); ``DISABLE_MULTI_STEPPING`` (2.0.x and 1.1.9) keeps one step per interrupt."""
+    if h.enabled("DISABLE_MULTI_STEPPING") is True:
+        d = h.definition("DISABLE_MULTI_STEPPING")
+        return 1, f"DISABLE_MULTI_STEPPING at {d.where if d else '?'}"
+    d = h.definition("MULTISTEPPING_LIMIT")
+    if d is not None:
+        v = evaluate(h, d.value or "")
+        if isinstance(v, Num) and v.value in (1, 2, 4, 8, 16, 32, 64, 128):
+            return int(v.value), f"MULTISTEPPING_LIMIT {int(v.value)} at {d.where}"
+    return 128, "Marlin's default: up to 128 steps per interrupt"
+
+
+#: Marlin's stepper interrupt (MarlinFirmware/Marlin Marlin/src/module/stepper.cpp, 1.1.9 to
+#: 2.1.x as indexed): ``pulse_phase_isr`` runs the Bresenham of every axis on each of the
+#: leading axis's step events; between the events of one interrupt it waits the low time
+#: (``AWAIT_LOW_PULSE``, skipped for the first step: ``firstStep``); ``isr()`` schedules the
+#: next interrupt from the leading axis's rate and runs the pulse phase again at once when that
+#: time has already passed ("Advance pulses if not enough time to wait for the next ISR").
+_ISR = ("stepper.cpp pulse_phase_isr: the low time is waited only between the steps of one "
+        "interrupt (AWAIT_LOW_PULSE after the first); an interrupt's first step waits for the "
+        "timer, set from the leading axis's rate (isr(): at once when that time has passed)")  # fmt: skip
+
+
 def _axis(
-    h: Headers, era: Era, d: _Driver, drivers: list[_Driver], figs: _Figures
+    h: Headers,
+    d: _Driver,
+    figs: _Figures,
+    info: dict[str, str],
+    sustained: _Sustained | None,
+    fastest: Fraction | None,
+    packing: tuple[int, str],
 ) -> GeneratorGuarantee:
     axis = d.axis
     letter = "E" if axis.startswith("E") else axis[0]
@@ -707,13 +799,20 @@ def _axis(
     inv_def = h.definition(f"INVERT_{axis}_DIR") or h.definition(f"INVERT_{letter}_DIR")
     inv_v = evaluate(h, inv_def.value or "") if inv_def is not None else None
     inv = isinstance(inv_v, Num) and inv_v.value != 0  # true, 1 or a macro naming one
-    kind = " or ".join(f"{k} ({w})" for k, w, _ in d.options)
-    info = {"driver type": kind}
-    rate = _axis_rate(h, axis, drivers, figs.rate, info)
+    rate = _driver_rate(figs.rate, axis in _coupled(h))
+    if sustained is not None and (packing[0] == 1 or figs.rate.value is None):
+        rate = Guaranteed(sustained.hz, "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE",
+                          sustained.where, "mm/s", "derived", sustained.how + (
+                              f"; one step per interrupt ({packing[1]})"
+                              if packing[0] == 1 else ""))  # fmt: skip
+    elif sustained is not None:
+        rate = replace(rate, note=f"{rate.note}; {packing[1]}: the steps of one interrupt are "
+                       f"spaced by the driver timing, so this axis's {float(sustained.hz):g} Hz "
+                       f"({sustained.how}) is only its sustained rate")  # fmt: skip
     return GeneratorGuarantee(
         axis=axis,
         pulse=figs.pulse,
-        idle=figs.idle,
+        idle=_axis_idle(figs, sustained.hz if sustained else None, fastest, packing),
         dir_setup=figs.setup,
         dir_hold=figs.hold,
         max_rate=rate,
@@ -726,29 +825,86 @@ def _axis(
     )
 
 
-def _axis_rate(
-    h: Headers, axis: str, drivers: list[_Driver], global_rate: Guaranteed, info: dict[str, str]
+def _axis_idle(
+    figs: _Figures, rate: Fraction | None, fastest: Fraction | None, packing: tuple[int, str]
 ) -> Guaranteed:
-    spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
-    kinematic = {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
-    base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
+    """The low time of one axis: the waited figure between the steps of one interrupt (when
+    it may take more than one), and between interrupts the leading axis's schedule, on whose
+    events this axis steps: 1 / min(2 x its rate, the fastest axis's) apart at the least, as in
+    grbl (:func:`wavecheck.firmware.grbl.bresenham_spacing`), less the pulse."""
+    waited = figs.idle if packing[0] > 1 else None
+    pulse = figs.pulse.value
+    if rate is None or fastest is None or pulse is None or figs.pulse.status == "not_enforced":
+        if waited is not None:
+            return waited
+        return unknown("MAXIMUM_STEPPER_RATE", f"one step per interrupt ({packing[1]}): no "
+                       "low time is waited, and an axis's rate is not known; " + _ISR)  # fmt: skip
+    gap = max(bresenham_spacing(rate, fastest) - pulse, Fraction(0))
+    if waited is not None and (waited.value is None or waited.value <= gap):
+        return waited
+    return uncertain(gap, "DEFAULT_MAX_FEEDRATE", "steps/unit x feedrate of every axis", "mm/s",
+                     None, "a time between stepper interrupts, which other interrupts may delay",
+                     "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: Bresenham "
+                     "steps it on the leading axis's events; " + _ISR)  # fmt: skip
+
+
+def _outrun(figs: _Figures, asked: dict[str, _Sustained | None]) -> _Figures:
+    """An axis whose steps/unit x feedrate is over 1 / (pulse + low) asks the interrupt for
+    more steps than its waits can space: ``isr()`` runs late and takes the next interrupt's
+    first step at once ("Advance pulses if not enough time to wait for the next ISR"), after
+    no low-time wait. In a move that axis leads, every axis steps on its events: the low time
+    is then not enforced (the figure is kept as what the settings ask for)."""
+    pulse, low = figs.pulse.value, figs.idle.value
+    if not pulse or not low or figs.idle.status == "not_enforced":
+        return figs
+    cap = _GIGA / (pulse + low)
+    fast = [f"{a} {float(r.hz):g} Hz ({r.how})" for a, r in asked.items() if r and r.hz > cap]
+    if not fast:
+        return figs
+    why = (f"{', '.join(fast)} over the {float(cap):g} Hz that 1 / (pulse + low) allows: the "
+           "interrupt runs late and steps again with no low-time wait (stepper.cpp isr(), "
+           "pulse_phase_isr's first step)")  # fmt: skip
+    idle = not_enforced(figs.idle.setting, why, figs.idle.where, value=low, unit=figs.idle.unit)
+    return _Figures(figs.pulse, idle, figs.setup, figs.pre, figs.hold, figs.rate)
+
+
+def _coupled(h: Headers) -> set[str]:
+    """The steppers whose motion kinematics couple (steps/unit x feedrate bounds none)."""
+    return {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
+
+
+def _driver_rate(global_rate: Guaranteed, coupled: bool) -> Guaranteed:
     note = "the driver rate Marlin times pulses for; not a cap on motion"
-    if base in kinematic:
+    if coupled:
         note += (
             "; kinematics couple this axis with others (steps/unit x feedrate does not bound it)"
         )
     # MAXIMUM_STEPPER_RATE spaces the pulses of one interrupt (it sets _MIN_PULSE_LOW_NS,
     # stepper/cycles.h); nothing caps the planner's step rate at it: no bound above
-    fallback = (
+    return (
         uncertain(global_rate.value, global_rate.setting, global_rate.where, "Hz", None,
                   "the planner does not cap the step rate at MAXIMUM_STEPPER_RATE", note)
         if global_rate.value is not None
         else Guaranteed(None, global_rate.setting, global_rate.where, "Hz", "unknown", note)
     )  # fmt: skip
-    if base in kinematic:
-        return fallback
-    if spu is None or feed is None:
-        return fallback
+
+
+@dataclass(frozen=True)
+class _Sustained:
+    hz: Fraction
+    where: str
+    how: str
+
+
+def _sustained_rate(
+    h: Headers, axis: str, drivers: list[_Driver], info: dict[str, str]
+) -> _Sustained | None:
+    """Steps/unit x max feedrate (Hz) of an uncoupled axis (the planner keeps every axis's
+    speed under its ``max_feedrate_mm_s``), else None."""
+    spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
+    base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
+    if base in _coupled(h) or spu is None or feed is None:
+        return None
     linear = [a for a in _LINEAR if any(d.axis == a for d in drivers)]
     if base == "E":
         distinct = h.enabled("DISTINCT_E_FACTORS") is True
@@ -762,11 +918,7 @@ def _axis_rate(
     f = feed[0][min(index, len(feed[0]) - 1)]
     info["steps/unit"] = f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {spu[1]})"
     info["max feedrate"] = f"{float(f):g} mm/s (DEFAULT_MAX_FEEDRATE, {feed[1]})"
-    hz = s * f
-    if global_rate.value is not None and hz >= global_rate.value:
-        return fallback
-    return Guaranteed(hz, "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE", feed[1], "mm/s",
-                      "derived", f"{float(s):g} steps/unit x {float(f):g} mm/s")  # fmt: skip
+    return _Sustained(s * f, feed[1], f"{float(s):g} steps/unit x {float(f):g} mm/s")
 
 
 def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
@@ -780,6 +932,12 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
             return f"Marlin: define MINIMUM_STEPPER_PULSE_NS {ns(need)}"
         if role == "idle":
             p = axis.pulse.value or Fraction(0)
+            if axis.idle.setting == "DEFAULT_MAX_FEEDRATE":  # the leading axis's schedule decides
+                return (
+                    f"Marlin: lower DEFAULT_MAX_FEEDRATE so that no axis steps faster than "
+                    f"{float(_GIGA / (p + need)):.6g} steps/s ({axis.axis} steps on the leading "
+                    "axis's events, one step per interrupt)"
+                )
             if need > p:
                 # low = 1e9 / rate - pulse, or 5e8 / rate with the pulse 0 or unset: both hold
                 rate = min(_GIGA / (p + need), _GIGA / 2 / need)
@@ -807,6 +965,10 @@ def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
                     "DIR hold after the pulse, so the drive's edge must start a pulse that long"
                 )
             return f"Marlin: define MINIMUM_STEPPER_PRE_DIR_DELAY {ns(need)}"
+        if axis.max_rate.setting == "MAXIMUM_STEPPER_RATE":
+            # multi-stepping spaces an interrupt's steps by the driver timing: a lower feed
+            # rate lowers the sustained rate only (stepper.cpp pulse_phase_isr)
+            return f"Marlin: define MAXIMUM_STEPPER_RATE {int(need)}"
         return (
             f"Marlin: define MAXIMUM_STEPPER_RATE {int(need)}, or lower DEFAULT_MAX_FEEDRATE for "
             f"{axis.axis} so that it steps at most {float(need):.6g} steps/s"

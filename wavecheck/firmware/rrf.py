@@ -18,6 +18,11 @@ not give (``uncertain`` with no bound: never a PASS). Meta-commands (``if``, ``v
 ``{expressions}``) are not evaluated: a value written as an expression is not read (named), and
 the motion commands of an ``if``/``elif``/``else``/``while`` block are not read either (the
 block is named), since whether they run is not decided by the file.
+
+What the comments state (the configurator's "Configuration file for Duet WiFi (firmware
+version 2.03)", "RepRapFirmware v3.5.4") is used where the firmware's rule depends on it: before
+1.21 ``T`` is one value for the high and low time and DIR is not held; 2.0x on a Duet 2
+WiFi/Ethernet has two default extruders (drivers 3 and 4).
 """
 
 from __future__ import annotations
@@ -74,20 +79,53 @@ def looks_like(text: str) -> bool:
 #: be far too short"). The 0.2 us RRF assumes is not a wait.
 _FAST = ("a fast driver (no T over 0.2 us): DDA::StepDrivers raises and lowers STEP with no "
          "wait between, DIR with none before or after")  # fmt: skip
+#: What a comment may state: the RepRapFirmware configurator's header ("; Configuration file for
+#: Duet WiFi (firmware version 2.03)") or a user's "RepRapFirmware v3.5.4" / "RRF 3.4".
+_STATED_VERSION = re.compile(
+    r"(?i)(?:firmware\s+version|\bRepRapFirmware|\bRRF)\s*v?(\d{1,2}(?:\.\d{1,3}){0,2})(?![\d.]*\d)"
+)
+_STATED_BOARD = re.compile(r"(?i)configuration file for\s+(duet[^(;\r\n]*?)\s*(?:\(|$)")
+#: Boards whose smart drivers 2.0x counts for its default extruders: the Duet 2 WiFi/Ethernet have
+#: five TMC2660 (Platform::Init: numTMC2660Drivers 5 without a DueX, 7 with a DueX2, 10 with a
+#: DueX5, which the file does not show: at least 5).
+_DUET2 = ("duet wifi", "duet ethernet", "duet 2 wifi", "duet 2 ethernet")
+#: 1.21's release notes (WHATS_NEW.md, "Version 1.21"): "New M569 T parameter options to specify
+#: step pulse width, step pulse interval, direction setup and direction hold times" and "When
+#: using external stepper drivers the DIR signal is no longer changed before the step pulse has
+#: ended". Before, GCodes ``case 569`` read ``platform.SetDriverStepTiming(drive,
+#: gb.GetFValue())``: one number (GetFValue stops at ``:``), the "minimum pulse width";
+#: Platform::SetDriverStepTiming makes the driver slow when it is >= minStepPulseTiming 0.2 us,
+#: and DDA::Step waits that many clocks before raising STEP (since it was lowered) and before
+#: lowering it: the high and the low time. DIR is updated in step 4 ("update the direction pins
+#: where necessary ... We assume that meeting the direction pin hold time is not a problem"),
+#: between the two, while STEP is high: no DIR setup or hold is kept. From 1.21 (2.0x: GCodes
+#: ``gb.GetFloatArray(timings, numTimings, true)`` then ``numTimings != 4`` -> "bad timing
+#: parameter"; GCodeBuffer::GetFloatArray pads one entry to all four, "Special case if there is
+#: one entry"; 3.x: ``numTimings == 1`` copied, else 4 required) T is one value or four.
+_ONE_T = (1, 21)
+_ONE_T_WHY = ("RepRapFirmware before 1.21 reads one M569 T value, the minimum pulse width, for "
+              "the high and the low time, and may change DIR while STEP is high (DDA::Step; 1.21 "
+              "release notes)")  # fmt: skip
 #: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide.
 #: Per version, from RepRapFirmware's own code (Duet3D/RepRapFirmware and its 2.0x sources, as
 #: indexed): 2.0x ``GCodes::Init``: ``numExtruders = min<size_t>(MaxExtruders,
 #: platform.GetNumSmartDrivers() - XYZ_AXES)`` with smart drivers ("don't default dumb drivers
 #: to extruders"), ``MaxExtruders`` without (a Duet 2 alone has 5 smart drivers: 2 extruders,
 #: on drivers 3 and 4; a DueX adds more); 3.x: ``numExtruders = NumDefaultExtruders``
-#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0, 1 or 2 in the
+#: (src/GCodes/GCodes.cpp @ fa22ccf), a constant of the board's Pins file (0 to 3 in the
 #: indexed ones); the latest Pins files (Pins_DuetNG.h @ 17a42594, Pins_Duet3_MB6HC.h @
 #: 0ab87481) define none. Which of these applies needs the version and board, so only an E0 the
 #: file gives M92/M203 values is read (on driver 3, the first after X/Y/Z), with this note.
 _DEFAULT_EXTRUDERS = (
     "no M584 E: E0 on driver 3 assumed, other extruders not read; RepRapFirmware's default "
     "extruders depend on its version and board (2.0x: the smart drivers minus 3, 2 on a Duet 2; "
-    "3.x: the board's NumDefaultExtruders, 0 to 2; later releases: not established): give M584 E… to decide"
+    "3.x: the board's NumDefaultExtruders, 0 to 3 in the Pins files read; later releases: not established): give M584 E… to decide"
+)
+_DUET2_EXTRUDERS = (
+    "no M584 E: {at} states RepRapFirmware {version} on a {board}: GCodes::Init makes "
+    "min(MaxExtruders, smart drivers - 3) extruders, and a Duet 2 has 5 smart drivers (a DueX "
+    "adds more, which the file does not show): E0 on driver 3 and E1 on driver 4 (Platform::Init "
+    "extruderDrivers[extr] = extr + MinAxes)"
 )
 
 
@@ -105,6 +143,10 @@ class _State:
     unsupported: list[str] = field(default_factory=list)
     files: list[str] = field(default_factory=list)
     board_6xd: str = ""
+    version: tuple[int, ...] | None = None  # the version a comment states, and where
+    version_at: str = ""
+    board: str = ""  # the board the configurator's header names, and where
+    board_at: str = ""
     coupled: dict[str, str] = field(default_factory=dict)  # axis → why its rate is unknown
     backwards: dict[str, bool] = field(default_factory=dict)  # driver → M569 S0
 
@@ -132,6 +174,7 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
     text = read_text(path)
     if not st.board_6xd and re.search(r"\b(MB\s*)?6XD\b", text, re.I):
         st.board_6xd = f"{path} names a Duet 3 MB6XD"
+    _stated(path, text, st)
     block: tuple[int, str] | None = None  # (indent, where) of the outermost if/while open
     skipped = ""  # the block whose commands were left out (noted once)
     for no, line in enumerate(text.splitlines(), 1):
@@ -184,6 +227,25 @@ def _feed(path: Path, sys_dir: Path, st: _State, seen: set[Path]) -> None:
             _m92_203(code, rest, at, st)
 
 
+def _stated(path: Path, text: str, st: _State) -> None:
+    """The version and board the comments state (the first of each, in file order)."""
+    for no, line in enumerate(text.splitlines(), 1):
+        if st.version is not None and st.board:
+            return
+        comment = line.partition(";")[2]
+        if not comment:
+            continue
+        v = _STATED_VERSION.search(comment)
+        if st.version is None and v:
+            st.version, st.version_at = (
+                tuple(int(x) for x in v.group(1).split(".")),
+                where(path, no),
+            )
+        b = _STATED_BOARD.search(comment)
+        if not st.board and b:
+            st.board, st.board_at = " ".join(b.group(1).split()), where(path, no)
+
+
 def _include(path: Path, sys_dir: Path, target: str, at: str, st: _State, seen: set[Path]) -> None:
     name = target.strip('"')
     if not name:
@@ -213,9 +275,10 @@ def _m569(words: dict[str, str], at: str, st: _State) -> None:
     if words["T"].startswith("{"):
         st.unsupported.append(f"{at}: M569 T{words['T']} is an expression; not read")
         return
-    fields = [
-        number(v, at, "M569 T", low=0, high=10**6, unit="us") * _US for v in words["T"].split(":")
-    ]
+    values = words["T"].split(":")
+    if st.version is not None and st.version < _ONE_T:
+        values = values[:1] * 4  # GetFValue reads the first number: the high and low time
+    fields = [number(v, at, "M569 T", low=0, high=10**6, unit="us") * _US for v in values]
     if len(fields) == 1:
         fields *= 4
     if len(fields) != 4:
@@ -311,15 +374,21 @@ def _config(path: str, st: _State) -> FirmwareConfig:
             for d in used
             if d.startswith("0.")
         }
+    elif st.version is not None and st.version < _ONE_T:  # slow from minStepPulseTiming up
+        slow = {d: t for d, t in main.items() if t[0][0] >= _FAST_NS}
     else:
         slow = {d: t for d, t in main.items() if any(f > _FAST_NS for f in t[0])}
+    duet2 = (st.version is not None and st.version[0] == 2
+             and st.board.lower() in _DUET2 and not st.extruders_given)  # fmt: skip
+    if duet2:
+        st.extruders = ["0.3", "0.4"]
     worst = _worst(slow)
     logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
     axes = []
     for name, drivers in logical:
         configured = name in st.spm or name in st.speed
-        if not configured and (name[0] == "E" and not st.extruders_given
-                               or not any(d in st.timing for d in drivers)):  # fmt: skip
+        if not configured and (name[0] == "E" and not (st.extruders_given or duet2)
+                               or name[0] != "E" and not any(d in st.timing for d in drivers)):  # fmt: skip
             continue  # a default extruder the file gives no M92/M203 for is not assumed
         axes.append(_axis(name, drivers, st, slow, worst))
     if not axes:
@@ -340,8 +409,23 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     ]
     if st.board_6xd:
         notes.insert(0, f"{st.board_6xd}: every driver 2.5 us per field unless T says more")
-    if not st.extruders_given and any(k.startswith("E") for k in (*st.spm, *st.speed)):
-        notes.append(_DEFAULT_EXTRUDERS)
+    if duet2:
+        version = ".".join(map(str, st.version or ()))
+        notes.append(_DUET2_EXTRUDERS.format(at=f"{st.version_at} and {st.board_at}",
+                                             version=version, board=st.board))  # fmt: skip
+    elif not st.extruders_given and any(k.startswith("E") for k in (*st.spm, *st.speed)):
+        stated = ", ".join(
+            f"{what} at {at}" for what, at in (
+                (f"version {'.'.join(map(str, st.version or ()))}", st.version_at),
+                (f"board {st.board}", st.board_at)) if at
+        )  # fmt: skip
+        notes.append(_DEFAULT_EXTRUDERS + (
+            f" (the file states {stated}: the rule is applied only to 2.0x on a Duet 2 "
+            "WiFi/Ethernet, as 3.x boards' NumDefaultExtruders differ between releases)"
+            if stated else " (the file states neither its version nor its board)"))  # fmt: skip
+    if st.version is not None and st.version < _ONE_T:
+        notes.append(f"{st.version_at} states version {'.'.join(map(str, st.version))}: "
+                     f"{_ONE_T_WHY}")  # fmt: skip
     return FirmwareConfig(
         firmware="reprapfirmware",
         path=path,
@@ -349,7 +433,7 @@ def _config(path: str, st: _State) -> FirmwareConfig:
         files=tuple(dict.fromkeys(st.files)),
         unsupported=tuple(dict.fromkeys(st.unsupported)),
         notes=tuple(notes),
-        fixer=_fix,
+        fixer=_fix_one_t if st.version is not None and st.version < _ONE_T else _fix,
     )
 
 
@@ -384,6 +468,11 @@ def _axis(
             for i, f in enumerate(fields)
         )
         hold = _hold(pulse, hold_t)
+    elif any(d in slow for d in drivers) and worst and st.version and st.version < _ONE_T:
+        pulse, idle = worst[0], worst[1]
+        setup = not_enforced("M569 T", f"no DIR setup wait: {_ONE_T_WHY}", st.version_at)
+        hold = not_enforced("M569 T", f"no DIR hold wait: {_ONE_T_WHY}", st.version_at)
+        hold_t = hold
     elif any(d in slow for d in drivers) and worst:
         pulse, idle, setup, hold_t = worst
         hold = _hold(pulse, hold_t)
@@ -495,3 +584,16 @@ def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
     fields[field_no] = max(fields[field_no], need)
     t = ":".join(at_least(f / 1000) for f in fields)
     return "add " + " and ".join(f"`M569 P{d} T{t}`" for d in drivers) + " (us)"
+
+
+def _fix_one_t(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
+    """Before 1.21 T is one value, the high and the low time both (see :data:`_ONE_T_WHY`)."""
+    drivers = [d for d in axis.info.get("drivers", "").split(",") if d]
+    if role not in ("pulse", "idle") or not drivers:
+        return _fix(axis, role, need)
+    t = at_least(max(need, axis.pulse.value or Fraction(0)) / 1000)
+    return (
+        "add "
+        + " and ".join(f"`M569 P{d} T{t}`" for d in drivers)
+        + (" (us; before 1.21 one value sets the high and the low time)")
+    )

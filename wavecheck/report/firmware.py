@@ -154,6 +154,7 @@ def _axis_dict(a: GeneratorGuarantee) -> dict[str, Any]:
         "dir_setup_ns": guaranteed_dict(a.dir_setup),
         "dir_hold_ns": guaranteed_dict(a.dir_hold),
         "dir_hold_trailing_ns": guaranteed_dict(a.dir_hold_trailing),
+        "dir_setup_trailing_ns": guaranteed_dict(a.dir_setup_trailing),
         "max_rate_hz": guaranteed_dict(a.max_rate),
         "info": dict(a.info),
         "notes": list(a.notes),

@@ -23,6 +23,7 @@ from tests.conftest import REPO, shared_capture
 from wavecheck.capture.binary import BinaryBlocks
 from wavecheck.capture.blocks import MemorySource, assemble
 from wavecheck.capture.edges import Capture
+from wavecheck.capture.fst_source import FstNativeBlocks
 from wavecheck.capture.open import open_capture, open_source
 from wavecheck.capture.sr import SrBlocks
 from wavecheck.capture.vcd.reader import VcdBlocks
@@ -77,10 +78,11 @@ def _raw(tmp: Path) -> Path:
     return path
 
 
-def _fst(tmp: Path) -> Path:
-    """The VCD below as an FST, made by GTKWave's vcd2fst."""
+def _fst(tmp: Path, *options: str) -> Path:
+    """The VCD below as an FST, made by GTKWave's vcd2fst (LZ4-packed, its default; ``-F``:
+    FastLZ, which only fst2vcd reads)."""
     path = tmp / "c.fst"
-    subprocess.run(["vcd2fst", str(VCD), str(path)], check=True, capture_output=True)
+    subprocess.run(["vcd2fst", *options, str(VCD), str(path)], check=True, capture_output=True)
     return path
 
 
@@ -92,7 +94,8 @@ CASES = {
     "vcd file": ("vcd", None, VcdBlocks),
     "vcd pipe": ("vcd", None, VcdBlocks),
     "sr file": ("sr", None, SrBlocks),
-    "fst file (fst2vcd)": ("fst", None, FstBlocks),
+    "fst file": ("fst", None, FstNativeBlocks),
+    "fst file, FastLZ (fst2vcd)": ("fst-fastlz", None, FstBlocks),
     "raw file": ("raw", RAW, BinaryBlocks),
     "raw pipe": ("raw", RAW, BinaryBlocks),
     "vcd through sigrok-cli, one block": ("vcd", "vcd:downsample=1", MemorySource),
@@ -105,7 +108,10 @@ def test_a_block_source_gives_the_whole_reads_capture(
     tmp_path: Path, case: str, chunk: int
 ) -> None:
     what, fmt, kind = CASES[case]
-    make = {"vcd": lambda: VCD, "raw": lambda: _raw(tmp_path), "fst": lambda: _fst(tmp_path)}
+    make = {
+        "vcd": lambda: VCD, "raw": lambda: _raw(tmp_path), "fst": lambda: _fst(tmp_path),
+        "fst-fastlz": lambda: _fst(tmp_path, "-F"),
+    }  # fmt: skip
     path = make[what]() if what in make else shared_capture(SR)
     ref = open_capture(path, input_format=fmt)
     source = open_source(

@@ -88,6 +88,10 @@ def test_dir_change_during_the_pulse_is_a_setup_for_a_trailing_edge_drive(
     setup = next(r for r in doc["pairs"][0]["rules"] if r["rule"] == "dir_setup")
     assert code == 1 and setup["generator_ns"] == 800 and setup["verdict"] == "fail"
     assert "dirhold 1000" in setup["fix"]  # keep DIR through the pulse
+    # the axis entry says it too (it listed dir_hold_trailing but not this figure)
+    axis = doc["axes"][0]
+    assert axis["dir_setup_trailing_ns"]["value"] == 800
+    assert axis["dir_setup_trailing_ns"]["setting"] == "steplen - dirhold"
 
 
 def test_a_capture_of_what_the_hardware_does_is_no_finding(

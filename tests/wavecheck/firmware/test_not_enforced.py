@@ -68,6 +68,29 @@ def test_klipper_both_edge_full_path_is_enforced(tmp_path: Path) -> None:
     assert x.pulse.value == made and x.dir_hold.value == made and x.dir_setup.value == made
 
 
+@pytest.mark.parametrize(("chip", "enforced"), [("STM32H723", True), ("STM32F407", False)])
+def test_klipper_stm32h7_has_no_edge_path(tmp_path: Path, chip: str, enforced: bool) -> None:
+    """src/stm32/Kconfig:16 selects HAVE_STEPPER_OPTIMIZED_BOTH_EDGE "if !MACH_STM32H7", so an H7
+    build has no stepper_event_edge (src/stepper.c:19-28): TMC both-edge steps run
+    stepper_event_full with SF_SINGLE_SCHED (224-227, 233-237), each edge >= step_pulse_ticks
+    after the last (184-195). 100 ns at 520 MHz (src/stm32/Kconfig:214) is 52 ticks: 100 ns,
+    enforced; it was read as the unenforced edge path. An STM32F407 (168 MHz: 16 ticks <=
+    EDGE_STEP_TICKS 21) does run the edge path."""
+    cfg = tmp_path / "printer.cfg"
+    cfg.write_text(
+        f"# This file contains common pin mappings for an {chip} board.\n"
+        "[stepper_x]\nstep_pin: PF13\ndir_pin: PF12\nmicrosteps: 16\nrotation_distance: 40\n"
+        "[tmc2209 stepper_x]\nuart_pin: PC4\n"
+        "[printer]\nkinematics: cartesian\nmax_velocity: 300\n"
+    )
+    x = read_firmware(cfg).axis("x")
+    assert x.both_edges
+    if enforced:
+        assert x.pulse.value == x.dir_setup.value == x.dir_hold.value == 100
+    else:
+        assert x.pulse.value is None and x.pulse.status == "not_enforced"
+
+
 def test_klipper_arm_full_path_stays_enforced(capsys: pytest.CaptureFixture[str]) -> None:
     """duet3-6xd (no TMC section, SAME70): stepper_event_full; the pulse, space and DIR setup are
     each >= step_pulse_ticks (src/stepper.c:185-195, 117-120): decided."""

@@ -13,9 +13,11 @@ Speed (``bench/README.md`` has the profiles): whitespace is found with two compa
 timestamps are decoded 8 digits at a time in ``uint64`` words (SWAR), a change's timestamp is
 counted rather than searched when a chunk holds only timestamps and changes, the sort by signal
 is numpy's radix sort on ``int16``, and line numbers (for messages only) are counted from the
-file when an error is raised. Chunks are 192 KiB: with 1 MiB chunks the per-chunk token arrays
-(several MB) are returned to the kernel and faulted in again chunk after chunk, which on this VM
-costs more kernel time (0.5 s per 10 M changes) than the whole tokenizer.
+file when an error is raised. Chunks are 384 KiB: each chunk costs ~150 numpy calls whatever
+its size, so 192 KiB chunks were ~9 % slower (round 6); with 1 MiB chunks the per-chunk token
+arrays (several MB) are returned to the kernel and faulted in again chunk after chunk, which on
+this VM costs more kernel time (0.5 s per 10 M changes) than the whole tokenizer. A whole read
+writes each signal's edges into one growing buffer (peak RSS −20 % on 10 M changes).
 
 Semantics (identical in :func:`wavecheck.capture.vcd.reference.read_vcd_reference`, the
 deliberately simple path):
@@ -63,7 +65,7 @@ if TYPE_CHECKING:
 
 __all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "VcdBlocks", "read_vcd"]
 
-DEFAULT_CHUNK_BYTES = 192 << 10  # see the note on chunk size in the module docstring
+DEFAULT_CHUNK_BYTES = 384 << 10  # see the note on chunk size in the module docstring
 #: Longest token (or body ``$comment``) held whole: a 16-Mbit vector value. Longer is refused, so
 #: a body without whitespace (binary junk, a sparse file) cannot take the memory.
 MAX_TOKEN_BYTES = 16 << 20
@@ -105,10 +107,18 @@ _PAD = 16  # zero bytes before a chunk, so the 16 bytes before any token can be 
 
 
 class _EdgeBuilder:
-    """Turns batches of time-ordered (signal, time, value) changes into per-signal edges."""
+    """Turns batches of time-ordered (signal, time, value) changes into per-signal edges.
 
-    def __init__(self, nsig: int) -> None:
+    With ``whole`` (a whole read, :meth:`signals` at the end), each signal's edges are written
+    into one buffer grown by doubling (``ndarray.resize``) instead of pieces joined at the end:
+    no second copy of every edge at the end (peak RSS 190 → 153 MB on 10 M changes, CPU the
+    same within noise; ``bench/README.md``, round 6)."""
+
+    def __init__(self, nsig: int, whole: bool = False) -> None:
         self.nsig = nsig
+        self.whole = whole
+        self.grown = [np.zeros(0, np.int64) for _ in range(nsig)] if whole else []
+        self.filled = [0] * nsig
         self.last_raw = np.full(nsig, -1, dtype=np.int8)
         self.last_known = np.full(nsig, -1, dtype=np.int8)
         self.known_from = np.zeros(nsig, dtype=np.int64)
@@ -180,7 +190,10 @@ class _EdgeBuilder:
             self.initial[ks[new]] = kv[new]
             self.known_from[ks[new]] = kt[new]
         edge = (prev >= 0) & (kv != prev)
-        self._split(self.edges, ks[edge], kt[edge])
+        if self.whole:
+            self._grow(ks[edge], kt[edge])
+        else:
+            self._split(self.edges, ks[edge], kt[edge])
         self.last_known[ks[klast]] = kv[klast]
 
     def _split(
@@ -200,11 +213,31 @@ class _EdgeBuilder:
             # channel is joined, doubling the peak memory of :meth:`channels`
             into[i].append(t[a:b].astype(np.int64, copy=True))
 
+    def _grow(self, s: npt.NDArray[np.integer], t: npt.NDArray[np.int64]) -> None:
+        """Append each run of one signal in ``s`` (sorted) to that signal's buffer."""
+        if len(s) == 0:
+            return
+        cuts = np.flatnonzero(s[1:] != s[:-1]) + 1
+        lo = np.concatenate(([0], cuts))
+        hi = np.concatenate((cuts, [len(s)]))
+        for i, a, b in zip(s[lo].tolist(), lo.tolist(), hi.tolist(), strict=True):
+            buf, n = self.grown[i], self.filled[i]
+            need = n + b - a
+            if need > len(buf):  # no view of the buffer exists before signals()
+                buf.resize(max(need, 2 * len(buf), 4096), refcheck=False)
+            buf[n:need] = t[a:b]
+            self.filled[i] = need
+
     def signals(self) -> list[SignalEdges]:
         """Each signal's edges, joined (the pieces are released as they are joined)."""
         out: list[SignalEdges] = []
         for i in range(self.nsig):
-            edges = _concat(self.edges[i])
+            if self.whole:
+                edges = self.grown[i]
+                edges.resize(self.filled[i], refcheck=False)
+                self.grown[i] = np.zeros(0, np.int64)
+            else:
+                edges = _concat(self.edges[i])
             self.edges[i] = []
             known = self.last_known[i] >= 0
             out.append(
@@ -643,7 +676,7 @@ def read_vcd(
         tb = header_timebase(header, notes)
         lay = layout_of(header)
         notes += lay.notes
-        builder = _EdgeBuilder(len(lay.ids))
+        builder = _EdgeBuilder(len(lay.ids), whole=True)
         body = _Body(
             path,
             _IdMap(lay.ids, lay.vector_ids),
@@ -746,6 +779,10 @@ class VcdBlocks:
         else:
             with open_vcd(path) as f:
                 self.header, _ = read_header(path, f)
+        self._setup(channels)
+
+    def _setup(self, channels: Iterable[int] | None) -> None:
+        """The layout, builder and skeleton of ``self.header`` (also the FST reader's)."""
         self.notes: list[str] = []
         self.tb = header_timebase(self.header, self.notes)
         self.lay = layout_of(self.header)
@@ -834,8 +871,6 @@ class VcdBlocks:
 
     def blocks(self) -> Iterator[EdgeBlock]:
         """The edges after each chunk of text (the changes of its last timestamp held back)."""
-        from wavecheck.capture.blocks import EdgeBlock
-
         b = self.builder = _EdgeBuilder(len(self.lay.ids) + len(self.bit_channels))
         if self._body is not None:
             f, rest = self._body
@@ -860,30 +895,41 @@ class VcdBlocks:
                 if not final and body.time is not None:
                     pend = body.pend
                     end = body.time if pend is None else min(body.time, int(pend[1][0]))
-                block = EdgeBlock(end=end)
+                start = None
                 if not started:
-                    block.start = 0 if body.pre_time_changes else (body.first_time or 0)
+                    start = 0 if body.pre_time_changes else (body.first_time or 0)
                     started = True
-                now = b.last_known >= 0
-                for i in np.flatnonzero(now & ~known).tolist():
-                    block.known[i] = (int(b.known_from[i]), int(b.initial[i]))
-                known = now
-                for i in range(b.nsig):
-                    if b.edges[i]:
-                        e = _concat(b.edges[i])
-                        b.edges[i] = []
-                        self.counts[i] += len(e)
-                        if i in self.wanted:
-                            block.edges[i] = e
-                    if b.xz[i]:
-                        block.xz_starts[i] = _concat(b.xz[i])
-                        b.xz[i] = []
-                    if b.xz_end[i]:
-                        block.xz_ends[i] = _concat(b.xz_end[i])
-                        b.xz_end[i] = []
+                block, known = self._take(end, start, known)
                 yield block
             self.first_time, self.last_time = body.first_time, body.time
             self.pre_time = body.pre_time_changes
+
+    def _take(
+        self, end: int, start: int | None, known: npt.NDArray[np.bool_]
+    ) -> tuple[EdgeBlock, npt.NDArray[np.bool_]]:
+        """The builder's edges, levels now known (``known``: those known before) and x/z
+        stretches as a block ending at ``end``; the builder is emptied."""
+        from wavecheck.capture.blocks import EdgeBlock
+
+        b = self.builder
+        block = EdgeBlock(end=end, start=start)
+        now = b.last_known >= 0
+        for i in np.flatnonzero(now & ~known).tolist():
+            block.known[i] = (int(b.known_from[i]), int(b.initial[i]))
+        for i in range(b.nsig):
+            if b.edges[i]:
+                e = _concat(b.edges[i])
+                b.edges[i] = []
+                self.counts[i] += len(e)
+                if i in self.wanted:
+                    block.edges[i] = e
+            if b.xz[i]:
+                block.xz_starts[i] = _concat(b.xz[i])
+                b.xz[i] = []
+            if b.xz_end[i]:
+                block.xz_ends[i] = _concat(b.xz_end[i])
+                b.xz_end[i] = []
+        return block, now
 
     def capture(self) -> Capture:
         """The whole capture without edges (after :meth:`blocks`)."""

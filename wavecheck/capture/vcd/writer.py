@@ -12,8 +12,10 @@ and a final ``#end``. A wire's edges each toggle its level; several edges at one
 written (the last one wins for a reader).
 
 Two paths, byte for byte the same file (tests/wavecheck/capture/vcd/test_writer.py compares them
-on hypothesis inputs): pyvcd writes the header, the ``$dumpvars`` section and the changes at
-time 0; the changes after time 0 are then formatted all at once with numpy (timestamps 8 digits
+on hypothesis inputs): the header and the ``$dumpvars`` section (the values after the changes at
+time 0) are written as pyvcd writes them (:func:`_header`; by pyvcd itself for a timescale, a
+scope or names outside the plain cases, so pyvcd is imported only then: ~6 ms); the changes
+after time 0 are then formatted all at once with numpy (timestamps 8 digits
 per ``uint32`` division, vector values from ``unpackbits``, each piece scattered to its offset),
 ~20× faster than one ``VCDWriter.change`` call per change. pyvcd writes everything itself
 (:func:`_write_pyvcd`, the reference) when the fast path does not cover the input: more than
@@ -46,12 +48,11 @@ _FAST_MAX_BITS = 62  # wider vectors: pyvcd
 _FAST_BLOCK = _REPORT_EVERY  # changes formatted at a time (memory stays bounded)
 # _BYTE_CHARS[b]: the 8 characters "0"/"1" of byte b, most significant first, as the
 # little-endian uint64 that puts them in that order in memory
-_BYTE_CHARS = np.array(
-    [sum((48 + ((b >> (7 - i)) & 1)) << (8 * i) for i in range(8)) for b in range(256)],
-    dtype=np.uint64,
-)
+_BITS = (np.arange(256, dtype=np.uint64)[:, None] >> np.arange(7, -1, -1, dtype=np.uint64)) & 1
+_BYTE_CHARS = ((_BITS + 48) << (8 * np.arange(8, dtype=np.uint64))).sum(axis=1, dtype=np.uint64)
 _POW10 = np.array([10**k for k in range(19)], dtype=np.int64)
 _VECTOR_TYPES = {"integer", "reg", "wire", "tri", "wor", "wand", "supply0", "supply1", "time"}
+_UNITS = ("s", "ms", "us", "ns", "ps", "fs")  # timescale units :func:`_header` writes itself
 
 
 @dataclass(frozen=True)
@@ -265,16 +266,29 @@ def _write_fast(
     initials = [int(w.initial) for w in wires]
     at0 = [int(np.searchsorted(t, 0, side="right")) for t, _ in variables]
     n0, total = sum(at0), sum(len(t) for t, _ in variables)
-    t, v, x = _merged(variables, initials, [(0, a) for a in at0])
-    if n0 == total:  # nothing after time 0: all pyvcd
-        _write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
-        return
-    writer, registered = _write_pyvcd(
-        fh, wires, vectors, t, v, x, timescale, end, scope, comment, version, upto=n0
-    )
-    writer.flush()  # the header and "#0 $dumpvars … $end", as the first later change would
+    # each variable's value after its changes at time 0 (what $dumpvars shows)
+    last0 = [initials[j] ^ (at0[j] & 1) for j in range(len(wires))] + [
+        int(vec.values[a - 1]) if a else int(vec.initial)
+        for vec, a in zip(vectors, at0[len(wires) :], strict=True)
+    ]
+    head = _header(wires, vectors, last0, timescale, scope, comment, version)
+    if head is None:  # pyvcd writes the header, $dumpvars and the changes at time 0
+        t, v, x = _merged(variables, initials, [(0, a) for a in at0])
+        if n0 == total:  # nothing after time 0: all pyvcd
+            _write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, scope, comment, version)
+            return
+        writer, registered = _write_pyvcd(
+            fh, wires, vectors, t, v, x, timescale, end, scope, comment, version, upto=n0
+        )
+        writer.flush()  # the header and "#0 $dumpvars … $end", as the first later change would
+    else:
+        fh.write(head)
     fh.flush()
-    idents = [var.ident.encode("ascii") for var in registered]
+    if n0 == total:  # what pyvcd's close(end) adds
+        if end:
+            fh.buffer.write(b"#%d\n" % end)
+        return
+    idents = [_ident(j + 1).encode("ascii") for j in range(len(variables))]
     sizes = [0] * len(wires) + [vec.size for vec in vectors]
     # after time 0, each variable's own changes; pyvcd writes a change only when the value
     # differs from the variable's last one: always for a wire's edges (each toggles), not for a
@@ -285,7 +299,7 @@ def _write_fast(
             rest.append((times[a:], None))
             continue
         vals = values[a:]
-        prev = np.concatenate(([int(registered[j].value)], vals[:-1]))
+        prev = np.concatenate(([last0[j]], vals[:-1]))
         keep = vals != prev
         rest.append((times[a:][keep], vals[keep]) if not keep.all() else (times[a:], vals))
     for j in range(len(wires)):  # a wire's level after its time-0 edges; its edges renumbered
@@ -303,6 +317,65 @@ def _write_fast(
         report(done, total)
     if end != last_ts:
         fh.buffer.write(b"#%d\n" % end)
+
+
+def _ident(number: int) -> str:
+    """The id code of the ``number``-th variable (from 1) as pyvcd makes it: base 94 in the
+    printable characters ``!`` … ``~``, least significant first."""
+    code = ""
+    while number:
+        number -= 1
+        code += chr(number % 94 + 33)
+        number //= 94
+    return code
+
+
+def _timescale(text: str) -> str | None:
+    """pyvcd's form of a timescale (``Timescale.from_str``, then ``"1 ns"``) when its magnitude
+    is 1, 10 or 100 and its unit one of ``_UNITS``; None otherwise (pyvcd then decides)."""
+    if text in _UNITS:
+        return f"1 {text}"
+    digits = len(text) - len(text.lstrip("0123456789"))
+    if not digits or int(text[:digits]) not in (1, 10, 100):
+        return None
+    unit = text[digits:].lstrip(" ")
+    return f"{int(text[:digits])} {unit}" if unit in _UNITS else None
+
+
+def _header(
+    wires: Sequence[VcdWire],
+    vectors: Sequence[VcdVector],
+    last0: Sequence[int],
+    timescale: str,
+    scope: str,
+    comment: str,
+    version: str,
+) -> str | None:
+    """The text pyvcd's ``VCDWriter`` writes up to the end of ``$dumpvars`` (``last0``: each
+    variable's value there), or None where pyvcd itself is to write it: a timescale outside
+    :func:`_timescale`, a nested or empty scope, two variables of one name (pyvcd raises)."""
+    ts = _timescale(timescale)
+    names = [w.name for w in wires] + [vec.name for vec in vectors]
+    if ts is None or not scope or "." in scope or len(set(names)) != len(names):
+        return None
+    lines = []
+    for keyword, value in (("$comment", comment), ("$timescale", ts), ("$version", version)):
+        if value:  # pyvcd: the keywords sorted, no $date here, several lines indented
+            parts = value.split("\n")
+            if len(parts) == 1:
+                lines.append(f"{keyword} {value} $end")
+            else:
+                lines += [keyword, *(f"\t{part}" for part in parts), "$end"]
+    lines.append(f"$scope module {scope} $end")
+    idents = [_ident(j + 1) for j in range(len(names))]
+    lines += [f"$var wire 1 {idents[j]} {w.name} $end" for j, w in enumerate(wires)]
+    dump = [f"{last0[j]}{idents[j]}" for j in range(len(wires))]
+    for j, vec in enumerate(vectors, len(wires)):
+        lines.append(f"$var {vec.var_type} {vec.size} {idents[j]} {vec.name} $end")
+        number = last0[j] + (1 << vec.size) if last0[j] < 0 else last0[j]
+        dump.append(f"b{number:b} {idents[j]}")
+    lines += ["$upscope $end", "$enddefinitions $end", "#0", "$dumpvars", *dump, "$end", ""]
+    return "\n".join(lines)
 
 
 def _block_spans(times: Sequence[npt.NDArray[np.int64]]) -> list[list[tuple[int, int]]]:
@@ -419,6 +492,7 @@ def _put_digits(
             top = high // 10**8
             parts = [parts[0], high - top * 10**8, top]
     col = 0
+    pos = end.copy()  # where each value's digit ``col`` goes
     for part in parts:
         q = part.astype(np.uint32)
         for _ in range(8):
@@ -428,7 +502,8 @@ def _put_digits(
             nq = q // np.uint32(10)
             digit = (q - nq * np.uint32(10)).astype(np.uint8)
             digit += np.uint8(ord("0"))
-            out[end[first:] - col] = digit[first:]
+            out[pos[first:]] = digit[first:]
+            pos -= 1
             q = nq
             col += 1
 
@@ -466,7 +541,19 @@ def _put_bits(
         byte = (u[rows] >> np.uint64(8 * j)) & np.uint64(0xFF)
         words[end[rows] - 8 * (j + 1)] = _BYTE_CHARS[byte.astype(np.intp)]
     lead = nbits - 8 * whole
-    for c in range(int(lead.max()) if len(lead) else 0):
-        rows = np.flatnonzero(lead > c)
-        bit = (u[rows] >> (8 * whole[rows] + c).astype(np.uint64)) & np.uint64(1)
-        out[end[rows] - 8 * whole[rows] - 1 - c] = bit.astype(np.uint8) + np.uint8(ord("0"))
+    if not len(lead) or not int(lead.max()):
+        return
+    # the leading partial byte's bits, lowest first, of the values that have one; a value
+    # leaves the set when its bits are written (lead is how many it has)
+    rows = np.flatnonzero(lead)
+    top = u[rows] >> (8 * whole[rows]).astype(np.uint64)
+    at_bit = end[rows] - 8 * whole[rows] - 1
+    left = lead[rows]
+    while len(rows):
+        out[at_bit] = (top & np.uint64(1)).astype(np.uint8) + np.uint8(ord("0"))
+        top >>= np.uint64(1)
+        at_bit -= 1
+        left -= 1
+        more = left > 0
+        if not more.all():
+            rows, top, at_bit, left = rows[more], top[more], at_bit[more], left[more]

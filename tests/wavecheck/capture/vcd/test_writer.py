@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import io
+import subprocess
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -137,16 +139,24 @@ def test_progress_counts_value_changes(tmp_path: Path) -> None:
 
 
 def _both_paths(
-    wires: list[VcdWire], vectors: list[VcdVector], timescale: str, end: int, comment: str = ""
+    wires: list[VcdWire],
+    vectors: list[VcdVector],
+    timescale: str,
+    end: int,
+    comment: str = "",
+    version: str = "",
+    scope: str = "stepgen",
 ) -> tuple[bytes, bytes]:
     outs = []
     for fast in (False, True):
         fh = io.TextIOWrapper(io.BytesIO(), encoding="utf-8", newline="\n")
         if fast:
-            writer._write_fast(fh, wires, vectors, timescale, end, "stepgen", comment, "")
+            writer._write_fast(fh, wires, vectors, timescale, end, scope, comment, version)
         else:
             t, v, x = writer._changes(wires, vectors)
-            writer._write_pyvcd(fh, wires, vectors, t, v, x, timescale, end, "stepgen", comment, "")
+            writer._write_pyvcd(
+                fh, wires, vectors, t, v, x, timescale, end, scope, comment, version
+            )
         fh.flush()
         outs.append(fh.buffer.getvalue())  # type: ignore[attr-defined]
     return outs[0], outs[1]
@@ -172,14 +182,17 @@ def _signals(draw: st.DrawFn) -> tuple[list[VcdWire], list[VcdVector], str, int,
         values = st.integers(lo, hi) | st.sampled_from([0, 1, lo, hi])
         times = np.sort(np.array(draw(st.lists(_TIMES, max_size=30)), dtype=np.int64))
         vals = np.array([draw(values) for _ in times], dtype=np.int64)
-        vectors.append(VcdVector(f"v{i}", times, vals, size=size, initial=draw(values)))
+        kind = draw(st.sampled_from(sorted(writer._VECTOR_TYPES)))
+        vectors.append(
+            VcdVector(f"v{i}", times, vals, size=size, var_type=kind, initial=draw(values))
+        )
     last = max([0] + [int(w.edges[-1]) for w in wires if len(w.edges)]
                + [int(vec.times[-1]) for vec in vectors if len(vec.times)])  # fmt: skip
     end = last + draw(st.sampled_from([0, 0, 1, 10**9]))
     return (
         wires,
         vectors,
-        draw(st.sampled_from(["1 ns", "10 us", "100 ps", "1 s"])),
+        draw(st.sampled_from(["1 ns", "10 us", "100 ps", "1 s", "1ns", "ms", "010 fs", "1000 ns"])),
         end,
         draw(st.integers(1, 7)),
     )
@@ -196,6 +209,48 @@ def test_fast_path_writes_the_bytes_pyvcd_writes(
         m.setattr(writer, "_FAST_BLOCK", block)  # block boundaries inside one timestamp too
         ref, fast = _both_paths(wires, vectors, timescale, end, comment="c")
     assert fast == ref
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    case=_signals(),
+    comment=st.sampled_from(["", "one line", "two\nlines", "tab\there"]),
+    version=st.sampled_from(["", "v 1.0", "a\nb"]),
+    scope=st.sampled_from(["stepgen", "top module", "a.b", ""]),
+)
+def test_header_is_the_one_pyvcd_writes(
+    case: tuple[list[VcdWire], list[VcdVector], str, int, int],
+    comment: str,
+    version: str,
+    scope: str,
+) -> None:
+    """The header the writer makes itself (pyvcd is not imported for it) and the ones it leaves
+    to pyvcd (a nested or empty scope, a timescale it does not know) are pyvcd's bytes."""
+    wires, vectors, timescale, end, _ = case
+    ref, fast = _both_paths(wires, vectors, timescale, end, comment, version, scope)
+    assert fast == ref
+
+
+@pytest.mark.parametrize("number", [1, 2, 94, 95, 96, 94 * 95, 94 * 95 + 1, 10**6])
+def test_id_codes_are_pyvcds(number: int) -> None:
+    from vcd.writer import _encode_identifier
+
+    assert writer._ident(number) == _encode_identifier(number)
+
+
+def test_a_plain_vcd_is_written_without_pyvcd(tmp_path: Path) -> None:
+    """pyvcd (~6 ms to import) is loaded only for a header outside the plain cases."""
+    code = (
+        "import sys, numpy as np\n"
+        "from wavecheck.capture.vcd.writer import VcdVector, VcdWire, write_vcd\n"
+        "w = [VcdWire('step', 0, np.arange(1, 9)), VcdWire('dir', 1, np.arange(0, 9, 4))]\n"
+        "v = [VcdVector('counts', np.arange(0, 9, 2), np.arange(-2, 3), size=32)]\n"
+        f"write_vcd({str(tmp_path / 'a.vcd')!r}, w, vectors=v, timescale='1 ns', end=9,"
+        " scope='stepgen', comment='c')\n"
+        "print('vcd' in sys.modules)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.split() == ["False"]
 
 
 def test_fast_path_on_a_stepgen_like_trace() -> None:
