@@ -56,6 +56,7 @@ from wavecheck.firmware.guarantee import (
     GeneratorGuarantee,
     Guaranteed,
     at_most,
+    not_enforced,
     uncertain,
     unknown,
 )
@@ -113,6 +114,20 @@ def _compose(path: str, text: str) -> yaml.Node:
     return node
 
 
+def _drop_flow(node: yaml.Node, found: list[int]) -> yaml.Node:
+    """``node`` with every flow collection (``key: { a: 1 }``) made the one string value FluidNC
+    sees: its tokenizer reads a line's key and the rest of the line as the value
+    (Configuration/Tokenizer.cpp), and a section reads only the more-indented lines below it
+    (ParserHandler::enterSection), so the settings inside the braces are never read. ``found``
+    gets the line of each."""
+    if isinstance(node, yaml.CollectionNode) and node.flow_style:
+        found.append(node.start_mark.line + 1)
+        return yaml.ScalarNode("tag:yaml.org,2002:str", "{...}", node.start_mark, node.end_mark)
+    if isinstance(node, yaml.MappingNode):
+        node.value = [(k, _drop_flow(v, found)) for k, v in node.value]
+    return node
+
+
 def _items(node: yaml.Node | None) -> Iterator[tuple[str, yaml.Node]]:
     if isinstance(node, yaml.MappingNode):
         for key, value in node.value:
@@ -147,7 +162,8 @@ def _us(path: str, node: yaml.Node | None, key: str, default: int, high: int) ->
 def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     """Read a FluidNC ``config.yaml`` (see the module doc)."""
     p = str(path)
-    root = _compose(p, read_text(path))
+    flows: list[int] = []
+    root = _drop_flow(_compose(p, read_text(path)), flows)
     stepping = _child(root, "stepping")
     engine_v = _scalar(stepping, "engine")
     engine = engine_v.text.upper() if engine_v else "RMT"
@@ -162,6 +178,12 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     notes = [
         f"stepping engine {engine} ({engine_at}); pulse_us and dir_delay_us apply to every motor"
     ]
+    if flows:
+        notes.append(
+            f"{where(p, flows[0])}: {len(flows)} YAML flow mapping(s) {{...}}: FluidNC reads such "
+            "a line as one value and leaves the section empty (Tokenizer.cpp, "
+            "ParserHandler::enterSection): their settings are not read; write one key per line"
+        )
     frame = _frame(p, root) if engine.startswith("I2S") else None
     if frame is not None and frame.value is not None:
         notes.append(f"I2S frame {frame.value / _US} us (i2so: min_pulse_us, {frame.where})")
@@ -187,7 +209,15 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
                 )  # fmt: skip
             )
     if not axes:
-        raise ConfigError(f"{p}: no axis has a motor with a step_pin (no step generator to check)")
+        why = (
+            f"; {len(flows)} YAML flow mapping(s) {{...}} (first at line {flows[0]}) are not read "
+            "by FluidNC's parser: write one key per line"
+            if flows
+            else ""
+        )
+        raise ConfigError(
+            f"{p}: no axis has a motor with a step_pin (no step generator to check){why}"
+        )
     return FirmwareConfig(
         firmware="fluidnc",
         path=p,
@@ -247,10 +277,16 @@ def _setup(engine: str, dir_delay: Guaranteed, frame: Guaranteed | None) -> Guar
             "the FIFO has run dry, so one frame is what the engine guarantees"
         )
         return Guaranteed(frame.value, frame.setting, frame.where, "us", "derived", note)
+    if not dd:  # timed_engine.c finish_dir: delay_us(0), the next GPIO write is the step
+        return not_enforced(
+            dir_delay.setting,
+            "TIMED with dir_delay_us 0: the CPU writes DIR and then STEP with no wait between "
+            "(timed_engine.c finish_dir spins dir_delay_us), so the setup is instruction time",
+            dir_delay.where,
+        )
     # timed_engine.c:31-33: finish_dir spins delay_us(dir_delay_us) after the DIR writes, a
     # cycle-counted wait (spinUntil(usToEndTicks(us))): at least the set value
-    note = ("TIMED: the CPU spins dir_delay_us after a DIR change (timed_engine.c:31-33; 0: DIR "
-            "right before STEP)")  # fmt: skip
+    note = "TIMED: the CPU spins dir_delay_us after a DIR change (timed_engine.c:31-33)"
     return Guaranteed(dd, dir_delay.setting, dir_delay.where, "us", dir_delay.status, note)
 
 

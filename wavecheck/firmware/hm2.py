@@ -34,6 +34,7 @@ step are the lower of the two when the clock is known. Unset parameters start at
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Callable
 from fractions import Fraction
@@ -54,6 +55,7 @@ __all__ = ["STEPGEN", "axes", "fixer", "ns_for", "register"]
 
 #: An hm2 stepgen parameter: ``hm2_<board>.<n>.stepgen.<NN>.<param>``.
 STEPGEN = re.compile(r"^(hm2_[^.\s]+\.\d+)\.stepgen\.(\d+)\.([a-z_-]+)$")
+_GPIO_INVERT = re.compile(r"^(hm2_[^.\s]+\.\d+)\.gpio\.(\d+)\.invert_output$")
 _PARAMS = ("steplen", "stepspace", "dirsetup", "dirhold", "position-scale", "maxvel", "step_type")
 _REG_MAX = 0x3FFF
 _VHDL = (
@@ -98,9 +100,46 @@ def axes(files: LinuxCNCFiles, clock_hz: Fraction | None) -> list[GeneratorGuara
                 number(value, at, name, low=-(10**9), high=10**12),
                 at,
             )
-    return [
+    inverted: dict[str, list[str]] = {}
+    for name, (raw, at) in files.setp.items():
+        m = _GPIO_INVERT.match(name)
+        is_output = files.setp.get(name.replace(".invert_output", ".is_output"), ("0", ""))
+        if (
+            m
+            and _true(resolve_ref(raw, files.ini, at))
+            and not _true(is_output[0])  # a plain GPIO output, not a module's
+        ):
+            inverted.setdefault(m.group(1), []).append(f"gpio.{m.group(2)} ({at})")
+    axes_ = [
         _axis(board, nn, params, clock_hz, files) for (board, nn), params in sorted(gens.items())
     ]
+    return [_with_inverted_gpio(a, inverted) for a in axes_]
+
+
+def _true(value: str) -> bool:
+    return value.strip().lower() in ("1", "true")
+
+
+def _with_inverted_gpio(
+    axis: GeneratorGuarantee, inverted: dict[str, list[str]]
+) -> GeneratorGuarantee:
+    """A note on ``axis`` when its board inverts output pins: hostmot2 writes a pin's
+    ``invert_output`` to the output-invert register for module outputs too (ioport.c
+    hm2_ioport_gpio_export_hal gives "an output for some other module" the parameter,
+    hm2_ioport_update sets its bit), so an inverted pin that carries this stepgen's STEP or DIR
+    flips it at the pin. Which IO pin a stepgen drives is in the bitfile's pin table, not in
+    the HAL files: the polarity above assumes none of them does."""
+    board = next((a for a in axis.aliases if a.startswith("hm2_")), "").split(".stepgen.")[0]
+    pins = inverted.get(board)
+    if not pins:
+        return axis
+    note = (
+        f"{board}: {', '.join(pins)} invert_output set; hostmot2 inverts module outputs too "
+        "(ioport.c hm2_ioport_update), and the bitfile's pin table, not the HAL files, says "
+        "whether one carries this stepgen's STEP or DIR: the polarity shown assumes not; check "
+        "the pin table (hm2 prints it at load) or measure"
+    )
+    return dataclasses.replace(axis, notes=(*axis.notes, note))
 
 
 def _axis(

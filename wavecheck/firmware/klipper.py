@@ -195,6 +195,13 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             tmc[target] = sec
     steppers = [s for s in sections.values() if "step_pin" in s.keys]
     if not steppers:
+        missing = [n.split("] ")[0].split("[include ", 1)[1] for n in notes if "matches no" in n]
+        if missing:  # the steppers are most likely in the includes that are not there
+            raise ConfigError(
+                f"{p}: no section with a step_pin, and {len(missing)} [include] "
+                f"match no file beside it (first: {missing[0]}): give the folder with the "
+                "included files"
+            )
         raise ConfigError(
             f"{p}: no section with a step_pin (a Klipper file without steppers: nothing to check)"
         )

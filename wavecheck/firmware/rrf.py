@@ -311,13 +311,28 @@ def _kinematics(code: str, words: dict[str, str], at: str, st: _State) -> None:
         st.coupled[a] = f"{what} at {at}"
 
 
+#: Microstepping values the smart drivers take (M350 refuses others, see _m350).
+_MICROSTEPS = frozenset(Fraction(2**k) for k in range(9))
+
+
 def _m350(words: list[tuple[str, str]], at: str, st: _State) -> None:
     for letter, value in words:
         if letter not in (*_AXES, "E") or not value or value.startswith("{"):
             continue
-        for i, v in enumerate(value.split(":")):
+        values = value.split(":")
+        if letter == "E" and len(values) == 1 and st.extruders_given:
+            values *= len(st.extruders)  # GetUnsignedArray(..., doPad=true), as M92 E
+        for i, v in enumerate(values):
             key = letter if letter != "E" else f"E{i}"
-            new = number(v, at, f"M350 {letter}", low=1, high=256)
+            new = number(v, at, f"M350 {letter}", low=0, high=10**6)
+            if new not in _MICROSTEPS:
+                # GCodes M350: ChangeMicrostepping fails, "Drive %c does not support %ux
+                # microstepping" is reported and the loop goes on: that drive keeps its setting
+                st.unsupported.append(
+                    f"{at}: M350 {letter}{v}: RepRapFirmware refuses {v}x microstepping (a "
+                    "power of 2 up to 256) and keeps the drive's setting; not applied"
+                )
+                continue
             old = st.micro.get(key, Fraction(16))
             if key in st.spm:
                 spm, first = st.spm[key]
@@ -333,7 +348,12 @@ def _m92_203(code: str, words: list[tuple[str, str]], at: str, st: _State) -> No
         if not value or value.startswith("{"):
             st.unsupported.append(f"{at}: M{code} {letter}{value} is not a number; not read")
             continue
-        for i, v in enumerate(value.split(":")):
+        values = value.split(":")
+        if letter == "E" and len(values) == 1 and st.extruders_given:
+            # one E value is every extruder's: GCodeBuffer::GetFloatArray(..., doPad=true) fills
+            # the array with it (M92 and M203 read E so, GCodes2.cpp / GCodes3.cpp)
+            values *= len(st.extruders)
+        for i, v in enumerate(values):
             key = letter if letter != "E" else f"E{i}"
             x = number(v, at, f"M{code} {letter}", low=0, high=10**9)
             if code == "92":
@@ -494,6 +514,21 @@ def _axis(
         dir_inverted=st.backwards.get(drivers[0], False),
         info=info,
         aliases=("E",) if name == "E0" else (),
+        notes=_mixed_direction(drivers, st),
+    )
+
+
+def _mixed_direction(drivers: list[str], st: _State) -> tuple[str, ...]:
+    """A note when an axis's drivers run in different directions (M569 S per driver, e.g. a
+    gantry's second Y motor mounted mirrored): DIR is inverted on some of them only, and the
+    axis's DIR polarity shown is its first driver's."""
+    back = [d.removeprefix("0.") for d in drivers if st.backwards.get(d, False)]
+    if not back or len(back) == len(drivers):
+        return ()
+    return (
+        f"M569 S0 (backwards) on driver {', '.join(back)} only: DIR is inverted there and not on "
+        f"the axis's other drivers; the DIR polarity shown is driver "
+        f"{drivers[0].removeprefix('0.')}'s",
     )
 
 

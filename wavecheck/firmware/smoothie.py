@@ -5,7 +5,9 @@ Read: ``microseconds_per_step_pulse`` (default 1 µs), ``base_stepping_frequency
 gamma, 80 for the others) and ``…_max_rate`` (mm/min, default 30000) (Robot::load_config),
 ``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``, and
 each enabled ``extruder.NAME`` module (``step_pin``, ``dir_pin``, ``steps_per_mm`` default 1,
-``max_speed`` mm/s default 1000: Extruder.cpp ``config_load`` makes a stepper motor of it). A key
+``max_speed`` mm/s default 1000: Extruder.cpp ``config_load`` makes a stepper motor of it) and the
+old single-extruder syntax (``extruder_module_enable true`` with ``extruder_step_pin``,
+``extruder_steps_per_mm``, ``extruder_max_speed``: ExtruderMaker makes one Extruder of them). A key
 given twice keeps its last value (ConfigCache ``replace_or_push_back``).
 
 StepTicker: the pulse is the setting plus interrupt time (≥ the setting); each motor steps at most
@@ -107,6 +109,12 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
             continue
         axes.append(_axis(motor, f"{motor}_", "max_rate", keys, get, f, f_at, pulse, idle, setup,
                           arm))  # fmt: skip
+    if keys.get("extruder_module_enable", ("false", ""))[0].lower() in ("true", "1"):
+        # the old single-extruder syntax: ExtruderMaker makes one Extruder of the
+        # extruder_* keys (steps/mm default 1, extruder_max_speed mm/s default 1000)
+        if keys.get("extruder_step_pin", ("nc", ""))[0].lower() != "nc":
+            axes.append(_axis("extruder", "extruder_", "max_speed", keys, get, f, f_at, pulse,
+                              idle, setup, arm))  # fmt: skip
     for name in dict.fromkeys(m.group(1) for k in keys if (m := _EXTRUDER.fullmatch(k))):
         base = f"extruder.{name}."
         if keys.get(base + "enable", ("false", ""))[0].lower() not in ("true", "1"):
@@ -165,7 +173,7 @@ def _axis(  # type: ignore[no-untyped-def]
                           "derived", note)  # fmt: skip
     alias = _CARTESIAN_AXIS.get(motor) if arm[0].lower() == "cartesian" else None
     if extruder:
-        alias = "e" if motor == "extruder.hotend" else None
+        alias = "e" if motor in ("extruder", "extruder.hotend") else None
     return GeneratorGuarantee(
         axis=motor,
         pulse=pulse,
@@ -191,6 +199,8 @@ def _fix(axis: GeneratorGuarantee, role: FixRole, need: Fraction) -> str:
         spm = axis.info.get("steps/mm", "").split(" ")[0]
         extruder = axis.axis.startswith("extruder.")
         key = f"{axis.axis}.max_speed" if extruder else f"{axis.axis}_max_rate"
+        if axis.axis == "extruder":  # the old single-extruder syntax
+            key, extruder = "extruder_max_speed", True
         if spm and Fraction(spm) > 0:
             value = need / Fraction(spm) * (1 if extruder else 60)
             return f"set `{key} {at_most(value)}` ({'mm/s' if extruder else 'mm/min'})"
