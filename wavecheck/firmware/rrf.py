@@ -385,10 +385,13 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     worst = _worst(slow)
     logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
     axes = []
+    unread: list[str] = []  # axes RRF has that the file gives no figure for
     for name, drivers in logical:
         configured = name in st.spm or name in st.speed
         if not configured and (name[0] == "E" and not (st.extruders_given or duet2)
                                or name[0] != "E" and not any(d in st.timing for d in drivers)):  # fmt: skip
+            if name[0] != "E":
+                unread.append(f"{name} (driver {':'.join(drivers)})")
             continue  # a default extruder the file gives no M92/M203 for is not assumed
         axes.append(_axis(name, drivers, st, slow, worst))
     if not axes:
@@ -423,6 +426,9 @@ def _config(path: str, st: _State) -> FirmwareConfig:
             f" (the file states {stated}: the rule is applied only to 2.0x on a Duet 2 "
             "WiFi/Ethernet, as 3.x boards' NumDefaultExtruders differ between releases)"
             if stated else " (the file states neither its version nor its board)"))  # fmt: skip
+    if unread and axes:
+        notes.append(f"axis {', '.join(unread)}: no M92, M203 or M569 T in the file, so nothing "
+                     "bounds its rate or timing: not checked (measure it)")  # fmt: skip
     if st.version is not None and st.version < _ONE_T:
         notes.append(f"{st.version_at} states version {'.'.join(map(str, st.version))}: "
                      f"{_ONE_T_WHY}")  # fmt: skip

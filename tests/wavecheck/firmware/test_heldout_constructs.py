@@ -54,6 +54,17 @@ def test_rrf_one_e_value_is_every_extruders(tmp_path: Path) -> None:
         assert got.axis(e).max_rate.value == 420 * 1200 / 60  # steps/mm x mm/min / 60
 
 
+def test_rrf_axis_without_figures_is_named_not_dropped(tmp_path: Path) -> None:
+    """Seen in uwo-fast/hangprinter-v4 config.g: ``M584 X40.0 Y41.0 Z42.0 U43.0`` makes four
+    motor axes, and U (the D anchor) has no M92, M203 or M569 T. The reader left it out without a
+    word, so the report read as if the machine had three; it is now named as not checked."""
+    cfg = tmp_path / "config.g"
+    cfg.write_text("M584 X0 Y1 Z2 U3 E4\nM92 X80 Y80 Z400 E420\nM203 X6000 Y6000 Z600 E1200\n")
+    got = read_firmware(cfg)
+    assert "U" not in got.axis_names
+    assert any(n.startswith("axis U (driver 0.3)") and "not checked" in n for n in got.notes)
+
+
 def test_rrf_e_list_is_read_value_by_value(tmp_path: Path) -> None:
     """The other side: a list gives each extruder its own value, no padding."""
     cfg = tmp_path / "config.g"
