@@ -14,8 +14,9 @@ failure too, so the hostile shapes (chunk numbers far apart, overlapping zip ent
 ``$var`` lines, a body without whitespace) must cost bounded time and memory. ``make fuzz`` runs
 the default. Exit 1 if anything failed.
 
-The readers whose work is in native code (GHW and FST through pywellen and ``fst2vcd``; a Rust
-panic or abort, memory tracemalloc cannot see) and the newer readers (Saleae CSV and binary,
+The readers whose work is in native code or a C extension (GHW through pywellen; FST through
+our decoder, whose zlib/LZ4 is native, and pywellen; a Rust panic or abort, memory tracemalloc
+cannot see) and the newer readers (Saleae CSV and binary,
 latency files and histograms, ``follow`` command files) run each case in a forked child under
 ``RLIMIT_AS`` (:data:`FORK_EXTRA_BYTES` beyond the parent's address space) and a wall-clock
 bound: a child killed by a signal, past its time, or out of memory is a failure.
@@ -102,7 +103,7 @@ def _read_fst(path: Path) -> None:
     from wavecheck.capture.open import open_capture
     from wavecheck.capture.wellen import read_wellen
 
-    open_capture(path, input_format="fst")  # through fst2vcd when installed
+    open_capture(path, input_format="fst")  # the native reader (capture/fst.py)
     read_wellen(path, kind="fst")  # through pywellen
 
 
