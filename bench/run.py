@@ -110,8 +110,14 @@ def machine() -> dict[str, Any]:
     mem = Path("/proc/meminfo").read_text()
     ram_kb = int(re.search(r"MemTotal:\s+(\d+)", mem).group(1))  # type: ignore[union-attr]
     cpu = re.search(r"model name\s*:\s*(.+)", Path("/proc/cpuinfo").read_text())
-    code = "import numpy, importlib.metadata as m; print(numpy.__version__, m.version('pywellen'), m.version('vcdvcd'))"
-    np_v, pw_v, vv_v = version([PY, "-c", code]).split()
+    code = (
+        "import importlib.metadata as m\n"
+        "def v(n):\n"
+        "    try: return m.version(n)\n"
+        "    except m.PackageNotFoundError: return 'missing'\n"
+        "print(v('numpy'), v('pywellen'), v('vcdvcd'))"
+    )
+    np_v, pw_v, vv_v = (version([PY, "-c", code]).split() + ["?", "?", "?"])[:3]
     return {
         "nproc": os.cpu_count(),
         "ram_gib": round(ram_kb / 2**20, 1),
