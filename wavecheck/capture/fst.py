@@ -34,7 +34,14 @@ from fractions import Fraction
 import numpy as np
 import numpy.typing as npt
 
-from wavecheck.capture.vcd.header import MAX_VARS, SCALAR_VALUES, VarDecl, VcdHeader
+from wavecheck.capture.vcd.header import (
+    MAX_VARS,
+    SCALAR_VALUES,
+    VarDecl,
+    VcdHeader,
+    decode_name,
+    not_utf8_notes,
+)
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
 
@@ -150,15 +157,6 @@ class _Cursor:
         raw = bytes(self.data[self.pos : end])
         self.pos = end + 1
         return raw[:_NAME_BYTES]
-
-
-def _name(raw: bytes, not_utf8: list[str]) -> str:
-    try:
-        return raw.decode("utf-8")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")
-        not_utf8.append(text)
-        return text
 
 
 def varints(data: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint64]:
@@ -365,7 +363,7 @@ class FstFile:
                 name = c.text()
                 c.text()  # component
                 said = (_SCOPE_TYPES[kind] if kind < len(_SCOPE_TYPES) else "module").encode()
-                scope.append(_name((said + b" " + name).split()[-1], not_utf8))
+                scope.append(decode_name((said + b" " + name).split()[-1], not_utf8))
             elif tag == _UPSCOPE:
                 if scope:
                     scope.pop()
@@ -397,22 +395,16 @@ class FstFile:
                     else b" ".join(words)
                 )
                 decls.append(
-                    VarDecl(_VAR_TYPES[tag], size, str(handle), _name(ref, not_utf8),
+                    VarDecl(_VAR_TYPES[tag], size, str(handle), decode_name(ref, not_utf8),
                             tuple(scope), 0)
                 )  # fmt: skip
             # other tags (attribute end, unknown) are skipped byte by byte, as fst2vcd does
-        notes = []
-        if not_utf8:
-            listed = ", ".join(repr(n) for n in not_utf8[:5])
-            notes.append(
-                f"{len(not_utf8)} name(s) are not valid UTF-8 and were read as latin-1: "
-                f"{listed}" + (" …" if len(not_utf8) > 5 else "")
-            )
+        notes = not_utf8_notes(not_utf8)
         mag, unit = self.tick
         tb = Timebase.from_timescale(mag, unit)
         if not Fraction(1, 10**15) <= tb.tick_s <= 100:
             raise self.error(0, f"time scale {mag} {unit} is outside 1 fs … 100 s")
-        version = " ".join(_name(self.version, []).split())
+        version = " ".join(decode_name(self.version, []).split())
         return VcdHeader(tb, self.timescale_text, decls, [], 0, 0, version, notes)
 
     # --- a block's changes ------------------------------------------------------------------

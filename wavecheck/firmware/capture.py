@@ -271,57 +271,25 @@ def firmware_check(
     if trailing and axis.dir_setup_trailing is not None:  # DIR may change during the pulse
         setup, added = axis.dir_setup_trailing, None
     out.append(_time(seen, "dir_setup", "dir_setup", setup, added, "DIR setup"))
-    cfg_rate, rate = axis.max_rate.value, seen.rate_hz
-    if cfg_rate is None or rate is None:
-        out.append(
-            Comparison(
-                "rate",
-                "",
-                cfg_rate,
-                rate,
-                "Hz",
-                None,
-                axis.max_rate.setting,
-                axis.max_rate.where,
-                "unchecked",
-                "no configured maximum or no steps",
-            )
-        )
-    elif axis.max_rate.short_by is None and rate > cfg_rate:  # the band has no top
-        out.append(
-            Comparison(
-                "rate",
-                "",
-                cfg_rate,
-                rate,
-                "Hz",
-                seen.rate_at_s,
-                axis.max_rate.setting,
-                axis.max_rate.where,
-                "indeterminate",
-                f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); "
-                f"highest measured {format_rate(rate)}, and "
-                f"{axis.max_rate.band_text(rate=True)}",
-                None,
-            )  # fmt: skip
-        )
-    else:
-        at = seen.rate_at_s
-        ok = rate <= cfg_rate + (axis.max_rate.short_by or Fraction(0))
-        out.append(
-            Comparison(
-                "rate",
-                "",
-                cfg_rate,
-                rate,
-                "Hz",
-                at,
-                axis.max_rate.setting,
-                axis.max_rate.where,
-                "pass" if ok else "fail",
-                f"configured at most {format_rate(cfg_rate)} ({axis.max_rate.setting}); highest measured "
-                f"{format_rate(rate)}" + ("" if ok or at is None else f" at {format_time(at)}"),
-                axis.max_rate.short_by,
-            )
-        )
+    out.append(_rate(axis.max_rate, seen.rate_hz, seen.rate_at_s))
     return FirmwareCheck(config.firmware, config.path, axis, tuple(out), pairing)
+
+
+def _rate(fig: Guaranteed, rate: Fraction | None, at: Fraction | None) -> Comparison:
+    """The highest measured step rate against the configured maximum (and its band above)."""
+    cfg = fig.value
+
+    def said(verdict: Verdict, message: str, at_s: Fraction | None = at,
+             short: Fraction | None = fig.short_by) -> Comparison:  # fmt: skip
+        return Comparison("rate", "", cfg, rate, "Hz", at_s, fig.setting, fig.where, verdict,
+                          message, short)  # fmt: skip
+
+    if cfg is None or rate is None:
+        return said("unchecked", "no configured maximum or no steps", None, Fraction(0))
+    configured = f"configured at most {format_rate(cfg)} ({fig.setting}); highest measured "
+    if fig.short_by is None and rate > cfg:  # the band has no top
+        return said("indeterminate", f"{configured}{format_rate(rate)}, and "
+                    f"{fig.band_text(rate=True)}", short=None)  # fmt: skip
+    ok = rate <= cfg + (fig.short_by or Fraction(0))
+    return said("pass" if ok else "fail", configured + format_rate(rate)
+                + ("" if ok or at is None else f" at {format_time(at)}"))  # fmt: skip

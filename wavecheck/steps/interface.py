@@ -27,6 +27,7 @@ __all__ = [
     "mapped_channel_names",
     "parse_map",
     "role_name",
+    "split_pairs",
 ]
 
 ROLES: tuple[str, ...] = (
@@ -54,6 +55,17 @@ def role_name(name: str) -> str:
     raise UsageError(f"unknown role {name!r} (roles: {', '.join(ROLES)})")
 
 
+def split_pairs(item: str) -> list[str]:
+    """``"x.step=5,x.dir=A,B"`` → pairs; a comma separates pairs only before ``role=``."""
+    parts: list[str] = []
+    for chunk in item.split(","):
+        if parts and "=" not in chunk:
+            parts[-1] += "," + chunk
+        else:
+            parts.append(chunk)
+    return parts
+
+
 def parse_map(items: Iterable[str], option: str = "--map") -> dict[str, str]:
     """Parse ``--map`` values (``"step=STEP (Y axis),dir=3"``, repeatable) into role → channel.
 
@@ -69,13 +81,7 @@ def parse_map(items: Iterable[str], option: str = "--map") -> dict[str, str]:
     mapping: dict[str, str] = {}
     written: dict[str, str] = {}  # role -> its pair as written
     for item in items:
-        parts: list[str] = []
-        for chunk in item.split(","):
-            if parts and "=" not in chunk:
-                parts[-1] += "," + chunk
-            else:
-                parts.append(chunk)
-        for part in parts:
+        for part in split_pairs(item):
             if "=" not in part:
                 raise UsageError(
                     f"{option} {part!r} is not ROLE=CHANNEL (e.g. {option} step=STEP,dir=3)"

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 from wavecheck.errors import UsageError
 from wavecheck.record import field, record
-from wavecheck.steps.interface import parse_map, role_name
+from wavecheck.steps.interface import parse_map, role_name, split_pairs
 
 __all__ = [
     "AxisMap",
@@ -44,17 +44,6 @@ class AxisMap:
     """Roles found inverted with the roles (an active-low ENABLE of an inferred mapping)."""
 
 
-def _split_pairs(item: str) -> list[str]:
-    """``"x.step=5,x.dir=A,B"`` → pairs; a comma separates pairs only before ``role=``."""
-    parts: list[str] = []
-    for chunk in item.split(","):
-        if parts and "=" not in chunk:
-            parts[-1] += "," + chunk
-        else:
-            parts.append(chunk)
-    return parts
-
-
 def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
     """Parse ``--map`` values into axes, in the order their names first appear.
 
@@ -70,7 +59,7 @@ def parse_axes(items: Iterable[str], option: str = "--map") -> list[AxisMap]:
     per_axis: dict[str, list[str]] = {}
     shared: list[str] = []
     for item in items:
-        for part in _split_pairs(item):
+        for part in split_pairs(item):
             role_text = part.split("=", 1)[0]
             if "." in role_text:
                 axis, rest = role_text.split(".", 1)

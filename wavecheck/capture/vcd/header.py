@@ -36,8 +36,10 @@ __all__ = [
     "VcdHeader",
     "analyzer_writer",
     "build_capture",
+    "decode_name",
     "header_timebase",
     "layout_of",
+    "not_utf8_notes",
     "open_vcd",
     "parse_header",
     "read_header",
@@ -110,7 +112,18 @@ class _Lines:
         return self.line
 
 
-def _name(raw: bytes, not_utf8: list[str]) -> str:
+def not_utf8_notes(not_utf8: list[str]) -> list[str]:
+    """The note for the names :func:`decode_name` read as latin-1 (none when there are none)."""
+    if not not_utf8:
+        return []
+    listed = ", ".join(repr(n) for n in not_utf8[:5])
+    return [
+        f"{len(not_utf8)} name(s) are not valid UTF-8 and were read as latin-1: "
+        f"{listed}" + (" …" if len(not_utf8) > 5 else "")
+    ]
+
+
+def decode_name(raw: bytes, not_utf8: list[str]) -> str:
     """A name as text: UTF-8 (as sigrok-cli and GTKWave write it), else latin-1 (noted)."""
     try:
         return raw.decode("utf-8")
@@ -162,13 +175,7 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
         where = f"line {line}"
         if word == "$enddefinitions":
             _, end = section(tok, line)
-            notes = []
-            if not_utf8:
-                listed = ", ".join(repr(n) for n in not_utf8[:5])
-                notes.append(
-                    f"{len(not_utf8)} name(s) are not valid UTF-8 and were read as latin-1: "
-                    f"{listed}" + (" …" if len(not_utf8) > 5 else "")
-                )
+            notes = not_utf8_notes(not_utf8)
             return VcdHeader(
                 timescale, timescale_text, decls, comments, end, lines.at(end), version, notes
             )
@@ -189,7 +196,7 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
             timescale, timescale_text = tb, f"{match.group(1)} {match.group(2)}"
         elif word == "$scope":
             body_b, _ = section(tok, line)
-            scope.append(_name(body_b[-1], not_utf8) if body_b else "")
+            scope.append(decode_name(body_b[-1], not_utf8) if body_b else "")
         elif word == "$upscope":
             section(tok, line)
             if scope:
@@ -216,11 +223,13 @@ def parse_header(path: str | os.PathLike[str], data: bytes) -> VcdHeader:
                 else b" ".join(ref)
             )
             decls.append(
-                VarDecl(body[0], int(body[1]), id_code, _name(raw, not_utf8), tuple(scope), line)
+                VarDecl(
+                    body[0], int(body[1]), id_code, decode_name(raw, not_utf8), tuple(scope), line
+                )
             )
         elif word in ("$comment", "$date", "$version"):
             body_b, _ = section(tok, line)
-            text = _name(b" ".join(body_b), [])
+            text = decode_name(b" ".join(body_b), [])
             if word == "$comment":
                 comments.append(text)
             elif word == "$version":

@@ -106,6 +106,15 @@ _PAD = 16  # zero bytes before a chunk, so the 16 bytes before any token can be 
 # Fast path
 
 
+def _runs(s: npt.NDArray[np.integer]) -> zip[tuple[int, int, int]]:
+    """(signal, start, end) of each run of one signal in ``s`` (sorted): linear in the batch,
+    not in the signal count."""
+    cuts = np.flatnonzero(s[1:] != s[:-1]) + 1
+    lo = np.concatenate(([0], cuts)) if len(s) else cuts
+    hi = np.concatenate((cuts, [len(s)])) if len(s) else cuts
+    return zip(s[lo].tolist(), lo.tolist(), hi.tolist(), strict=True)
+
+
 class _EdgeBuilder:
     """Turns batches of time-ordered (signal, time, value) changes into per-signal edges.
 
@@ -202,25 +211,14 @@ class _EdgeBuilder:
         s: npt.NDArray[np.integer],
         t: npt.NDArray[np.int64],
     ) -> None:
-        if len(s) == 0:
-            return
-        # runs of one signal in ``s`` (sorted): linear in the batch, not in the signal count
-        cuts = np.flatnonzero(s[1:] != s[:-1]) + 1
-        lo = np.concatenate(([0], cuts))
-        hi = np.concatenate((cuts, [len(s)]))
-        for i, a, b in zip(s[lo].tolist(), lo.tolist(), hi.tolist(), strict=True):
+        for i, a, b in _runs(s):
             # a copy, not a view: a view would keep this batch's whole array alive until every
             # channel is joined, doubling the peak memory of :meth:`channels`
             into[i].append(t[a:b].astype(np.int64, copy=True))
 
     def _grow(self, s: npt.NDArray[np.integer], t: npt.NDArray[np.int64]) -> None:
         """Append each run of one signal in ``s`` (sorted) to that signal's buffer."""
-        if len(s) == 0:
-            return
-        cuts = np.flatnonzero(s[1:] != s[:-1]) + 1
-        lo = np.concatenate(([0], cuts))
-        hi = np.concatenate((cuts, [len(s)]))
-        for i, a, b in zip(s[lo].tolist(), lo.tolist(), hi.tolist(), strict=True):
+        for i, a, b in _runs(s):
             buf, n = self.grown[i], self.filled[i]
             need = n + b - a
             if need > len(buf):  # no view of the buffer exists before signals()
