@@ -2,10 +2,9 @@
 SHELL := /bin/bash
 PY    := .venv/bin/python
 VENV_STAMP := .venv/.installed
-# The virtual environment's interpreter: Debian's own Python where it is installed (built with
-# profile-guided optimisation and LTO, and the libpython sigrok-cli runs its decoders in; pure
-# Python runs ~25 % faster here than on an unoptimised build: bench/README.md, Round 7), else
-# the first python3 on PATH. `make PYTHON3=...` chooses another.
+# The virtual environment's interpreter: Debian's own Python where it is installed (the libpython
+# sigrok-cli runs its decoders in; here it runs pure Python ~25 % faster than pyenv's build:
+# bench/README.md, Round 7), else the first python3 on PATH. `make PYTHON3=...` chooses another.
 PYTHON3 ?= $(firstword $(wildcard /usr/bin/python3) python3)
 
 .PHONY: demo test test-all setup system-deps lint typecheck bench golden golden-check story fuzz clean
