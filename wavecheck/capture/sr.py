@@ -33,7 +33,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.srzip import EXACT_SECTION
@@ -43,6 +42,8 @@ from wavecheck.timebase import Timebase
 from wavecheck.units import SAMPLE_RATE, format_frequency, format_time, parse_frequency
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from wavecheck.capture.blocks import EdgeBlock
 
 

@@ -20,12 +20,14 @@ import io
 import os
 import zipfile
 from collections.abc import Iterable, Mapping, Sequence
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.output import atomic_path
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "EXACT_SECTION",
