@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import glob
 import importlib
 import os
 import sys
@@ -142,6 +141,16 @@ def as_program(run: Callable[[], int]) -> int:
         gc.freeze()
 
 
+def glob_matches(text: str) -> list[str] | None:
+    """The paths the glob pattern ``text`` matches (``**`` recursive), or None when it has no
+    wildcard (``glob.has_magic``; glob itself is imported only for a pattern)."""
+    if not any(c in text for c in "*?["):
+        return None
+    import glob
+
+    return glob.glob(text, recursive=True)
+
+
 def _command_word(words: Sequence[str]) -> str | None:
     """The word argparse takes for the subcommand: the tool's own options (``-h``,
     ``--version``) take no value, so it is the first word that is not an option."""
@@ -172,8 +181,7 @@ def _files(
             if not isinstance(text, str) or not text:
                 continue
             paths = [text, text.partition(":")[2]]
-            if glob.has_magic(text):
-                paths += glob.glob(text, recursive=True)
+            paths += glob_matches(text) or []
             found = [p for p in paths if p and os.path.isfile(os.path.expanduser(p))]
             inputs.setdefault(name, []).extend(os.path.expanduser(p) for p in found)
     return outputs, inputs
