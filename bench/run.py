@@ -124,6 +124,8 @@ def machine() -> dict[str, Any]:
         "cpu": cpu.group(1).strip() if cpu else platform.processor(),
         "kernel": platform.release(),
         "python": platform.python_version(),
+        # which build: Debian's (the libpython sigrok-cli decodes in) or another (Makefile)
+        "python_executable": os.path.realpath(sys.executable),
         "numpy": np_v,
         "pywellen": pw_v,
         "vcdvcd": vv_v,
