@@ -60,8 +60,9 @@ def parse_keyfile(text: str) -> dict[str, dict[str, str]]:
     current: dict[str, str] | None = None
     first: str | None = None
     name = ""
-    for number, line in enumerate(text.split("\n"), 1):
-        line = line.removesuffix("\r").lstrip(_SPACE)
+    for number, whole in enumerate(text.split("\n"), 1):
+        whole = whole.removesuffix("\r")
+        line = whole.lstrip(_SPACE)
         if not line or line[0] == "#":
             continue
         if line[0] == "[" and "]" in line and not line[line.index("]") + 1 :].strip(" \t"):
@@ -85,7 +86,7 @@ def parse_keyfile(text: str) -> dict[str, dict[str, str]]:
             current[key] = value
         else:
             raise KeyFileError(
-                f"line {number}: Key file contains line “{line}” which is not a key-value "
+                f"line {number}: Key file contains line “{whole}” which is not a key-value "
                 "pair, group, or comment"
             )
     return groups
