@@ -125,10 +125,10 @@ def _open_zip(path: str | os.PathLike[str], again: Archive | None = None) -> Arc
 def _value(path: str | os.PathLike[str], group: dict[str, str], key: str) -> str | None:
     """The value of ``key`` as ``g_key_file_get_string`` gives it (None: no such key)."""
     raw = group.get(key)
-    return None if raw is None else unescape_value(path, key, raw)
+    return None if raw is None else _unescaped(path, key, raw)
 
 
-def unescape_value(path: str | os.PathLike[str], key: str, raw: str) -> str:
+def _unescaped(path: str | os.PathLike[str], key: str, raw: str) -> str:
     """``raw`` unescaped (:func:`~wavecheck.capture.keyfile.unescape`), else a CaptureError."""
     try:
         return unescape(raw)
@@ -207,7 +207,7 @@ def read_sr_metadata(
                 raise CaptureError(
                     path, "metadata", f"{key}={value!r} is outside total probes={total}"
                 )
-            probes[number - 1] = unescape_value(path, key, value)
+            probes[number - 1] = _unescaped(path, key, value)
     rate_text = _value(path, dev, "samplerate")
     rate_text = rate_text.strip() if rate_text is not None else None
     rate: Fraction | None = None

@@ -3,7 +3,8 @@
 Importing ``zipfile`` costs a check of a ``.sr`` about 3 ms of CPU (it brings ``threading``,
 ``bz2``, ``lzma``, ``binascii``, ``encodings.cp437``; ``python -X importtime``), a share of the
 ~6 ms issue 38 needed. The reader here gives the values ``zipfile`` gives (CPython 3.11's
-``_EndRecData``, ``_EndRecData64``, ``_RealGetContents``, ``ZipInfo._decodeExtra``) for what a
+``_EndRecData``, ``_EndRecData64``, ``_RealGetContents``, ``ZipInfo._decodeExtra``; the same
+entries as 3.12's and 3.13's zipfile on 4000 random and damaged zips each) for what a
 ``.sr`` holds: one disk, stored or deflated members, ASCII or UTF-8-flagged names, ZIP64 records
 and extra fields, an archive comment, data prepended to the archive. Anything else (more disks,
 encryption, other methods, a name in cp437 beyond ASCII or with a NUL, a record that does not add

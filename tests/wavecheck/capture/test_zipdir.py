@@ -60,7 +60,7 @@ def _archive_view(path: Path) -> tuple[Any, ...]:
             for name in zf.namelist():
                 try:
                     members[name] = zf.read(name)
-                except (ZipError, EOFError, OSError, Exception) as err:  # noqa: BLE001
+                except Exception as err:  # noqa: BLE001
                     members[name] = (type(err).__name__, str(err))
             return [_row(e) for e in zf.infolist()], zf.start_dir, members
     except Exception as err:  # noqa: BLE001
@@ -152,9 +152,23 @@ def zips(draw: st.DrawFn) -> bytes:
                         fh.write(data)
                 else:
                     zf.writestr(info, data)
-            zf.comment = draw(st.binary(max_size=80) | st.just(b"PK\x05\x06" * 3))
+            zf.comment = comment = draw(st.binary(max_size=80) | st.just(b"PK\x05\x06" * 3))
     data = (out.buf if isinstance(out, _Unseekable) else out).getvalue()
+    if draw(st.booleans()):
+        data = _zip64_end(data, len(comment))
     return draw(st.binary(max_size=40)) + data  # data before the zip (a self-extractor's stub)
+
+
+def _zip64_end(data: bytes, comment_len: int = 0) -> bytes:
+    """The zip with ZIP64 end records, as zipfile writes them past 65535 entries or 4 GiB: the
+    ZIP64 record and locator, then an end record saying 0xFFFF / 0xFFFFFFFF."""
+    at = len(data) - 22 - comment_len
+    _, _, _, _, count, size, offset, _ = zipdir._EOCD.unpack_from(data, at)
+    rec64 = zipdir._EOCD64.pack(b"PK\x06\x06", 44, 45, 45, 0, 0, count, count, size, offset)
+    locator = zipdir._LOCATOR64.pack(b"PK\x06\x07", 0, at, 1)
+    end = zipdir._EOCD.pack(b"PK\x05\x06", 0, 0, 0xFFFF, 0xFFFF, 0xFFFF_FFFF, 0xFFFF_FFFF,
+                            comment_len)  # fmt: skip
+    return data[:at] + rec64 + locator + end + data[at + 22 :]
 
 
 @settings(max_examples=150, suppress_health_check=[HealthCheck.too_slow])
@@ -254,16 +268,19 @@ def test_a_member_with_a_bad_crc_gives_zipfiles_error(tmp_path: Path) -> None:
     _check(path)
 
 
-def test_a_zip64_directory_is_read_here(tmp_path: Path) -> None:
+@pytest.mark.parametrize("comment", [b"", b"a comment"])
+def test_a_zip64_archive_is_read_here(comment: bytes, tmp_path: Path) -> None:
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w") as zf:
         for n in range(3):
-            with zf.open(f"logic-1-{n + 1}", "w", force_zip64=True) as fh:
+            with zf.open(f"logic-1-{n + 1}", "w", force_zip64=True) as fh:  # ZIP64 extra fields
                 fh.write(bytes(100))
+        zf.comment = comment
+    data = b"stub" + _zip64_end(buf.getvalue(), len(comment))
     path = tmp_path / "a.zip"
-    path.write_bytes(buf.getvalue())
-    entries = _ours(buf.getvalue())
-    assert entries is not None and len(entries[0]) == 3
+    path.write_bytes(data)
+    entries = _ours(data)
+    assert entries is not None and len(entries[0]) == 3 and entries[0][0][1] == 4
     _check(path, ordinary=True)
 
 
