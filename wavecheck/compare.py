@@ -31,10 +31,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, EdgeArray
 from wavecheck.drives.datasheet import Drive
@@ -45,6 +44,9 @@ from wavecheck.steps.decode import StepEvents
 from wavecheck.steps.mapping import AxisMap
 from wavecheck.units import format_ns
 from wavecheck.verdict import overall_verdict
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "Align",

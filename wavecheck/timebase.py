@@ -10,14 +10,16 @@ from __future__ import annotations
 
 from fractions import Fraction
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.errors import UsageError
 from wavecheck.record import record
 from wavecheck.units import SI_TIME
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["Rounding", "Timebase"]
 

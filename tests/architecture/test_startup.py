@@ -263,10 +263,11 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
 #: Never on those paths: roles inference (the channels are mapped; roles.names, what a name
 #: says, is read), the firmware records and readers (no --firmware), the LinuxCNC configuration
 #: (no --ini/--hal/--base-period), the steps CSV writer, the PulseView session writer, json (a
-#: text report), tempfile (only standard input is spooled), numpy.ma (np.unique).
+#: text report), tempfile (only standard input is spooled), numpy.ma (np.unique), numpy.typing
+#: (annotations only), shlex (only messages quote a --map example), glob (no wildcard given).
 NOT_LOADED = ("wavecheck.roles.infer", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
               "wavecheck.report.steps_csv", "wavecheck.sigrok.session", "json", "tempfile",
-              "numpy.ma")  # fmt: skip
+              "numpy.ma", "numpy.typing", "shlex", "glob")  # fmt: skip
 
 
 def test_a_check_of_an_sr_reads_the_zip_and_metadata_without_the_stdlib_parsers() -> None:

@@ -30,9 +30,9 @@ import os
 import zlib
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.vcd.header import (
     MAX_VARS,
@@ -44,6 +44,9 @@ from wavecheck.capture.vcd.header import (
 )
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "FRAME_CODES", "FstFile", "FstUnsupported", "VcBlock", "scalar_changes", "varints",

@@ -28,16 +28,18 @@ import re
 import struct
 from fractions import Fraction
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.common import resolution_of
 from wavecheck.capture.edges import NEVER, Capture, Channel
 from wavecheck.errors import CaptureError, UnitError
 from wavecheck.timebase import Timebase
 from wavecheck.units import check_finite, format_frequency
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["MAGIC", "holds_export", "read_saleae_binary"]
 

@@ -30,7 +30,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel
 from wavecheck.capture.keyfile import KeyFileError, parse_keyfile, unescape
@@ -42,6 +41,8 @@ from wavecheck.timebase import Timebase
 from wavecheck.units import SAMPLE_RATE, format_frequency, format_time, parse_frequency
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from wavecheck.capture.blocks import EdgeBlock
 
 

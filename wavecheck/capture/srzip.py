@@ -19,13 +19,15 @@ from __future__ import annotations
 import io
 import os
 from collections.abc import Iterable, Mapping, Sequence
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.zipdir import ZIP_DEFLATED
 from wavecheck.output import atomic_path
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "EXACT_SECTION",

@@ -31,7 +31,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any, BinaryIO, cast
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.common import path_argument, resolution_of
 from wavecheck.capture.edges import Capture, Channel, Vector
@@ -43,6 +42,8 @@ from wavecheck.timebase import Timebase
 from wavecheck.units import format_time
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from wavecheck.capture.blocks import EdgeBlock
 
 __all__ = ["FstBlocks", "ghw_timebase", "load_bit", "read_fst", "read_wellen"]

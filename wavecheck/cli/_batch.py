@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import glob
 import os
 import sys
 from collections.abc import Callable, Iterator
@@ -25,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from wavecheck.cli._formats import FORMATS, Checked, Part, axis_reports
+from wavecheck.cli._main import glob_matches
 from wavecheck.cli._reports import Asked, asked
 from wavecheck.cli._tuning_args import required
 from wavecheck.engine import MachineReport, Report
@@ -48,8 +48,9 @@ def expand_captures(patterns: list[str]) -> list[str]:
     (sorted); a pattern matching nothing is an error."""
     out: list[str] = []
     for pat in patterns:
-        if glob.has_magic(pat) and not os.path.exists(pat):
-            hits = sorted(glob.glob(pat, recursive=True))
+        matches = None if os.path.exists(pat) else glob_matches(pat)
+        if matches is not None:
+            hits = sorted(matches)
             if not hits:
                 raise UsageError(f"{pat}: no file matches this pattern")
             out += hits

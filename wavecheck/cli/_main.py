@@ -12,8 +12,8 @@ inputs (every file named by another option), and those inputs stay protected whi
 from __future__ import annotations
 
 import argparse
+import atexit
 import gc
-import glob
 import importlib
 import os
 import sys
@@ -133,13 +133,64 @@ def as_program(run: Callable[[], int]) -> int:
     """``run()`` as the whole program (the console script, ``python -m``): the cyclic garbage
     collector runs less often, and the objects left at the end are frozen, so the collection
     at interpreter exit does not walk them again (``wavecheck check`` on grbl_cnc_1.sr: ~25 ms
-    of ~165 ms CPU; bench/README.md, Round 6, start-up). Every temporary file the commands make
-    is closed by a ``with`` or unlinked at creation, so none waits on that collection."""
+    of ~165 ms CPU; bench/README.md, Round 6, start-up). When nothing is left for the
+    interpreter's teardown to do but free memory (:func:`_leave_now`), the process ends there.
+    Every temporary file the commands make is closed by a ``with`` or unlinked at creation,
+    so none waits on that collection."""
     gc.set_threshold(GC_YOUNG_THRESHOLD, *gc.get_threshold()[1:])
+    fds = _open_fds()
     try:
-        return run()
+        code = run()
     finally:
         gc.freeze()
+    _leave_now(code, fds)
+    return code
+
+
+#: Where the process's open file descriptors are listed (Linux; /dev/fd elsewhere).
+_FD_DIRS = ("/proc/self/fd", "/dev/fd")
+
+
+def _open_fds() -> frozenset[str] | None:
+    """The process's open file descriptors (with the listing's own), or None if unknown."""
+    for folder in _FD_DIRS:
+        try:
+            return frozenset(os.listdir(folder))
+        except OSError:
+            continue
+    return None
+
+
+def _leave_now(code: int, fds_at_start: frozenset[str] | None) -> None:
+    """End the process with ``code`` now, without the interpreter's teardown (freeing every
+    module and object: ~4 ms after a ``check``; bench/README.md, Round 7), when that teardown
+    has nothing else to do: no ``atexit`` callback (multiprocessing, coverage, a temporary
+    folder's finalizer register one), no other thread, no file descriptor opened since the
+    start (a file left open could still hold buffered output), and both standard streams
+    flushed. Otherwise it returns and the interpreter exits as usual."""
+    if fds_at_start is None or getattr(atexit, "_ncallbacks", lambda: 1)():
+        return
+    threading = sys.modules.get("threading")
+    if threading is not None and threading.active_count() > 1:
+        return
+    if _open_fds() != fds_at_start:
+        return
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (OSError, ValueError):  # a closed pipe: the usual exit reports it as it always did
+        return
+    os._exit(code)
+
+
+def glob_matches(text: str) -> list[str] | None:
+    """The paths the glob pattern ``text`` matches (``**`` recursive), or None when it has no
+    wildcard (``glob.has_magic``; glob itself is imported only for a pattern)."""
+    if not any(c in text for c in "*?["):
+        return None
+    import glob
+
+    return glob.glob(text, recursive=True)
 
 
 def _command_word(words: Sequence[str]) -> str | None:
@@ -172,8 +223,7 @@ def _files(
             if not isinstance(text, str) or not text:
                 continue
             paths = [text, text.partition(":")[2]]
-            if glob.has_magic(text):
-                paths += glob.glob(text, recursive=True)
+            paths += glob_matches(text) or []
             found = [p for p in paths if p and os.path.isfile(os.path.expanduser(p))]
             inputs.setdefault(name, []).extend(os.path.expanduser(p) for p in found)
     return outputs, inputs

@@ -12,7 +12,6 @@ outputs register in :data:`wavecheck.cli._formats.FORMATS` (``--format``); extra
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from typing import Any
 
@@ -128,6 +127,8 @@ def _stored_settings(args: argparse.Namespace) -> None:
     for key, value in vars(given).items():  # an option given on the command line wins
         if key != "capture" and getattr(args, key, None) == sub.choices["check"].get_default(key):
             setattr(args, key, value)
+    import shlex  # for the message only: not at every start
+
     print(
         f"wavecheck: {paths[0]}: checked with the options it carries: {shlex.join(stored)}",
         file=sys.stderr,

@@ -27,9 +27,9 @@ is dropped, so memory follows the window, not the capture.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.blocks import EdgeBlock
 from wavecheck.capture.edges import NEVER, Capture, EdgeArray
@@ -55,6 +55,9 @@ from wavecheck.steps.decode import (
 )
 from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steps.primitives import Intervals, widths
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["AxisCheck"]
 

@@ -25,9 +25,9 @@ comes back) is not judged: an event may be hidden there. It is counted as unknow
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge, Drive, Figure
@@ -41,6 +41,9 @@ from wavecheck.steps.decode import (
 from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steps.primitives import Intervals, holds, periods, setups, widths
 from wavecheck.steptypes import StepType
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "either_level",

@@ -17,14 +17,17 @@ from __future__ import annotations
 import functools
 import math
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.record import field, record
 from wavecheck.steps.primitives import Intervals
 from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "FAIL",

@@ -25,7 +25,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.drives.datasheet import ActiveEdge, Drive
 from wavecheck.record import record, replace
@@ -37,6 +36,8 @@ from wavecheck.steptypes import StepType
 from wavecheck.timebase import Timebase
 
 if TYPE_CHECKING:  # the LinuxCNC config is read only when given
+    import numpy.typing as npt
+
     from wavecheck.linuxcnc.stepgen_config import ConfigRates
 
 __all__ = ["MaxStepRates", "max_step_rates", "rates_from"]

@@ -10,7 +10,6 @@ feeds the plan's channels block by block.
 
 from __future__ import annotations
 
-import shlex
 from collections.abc import Iterable, Mapping
 from fractions import Fraction
 from typing import TYPE_CHECKING, Literal
@@ -97,6 +96,8 @@ def _refuse_contradicted_names(waveforms: Capture, mapping: Mapping[str, str]) -
         return
     first = refused[0]
     hint = f"{first.role}={first.others[0]}" if first.others else f"{first.role}=LINE"
+    import shlex  # for the message only: not at every start
+
     raise UsageError(
         f"{waveforms.path}: {first.conflict.question}: give the {first.role.upper()} line "
         f"(e.g. --map {shlex.quote(hint)}), or --map {shlex.quote(f'{first.role}={first.ref}')} "

@@ -14,7 +14,6 @@ on one common periodic lattice (one thread or timer makes them), judged on the f
 from __future__ import annotations
 
 import itertools
-import shlex
 from collections.abc import Callable, Iterator, Sequence
 from fractions import Fraction
 
@@ -90,6 +89,8 @@ def axes_from_waveforms(capture: Capture) -> tuple[list[AxisMap], list[str]]:
     if not proposal.unambiguous:
         example = proposal.map_args() if proposal.axes else ""
         if not example and proposal.candidates:
+            import shlex  # for the message only: not at every start
+
             example = f"--map step={shlex.quote(proposal.candidates[0])}"
         hint = f" (e.g. {example})" if example else ""
         details = tuple(
@@ -231,6 +232,8 @@ def axes_for(options: CheckOptions, capture: Capture) -> tuple[list[AxisMap], li
         scoped = axes_by_scope([c.name for c in capture.channels])
         if scoped is None:
             return [AxisMap(None, {})], []
+        import shlex  # for the message only: not at every start
+
         args = " ".join(
             "--map " + ",".join(f"{name}.{role}={shlex.quote(ch)}" for role, ch in roles.items())
             for name, roles in scoped

@@ -9,14 +9,16 @@ in time order, once each, and keeps nothing for it.
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.rules import Rule
 from wavecheck.steps.primitives import Intervals
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["IntervalSink", "StepSink", "TimerSample"]
 

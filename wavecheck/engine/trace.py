@@ -24,11 +24,15 @@ more than two steps, the curves hold every step (:attr:`StepTrace.thinned` is Fa
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.record import field_names, record
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["MAX_BUCKETS", "REVERSALS_KEPT", "StepTrace"]
 
@@ -39,7 +43,7 @@ REVERSALS_KEPT = 200
 
 _BIG = np.iinfo(np.int64).max
 _SMALL = np.iinfo(np.int64).min
-_I64 = npt.NDArray[np.int64]
+_I64 = EdgeArray  # int64 arrays (not only edges)
 
 
 @record

@@ -39,9 +39,9 @@ import re
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.vcd.header import open_vcd, read_header
 from wavecheck.capture.vcd.writer import VcdWire, write_vcd
@@ -50,6 +50,9 @@ from wavecheck.errors import UsageError
 from wavecheck.output import atomic_write
 from wavecheck.report.plot import Place, choose_places
 from wavecheck.units import SI_TIME, format_time
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "MAX_MARKERS",

@@ -15,11 +15,11 @@ import os
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.units import format_ns
 
 if TYPE_CHECKING:  # names for annotations: check --plot loads no measurement module
+    import numpy.typing as npt
     from matplotlib.axes import Axes
 
     from wavecheck.engine.parts import StepCounts, StepTrace

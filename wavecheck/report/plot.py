@@ -33,7 +33,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.engine import Report, RuleResult
 from wavecheck.output import atomic_write, figure_format
@@ -41,6 +40,7 @@ from wavecheck.report.claims import not_checked
 from wavecheck.units import SI_TIME, format_time
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 

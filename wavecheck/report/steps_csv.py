@@ -31,16 +31,18 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.errors import UsageError
 from wavecheck.output import atomic_path
 from wavecheck.steps.mapping import check_axis_names
 from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "StepsCsvWriter",

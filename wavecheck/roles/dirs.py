@@ -23,13 +23,16 @@ involved are refused. Elsewhere, a line with two possible STEPs is refused and i
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
 from wavecheck.record import field, record
 from wavecheck.roles.features import Pulses
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["Assignment", "DirFit", "assign", "at_pauses", "dir_fit", "plural"]
 

@@ -22,15 +22,18 @@ and RX have intervals of 17–104 samples at 2 MHz, all within ±1 sample of mul
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Capture, Channel, EdgeArray
 from wavecheck.record import record
 from wavecheck.roles.periodic import Timing, timing
 from wavecheck.roles.periodic import may_be_one_rate as may_be_rate
 from wavecheck.units import format_frequency, format_time
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "BY_NAME_ONLY",

@@ -28,10 +28,14 @@ The rules look at the periods between pulse starts, in ticks, with a few ``numpy
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.record import record
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["Timing", "may_be_one_rate", "timing"]
 

@@ -41,15 +41,18 @@ from __future__ import annotations
 import functools
 import itertools
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import Channel
 from wavecheck.record import field, record
 from wavecheck.roles.names import name_hint
 from wavecheck.roles.periodic import timing
 from wavecheck.steptypes import PHASE_NAMES, STATE_TABLES, step_type
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["BUDGET", "PhaseGroup", "PhaseSearch", "find_phase_groups"]
 

@@ -28,9 +28,9 @@ Everything is vectorised over the whole edge arrays (numpy ``searchsorted`` / ``
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.drives.datasheet import ActiveEdge
@@ -38,6 +38,9 @@ from wavecheck.errors import UsageError
 from wavecheck.record import field, record
 from wavecheck.steps.interface import RoleSignal, StepInterface
 from wavecheck.steptypes import StepType, step_type
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "StepEvents",

@@ -7,7 +7,6 @@
 from __future__ import annotations
 
 import re
-import shlex
 from collections.abc import Iterable, Mapping
 
 import numpy as np
@@ -192,6 +191,8 @@ def find_channel(capture: Capture, ref: str | int, role: str | None = None) -> C
 
 def _not_found(capture: Capture, ref: str, role: str | None) -> str:
     """No channel is ``ref``: the channels, and the one most like ``role`` to map instead."""
+    import shlex
+
     from wavecheck.roles import best_channel
 
     available = ", ".join(f"{c.index}={c.name!r}" for c in capture.channels) or "none"
@@ -256,6 +257,8 @@ class StepInterface:
         """The signal of ``role``; a clear error when it is not mapped."""
         sig = self.signals.get(role)
         if sig is None:
+            import shlex
+
             from wavecheck.roles import best_channel
 
             best = best_channel(self.capture, role) if self.capture.channels else None

@@ -15,13 +15,15 @@ All inputs are increasing ``int64`` tick arrays; nothing loops per edge in Pytho
 from __future__ import annotations
 
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import EdgeArray
 from wavecheck.record import record
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["Intervals", "holds", "periods", "setups", "sorted_search", "widths"]
 

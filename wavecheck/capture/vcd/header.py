@@ -12,10 +12,9 @@ import os
 import re
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.common import (
     ANALYZER_WRITERS,
@@ -26,6 +25,9 @@ from wavecheck.capture.common import (
 from wavecheck.capture.edges import Capture, Channel, Vector
 from wavecheck.errors import CaptureError
 from wavecheck.timebase import Timebase
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "SCALAR_VALUES",

@@ -44,7 +44,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
-import numpy.typing as npt
 
 from wavecheck.capture.edges import NEVER, Capture, Channel, Vector
 from wavecheck.capture.vcd.header import (
@@ -61,6 +60,8 @@ from wavecheck.errors import CaptureError, UsageError
 from wavecheck.progress import current
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from wavecheck.capture.blocks import EdgeBlock
 
 __all__ = ["DEFAULT_CHUNK_BYTES", "MAX_TOKEN_BYTES", "VcdBlocks", "read_vcd"]
