@@ -1,7 +1,9 @@
 """Native sigrok ``.sr`` (srzip) reader: streams the logic chunks and keeps only the edges.
 
-Layout (``../shared/reference/sigrok.md`` §5): a zip with ``version`` (1 or 2), ``metadata`` (an
-INI file: ``samplerate``, ``total probes``, ``probeN`` names, ``unitsize``, ``capturefile``) and
+Layout (``../shared/reference/sigrok.md`` §5): a zip (read by :mod:`~wavecheck.capture.zipdir`)
+with ``version`` (1 or 2), ``metadata`` (a GLib key file, read as libsigrok reads it:
+:mod:`~wavecheck.capture.keyfile`; ``samplerate``, ``total probes``, ``probeN`` names,
+``unitsize``, ``capturefile``) and
 the raw samples in ``logic-1`` or ``logic-1-1``, ``logic-1-2``, …, concatenated in numeric order.
 Each sample is ``unitsize`` bytes, little-endian, bit n = probe n+1.
 

@@ -210,6 +210,8 @@ def _set_end_offsets(entries: list[Entry], start_dir: int) -> None:
 def read_member(f: BinaryIO, entry: Entry) -> bytes | None:
     """The bytes of a stored or deflated member whose local header, room, length and CRC-32 are
     all right; None otherwise (``zipfile`` then reads it, or says why it cannot)."""
+    if entry.header_offset < 0:  # data prepended less than the directory says: zipfile's error
+        return None
     f.seek(entry.header_offset)
     head = f.read(_LOCAL.size)
     if len(head) < _LOCAL.size or head[:4] != b"PK\x03\x04":

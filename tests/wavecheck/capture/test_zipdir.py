@@ -293,3 +293,16 @@ def test_a_directory_larger_than_the_bound_is_left_to_zipfile(
     path = tmp_path / "a.zip"
     path.write_bytes(data)
     _check(path)
+
+
+def test_a_directory_offset_past_its_place_gives_zipfiles_reading(tmp_path: Path) -> None:
+    """The end record puts the directory 10 bytes later than it is: zipfile takes the 10 bytes
+    as missing from the front, so the first local header is at -10; its read is zipfile's."""
+    data = bytearray(_zip(version=b"2", metadata=b"[device 1]\n"))
+    at = len(data) - 22 + 16  # the directory's offset in the end record
+    struct.pack_into("<L", data, at, struct.unpack_from("<L", data, at)[0] + 10)
+    path = tmp_path / "a.zip"
+    path.write_bytes(bytes(data))
+    ours = _ours(bytes(data))
+    assert ours is not None and ours[0][0][1] == -10
+    _check(path)
