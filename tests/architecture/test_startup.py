@@ -168,17 +168,20 @@ def test_only_the_program_tunes_the_garbage_collector(
     tool: str, call: str, young: str, frozen: str
 ) -> None:
     """``main()`` as the console script calls it: fewer young collections, the objects left
-    frozen for the exit (issue 38); ``main(argv)`` from another program changes nothing."""
+    frozen for the exit (issue 38); ``main(argv)`` from another program changes nothing. (The
+    state is printed by an atexit callback, which also keeps the process from ending before
+    the interpreter's exit: tests/wavecheck/cli/test_program_exit.py.)"""
     argv = ["drives"] if tool == "wavecheck" else ["--help"]
     code = (
-        "import gc, sys\n"
+        "import atexit, gc, sys\n"
+        "atexit.register(lambda: print('--- gc ---', gc.get_threshold()[0],"
+        " gc.get_freeze_count() > 0))\n"
         f"sys.argv = [{tool!r}, *{argv!r}]\n"
         f"from {tool}.cli import main\n"
         "try:\n"
         f"    {call}\n"
         "except SystemExit:\n"
         "    pass\n"
-        "print('--- gc ---', gc.get_threshold()[0], gc.get_freeze_count() > 0)\n"
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert run.returncode == 0, run.stderr

@@ -131,19 +131,23 @@ GC_YOUNG_THRESHOLD = 50_000
 
 def as_program(run: Callable[[], int]) -> int:
     """``run()`` as the whole program (the console script, ``python -m``): the cyclic garbage
-    collector runs less often, and the objects left at the end are frozen, so the collection
-    at interpreter exit does not walk them again (``wavecheck check`` on grbl_cnc_1.sr: ~25 ms
-    of ~165 ms CPU; bench/README.md, Round 6, start-up). When nothing is left for the
-    interpreter's teardown to do but free memory (:func:`_leave_now`), the process ends there.
-    Every temporary file the commands make is closed by a ``with`` or unlinked at creation,
-    so none waits on that collection."""
+    collector runs less often, and when the command leaves no file open, the objects left at
+    the end are frozen, so the collection at interpreter exit does not walk them again
+    (``wavecheck check`` on grbl_cnc_1.sr: ~25 ms of ~165 ms CPU; bench/README.md, Round 6,
+    start-up), and when nothing else is left for the interpreter's teardown to do but free
+    memory, the process ends there (:func:`_leave_now`). A file left open is not frozen: the
+    teardown frees it, which writes what it still buffers."""
     gc.set_threshold(GC_YOUNG_THRESHOLD, *gc.get_threshold()[1:])
     fds = _open_fds()
+    nothing_open = False
     try:
         code = run()
     finally:
-        gc.freeze()
-    _leave_now(code, fds)
+        nothing_open = fds is not None and _open_fds() == fds
+        if nothing_open:
+            gc.freeze()
+    if nothing_open:
+        _leave_now(code)
     return code
 
 
@@ -161,19 +165,17 @@ def _open_fds() -> frozenset[str] | None:
     return None
 
 
-def _leave_now(code: int, fds_at_start: frozenset[str] | None) -> None:
+def _leave_now(code: int) -> None:
     """End the process with ``code`` now, without the interpreter's teardown (freeing every
-    module and object: ~4 ms after a ``check``; bench/README.md, Round 7), when that teardown
-    has nothing else to do: no ``atexit`` callback (multiprocessing, coverage, a temporary
-    folder's finalizer register one), no other thread, no file descriptor opened since the
-    start (a file left open could still hold buffered output), and both standard streams
-    flushed. Otherwise it returns and the interpreter exits as usual."""
-    if fds_at_start is None or getattr(atexit, "_ncallbacks", lambda: 1)():
+    module and object: ~4 ms after a ``check``; bench/README.md, Round 7), when, beyond what
+    :func:`as_program` checked (no file opened since the start), that teardown has nothing
+    else to do: no ``atexit`` callback (multiprocessing, coverage, a temporary folder's
+    finalizer register one), no other thread, and both standard streams flushed. Otherwise it
+    returns and the interpreter exits as usual."""
+    if getattr(atexit, "_ncallbacks", lambda: 1)():
         return
     threading = sys.modules.get("threading")
     if threading is not None and threading.active_count() > 1:
-        return
-    if _open_fds() != fds_at_start:
         return
     try:
         sys.stdout.flush()
