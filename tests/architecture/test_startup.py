@@ -238,8 +238,9 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
         ["check", str(GRBL_SR), "--drive", "leadshine-dm542", "--map", "step=STEP (Y axis),dir=EN"],
         {
             "wavecheck", "wavecheck.capture", "wavecheck.capture.blocks", "wavecheck.capture.edges",
-            "wavecheck.capture.formats", "wavecheck.capture.open", "wavecheck.capture.sr",
-            "wavecheck.capture.srzip", "wavecheck.cli", "wavecheck.cli._axis_args",
+            "wavecheck.capture.formats", "wavecheck.capture.keyfile", "wavecheck.capture.open",
+            "wavecheck.capture.sr", "wavecheck.capture.srzip", "wavecheck.capture.zipdir",
+            "wavecheck.cli", "wavecheck.cli._axis_args",
             "wavecheck.cli._batch", "wavecheck.cli._capture_args", "wavecheck.cli._check_flow",
             "wavecheck.cli._firmware_args", "wavecheck.cli._formats",
             "wavecheck.cli._linuxcnc_args", "wavecheck.cli._main", "wavecheck.cli._pulseview_args",
@@ -270,6 +271,16 @@ PINNED: dict[str, tuple[list[str], set[str]]] = {
 NOT_LOADED = ("wavecheck.roles.infer", "wavecheck.firmware.guarantee", "wavecheck.linuxcnc",
               "wavecheck.report.steps_csv", "wavecheck.sigrok.session", "json", "tempfile",
               "numpy.ma", "numpy.typing", "shlex", "glob")  # fmt: skip
+
+
+def test_a_check_of_an_sr_reads_the_zip_and_metadata_without_the_stdlib_parsers() -> None:
+    """Issue 38: an ordinary .sr's zip directory and members are read by capture.zipdir, its
+    metadata by capture.keyfile; zipfile (threading, bz2, lzma, binascii, cp437), configparser
+    and shutil cost ~4 ms of the check's start-up and are loaded only for an exotic zip."""
+    loaded = _loaded_after(PINNED["check sr --map"][0])
+    assert "wavecheck.capture.zipdir" in loaded  # the probe sees the reader
+    unwanted = ("zipfile", "configparser", "shutil", "bz2", "lzma", "threading", "encodings.cp437")
+    assert sorted(m for m in unwanted if m in loaded) == []
 
 
 @pytest.mark.parametrize("path", list(PINNED))

@@ -12,7 +12,6 @@ from __future__ import annotations
 import functools
 import os
 import re
-import shutil
 from collections.abc import Callable, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, BinaryIO
@@ -161,6 +160,8 @@ def _fst_blocks(r: Request) -> BlockSource | None:
         )  # fmt: skip
     except FstUnsupported:
         pass  # FastLZ packing: GTKWave's fst2vcd, else the whole file with pywellen
+    import shutil  # here: it imports bz2 and lzma, which a check of another format never needs
+
     tool = shutil.which("fst2vcd")
     if tool is None:
         return None

@@ -12,7 +12,6 @@ import contextlib
 import functools
 import io
 import os
-import shutil
 import stat
 import sys
 from collections.abc import Sequence
@@ -77,12 +76,12 @@ def detect_format(path: str | os.PathLike[str]) -> str:
 
 def _zip_names(path: Path) -> bytes:
     """The member names of a zip file, one a line (nothing when it cannot be read as a zip)."""
-    import zipfile
+    from wavecheck.capture.zipdir import Archive, ZipError
 
     try:
-        with zipfile.ZipFile(path) as zf:
+        with Archive(path) as zf:
             return "\n".join(zf.namelist()[:1000]).encode("utf-8", "replace")
-    except (OSError, zipfile.BadZipFile, ValueError, NotImplementedError, EOFError, KeyError):
+    except (OSError, ZipError, EOFError):
         return b""  # the .sr reader says what is wrong with the zip
 
 
@@ -232,7 +231,8 @@ def _read_stream(sniffed: _Sniffed, request: Request) -> Capture:
         if fmt.streams:
             return _wired(fmt.read(replace(request, path=name, stream=sniffed.stream)))
         suffix = (*fmt.extensions, "." + sniffed.spec.partition(":")[0].strip().lower())[0]
-        import tempfile  # here: only a stream that needs seeking is spooled
+        import shutil  # here: only a stream that needs seeking is spooled
+        import tempfile
 
         with tempfile.TemporaryDirectory(prefix="wavecheck-stdin-") as tmp:
             spool = Path(tmp) / f"input{suffix}"

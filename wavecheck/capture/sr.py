@@ -1,7 +1,9 @@
 """Native sigrok ``.sr`` (srzip) reader: streams the logic chunks and keeps only the edges.
 
-Layout (``../shared/reference/sigrok.md`` §5): a zip with ``version`` (1 or 2), ``metadata`` (an
-INI file: ``samplerate``, ``total probes``, ``probeN`` names, ``unitsize``, ``capturefile``) and
+Layout (``../shared/reference/sigrok.md`` §5): a zip (read by :mod:`~wavecheck.capture.zipdir`)
+with ``version`` (1 or 2), ``metadata`` (a GLib key file, read as libsigrok reads it:
+:mod:`~wavecheck.capture.keyfile`; ``samplerate``, ``total probes``, ``probeN`` names,
+``unitsize``, ``capturefile``) and
 the raw samples in ``logic-1`` or ``logic-1-1``, ``logic-1-2``, …, concatenated in numeric order.
 Each sample is ``unitsize`` bytes, little-endian, bit n = probe n+1.
 
@@ -21,12 +23,9 @@ each such word's XOR once) and the changed bits of all channels sorted out toget
 
 from __future__ import annotations
 
-import configparser
-import lzma
 import os
 import re
 import struct
-import zipfile
 import zlib
 from collections.abc import Iterable, Iterator
 from fractions import Fraction
@@ -35,7 +34,9 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 
 from wavecheck.capture.edges import Capture, Channel
+from wavecheck.capture.keyfile import KeyFileError, parse_keyfile, unescape
 from wavecheck.capture.srzip import EXACT_SECTION
+from wavecheck.capture.zipdir import ZIP_DEFLATED, ZIP_STORED, Archive, Entry, ZipError
 from wavecheck.errors import CaptureError, UnitError, UsageError
 from wavecheck.progress import current
 from wavecheck.timebase import Timebase
@@ -74,16 +75,9 @@ MAX_TOTAL_BYTES = 1 << 40  # the whole capture inflated (1 TiB: 1e12 samples at 
 _MAX_METADATA_BYTES = 1 << 20
 _READ_COMPRESSED = 1 << 20  # compressed bytes read from the file at a time
 _READ_ERRORS: tuple[type[BaseException], ...] = (
-    zipfile.BadZipFile, zlib.error, _zlib.error, EOFError, OSError
+    ZipError, zlib.error, _zlib.error, EOFError, OSError
 )  # fmt: skip
 _DIGITS = re.compile(r"[0-9]+")
-# zipfile refuses some corrupt or exotic headers with these rather than BadZipFile: encryption
-# (RuntimeError), flag bits 5/6, "version needed", unknown methods (NotImplementedError), a
-# non-UTF-8 name under the UTF-8 flag (UnicodeDecodeError), bogus LZMA data (LZMAError)
-_ZIPFILE_REFUSALS: tuple[type[BaseException], ...] = (
-    NotImplementedError, RuntimeError, ValueError, lzma.LZMAError
-)  # fmt: skip
-_OPEN_ERRORS: tuple[type[BaseException], ...] = (zipfile.BadZipFile, *_ZIPFILE_REFUSALS)
 
 
 class SrMetadata:
@@ -96,7 +90,7 @@ class SrMetadata:
         total_probes: int,
         unitsize: int,
         probes: dict[int, str],
-        members: list[zipfile.ZipInfo],
+        members: list[Entry],
         total_analog: int,
     ) -> None:
         self.samplerate = samplerate
@@ -115,14 +109,15 @@ class SrMetadata:
         return sum(m.file_size for m in self.members) // self.unitsize
 
 
-def _open_zip(path: str | os.PathLike[str]) -> zipfile.ZipFile:
+def _open_zip(path: str | os.PathLike[str], again: Archive | None = None) -> Archive:
+    """The zip at ``path``, or ``again`` (its directory read before) with the file opened again."""
     try:
-        return zipfile.ZipFile(path)
+        return Archive(path) if again is None else again.reopen()
     except FileNotFoundError:
         raise CaptureError(path, None, "no such file") from None
     except IsADirectoryError:
         raise CaptureError(path, None, "is a folder, not a capture file") from None
-    except _OPEN_ERRORS as err:
+    except ZipError as err:
         raise CaptureError(
             path, None, f"not a sigrok .sr file: {err} (truncated or not a zip archive)"
         ) from None
@@ -130,10 +125,25 @@ def _open_zip(path: str | os.PathLike[str]) -> zipfile.ZipFile:
         raise CaptureError(path, None, f"cannot open: {err.strerror or err}") from None
 
 
-def _int(path: str | os.PathLike[str], dev: configparser.SectionProxy, key: str) -> int | None:
-    if key not in dev:
+def _value(path: str | os.PathLike[str], group: dict[str, str], key: str) -> str | None:
+    """The value of ``key`` as ``g_key_file_get_string`` gives it (None: no such key)."""
+    raw = group.get(key)
+    return None if raw is None else _unescaped(path, key, raw)
+
+
+def _unescaped(path: str | os.PathLike[str], key: str, raw: str) -> str:
+    """``raw`` unescaped (:func:`~wavecheck.capture.keyfile.unescape`), else a CaptureError."""
+    try:
+        return unescape(raw)
+    except KeyFileError as err:
+        raise CaptureError(path, "metadata", f"{key}={raw!r} cannot be read: {err}") from None
+
+
+def _int(path: str | os.PathLike[str], dev: dict[str, str], key: str) -> int | None:
+    text = _value(path, dev, key)
+    if text is None:
         return None
-    text = dev[key].strip()
+    text = text.strip()
     if not re.fullmatch(r"\d{1,9}", text):
         raise CaptureError(path, "metadata", f"{key}={text!r} is not a whole number")
     return int(text)
@@ -141,7 +151,7 @@ def _int(path: str | os.PathLike[str], dev: configparser.SectionProxy, key: str)
 
 def read_sr_metadata(
     path: str | os.PathLike[str],
-    zf: zipfile.ZipFile,
+    zf: Archive,
     *,
     max_member_bytes: int = MAX_MEMBER_BYTES,
     max_total_bytes: int = MAX_TOTAL_BYTES,
@@ -162,22 +172,19 @@ def read_sr_metadata(
     try:
         version = zf.read("version").strip()
         raw_meta = zf.read("metadata")
-    except (*_READ_ERRORS, *_ZIPFILE_REFUSALS) as err:
+    except _READ_ERRORS as err:
         raise CaptureError(path, "metadata", f"cannot be unpacked: {err}") from None
     if version not in (b"1", b"2"):
         raise CaptureError(
             path, "member version", f"unsupported .sr version {version[:10]!r} (known: 1, 2)"
         )
-    cp = configparser.ConfigParser(interpolation=None, delimiters=("=",), strict=False)
-    cp.optionxform = str  # type: ignore[assignment,method-assign]
     try:
-        cp.read_string(raw_meta.decode("utf-8"))
-    except (UnicodeDecodeError, configparser.Error) as err:
-        msg = str(err).splitlines()[0]
-        raise CaptureError(path, "metadata", f"cannot be parsed: {msg}") from None
-    if "device 1" not in cp:
+        groups = parse_keyfile(raw_meta.decode("utf-8"))
+    except (UnicodeDecodeError, KeyFileError) as err:
+        raise CaptureError(path, "metadata", f"cannot be parsed: {err}") from None
+    if "device 1" not in groups:
         raise CaptureError(path, "metadata", "has no [device 1] section")
-    dev = cp["device 1"]
+    dev = groups["device 1"]
     total = _int(path, dev, "total probes")
     unitsize = _int(path, dev, "unitsize")
     if total is None or total < 1:
@@ -203,8 +210,9 @@ def read_sr_metadata(
                 raise CaptureError(
                     path, "metadata", f"{key}={value!r} is outside total probes={total}"
                 )
-            probes[number - 1] = value
-    rate_text = dev.get("samplerate")
+            probes[number - 1] = _unescaped(path, key, value)
+    rate_text = _value(path, dev, "samplerate")
+    rate_text = rate_text.strip() if rate_text is not None else None
     rate: Fraction | None = None
     if rate_text is not None:
         try:
@@ -215,7 +223,7 @@ def read_sr_metadata(
             ) from None
         if rate <= 0:
             raise CaptureError(path, "metadata", f"samplerate={rate_text!r} must be positive")
-    base = dev.get("capturefile", "logic-1").strip()
+    base = (_value(path, dev, "capturefile") or "logic-1").strip()
     ignored: list[str] = []
     if base in names:
         members = [zf.getinfo(base)]
@@ -250,14 +258,15 @@ def read_sr_metadata(
     meta = SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
     meta.ignored = ignored
     meta.data_end = extents
-    if EXACT_SECTION in cp and cp[EXACT_SECTION].get("edges", "").strip() == "exact":
-        meta.exact_source = cp[EXACT_SECTION].get("source", "").strip() or "unnamed"
+    exact = groups.get(EXACT_SECTION, {})
+    if (_value(path, exact, "edges") or "").strip() == "exact":
+        meta.exact_source = (_value(path, exact, "source") or "").strip() or "unnamed"
     return meta
 
 
 def _chunk_members(
-    path: str | os.PathLike[str], zf: zipfile.ZipFile, base: str
-) -> tuple[list[zipfile.ZipInfo], list[str]]:
+    path: str | os.PathLike[str], zf: Archive, base: str
+) -> tuple[list[Entry], list[str]]:
     """The chunk members ``base-1``, ``base-2``, … in order, and the names that look like chunks
     but are not read.
 
@@ -270,7 +279,7 @@ def _chunk_members(
         CaptureError: no chunk, a gap, or a chunk name twice.
     """
     prefix = base + "-"
-    present: dict[int, zipfile.ZipInfo] = {}
+    present: dict[int, Entry] = {}
     unreachable = 0  # chunk names with a number too large to ever be reached
     ignored: list[str] = []
     for info in zf.infolist():
@@ -288,7 +297,7 @@ def _chunk_members(
             raise CaptureError(path, f"member {name}", "appears twice in the zip directory")
         else:
             present[int(tail)] = info
-    members: list[zipfile.ZipInfo] = []
+    members: list[Entry] = []
     while (chunk := present.get(len(members) + 1)) is not None:
         members.append(chunk)
     if not present and not unreachable:
@@ -304,14 +313,16 @@ def _chunk_members(
     return members, ignored
 
 
-def _name_len(info: zipfile.ZipInfo) -> int:
+def _name_len(info: Entry) -> int:
     """Length in bytes of the entry's name as stored (UTF-8 under flag bit 11, else cp437)."""
+    if info.filename.isascii():
+        return len(info.filename)  # the same in both (and no cp437 codec to import)
     if info.flag_bits & 0x800:
         return len(info.filename.encode("utf-8", "surrogateescape"))
     return len(info.filename.encode("cp437", "replace"))
 
 
-def _entry_extents(path: str | os.PathLike[str], zf: zipfile.ZipFile) -> dict[int, int]:
+def _entry_extents(path: str | os.PathLike[str], zf: Archive) -> dict[int, int]:
     """Where each zip entry's room ends (the next entry's local header, or the central
     directory), by header offset; refuses entries whose ranges overlap.
 
@@ -323,7 +334,7 @@ def _entry_extents(path: str | os.PathLike[str], zf: zipfile.ZipFile) -> dict[in
         CaptureError: two entries overlap, or one reaches into the central directory.
     """
     infos = sorted(zf.infolist(), key=lambda i: i.header_offset)
-    stop = getattr(zf, "start_dir", None)
+    stop = zf.start_dir
     extents: dict[int, int] = {}
     for k, info in enumerate(infos):
         nxt = infos[k + 1] if k + 1 < len(infos) else None
@@ -526,7 +537,7 @@ def _changed_words(
 
 
 def _member_blocks(
-    zf: zipfile.ZipFile, raw: BinaryIO, info: zipfile.ZipInfo, step: int, room: int | None = None
+    zf: Archive, raw: BinaryIO, info: Entry, step: int, room: int | None = None
 ) -> Iterator[bytes]:
     """The inflated bytes of chunk member ``info`` in blocks of at most ``step`` bytes.
 
@@ -536,27 +547,22 @@ def _member_blocks(
     is the offset where the entry's room ends (the next entry): data reaching past it is refused.
 
     Raises:
-        zipfile.BadZipFile: a bad local header or CRC; zlib errors for a corrupt stream.
+        ZipError: a bad local header or CRC; zlib errors for a corrupt stream.
     """
-    if info.flag_bits & 1 or info.compress_type not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
-        try:
-            with zf.open(info) as fh:
-                while data := fh.read(step):
-                    yield data
-        except _ZIPFILE_REFUSALS as err:
-            raise zipfile.BadZipFile(f"cannot be unpacked: {err}") from None
+    if info.flag_bits & 1 or info.compress_type not in (ZIP_STORED, ZIP_DEFLATED):
+        yield from zf.blocks(info, step)
         return
     raw.seek(info.header_offset)
     head = raw.read(30)
     if len(head) < 30 or head[:4] != b"PK\x03\x04":
-        raise zipfile.BadZipFile("bad local file header")
+        raise ZipError("bad local file header")
     name_len, extra_len = struct.unpack("<HH", head[26:30])
     start = info.header_offset + 30 + name_len + extra_len
     if room is not None and start + info.compress_size > room:
-        raise zipfile.BadZipFile("its data overlaps the next zip entry (a zip bomb?)")
+        raise ZipError("its data overlaps the next zip entry (a zip bomb?)")
     raw.seek(start)
     left_in, left_out, crc = info.compress_size, info.file_size, 0
-    if info.compress_type == zipfile.ZIP_STORED:
+    if info.compress_type == ZIP_STORED:
         while left_in:
             data = raw.read(min(step, left_in))
             if not data:
@@ -584,7 +590,7 @@ def _member_blocks(
         if left_out:
             return  # short or long: the caller compares the byte count
     if crc != info.CRC:
-        raise zipfile.BadZipFile(f"Bad CRC-32 for file {info.filename!r}")
+        raise ZipError(f"Bad CRC-32 for file {info.filename!r}")
 
 
 #: Below this a stated sample rate is warned about: no logic analyzer samples that slowly, and
@@ -659,7 +665,7 @@ def _rate_notes(
 
 def _scan(
     path: str | os.PathLike[str],
-    zf: zipfile.ZipFile,
+    zf: Archive,
     raw: BinaryIO,
     meta: SrMetadata,
     finder: _EdgeFinder,
@@ -785,14 +791,14 @@ def read_sr(
     """
     if chunk_bytes < 1:
         raise UsageError(f"chunk_bytes must be positive, got {chunk_bytes}")
-    with _open_zip(path) as zf, open(path, "rb") as raw:
+    with _open_zip(path) as zf:
         meta = read_sr_metadata(
             path, zf, max_member_bytes=max_member_bytes, max_total_bytes=max_total_bytes
         )
         rate, notes = _rate_notes(path, meta, samplerate, require_rate)
         bits = sorted(meta.probes)
         finder = _EdgeFinder(meta.unitsize, bits)
-        for _ in _scan(path, zf, raw, meta, finder, chunk_bytes):
+        for _ in _scan(path, zf, zf.raw, meta, finder, chunk_bytes):
             pass
         channels = [
             Channel(name=meta.probes[bit], index=bit, initial=finder.initial[slot],
@@ -821,6 +827,7 @@ class SrBlocks:
         self.chunk_bytes = max(1, chunk_bytes)
         with _open_zip(path) as zf:
             self.meta = read_sr_metadata(path, zf)
+        self._zip = zf  # its directory, for blocks()
         self.rate, self.notes = _rate_notes(path, self.meta, samplerate, True)
         self.bits = sorted(self.meta.probes)
         self.wanted = set(self.bits if channels is None else channels)
@@ -848,11 +855,11 @@ class SrBlocks:
         """The edges after each inflated block of samples."""
         from wavecheck.capture.blocks import EdgeBlock
 
-        with _open_zip(self.path) as zf, open(self.path, "rb") as raw:
+        with _open_zip(self.path, self._zip) as zf:
             finder = self._finder = _EdgeFinder(self.meta.unitsize, self.bits)
             finder.want(slot for slot, b in enumerate(self.bits) if b in self.wanted)
             first = True
-            for _ in _scan(self.path, zf, raw, self.meta, finder, self.chunk_bytes):
+            for _ in _scan(self.path, zf, zf.raw, self.meta, finder, self.chunk_bytes):
                 block = EdgeBlock(end=finder.nsamples, start=0 if first else None)
                 if first:
                     for slot, b in enumerate(self.bits):

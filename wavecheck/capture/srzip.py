@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import io
 import os
-import zipfile
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
+from wavecheck.capture.zipdir import ZIP_DEFLATED
 from wavecheck.output import atomic_path
 
 if TYPE_CHECKING:
@@ -158,7 +158,7 @@ def write_sr(
     *,
     metadata: str,
     chunk_bytes: int = SR_CHUNK_BYTES,
-    compression: int = zipfile.ZIP_DEFLATED,
+    compression: int = ZIP_DEFLATED,
     compresslevel: int | None = None,
     version: str | bytes = "2",
 ) -> int:
@@ -193,11 +193,14 @@ class SrZip:
         fh: BinaryIO | io.BytesIO,
         metadata: str,
         *,
-        compression: int = zipfile.ZIP_DEFLATED,
+        compression: int = ZIP_DEFLATED,
         compresslevel: int | None = None,
         version: str | bytes = "2",
     ) -> None:
+        import zipfile  # here: the .sr reader imports this module, and reads without zipfile
+
         self.zip = zipfile.ZipFile(fh, "w")
+        self._entry = zipfile.ZipInfo
         self.compression = compression
         self.compresslevel = compresslevel
         self.members = 0
@@ -214,7 +217,7 @@ class SrZip:
         """Write ``piece`` (whole samples) as the next ``logic-1-N`` member."""
         self.members += 1
         self.zip.writestr(
-            zipfile.ZipInfo(f"logic-1-{self.members}"),
+            self._entry(f"logic-1-{self.members}"),
             piece,
             compress_type=self.compression,
             compresslevel=self.compresslevel,
