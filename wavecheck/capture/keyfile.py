@@ -17,7 +17,7 @@ The rules are GLib's ``glib/gkeyfile.c`` (2.56; ``g_key_file_parse_data``, ``_pa
   ``Encoding`` in the first group must be ``UTF-8``;
 - any other line is an error (no continuation lines);
 - values are unescaped when read: ``\\s`` ``\\n`` ``\\t`` ``\\r`` ``\\\\``; any other escape, or a
-  ``\\`` at the end, is an error.
+  ``\\`` at the end, is an error; :func:`escape` writes a value so (``g_key_file_set_string``).
 
 Translated keys (``key[de]``) are kept under their full name (GLib keeps only the user's
 locales'): ``metadata`` lookups name plain keys only.
@@ -25,7 +25,7 @@ locales'): ``metadata`` lookups name plain keys only.
 
 from __future__ import annotations
 
-__all__ = ["KeyFileError", "parse_keyfile", "unescape"]
+__all__ = ["KeyFileError", "escape", "parse_keyfile", "unescape"]
 
 _SPACE = " \t\n\f\r"  # g_ascii_isspace
 _ESCAPES = {"s": " ", "n": "\n", "t": "\t", "r": "\r", "\\": "\\"}
@@ -112,4 +112,19 @@ def unescape(value: str) -> str:
         out.append(char)
         i = j + 2
     out.append(value[i:])
+    return "".join(out)
+
+
+def escape(value: str) -> str:
+    """``value`` as ``g_key_file_set_string`` writes it, so that :func:`unescape` (and GLib)
+    read it back: ``\\``, newline and carriage return always escaped, spaces and tabs only
+    while they lead (the reader drops leading whitespace and keeps trailing whitespace)."""
+    out: list[str] = []
+    leading = True
+    for char in value:
+        if leading and char in " \t":
+            out.append("\\s" if char == " " else "\\t")
+            continue
+        leading = False
+        out.append({"\\": "\\\\", "\n": "\\n", "\r": "\\r"}.get(char, char))
     return "".join(out)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
+from wavecheck.capture.keyfile import escape
 from wavecheck.capture.zipdir import ZIP_DEFLATED
 from wavecheck.output import atomic_path
 
@@ -51,7 +52,7 @@ EXACT_SECTION = "wavecheck"
 def exact_edges_section(source: str) -> str:
     """The metadata text stating exact edges, ``source`` naming the simulation (one line)."""
     one_line = " ".join(source.split())
-    return f"\n[{EXACT_SECTION}]\nedges=exact\nsource={one_line}\n"
+    return f"\n[{EXACT_SECTION}]\nedges=exact\nsource={escape(one_line)}\n"
 
 
 def rate_text(hz: int) -> str:
@@ -71,7 +72,7 @@ def sr_metadata(
     total_analog: int | None = 0,
     extra: str = "",
 ) -> str:
-    """The ``metadata`` member's text.
+    """The ``metadata`` member's text (names escaped as GLib's key files want them).
 
     Args:
         probes: channel names, in bit order; or bit number → name (unnamed bits get none).
@@ -92,7 +93,7 @@ def sr_metadata(
         )
     if total_analog is not None:
         lines.append(f"total analog={total_analog}")
-    lines += [f"probe{i + 1}={name}" for i, name in sorted(named.items())]
+    lines += [f"probe{i + 1}={escape(name)}" for i, name in sorted(named.items())]
     if unit:
         lines.append(f"unitsize={unit}")
     return "\n".join(lines) + "\n" + extra

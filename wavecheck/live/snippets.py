@@ -18,17 +18,18 @@ from __future__ import annotations
 
 import argparse
 import collections
-import configparser
 import os
 import shlex
-import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from wavecheck.capture.keyfile import KeyFileError, escape, parse_keyfile, unescape
 from wavecheck.capture.srzip import EXACT_SECTION, sr_metadata, write_sr
+from wavecheck.capture.zipdir import Archive, ZipError
 from wavecheck.errors import UsageError
 from wavecheck.steps.mapping import per_axis
 
@@ -148,7 +149,7 @@ class Snippets:
         path = self.folder / f"{tag}.sr"
         extra = (
             f"\n[{EXACT_SECTION}]\nsnippet_of=wavecheck watch\nfirst_sample={first}\n"
-            f"violations={p.count}\n{CHECK_KEY}={shlex.join(self.check)}\n"
+            f"violations={p.count}\n{CHECK_KEY}={escape(shlex.join(self.check))}\n"
         )
         rate = int(self.samplerate) if self.samplerate.denominator == 1 else str(self.samplerate)
         meta = sr_metadata(
@@ -250,14 +251,12 @@ def stored_arguments(path: str | os.PathLike[str]) -> list[str] | None:
     """The check options a snippet written by ``wavecheck watch`` carries (None: ``path`` is
     not such a snippet, or cannot be read; the check then says what it needs)."""
     try:
-        with zipfile.ZipFile(path) as z:
+        with Archive(path) as z:
             info = z.getinfo("metadata")
             if info.file_size > 1 << 16:
                 return None
-            text = z.read(info).decode("utf-8", "replace")
-        cp = configparser.ConfigParser(interpolation=None, strict=False)
-        cp.read_string(text)
-        line = cp.get(EXACT_SECTION, CHECK_KEY, fallback=None)
-        return shlex.split(line) if line else None
-    except (OSError, KeyError, ValueError, zipfile.BadZipFile, configparser.Error):
+            text = z.read("metadata").decode("utf-8", "replace")
+        line = parse_keyfile(text).get(EXACT_SECTION, {}).get(CHECK_KEY)
+        return shlex.split(unescape(line)) if line else None
+    except (OSError, KeyError, ValueError, EOFError, zlib.error, ZipError, KeyFileError):
         return None

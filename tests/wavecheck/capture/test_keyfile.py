@@ -6,12 +6,18 @@ strict=False)``, ``optionxform = str``), both readings side by side."""
 from __future__ import annotations
 
 import configparser
+import shutil
+import subprocess
 import zipfile
+from pathlib import Path
 
+import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.wavecheck.capture.test_zipdir import REAL_SR
-from wavecheck.capture.keyfile import KeyFileError, parse_keyfile, unescape
+from wavecheck.capture.keyfile import KeyFileError, escape, parse_keyfile, unescape
 
 
 def _configparser(text: str) -> dict[str, dict[str, str]] | str:
@@ -122,3 +128,35 @@ def test_bad_escapes_are_errors_as_in_glib(raw: str, message: str) -> None:
 def test_errors_name_the_line() -> None:
     with pytest.raises(KeyFileError, match="^line 3: "):
         parse_keyfile("[d]\nk=1\nnonsense\n")
+
+
+@settings(max_examples=300)
+@given(st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\0")))
+def test_escape_reads_back_as_written(value: str) -> None:
+    """``escape`` (``g_key_file_set_string``'s escaping) read back through a whole line of a
+    key file gives the value: leading spaces and tabs, newlines, carriage returns and
+    backslashes survive; trailing whitespace is kept by the reader."""
+    groups = parse_keyfile(f"[g]\nkey={escape(value)}\nnext=1\n")
+    assert unescape(groups["g"]["key"]) == value
+    assert groups["g"]["next"] == "1"
+
+
+@pytest.mark.skipif(shutil.which("sigrok-cli") is None, reason="needs sigrok-cli")
+def test_sigrok_cli_reads_escaped_names_as_written(tmp_path: Path) -> None:
+    """What GLib itself reads (libsigrok's ``g_key_file_get_string``, through sigrok-cli
+    ``--show``): names that need escaping come out as written, so do ours."""
+    from wavecheck.capture.sr import read_sr
+    from wavecheck.capture.srzip import write_sr_edges
+
+    names = ["\\bus[3] ", " lead", "tab\tin", "A\\B"]
+    path = tmp_path / "names.sr"
+    edges = [np.array([2], dtype=np.int64)] * len(names)
+    write_sr_edges(path, names, edges, [0] * len(names), 8, samplerate=1_000_000)
+    assert [c.name for c in read_sr(path).channels] == names
+    shown = subprocess.run(
+        ["sigrok-cli", "-i", str(path), "--show"], capture_output=True, text=True, timeout=60
+    )
+    assert shown.returncode == 0, shown.stderr
+    channels = [line[2:].removesuffix(": logic") for line in shown.stdout.split("\n")
+                if line.startswith("- ") and line.endswith(": logic")]  # fmt: skip
+    assert channels == names
