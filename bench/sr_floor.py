@@ -18,14 +18,14 @@ import json
 import struct
 import sys
 import time
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from wavecheck.capture import sr  # noqa: E402
+from wavecheck.capture import sr
+from wavecheck.capture.zipdir import Archive
 
 PIECE = sr.DEFAULT_CHUNK_BYTES
 
@@ -35,7 +35,7 @@ def floor(path: str) -> int:
     zlib = sr._zlib  # zlib-ng, as the reader
     found = 0
     ne = np.empty(PIECE // 8, dtype=bool)
-    with zipfile.ZipFile(path) as zf, open(path, "rb") as raw:
+    with Archive(path) as zf, open(path, "rb") as raw:
         meta = sr.read_sr_metadata(path, zf)
         step = meta.unitsize
         for info in meta.members:

@@ -16,7 +16,6 @@ import argparse
 import json
 import sys
 import time
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,7 @@ import numpy.typing as npt
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from wavecheck.capture import sr  # noqa: E402
+from wavecheck.capture.zipdir import Archive  # noqa: E402
 
 _OFFSETS = np.arange(8, dtype=np.int64)
 
@@ -85,9 +85,9 @@ def main() -> None:
     ap.add_argument("file")
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
-    with zipfile.ZipFile(args.file) as zf:
+    with Archive(args.file) as zf:
         meta = sr.read_sr_metadata(args.file, zf)
-        data = b"".join(zf.read(m) for m in meta.members)
+        data = b"".join(zf.read(m.filename) for m in meta.members)
     bits = sorted(meta.probes)
     step = sr.DEFAULT_CHUNK_BYTES - sr.DEFAULT_CHUNK_BYTES % meta.unitsize
     blocks = [

@@ -27,6 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from wavecheck.capture.sr import read_sr_metadata  # noqa: E402
+from wavecheck.capture.zipdir import Archive  # noqa: E402
 
 GRBL = ROOT.parent / "shared/captures/sigrok-dumps/stepper_motor/grbl_cnc/grbl_cnc_1.sr"
 DEMO_RATE = 24_000_000  # bytes/s: sigrok's demo driver, 24 MHz × 8 channels, one byte a sample
@@ -34,13 +35,14 @@ DEMO_RATE = 24_000_000  # bytes/s: sigrok's demo driver, 24 MHz × 8 channels, o
 
 def raw_samples(sr: Path, out: Path) -> tuple[int, int, int]:
     """Write ``sr``'s logic bytes to ``out`` (once); returns (bytes, unitsize, samplerate Hz)."""
+    with Archive(sr) as directory:
+        meta = read_sr_metadata(sr, directory)
     with zipfile.ZipFile(sr) as zf:
-        meta = read_sr_metadata(sr, zf)
         if not out.exists() or out.stat().st_size != sum(m.file_size for m in meta.members):
             tmp = out.with_suffix(".part")
             with open(tmp, "wb") as f:
                 for info in meta.members:
-                    with zf.open(info) as member:
+                    with zf.open(info.filename) as member:
                         while block := member.read(1 << 22):
                             f.write(block)
             tmp.replace(out)
