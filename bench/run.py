@@ -212,8 +212,14 @@ def bench_sr(
     figure(f"`check` {label}.sr vs sigrok-cli", f"{ratio:.2f}× ({wt:.2f} s; cpu {scpu / wcpu:.2f}×)",
            f"≥ {goal:g}×", ratio >= goal, f"sigrok-cli {st:.2f} s", load)  # fmt: skip
     if goal >= 8:  # issue 38 judges grbl on CPU (start-up is most of it; wall is load)
-        figure(f"`check` {label}.sr vs sigrok-cli (CPU)", f"{scpu / wcpu:.2f}× faster ({wcpu:.2f} s cpu)",
-               f"≥ {goal:g}×", scpu / wcpu >= goal, f"sigrok-cli {scpu:.2f} s cpu", load)  # fmt: skip
+        # judged on the medians; the best runs (each side's least disturbed) shown beside
+        wbest = min(r["user_s"] + r["sys_s"] for r in wruns)
+        sbest = min(r["user_s"] + r["sys_s"] for r in sruns)
+        res["cpu_ratio_best"] = sbest / wbest if wbest else None
+        figure(f"`check` {label}.sr vs sigrok-cli (CPU)",
+               f"{scpu / wcpu:.2f}× faster ({wcpu:.3f} s cpu; best runs {sbest / wbest:.2f}×, "
+               f"{wbest:.3f} s)", f"≥ {goal:g}×", scpu / wcpu >= goal,
+               f"sigrok-cli {scpu:.2f} s cpu (best {sbest:.2f} s)", load)  # fmt: skip
     figure(f"`check` {label}.sr max RSS", f"{rss:.0f} MB", "< 150 MB", rss < 150,
            f"sigrok-cli {res['sigrok_max_rss_mb']:.0f} MB", load)  # fmt: skip
     return res
