@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from tests.wavecheck.capture.test_zipdir import REAL_SR
@@ -135,7 +135,10 @@ def test_errors_name_the_line() -> None:
 def test_escape_reads_back_as_written(value: str) -> None:
     """``escape`` (``g_key_file_set_string``'s escaping) read back through a whole line of a
     key file gives the value: leading spaces and tabs, newlines, carriage returns and
-    backslashes survive; trailing whitespace is kept by the reader."""
+    backslashes survive; trailing whitespace is kept by the reader. A leading form feed has no
+    escape in GLib (``g_key_file_parse_string_as_value`` writes it as is) and the reader drops
+    it (``g_ascii_isspace``): GLib's own limit, left out."""
+    assume(not value.startswith("\f"))
     groups = parse_keyfile(f"[g]\nkey={escape(value)}\nnext=1\n")
     assert unescape(groups["g"]["key"]) == value
     assert groups["g"]["next"] == "1"
