@@ -147,8 +147,11 @@ class ConfigResult:
 
     @property
     def verdict_line(self) -> str:
-        """``PASS (dir_setup, dir_hold not checked: drive tb6600 states no figure)``."""
-        return qualified_verdict(self.verdict, self.unchecked)
+        """``PASS (dir_setup, dir_hold not checked: drive tb6600 states no figure)``; axes the
+        file names but gives nothing to check lead (``PASS (axis U not checked: …)``)."""
+        lead = "; ".join(f"axis {', '.join(axes)} not checked: {why}"
+                         for why, axes in self.config.unchecked_axes)  # fmt: skip
+        return qualified_verdict(self.verdict, self.unchecked, lead)
 
 
 _EXACT = Guaranteed(Fraction(0), "", "")

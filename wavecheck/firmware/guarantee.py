@@ -287,6 +287,9 @@ class FirmwareConfig:
             its place (named, not guessed).
         notes: global notes (scope of settings, rounding, defaults used).
         fixer: how to say which setting to change (see :data:`Fixer`).
+        unchecked_axes: why → the axes the file names but gives nothing to check (no figure
+            bounds their rate or timing); the verdict line names them, so a PASS does not
+            read as the whole machine's.
     """
 
     firmware: str
@@ -296,6 +299,7 @@ class FirmwareConfig:
     unsupported: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
     fixer: Fixer = _no_fix
+    unchecked_axes: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
     def __post_init__(self) -> None:
         if len(self.axes) > MAX_AXES:

@@ -106,6 +106,8 @@ _ONE_T = (1, 21)
 _ONE_T_WHY = ("RepRapFirmware before 1.21 reads one M569 T value, the minimum pulse width, for "
               "the high and the low time, and may change DIR while STEP is high (DDA::Step; 1.21 "
               "release notes)")  # fmt: skip
+#: Why an axis RRF has (``M584``) is not checked.
+_UNREAD = "no M92, M203 or M569 T in the file"
 #: Without ``M584 E`` the extruders are the firmware's default, which the file does not decide.
 #: Per version, from RepRapFirmware's own code (Duet3D/RepRapFirmware and its 2.0x sources, as
 #: indexed): 2.0x ``GCodes::Init``: ``numExtruders = min<size_t>(MaxExtruders,
@@ -385,13 +387,13 @@ def _config(path: str, st: _State) -> FirmwareConfig:
     worst = _worst(slow)
     logical = [*st.axis_drivers.items(), *((f"E{i}", [d]) for i, d in enumerate(st.extruders))]
     axes = []
-    unread: list[str] = []  # axes RRF has that the file gives no figure for
+    unread: dict[str, str] = {}  # axes RRF has that the file gives no figure for → drivers
     for name, drivers in logical:
         configured = name in st.spm or name in st.speed
         if not configured and (name[0] == "E" and not (st.extruders_given or duet2)
                                or name[0] != "E" and not any(d in st.timing for d in drivers)):  # fmt: skip
             if name[0] != "E":
-                unread.append(f"{name} (driver {':'.join(drivers)})")
+                unread[name] = ":".join(drivers)
             continue  # a default extruder the file gives no M92/M203 for is not assumed
         axes.append(_axis(name, drivers, st, slow, worst))
     if not axes:
@@ -427,8 +429,9 @@ def _config(path: str, st: _State) -> FirmwareConfig:
             "WiFi/Ethernet, as 3.x boards' NumDefaultExtruders differ between releases)"
             if stated else " (the file states neither its version nor its board)"))  # fmt: skip
     if unread and axes:
-        notes.append(f"axis {', '.join(unread)}: no M92, M203 or M569 T in the file, so nothing "
-                     "bounds its rate or timing: not checked (measure it)")  # fmt: skip
+        named = ", ".join(f"{name} (driver {drivers})" for name, drivers in unread.items())
+        notes.append(f"axis {named}: {_UNREAD}, so nothing bounds its rate or timing: not "
+                     "checked (measure it)")  # fmt: skip
     if st.version is not None and st.version < _ONE_T:
         notes.append(f"{st.version_at} states version {'.'.join(map(str, st.version))}: "
                      f"{_ONE_T_WHY}")  # fmt: skip
@@ -440,6 +443,7 @@ def _config(path: str, st: _State) -> FirmwareConfig:
         unsupported=tuple(dict.fromkeys(st.unsupported)),
         notes=tuple(notes),
         fixer=_fix_one_t if st.version is not None and st.version < _ONE_T else _fix,
+        unchecked_axes=((_UNREAD, tuple(unread)),) if unread and axes else (),
     )
 
 

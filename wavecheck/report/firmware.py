@@ -216,6 +216,9 @@ def config_dict(result: ConfigResult, require: Sequence[str] = ()) -> dict[str, 
         "unchecked": [
             {"why": why, "rules": list(rules)} for why, rules in result.unchecked.items()
         ],
+        "unchecked_axes": [
+            {"why": why, "axes": list(axes)} for why, axes in result.config.unchecked_axes
+        ],
         "required": required_dict(require, unmet),
         "exit_code": required_exit_code(result.exit_code, unmet),
     }

@@ -8,8 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from wavecheck.drives.library import load_drive
 from wavecheck.errors import ConfigError
 from wavecheck.firmware import read_firmware
+from wavecheck.firmware.evaluate import evaluate_config
 
 
 def test_klipper_printer_cfg_of_missing_includes_says_so(tmp_path: Path) -> None:
@@ -63,6 +65,10 @@ def test_rrf_axis_without_figures_is_named_not_dropped(tmp_path: Path) -> None:
     got = read_firmware(cfg)
     assert "U" not in got.axis_names
     assert any(n.startswith("axis U (driver 0.3)") and "not checked" in n for n in got.notes)
+    # and the verdict line says so: a verdict of X, Y, Z and E0 is not the whole machine's
+    drive = load_drive("gecko-g202")
+    line = evaluate_config(got, [(g, drive) for g in got.axes]).verdict_line
+    assert " (axis U not checked: no M92, M203 or M569 T in the file; " in line
 
 
 def test_rrf_e_list_is_read_value_by_value(tmp_path: Path) -> None:
