@@ -27,14 +27,7 @@ pulse is a busy-wait on the pulse timer, so it is ``uncertain``: it may be up to
 A figure that depends on a branch the files cannot decide is the smallest over the branches
 (the largest for the max rate), and the note names the branch.
 
-Spacing (stepper.cpp ``pulse_phase_isr``/``isr``, stepper.h ``calc_timer_interval``, 1.1.9 to
-2.1.x): the interrupt runs every axis's Bresenham on the leading axis's step events and, above
-the CPU's one-step-per-interrupt rate (not in the files), takes up to 128 of them per interrupt
-(``MULTISTEPPING_LIMIT``; ``DISABLE_MULTI_STEPPING`` or a limit of 1: one), waiting only the
-low time between them. So any axis may step at the driver rate: its max rate is that, and
-steps/unit × feedrate is only its sustained rate. Between interrupts nothing is waited: the
-timer set from the leading axis's rate spaces a slow axis's steps ≥ 1 / min(2 × its rate, the
-fastest axis's) (as grbl's), less the pulse: the low time is the smaller of the two.
+Spacing, the steps of one interrupt and each axis's rate: :mod:`.marlin_spacing`.
 Hangprinter's fourth anchor D is a stepper on the first free E socket.
 """
 
@@ -50,7 +43,6 @@ from pathlib import Path
 
 from wavecheck.errors import ConfigError
 from wavecheck.firmware._text import read_text
-from wavecheck.firmware.grbl import bresenham_spacing
 from wavecheck.firmware.guarantee import (
     FirmwareConfig,
     FixRole,
@@ -59,6 +51,17 @@ from wavecheck.firmware.guarantee import (
     not_enforced,
     uncertain,
     unknown,
+)
+from wavecheck.firmware.marlin_spacing import (
+    LINEAR,
+    Figures,
+    Sustained,
+    axis_idle,
+    coupled,
+    driver_rate,
+    multistepping,
+    outrun,
+    sustained_rate,
 )
 from wavecheck.firmware.preprocessor import Definition, Headers, Num, evaluate
 from wavecheck.units import shown
@@ -224,16 +227,7 @@ ERAS: tuple[Era, ...] = (
         "/ (2 x 2 us) as 1.1.9's Configuration_adv.h says): one DIR delay, the setup",
         old_pulse_code=True, untyped_is_none=True),
 )  # fmt: skip
-_LINEAR = ("X", "Y", "Z", "I", "J", "K", "U", "V", "W")
-_DRIVER_AXES = (*_LINEAR, "X2", "Y2", "Z2", "Z3", "Z4", *(f"E{i}" for i in range(8)))
-_KINEMATIC = {
-    "COREXY": "XY", "COREYX": "XY", "MARKFORGED_XY": "XY", "MARKFORGED_YX": "XY",
-    "COREXZ": "XZ", "COREZX": "XZ", "COREYZ": "YZ", "COREZY": "YZ",
-    # SCARA arms, polar and polargraph couple X and Y; Z passes through (scara.cpp
-    # inverse_kinematics: delta.set(DEGREES(THETA), DEGREES(THETA + PSI), raw.z))
-    "DELTA": "XYZ", "MORGAN_SCARA": "XY", "MP_SCARA": "XY", "AXEL_TPARA": "XYZ",
-    "POLARGRAPH": "XY", "POLAR": "XY", "HANGPRINTER": "XYZD",
-}  # fmt: skip
+_DRIVER_AXES = (*LINEAR, "X2", "Y2", "Z2", "Z3", "Z4", *(f"E{i}" for i in range(8)))
 #: 1.1.9's HANGPRINTER drives four anchor motors A-D (enum.h: ``D_AXIS = 3, E_AXIS = 4``): A-C on
 #: the X-Z sockets, D on the first E socket the extruders leave free (1.1.x ``Marlin/pins.h``,
 #: HANGPRINTER block: ``D_STEP_PIN _EPIN(E_STEPPERS, STEP)``, as indexed in a 1.1.9-era copy;
@@ -579,12 +573,12 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     figs = _figures(results, dims, era, pulse_name, post_name)
     infos = {d.axis: {"driver type": " or ".join(f"{k} ({w})" for k, w, _ in d.options)}
              for d in drivers}  # fmt: skip
-    asked = {d.axis: _sustained_rate(h, d.axis, drivers, infos[d.axis])
+    asked = {d.axis: sustained_rate(h, d.axis, {x.axis for x in drivers}, infos[d.axis])
              for d in drivers}  # fmt: skip
     sustained = {a: r if r is None or figs.rate.value is None or r.hz < figs.rate.value else None
                  for a, r in asked.items()}  # fmt: skip
-    figs = _outrun(figs, asked)
-    packing = _multistepping(h)
+    figs = outrun(figs, asked)
+    packing = multistepping(h)
     if packing[0] > 1:
         notes.append(f"multi-stepping ({packing[1]}): up to {packing[0]} steps per interrupt, "
                      "spaced by the driver timing, so every axis may step at the driver rate")  # fmt: skip
@@ -602,26 +596,16 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )
 
 
-@dataclass(frozen=True)
-class _Figures:
-    pulse: Guaranteed
-    idle: Guaranteed
-    setup: Guaranteed
-    pre: Guaranteed
-    hold: Guaranteed
-    rate: Guaranteed
-
-
 def _figures(
     results: list[tuple[_Timing, dict[str, _Opt], tuple[str, ...]]],
     dims: dict[str, list[_Opt]],
     era: Era,
     pulse_name: str,
     post_name: str,
-) -> _Figures:
+) -> Figures:
     if not results:
         none = unknown(pulse_name, "neither a pulse nor a rate is known (Marlin would not build)")
-        return _Figures(none, none, none, none, none, none)
+        return Figures(none, none, none, none, none, none)
 
     def pick(key: Callable[[_Timing], Fraction | None]) -> tuple[_Timing, dict[str, _Opt]]:
         """The combination that gives the smallest figure (the lower bound over branches); a
@@ -697,83 +681,15 @@ def _figures(
                           "Hz", st)  # type: ignore[arg-type]  # fmt: skip
     else:
         rate = Guaranteed(None, "MAXIMUM_STEPPER_RATE", "", "Hz", "unknown")
-    return _Figures(pulse, idle, setup, pre, hold, rate)
-
-
-def _array(h: Headers, name: str) -> tuple[list[Fraction], str] | None:
-    d = h.definition(name)
-    if d is None or d.value is None:
-        return None
-    inner = d.value.strip()
-    if not (inner.startswith("{") and inner.endswith("}")):
-        expanded = " ".join(t for _, t in h.expand(inner))
-        inner = expanded.strip()
-        if not (inner.startswith("{") and inner.endswith("}")):
-            return None
-    values = []
-    for part in _split_top(inner[1:-1]):
-        v = evaluate(h, part)
-        if not isinstance(v, Num) or not 0 <= v.value <= 10**9:
-            return None
-        values.append(v.value)
-    return (values, d.where) if values else None
-
-
-def _split_top(text: str) -> list[str]:
-    parts: list[str] = []
-    cur: list[str] = []
-    depth = 0
-    for ch in text:
-        if ch in "({":
-            depth += 1
-        elif ch in ")}":
-            depth -= 1
-        if ch == "," and depth == 0:
-            parts.append("".join(cur))
-            cur = []
-        else:
-            cur.append(ch)
-    if "".join(cur).strip():
-        parts.append("".join(cur))
-    return parts
-
-
-def _multistepping(h: Headers) -> tuple[int, str]:
-    """How many steps one stepper interrupt may take, and the setting that says so.
-
-    ``Stepper::calc_timer_interval`` (stepper.h, 2.0.x; ``calc_multistep_timer_interval`` in
-    2.1.x) doubles the steps per interrupt while the leading axis's rate is above the CPU's
-    ``MAX_STEP_ISR_FREQUENCY_<n>X`` estimates (not in the configuration), up to 128, or
-    ``MULTISTEPPING_LIMIT`` (2.1.x; Conditionals_adv.h "Multi-Stepping Limit": 128 when not
-    defined); ``DISABLE_MULTI_STEPPING`` (2.0.x and 1.1.9) keeps one step per interrupt."""
-    if h.enabled("DISABLE_MULTI_STEPPING") is True:
-        d = h.definition("DISABLE_MULTI_STEPPING")
-        return 1, f"DISABLE_MULTI_STEPPING at {d.where if d else '?'}"
-    d = h.definition("MULTISTEPPING_LIMIT")
-    if d is not None:
-        v = evaluate(h, d.value or "")
-        if isinstance(v, Num) and v.value in (1, 2, 4, 8, 16, 32, 64, 128):
-            return int(v.value), f"MULTISTEPPING_LIMIT {int(v.value)} at {d.where}"
-    return 128, "Marlin's default: up to 128 steps per interrupt"
-
-
-#: Marlin's stepper interrupt (MarlinFirmware/Marlin Marlin/src/module/stepper.cpp, 1.1.9 to
-#: 2.1.x as indexed): ``pulse_phase_isr`` runs the Bresenham of every axis on each of the
-#: leading axis's step events; between the events of one interrupt it waits the low time
-#: (``AWAIT_LOW_PULSE``, skipped for the first step: ``firstStep``); ``isr()`` schedules the
-#: next interrupt from the leading axis's rate and runs the pulse phase again at once when that
-#: time has already passed ("Advance pulses if not enough time to wait for the next ISR").
-_ISR = ("stepper.cpp pulse_phase_isr: the low time is waited only between the steps of one "
-        "interrupt (AWAIT_LOW_PULSE after the first); an interrupt's first step waits for the "
-        "timer, set from the leading axis's rate (isr(): at once when that time has passed)")  # fmt: skip
+    return Figures(pulse, idle, setup, pre, hold, rate)
 
 
 def _axis(
     h: Headers,
     d: _Driver,
-    figs: _Figures,
+    figs: Figures,
     info: dict[str, str],
-    sustained: _Sustained | None,
+    sustained: Sustained | None,
     fastest: Fraction | None,
     packing: tuple[int, str],
 ) -> GeneratorGuarantee:
@@ -799,7 +715,7 @@ def _axis(
     inv_def = h.definition(f"INVERT_{axis}_DIR") or h.definition(f"INVERT_{letter}_DIR")
     inv_v = evaluate(h, inv_def.value or "") if inv_def is not None else None
     inv = isinstance(inv_v, Num) and inv_v.value != 0  # true, 1 or a macro naming one
-    rate = _driver_rate(figs.rate, axis in _coupled(h))
+    rate = driver_rate(figs.rate, axis in coupled(h))
     if sustained is not None and (packing[0] == 1 or figs.rate.value is None):
         rate = Guaranteed(sustained.hz, "DEFAULT_AXIS_STEPS_PER_UNIT x DEFAULT_MAX_FEEDRATE",
                           sustained.where, "mm/s", "derived", sustained.how + (
@@ -819,7 +735,7 @@ def _axis(
     return GeneratorGuarantee(
         axis=axis,
         pulse=figs.pulse,
-        idle=_axis_idle(figs, sustained.hz if sustained else None, fastest, packing),
+        idle=axis_idle(figs, sustained.hz if sustained else None, fastest, packing),
         dir_setup=figs.setup,
         dir_hold=figs.hold,
         max_rate=rate,
@@ -830,102 +746,6 @@ def _axis(
         info=info,
         notes=tuple(notes),
     )
-
-
-def _axis_idle(
-    figs: _Figures, rate: Fraction | None, fastest: Fraction | None, packing: tuple[int, str]
-) -> Guaranteed:
-    """The low time of one axis: the waited figure between the steps of one interrupt (when
-    it may take more than one), and between interrupts the leading axis's schedule, on whose
-    events this axis steps: 1 / min(2 x its rate, the fastest axis's) apart at the least, as in
-    grbl (:func:`wavecheck.firmware.grbl.bresenham_spacing`), less the pulse."""
-    waited = figs.idle if packing[0] > 1 else None
-    pulse = figs.pulse.value
-    if rate is None or fastest is None or pulse is None or figs.pulse.status == "not_enforced":
-        if waited is not None:
-            return waited
-        return unknown("MAXIMUM_STEPPER_RATE", f"one step per interrupt ({packing[1]}): no "
-                       "low time is waited, and an axis's rate is not known; " + _ISR)  # fmt: skip
-    gap = max(bresenham_spacing(rate, fastest) - pulse, Fraction(0))
-    if waited is not None and (waited.value is None or waited.value <= gap):
-        return waited
-    return uncertain(gap, "DEFAULT_MAX_FEEDRATE", "steps/unit x feedrate of every axis", "mm/s",
-                     None, "a time between stepper interrupts, which other interrupts may delay",
-                     "1 / min(2 x this axis's max rate, the fastest axis's) - pulse: Bresenham "
-                     "steps it on the leading axis's events; " + _ISR)  # fmt: skip
-
-
-def _outrun(figs: _Figures, asked: dict[str, _Sustained | None]) -> _Figures:
-    """An axis whose steps/unit x feedrate is over 1 / (pulse + low) asks the interrupt for
-    more steps than its waits can space: ``isr()`` runs late and takes the next interrupt's
-    first step at once ("Advance pulses if not enough time to wait for the next ISR"), after
-    no low-time wait. In a move that axis leads, every axis steps on its events: the low time
-    is then not enforced (the figure is kept as what the settings ask for)."""
-    pulse, low = figs.pulse.value, figs.idle.value
-    if not pulse or not low or figs.idle.status == "not_enforced":
-        return figs
-    cap = _GIGA / (pulse + low)
-    fast = [f"{a} {float(r.hz):g} Hz ({r.how})" for a, r in asked.items() if r and r.hz > cap]
-    if not fast:
-        return figs
-    why = (f"{', '.join(fast)} over the {float(cap):g} Hz that 1 / (pulse + low) allows: the "
-           "interrupt runs late and steps again with no low-time wait (stepper.cpp isr(), "
-           "pulse_phase_isr's first step)")  # fmt: skip
-    idle = not_enforced(figs.idle.setting, why, figs.idle.where, value=low, unit=figs.idle.unit)
-    return _Figures(figs.pulse, idle, figs.setup, figs.pre, figs.hold, figs.rate)
-
-
-def _coupled(h: Headers) -> set[str]:
-    """The steppers whose motion kinematics couple (steps/unit x feedrate bounds none)."""
-    return {a for k, axes in _KINEMATIC.items() if h.enabled(k) for a in axes}
-
-
-def _driver_rate(global_rate: Guaranteed, coupled: bool) -> Guaranteed:
-    note = "the driver rate Marlin times pulses for; not a cap on motion"
-    if coupled:
-        note += (
-            "; kinematics couple this axis with others (steps/unit x feedrate does not bound it)"
-        )
-    # MAXIMUM_STEPPER_RATE spaces the pulses of one interrupt (it sets _MIN_PULSE_LOW_NS,
-    # stepper/cycles.h); nothing caps the planner's step rate at it: no bound above
-    return (
-        uncertain(global_rate.value, global_rate.setting, global_rate.where, "Hz", None,
-                  "the planner does not cap the step rate at MAXIMUM_STEPPER_RATE", note)
-        if global_rate.value is not None
-        else Guaranteed(None, global_rate.setting, global_rate.where, "Hz", "unknown", note)
-    )  # fmt: skip
-
-
-@dataclass(frozen=True)
-class _Sustained:
-    hz: Fraction
-    where: str
-    how: str
-
-
-def _sustained_rate(
-    h: Headers, axis: str, drivers: list[_Driver], info: dict[str, str]
-) -> _Sustained | None:
-    """Steps/unit x max feedrate (Hz) of an uncoupled axis (the planner keeps every axis's
-    speed under its ``max_feedrate_mm_s``), else None."""
-    spu, feed = _array(h, "DEFAULT_AXIS_STEPS_PER_UNIT"), _array(h, "DEFAULT_MAX_FEEDRATE")
-    base = axis.rstrip("0123456789") if not axis.startswith("E") else "E"
-    if base in _coupled(h) or spu is None or feed is None:
-        return None
-    linear = [a for a in _LINEAR if any(d.axis == a for d in drivers)]
-    if base == "E":
-        distinct = h.enabled("DISTINCT_E_FACTORS") is True
-        # 1.1.9's HANGPRINTER has four anchors A-D before E in the arrays
-        first_e = 4 if h.enabled("HANGPRINTER") else len(linear)
-        index = first_e + (int(axis[1:]) if distinct else 0)
-    else:
-        index = _LINEAR.index(base) if base in linear else len(linear)
-        index = linear.index(base) if base in linear else index
-    s = spu[0][min(index, len(spu[0]) - 1)]
-    f = feed[0][min(index, len(feed[0]) - 1)]
-    info["steps/unit"] = f"{float(s):g} (DEFAULT_AXIS_STEPS_PER_UNIT, {spu[1]})"
-    info["max feedrate"] = f"{float(f):g} mm/s (DEFAULT_MAX_FEEDRATE, {feed[1]})"
-    return _Sustained(s * f, feed[1], f"{float(s):g} steps/unit x {float(f):g} mm/s")
 
 
 def _fixer(old: bool) -> Callable[[GeneratorGuarantee, FixRole, Fraction], str]:
