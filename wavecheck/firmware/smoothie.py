@@ -3,7 +3,8 @@
 Read: ``microseconds_per_step_pulse`` (default 1 µs), ``base_stepping_frequency`` (default
 100 kHz) (Kernel.cpp), ``alpha/beta/gamma/delta/epsilon/zeta_steps_per_mm`` (default 2560 for
 gamma, 80 for the others) and ``…_max_rate`` (mm/min, default 30000) (Robot::load_config),
-``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it), ``arm_solution``, and
+``…_step_pin`` and ``…_dir_pin`` (a ``!`` after the pin inverts it; a pin no build reads,
+``nc`` or ``xx``, is none: :data:`_PIN`), ``arm_solution``, and
 each enabled ``extruder.NAME`` module (``step_pin``, ``dir_pin``, ``steps_per_mm`` default 1,
 ``max_speed`` mm/s default 1000: Extruder.cpp ``config_load`` makes a stepper motor of it) and the
 old single-extruder syntax (``extruder_module_enable true`` with ``extruder_step_pin``,
@@ -46,6 +47,19 @@ _MOTORS = ("alpha", "beta", "gamma", "delta", "epsilon", "zeta")
 _CARTESIAN_AXIS = {"alpha": "x", "beta": "y", "gamma": "z"}
 _LINE = re.compile(r"^\s*([A-Za-z0-9_.]+)\s+(\S+)")
 _EXTRUDER = re.compile(r"extruder\.(\w+)\.step_pin")
+#: A pin some Smoothieware build's ``Pin::from_string`` accepts: a port, ``.``, a pin index below
+#: 32. The LPC1769 build (Smoothieware/Smoothieware src/libs/Pin.cpp @ 1fd8a13) reads port and
+#: index with ``strtol`` (port ≤ 4, index < 32), the STM32 ports also a port letter ``a``-``i``;
+#: any other text ("nc", "xx") ends in "from_string failed": ``valid = false``, which
+#: ``Robot::load_config`` (``connected()``) reads as no pin. A pin only some builds accept
+#: (``5.1``, ``B.3``) is kept: which build runs is not in the file.
+_PIN = re.compile(r"\s*(?:[+-]?\d+|[A-Ia-i])\.\s*([+-]?\d+)")
+
+
+def _connected(pin: str) -> bool:
+    """Whether some Smoothieware build reads ``pin`` as a pin (:data:`_PIN`)."""
+    m = _PIN.match(pin)
+    return m is not None and int(m.group(1)) < 32
 
 
 def looks_like(text: str) -> bool:
@@ -98,28 +112,27 @@ def read(path: str | os.PathLike[str]) -> FirmwareConfig:
     )  # fmt: skip
     axes: list[GeneratorGuarantee] = []
     for motor in _MOTORS:
-        pin = keys.get(f"{motor}_step_pin", ("nc", ""))[0].lower()
+        pin = _connected(keys.get(f"{motor}_step_pin", ("nc", ""))[0])
         if motor not in _CARTESIAN_AXIS and any(a.axis == "gamma" for a in axes):
             # Robot::load_config: after gamma, a motor needs its step and dir pins and the
             # motors are taken in order, the first one missing ending them
-            dir_pin = keys.get(f"{motor}_dir_pin", ("nc", ""))[0].lower()
-            if "nc" in (pin, dir_pin):
+            if not (pin and _connected(keys.get(f"{motor}_dir_pin", ("nc", ""))[0])):
                 break
-        elif pin == "nc" and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
+        elif not pin and (motor not in _CARTESIAN_AXIS or f"{motor}_steps_per_mm" not in keys):
             continue
         axes.append(_axis(motor, f"{motor}_", "max_rate", keys, get, f, f_at, pulse, idle, setup,
                           arm))  # fmt: skip
     if keys.get("extruder_module_enable", ("false", ""))[0].lower() in ("true", "1"):
         # the old single-extruder syntax: ExtruderMaker makes one Extruder of the
         # extruder_* keys (steps/mm default 1, extruder_max_speed mm/s default 1000)
-        if keys.get("extruder_step_pin", ("nc", ""))[0].lower() != "nc":
+        if _connected(keys.get("extruder_step_pin", ("nc", ""))[0]):
             axes.append(_axis("extruder", "extruder_", "max_speed", keys, get, f, f_at, pulse,
                               idle, setup, arm))  # fmt: skip
     for name in dict.fromkeys(m.group(1) for k in keys if (m := _EXTRUDER.fullmatch(k))):
         base = f"extruder.{name}."
         if keys.get(base + "enable", ("false", ""))[0].lower() not in ("true", "1"):
             continue  # ExtruderMaker loads only enabled modules
-        if keys[base + "step_pin"][0].lower() == "nc":
+        if not _connected(keys[base + "step_pin"][0]):
             continue
         axes.append(_axis(f"extruder.{name}", base, "max_speed", keys, get, f, f_at, pulse, idle,
                           setup, arm))  # fmt: skip

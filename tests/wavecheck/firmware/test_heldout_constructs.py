@@ -118,6 +118,49 @@ def test_smoothie_old_extruder_disabled_is_no_motor(tmp_path: Path) -> None:
     assert read_firmware(cfg).axis_names == ("alpha",)
 
 
+_SMOOTHIE_PINS = """alpha_step_pin 2.0
+alpha_dir_pin 0.5
+beta_step_pin 2.1
+beta_dir_pin 0.11
+gamma_step_pin 2.2
+gamma_dir_pin 0.20
+delta_steps_per_mm 100
+delta_step_pin 2.3
+delta_dir_pin 0.22
+epsilon_steps_per_mm 100
+epsilon_step_pin {pin}
+epsilon_dir_pin {pin}
+zeta_steps_per_mm 100
+zeta_step_pin 1.31
+zeta_dir_pin 1.30
+"""
+
+
+@pytest.mark.parametrize(
+    ("pin", "axes"),
+    [
+        ("xx", ("alpha", "beta", "gamma", "delta")),  # no build reads it: no pin
+        ("0.32", ("alpha", "beta", "gamma", "delta")),  # index 32: no build reads it
+        ("nc", ("alpha", "beta", "gamma", "delta")),
+        ("2.8", ("alpha", "beta", "gamma", "delta", "epsilon", "zeta")),
+        ("B.3", ("alpha", "beta", "gamma", "delta", "epsilon", "zeta")),  # an STM32 build's pin
+        ("5.1", ("alpha", "beta", "gamma", "delta", "epsilon", "zeta")),  # STM32 builds' ports
+    ],
+)
+def test_smoothie_pin_no_build_reads_is_no_pin(
+    tmp_path: Path, pin: str, axes: tuple[str, ...]
+) -> None:
+    """Seen in Smoothieware/Smoothieware ConfigSamples/Snippets/six-axis.config: ``zeta_step_pin
+    xx`` (a placeholder). ``Pin::from_string`` (src/libs/Pin.cpp @ 1fd8a13) reads a port and an
+    index with ``strtol`` (port ≤ 4, index < 32) and marks anything else invalid ("from_string
+    failed"); ``Robot::load_config`` takes the motors after gamma in order while both pins are
+    ``connected()``, so a motor with such a pin ends them. It was read as a motor; only "nc"
+    was. A pin that some build reads (STM32 builds take port letters) is kept."""
+    cfg = tmp_path / "config"
+    cfg.write_text(_SMOOTHIE_PINS.format(pin=pin))
+    assert read_firmware(cfg).axis_names == axes
+
+
 _FLUIDNC_AXIS = """axes:
   x:
     steps_per_mm: 100
