@@ -35,6 +35,7 @@ from stepgen.motion import Motion, parse_command_csv, parse_moves, worst_motion
 from stepgen.reference import StepgenConfig, update_schedule
 from stepgen.simulate import MAX_PERIODS, n_periods_for, simulate
 from stepgen.vcdout import DEFAULT_MAX_SAMPLES, write_sr, write_vcd
+from wavecheck.cli._main import keep_freed_memory
 from wavecheck.errors import ConfigError, UnitError
 from wavecheck.output import atomic_write, output_file
 from wavecheck.progress import QUIET_HELP, activate
@@ -267,31 +268,11 @@ def build_motion(
     return Motion("moves", segments=parse_moves(args.move, vel, acc))
 
 
-def _keep_freed_memory() -> None:
-    """Ask glibc's malloc to keep freed memory for the next arrays instead of returning it to
-    the kernel (trim threshold 1 GiB, heap grown 64 MiB at a time, untouched until used).
-
-    The engine and the writer make many short-lived arrays of a few MB; by default glibc hands
-    each back and the next one faults its pages in again: 20 k page faults for the 20 s run of
-    ``make bench``'s ``stepgen`` row, 13 k with this, ~20 ms of its ~280 ms CPU on the bench
-    machine (bench/README.md). Memory still in use is the same; no effect off glibc."""
-    import ctypes
-
-    try:
-        mallopt = ctypes.CDLL(None).mallopt
-    except (AttributeError, OSError, TypeError):  # no mallopt (not glibc), no C library
-        return
-    mallopt(-1, 1 << 30)  # M_TRIM_THRESHOLD
-    mallopt(-2, 64 << 20)  # M_TOP_PAD
-    # M_MMAP_THRESHOLD (its largest value, 32 MiB): setting the two above stops glibc from
-    # raising it from 128 KiB as freed blocks come back, so every array of 128 KiB or more
-    # (pass 2's 16 k-step temporaries, the writer's blocks) was mapped and unmapped each time
-    mallopt(-3, 32 << 20)
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``stepgen simulate``; returns the exit code."""
-    _keep_freed_memory()
+    # its engine and writer make many short-lived arrays of a few MB: 20 k page faults for the
+    # 20 s run of ``make bench``'s ``stepgen`` row, 13 k with this (bench/README.md, Round 5)
+    keep_freed_memory(top_pad=64 << 20)
     out = Path(args.output)
     suffix = out.suffix.lower()
     if suffix not in (".vcd", ".sr"):

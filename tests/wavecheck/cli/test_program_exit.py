@@ -115,3 +115,46 @@ def test_a_failed_flush_keeps_the_usual_exit(tmp_path: Path) -> None:
     )
     assert run.returncode == 120
     assert "Bad file descriptor" in run.stderr
+
+
+SPY = """
+import sys
+from wavecheck.cli import _main
+
+def spy(top_pad=0, side=sys.argv[1]):
+    open(side, "a").write(f"tuned {top_pad}\\n")
+
+_main.keep_freed_memory = spy
+from wavecheck.cli import main
+sys.argv = ["wavecheck", *sys.argv[2:]]
+sys.exit(main() if "--argv" not in sys.argv else main(sys.argv[1:-1]))
+"""
+
+
+@pytest.mark.parametrize(
+    ("argv", "tuned"),
+    [
+        (["check", "captures/real/grbl_cnc_1.sr", "--drive", "leadshine-dm542", "-q"], "tuned 0\n"),
+        (["drives"], ""),  # no numpy: not worth loading ctypes for
+        (
+            ["check", "captures/real/grbl_cnc_1.sr", "--drive", "leadshine-dm542", "-q", "--argv"],
+            "",
+        ),
+    ],
+    ids=["check as the program", "drives", "main(argv)"],
+)
+def test_the_program_of_an_array_command_keeps_freed_memory(
+    argv: list[str], tuned: str, tmp_path: Path
+) -> None:
+    """``run_cli`` asks glibc to keep freed memory (``keep_freed_memory``) only for the
+    program's run (``main()``, as the console script) of a command that loaded numpy; another
+    program calling ``main(argv)`` keeps its allocator as it was."""
+    side = tmp_path / "side.txt"
+    script = tmp_path / "prog.py"
+    script.write_text(SPY)
+    root = Path(__file__).resolve().parents[3]
+    subprocess.run(
+        [sys.executable, str(script), str(side), *argv], capture_output=True, text=True,
+        timeout=120, cwd=root,
+    )  # fmt: skip
+    assert (side.read_text() if side.exists() else "") == tuned
