@@ -101,7 +101,6 @@ class SrMetadata:
         self.members = members
         self.total_analog = total_analog
         self.ignored: list[str] = []  # members named like chunks that libsigrok does not read
-        self.data_end: dict[int, int] = {}  # header offset → where the entry's room ends
         self.exact_source: str | None = None  # set when [wavecheck] says edges=exact
 
     @property
@@ -165,7 +164,7 @@ def read_sr_metadata(
     for member in ("version", "metadata"):
         if member not in names:
             raise CaptureError(path, None, f"no {member!r} member: not a sigrok .sr file")
-    extents = _entry_extents(path, zf)
+    _refuse_overlaps(path, zf)
     for member in ("version", "metadata"):
         if zf.getinfo(member).file_size > _MAX_METADATA_BYTES:
             raise CaptureError(path, f"member {member}", "is implausibly large (corrupt file?)")
@@ -257,7 +256,6 @@ def read_sr_metadata(
     analog = _int(path, dev, "total analog") or 0
     meta = SrMetadata(rate, rate_text, total, unitsize, probes, members, analog)
     meta.ignored = ignored
-    meta.data_end = extents
     exact = groups.get(EXACT_SECTION, {})
     if (_value(path, exact, "edges") or "").strip() == "exact":
         meta.exact_source = (_value(path, exact, "source") or "").strip() or "unnamed"
@@ -322,35 +320,31 @@ def _name_len(info: Entry) -> int:
     return len(info.filename.encode("cp437", "replace"))
 
 
-def _entry_extents(path: str | os.PathLike[str], zf: Archive) -> dict[int, int]:
-    """Where each zip entry's room ends (the next entry's local header, or the central
-    directory), by header offset; refuses entries whose ranges overlap.
-
-    An entry takes at least its 30-byte local header, its name and its compressed data; two
-    directory entries sharing bytes are how a zip bomb makes a small file inflate many times
-    (a 1 MB file with 1,000 entries on one 1 GiB stream). Linear in the entries after a sort.
+def _refuse_overlaps(path: str | os.PathLike[str], zf: Archive) -> None:
+    """Refuse entries whose ranges overlap: each takes at least its 30-byte local header, its
+    name and its compressed data, within its room (:attr:`Entry.end_offset
+    <wavecheck.capture.zipdir.Entry.end_offset>`: up to the next entry's local header, or the
+    central directory). Two directory entries sharing bytes are how a zip bomb makes a small
+    file inflate many times (a 1 MB file with 1,000 entries on one 1 GiB stream). Linear in
+    the entries.
 
     Raises:
         CaptureError: two entries overlap, or one reaches into the central directory.
     """
-    infos = sorted(zf.infolist(), key=lambda i: i.header_offset)
-    stop = zf.start_dir
-    extents: dict[int, int] = {}
-    for k, info in enumerate(infos):
-        nxt = infos[k + 1] if k + 1 < len(infos) else None
-        limit = nxt.header_offset if nxt is not None else stop
+    at: dict[int, str] = {}
+    for info in zf.infolist():
+        at.setdefault(info.header_offset, info.filename)  # of entries at one offset, the first
+    for info in zf.infolist():
         need = info.header_offset + 30 + _name_len(info) + info.compress_size
-        if limit is not None and need > limit:
-            other = repr(nxt.filename) if nxt is not None else "the zip directory"
+        if need > info.end_offset:
+            other = repr(at[info.end_offset]) if info.end_offset in at else "the zip directory"
             raise CaptureError(
                 path,
                 None,
                 f"zip entries {info.filename!r} and {other} overlap (bytes "
-                f"{info.header_offset}…{need} and {limit}…): refused as a zip bomb or a "
-                "corrupt archive",
+                f"{info.header_offset}…{need} and {info.end_offset}…): refused as a zip bomb or "
+                "a corrupt archive",
             )
-        extents[info.header_offset] = limit if limit is not None else need
-    return extents
 
 
 class _EdgeFinder:
@@ -536,15 +530,13 @@ def _changed_words(
     return at, xor
 
 
-def _member_blocks(
-    zf: Archive, raw: BinaryIO, info: Entry, step: int, room: int | None = None
-) -> Iterator[bytes]:
+def _member_blocks(zf: Archive, raw: BinaryIO, info: Entry, step: int) -> Iterator[bytes]:
     """The inflated bytes of chunk member ``info`` in blocks of at most ``step`` bytes.
 
     Stored and deflated members are read straight from the file (``raw``): the local header is
     skipped, the data inflated with zlib-ng (or zlib) and its CRC-32 checked at the end, like
-    ``zipfile`` does. Anything else (encrypted, bzip2, lzma) goes through ``zipfile``. ``room``
-    is the offset where the entry's room ends (the next entry): data reaching past it is refused.
+    ``zipfile`` does. Anything else (encrypted, bzip2, lzma) goes through ``zipfile``. Data
+    reaching past the entry's room (``info.end_offset``: the next entry) is refused.
 
     Raises:
         ZipError: a bad local header or CRC; zlib errors for a corrupt stream.
@@ -558,7 +550,7 @@ def _member_blocks(
         raise ZipError("bad local file header")
     name_len, extra_len = struct.unpack("<HH", head[26:30])
     start = info.header_offset + 30 + name_len + extra_len
-    if room is not None and start + info.compress_size > room:
+    if start + info.compress_size > info.end_offset:
         raise ZipError("its data overlaps the next zip entry (a zip bomb?)")
     raw.seek(start)
     left_in, left_out, crc = info.compress_size, info.file_size, 0
@@ -679,8 +671,7 @@ def _scan(
     for info in meta.members:
         got = 0
         try:
-            room = meta.data_end.get(info.header_offset)
-            for data in _member_blocks(zf, raw, info, step, room):
+            for data in _member_blocks(zf, raw, info, step):
                 got += len(data)
                 finder.add_bytes(data)
                 report(done + got, total)
