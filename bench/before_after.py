@@ -51,6 +51,24 @@ def cpu_of(cmd: list[str]) -> float:
     return use.ru_utime + use.ru_stime
 
 
+def tree_command(tool: str, where: Path, args: list[str]) -> list[str]:
+    """``tool ARGS`` (``wavecheck`` or ``stepgen``) run by the tree at ``where``: ``main()`` with
+    no argv, as the console script calls it (the collector and allocator tuned then)."""
+    code = f"import sys; sys.path.insert(0, sys.argv[1]); from {tool}.cli import main; " \
+           f"sys.argv = [{tool!r}, *sys.argv[2:]]; sys.exit(main())"  # fmt: skip
+    return [sys.executable, "-c", code, str(where), *args]
+
+
+def interleaved(cmds: dict[str, list[str]], runs: int) -> tuple[dict[str, list[float]], float]:
+    """CPU seconds of each command's ``runs`` runs, one of each in turn; the load at the start."""
+    load0 = os.getloadavg()[0]
+    cpu: dict[str, list[float]] = {k: [] for k in cmds}
+    for _ in range(runs):
+        for k, c in cmds.items():
+            cpu[k].append(cpu_of(c))
+    return cpu, load0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("commit", help="the older tree (e.g. the branch point)")
@@ -62,20 +80,13 @@ def main() -> None:
     words = argv[cut + 1 :]
     if not words or words[0] not in ("wavecheck", "stepgen"):
         raise SystemExit("give -- wavecheck ARGS or -- stepgen ARGS")
-    # main() with no argv, as the console script calls it (stepgen tunes the collector then)
-    code = f"import sys; sys.path.insert(0, sys.argv[1]); from {words[0]}.cli import main; " \
-           f"sys.argv = [{words[0]!r}, *sys.argv[2:]]; sys.exit(main())"  # fmt: skip
     cmds = {
-        f"before ({args.commit})": [sys.executable, "-c", code, str(tree(args.commit)), *words[1:]],
-        "after (this tree)": [sys.executable, "-c", code, str(ROOT), *words[1:]],
+        f"before ({args.commit})": tree_command(words[0], tree(args.commit), words[1:]),
+        "after (this tree)": tree_command(words[0], ROOT, words[1:]),
     }
     if args.peer:
         cmds[f"peer: {args.peer}"] = shlex.split(args.peer)
-    load0 = os.getloadavg()[0]
-    cpu: dict[str, list[float]] = {k: [] for k in cmds}
-    for _ in range(args.runs):
-        for k, c in cmds.items():
-            cpu[k].append(cpu_of(c))
+    cpu, load0 = interleaved(cmds, args.runs)
     print(f"$ {shlex.join(words)}   (best of {args.runs}, interleaved; load "
           f"{load0:.1f} -> {os.getloadavg()[0]:.1f})")  # fmt: skip
     for k, v in cpu.items():

@@ -14,7 +14,7 @@ import statistics
 import sys
 import tempfile
 
-from before_after import ROOT, cpu_of, tree
+from before_after import ROOT, interleaved, tree, tree_command
 
 TINY = str(ROOT / "captures/golden/g202-p16-dirhold2-worst.vcd")
 
@@ -24,21 +24,15 @@ def main() -> None:
     ap.add_argument("commit")
     ap.add_argument("--runs", type=int, default=9)
     args = ap.parse_args()
-    code = "import sys; sys.path.insert(0, sys.argv[1]); from wavecheck.cli import main; " \
-           "sys.argv = ['wavecheck', *sys.argv[2:]]; sys.exit(main())"  # fmt: skip
     trees = {"before": tree(args.commit), "after": ROOT}
     with tempfile.TemporaryDirectory() as tmp:
         check = ["check", TINY, "--drive", "gecko-g202"]
         cmds = {"pyplot": [sys.executable, "-c", "import matplotlib.pyplot"]}
         for name, path in trees.items():
-            cmds[f"{name} check"] = [sys.executable, "-c", code, str(path), *check]
-            cmds[f"{name} plot"] = [sys.executable, "-c", code, str(path), *check, "--plot",
-                                    f"{tmp}/{name}.png"]  # fmt: skip
-        load0 = os.getloadavg()[0]
-        cpu: dict[str, list[float]] = {k: [] for k in cmds}
-        for _ in range(args.runs):
-            for k, c in cmds.items():
-                cpu[k].append(cpu_of(c))
+            cmds[f"{name} check"] = tree_command("wavecheck", path, check)
+            cmds[f"{name} plot"] = tree_command("wavecheck", path,
+                                                [*check, "--plot", f"{tmp}/{name}.png"])  # fmt: skip
+        cpu, load0 = interleaved(cmds, args.runs)
     print(f"check --plot, CPU added (best of {args.runs}, interleaved; load {load0:.1f} -> "
           f"{os.getloadavg()[0]:.1f})")  # fmt: skip
     peer = min(cpu["pyplot"])
